@@ -1,0 +1,74 @@
+#version 460
+// G-buffer pass, fragment stage: samples the material's textures and writes the surface's
+// attributes. Lighting happens later, in lighting.frag, from these targets alone.
+#include "frame.glsl"
+
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
+
+// Per material; missing textures are bound to 1x1 defaults (white, or a flat normal).
+layout(set = 1, binding = 0) uniform sampler2D base_color_tex;
+layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;
+layout(set = 1, binding = 2) uniform sampler2D normal_tex;
+layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
+
+layout(push_constant, std430) uniform Draw {
+    mat4 world;
+    vec4 normal_matrix[3];
+    uint material;
+    float tangent_sign;
+    uint pad0;
+    uint pad1;
+} draw;
+
+layout(location = 0) in vec3 in_world_pos;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec4 in_tangent;
+layout(location = 3) in vec2 in_uv;
+
+layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
+layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
+layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1
+layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, diffuse shadow factor, 0
+layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance
+
+void main() {
+    Material m = materials[draw.material];
+
+    // Shading frame. Interpolated normals can cancel out (or be NaN from a broken file that got
+    // past the loader); fall back to the triangle's own normal.
+    vec3 geometric = cross(dFdx(in_world_pos), dFdy(in_world_pos));
+    vec3 n = in_normal;
+    if (!(dot(n, n) > 1e-20)) {
+        n = geometric;
+    }
+    n = dot(n, n) > 1e-30 ? normalize(n) : vec3(0.0, 1.0, 0.0);
+    if (!gl_FrontFacing) {
+        n = -n;
+    }
+    vec3 t = in_tangent.xyz - n * dot(n, in_tangent.xyz);
+    t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
+    float sign = in_tangent.w < 0.0 ? -1.0 : 1.0;
+    vec3 b = sign * cross(n, t);
+
+    vec3 tn = texture(normal_tex, in_uv).xyz * 2.0 - 1.0;
+    tn.xy *= m.emissive_normal.a;
+    vec3 mapped = t * tn.x + b * tn.y + n * tn.z;
+    if (dot(mapped, mapped) > 1e-20) {
+        n = normalize(mapped);
+        t = in_tangent.xyz - n * dot(n, in_tangent.xyz);
+        t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
+    }
+
+    vec4 base = m.base_color * texture(base_color_tex, in_uv);
+    vec4 mr = texture(metallic_roughness_tex, in_uv);
+    float metallic = clamp(m.metallic_roughness.x * mr.b, 0.0, 1.0);
+    float roughness = clamp(m.metallic_roughness.y * mr.g, 0.0, 1.0);
+    vec3 emissive = m.emissive_normal.rgb * texture(emissive_tex, in_uv).rgb;
+
+    gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
+    gb_frame = vec4(oct_encode(n), oct_encode(t));
+    gb_surface = vec4(roughness, float(draw.material), sign, 1.0);
+    gb_fabric = vec4(0.0, 0.0, 1.0, 0.0);
+    gb_emissive = vec4(max(emissive, vec3(0.0)), 0.0);
+}

@@ -1,0 +1,34 @@
+#version 460
+// G-buffer pass, vertex stage: object space to world and clip space.
+#include "frame.glsl"
+
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
+
+layout(push_constant, std430) uniform Draw {
+    mat4 world;
+    vec4 normal_matrix[3];  // columns of the inverse-transpose of world's 3x3 part
+    uint material;
+    float tangent_sign;     // -1 where world mirrors (negative determinant), else 1
+    uint pad0;
+    uint pad1;
+} draw;
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec4 in_tangent;
+layout(location = 3) in vec2 in_uv;
+
+layout(location = 0) out vec3 out_world_pos;
+layout(location = 1) out vec3 out_normal;
+layout(location = 2) out vec4 out_tangent;
+layout(location = 3) out vec2 out_uv;
+
+void main() {
+    vec4 world_pos = draw.world * vec4(in_position, 1.0);
+    mat3 nm = mat3(draw.normal_matrix[0].xyz, draw.normal_matrix[1].xyz, draw.normal_matrix[2].xyz);
+    out_world_pos = world_pos.xyz;
+    out_normal = nm * in_normal;
+    out_tangent = vec4(mat3(draw.world) * in_tangent.xyz, in_tangent.w * draw.tangent_sign);
+    out_uv = in_uv;
+    gl_Position = frame.view_proj * world_pos;
+}

@@ -1,0 +1,77 @@
+// Frame-wide data shared by the G-buffer and lighting passes: the camera and frame uniform, the
+// light and material records, and the G-buffer packing. Mirrored in Rust by src/render/gpu.rs
+// (same field order; std140 for the uniform, std430 for the storage buffers).
+#ifndef WEFT_FRAME_GLSL
+#define WEFT_FRAME_GLSL
+
+const float PI = 3.14159265358979323846;
+
+// Debug views (frame.debug_view); 0 is the lit image.
+const uint DEBUG_NONE = 0u;
+const uint DEBUG_ALBEDO = 1u;
+const uint DEBUG_NORMALS = 2u;
+const uint DEBUG_TANGENTS = 3u;
+const uint DEBUG_ROUGHNESS_METALLIC = 4u;
+const uint DEBUG_COVERAGE = 5u;
+const uint DEBUG_THREAD_DIR = 6u;
+const uint DEBUG_DEPTH = 7u;
+const uint DEBUG_UV = 8u;
+
+struct FrameData {
+    mat4 view;
+    mat4 proj;
+    mat4 view_proj;
+    mat4 inv_view_proj;
+    vec4 eye;            // xyz: camera position in world space
+    vec4 viewport;       // width, height, 1/width, 1/height
+    vec4 ambient_sky;    // rgb: ambient radiance from above (a: unused)
+    vec4 ambient_ground; // rgb: ambient radiance from below
+    vec4 background;     // rgb: radiance of empty pixels
+    uint light_count;
+    uint debug_view;
+    uint material_count;
+    uint pad0;
+};
+
+const uint LIGHT_DIRECTIONAL = 0u;
+const uint LIGHT_POINT = 1u;
+const uint LIGHT_SPOT = 2u;
+
+struct Light {
+    vec4 position_range;   // xyz world position; w: range (0 = infinite)
+    vec4 direction_type;   // xyz: direction the light travels; w: LIGHT_* as float
+    vec4 color_intensity;  // rgb colour, a: intensity (lux for directional, candela otherwise)
+    vec4 spot;             // x: angle scale, y: angle offset (KHR_lights_punctual spot falloff)
+};
+
+struct Material {
+    vec4 base_color;          // linear rgba factor
+    vec4 emissive_normal;     // rgb emissive factor, a: normal scale
+    vec4 metallic_roughness;  // x metallic, y roughness, z: fabric record index + 1 (0 = none), w: unused
+};
+
+// Octahedral encoding of unit vectors (Cigolle et al. 2014): two values in [-1, 1].
+vec2 oct_encode(vec3 n) {
+    n /= (abs(n.x) + abs(n.y) + abs(n.z));
+    vec2 p = n.xy;
+    if (n.z < 0.0) {
+        p = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    }
+    return p;
+}
+
+vec3 oct_decode(vec2 p) {
+    vec3 n = vec3(p, 1.0 - abs(p.x) - abs(p.y));
+    float t = max(-n.z, 0.0);
+    n.x += n.x >= 0.0 ? -t : t;
+    n.y += n.y >= 0.0 ? -t : t;
+    return normalize(n);
+}
+
+// A unit vector orthogonal to n, for when a tangent is missing or degenerate.
+vec3 any_tangent(vec3 n) {
+    vec3 a = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+    return normalize(cross(a, n));
+}
+
+#endif

@@ -1,0 +1,113 @@
+#version 460
+// Deferred lighting pass: one fullscreen triangle. Reads the G-buffer, sums every light's
+// contribution with the material's BRDF, and writes linear HDR radiance.
+#include "frame.glsl"
+#include "pbr.glsl"
+
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
+layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = 3) uniform sampler2D gb_albedo;
+layout(set = 0, binding = 4) uniform sampler2D gb_frame;
+layout(set = 0, binding = 5) uniform sampler2D gb_surface;
+layout(set = 0, binding = 6) uniform sampler2D gb_fabric;
+layout(set = 0, binding = 7) uniform sampler2D gb_emissive;
+layout(set = 0, binding = 8) uniform sampler2D gb_depth;
+
+layout(location = 0) in vec2 in_uv;
+layout(location = 0) out vec4 out_color;
+
+// Irradiance-style falloff of KHR_lights_punctual: inverse square, windowed to zero at range.
+float distance_falloff(float dist, float range) {
+    float inv_sq = 1.0 / max(dist * dist, 1e-8);
+    if (range <= 0.0) {
+        return inv_sq;
+    }
+    float r = dist / range;
+    float window = clamp(1.0 - r * r * r * r, 0.0, 1.0);
+    return window * window * inv_sq;
+}
+
+// Direction to the light (unit) and the illuminance it brings, per colour channel.
+vec3 light_incoming(Light light, vec3 p, out vec3 l) {
+    uint type = uint(light.direction_type.w + 0.5);
+    vec3 color = light.color_intensity.rgb * light.color_intensity.a;
+    if (type == LIGHT_DIRECTIONAL) {
+        l = -light.direction_type.xyz;
+        return color;
+    }
+    vec3 to_light = light.position_range.xyz - p;
+    float dist = length(to_light);
+    l = dist > 0.0 ? to_light / dist : vec3(0.0, 1.0, 0.0);
+    float atten = distance_falloff(dist, light.position_range.w);
+    if (type == LIGHT_SPOT) {
+        float cd = dot(light.direction_type.xyz, -l);
+        float a = clamp(cd * light.spot.x + light.spot.y, 0.0, 1.0);
+        atten *= a * a;
+    }
+    return color * atten;
+}
+
+vec3 debug_color(uint view, ivec2 px, float depth) {
+    vec4 albedo = texelFetch(gb_albedo, px, 0);
+    vec4 fr = texelFetch(gb_frame, px, 0);
+    vec4 surface = texelFetch(gb_surface, px, 0);
+    vec4 fabric = texelFetch(gb_fabric, px, 0);
+    if (view == DEBUG_ALBEDO) return albedo.rgb;
+    if (view == DEBUG_NORMALS) return oct_decode(fr.xy) * 0.5 + 0.5;
+    if (view == DEBUG_TANGENTS) return oct_decode(fr.zw) * 0.5 + 0.5;
+    if (view == DEBUG_ROUGHNESS_METALLIC) return vec3(surface.x, albedo.a, 0.0);
+    if (view == DEBUG_COVERAGE) return vec3(fabric.x, fabric.y, 1.0 - fabric.x - fabric.y);
+    if (view == DEBUG_THREAD_DIR) {
+        // Red where the top thread runs along the tangent (weft), green along the bitangent (warp).
+        return vec3(fabric.y, fabric.x, 0.0);
+    }
+    if (view == DEBUG_DEPTH) {
+        vec4 p = frame.inv_view_proj * vec4(0.0, 0.0, depth, 1.0);
+        float linear = length(p.xyz / p.w - frame.eye.xyz);
+        return vec3(fract(linear));
+    }
+    return vec3(1.0, 0.0, 1.0);
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    float depth = texelFetch(gb_depth, px, 0).r;
+    if (depth >= 1.0) {
+        // Empty pixel: no surface, no lighting.
+        out_color = vec4(frame.debug_view == DEBUG_NONE ? frame.background.rgb : vec3(0.0), 1.0);
+        return;
+    }
+    if (frame.debug_view != DEBUG_NONE) {
+        out_color = vec4(debug_color(frame.debug_view, px, depth), 1.0);
+        return;
+    }
+
+    vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+    vec4 hp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
+    vec3 p = hp.xyz / hp.w;
+    vec3 v = normalize(frame.eye.xyz - p);
+
+    vec4 albedo = texelFetch(gb_albedo, px, 0);
+    vec4 fr = texelFetch(gb_frame, px, 0);
+    vec4 surface = texelFetch(gb_surface, px, 0);
+    vec3 n = oct_decode(fr.xy);
+    vec3 base = albedo.rgb;
+    float metallic = albedo.a;
+    float roughness = surface.x;
+
+    vec3 radiance = texelFetch(gb_emissive, px, 0).rgb;
+    // Hemispherical ambient, so surfaces facing away from every light are not pure black.
+    vec3 ambient = mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
+    radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        vec3 l;
+        vec3 e = light_incoming(lights[i], p, l);
+        if (all(equal(e, vec3(0.0)))) {
+            continue;
+        }
+        radiance += e * pbr_brdf_cos(n, v, l, base, metallic, roughness);
+    }
+    out_color = vec4(radiance, 1.0);
+}

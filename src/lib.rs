@@ -1,0 +1,16 @@
+//! weft: a deferred Vulkan renderer for woven fabric.
+//!
+//! Layers, bottom up: `vk` (every `unsafe` Vulkan call), `scene` (glTF into plain data),
+//! `fabric` (the cloth material's parameters and weave patterns), `reference` (the CPU twin of
+//! every shader function), `render` (the plan and the passes of a frame).
+
+pub mod fabric;
+pub mod reference;
+pub mod render;
+pub mod scene;
+pub mod vk;
+
+mod error;
+pub use error::Error;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,173 @@
+//! The `weft` command line: parses arguments, calls the library, prints.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+
+use weft::render::{self, DebugView, Plan, RenderOptions, Renderer};
+use weft::scene::{self, Scene};
+use weft::vk::{Context, ContextOptions, DeviceChoice};
+
+#[derive(Parser)]
+#[command(name = "weft", version, about = "A deferred Vulkan renderer for woven fabric")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a glTF scene (or the built-in default scene) to PNG, and optionally EXR.
+    Render(RenderArgs),
+    /// Print what a frame of the scene needs: passes, lights, materials.
+    Plan(PlanArgs),
+}
+
+#[derive(Args)]
+struct SceneArgs {
+    /// A .gltf or .glb file; the built-in default scene when left out.
+    scene: Option<PathBuf>,
+    /// Output size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    size: String,
+    /// Index of the scene's camera to use (default: its first camera, or automatic framing).
+    #[arg(long)]
+    camera: Option<usize>,
+    /// Show a G-buffer target instead of the lit image: albedo, normals, tangents,
+    /// roughness-metallic, coverage, thread-dir, depth.
+    #[arg(long, default_value = "none")]
+    debug_view: String,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output PNG (display-referred, sRGB).
+    #[arg(short, long, default_value = "weft.png")]
+    output: PathBuf,
+    /// Also write the linear HDR image (before exposure and tone mapping) as OpenEXR.
+    #[arg(long)]
+    exr: Option<PathBuf>,
+    /// Exposure in EV (stops): the image is scaled by 2^EV before tone mapping.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Turn on the Vulkan validation layer; any message it reports fails the render.
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name. Also WEFT_DEVICE.
+    #[arg(long)]
+    device: Option<String>,
+    /// Print the GPU and wall time of each pass.
+    #[arg(long)]
+    timings: bool,
+    /// Print what the frame ran: passes, draws, pipelines.
+    #[arg(long)]
+    stats: bool,
+}
+
+#[derive(Args)]
+struct PlanArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Print the plan as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => run_render(args),
+        Command::Plan(args) => run_plan(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
+    let scene = match &args.scene {
+        Some(path) => scene::load(path)?,
+        None => scene::default_scene(),
+    };
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let (width, height) = render::parse_size(&args.size)?;
+    let options = RenderOptions {
+        width,
+        height,
+        camera: args.camera,
+        debug_view: DebugView::parse(&args.debug_view)?,
+        ..Default::default()
+    };
+    options.validate()?;
+    // Fails early, before any GPU work, if --camera names no camera.
+    scene.camera(options.camera)?;
+    Ok((scene, options))
+}
+
+fn run_render(args: RenderArgs) -> anyhow::Result<()> {
+    let (scene, mut options) = load_scene(&args.scene)?;
+    options.exposure = args.exposure;
+    options.validate()?;
+    let device = args.device.as_deref().map(DeviceChoice::parse).unwrap_or_else(DeviceChoice::from_env);
+    let ctx = Context::new(&ContextOptions { validate: args.validate, device })?;
+    let info = ctx.info().clone();
+    eprintln!("device: {} ({}, {} {})", info.name, info.device_type, info.driver_name, info.driver_info);
+    let start = std::time::Instant::now();
+    let mut renderer = Renderer::new(ctx)?;
+    let setup_ms = start.elapsed().as_secs_f64() * 1e3;
+    let frame = renderer.render(&scene, &options)?;
+    let render_ms = start.elapsed().as_secs_f64() * 1e3 - setup_ms;
+    render::write_png(&args.output, frame.width, frame.height, &frame.ldr)?;
+    eprintln!("wrote {} ({}x{})", args.output.display(), frame.width, frame.height);
+    if let Some(exr) = &args.exr {
+        render::write_exr(exr, frame.width, frame.height, &frame.hdr)?;
+        eprintln!("wrote {}", exr.display());
+    }
+    if args.timings {
+        println!("{:<12} {:>10} {:>10}", "pass", "gpu ms", "wall ms");
+        println!("{:<12} {:>10} {:>10.2}", "setup", "-", setup_ms);
+        for t in &frame.timings {
+            let gpu = t.gpu_ms.map(|g| format!("{g:.2}")).unwrap_or_else(|| "-".into());
+            println!("{:<12} {:>10} {:>10.2}", t.name, gpu, t.wall_ms);
+        }
+        println!("{:<12} {:>10} {:>10.2}", "frame total", "-", render_ms);
+    }
+    if args.stats {
+        println!("passes     {}", frame.stats.passes.join(" -> "));
+        println!("draws      {} ({} triangles)", frame.stats.draws, frame.stats.triangles);
+        println!("pipelines  {}", frame.stats.pipelines.join(", "));
+    }
+    Ok(())
+}
+
+fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
+    let (scene, options) = load_scene(&args.scene)?;
+    let plan = Plan::new(&scene, &options);
+    if args.json {
+        let json = serde_json::json!({
+            "width": plan.width,
+            "height": plan.height,
+            "passes": plan.passes.iter().map(|p| p.name()).collect::<Vec<_>>(),
+            "draws": plan.draws,
+            "triangles": plan.triangles,
+            "lights": {"directional": plan.lights.directional, "point": plan.lights.point, "spot": plan.lights.spot},
+            "fabric_materials": plan.fabric_materials,
+            "textures": plan.textures,
+            "debug_view": plan.debug_view.name(),
+        });
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    } else {
+        println!("scene       {}", scene.source);
+        println!("{plan}");
+    }
+    Ok(())
+}

@@ -1,0 +1,631 @@
+//! The frame: scene upload, then the passes the plan lists, each a function whose signature says
+//! what it reads and writes, then readback.
+//!
+//! Each pass is its own submission bracketed by two timestamps: on lavapipe, timestamps around a
+//! render pass that follows another in the same command buffer read far too short, so one pass per
+//! submit is what gives honest per-pass timings (see docs/architecture.md).
+
+use std::time::Instant;
+
+use glam::{Mat4, Vec3};
+
+use crate::scene::{ColorSpace, Scene, Texture};
+use crate::vk::{
+    shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd, Context,
+    Cull, DescriptorPool, DescriptorSet, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags, Pipeline,
+    Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
+};
+use crate::Error;
+
+use super::gpu::{DrawPush, FrameData, GpuLight, GpuMaterial, TonemapPush};
+use super::plan::{Pass, Plan};
+use super::RenderOptions;
+
+pub const ALBEDO_FORMAT: Format = Format::R8G8B8A8_SRGB;
+pub const FRAME_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const SURFACE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const FABRIC_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const EMISSIVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
+pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
+
+/// Wall-clock and GPU time of one pass.
+#[derive(Clone, Debug)]
+pub struct PassTiming {
+    pub name: &'static str,
+    /// GPU time between the pass's two timestamps, when the device has timestamps.
+    pub gpu_ms: Option<f64>,
+    /// CPU time from recording to the end of the wait for the GPU.
+    pub wall_ms: f64,
+}
+
+/// What the frame actually did.
+#[derive(Clone, Debug, Default)]
+pub struct FrameStats {
+    pub passes: Vec<&'static str>,
+    pub draws: usize,
+    pub triangles: usize,
+    pub pipelines: Vec<String>,
+}
+
+/// A rendered frame, read back.
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// Display-referred RGBA8, sRGB-encoded, rows top to bottom.
+    pub ldr: Vec<u8>,
+    /// Linear HDR radiance (before exposure), RGBA f32, rows top to bottom.
+    pub hdr: Vec<f32>,
+    pub timings: Vec<PassTiming>,
+    pub stats: FrameStats,
+    pub plan: Plan,
+}
+
+/// The G-buffer and output targets of one resolution.
+struct Targets {
+    albedo: Image,
+    frame: Image,
+    surface: Image,
+    fabric: Image,
+    emissive: Image,
+    depth: Image,
+    hdr: Image,
+    ldr: Image,
+}
+
+impl Targets {
+    fn new(ctx: &Context, width: u32, height: u32) -> crate::Result<Targets> {
+        let color = ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED;
+        let read = ImageUsageFlags::TRANSFER_SRC;
+        let t = |name: &str, format: Format, usage: ImageUsageFlags| {
+            ctx.create_image(&ImageDesc::new_2d(name, format, width, height).usage(usage))
+        };
+        Ok(Targets {
+            albedo: t("gbuffer albedo", ALBEDO_FORMAT, color | read)?,
+            frame: t("gbuffer normal+tangent", FRAME_FORMAT, color | read)?,
+            surface: t("gbuffer surface", SURFACE_FORMAT, color | read)?,
+            fabric: t("gbuffer fabric coverage", FABRIC_FORMAT, color | read)?,
+            emissive: t("gbuffer emissive", EMISSIVE_FORMAT, color | read)?,
+            depth: t("gbuffer depth", DEPTH_FORMAT, ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED | read)?,
+            hdr: t("hdr", HDR_FORMAT, color | read)?,
+            ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
+        })
+    }
+
+    fn gbuffer_colors(&self) -> [&Image; 5] {
+        [&self.albedo, &self.frame, &self.surface, &self.fabric, &self.emissive]
+    }
+}
+
+/// One draw: a mesh range in the shared buffers.
+struct DrawRange {
+    first_index: u32,
+    index_count: u32,
+    vertex_offset: i32,
+    material: u32,
+    world: Mat4,
+    double_sided: bool,
+}
+
+/// A scene's data on the GPU.
+pub struct GpuScene {
+    vertices: Buffer,
+    indices: Buffer,
+    materials: Buffer,
+    lights: Buffer,
+    light_count: u32,
+    material_count: u32,
+    /// Per material: base colour, metallic-roughness, normal and emissive textures (indices into
+    /// `textures`, None = a default).
+    material_textures: Vec<[Option<usize>; 4]>,
+    textures: Vec<Image>,
+    draws: Vec<DrawRange>,
+    triangles: usize,
+}
+
+pub struct Renderer {
+    ctx: Context,
+    frame_layout: SetLayout,
+    material_layout: SetLayout,
+    lighting_layout: SetLayout,
+    tonemap_layout: SetLayout,
+    gbuffer_pipeline: Pipeline,
+    lighting_pipeline: Pipeline,
+    tonemap_pipeline: Pipeline,
+    linear: Sampler,
+    nearest: Sampler,
+    white: Image,
+    flat_normal: Image,
+    targets: Option<Targets>,
+}
+
+fn sampled(binding: u32, stages: Stages) -> Binding {
+    Binding { binding, kind: BindingKind::SampledImage, stages }
+}
+
+impl Renderer {
+    pub fn new(ctx: Context) -> crate::Result<Renderer> {
+        let frame_layout = ctx.create_set_layout(&[
+            Binding { binding: 0, kind: BindingKind::UniformBuffer, stages: Stages::GRAPHICS },
+            Binding { binding: 1, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
+        ])?;
+        let material_layout = ctx.create_set_layout(&(0..4).map(|b| sampled(b, Stages::FRAGMENT)).collect::<Vec<_>>())?;
+        let mut lighting_bindings = vec![
+            Binding { binding: 0, kind: BindingKind::UniformBuffer, stages: Stages::FRAGMENT },
+            Binding { binding: 1, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
+            Binding { binding: 2, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
+        ];
+        lighting_bindings.extend((3..9).map(|b| sampled(b, Stages::FRAGMENT)));
+        let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
+        let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
+
+        let vertex_layout = VertexLayout {
+            stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+            attributes: vec![
+                (0, Format::R32G32B32_SFLOAT, 0),
+                (1, Format::R32G32B32_SFLOAT, 12),
+                (2, Format::R32G32B32A32_SFLOAT, 24),
+                (3, Format::R32G32_SFLOAT, 40),
+            ],
+        };
+        let gbuffer_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: "gbuffer",
+            vertex: &shaders::GBUFFER_VERT,
+            fragment: &shaders::GBUFFER_FRAG,
+            vertex_layout: Some(vertex_layout),
+            color_formats: &[ALBEDO_FORMAT, FRAME_FORMAT, SURFACE_FORMAT, FABRIC_FORMAT, EMISSIVE_FORMAT],
+            depth_format: Some(DEPTH_FORMAT),
+            set_layouts: &[&frame_layout, &material_layout],
+            push_constant_size: std::mem::size_of::<DrawPush>() as u32,
+            push_stages: Stages::GRAPHICS,
+            fragment_constants: &[],
+        })?;
+        let lighting_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: "lighting",
+            vertex: &shaders::FULLSCREEN_VERT,
+            fragment: &shaders::LIGHTING_FRAG,
+            vertex_layout: None,
+            color_formats: &[HDR_FORMAT],
+            depth_format: None,
+            set_layouts: &[&lighting_layout],
+            push_constant_size: 0,
+            push_stages: Stages::FRAGMENT,
+            fragment_constants: &[],
+        })?;
+        let tonemap_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: "tonemap",
+            vertex: &shaders::FULLSCREEN_VERT,
+            fragment: &shaders::TONEMAP_FRAG,
+            vertex_layout: None,
+            color_formats: &[LDR_FORMAT],
+            depth_format: None,
+            set_layouts: &[&tonemap_layout],
+            push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
+            push_stages: Stages::FRAGMENT,
+            fragment_constants: &[],
+        })?;
+        let linear = ctx.create_sampler(Filter::LinearRepeat)?;
+        let nearest = ctx.create_sampler(Filter::NearestClamp)?;
+        let white = upload_texture(&ctx, &solid("default white", [255, 255, 255, 255], ColorSpace::Srgb))?;
+        let flat_normal = upload_texture(&ctx, &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear))?;
+        Ok(Renderer {
+            ctx,
+            frame_layout,
+            material_layout,
+            lighting_layout,
+            tonemap_layout,
+            gbuffer_pipeline,
+            lighting_pipeline,
+            tonemap_pipeline,
+            linear,
+            nearest,
+            white,
+            flat_normal,
+            targets: None,
+        })
+    }
+
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// Uploads a scene: geometry, materials, lights and textures (with mip chains).
+    pub fn upload(&self, scene: &Scene) -> crate::Result<GpuScene> {
+        let ctx = &self.ctx;
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        let mut mesh_ranges = Vec::new();
+        for mesh in &scene.meshes {
+            mesh_ranges.push((indices.len() as u32, mesh.indices.len() as u32, vertices.len() as i32));
+            vertices.extend(mesh.vertices.iter().map(|v| {
+                let mut w = [0f32; 12];
+                w[0..3].copy_from_slice(&v.position);
+                w[3..6].copy_from_slice(&v.normal);
+                w[6..10].copy_from_slice(&v.tangent);
+                w[10..12].copy_from_slice(&v.uv);
+                w
+            }));
+            indices.extend_from_slice(&mesh.indices);
+        }
+        let mut draws = Vec::new();
+        let mut triangles = 0;
+        for d in &scene.draws {
+            let mesh = &scene.meshes[d.mesh];
+            let (first_index, index_count, vertex_offset) = mesh_ranges[d.mesh];
+            if index_count == 0 {
+                continue;
+            }
+            triangles += index_count as usize / 3;
+            draws.push(DrawRange {
+                first_index,
+                index_count,
+                vertex_offset,
+                material: mesh.material as u32,
+                world: d.world,
+                double_sided: scene.materials.get(mesh.material).is_some_and(|m| m.double_sided),
+            });
+        }
+        let vertices = ctx.create_buffer_with("vertices", BufferUsageFlags::VERTEX_BUFFER, &vertices)?;
+        let indices = ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
+        let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
+            vec![GpuMaterial::new(&Default::default(), None)]
+        } else {
+            scene.materials.iter().map(|m| GpuMaterial::new(m, None)).collect()
+        };
+        let material_textures = scene
+            .materials
+            .iter()
+            .map(|m| [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture])
+            .collect();
+        let material_count = materials.len() as u32;
+        let materials = ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
+        let mut lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+        let light_count = lights.len() as u32;
+        if lights.is_empty() {
+            lights.push(bytemuck::Zeroable::zeroed()); // a storage buffer cannot be empty
+        }
+        let lights = ctx.create_buffer_with("lights", BufferUsageFlags::STORAGE_BUFFER, &lights)?;
+        let textures = scene.textures.iter().map(|t| upload_texture(ctx, t)).collect::<crate::Result<Vec<_>>>()?;
+        Ok(GpuScene {
+            vertices,
+            indices,
+            materials,
+            lights,
+            light_count,
+            material_count,
+            material_textures,
+            textures,
+            draws,
+            triangles,
+        })
+    }
+
+    /// Renders a scene: upload, then one frame.
+    pub fn render(&mut self, scene: &Scene, options: &RenderOptions) -> crate::Result<Frame> {
+        let gpu = self.upload(scene)?;
+        self.render_frame(scene, &gpu, options)
+    }
+
+    /// Renders one frame of an uploaded scene.
+    pub fn render_frame(&mut self, scene: &Scene, gpu: &GpuScene, options: &RenderOptions) -> crate::Result<Frame> {
+        options.validate()?;
+        let plan = Plan::new(scene, options);
+        let (width, height) = (options.width, options.height);
+        if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
+            self.targets = None;
+            self.targets = Some(Targets::new(&self.ctx, width, height)?);
+        }
+        let camera = scene.camera(options.camera)?;
+        let frame_data = frame_data(&camera, width, height, gpu, options);
+        let frame_buffer = self.ctx.create_buffer_with("frame", BufferUsageFlags::UNIFORM_BUFFER, &[frame_data])?;
+
+        let ctx = self.ctx.clone();
+        let targets = self.targets.as_ref().expect("created above");
+        let pool = ctx.create_descriptor_pool(4 + gpu.material_count)?;
+        let queries = ctx.create_query_pool(2)?;
+        let mut timings = Vec::new();
+        let mut stats = FrameStats {
+            draws: gpu.draws.len(),
+            triangles: gpu.triangles,
+            ..Default::default()
+        };
+
+        // Times one pass: a submission of its own between two timestamps.
+        let mut timed = |name: &'static str, record: &mut dyn FnMut(&mut Cmd)| -> crate::Result<()> {
+            let start = Instant::now();
+            ctx.submit(|cmd| {
+                if let Some(q) = &queries {
+                    cmd.reset_queries(q);
+                    cmd.timestamp(q, 0);
+                }
+                record(cmd);
+                if let Some(q) = &queries {
+                    cmd.timestamp(q, 1);
+                }
+            })?;
+            let gpu_ms = match &queries {
+                Some(q) => {
+                    let t = q.read_ns(2)?;
+                    Some((t[1] - t[0]) / 1e6)
+                }
+                None => None,
+            };
+            timings.push(PassTiming { name, gpu_ms, wall_ms: start.elapsed().as_secs_f64() * 1e3 });
+            Ok(())
+        };
+
+        for pass in &plan.passes {
+            match pass {
+                Pass::GBuffer => {
+                    let frame_set = pool.set(
+                        &self.frame_layout,
+                        &[(0, Resource::Uniform(&frame_buffer)), (1, Resource::Storage(&gpu.materials))],
+                    )?;
+                    let material_sets = (0..gpu.material_count as usize)
+                        .map(|m| {
+                            let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 4]);
+                            let pick = |slot: usize, fallback: &'static str| -> &Image {
+                                match tex[slot].and_then(|i| gpu.textures.get(i)) {
+                                    Some(t) => t,
+                                    None if fallback == "normal" => &self.flat_normal,
+                                    None => &self.white,
+                                }
+                            };
+                            pool.set(
+                                &self.material_layout,
+                                &[
+                                    (0, Resource::Sampled(pick(0, "white"), &self.linear)),
+                                    (1, Resource::Sampled(pick(1, "white"), &self.linear)),
+                                    (2, Resource::Sampled(pick(2, "normal"), &self.linear)),
+                                    (3, Resource::Sampled(pick(3, "white"), &self.linear)),
+                                ],
+                            )
+                        })
+                        .collect::<crate::Result<Vec<_>>>()?;
+                    timed("gbuffer", &mut |cmd| {
+                        gbuffer_pass(cmd, &self.gbuffer_pipeline, gpu, frame_set, &material_sets, targets)
+                    })?;
+                    stats.pipelines.push(self.gbuffer_pipeline.name.clone());
+                }
+                Pass::Lighting => {
+                    let set = pool.set(
+                        &self.lighting_layout,
+                        &[
+                            (0, Resource::Uniform(&frame_buffer)),
+                            (1, Resource::Storage(&gpu.lights)),
+                            (2, Resource::Storage(&gpu.materials)),
+                            (3, Resource::Sampled(&targets.albedo, &self.nearest)),
+                            (4, Resource::Sampled(&targets.frame, &self.nearest)),
+                            (5, Resource::Sampled(&targets.surface, &self.nearest)),
+                            (6, Resource::Sampled(&targets.fabric, &self.nearest)),
+                            (7, Resource::Sampled(&targets.emissive, &self.nearest)),
+                            (8, Resource::Sampled(&targets.depth, &self.nearest)),
+                        ],
+                    )?;
+                    timed("lighting", &mut |cmd| lighting_pass(cmd, &self.lighting_pipeline, set, targets))?;
+                    stats.pipelines.push(self.lighting_pipeline.name.clone());
+                }
+                Pass::Tonemap => {
+                    let set = pool.set(&self.tonemap_layout, &[(0, Resource::Sampled(&targets.hdr, &self.nearest))])?;
+                    let push = TonemapPush {
+                        exposure: 2f32.powf(options.exposure),
+                        passthrough: (options.debug_view != super::DebugView::None) as u32,
+                    };
+                    timed("tonemap", &mut |cmd| tonemap_pass(cmd, &self.tonemap_pipeline, set, &push, targets))?;
+                    stats.pipelines.push(self.tonemap_pipeline.name.clone());
+                }
+            }
+            stats.passes.push(pass.name());
+        }
+
+        let start = Instant::now();
+        let ldr = read_image(&ctx, &targets.ldr, Usage::ColorAttachment, 4)?;
+        let hdr_half = read_image(&ctx, &targets.hdr, Usage::FragmentRead, 8)?;
+        let hdr: Vec<f32> = hdr_half.chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect();
+        timings.push(PassTiming { name: "readback", gpu_ms: None, wall_ms: start.elapsed().as_secs_f64() * 1e3 });
+        drop(pool);
+        ctx.check_validation()?;
+        Ok(Frame { width, height, ldr, hdr, timings, stats, plan })
+    }
+
+    /// Reads back the G-buffer of the last frame (for tests and debugging): albedo RGBA8,
+    /// then the four RGBA16F targets as f32, then depth.
+    pub fn read_gbuffer(&self) -> crate::Result<GBufferReadback> {
+        let t = self.targets.as_ref().ok_or_else(|| Error::input("no frame has been rendered yet"))?;
+        let ctx = &self.ctx;
+        let half = |img: &Image| -> crate::Result<Vec<f32>> {
+            let raw = read_image(ctx, img, Usage::FragmentRead, 8)?;
+            Ok(raw.chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect())
+        };
+        let depth_raw = read_image(ctx, &t.depth, Usage::FragmentRead, 4)?;
+        Ok(GBufferReadback {
+            albedo: read_image(ctx, &t.albedo, Usage::FragmentRead, 4)?,
+            frame: half(&t.frame)?,
+            surface: half(&t.surface)?,
+            fabric: half(&t.fabric)?,
+            emissive: half(&t.emissive)?,
+            depth: depth_raw.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+        })
+    }
+}
+
+/// The G-buffer of a frame on the CPU.
+pub struct GBufferReadback {
+    pub albedo: Vec<u8>,
+    pub frame: Vec<f32>,
+    pub surface: Vec<f32>,
+    pub fabric: Vec<f32>,
+    pub emissive: Vec<f32>,
+    pub depth: Vec<f32>,
+}
+
+/// Writes every G-buffer target and depth. Reads: scene geometry, materials, frame uniform.
+fn gbuffer_pass(
+    cmd: &mut Cmd,
+    pipeline: &Pipeline,
+    scene: &GpuScene,
+    frame_set: DescriptorSet,
+    material_sets: &[DescriptorSet],
+    targets: &Targets,
+) {
+    for img in targets.gbuffer_colors() {
+        cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
+    }
+    cmd.transition(&targets.depth, Usage::Undefined, Usage::DepthAttachment, None);
+    let colors: Vec<Attachment> =
+        targets.gbuffer_colors().into_iter().map(|image| Attachment { image, clear: Some([0.0; 4]) }).collect();
+    cmd.begin_rendering(&colors, Some(Attachment { image: &targets.depth, clear: Some([1.0; 4]) }));
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_vertex_buffer(&scene.vertices);
+    cmd.bind_index_buffer(&scene.indices);
+    cmd.bind_sets(pipeline, 0, &[frame_set]);
+    for draw in &scene.draws {
+        let material = draw.material.min(scene.material_count - 1);
+        cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
+        cmd.set_cull(if draw.double_sided { Cull::None } else { Cull::Back });
+        cmd.push_constants(pipeline, &DrawPush::new(draw.world, material));
+        cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+    }
+    cmd.end_rendering();
+    for img in targets.gbuffer_colors() {
+        cmd.transition(img, Usage::ColorAttachment, Usage::FragmentRead, None);
+    }
+    cmd.transition(&targets.depth, Usage::DepthAttachment, Usage::FragmentRead, None);
+}
+
+/// Reads the G-buffer, writes HDR radiance.
+fn lighting_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, targets: &Targets) {
+    cmd.transition(&targets.hdr, Usage::Undefined, Usage::ColorAttachment, None);
+    cmd.begin_rendering(&[Attachment { image: &targets.hdr, clear: None }], None);
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_sets(pipeline, 0, &[set]);
+    cmd.draw(3);
+    cmd.end_rendering();
+    cmd.transition(&targets.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
+}
+
+/// Reads HDR, writes the display-referred 8-bit image.
+fn tonemap_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, push: &TonemapPush, targets: &Targets) {
+    cmd.transition(&targets.ldr, Usage::Undefined, Usage::ColorAttachment, None);
+    cmd.begin_rendering(&[Attachment { image: &targets.ldr, clear: None }], None);
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_sets(pipeline, 0, &[set]);
+    cmd.push_constants(pipeline, push);
+    cmd.draw(3);
+    cmd.end_rendering();
+}
+
+fn frame_data(camera: &crate::scene::Camera, width: u32, height: u32, gpu: &GpuScene, options: &RenderOptions) -> FrameData {
+    let aspect = width as f32 / height as f32;
+    let mut proj = match camera.zfar {
+        Some(zfar) if zfar > camera.znear => Mat4::perspective_rh(camera.yfov, aspect, camera.znear, zfar),
+        _ => Mat4::perspective_infinite_rh(camera.yfov, aspect, camera.znear),
+    };
+    // Vulkan's clip space has +Y down; flipping here keeps images upright.
+    proj.y_axis.y = -proj.y_axis.y;
+    let view_proj = proj * camera.view;
+    let eye = camera.view.inverse().transform_point3(Vec3::ZERO);
+    FrameData {
+        view: camera.view.to_cols_array_2d(),
+        proj: proj.to_cols_array_2d(),
+        view_proj: view_proj.to_cols_array_2d(),
+        inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+        eye: [eye.x, eye.y, eye.z, 1.0],
+        viewport: [width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32],
+        ambient_sky: [0.040, 0.045, 0.055, 0.0],
+        ambient_ground: [0.020, 0.018, 0.015, 0.0],
+        background: [0.010, 0.012, 0.016, 0.0],
+        light_count: gpu.light_count,
+        debug_view: options.debug_view as u32,
+        material_count: gpu.material_count,
+        pad0: 0,
+    }
+}
+
+fn solid(name: &str, rgba: [u8; 4], color_space: ColorSpace) -> Texture {
+    Texture { name: name.into(), width: 1, height: 1, color_space, rgba8: rgba.to_vec() }
+}
+
+/// Uploads an RGBA8 texture and builds its mip chain by linear blits.
+fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
+    let format = match texture.color_space {
+        ColorSpace::Srgb => Format::R8G8B8A8_SRGB,
+        ColorSpace::Linear => Format::R8G8B8A8_UNORM,
+    };
+    let expected = texture.width as usize * texture.height as usize * 4;
+    if texture.rgba8.len() != expected {
+        return Err(Error::input(format!(
+            "texture '{}' has {} bytes of pixels, expected {expected} for {}x{} RGBA8",
+            texture.name,
+            texture.rgba8.len(),
+            texture.width,
+            texture.height
+        )));
+    }
+    let image = ctx.create_image(
+        &ImageDesc::new_2d(texture.name.clone(), format, texture.width, texture.height)
+            .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST | ImageUsageFlags::TRANSFER_SRC)
+            .full_mips(),
+    )?;
+    let staging = ctx.create_buffer_with("texture staging", BufferUsageFlags::TRANSFER_SRC, &texture.rgba8)?;
+    ctx.submit(|cmd| {
+        cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
+        cmd.copy_buffer_to_image(&staging, &image);
+        cmd.generate_mips(&image, Usage::FragmentRead);
+    })?;
+    Ok(image)
+}
+
+/// Copies mip 0 of `image` (currently in `from` usage) to the host; `texel` bytes per texel.
+fn read_image(ctx: &Context, image: &Image, from: Usage, texel: u64) -> crate::Result<Vec<u8>> {
+    let (w, h) = image.extent();
+    let buffer = ctx.create_buffer(
+        &format!("readback of {}", image.desc.name),
+        w as u64 * h as u64 * texel,
+        BufferUsageFlags::TRANSFER_DST,
+        BufferLocation::Readback,
+    )?;
+    ctx.submit(|cmd| {
+        cmd.transition(image, from, Usage::TransferSrc, None);
+        cmd.copy_image_to_buffer(image, 0, &buffer);
+        cmd.transition(image, Usage::TransferSrc, from, None);
+        cmd.buffer_barrier();
+    })?;
+    Ok(buffer.read()?.to_vec())
+}
+
+/// IEEE 754 half to single precision.
+pub fn f16_to_f32(h: u16) -> f32 {
+    let sign = ((h >> 15) as u32) << 31;
+    let exp = ((h >> 10) & 0x1f) as u32;
+    let mant = (h & 0x3ff) as u32;
+    let bits = match (exp, mant) {
+        (0, 0) => sign,
+        (0, m) => {
+            // Subnormal: renormalise.
+            let shift = m.leading_zeros() - 21;
+            let m = (m << shift) & 0x3ff;
+            sign | ((127 - 15 + 1 - shift) << 23) | (m << 13)
+        }
+        (0x1f, m) => sign | 0x7f80_0000 | (m << 13),
+        (e, m) => sign | ((e + 127 - 15) << 23) | (m << 13),
+    };
+    f32::from_bits(bits)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f16_to_f32;
+
+    #[test]
+    fn half_conversion() {
+        assert_eq!(f16_to_f32(0x3c00), 1.0);
+        assert_eq!(f16_to_f32(0xc000), -2.0);
+        assert_eq!(f16_to_f32(0x7bff), 65504.0);
+        assert_eq!(f16_to_f32(0x0001), 2f32.powi(-24));
+        assert_eq!(f16_to_f32(0x0200), 2f32.powi(-15));
+        assert!(f16_to_f32(0x7c00).is_infinite());
+        assert!(f16_to_f32(0x7e00).is_nan());
+    }
+}

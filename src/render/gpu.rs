@@ -1,0 +1,122 @@
+//! GPU-side records, mirrored field for field by `glsl/include/frame.glsl` (std140 for the frame
+//! uniform, std430 for the storage buffers and push constants). Sizes are asserted at compile time.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::scene::{Light, LightKind, Material};
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct FrameData {
+    pub view: [[f32; 4]; 4],
+    pub proj: [[f32; 4]; 4],
+    pub view_proj: [[f32; 4]; 4],
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 4],
+    pub viewport: [f32; 4],
+    pub ambient_sky: [f32; 4],
+    pub ambient_ground: [f32; 4],
+    pub background: [f32; 4],
+    pub light_count: u32,
+    pub debug_view: u32,
+    pub material_count: u32,
+    pub pad0: u32,
+}
+const _: () = assert!(std::mem::size_of::<FrameData>() == 4 * 64 + 5 * 16 + 16);
+
+pub const LIGHT_DIRECTIONAL: f32 = 0.0;
+pub const LIGHT_POINT: f32 = 1.0;
+pub const LIGHT_SPOT: f32 = 2.0;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position_range: [f32; 4],
+    pub direction_type: [f32; 4],
+    pub color_intensity: [f32; 4],
+    pub spot: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuLight>() == 64);
+
+impl GpuLight {
+    pub fn new(light: &Light) -> GpuLight {
+        let (kind, spot) = match light.kind {
+            LightKind::Directional => (LIGHT_DIRECTIONAL, [0.0; 4]),
+            LightKind::Point => (LIGHT_POINT, [0.0; 4]),
+            LightKind::Spot { inner_cone, outer_cone } => {
+                // KHR_lights_punctual's recommended spot falloff, as a scale and offset of cos.
+                let cos_outer = outer_cone.cos();
+                let cos_inner = inner_cone.cos();
+                let scale = 1.0 / (cos_inner - cos_outer).max(1e-3);
+                (LIGHT_SPOT, [scale, -cos_outer * scale, 0.0, 0.0])
+            }
+        };
+        let d = light.direction.normalize_or(Vec3::NEG_Y);
+        GpuLight {
+            position_range: [light.position.x, light.position.y, light.position.z, light.range.unwrap_or(0.0)],
+            direction_type: [d.x, d.y, d.z, kind],
+            color_intensity: [light.color[0], light.color[1], light.color[2], light.intensity],
+            spot,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub base_color: [f32; 4],
+    pub emissive_normal: [f32; 4],
+    pub metallic_roughness: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 48);
+
+impl GpuMaterial {
+    pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
+        GpuMaterial {
+            base_color: m.base_color,
+            emissive_normal: [m.emissive[0], m.emissive[1], m.emissive[2], m.normal_scale],
+            metallic_roughness: [
+                m.metallic,
+                m.roughness,
+                fabric_index.map(|i| i as f32 + 1.0).unwrap_or(0.0),
+                0.0,
+            ],
+        }
+    }
+}
+
+/// Push constants of the G-buffer pass, one per draw (128 bytes: the guaranteed minimum).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct DrawPush {
+    pub world: [[f32; 4]; 4],
+    pub normal_matrix: [[f32; 4]; 3],
+    pub material: u32,
+    pub tangent_sign: f32,
+    pub pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<DrawPush>() == 128);
+
+impl DrawPush {
+    pub fn new(world: Mat4, material: u32) -> DrawPush {
+        let m3 = glam::Mat3::from_mat4(world);
+        let det = m3.determinant();
+        let inv_t = if det.abs() > 1e-30 { m3.inverse().transpose() } else { glam::Mat3::IDENTITY };
+        let c = |v: Vec3| [v.x, v.y, v.z, 0.0];
+        DrawPush {
+            world: world.to_cols_array_2d(),
+            normal_matrix: [c(inv_t.x_axis), c(inv_t.y_axis), c(inv_t.z_axis)],
+            material,
+            tangent_sign: if det < 0.0 { -1.0 } else { 1.0 },
+            pad: [0; 2],
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct TonemapPush {
+    pub exposure: f32,
+    pub passthrough: u32,
+}

@@ -1,0 +1,948 @@
+//! glTF 2.0 (`.gltf` or `.glb`) into a [`Scene`].
+//!
+//! Order of work: parse the container and the JSON, check `extensionsRequired` against what weft
+//! supports, validate the document, load the buffers, then build materials (with their textures,
+//! one per image and colour space), meshes (one per triangle primitive, completed with normals and
+//! MikkTSpace tangents where the file has none) and walk the node tree into draws, lights and
+//! cameras with world transforms.
+//!
+//! A scene file is user input: every problem is an [`Error::Input`] that names the file, the
+//! object (mesh, material, accessor, image, camera, light) and a fix, or a [`Warning`] when the
+//! scene can still be drawn. Nothing here indexes unchecked into the file's data.
+
+use std::collections::HashMap;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::Path;
+
+use glam::{Mat4, Quat, Vec3, Vec4};
+use gltf::accessor::Dimensions;
+use gltf::json;
+use gltf::json::validation::{Checked, Validate};
+use gltf::mesh::{Mode, Semantic};
+
+use super::accessor::{self, Use};
+use super::resources;
+use super::tangents::{self, UvTransform};
+use super::{Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Texture, Vertex, Warning};
+use crate::fabric::FabricParams;
+use crate::{Error, Result};
+
+/// The built-in default scene (written by `tools/make_default_scene.py`).
+pub const DEFAULT_SCENE_GLB: &[u8] = include_bytes!("../../assets/default.glb");
+
+const DEFAULT_SCENE_SOURCE: &str = "built-in default scene";
+
+/// The fabric material extension; its parameters are parsed by [`FabricParams`].
+const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
+
+/// Extensions a file may list in `extensionsRequired`.
+const SUPPORTED_EXTENSIONS: &[&str] =
+    &["KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength", FABRIC_EXTENSION];
+
+/// The scene embedded in the binary: a draped cloth over a ball on a floor, a metal ball, three
+/// lights and a camera.
+pub fn default_scene() -> Scene {
+    load_slice(DEFAULT_SCENE_GLB, DEFAULT_SCENE_SOURCE, None)
+        .expect("the built-in default scene is valid (tests/scene_loading.rs loads it)")
+}
+
+/// Loads a `.gltf` (with its external or embedded buffers and images) or a `.glb` file.
+pub fn load(path: &Path) -> Result<Scene> {
+    let source = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            Error::input(format!(
+                "scene file '{source}' does not exist; check the path (a relative path starts at the current directory), or leave the scene out to render the built-in default scene"
+            ))
+        } else if path.is_dir() {
+            Error::input(format!("scene file '{source}' is a directory; pass the .gltf or .glb file inside it"))
+        } else {
+            Error::input(format!("scene file '{source}' could not be read: {e}; check that it is a readable file"))
+        }
+    })?;
+    let base_dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    load_slice(&bytes, &source, Some(base_dir))
+}
+
+/// Loads a scene from the bytes of a `.gltf` or `.glb` file. `source` names it in messages;
+/// `base_dir` is where relative URIs (external buffers and images) are resolved: None refuses them.
+pub fn load_slice(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<Scene> {
+    // Everything below checks the file before use, but the gltf crate's accessors unwrap on
+    // documents that slip past its validator; a panic there must still reach the user as an error.
+    match catch_unwind(AssertUnwindSafe(|| load_checked(bytes, source, base_dir))) {
+        Ok(result) => result,
+        Err(panic) => {
+            let detail = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "no details".into());
+            Err(Error::input(format!(
+                "'{source}': the glTF reader failed on this file ({detail}); it is probably malformed: check it with the Khronos glTF Validator and re-export it"
+            )))
+        }
+    }
+}
+
+fn load_checked(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<Scene> {
+    let label = format!("'{source}'");
+    let (mut root, glb_bin) = parse(bytes, source)?;
+    let mut warnings = Vec::new();
+    check_extensions(&mut root, &label, &mut warnings)?;
+    validate(&root, &label)?;
+    let buffers = resources::load_buffers(&root, glb_bin, base_dir, &label)?;
+    let doc = gltf::Document::from_json_without_validation(root);
+
+    let mut loader = Loader {
+        label,
+        base_dir,
+        doc: &doc,
+        buffers: &buffers,
+        scene: Scene { source: source.to_owned(), warnings, ..Scene::default() },
+        textures: HashMap::new(),
+        material_uv: Vec::new(),
+        default_material: None,
+        mesh_ids: vec![None; doc.meshes().len()],
+        lights: Vec::new(),
+        cameras: Vec::new(),
+    };
+    loader.load_materials()?;
+    loader.lights = loader.light_definitions()?;
+    loader.cameras = loader.camera_definitions()?;
+    loader.walk_nodes()?;
+    Ok(loader.scene)
+}
+
+/// Splits a .glb into JSON and binary chunk, or takes the bytes as .gltf JSON, and deserialises
+/// the document.
+fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
+    let not_gltf = |why: &str| {
+        Error::input(format!(
+            "'{source}' is not a glTF 2.0 file (.gltf JSON or .glb): {why}; pass a scene exported as glTF 2.0"
+        ))
+    };
+    let (text, bin): (std::borrow::Cow<[u8]>, Option<Vec<u8>>) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| {
+            Error::input(format!(
+                "'{source}' starts like a binary glTF (.glb) file but its container is broken ({e}); the file is truncated or damaged: re-export it"
+            ))
+        })?;
+        (glb.json, glb.bin.map(|b| b.into_owned()))
+    } else {
+        (std::borrow::Cow::Borrowed(bytes), None)
+    };
+    let text = text.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(&text);
+
+    let value: serde_json::Value = match serde_json::from_slice(text) {
+        Ok(v) => v,
+        Err(e) => {
+            let first = text.iter().find(|b| !b.is_ascii_whitespace());
+            return Err(if first == Some(&b'{') {
+                not_gltf(&format!("it looks like JSON but does not parse ({e})"))
+            } else {
+                not_gltf("it is neither JSON nor a .glb container")
+            });
+        }
+    };
+    let version = value.get("asset").and_then(|a| a.get("version")).and_then(|v| v.as_str());
+    match version {
+        None => return Err(not_gltf("its JSON has no \"asset\": {\"version\": \"2.0\"} object")),
+        Some(v) if !v.starts_with("2.") => {
+            return Err(Error::input(format!(
+                "'{source}' is a glTF {v} file; weft reads glTF 2.0 only: convert it (Blender or gltf-transform can) and try again"
+            )))
+        }
+        Some(_) => {}
+    }
+    let root: json::Root = serde_json::from_slice(text).map_err(|e| {
+        Error::input(format!(
+            "'{source}' is not a valid glTF 2.0 file: {e}; fix the JSON or re-export the scene (the Khronos glTF Validator explains such problems)"
+        ))
+    })?;
+    Ok((root, bin))
+}
+
+/// Refuses required extensions weft cannot honour and warns about used ones it ignores. Removes
+/// weft's own extension from `extensionsRequired`, since the gltf crate's validator only knows its own.
+fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warning>) -> Result<()> {
+    if let Some(ext) = root.extensions_required.iter().find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str())) {
+        return Err(Error::input(format!(
+            "{label} requires the glTF extension '{ext}', which weft does not support (it supports {}); re-export the scene without that extension (for example, turn off mesh compression in the exporter)",
+            SUPPORTED_EXTENSIONS.join(", ")
+        )));
+    }
+    for ext in &root.extensions_used {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+            warnings.push(Warning(format!(
+                "{label} uses the glTF extension '{ext}', which weft ignores; the scene may look different than intended"
+            )));
+        }
+    }
+    root.extensions_required.retain(|e| e != FABRIC_EXTENSION);
+    Ok(())
+}
+
+/// Runs the gltf crate's validator (index bounds, required fields, enum values) and reports its
+/// findings as one error.
+fn validate(root: &json::Root, label: &str) -> Result<()> {
+    // The validator's POSITION hook indexes the accessor list without a bounds check: check first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    let name = match semantic {
+                        Checked::Valid(s) => s.to_string(),
+                        Checked::Invalid => "an unknown attribute".into(),
+                    };
+                    return Err(Error::input(format!(
+                        "{label}: mesh {m} primitive {p} reads {name} from accessor {}, but the file has only {} accessor(s); fix the attribute's accessor index or re-export the scene",
+                        index.value(),
+                        root.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
+
+    let mut problems: Vec<String> = Vec::new();
+    root.validate(root, json::Path::new, &mut |path: &dyn Fn() -> json::Path, error| {
+        use json::validation::Error as E;
+        let what = match error {
+            E::IndexOutOfBounds => "refers to an object that does not exist",
+            E::Invalid => "has an invalid value",
+            E::Missing => "is required but missing",
+            E::Oversize => "is too large",
+            E::Unsupported => "is not supported",
+        };
+        problems.push(format!("{} {what}", path()));
+    });
+    match problems.split_first() {
+        None => Ok(()),
+        Some((first, rest)) => Err(Error::input(format!(
+            "{label} is not a valid glTF 2.0 file: {first}{}; fix the file or re-export the scene (the Khronos glTF Validator lists every problem)",
+            if rest.is_empty() { String::new() } else { format!(" (and {} more problem(s): {})", rest.len(), rest.join("; ")) }
+        ))),
+    }
+}
+
+/// A KHR_lights_punctual light before a node places it.
+struct LightDef {
+    name: String,
+    kind: LightKind,
+    color: [f32; 3],
+    intensity: f32,
+    range: Option<f32>,
+}
+
+/// A perspective camera before a node places it.
+struct CameraDef {
+    name: String,
+    yfov: f32,
+    znear: f32,
+    zfar: Option<f32>,
+    aspect_ratio: Option<f32>,
+}
+
+struct Loader<'a> {
+    /// The source, quoted, for messages.
+    label: String,
+    base_dir: Option<&'a Path>,
+    doc: &'a gltf::Document,
+    buffers: &'a [Vec<u8>],
+    scene: Scene,
+    /// (image index, is sRGB) -> index into `scene.textures`.
+    textures: HashMap<(usize, bool), usize>,
+    /// Per glTF material: the texture transform baked into the texture coordinates of its meshes.
+    material_uv: Vec<UvTransform>,
+    /// Index of `Material::default()` in `scene.materials`, once a primitive needed it.
+    default_material: Option<usize>,
+    /// Per glTF mesh: the scene meshes made from its primitives, once a node used it.
+    mesh_ids: Vec<Option<Vec<usize>>>,
+    lights: Vec<LightDef>,
+    /// None for orthographic cameras, which are skipped.
+    cameras: Vec<Option<CameraDef>>,
+}
+
+impl<'a> Loader<'a> {
+    fn warn(&mut self, message: impl std::fmt::Display) {
+        self.scene.warnings.push(Warning(format!("{}: {message}", self.label)));
+    }
+
+    fn error(&self, message: impl std::fmt::Display) -> Error {
+        Error::input(format!("{}: {message}", self.label))
+    }
+
+    // --- materials and textures -----------------------------------------------------------------
+
+    fn load_materials(&mut self) -> Result<()> {
+        let doc = self.doc;
+        for (index, m) in doc.materials().enumerate() {
+            let (material, uv) = self.material(&m, index)?;
+            self.scene.materials.push(material);
+            self.material_uv.push(uv);
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, m: &gltf::Material<'a>, index: usize) -> Result<(Material, UvTransform)> {
+        let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {index}"));
+        let who = format!("material '{name}'");
+        let pbr = m.pbr_metallic_roughness();
+
+        let label = self.label.clone();
+        let finite = |what: &str, values: &[f32]| -> Result<()> {
+            if values.iter().all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(Error::input(format!("{label}: {who} has a non-finite {what} {values:?}; set it to a finite number")))
+            }
+        };
+        let base_color = pbr.base_color_factor();
+        finite("baseColorFactor", &base_color)?;
+        finite("metallicFactor", &[pbr.metallic_factor()])?;
+        finite("roughnessFactor", &[pbr.roughness_factor()])?;
+        let emissive_strength = m.emissive_strength().unwrap_or(1.0);
+        finite("KHR_materials_emissive_strength", &[emissive_strength])?;
+        let emissive_factor = m.emissive_factor();
+        finite("emissiveFactor", &emissive_factor)?;
+
+        let clamp01 = |what: &str, v: f32, loader: &mut Self| -> f32 {
+            if !(0.0..=1.0).contains(&v) {
+                loader.warn(format_args!("{who} has {what} {v}, outside [0, 1]; clamped"));
+            }
+            v.clamp(0.0, 1.0)
+        };
+        let metallic = clamp01("metallicFactor", pbr.metallic_factor(), self);
+        let roughness = clamp01("roughnessFactor", pbr.roughness_factor(), self);
+
+        // Texture coordinate transforms of the textures, in slot order (base colour first, so it
+        // wins when they disagree).
+        let mut uv_transforms: Vec<(&str, UvTransform)> = Vec::new();
+        let slot = |loader: &mut Self,
+                        info_tex: gltf::Texture<'a>,
+                        tex_coord: u32,
+                        transform: Option<(UvTransform, Option<u32>)>,
+                        slot_name: &'static str,
+                        color_space: ColorSpace,
+                        uv_transforms: &mut Vec<(&'static str, UvTransform)>|
+         -> Result<usize> {
+            let (uv, set) = match transform {
+                Some((t, set)) => (t, set.unwrap_or(tex_coord)),
+                None => (UvTransform::IDENTITY, tex_coord),
+            };
+            if set != 0 {
+                loader.warn(format_args!(
+                    "{who}'s {slot_name} uses TEXCOORD_{set}; weft reads only TEXCOORD_0, so it is sampled with those"
+                ));
+            }
+            uv_transforms.push((slot_name, uv));
+            loader.texture(&info_tex, color_space, &who, slot_name)
+        };
+
+        let info_transform = |info: &gltf::texture::Info| -> Result<Option<(UvTransform, Option<u32>)>> {
+            match info.texture_transform() {
+                None => Ok(None),
+                Some(t) => {
+                    let uv = UvTransform { offset: t.offset(), rotation: t.rotation(), scale: t.scale() };
+                    finite("KHR_texture_transform", &[uv.offset[0], uv.offset[1], uv.rotation, uv.scale[0], uv.scale[1]])?;
+                    Ok(Some((uv, t.tex_coord())))
+                }
+            }
+        };
+
+        let base_color_texture = match pbr.base_color_texture() {
+            Some(info) => Some(slot(
+                self,
+                info.texture(),
+                info.tex_coord(),
+                info_transform(&info)?,
+                "base colour texture",
+                ColorSpace::Srgb,
+                &mut uv_transforms,
+            )?),
+            None => None,
+        };
+        let metallic_roughness_texture = match pbr.metallic_roughness_texture() {
+            Some(info) => Some(slot(
+                self,
+                info.texture(),
+                info.tex_coord(),
+                info_transform(&info)?,
+                "metallic-roughness texture",
+                ColorSpace::Linear,
+                &mut uv_transforms,
+            )?),
+            None => None,
+        };
+        let (normal_texture, normal_scale) = match m.normal_texture() {
+            Some(normal) => {
+                // The gltf crate leaves KHR_texture_transform on normal textures as raw JSON.
+                let transform = match normal.extension_value("KHR_texture_transform") {
+                    Some(v) => Some(self.parse_texture_transform(v, &who)?),
+                    None => None,
+                };
+                let scale = normal.scale();
+                finite("normalTexture.scale", &[scale])?;
+                let t = slot(
+                    self,
+                    normal.texture(),
+                    normal.tex_coord(),
+                    transform,
+                    "normal texture",
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?;
+                (Some(t), scale)
+            }
+            None => (None, 1.0),
+        };
+        let emissive_texture = match m.emissive_texture() {
+            Some(info) => Some(slot(
+                self,
+                info.texture(),
+                info.tex_coord(),
+                info_transform(&info)?,
+                "emissive texture",
+                ColorSpace::Srgb,
+                &mut uv_transforms,
+            )?),
+            None => None,
+        };
+        if m.occlusion_texture().is_some() {
+            self.warn(format_args!("{who} has an occlusion texture, which weft does not use"));
+        }
+        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
+            self.warn(format_args!("{who} has alphaMode {:?}; weft draws every material opaque", m.alpha_mode()));
+        }
+
+        // One set of texture coordinates per mesh: the transform is baked into them, which is
+        // exact when every texture of the material agrees.
+        let uv = match uv_transforms.split_first() {
+            None => UvTransform::IDENTITY,
+            Some(((first_slot, first), rest)) => {
+                if let Some((other_slot, _)) = rest.iter().find(|(_, t)| t != first) {
+                    self.warn(format_args!(
+                        "{who}'s {first_slot} and {other_slot} have different KHR_texture_transform settings; weft applies one transform per material, the {first_slot}'s"
+                    ));
+                }
+                *first
+            }
+        };
+
+        let fabric = match m.extensions().and_then(|e| e.get(FABRIC_EXTENSION)) {
+            Some(value) => Some(FabricParams::from_gltf_extension(value, &name, &mut self.scene.warnings).map_err(
+                |e| match e {
+                    Error::Input(msg) => self.error(msg),
+                    other => other,
+                },
+            )?),
+            None => None,
+        };
+
+        let material = Material {
+            name,
+            base_color,
+            metallic,
+            roughness,
+            emissive: (Vec3::from(emissive_factor) * emissive_strength).to_array(),
+            normal_scale,
+            base_color_texture,
+            metallic_roughness_texture,
+            normal_texture,
+            emissive_texture,
+            double_sided: m.double_sided(),
+            fabric,
+        };
+        Ok((material, uv))
+    }
+
+    /// KHR_texture_transform from raw JSON (normal textures).
+    fn parse_texture_transform(&self, v: &serde_json::Value, who: &str) -> Result<(UvTransform, Option<u32>)> {
+        let bad = || {
+            self.error(format_args!(
+                "{who}'s normal texture has a malformed KHR_texture_transform ({v}); offset and scale must be [x, y] numbers, rotation a number, texCoord an unsigned integer"
+            ))
+        };
+        let pair = |key: &str, default: [f32; 2]| -> Result<[f32; 2]> {
+            match v.get(key) {
+                None => Ok(default),
+                Some(serde_json::Value::Array(a)) if a.len() == 2 => {
+                    let x = a[0].as_f64().ok_or_else(bad)? as f32;
+                    let y = a[1].as_f64().ok_or_else(bad)? as f32;
+                    Ok([x, y])
+                }
+                Some(_) => Err(bad()),
+            }
+        };
+        let rotation = match v.get("rotation") {
+            None => 0.0,
+            Some(r) => r.as_f64().ok_or_else(bad)? as f32,
+        };
+        let tex_coord = match v.get("texCoord") {
+            None => None,
+            Some(t) => Some(t.as_u64().and_then(|t| u32::try_from(t).ok()).ok_or_else(bad)?),
+        };
+        let uv = UvTransform { offset: pair("offset", [0.0, 0.0])?, rotation, scale: pair("scale", [1.0, 1.0])? };
+        if ![uv.offset[0], uv.offset[1], uv.rotation, uv.scale[0], uv.scale[1]].iter().all(|x| x.is_finite()) {
+            return Err(bad());
+        }
+        Ok((uv, tex_coord))
+    }
+
+    /// The scene texture for `texture`'s image in `color_space`, decoding the image on first use.
+    fn texture(&mut self, texture: &gltf::Texture<'a>, color_space: ColorSpace, who: &str, slot: &str) -> Result<usize> {
+        let image = texture.source().index();
+        let key = (image, color_space == ColorSpace::Srgb);
+        if let Some(&index) = self.textures.get(&key) {
+            return Ok(index);
+        }
+        let root = self.doc.as_json();
+        let what = format!("{who} ({slot}, texture {})", texture.index());
+        let decoded = resources::load_image(root, self.buffers, image, self.base_dir, &self.label, &what)?;
+        let space = match color_space {
+            ColorSpace::Srgb => "sRGB",
+            ColorSpace::Linear => "linear",
+        };
+        self.scene.textures.push(Texture {
+            name: format!("{} ({space})", resources::image_label(root, image)),
+            width: decoded.width,
+            height: decoded.height,
+            color_space,
+            rgba8: decoded.rgba8,
+        });
+        let index = self.scene.textures.len() - 1;
+        self.textures.insert(key, index);
+        Ok(index)
+    }
+
+    // --- meshes ---------------------------------------------------------------------------------
+
+    /// The scene meshes of glTF mesh `mesh` (one per triangle primitive), built on first use.
+    fn mesh_ids(&mut self, mesh: &gltf::Mesh<'a>) -> Result<Vec<usize>> {
+        if let Some(Some(ids)) = self.mesh_ids.get(mesh.index()) {
+            return Ok(ids.clone());
+        }
+        let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+        let several = mesh.primitives().len() > 1;
+        let mut ids = Vec::new();
+        for prim in mesh.primitives() {
+            let who = format!("mesh '{name}' primitive {}", prim.index());
+            if prim.mode() != Mode::Triangles {
+                self.warn(format_args!(
+                    "{who} has mode {:?}; weft draws only TRIANGLES, so this primitive is skipped (export it as triangles to see it)",
+                    prim.mode()
+                ));
+                continue;
+            }
+            let mesh_name = if several { format!("{name} (primitive {})", prim.index()) } else { name.clone() };
+            if let Some(m) = self.primitive(&prim, &who, mesh_name)? {
+                self.scene.meshes.push(m);
+                ids.push(self.scene.meshes.len() - 1);
+            }
+        }
+        if let Some(slot) = self.mesh_ids.get_mut(mesh.index()) {
+            *slot = Some(ids.clone());
+        }
+        Ok(ids)
+    }
+
+    fn material_index(&mut self, prim: &gltf::Primitive<'a>) -> usize {
+        match prim.material().index() {
+            Some(i) => i,
+            None => *self.default_material.get_or_insert_with(|| {
+                self.scene.materials.push(Material::default());
+                self.scene.materials.len() - 1
+            }),
+        }
+    }
+
+    fn primitive(&mut self, prim: &gltf::Primitive<'a>, who: &str, name: String) -> Result<Option<Mesh>> {
+        let buffers = self.buffers;
+        let read = |semantic: &Semantic, dims: Dimensions| -> Result<Option<(usize, Vec<f32>)>> {
+            match prim.get(semantic) {
+                None => Ok(None),
+                Some(acc) => {
+                    let what = format!("{who}, attribute {}", semantic.to_string());
+                    let values = accessor::read_f32(&acc, dims, buffers, &Use { source: &self.label, what: &what })?;
+                    Ok(Some((acc.index(), values)))
+                }
+            }
+        };
+        let (pos_accessor, positions) = read(&Semantic::Positions, Dimensions::Vec3)?.ok_or_else(|| {
+            self.error(format_args!("{who} has no POSITION attribute; every primitive needs one: re-export the mesh"))
+        })?;
+        let count = positions.len() / 3;
+        if u32::try_from(count).is_err() {
+            return Err(self.error(format_args!("{who} has {count} vertices; weft supports at most 2^32 - 1 per primitive: split the mesh")));
+        }
+        let normals = read(&Semantic::Normals, Dimensions::Vec3)?;
+        let tangents = read(&Semantic::Tangents, Dimensions::Vec4)?;
+        let uvs = read(&Semantic::TexCoords(0), Dimensions::Vec2)?;
+        for (semantic, attr, n) in [
+            ("NORMAL", &normals, 3),
+            ("TANGENT", &tangents, 4),
+            ("TEXCOORD_0", &uvs, 2),
+        ] {
+            if let Some((acc, values)) = attr {
+                if values.len() / n != count {
+                    return Err(self.error(format_args!(
+                        "{who}: attribute {semantic} (accessor {acc}) has {} elements but POSITION (accessor {pos_accessor}) has {count}; all attributes of a primitive must have the same count: re-export the mesh",
+                        values.len() / n
+                    )));
+                }
+            }
+        }
+        if prim.get(&Semantic::Colors(0)).is_some() {
+            self.warn(format_args!("{who} has vertex colours (COLOR_0), which weft ignores"));
+        }
+        if prim.morph_targets().len() > 0 {
+            self.warn(format_args!("{who} has morph targets, which weft ignores (it draws the base shape)"));
+        }
+
+        let mut indices = match prim.indices() {
+            Some(acc) => {
+                let what = format!("{who}, indices");
+                let indices = accessor::read_u32(&acc, buffers, &Use { source: &self.label, what: &what })?;
+                if let Some((k, &i)) = indices.iter().enumerate().find(|(_, &i)| i as usize >= count) {
+                    return Err(self.error(format_args!(
+                        "{who}: index accessor {} holds index {i} at position {k}, but the primitive has only {count} vertices (POSITION accessor {pos_accessor}); fix the indices or re-export the mesh",
+                        acc.index()
+                    )));
+                }
+                indices
+            }
+            None => (0..count as u32).collect(),
+        };
+        if indices.len() % 3 != 0 {
+            self.warn(format_args!(
+                "{who} has {} indices, not a multiple of 3; the last {} are ignored",
+                indices.len(),
+                indices.len() % 3
+            ));
+            indices.truncate(indices.len() / 3 * 3);
+        }
+        if indices.is_empty() {
+            self.warn(format_args!("{who} has no triangles; skipped"));
+            return Ok(None);
+        }
+
+        // Positions: a non-finite vertex in a triangle breaks rasterisation, bounds and tangents.
+        let position = |v: usize| [positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]];
+        if let Some((corner, &v)) = indices.iter().enumerate().find(|(_, &v)| !position(v as usize).iter().all(|c| c.is_finite())) {
+            return Err(self.error(format_args!(
+                "{who}: vertex {v} of triangle {} has the non-finite position {:?} (POSITION accessor {pos_accessor}); fix or delete that vertex in your modelling tool and re-export",
+                corner / 3,
+                position(v as usize)
+            )));
+        }
+
+        let mut vertices: Vec<Vertex> = (0..count)
+            .map(|v| Vertex {
+                // Vertices no triangle uses are never drawn; keep them finite all the same.
+                position: position(v).map(|c| if c.is_finite() { c } else { 0.0 }),
+                normal: normals.as_ref().map_or([0.0; 3], |(_, n)| [n[3 * v], n[3 * v + 1], n[3 * v + 2]]),
+                tangent: tangents.as_ref().map_or([0.0; 4], |(_, t)| [t[4 * v], t[4 * v + 1], t[4 * v + 2], t[4 * v + 3]]),
+                uv: uvs.as_ref().map_or([0.0; 2], |(_, t)| [t[2 * v], t[2 * v + 1]]),
+            })
+            .collect();
+
+        let material = self.material_index(prim);
+        let uv_transform = prim.material().index().and_then(|m| self.material_uv.get(m)).copied().unwrap_or(UvTransform::IDENTITY);
+
+        if uvs.is_some() {
+            let bad = vertices.iter().filter(|v| !v.uv.iter().all(|c| c.is_finite())).count();
+            if bad > 0 {
+                self.warn(format_args!("{who} has {bad} non-finite texture coordinate(s); replaced by (0, 0)"));
+                for v in vertices.iter_mut().filter(|v| !v.uv.iter().all(|c| c.is_finite())) {
+                    v.uv = [0.0, 0.0];
+                }
+            }
+            if uv_transform != UvTransform::IDENTITY {
+                for v in vertices.iter_mut() {
+                    v.uv = uv_transform.apply(v.uv);
+                }
+            }
+        } else {
+            let m = self.scene.materials.get(material);
+            let needs_uvs = m.is_some_and(|m| {
+                m.fabric.is_some()
+                    || m.base_color_texture.is_some()
+                    || m.metallic_roughness_texture.is_some()
+                    || m.normal_texture.is_some()
+                    || m.emissive_texture.is_some()
+            });
+            if needs_uvs {
+                let mname = m.map(|m| m.name.clone()).unwrap_or_default();
+                self.warn(format_args!(
+                    "{who} has no texture coordinates (TEXCOORD_0) but its material '{mname}' has textures or a weave; they will look flat: add UVs to the mesh"
+                ));
+            }
+        }
+
+        if normals.is_none() {
+            tangents::generate_normals(&mut vertices, &indices);
+            self.warn(format_args!("{who} has no normals; generated them from the triangles (export normals for the intended shading)"));
+        }
+        let bad_normals = tangents::repair_normals(&mut vertices, &indices);
+
+        let bad_tangents = if tangents.is_some() && !uv_transform.turns_or_mirrors() {
+            tangents::repair_tangents(&mut vertices)
+        } else if uvs.is_some() {
+            if !tangents::mikktspace_tangents(&mut vertices, &mut indices) {
+                tangents::arbitrary_tangents(&mut vertices);
+            }
+            tangents::repair_tangents(&mut vertices)
+        } else {
+            tangents::arbitrary_tangents(&mut vertices);
+            0
+        };
+        if bad_normals + bad_tangents > 0 {
+            self.warn(format_args!(
+                "{who}: {bad_normals} normal(s) and {bad_tangents} tangent(s) were zero-length, degenerate or not finite; replaced by a fallback frame (check the mesh's normals and UVs in your modelling tool)"
+            ));
+        }
+
+        Ok(Some(Mesh { name, vertices, indices, material }))
+    }
+
+    // --- lights and cameras ---------------------------------------------------------------------
+
+    fn light_definitions(&mut self) -> Result<Vec<LightDef>> {
+        let root = self.doc.as_json();
+        let lights = root.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()).map_or(&[][..], |l| &l.lights[..]);
+        let mut out = Vec::with_capacity(lights.len());
+        for (i, l) in lights.iter().enumerate() {
+            let name = l.name.clone().unwrap_or_else(|| format!("light {i}"));
+            let who = format!("light '{name}' (KHR_lights_punctual light {i})");
+            use json::extensions::scene::khr_lights_punctual::Type;
+            let kind = match (&l.type_, &l.spot) {
+                (Checked::Valid(Type::Directional), _) => LightKind::Directional,
+                (Checked::Valid(Type::Point), _) => LightKind::Point,
+                (Checked::Valid(Type::Spot), Some(spot)) => {
+                    let (inner, outer) = (spot.inner_cone_angle, spot.outer_cone_angle);
+                    let half_pi = std::f32::consts::FRAC_PI_2;
+                    if !(inner.is_finite() && outer.is_finite() && 0.0 <= inner && inner < outer && outer <= half_pi) {
+                        return Err(self.error(format_args!(
+                            "{who} has innerConeAngle {inner} and outerConeAngle {outer}; they must satisfy 0 <= inner < outer <= pi/2 (radians): fix the spot angles"
+                        )));
+                    }
+                    LightKind::Spot { inner_cone: inner, outer_cone: outer }
+                }
+                _ => return Err(self.error(format_args!("{who} has no valid type and spot parameters; re-export the light"))),
+            };
+            if !(l.intensity.is_finite() && l.intensity >= 0.0) {
+                return Err(self.error(format_args!("{who} has intensity {}; it must be a finite number >= 0", l.intensity)));
+            }
+            if !l.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                return Err(self.error(format_args!("{who} has colour {:?}; components must be finite and >= 0", l.color)));
+            }
+            let range = match (kind, l.range) {
+                // The extension defines no range for directional lights.
+                (LightKind::Directional, _) | (_, None) => None,
+                (_, Some(r)) if r.is_finite() && r > 0.0 => Some(r),
+                (_, Some(r)) => {
+                    return Err(self.error(format_args!("{who} has range {r}; it must be > 0 (or left out for no cut-off)")))
+                }
+            };
+            out.push(LightDef { name, kind, color: l.color, intensity: l.intensity, range });
+        }
+        Ok(out)
+    }
+
+    fn camera_definitions(&mut self) -> Result<Vec<Option<CameraDef>>> {
+        let root = self.doc.as_json();
+        let mut out = Vec::with_capacity(root.cameras.len());
+        for (i, c) in root.cameras.iter().enumerate() {
+            let name = c.name.clone().unwrap_or_else(|| format!("camera {i}"));
+            let who = format!("camera '{name}' (camera {i})");
+            let p = match (&c.type_, &c.perspective) {
+                (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
+                (Checked::Valid(json::camera::Type::Orthographic), _) => {
+                    self.warn(format_args!("{who} is orthographic; weft renders perspective cameras only, so it is skipped"));
+                    out.push(None);
+                    continue;
+                }
+                _ => {
+                    return Err(self.error(format_args!(
+                        "{who} has type perspective but no \"perspective\" object; add one with yfov and znear"
+                    )))
+                }
+            };
+            if !(p.yfov.is_finite() && p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
+                return Err(self.error(format_args!(
+                    "{who} has yfov {} rad; the vertical field of view must be between 0 and pi radians (exclusive): set perspective.yfov, e.g. 0.7 for 40 degrees",
+                    p.yfov
+                )));
+            }
+            if !(p.znear.is_finite() && p.znear > 0.0) {
+                return Err(self.error(format_args!(
+                    "{who} has znear {}; the near plane distance must be > 0: set perspective.znear, e.g. 0.05",
+                    p.znear
+                )));
+            }
+            if let Some(zfar) = p.zfar {
+                if !(zfar.is_finite() && zfar > p.znear) {
+                    return Err(self.error(format_args!(
+                        "{who} has zfar {zfar} with znear {}; zfar must be greater than znear (or left out for an infinite far plane)",
+                        p.znear
+                    )));
+                }
+            }
+            if let Some(a) = p.aspect_ratio {
+                if !(a.is_finite() && a > 0.0) {
+                    return Err(self.error(format_args!("{who} has aspectRatio {a}; it must be > 0 (or left out)")));
+                }
+            }
+            out.push(Some(CameraDef { name, yfov: p.yfov, znear: p.znear, zfar: p.zfar, aspect_ratio: p.aspect_ratio }));
+        }
+        Ok(out)
+    }
+
+    // --- the node tree --------------------------------------------------------------------------
+
+    fn walk_nodes(&mut self) -> Result<()> {
+        let doc = self.doc;
+        let roots: Vec<gltf::Node<'a>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+            Some(scene) => {
+                if doc.scenes().len() > 1 {
+                    let name = scene.name().map(|n| format!(" ('{n}')")).unwrap_or_default();
+                    self.warn(format_args!("has {} scenes; weft renders scene {}{name}", doc.scenes().len(), scene.index()));
+                }
+                scene.nodes().collect()
+            }
+            None => {
+                // No scene: draw every node that is nobody's child.
+                let mut is_child = vec![false; doc.nodes().len()];
+                for node in doc.nodes() {
+                    for child in node.children() {
+                        if let Some(c) = is_child.get_mut(child.index()) {
+                            *c = true;
+                        }
+                    }
+                }
+                let roots: Vec<_> = doc.nodes().filter(|n| !is_child.get(n.index()).copied().unwrap_or(false)).collect();
+                if !roots.is_empty() {
+                    self.warn("has no scenes; drawing every root node");
+                }
+                roots
+            }
+        };
+
+        let mut visited = vec![false; doc.nodes().len()];
+        let mut stack: Vec<(gltf::Node<'a>, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+        while let Some((node, parent)) = stack.pop() {
+            let name = node.name().map(str::to_owned).unwrap_or_else(|| format!("node {}", node.index()));
+            let who = format!("node '{name}' (node {})", node.index());
+            match visited.get_mut(node.index()) {
+                Some(seen) if !*seen => *seen = true,
+                _ => {
+                    return Err(self.error(format_args!(
+                        "{who} is reached twice in the node hierarchy; glTF nodes must form trees (each node has at most one parent, no cycles): fix the \"children\" lists"
+                    )))
+                }
+            }
+            let world = parent * self.local_transform(&node, &who)?;
+            if !world.is_finite() {
+                return Err(self.error(format_args!(
+                    "{who} has a world transform that is not finite (check its and its parents' translation, rotation, scale or matrix)"
+                )));
+            }
+
+            if let Some(mesh) = node.mesh() {
+                if node.skin().is_some() {
+                    self.warn(format_args!("{who} is skinned; weft ignores skins and draws the mesh in its bind pose"));
+                }
+                for id in self.mesh_ids(&mesh)? {
+                    self.scene.draws.push(Draw { mesh: id, world });
+                }
+            }
+            if let Some(camera) = node.camera() {
+                self.place_camera(camera.index(), world, &who);
+            }
+            let light = doc
+                .as_json()
+                .nodes
+                .get(node.index())
+                .and_then(|n| n.extensions.as_ref())
+                .and_then(|e| e.khr_lights_punctual.as_ref())
+                .map(|l| l.light.value());
+            if let Some(light) = light {
+                self.place_light(light, world, &who)?;
+            }
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child, world));
+            }
+        }
+        Ok(())
+    }
+
+    fn local_transform(&self, node: &gltf::Node<'a>, who: &str) -> Result<Mat4> {
+        Ok(match node.transform() {
+            gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
+            gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+                let q = Quat::from_array(rotation);
+                // glTF requires unit quaternions; exporters round, so normalise, but a zero one is wrong.
+                let q = if q.length_squared() > 1e-12 && q.is_finite() {
+                    q.normalize()
+                } else {
+                    return Err(self.error(format_args!(
+                        "{who} has the rotation {rotation:?}, which is not a unit quaternion; set it to [x, y, z, w] of length 1 ([0, 0, 0, 1] for none)"
+                    )));
+                };
+                Mat4::from_scale_rotation_translation(Vec3::from(scale), q, Vec3::from(translation))
+            }
+        })
+    }
+
+    fn place_light(&mut self, index: usize, world: Mat4, who: &str) -> Result<()> {
+        let Some(def) = self.lights.get(index) else {
+            return Err(self.error(format_args!("{who} refers to light {index}, which does not exist; fix the node's KHR_lights_punctual.light")));
+        };
+        let position = world.w_axis.truncate();
+        let Some(direction) = (world * Vec4::new(0.0, 0.0, -1.0, 0.0)).truncate().try_normalize() else {
+            let name = def.name.clone();
+            self.warn(format_args!("{who} scales light '{name}' to nothing, so it has no direction; the light is skipped"));
+            return Ok(());
+        };
+        self.scene.lights.push(Light {
+            name: def.name.clone(),
+            kind: def.kind,
+            color: def.color,
+            intensity: def.intensity,
+            range: def.range,
+            position,
+            direction,
+        });
+        Ok(())
+    }
+
+    fn place_camera(&mut self, index: usize, world: Mat4, who: &str) {
+        let Some(Some(def)) = self.cameras.get(index) else { return };
+        // The view is the inverse of the node's rigid motion: scale (even mirroring) is removed,
+        // keeping the view direction (-Z) and the up direction (+Y) of the node.
+        let z = world.z_axis.truncate().try_normalize();
+        let y = z.and_then(|z| {
+            let y = world.y_axis.truncate();
+            (y - z * z.dot(y)).try_normalize()
+        });
+        let (Some(z), Some(y)) = (z, y) else {
+            let name = def.name.clone();
+            self.warn(format_args!("{who} scales camera '{name}' to nothing, so it has no orientation; the camera is skipped"));
+            return;
+        };
+        let x = y.cross(z);
+        let rigid = Mat4::from_cols(x.extend(0.0), y.extend(0.0), z.extend(0.0), world.w_axis);
+        let camera = Camera {
+            name: def.name.clone(),
+            view: rigid.inverse(),
+            yfov: def.yfov,
+            znear: def.znear,
+            zfar: def.zfar,
+            aspect_ratio: def.aspect_ratio,
+        };
+        self.scene.cameras.push(camera);
+    }
+}

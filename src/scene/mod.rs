@@ -1,0 +1,217 @@
+//! Scenes: what the renderer draws, as plain data with no GPU handles.
+//!
+//! `load` turns a glTF 2.0 file (`.gltf` or `.glb`) into a [`Scene`]: the node hierarchy is
+//! flattened into [`Draw`]s with world matrices, tangents are generated (MikkTSpace) where the file
+//! has none, lights come from `KHR_lights_punctual`, and the fabric extension
+//! (`WEFT_materials_fabric`) is parsed into [`crate::fabric::FabricParams`].
+//! [`default_scene`] is the built-in scene embedded in the binary.
+
+use glam::{Mat4, Vec3};
+
+mod accessor;
+mod gltf_load;
+mod resources;
+mod tangents;
+pub use gltf_load::{load, load_slice, default_scene, DEFAULT_SCENE_GLB};
+
+/// One vertex as the G-buffer pass reads it (std430-compatible, 48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    /// xyz: tangent along +u; w: handedness sign (+1 or -1), bitangent = w * cross(n, t).
+    pub tangent: [f32; 4],
+    pub uv: [f32; 2],
+}
+
+/// A triangle list with one material, in object space.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub name: String,
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+    pub material: usize,
+}
+
+/// An instance of a mesh in the world.
+#[derive(Clone, Debug)]
+pub struct Draw {
+    pub mesh: usize,
+    pub world: Mat4,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorSpace {
+    Srgb,
+    Linear,
+}
+
+/// An RGBA8 texture, already decoded.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub color_space: ColorSpace,
+    /// width * height * 4 bytes, rows top to bottom.
+    pub rgba8: Vec<u8>,
+}
+
+/// glTF metallic-roughness material, plus the optional fabric model.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub base_color: [f32; 4],
+    pub metallic: f32,
+    pub roughness: f32,
+    pub emissive: [f32; 3],
+    pub normal_scale: f32,
+    /// Indices into `Scene::textures`.
+    pub base_color_texture: Option<usize>,
+    pub metallic_roughness_texture: Option<usize>,
+    pub normal_texture: Option<usize>,
+    pub emissive_texture: Option<usize>,
+    pub double_sided: bool,
+    pub fabric: Option<crate::fabric::FabricParams>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        // glTF's default material.
+        Material {
+            name: "default".into(),
+            base_color: [1.0; 4],
+            metallic: 1.0,
+            roughness: 1.0,
+            emissive: [0.0; 3],
+            normal_scale: 1.0,
+            base_color_texture: None,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            emissive_texture: None,
+            double_sided: false,
+            fabric: None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    Directional,
+    Point,
+    /// Cone angles in radians, as in KHR_lights_punctual.
+    Spot { inner_cone: f32, outer_cone: f32 },
+}
+
+/// A punctual light in world space (KHR_lights_punctual units: lux for directional, candela otherwise).
+#[derive(Clone, Debug)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    pub color: [f32; 3],
+    pub intensity: f32,
+    /// None = infinite.
+    pub range: Option<f32>,
+    pub position: Vec3,
+    /// Direction the light travels (the node's -Z), unit length.
+    pub direction: Vec3,
+}
+
+/// A perspective camera in world space.
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub name: String,
+    /// World-to-view transform (view space looks down -Z, +Y up).
+    pub view: Mat4,
+    /// Vertical field of view in radians, in (0, pi).
+    pub yfov: f32,
+    pub znear: f32,
+    /// None = infinite far plane.
+    pub zfar: Option<f32>,
+    /// Aspect ratio stored in the file; the renderer uses the output image's.
+    pub aspect_ratio: Option<f32>,
+}
+
+/// Non-fatal problems found while loading: the scene still renders, and the CLI prints these.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Warning(pub String);
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Where the scene came from (a path, or "built-in default scene"), for messages.
+    pub source: String,
+    pub meshes: Vec<Mesh>,
+    pub draws: Vec<Draw>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub lights: Vec<Light>,
+    pub cameras: Vec<Camera>,
+    pub warnings: Vec<Warning>,
+}
+
+/// Axis-aligned bounds in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Scene {
+    /// World-space bounds of every drawn vertex; None for a scene with nothing to draw.
+    pub fn bounds(&self) -> Option<Bounds> {
+        let mut min = Vec3::splat(f32::INFINITY);
+        let mut max = Vec3::splat(f32::NEG_INFINITY);
+        for d in &self.draws {
+            for v in &self.meshes[d.mesh].vertices {
+                let p = d.world.transform_point3(Vec3::from(v.position));
+                if p.is_finite() {
+                    min = min.min(p);
+                    max = max.max(p);
+                }
+            }
+        }
+        (min.x <= max.x).then_some(Bounds { min, max })
+    }
+
+    /// The camera to render with: the file's camera `index`, or (when None) the file's first camera,
+    /// or an automatic framing of the bounds seen from the front, slightly above.
+    pub fn camera(&self, index: Option<usize>) -> Result<Camera, crate::Error> {
+        match index {
+            Some(i) => self.cameras.get(i).cloned().ok_or_else(|| {
+                crate::Error::input(format!(
+                    "camera {i} does not exist in {}: it has {} camera(s); pass --camera with an index below {}, or leave it out for automatic framing",
+                    self.source,
+                    self.cameras.len(),
+                    self.cameras.len().max(1)
+                ))
+            }),
+            None => Ok(self.cameras.first().cloned().unwrap_or_else(|| self.auto_camera())),
+        }
+    }
+
+    /// Frames the scene's bounds: looks at the centre from the +Z side, 20 degrees above.
+    pub fn auto_camera(&self) -> Camera {
+        let b = self.bounds().unwrap_or(Bounds { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
+        let center = (b.min + b.max) * 0.5;
+        let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
+        let yfov = 45f32.to_radians();
+        let dist = radius / (yfov * 0.5).sin() * 1.05;
+        let dir = Vec3::new(0.0, 20f32.to_radians().sin(), 20f32.to_radians().cos());
+        let eye = center + dir * dist;
+        Camera {
+            name: "automatic framing".into(),
+            view: Mat4::look_at_rh(eye, center, Vec3::Y),
+            yfov,
+            znear: (dist - radius).max(radius * 1e-3),
+            zfar: Some(dist + radius * 2.0),
+            aspect_ratio: None,
+        }
+    }
+}

@@ -1,0 +1,313 @@
+//! Command recording: a safe wrapper over one command buffer, and one-shot submission.
+//!
+//! Image layouts are named by what the image is used for next ([`Usage`]); a transition is a
+//! synchronization2 barrier from one usage to another.
+
+use ash::vk;
+
+use super::context::{vkerr, Context, Shared};
+use super::pipeline::{DescriptorSet, Pipeline};
+use super::resources::{Buffer, Image, QueryPool};
+
+/// How an image is used, which fixes its layout, stages and access.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Usage {
+    Undefined,
+    ColorAttachment,
+    DepthAttachment,
+    /// Sampled in fragment shaders.
+    FragmentRead,
+    /// Sampled in compute shaders.
+    ComputeRead,
+    /// Written as a storage image in compute shaders.
+    ComputeWrite,
+    TransferSrc,
+    TransferDst,
+}
+
+impl Usage {
+    fn parts(self) -> (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2) {
+        use vk::{AccessFlags2 as A, ImageLayout as L, PipelineStageFlags2 as S};
+        match self {
+            Usage::Undefined => (L::UNDEFINED, S::TOP_OF_PIPE, A::NONE),
+            Usage::ColorAttachment => (
+                L::COLOR_ATTACHMENT_OPTIMAL,
+                S::COLOR_ATTACHMENT_OUTPUT,
+                A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
+            ),
+            Usage::DepthAttachment => (
+                L::DEPTH_ATTACHMENT_OPTIMAL,
+                S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
+                A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ,
+            ),
+            Usage::FragmentRead => (L::SHADER_READ_ONLY_OPTIMAL, S::FRAGMENT_SHADER, A::SHADER_SAMPLED_READ),
+            Usage::ComputeRead => (L::SHADER_READ_ONLY_OPTIMAL, S::COMPUTE_SHADER, A::SHADER_SAMPLED_READ),
+            Usage::ComputeWrite => (L::GENERAL, S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ),
+            Usage::TransferSrc => (L::TRANSFER_SRC_OPTIMAL, S::ALL_TRANSFER, A::TRANSFER_READ),
+            Usage::TransferDst => (L::TRANSFER_DST_OPTIMAL, S::ALL_TRANSFER, A::TRANSFER_WRITE),
+        }
+    }
+}
+
+/// One attachment of a dynamic-rendering pass: the image and, if it is cleared, the clear value.
+pub struct Attachment<'a> {
+    pub image: &'a Image,
+    pub clear: Option<[f32; 4]>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cull {
+    None,
+    Back,
+}
+
+/// A command buffer being recorded.
+pub struct Cmd<'a> {
+    shared: &'a Shared,
+    raw: vk::CommandBuffer,
+}
+
+impl Cmd<'_> {
+    fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// Barrier: `image` (mips `levels`, or all when None) goes from `from` to `to`.
+    pub fn transition(&mut self, image: &Image, from: Usage, to: Usage, levels: Option<(u32, u32)>) {
+        let (old_layout, src_stage, src_access) = from.parts();
+        let (new_layout, dst_stage, dst_access) = to.parts();
+        let (base, count) = levels.unwrap_or((0, image.desc.mip_levels));
+        let barrier = vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(src_stage)
+            .src_access_mask(src_access)
+            .dst_stage_mask(dst_stage)
+            .dst_access_mask(dst_access)
+            .old_layout(old_layout)
+            .new_layout(new_layout)
+            .image(image.raw)
+            .subresource_range(vk::ImageSubresourceRange {
+                aspect_mask: image.aspect(),
+                base_mip_level: base,
+                level_count: count,
+                base_array_layer: 0,
+                layer_count: 1,
+            });
+        let barriers = [barrier];
+        let dep = vk::DependencyInfo::default().image_memory_barriers(&barriers);
+        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+    }
+
+    /// Makes transfer or shader writes to buffers visible to everything after.
+    pub fn buffer_barrier(&mut self) {
+        let barrier = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
+        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
+        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+    }
+
+    /// Begins dynamic rendering over the full extent of the first attachment, and sets the
+    /// viewport and scissor to it.
+    pub fn begin_rendering(&mut self, colors: &[Attachment], depth: Option<Attachment>) {
+        let extent = colors.first().or(depth.as_ref()).map(|a| a.image.extent()).unwrap_or((1, 1));
+        let attachment = |a: &Attachment, layout: vk::ImageLayout, depth: bool| {
+            let clear = match (a.clear, depth) {
+                (Some(c), false) => vk::ClearValue { color: vk::ClearColorValue { float32: c } },
+                (Some(c), true) => vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: c[0], stencil: 0 } },
+                (None, _) => vk::ClearValue::default(),
+            };
+            vk::RenderingAttachmentInfo::default()
+                .image_view(a.image.view)
+                .image_layout(layout)
+                .load_op(if a.clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(clear)
+        };
+        let color_infos: Vec<_> =
+            colors.iter().map(|a| attachment(a, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, false)).collect();
+        let depth_info = depth.as_ref().map(|a| attachment(a, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, true));
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width: extent.0, height: extent.1 } };
+        let mut info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&color_infos);
+        if let Some(d) = depth_info.as_ref() {
+            info = info.depth_attachment(d);
+        }
+        unsafe {
+            self.device().cmd_begin_rendering(self.raw, &info);
+            let viewport = vk::Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: extent.0 as f32,
+                height: extent.1 as f32,
+                min_depth: 0.0,
+                max_depth: 1.0,
+            };
+            self.device().cmd_set_viewport(self.raw, 0, &[viewport]);
+            self.device().cmd_set_scissor(self.raw, 0, &[area]);
+            self.device().cmd_set_cull_mode(self.raw, vk::CullModeFlags::NONE);
+        }
+    }
+
+    pub fn end_rendering(&mut self) {
+        unsafe { self.device().cmd_end_rendering(self.raw) };
+    }
+
+    pub fn set_cull(&mut self, cull: Cull) {
+        let mode = match cull {
+            Cull::None => vk::CullModeFlags::NONE,
+            Cull::Back => vk::CullModeFlags::BACK,
+        };
+        unsafe { self.device().cmd_set_cull_mode(self.raw, mode) };
+    }
+
+    pub fn bind_pipeline(&mut self, pipeline: &Pipeline) {
+        unsafe { self.device().cmd_bind_pipeline(self.raw, pipeline.bind_point, pipeline.raw) };
+    }
+
+    pub fn bind_sets(&mut self, pipeline: &Pipeline, first: u32, sets: &[DescriptorSet]) {
+        let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
+        unsafe { self.device().cmd_bind_descriptor_sets(self.raw, pipeline.bind_point, pipeline.layout, first, &raw, &[]) };
+    }
+
+    pub fn push_constants<T: bytemuck::Pod>(&mut self, pipeline: &Pipeline, value: &T) {
+        let bytes = bytemuck::bytes_of(value);
+        unsafe { self.device().cmd_push_constants(self.raw, pipeline.layout, pipeline.push_stages, 0, bytes) };
+    }
+
+    pub fn bind_vertex_buffer(&mut self, buffer: &Buffer) {
+        unsafe { self.device().cmd_bind_vertex_buffers(self.raw, 0, &[buffer.raw], &[0]) };
+    }
+
+    pub fn bind_index_buffer(&mut self, buffer: &Buffer) {
+        unsafe { self.device().cmd_bind_index_buffer(self.raw, buffer.raw, 0, vk::IndexType::UINT32) };
+    }
+
+    pub fn draw(&mut self, vertices: u32) {
+        unsafe { self.device().cmd_draw(self.raw, vertices, 1, 0, 0) };
+    }
+
+    pub fn draw_indexed(&mut self, index_count: u32, first_index: u32, vertex_offset: i32) {
+        unsafe { self.device().cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0) };
+    }
+
+    pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
+        unsafe { self.device().cmd_dispatch(self.raw, x, y, z) };
+    }
+
+    /// Copies a buffer into mip 0 of an image in `TransferDst` usage.
+    pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image) {
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: image.aspect(),
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
+        unsafe {
+            self.device().cmd_copy_buffer_to_image(self.raw, buffer.raw, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+        };
+    }
+
+    /// Copies mip `level` of an image in `TransferSrc` usage into a buffer, tightly packed.
+    pub fn copy_image_to_buffer(&mut self, image: &Image, level: u32, buffer: &Buffer) {
+        let w = (image.desc.width >> level).max(1);
+        let h = (image.desc.height >> level).max(1);
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: image.aspect(),
+                mip_level: level,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
+        unsafe {
+            self.device().cmd_copy_image_to_buffer(self.raw, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
+        };
+    }
+
+    /// Fills mips 1.. of an image whose mip 0 is in `TransferDst` usage by successive linear blits;
+    /// leaves the whole image in `to` usage.
+    pub fn generate_mips(&mut self, image: &Image, to: Usage) {
+        let levels = image.desc.mip_levels;
+        let (mut w, mut h) = (image.desc.width as i32, image.desc.height as i32);
+        for level in 1..levels {
+            self.transition(image, Usage::TransferDst, Usage::TransferSrc, Some((level - 1, 1)));
+            self.transition(image, Usage::Undefined, Usage::TransferDst, Some((level, 1)));
+            let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+            let layers = |mip_level| vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level,
+                base_array_layer: 0,
+                layer_count: 1,
+            };
+            let blit = vk::ImageBlit::default()
+                .src_subresource(layers(level - 1))
+                .src_offsets([vk::Offset3D::default(), vk::Offset3D { x: w, y: h, z: 1 }])
+                .dst_subresource(layers(level))
+                .dst_offsets([vk::Offset3D::default(), vk::Offset3D { x: nw, y: nh, z: 1 }]);
+            unsafe {
+                self.device().cmd_blit_image(
+                    self.raw,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[blit],
+                    vk::Filter::LINEAR,
+                )
+            };
+            self.transition(image, Usage::TransferSrc, to, Some((level - 1, 1)));
+            (w, h) = (nw, nh);
+        }
+        self.transition(image, Usage::TransferDst, to, Some((levels - 1, 1)));
+    }
+
+    pub fn reset_queries(&mut self, pool: &QueryPool) {
+        unsafe { self.device().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.count) };
+    }
+
+    /// Writes a timestamp once all previously submitted work has finished.
+    pub fn timestamp(&mut self, pool: &QueryPool, index: u32) {
+        unsafe {
+            self.device().cmd_write_timestamp2(self.raw, vk::PipelineStageFlags2::ALL_COMMANDS, pool.raw, index)
+        };
+    }
+}
+
+impl Context {
+    /// Records commands with `record`, submits them, and waits for the GPU to finish.
+    pub fn submit<R>(&self, record: impl FnOnce(&mut Cmd) -> R) -> crate::Result<R> {
+        let device = &self.shared.device;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.shared.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let raw = unsafe { device.allocate_command_buffers(&alloc) }.map_err(vkerr("vkAllocateCommandBuffers"))?[0];
+        struct Free<'a>(&'a Shared, vk::CommandBuffer, vk::Fence);
+        impl Drop for Free<'_> {
+            fn drop(&mut self) {
+                unsafe {
+                    if self.2 != vk::Fence::null() {
+                        self.0.device.destroy_fence(self.2, None);
+                    }
+                    self.0.device.free_command_buffers(self.0.command_pool, &[self.1]);
+                }
+            }
+        }
+        let mut guard = Free(&self.shared, raw, vk::Fence::null());
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(raw, &begin) }.map_err(vkerr("vkBeginCommandBuffer"))?;
+        let mut cmd = Cmd { shared: &self.shared, raw };
+        let result = record(&mut cmd);
+        unsafe { device.end_command_buffer(raw) }.map_err(vkerr("vkEndCommandBuffer"))?;
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.map_err(vkerr("vkCreateFence"))?;
+        guard.2 = fence;
+        let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(raw)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos)];
+        unsafe { device.queue_submit2(self.shared.queue, &submit, fence) }.map_err(vkerr("vkQueueSubmit2"))?;
+        unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.map_err(vkerr("vkWaitForFences"))?;
+        Ok(result)
+    }
+}

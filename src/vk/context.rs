@@ -1,0 +1,449 @@
+//! The Vulkan context: loader, instance (with the Khronos validation layer and a debug messenger
+//! when asked), device selection, the logical device, its one queue, and the memory allocator.
+//!
+//! Everything is owned by [`Shared`], which every resource holds through an `Arc`, so the device
+//! outlives every object made from it and is destroyed last, in reverse order of creation.
+
+use std::ffi::{c_void, CStr};
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use crate::Error;
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// Which physical device to use.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum DeviceChoice {
+    /// A real GPU when there is one (discrete, then integrated), lavapipe otherwise.
+    #[default]
+    Auto,
+    /// A CPU implementation (lavapipe).
+    Cpu,
+    /// The first device whose name contains this text (case-insensitive), or whose index it is.
+    Named(String),
+}
+
+impl DeviceChoice {
+    /// `auto`, `cpu` (or `lavapipe`), a device index, or part of a device name.
+    pub fn parse(text: &str) -> DeviceChoice {
+        match text.to_ascii_lowercase().as_str() {
+            "" | "auto" => DeviceChoice::Auto,
+            "cpu" | "lavapipe" | "llvmpipe" => DeviceChoice::Cpu,
+            _ => DeviceChoice::Named(text.to_string()),
+        }
+    }
+
+    /// The choice named by `WEFT_DEVICE`, or `Auto`.
+    pub fn from_env() -> DeviceChoice {
+        std::env::var("WEFT_DEVICE").map(|v| DeviceChoice::parse(&v)).unwrap_or_default()
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Turn on the Khronos validation layer (with synchronization validation) and collect every
+    /// warning and error it reports; see [`Context::take_validation_messages`].
+    pub validate: bool,
+    pub device: DeviceChoice,
+}
+
+/// What was chosen, for messages, goldens and benchmarks.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub device_type: String,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub api_version: String,
+    pub max_image_dimension_2d: u32,
+    pub timestamp_period_ns: f32,
+    pub timestamps: bool,
+}
+
+impl DeviceInfo {
+    pub fn is_cpu(&self) -> bool {
+        self.device_type == "cpu"
+    }
+}
+
+pub(crate) struct Shared {
+    pub(crate) entry: ash::Entry,
+    pub(crate) instance: ash::Instance,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    pub(crate) physical: vk::PhysicalDevice,
+    pub(crate) device: ash::Device,
+    pub(crate) queue: vk::Queue,
+    pub(crate) queue_family: u32,
+    pub(crate) command_pool: vk::CommandPool,
+    pub(crate) allocator: Mutex<Option<Allocator>>,
+    pub(crate) info: DeviceInfo,
+    pub(crate) limits: vk::PhysicalDeviceLimits,
+    /// Boxed so the debug callback's user pointer stays valid for the instance's whole life.
+    messages: Box<Mutex<Vec<String>>>,
+    pub(crate) anisotropy: bool,
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // Reverse order of creation. Every resource holding an Arc<Shared> is gone by now.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.command_pool, None);
+            drop(self.allocator.lock().map(|mut a| a.take()));
+            self.device.destroy_device(None);
+            if let Some((loader, messenger)) = self.debug.take() {
+                loader.destroy_debug_utils_messenger(messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+        let _ = &self.entry;
+    }
+}
+
+/// The handle the rest of the crate uses: cheap to clone.
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _ty: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if data.is_null() || user.is_null() {
+        return vk::FALSE;
+    }
+    let message = unsafe {
+        let data = &*data;
+        if data.p_message.is_null() {
+            String::from("(no message)")
+        } else {
+            CStr::from_ptr(data.p_message).to_string_lossy().into_owned()
+        }
+    };
+    let level = if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        "error"
+    } else {
+        "warning"
+    };
+    let sink = unsafe { &*(user as *const Mutex<Vec<String>>) };
+    if let Ok(mut v) = sink.lock() {
+        v.push(format!("[validation {level}] {message}"));
+    }
+    vk::FALSE
+}
+
+fn no_driver(detail: &str) -> Error {
+    Error::NoVulkan(format!(
+        "No Vulkan driver found ({detail}): install one, e.g. `sudo apt-get install libvulkan1 mesa-vulkan-drivers` for the lavapipe CPU driver (or run tools/setup), and check that VK_ICD_FILENAMES / VK_DRIVER_FILES, if set, point at an installed driver."
+    ))
+}
+
+pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
+    move |result| match result {
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+            Error::device(format!("{what}: the device ran out of memory ({result}); try a smaller --size or a smaller scene"))
+        }
+        _ => Error::Vulkan { what, result },
+    }
+}
+
+impl Context {
+    pub fn new(options: &ContextOptions) -> crate::Result<Context> {
+        let entry = unsafe { ash::Entry::load() }
+            .map_err(|e| no_driver(&format!("the Vulkan loader libvulkan.so.1 could not be loaded: {e}")))?;
+
+        let mut layers: Vec<*const i8> = Vec::new();
+        let mut extensions: Vec<*const i8> = Vec::new();
+        if options.validate {
+            let available = unsafe { entry.enumerate_instance_layer_properties() }
+                .map_err(|e| no_driver(&format!("listing instance layers failed: {e}")))?;
+            let found = available
+                .iter()
+                .any(|l| unsafe { CStr::from_ptr(l.layer_name.as_ptr()) } == VALIDATION_LAYER);
+            if !found {
+                return Err(Error::NoVulkan(
+                    "Vulkan validation was asked for but the Khronos validation layer is not installed: run `sudo apt-get install vulkan-validationlayers` (or tools/setup).".into(),
+                ));
+            }
+            layers.push(VALIDATION_LAYER.as_ptr());
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"weft")
+            .engine_name(c"weft")
+            .api_version(vk::API_VERSION_1_3);
+        let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut validation_features =
+            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
+        let messages: Box<Mutex<Vec<String>>> = Box::new(Mutex::new(Vec::new()));
+        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(debug_callback))
+            .user_data(&*messages as *const Mutex<Vec<String>> as *mut c_void);
+        let mut create_info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        if options.validate {
+            create_info = create_info.push_next(&mut validation_features).push_next(&mut messenger_info);
+        }
+        let instance = unsafe { entry.create_instance(&create_info, None) }.map_err(|e| match e {
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
+                no_driver(&format!("creating a Vulkan 1.3 instance failed: {e}"))
+            }
+            other => vkerr("vkCreateInstance")(other),
+        })?;
+        let debug = if options.validate {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            // A fresh copy: the one above was chained into the instance's pNext list.
+            let info = vk::DebugUtilsMessengerCreateInfoEXT {
+                p_next: std::ptr::null(),
+                ..messenger_info
+            };
+            match unsafe { loader.create_debug_utils_messenger(&info, None) } {
+                Ok(m) => Some((loader, m)),
+                Err(e) => {
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(vkerr("vkCreateDebugUtilsMessengerEXT")(e));
+                }
+            }
+        } else {
+            None
+        };
+
+        // From here on, a failure must still destroy the instance: keep it in a guard.
+        struct InstanceGuard(
+            Option<(ash::Instance, Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>)>,
+        );
+        impl Drop for InstanceGuard {
+            fn drop(&mut self) {
+                if let Some((instance, debug)) = self.0.take() {
+                    unsafe {
+                        if let Some((l, m)) = debug {
+                            l.destroy_debug_utils_messenger(m, None);
+                        }
+                        instance.destroy_instance(None);
+                    }
+                }
+            }
+        }
+        let mut guard = InstanceGuard(Some((instance.clone(), debug)));
+
+        let physical_devices = unsafe { instance.enumerate_physical_devices() }
+            .map_err(|e| no_driver(&format!("listing physical devices failed: {e}")))?;
+        if physical_devices.is_empty() {
+            return Err(no_driver("the loader found no physical device"));
+        }
+        let (physical, queue_family, info, limits) =
+            choose_device(&instance, &physical_devices, &options.device)?;
+
+        let mut supported13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut supported = vk::PhysicalDeviceFeatures2::default().push_next(&mut supported13);
+        unsafe { instance.get_physical_device_features2(physical, &mut supported) };
+        let anisotropy = supported.features.sampler_anisotropy == vk::TRUE;
+        let float64 = supported.features.shader_float64 == vk::TRUE;
+        let (dr, s2, m4) = (supported13.dynamic_rendering, supported13.synchronization2, supported13.maintenance4);
+        if dr != vk::TRUE || s2 != vk::TRUE || m4 != vk::TRUE {
+            return Err(Error::NoVulkan(format!(
+                "The Vulkan device '{}' lacks dynamic rendering, synchronization2 or maintenance4, which weft needs: update the driver (Mesa >= 22) or choose another device with --device / WEFT_DEVICE.",
+                info.name
+            )));
+        }
+
+        let priorities = [1.0f32];
+        let queue_infos = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true)
+            .maintenance4(true);
+        let base_features = vk::PhysicalDeviceFeatures::default()
+            .sampler_anisotropy(anisotropy)
+            .shader_float64(float64);
+        let mut features = vk::PhysicalDeviceFeatures2::default().features(base_features).push_next(&mut features13);
+        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_infos).push_next(&mut features);
+        let device = unsafe { instance.create_device(physical, &device_info, None) }
+            .map_err(vkerr("vkCreateDevice"))?;
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+            Ok(p) => p,
+            Err(e) => {
+                unsafe { device.destroy_device(None) };
+                return Err(vkerr("vkCreateCommandPool")(e));
+            }
+        };
+        let allocator = match Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        }) {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe {
+                    device.destroy_command_pool(command_pool, None);
+                    device.destroy_device(None);
+                }
+                return Err(Error::device(format!("creating the memory allocator failed: {e}")));
+            }
+        };
+
+        let (instance, debug) = guard.0.take().expect("guard holds the instance until here");
+        Ok(Context {
+            shared: Arc::new(Shared {
+                entry,
+                instance,
+                debug,
+                physical,
+                device,
+                queue,
+                queue_family,
+                command_pool,
+                allocator: Mutex::new(Some(allocator)),
+                info,
+                limits,
+                messages,
+                anisotropy,
+            }),
+        })
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+
+    pub fn validating(&self) -> bool {
+        self.shared.debug.is_some()
+    }
+
+    /// Every validation warning and error reported since the last call.
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        self.shared.messages.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default()
+    }
+
+    /// `Err(Error::Validation)` if the validation layer reported anything since the last call.
+    pub fn check_validation(&self) -> crate::Result<()> {
+        let messages = self.take_validation_messages();
+        if messages.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::Validation(messages))
+        }
+    }
+
+    /// Makes one deliberately invalid call (a buffer with no usage flags, destroyed at once), so a
+    /// test can prove that validation messages are caught. Harmless to the driver.
+    #[doc(hidden)]
+    pub fn provoke_validation_error(&self) {
+        let info = vk::BufferCreateInfo::default().size(16).usage(vk::BufferUsageFlags::empty());
+        if let Ok(b) = unsafe { self.shared.device.create_buffer(&info, None) } {
+            unsafe { self.shared.device.destroy_buffer(b, None) };
+        }
+    }
+
+    pub fn wait_idle(&self) -> crate::Result<()> {
+        unsafe { self.shared.device.device_wait_idle() }.map_err(vkerr("vkDeviceWaitIdle"))
+    }
+}
+
+fn device_type_name(t: vk::PhysicalDeviceType) -> &'static str {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "cpu",
+        _ => "other",
+    }
+}
+
+fn choose_device(
+    instance: &ash::Instance,
+    devices: &[vk::PhysicalDevice],
+    choice: &DeviceChoice,
+) -> crate::Result<(vk::PhysicalDevice, u32, DeviceInfo, vk::PhysicalDeviceLimits)> {
+    let mut candidates = Vec::new();
+    for (index, &pd) in devices.iter().enumerate() {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+        let props = props2.properties;
+        let name = unsafe { CStr::from_ptr(props.device_name.as_ptr()) }.to_string_lossy().into_owned();
+        let driver_name = unsafe { CStr::from_ptr(driver.driver_name.as_ptr()) }.to_string_lossy().into_owned();
+        let driver_info = unsafe { CStr::from_ptr(driver.driver_info.as_ptr()) }.to_string_lossy().into_owned();
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let family = families.iter().position(|f| {
+            f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+        });
+        let v = props.api_version;
+        let info = DeviceInfo {
+            name,
+            device_type: device_type_name(props.device_type).into(),
+            driver_name,
+            driver_info,
+            api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
+            max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            timestamp_period_ns: props.limits.timestamp_period,
+            timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE
+                && family.is_some_and(|f| families[f].timestamp_valid_bits > 0),
+        };
+        let usable = family.is_some() && v >= vk::API_VERSION_1_3;
+        candidates.push((index, pd, family.unwrap_or(0) as u32, info, props.limits, props.device_type, usable));
+    }
+    let rank = |t: vk::PhysicalDeviceType| match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    };
+    let list = || {
+        candidates
+            .iter()
+            .map(|c| format!("{}: {} ({}, Vulkan {})", c.0, c.3.name, c.3.device_type, c.3.api_version))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let chosen = match choice {
+        DeviceChoice::Auto => candidates.iter().filter(|c| c.6).min_by_key(|c| (rank(c.5), c.0)),
+        DeviceChoice::Cpu => candidates.iter().find(|c| c.6 && c.5 == vk::PhysicalDeviceType::CPU),
+        DeviceChoice::Named(n) => {
+            let lower = n.to_ascii_lowercase();
+            candidates.iter().find(|c| {
+                c.6 && (n.parse::<usize>().ok() == Some(c.0) || c.3.name.to_ascii_lowercase().contains(&lower))
+            })
+        }
+    };
+    match chosen {
+        Some(c) => Ok((c.1, c.2, c.3.clone(), c.4)),
+        None => Err(Error::NoVulkan(format!(
+            "No usable Vulkan 1.3 device matches '{}' (devices: {}): install mesa-vulkan-drivers for lavapipe, or pick another with --device / WEFT_DEVICE (auto, cpu, an index, or part of a name).",
+            match choice {
+                DeviceChoice::Auto => "auto".to_string(),
+                DeviceChoice::Cpu => "cpu".to_string(),
+                DeviceChoice::Named(n) => n.clone(),
+            },
+            list()
+        ))),
+    }
+}

@@ -1,0 +1,387 @@
+//! Pipelines and descriptors: set layouts described as plain values, pipeline layouts, graphics
+//! pipelines for dynamic rendering, compute pipelines, and a descriptor pool whose sets live as
+//! long as the pool.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::context::{vkerr, Context, Shared};
+use super::resources::{Buffer, Image, Sampler};
+use super::{Shader, Stage};
+use crate::Error;
+
+/// What a shader binding holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BindingKind {
+    UniformBuffer,
+    StorageBuffer,
+    SampledImage,
+    StorageImage,
+}
+
+impl BindingKind {
+    pub fn vk(self) -> vk::DescriptorType {
+        match self {
+            BindingKind::UniformBuffer => vk::DescriptorType::UNIFORM_BUFFER,
+            BindingKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
+            BindingKind::SampledImage => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
+}
+
+/// One binding of a descriptor set layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub binding: u32,
+    pub kind: BindingKind,
+    pub stages: Stages,
+}
+
+/// Shader stages a binding or push constant is visible to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stages(pub(crate) vk::ShaderStageFlags);
+
+impl Stages {
+    pub const VERTEX: Stages = Stages(vk::ShaderStageFlags::VERTEX);
+    pub const FRAGMENT: Stages = Stages(vk::ShaderStageFlags::FRAGMENT);
+    pub const COMPUTE: Stages = Stages(vk::ShaderStageFlags::COMPUTE);
+    pub const GRAPHICS: Stages = Stages(vk::ShaderStageFlags::from_raw(
+        vk::ShaderStageFlags::VERTEX.as_raw() | vk::ShaderStageFlags::FRAGMENT.as_raw(),
+    ));
+}
+
+pub struct SetLayout {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::DescriptorSetLayout,
+    pub bindings: Vec<Binding>,
+}
+
+impl Drop for SetLayout {
+    fn drop(&mut self) {
+        unsafe { self.shared.device.destroy_descriptor_set_layout(self.raw, None) };
+    }
+}
+
+/// A pipeline and its layout.
+pub struct Pipeline {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    pub(crate) bind_point: vk::PipelineBindPoint,
+    pub(crate) push_stages: vk::ShaderStageFlags,
+    pub name: String,
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        unsafe {
+            self.shared.device.destroy_pipeline(self.raw, None);
+            self.shared.device.destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+/// Vertex input: one interleaved buffer; attributes are (location, format, offset).
+#[derive(Clone, Debug)]
+pub struct VertexLayout {
+    pub stride: u32,
+    pub attributes: Vec<(u32, vk::Format, u32)>,
+}
+
+/// A graphics pipeline for dynamic rendering. Viewport, scissor and cull mode are dynamic.
+pub struct GraphicsDesc<'a> {
+    pub name: &'a str,
+    pub vertex: &'a Shader,
+    pub fragment: &'a Shader,
+    pub vertex_layout: Option<VertexLayout>,
+    pub color_formats: &'a [vk::Format],
+    pub depth_format: Option<vk::Format>,
+    pub set_layouts: &'a [&'a SetLayout],
+    pub push_constant_size: u32,
+    pub push_stages: Stages,
+    /// Specialization constants (id, value) for the fragment stage.
+    pub fragment_constants: &'a [(u32, u32)],
+}
+
+pub struct ComputeDesc<'a> {
+    pub name: &'a str,
+    pub shader: &'a Shader,
+    pub set_layouts: &'a [&'a SetLayout],
+    pub push_constant_size: u32,
+    pub constants: &'a [(u32, u32)],
+}
+
+/// Descriptor sets allocated from here are freed with the pool.
+pub struct DescriptorPool {
+    shared: Arc<Shared>,
+    raw: vk::DescriptorPool,
+}
+
+impl Drop for DescriptorPool {
+    fn drop(&mut self) {
+        unsafe { self.shared.device.destroy_descriptor_pool(self.raw, None) };
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct DescriptorSet {
+    pub(crate) raw: vk::DescriptorSet,
+}
+
+/// What to bind at one binding of a set.
+pub enum Resource<'a> {
+    Uniform(&'a Buffer),
+    Storage(&'a Buffer),
+    /// An image in SHADER_READ_ONLY_OPTIMAL layout, with a sampler.
+    Sampled(&'a Image, &'a Sampler),
+    /// One mip level of an image, in GENERAL layout.
+    StorageImage(&'a Image, u32),
+}
+
+struct ShaderModule<'a> {
+    shared: &'a Shared,
+    raw: vk::ShaderModule,
+}
+
+impl Drop for ShaderModule<'_> {
+    fn drop(&mut self) {
+        unsafe { self.shared.device.destroy_shader_module(self.raw, None) };
+    }
+}
+
+fn module<'a>(shared: &'a Shared, shader: &Shader, expect: Stage) -> crate::Result<ShaderModule<'a>> {
+    if shader.stage != expect {
+        return Err(Error::device(format!("shader {} is a {:?} shader, used as {:?}", shader.name, shader.stage, expect)));
+    }
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(shader.spirv))
+        .map_err(|e| Error::device(format!("embedded SPIR-V of {} is malformed: {e}", shader.name)))?;
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    let raw = unsafe { shared.device.create_shader_module(&info, None) }.map_err(vkerr("vkCreateShaderModule"))?;
+    Ok(ShaderModule { shared, raw })
+}
+
+struct Specialization {
+    entries: Vec<vk::SpecializationMapEntry>,
+    data: Vec<u8>,
+}
+
+fn specialization(constants: &[(u32, u32)]) -> Specialization {
+    let mut entries = Vec::new();
+    let mut data = Vec::new();
+    for (i, &(id, value)) in constants.iter().enumerate() {
+        entries.push(vk::SpecializationMapEntry { constant_id: id, offset: (i * 4) as u32, size: 4 });
+        data.extend_from_slice(&value.to_ne_bytes());
+    }
+    Specialization { entries, data }
+}
+
+impl Context {
+    pub fn create_set_layout(&self, bindings: &[Binding]) -> crate::Result<SetLayout> {
+        let vk_bindings: Vec<_> = bindings
+            .iter()
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b.binding)
+                    .descriptor_type(b.kind.vk())
+                    .descriptor_count(1)
+                    .stage_flags(b.stages.0)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&vk_bindings);
+        let raw = unsafe { self.shared.device.create_descriptor_set_layout(&info, None) }
+            .map_err(vkerr("vkCreateDescriptorSetLayout"))?;
+        Ok(SetLayout { shared: self.shared.clone(), raw, bindings: bindings.to_vec() })
+    }
+
+    fn pipeline_layout(&self, sets: &[&SetLayout], push_size: u32, stages: vk::ShaderStageFlags) -> crate::Result<vk::PipelineLayout> {
+        let raw_sets: Vec<_> = sets.iter().map(|s| s.raw).collect();
+        let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_size }];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&raw_sets);
+        if push_size > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        unsafe { self.shared.device.create_pipeline_layout(&info, None) }.map_err(vkerr("vkCreatePipelineLayout"))
+    }
+
+    pub fn create_graphics_pipeline(&self, desc: &GraphicsDesc) -> crate::Result<Pipeline> {
+        let device = &self.shared.device;
+        let vs = module(&self.shared, desc.vertex, Stage::Vertex)?;
+        let fs = module(&self.shared, desc.fragment, Stage::Fragment)?;
+        let spec = specialization(desc.fragment_constants);
+        let spec_info = vk::SpecializationInfo::default().map_entries(&spec.entries).data(&spec.data);
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs.raw).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fs.raw)
+                .name(c"main")
+                .specialization_info(&spec_info),
+        ];
+        let (vbind, vattrs) = match &desc.vertex_layout {
+            Some(l) => (
+                vec![vk::VertexInputBindingDescription { binding: 0, stride: l.stride, input_rate: vk::VertexInputRate::VERTEX }],
+                l.attributes
+                    .iter()
+                    .map(|&(location, format, offset)| vk::VertexInputAttributeDescription { location, binding: 0, format, offset })
+                    .collect(),
+            ),
+            None => (vec![], vec![]),
+        };
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vbind)
+            .vertex_attribute_descriptions(&vattrs);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        // glTF front faces are counter-clockwise. The projection flips Y (Vulkan clip space is
+        // Y-down), and Vulkan's facing test is defined in that Y-down framebuffer space, so
+        // counter-clockwise stays front.
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::BACK)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(desc.depth_format.is_some())
+            .depth_write_enable(desc.depth_format.is_some())
+            .depth_compare_op(vk::CompareOp::LESS);
+        let attachments: Vec<_> = desc
+            .color_formats
+            .iter()
+            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .collect();
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(desc.color_formats)
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+        let layout = self.pipeline_layout(desc.set_layouts, desc.push_constant_size, desc.push_stages.0)?;
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering);
+        let raw = match unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) } {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { device.destroy_pipeline_layout(layout, None) };
+                return Err(vkerr("vkCreateGraphicsPipelines")(e));
+            }
+        };
+        Ok(Pipeline {
+            shared: self.shared.clone(),
+            raw,
+            layout,
+            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            push_stages: desc.push_stages.0,
+            name: desc.name.into(),
+        })
+    }
+
+    pub fn create_compute_pipeline(&self, desc: &ComputeDesc) -> crate::Result<Pipeline> {
+        let device = &self.shared.device;
+        let cs = module(&self.shared, desc.shader, Stage::Compute)?;
+        let spec = specialization(desc.constants);
+        let spec_info = vk::SpecializationInfo::default().map_entries(&spec.entries).data(&spec.data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(cs.raw)
+            .name(c"main")
+            .specialization_info(&spec_info);
+        let layout = self.pipeline_layout(desc.set_layouts, desc.push_constant_size, vk::ShaderStageFlags::COMPUTE)?;
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        let raw = match unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) } {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { device.destroy_pipeline_layout(layout, None) };
+                return Err(vkerr("vkCreateComputePipelines")(e));
+            }
+        };
+        Ok(Pipeline {
+            shared: self.shared.clone(),
+            raw,
+            layout,
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            push_stages: vk::ShaderStageFlags::COMPUTE,
+            name: desc.name.into(),
+        })
+    }
+
+    /// A pool with room for `max_sets` sets of up to 16 bindings of each kind.
+    pub fn create_descriptor_pool(&self, max_sets: u32) -> crate::Result<DescriptorPool> {
+        let n = max_sets.max(1) * 16;
+        let sizes = [
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: n },
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: n },
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, descriptor_count: n },
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: n },
+        ];
+        let info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets.max(1)).pool_sizes(&sizes);
+        let raw = unsafe { self.shared.device.create_descriptor_pool(&info, None) }.map_err(vkerr("vkCreateDescriptorPool"))?;
+        Ok(DescriptorPool { shared: self.shared.clone(), raw })
+    }
+}
+
+impl DescriptorPool {
+    /// Allocates a set of `layout` and writes `resources` (binding, resource) into it.
+    pub fn set(&self, layout: &SetLayout, resources: &[(u32, Resource)]) -> crate::Result<DescriptorSet> {
+        let layouts = [layout.raw];
+        let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.raw).set_layouts(&layouts);
+        let raw = unsafe { self.shared.device.allocate_descriptor_sets(&info) }.map_err(vkerr("vkAllocateDescriptorSets"))?[0];
+        let mut buffer_infos = Vec::new();
+        let mut image_infos = Vec::new();
+        for (_, r) in resources {
+            match r {
+                Resource::Uniform(b) | Resource::Storage(b) => {
+                    buffer_infos.push([vk::DescriptorBufferInfo { buffer: b.raw, offset: 0, range: vk::WHOLE_SIZE }])
+                }
+                Resource::Sampled(img, s) => image_infos.push([vk::DescriptorImageInfo {
+                    sampler: s.raw,
+                    image_view: img.view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }]),
+                Resource::StorageImage(img, level) => image_infos.push([vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: if img.mip_views.is_empty() { img.view } else { img.mip_views[*level as usize] },
+                    image_layout: vk::ImageLayout::GENERAL,
+                }]),
+            }
+        }
+        let (mut bi, mut ii) = (0, 0);
+        let mut writes = Vec::new();
+        for (binding, r) in resources {
+            let w = vk::WriteDescriptorSet::default().dst_set(raw).dst_binding(*binding);
+            let w = match r {
+                Resource::Uniform(_) => {
+                    bi += 1;
+                    w.descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&buffer_infos[bi - 1])
+                }
+                Resource::Storage(_) => {
+                    bi += 1;
+                    w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(&buffer_infos[bi - 1])
+                }
+                Resource::Sampled(..) => {
+                    ii += 1;
+                    w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(&image_infos[ii - 1])
+                }
+                Resource::StorageImage(..) => {
+                    ii += 1;
+                    w.descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(&image_infos[ii - 1])
+                }
+            };
+            writes.push(w);
+        }
+        unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
+        Ok(DescriptorSet { raw })
+    }
+}

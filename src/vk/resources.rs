@@ -1,0 +1,377 @@
+//! GPU resources: buffers, images (with per-mip views), samplers, query pools, descriptor pools.
+//! Each owns its memory through gpu-allocator and frees it on Drop.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::context::{vkerr, Context, Shared};
+use crate::Error;
+
+fn alloc_error(name: &str, e: gpu_allocator::AllocationError) -> Error {
+    Error::device(format!(
+        "allocating GPU memory for '{name}' failed: {e}; try a smaller --size or a smaller scene"
+    ))
+}
+
+/// Where a buffer lives: `Upload` and `Readback` are host-visible.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BufferLocation {
+    Upload,
+    Readback,
+    Device,
+}
+
+pub struct Buffer {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+    pub name: String,
+}
+
+impl Buffer {
+    /// Copies `data` into a host-visible buffer at `offset` bytes.
+    pub fn write<T: bytemuck::Pod>(&mut self, offset: u64, data: &[T]) -> crate::Result<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let name = self.name.clone();
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .ok_or_else(|| Error::device(format!("buffer '{name}' is not host-visible")))?;
+        let start = offset as usize;
+        let end = start + bytes.len();
+        if end > slice.len() {
+            return Err(Error::device(format!("write of {} bytes past the end of buffer '{name}'", bytes.len())));
+        }
+        slice[start..end].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    /// The contents of a host-visible buffer.
+    pub fn read(&self) -> crate::Result<&[u8]> {
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .map(|s| &s[..self.size as usize])
+            .ok_or_else(|| Error::device(format!("buffer '{}' is not host-visible", self.name)))
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        unsafe { self.shared.device.destroy_buffer(self.raw, None) };
+        if let (Some(a), Ok(mut guard)) = (self.allocation.take(), self.shared.allocator.lock()) {
+            if let Some(alloc) = guard.as_mut() {
+                let _ = alloc.free(a);
+            }
+        }
+    }
+}
+
+/// A plain description of a 2-D image.
+#[derive(Clone, Debug)]
+pub struct ImageDesc {
+    pub name: String,
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    pub mip_levels: u32,
+    pub usage: vk::ImageUsageFlags,
+}
+
+impl ImageDesc {
+    pub fn new_2d(name: impl Into<String>, format: vk::Format, width: u32, height: u32) -> Self {
+        ImageDesc { name: name.into(), format, width, height, mip_levels: 1, usage: vk::ImageUsageFlags::empty() }
+    }
+    pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
+        self.usage |= usage;
+        self
+    }
+    /// A full mip chain down to 1x1.
+    pub fn full_mips(mut self) -> Self {
+        self.mip_levels = 32 - self.width.max(self.height).max(1).leading_zeros();
+        self
+    }
+}
+
+pub fn is_depth(format: vk::Format) -> bool {
+    matches!(format, vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT)
+}
+
+pub struct Image {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Image,
+    /// A view of every mip level.
+    pub(crate) view: vk::ImageView,
+    /// One view per mip level (for storage writes of a single level).
+    pub(crate) mip_views: Vec<vk::ImageView>,
+    allocation: Option<Allocation>,
+    pub desc: ImageDesc,
+}
+
+impl Image {
+    pub fn extent(&self) -> (u32, u32) {
+        (self.desc.width, self.desc.height)
+    }
+    pub(crate) fn aspect(&self) -> vk::ImageAspectFlags {
+        if is_depth(self.desc.format) {
+            vk::ImageAspectFlags::DEPTH
+        } else {
+            vk::ImageAspectFlags::COLOR
+        }
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        unsafe {
+            for v in self.mip_views.drain(..) {
+                self.shared.device.destroy_image_view(v, None);
+            }
+            self.shared.device.destroy_image_view(self.view, None);
+            self.shared.device.destroy_image(self.raw, None);
+        }
+        if let (Some(a), Ok(mut guard)) = (self.allocation.take(), self.shared.allocator.lock()) {
+            if let Some(alloc) = guard.as_mut() {
+                let _ = alloc.free(a);
+            }
+        }
+    }
+}
+
+pub struct Sampler {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Sampler,
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.shared.device.destroy_sampler(self.raw, None) };
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    /// Trilinear with anisotropy where the device has it; repeat addressing.
+    LinearRepeat,
+    /// Nearest texel, nearest mip; repeat addressing.
+    NearestRepeat,
+    /// Nearest, clamped: for reading render targets.
+    NearestClamp,
+}
+
+/// Timestamp queries, read back in nanoseconds.
+pub struct QueryPool {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::QueryPool,
+    pub count: u32,
+}
+
+impl QueryPool {
+    /// Nanoseconds of each timestamp written so far (relative to an arbitrary origin).
+    pub fn read_ns(&self, count: u32) -> crate::Result<Vec<f64>> {
+        let mut data = vec![0u64; count as usize];
+        unsafe {
+            self.shared.device.get_query_pool_results(
+                self.raw,
+                0,
+                &mut data,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(vkerr("vkGetQueryPoolResults"))?;
+        let period = self.shared.info.timestamp_period_ns as f64;
+        Ok(data.iter().map(|&t| t as f64 * period).collect())
+    }
+}
+
+impl Drop for QueryPool {
+    fn drop(&mut self) {
+        unsafe { self.shared.device.destroy_query_pool(self.raw, None) };
+    }
+}
+
+impl Context {
+    pub fn create_buffer(
+        &self,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: BufferLocation,
+    ) -> crate::Result<Buffer> {
+        let size = size.max(16);
+        let device = &self.shared.device;
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { device.create_buffer(&info, None) }.map_err(vkerr("vkCreateBuffer"))?;
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let location = match location {
+            BufferLocation::Upload => MemoryLocation::CpuToGpu,
+            BufferLocation::Readback => MemoryLocation::GpuToCpu,
+            BufferLocation::Device => MemoryLocation::GpuOnly,
+        };
+        let allocation = self
+            .shared
+            .allocator
+            .lock()
+            .map_err(|_| Error::device("allocator lock poisoned"))?
+            .as_mut()
+            .expect("allocator lives as long as the context")
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(alloc_error(name, e));
+            }
+        };
+        let buffer = Buffer { shared: self.shared.clone(), raw, allocation: Some(allocation), size, name: name.into() };
+        let a = buffer.allocation.as_ref().expect("just set");
+        unsafe { device.bind_buffer_memory(raw, a.memory(), a.offset()) }.map_err(vkerr("vkBindBufferMemory"))?;
+        Ok(buffer)
+    }
+
+    /// A host-visible buffer holding `data`.
+    pub fn create_buffer_with<T: bytemuck::Pod>(
+        &self,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        data: &[T],
+    ) -> crate::Result<Buffer> {
+        let mut b = self.create_buffer(name, std::mem::size_of_val(data) as u64, usage, BufferLocation::Upload)?;
+        b.write(0, data)?;
+        Ok(b)
+    }
+
+    pub fn create_image(&self, desc: &ImageDesc) -> crate::Result<Image> {
+        let max = self.shared.info.max_image_dimension_2d;
+        if desc.width == 0 || desc.height == 0 || desc.width > max || desc.height > max {
+            return Err(Error::device(format!(
+                "image '{}' of {}x{} is outside what the device '{}' supports (1 to {max} per side): choose a smaller --size",
+                desc.name, desc.width, desc.height, self.shared.info.name
+            )));
+        }
+        let device = &self.shared.device;
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D { width: desc.width, height: desc.height, depth: 1 })
+            .mip_levels(desc.mip_levels)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { device.create_image(&info, None) }.map_err(|e| match e {
+            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => Error::device(format!(
+                "image '{}' of {}x{} does not fit in device memory: choose a smaller --size",
+                desc.name, desc.width, desc.height
+            )),
+            other => Error::Vulkan { what: "vkCreateImage", result: other },
+        })?;
+        let requirements = unsafe { device.get_image_memory_requirements(raw) };
+        let allocation = self
+            .shared
+            .allocator
+            .lock()
+            .map_err(|_| Error::device("allocator lock poisoned"))?
+            .as_mut()
+            .expect("allocator lives as long as the context")
+            .allocate(&AllocationCreateDesc {
+                name: &desc.name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_image(raw, None) };
+                return Err(alloc_error(&desc.name, e));
+            }
+        };
+        let mut image = Image {
+            shared: self.shared.clone(),
+            raw,
+            view: vk::ImageView::null(),
+            mip_views: Vec::new(),
+            allocation: Some(allocation),
+            desc: desc.clone(),
+        };
+        let a = image.allocation.as_ref().expect("just set");
+        unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.map_err(vkerr("vkBindImageMemory"))?;
+        let aspect = image.aspect();
+        let make_view = |base: u32, count: u32| {
+            let info = vk::ImageViewCreateInfo::default()
+                .image(raw)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(desc.format)
+                .subresource_range(vk::ImageSubresourceRange {
+                    aspect_mask: aspect,
+                    base_mip_level: base,
+                    level_count: count,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                });
+            unsafe { device.create_image_view(&info, None) }.map_err(vkerr("vkCreateImageView"))
+        };
+        image.view = make_view(0, desc.mip_levels)?;
+        if desc.mip_levels > 1 && desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
+            for level in 0..desc.mip_levels {
+                let v = make_view(level, 1)?;
+                image.mip_views.push(v);
+            }
+        }
+        Ok(image)
+    }
+
+    pub fn create_sampler(&self, filter: Filter) -> crate::Result<Sampler> {
+        let (mag, mip, address, aniso) = match filter {
+            Filter::LinearRepeat => (
+                vk::Filter::LINEAR,
+                vk::SamplerMipmapMode::LINEAR,
+                vk::SamplerAddressMode::REPEAT,
+                self.shared.anisotropy,
+            ),
+            Filter::NearestRepeat => (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST, vk::SamplerAddressMode::REPEAT, false),
+            Filter::NearestClamp => {
+                (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST, vk::SamplerAddressMode::CLAMP_TO_EDGE, false)
+            }
+        };
+        let max_aniso = self.shared.limits.max_sampler_anisotropy.min(16.0);
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(mag)
+            .min_filter(mag)
+            .mipmap_mode(mip)
+            .address_mode_u(address)
+            .address_mode_v(address)
+            .address_mode_w(address)
+            .anisotropy_enable(aniso)
+            .max_anisotropy(if aniso { max_aniso } else { 1.0 })
+            .min_lod(0.0)
+            .max_lod(vk::LOD_CLAMP_NONE);
+        let raw = unsafe { self.shared.device.create_sampler(&info, None) }.map_err(vkerr("vkCreateSampler"))?;
+        Ok(Sampler { shared: self.shared.clone(), raw })
+    }
+
+    /// A timestamp query pool, or None where the device has no timestamps.
+    pub fn create_query_pool(&self, count: u32) -> crate::Result<Option<QueryPool>> {
+        if !self.shared.info.timestamps {
+            return Ok(None);
+        }
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(count);
+        let raw = unsafe { self.shared.device.create_query_pool(&info, None) }.map_err(vkerr("vkCreateQueryPool"))?;
+        Ok(Some(QueryPool { shared: self.shared.clone(), raw, count }))
+    }
+}
