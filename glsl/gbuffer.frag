@@ -2,15 +2,20 @@
 // G-buffer pass, fragment stage: samples the material's textures and writes the surface's
 // attributes. Lighting happens later, in lighting.frag, from these targets alone.
 #include "frame.glsl"
+#include "fabric.glsl"
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
 
 // Per material; missing textures are bound to 1x1 defaults (white, or a flat normal).
 layout(set = 1, binding = 0) uniform sampler2D base_color_tex;
 layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;
 layout(set = 1, binding = 2) uniform sampler2D normal_tex;
 layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
+// The material's weave texture (fabric only): one pattern repeat, full mip chain, each texel the
+// exact coverage (c_warp, c_weft, shadow-weighted thread area) of its footprint.
+layout(set = 1, binding = 4) uniform sampler2D weave_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -25,11 +30,12 @@ layout(location = 0) in vec3 in_world_pos;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec4 in_tangent;
 layout(location = 3) in vec2 in_uv;
+layout(location = 4) in vec2 in_weave_uv;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
 layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1
-layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, diffuse shadow factor, 0
+layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, shadow-weighted thread area, 1 if fabric
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance
 
 void main() {
@@ -69,6 +75,15 @@ void main() {
     gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
     gb_frame = vec4(oct_encode(n), oct_encode(t));
     gb_surface = vec4(roughness, float(draw.material), sign, 1.0);
-    gb_fabric = vec4(0.0, 0.0, 1.0, 0.0);
+    gb_fabric = vec4(0.0);
+    uint fabric = uint(m.metallic_roughness.z + 0.5);
+    if (fabric > 0u) {
+        // The weave is sampled here, with the UV derivatives, because only this pass has them:
+        // trilinear/anisotropic filtering of exact coverages gives the footprint's area fractions.
+        GpuFabric f = fabrics[fabric - 1u];
+        vec2 st = in_weave_uv * f.cell_per_uv / vec2(float(f.cols), float(f.rows));
+        vec3 coverage = textureGrad(weave_tex, st, dFdx(st), dFdy(st)).rgb;
+        gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
+    }
     gb_emissive = vec4(max(emissive, vec3(0.0)), 0.0);
 }

@@ -3,6 +3,7 @@
 // contribution with the material's BRDF, and writes linear HDR radiance.
 #include "frame.glsl"
 #include "pbr.glsl"
+#include "fabric.glsl"
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -13,6 +14,7 @@ layout(set = 0, binding = 5) uniform sampler2D gb_surface;
 layout(set = 0, binding = 6) uniform sampler2D gb_fabric;
 layout(set = 0, binding = 7) uniform sampler2D gb_emissive;
 layout(set = 0, binding = 8) uniform sampler2D gb_depth;
+layout(set = 0, binding = 9, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
@@ -57,10 +59,17 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
     if (view == DEBUG_NORMALS) return oct_decode(fr.xy) * 0.5 + 0.5;
     if (view == DEBUG_TANGENTS) return oct_decode(fr.zw) * 0.5 + 0.5;
     if (view == DEBUG_ROUGHNESS_METALLIC) return vec3(surface.x, albedo.a, 0.0);
-    if (view == DEBUG_COVERAGE) return vec3(fabric.x, fabric.y, 1.0 - fabric.x - fabric.y);
+    // Non-fabric surfaces (fabric.w = 0) show dark grey in the two fabric views.
+    if (view == DEBUG_COVERAGE) return fabric.w > 0.0 ? vec3(fabric.x, fabric.y, 1.0 - fabric.x - fabric.y) : vec3(0.1);
     if (view == DEBUG_THREAD_DIR) {
-        // Red where the top thread runs along the tangent (weft), green along the bitangent (warp).
-        return vec3(fabric.y, fabric.x, 0.0);
+        if (fabric.w == 0.0) return vec3(0.1);
+        // The dominant thread direction in screen colours: the tangent (weft) or bitangent (warp)
+        // of the thread on top, weighted by coverage, encoded as 0.5 + 0.5 * direction.
+        vec3 t = oct_decode(fr.zw);
+        vec3 n = oct_decode(fr.xy);
+        vec3 b = (surface.z < 0.0 ? -1.0 : 1.0) * cross(n, t);
+        vec3 dir = fabric.y * t + fabric.x * b;
+        return dot(dir, dir) > 0.0 ? normalize(dir) * 0.5 + 0.5 : vec3(0.0);
     }
     if (view == DEBUG_DEPTH) {
         vec4 p = frame.inv_view_proj * vec4(0.0, 0.0, depth, 1.0);
@@ -97,17 +106,41 @@ void main() {
     float roughness = surface.x;
 
     vec3 radiance = texelFetch(gb_emissive, px, 0).rgb;
-    // Hemispherical ambient, so surfaces facing away from every light are not pure black.
     vec3 ambient = mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
-    radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+    uint material = uint(surface.y + 0.5);
+    uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
 
-    for (uint i = 0u; i < frame.light_count; ++i) {
-        vec3 l;
-        vec3 e = light_incoming(lights[i], p, l);
-        if (all(equal(e, vec3(0.0)))) {
-            continue;
+    if (fabric > 0u) {
+        // The fabric model (docs/fabric-model.md §3): the two-lobe mixture weighted by the weave
+        // coverages the G-buffer pass filtered over the pixel's footprint.
+        GpuFabric f = fabrics[fabric - 1u];
+        vec3 coverage = texelFetch(gb_fabric, px, 0).rgb;
+        mat3 tbn = fabric_frame(n, oct_decode(fr.zw), surface.z);
+        vec3 k2 = fabric_local(v, tbn);
+        float c_thread = coverage.x + coverage.y;
+        vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
+        // Ambient: the threads' diffuse albedo under the hemispherical ambient.
+        radiance += ambient * rd;
+        for (uint i = 0u; i < frame.light_count; ++i) {
+            vec3 l;
+            vec3 e = light_incoming(lights[i], p, l);
+            vec3 k1 = fabric_local(l, tbn);
+            if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
+                continue;
+            }
+            radiance += e * fabric_brdf(k1, k2, coverage, f) * k1.z;
         }
-        radiance += e * pbr_brdf_cos(n, v, l, base, metallic, roughness);
+    } else {
+        // Hemispherical ambient, so surfaces facing away from every light are not pure black.
+        radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+        for (uint i = 0u; i < frame.light_count; ++i) {
+            vec3 l;
+            vec3 e = light_incoming(lights[i], p, l);
+            if (all(equal(e, vec3(0.0)))) {
+                continue;
+            }
+            radiance += e * pbr_brdf_cos(n, v, l, base, metallic, roughness);
+        }
     }
     out_color = vec4(radiance, 1.0);
 }

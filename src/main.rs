@@ -65,6 +65,10 @@ struct RenderArgs {
     /// Print what the frame ran: passes, draws, pipelines.
     #[arg(long)]
     stats: bool,
+    /// Render this many frames of the scene in one process (uploaded once); --timings then
+    /// reports the median of the frames after the first (the first pays shader JIT compilation).
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
 }
 
 #[derive(Args)]
@@ -124,8 +128,29 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let mut renderer = Renderer::new(ctx)?;
     let setup_ms = start.elapsed().as_secs_f64() * 1e3;
-    let frame = renderer.render(&scene, &options)?;
-    let render_ms = start.elapsed().as_secs_f64() * 1e3 - setup_ms;
+    if args.frames == 0 {
+        anyhow::bail!("--frames must be at least 1");
+    }
+    let gpu_scene = renderer.upload(&scene)?;
+    let mut frame = renderer.render_frame(&scene, &gpu_scene, &options)?;
+    let mut render_ms = vec![start.elapsed().as_secs_f64() * 1e3 - setup_ms];
+    let mut history = vec![frame.timings.clone()];
+    for _ in 1..args.frames {
+        let t = std::time::Instant::now();
+        frame = renderer.render_frame(&scene, &gpu_scene, &options)?;
+        render_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        history.push(frame.timings.clone());
+    }
+    if args.frames > 1 {
+        // Warm frames only.
+        history.remove(0);
+        render_ms.remove(0);
+        for (i, t) in frame.timings.iter_mut().enumerate() {
+            t.wall_ms = median(history.iter().map(|h| h[i].wall_ms).collect());
+            t.gpu_ms = t.gpu_ms.map(|_| median(history.iter().filter_map(|h| h[i].gpu_ms).collect()));
+        }
+    }
+    let render_ms = median(render_ms);
     render::write_png(&args.output, frame.width, frame.height, &frame.ldr)?;
     eprintln!("wrote {} ({}x{})", args.output.display(), frame.width, frame.height);
     if let Some(exr) = &args.exr {
@@ -133,13 +158,18 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         eprintln!("wrote {}", exr.display());
     }
     if args.timings {
+        if args.frames > 1 {
+            println!("median of {} warm frames (after the first)", args.frames - 1);
+        } else {
+            println!("one cold frame (includes shader JIT); --frames 10 gives warm medians");
+        }
         println!("{:<12} {:>10} {:>10}", "pass", "gpu ms", "wall ms");
         println!("{:<12} {:>10} {:>10.2}", "setup", "-", setup_ms);
         for t in &frame.timings {
             let gpu = t.gpu_ms.map(|g| format!("{g:.2}")).unwrap_or_else(|| "-".into());
             println!("{:<12} {:>10} {:>10.2}", t.name, gpu, t.wall_ms);
         }
-        println!("{:<12} {:>10} {:>10.2}", "frame total", "-", render_ms);
+        println!("{:<12} {:>10} {:>10.2}", "frame", "-", render_ms);
     }
     if args.stats {
         println!("passes     {}", frame.stats.passes.join(" -> "));
@@ -147,6 +177,11 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         println!("pipelines  {}", frame.stats.pipelines.join(", "));
     }
     Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 fn run_plan(args: PlanArgs) -> anyhow::Result<()> {

@@ -9,10 +9,11 @@ use std::time::Instant;
 
 use glam::{Mat4, Vec3};
 
+use crate::fabric::{weave_level0_size, weave_level_size, weave_mip_count, FabricParams};
 use crate::scene::{ColorSpace, Scene, Texture};
 use crate::vk::{
     shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd, Context,
-    Cull, DescriptorPool, DescriptorSet, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags, Pipeline,
+    ComputeDesc, Cull, DescriptorSet, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags, Pipeline,
     Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
 };
 use crate::Error;
@@ -29,6 +30,10 @@ pub const EMISSIVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
 pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
+pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+
+/// Floats per vertex in the G-buffer pass's vertex buffer: position, normal, tangent, uv, weave uv.
+const VERTEX_FLOATS: usize = 14;
 
 /// Wall-clock and GPU time of one pass.
 #[derive(Clone, Debug)]
@@ -113,6 +118,11 @@ pub struct GpuScene {
     vertices: Buffer,
     indices: Buffer,
     materials: Buffer,
+    /// One GpuFabric record per fabric material (a zeroed one when there is none).
+    fabrics: Buffer,
+    /// One weave texture per distinct weave, and per material the weave it uses.
+    weaves: Vec<Image>,
+    material_weave: Vec<Option<usize>>,
     lights: Buffer,
     light_count: u32,
     material_count: u32,
@@ -130,6 +140,8 @@ pub struct Renderer {
     material_layout: SetLayout,
     lighting_layout: SetLayout,
     tonemap_layout: SetLayout,
+    weave_layout: SetLayout,
+    weave_pipeline: Pipeline,
     gbuffer_pipeline: Pipeline,
     lighting_pipeline: Pipeline,
     tonemap_pipeline: Pipeline,
@@ -149,24 +161,36 @@ impl Renderer {
         let frame_layout = ctx.create_set_layout(&[
             Binding { binding: 0, kind: BindingKind::UniformBuffer, stages: Stages::GRAPHICS },
             Binding { binding: 1, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
+            Binding { binding: 2, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
         ])?;
-        let material_layout = ctx.create_set_layout(&(0..4).map(|b| sampled(b, Stages::FRAGMENT)).collect::<Vec<_>>())?;
+        let material_layout = ctx.create_set_layout(&(0..5).map(|b| sampled(b, Stages::FRAGMENT)).collect::<Vec<_>>())?;
         let mut lighting_bindings = vec![
             Binding { binding: 0, kind: BindingKind::UniformBuffer, stages: Stages::FRAGMENT },
             Binding { binding: 1, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
             Binding { binding: 2, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
         ];
         lighting_bindings.extend((3..9).map(|b| sampled(b, Stages::FRAGMENT)));
+        lighting_bindings.push(Binding { binding: 9, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT });
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
+        let weave_layout =
+            ctx.create_set_layout(&[Binding { binding: 0, kind: BindingKind::StorageImage, stages: Stages::COMPUTE }])?;
+        let weave_pipeline = ctx.create_compute_pipeline(&ComputeDesc {
+            name: "weave",
+            shader: &shaders::WEAVE_COMP,
+            set_layouts: &[&weave_layout],
+            push_constant_size: std::mem::size_of::<crate::fabric::WeavePush>() as u32,
+            constants: &[],
+        })?;
 
         let vertex_layout = VertexLayout {
-            stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+            stride: (VERTEX_FLOATS * 4) as u32,
             attributes: vec![
                 (0, Format::R32G32B32_SFLOAT, 0),
                 (1, Format::R32G32B32_SFLOAT, 12),
                 (2, Format::R32G32B32A32_SFLOAT, 24),
                 (3, Format::R32G32_SFLOAT, 40),
+                (4, Format::R32G32_SFLOAT, 48),
             ],
         };
         let gbuffer_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
@@ -215,6 +239,8 @@ impl Renderer {
             material_layout,
             lighting_layout,
             tonemap_layout,
+            weave_layout,
+            weave_pipeline,
             gbuffer_pipeline,
             lighting_pipeline,
             tonemap_pipeline,
@@ -238,12 +264,16 @@ impl Renderer {
         let mut mesh_ranges = Vec::new();
         for mesh in &scene.meshes {
             mesh_ranges.push((indices.len() as u32, mesh.indices.len() as u32, vertices.len() as i32));
+            let fabric = scene.materials.get(mesh.material).and_then(|m| m.fabric.as_ref());
+            let weave_offset = fabric.map(|f| weave_uv_offset(f, mesh)).unwrap_or([0.0; 2]);
             vertices.extend(mesh.vertices.iter().map(|v| {
-                let mut w = [0f32; 12];
+                let mut w = [0f32; VERTEX_FLOATS];
                 w[0..3].copy_from_slice(&v.position);
                 w[3..6].copy_from_slice(&v.normal);
                 w[6..10].copy_from_slice(&v.tangent);
                 w[10..12].copy_from_slice(&v.uv);
+                w[12] = (v.uv[0] as f64 - weave_offset[0]) as f32;
+                w[13] = (v.uv[1] as f64 - weave_offset[1]) as f32;
                 w
             }));
             indices.extend_from_slice(&mesh.indices);
@@ -268,10 +298,42 @@ impl Renderer {
         }
         let vertices = ctx.create_buffer_with("vertices", BufferUsageFlags::VERTEX_BUFFER, &vertices)?;
         let indices = ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
+        // Fabric records, and one weave texture per distinct weave (materials that differ only in
+        // colour or exponents share one).
+        let mut fabric_bytes: Vec<u8> = Vec::new();
+        let mut fabric_index = Vec::new();
+        let mut weave_keys: Vec<[u32; 7]> = Vec::new();
+        let mut weave_params: Vec<FabricParams> = Vec::new();
+        let mut material_weave = Vec::new();
+        for m in &scene.materials {
+            match &m.fabric {
+                Some(f) => {
+                    fabric_index.push(Some(fabric_bytes.len() / 80));
+                    let g = f.to_gpu();
+                    fabric_bytes.extend_from_slice(&g.to_bytes());
+                    let key = weave_key(f);
+                    let w = weave_keys.iter().position(|k| *k == key).unwrap_or_else(|| {
+                        weave_keys.push(key);
+                        weave_params.push(f.clone());
+                        weave_keys.len() - 1
+                    });
+                    material_weave.push(Some(w));
+                }
+                None => {
+                    fabric_index.push(None);
+                    material_weave.push(None);
+                }
+            }
+        }
+        if fabric_bytes.is_empty() {
+            fabric_bytes = vec![0; 80]; // a storage buffer cannot be empty
+        }
+        let fabrics = ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+        let weaves = weave_params.iter().map(|f| self.build_weave(f)).collect::<crate::Result<Vec<_>>>()?;
         let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
             vec![GpuMaterial::new(&Default::default(), None)]
         } else {
-            scene.materials.iter().map(|m| GpuMaterial::new(m, None)).collect()
+            scene.materials.iter().zip(&fabric_index).map(|(m, f)| GpuMaterial::new(m, *f)).collect()
         };
         let material_textures = scene
             .materials
@@ -291,6 +353,9 @@ impl Renderer {
             vertices,
             indices,
             materials,
+            fabrics,
+            weaves,
+            material_weave,
             lights,
             light_count,
             material_count,
@@ -360,7 +425,11 @@ impl Renderer {
                 Pass::GBuffer => {
                     let frame_set = pool.set(
                         &self.frame_layout,
-                        &[(0, Resource::Uniform(&frame_buffer)), (1, Resource::Storage(&gpu.materials))],
+                        &[
+                            (0, Resource::Uniform(&frame_buffer)),
+                            (1, Resource::Storage(&gpu.materials)),
+                            (2, Resource::Storage(&gpu.fabrics)),
+                        ],
                     )?;
                     let material_sets = (0..gpu.material_count as usize)
                         .map(|m| {
@@ -372,6 +441,10 @@ impl Renderer {
                                     None => &self.white,
                                 }
                             };
+                            let weave = match gpu.material_weave.get(m).copied().flatten() {
+                                Some(w) => &gpu.weaves[w],
+                                None => &self.white,
+                            };
                             pool.set(
                                 &self.material_layout,
                                 &[
@@ -379,6 +452,7 @@ impl Renderer {
                                     (1, Resource::Sampled(pick(1, "white"), &self.linear)),
                                     (2, Resource::Sampled(pick(2, "normal"), &self.linear)),
                                     (3, Resource::Sampled(pick(3, "white"), &self.linear)),
+                                    (4, Resource::Sampled(weave, &self.linear)),
                                 ],
                             )
                         })
@@ -401,6 +475,7 @@ impl Renderer {
                             (6, Resource::Sampled(&targets.fabric, &self.nearest)),
                             (7, Resource::Sampled(&targets.emissive, &self.nearest)),
                             (8, Resource::Sampled(&targets.depth, &self.nearest)),
+                            (9, Resource::Storage(&gpu.fabrics)),
                         ],
                     )?;
                     timed("lighting", &mut |cmd| lighting_pass(cmd, &self.lighting_pipeline, set, targets))?;
@@ -427,6 +502,39 @@ impl Renderer {
         drop(pool);
         ctx.check_validation()?;
         Ok(Frame { width, height, ldr, hdr, timings, stats, plan })
+    }
+
+    /// Builds a weave texture: every mip level computed by weave.comp as the exact coverage of its
+    /// texels' footprints (not a downsampling of level 0).
+    pub fn build_weave(&self, fabric: &FabricParams) -> crate::Result<Image> {
+        let ctx = &self.ctx;
+        let level0 = weave_level0_size(&fabric.pattern);
+        let mut desc = ImageDesc::new_2d("weave", WEAVE_FORMAT, level0.0, level0.1)
+            .usage(ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_SRC);
+        desc.mip_levels = weave_mip_count(level0);
+        let image = ctx.create_image(&desc)?;
+        let pool = ctx.create_descriptor_pool(desc.mip_levels)?;
+        let sets = (0..desc.mip_levels)
+            .map(|level| pool.set(&self.weave_layout, &[(0, Resource::StorageImage(&image, level))]))
+            .collect::<crate::Result<Vec<_>>>()?;
+        ctx.submit(|cmd| {
+            cmd.transition(&image, Usage::Undefined, Usage::ComputeWrite, None);
+            cmd.bind_pipeline(&self.weave_pipeline);
+            for (level, set) in sets.iter().enumerate() {
+                let (w, h) = weave_level_size(level0, level as u32);
+                cmd.bind_sets(&self.weave_pipeline, 0, &[*set]);
+                cmd.push_constant_bytes(&self.weave_pipeline, &fabric.weave_push(w, h).to_bytes());
+                cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
+            }
+            cmd.transition(&image, Usage::ComputeWrite, Usage::FragmentRead, None);
+        })?;
+        Ok(image)
+    }
+
+    /// Reads mip `level` of a weave texture back as RGBA f32 (for tests).
+    pub fn read_weave(&self, image: &Image, level: u32) -> crate::Result<Vec<f32>> {
+        let raw = read_image_level(&self.ctx, image, level, Usage::FragmentRead, 8)?;
+        Ok(raw.chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect())
     }
 
     /// Reads back the G-buffer of the last frame (for tests and debugging): albedo RGBA8,
@@ -577,9 +685,41 @@ fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
     Ok(image)
 }
 
+/// The whole number of weave repeats to take off a fabric mesh's UVs, per axis, computed in f64
+/// so that huge coordinates keep the pattern once they are f32 again (model page, hard case 8).
+fn weave_uv_offset(fabric: &FabricParams, mesh: &crate::scene::Mesh) -> [f64; 2] {
+    let repeat = fabric.repeat_uv();
+    let mut min = [f64::INFINITY; 2];
+    for v in &mesh.vertices {
+        for a in 0..2 {
+            if v.uv[a].is_finite() {
+                min[a] = min[a].min(v.uv[a] as f64);
+            }
+        }
+    }
+    let mut offset = [0.0; 2];
+    for a in 0..2 {
+        if min[a].is_finite() && repeat[a] > 0.0 {
+            offset[a] = (min[a] / repeat[a]).floor() * repeat[a];
+        }
+    }
+    offset
+}
+
+/// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
+fn weave_key(fabric: &FabricParams) -> [u32; 7] {
+    let p = fabric.weave_push(0, 0);
+    [p.pattern_lo, p.pattern_hi, p.cols, p.rows, p.gap.to_bits(), p.shadow_dist.to_bits(), p.shadow_strength.to_bits()]
+}
+
 /// Copies mip 0 of `image` (currently in `from` usage) to the host; `texel` bytes per texel.
 fn read_image(ctx: &Context, image: &Image, from: Usage, texel: u64) -> crate::Result<Vec<u8>> {
-    let (w, h) = image.extent();
+    read_image_level(ctx, image, 0, from, texel)
+}
+
+fn read_image_level(ctx: &Context, image: &Image, level: u32, from: Usage, texel: u64) -> crate::Result<Vec<u8>> {
+    let w = (image.desc.width >> level).max(1);
+    let h = (image.desc.height >> level).max(1);
     let buffer = ctx.create_buffer(
         &format!("readback of {}", image.desc.name),
         w as u64 * h as u64 * texel,
@@ -587,9 +727,9 @@ fn read_image(ctx: &Context, image: &Image, from: Usage, texel: u64) -> crate::R
         BufferLocation::Readback,
     )?;
     ctx.submit(|cmd| {
-        cmd.transition(image, from, Usage::TransferSrc, None);
-        cmd.copy_image_to_buffer(image, 0, &buffer);
-        cmd.transition(image, Usage::TransferSrc, from, None);
+        cmd.transition(image, from, Usage::TransferSrc, Some((level, 1)));
+        cmd.copy_image_to_buffer(image, level, &buffer);
+        cmd.transition(image, Usage::TransferSrc, from, Some((level, 1)));
         cmd.buffer_barrier();
     })?;
     Ok(buffer.read()?.to_vec())

@@ -80,21 +80,26 @@ fn decode_u32(t: DataType, b: &[u8]) -> u32 {
     }
 }
 
-/// The bytes of `count` elements of `elem_size` bytes, `stride` apart, starting `offset` bytes
-/// into buffer view `view`; checked against the view and its buffer.
+/// `count` elements of `elem` bytes, `stride` apart, starting `offset` bytes into a buffer view.
+struct Span {
+    offset: usize,
+    count: usize,
+    elem: usize,
+    stride: usize,
+}
+
+/// The bytes of `span` in buffer view `view`, checked against the view and its buffer.
 fn strided_bytes<'b>(
     use_: &Use,
     accessor: usize,
     view: &gltf::buffer::View,
-    offset: usize,
-    count: usize,
-    elem_size: usize,
-    stride: usize,
+    span: Span,
     buffers: &'b [Vec<u8>],
 ) -> crate::Result<&'b [u8]> {
-    let buffer = buffers
-        .get(view.buffer().index())
-        .ok_or_else(|| use_.error(accessor, format_args!("uses buffer {} that was not loaded", view.buffer().index())))?;
+    let Span { offset, count, elem: elem_size, stride } = span;
+    let buffer = buffers.get(view.buffer().index()).ok_or_else(|| {
+        use_.error(accessor, format_args!("uses buffer {} that was not loaded", view.buffer().index()))
+    })?;
     let view_end = view.offset().checked_add(view.length());
     let view_bytes = view_end.and_then(|end| buffer.get(view.offset()..end)).ok_or_else(|| {
         use_.error(
@@ -112,10 +117,8 @@ fn strided_bytes<'b>(
     if count == 0 {
         return Ok(&view_bytes[..0]);
     }
-    let needed = stride
-        .checked_mul(count - 1)
-        .and_then(|n| n.checked_add(elem_size))
-        .and_then(|n| n.checked_add(offset));
+    let needed =
+        stride.checked_mul(count - 1).and_then(|n| n.checked_add(elem_size)).and_then(|n| n.checked_add(offset));
     match needed {
         Some(end) if end <= view_bytes.len() => Ok(&view_bytes[offset..end]),
         _ => Err(use_.error(
@@ -148,7 +151,9 @@ pub(super) fn read_u32(acc: &gltf::Accessor, buffers: &[Vec<u8>], use_: &Use) ->
         other => {
             return Err(use_.error(
                 acc.index(),
-                format_args!("has component type {other:?}; indices must be unsigned byte, unsigned short or unsigned int"),
+                format_args!(
+                    "has component type {other:?}; indices must be unsigned byte, unsigned short or unsigned int"
+                ),
             ))
         }
     }
@@ -167,7 +172,11 @@ fn read<T: Copy>(
     if acc.dimensions() != expect {
         return Err(use_.error(
             index,
-            format_args!("has type {} where {} is required", dimensions_name(acc.dimensions()), dimensions_name(expect)),
+            format_args!(
+                "has type {} where {} is required",
+                dimensions_name(acc.dimensions()),
+                dimensions_name(expect)
+            ),
         ));
     }
     let n = component_count(expect);
@@ -185,11 +194,14 @@ fn read<T: Copy>(
             if stride < elem {
                 return Err(use_.error(
                     index,
-                    format_args!("has {elem}-byte elements but buffer view {} has a byte stride of only {stride}", view.index()),
+                    format_args!(
+                        "has {elem}-byte elements but buffer view {} has a byte stride of only {stride}",
+                        view.index()
+                    ),
                 ));
             }
             // Checked before allocating, so a bogus count cannot exhaust memory.
-            let bytes = strided_bytes(use_, index, &view, acc.offset(), count, elem, stride, buffers)?;
+            let bytes = strided_bytes(use_, index, &view, Span { offset: acc.offset(), count, elem, stride }, buffers)?;
             out.reserve_exact(total);
             for i in 0..count {
                 let e = &bytes[i * stride..i * stride + elem];
@@ -198,7 +210,7 @@ fn read<T: Copy>(
         }
         // No buffer view: zeros, then the sparse substitutions below. Nothing bounds the count
         // here, so cap it at something no real mesh reaches.
-        None if total > 1 << 28 => {
+        None if total > 1 << 26 => {
             return Err(use_.error(index, format_args!("claims {count} elements without a buffer view")));
         }
         None => out.resize(total, zero),
@@ -217,9 +229,21 @@ fn read<T: Copy>(
             IndexType::U16 => DataType::U16,
             IndexType::U32 => DataType::U32,
         };
-        let ibytes = strided_bytes(use_, index, &indices.view(), indices.offset(), scount, isize, isize, buffers)?;
+        let ibytes = strided_bytes(
+            use_,
+            index,
+            &indices.view(),
+            Span { offset: indices.offset(), count: scount, elem: isize, stride: isize },
+            buffers,
+        )?;
         let values = sparse.values();
-        let vbytes = strided_bytes(use_, index, &values.view(), values.offset(), scount, elem, elem, buffers)?;
+        let vbytes = strided_bytes(
+            use_,
+            index,
+            &values.view(),
+            Span { offset: values.offset(), count: scount, elem, stride: elem },
+            buffers,
+        )?;
         for (k, ib) in ibytes.chunks_exact(isize).enumerate() {
             let target = decode_u32(itype, ib) as usize;
             if target >= count {

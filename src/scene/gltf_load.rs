@@ -297,7 +297,9 @@ impl<'a> Loader<'a> {
             if values.iter().all(|v| v.is_finite()) {
                 Ok(())
             } else {
-                Err(Error::input(format!("{label}: {who} has a non-finite {what} {values:?}; set it to a finite number")))
+                Err(Error::input(format!(
+                    "{label}: {who} has a non-finite {what} {values:?}; set it to a finite number"
+                )))
             }
         };
         let base_color = pbr.base_color_factor();
@@ -322,12 +324,12 @@ impl<'a> Loader<'a> {
         // wins when they disagree).
         let mut uv_transforms: Vec<(&str, UvTransform)> = Vec::new();
         let slot = |loader: &mut Self,
-                        info_tex: gltf::Texture<'a>,
-                        tex_coord: u32,
-                        transform: Option<(UvTransform, Option<u32>)>,
-                        slot_name: &'static str,
-                        color_space: ColorSpace,
-                        uv_transforms: &mut Vec<(&'static str, UvTransform)>|
+                    info_tex: gltf::Texture<'a>,
+                    tex_coord: u32,
+                    transform: Option<(UvTransform, Option<u32>)>,
+                    slot_name: &'static str,
+                    color_space: ColorSpace,
+                    uv_transforms: &mut Vec<(&'static str, UvTransform)>|
          -> Result<usize> {
             let (uv, set) = match transform {
                 Some((t, set)) => (t, set.unwrap_or(tex_coord)),
@@ -347,7 +349,10 @@ impl<'a> Loader<'a> {
                 None => Ok(None),
                 Some(t) => {
                     let uv = UvTransform { offset: t.offset(), rotation: t.rotation(), scale: t.scale() };
-                    finite("KHR_texture_transform", &[uv.offset[0], uv.offset[1], uv.rotation, uv.scale[0], uv.scale[1]])?;
+                    finite(
+                        "KHR_texture_transform",
+                        &[uv.offset[0], uv.offset[1], uv.rotation, uv.scale[0], uv.scale[1]],
+                    )?;
                     Ok(Some((uv, t.tex_coord())))
                 }
             }
@@ -493,14 +498,20 @@ impl<'a> Loader<'a> {
     }
 
     /// The scene texture for `texture`'s image in `color_space`, decoding the image on first use.
-    fn texture(&mut self, texture: &gltf::Texture<'a>, color_space: ColorSpace, who: &str, slot: &str) -> Result<usize> {
+    fn texture(
+        &mut self,
+        texture: &gltf::Texture<'a>,
+        color_space: ColorSpace,
+        who: &str,
+        slot: &str,
+    ) -> Result<usize> {
         let image = texture.source().index();
         let key = (image, color_space == ColorSpace::Srgb);
         if let Some(&index) = self.textures.get(&key) {
             return Ok(index);
         }
         let root = self.doc.as_json();
-        let what = format!("{who} ({slot}, texture {})", texture.index());
+        let what = format!("{who} ({slot})");
         let decoded = resources::load_image(root, self.buffers, image, self.base_dir, &self.label, &what)?;
         let space = match color_space {
             ColorSpace::Srgb => "sRGB",
@@ -576,16 +587,14 @@ impl<'a> Loader<'a> {
         })?;
         let count = positions.len() / 3;
         if u32::try_from(count).is_err() {
-            return Err(self.error(format_args!("{who} has {count} vertices; weft supports at most 2^32 - 1 per primitive: split the mesh")));
+            return Err(self.error(format_args!(
+                "{who} has {count} vertices; weft supports at most 2^32 - 1 per primitive: split the mesh"
+            )));
         }
         let normals = read(&Semantic::Normals, Dimensions::Vec3)?;
         let tangents = read(&Semantic::Tangents, Dimensions::Vec4)?;
         let uvs = read(&Semantic::TexCoords(0), Dimensions::Vec2)?;
-        for (semantic, attr, n) in [
-            ("NORMAL", &normals, 3),
-            ("TANGENT", &tangents, 4),
-            ("TEXCOORD_0", &uvs, 2),
-        ] {
+        for (semantic, attr, n) in [("NORMAL", &normals, 3), ("TANGENT", &tangents, 4), ("TEXCOORD_0", &uvs, 2)] {
             if let Some((acc, values)) = attr {
                 if values.len() / n != count {
                     return Err(self.error(format_args!(
@@ -631,7 +640,9 @@ impl<'a> Loader<'a> {
 
         // Positions: a non-finite vertex in a triangle breaks rasterisation, bounds and tangents.
         let position = |v: usize| [positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]];
-        if let Some((corner, &v)) = indices.iter().enumerate().find(|(_, &v)| !position(v as usize).iter().all(|c| c.is_finite())) {
+        if let Some((corner, &v)) =
+            indices.iter().enumerate().find(|(_, &v)| !position(v as usize).iter().all(|c| c.is_finite()))
+        {
             return Err(self.error(format_args!(
                 "{who}: vertex {v} of triangle {} has the non-finite position {:?} (POSITION accessor {pos_accessor}); fix or delete that vertex in your modelling tool and re-export",
                 corner / 3,
@@ -644,13 +655,16 @@ impl<'a> Loader<'a> {
                 // Vertices no triangle uses are never drawn; keep them finite all the same.
                 position: position(v).map(|c| if c.is_finite() { c } else { 0.0 }),
                 normal: normals.as_ref().map_or([0.0; 3], |(_, n)| [n[3 * v], n[3 * v + 1], n[3 * v + 2]]),
-                tangent: tangents.as_ref().map_or([0.0; 4], |(_, t)| [t[4 * v], t[4 * v + 1], t[4 * v + 2], t[4 * v + 3]]),
+                tangent: tangents
+                    .as_ref()
+                    .map_or([0.0; 4], |(_, t)| [t[4 * v], t[4 * v + 1], t[4 * v + 2], t[4 * v + 3]]),
                 uv: uvs.as_ref().map_or([0.0; 2], |(_, t)| [t[2 * v], t[2 * v + 1]]),
             })
             .collect();
 
         let material = self.material_index(prim);
-        let uv_transform = prim.material().index().and_then(|m| self.material_uv.get(m)).copied().unwrap_or(UvTransform::IDENTITY);
+        let uv_transform =
+            prim.material().index().and_then(|m| self.material_uv.get(m)).copied().unwrap_or(UvTransform::IDENTITY);
 
         if uvs.is_some() {
             let bad = vertices.iter().filter(|v| !v.uv.iter().all(|c| c.is_finite())).count();
@@ -684,7 +698,9 @@ impl<'a> Loader<'a> {
 
         if normals.is_none() {
             tangents::generate_normals(&mut vertices, &indices);
-            self.warn(format_args!("{who} has no normals; generated them from the triangles (export normals for the intended shading)"));
+            self.warn(format_args!(
+                "{who} has no normals; generated them from the triangles (export normals for the intended shading)"
+            ));
         }
         let bad_normals = tangents::repair_normals(&mut vertices, &indices);
 
@@ -699,9 +715,15 @@ impl<'a> Loader<'a> {
             tangents::arbitrary_tangents(&mut vertices);
             0
         };
-        if bad_normals + bad_tangents > 0 {
+        let repaired: Vec<String> = [(bad_normals, "normal"), (bad_tangents, "tangent")]
+            .iter()
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, what)| format!("{n} {what}(s)"))
+            .collect();
+        if !repaired.is_empty() {
             self.warn(format_args!(
-                "{who}: {bad_normals} normal(s) and {bad_tangents} tangent(s) were zero-length, degenerate or not finite; replaced by a fallback frame (check the mesh's normals and UVs in your modelling tool)"
+                "{who}: {} were zero-length, degenerate or not finite; replaced by a fallback frame (check the mesh's normals and UVs in your modelling tool)",
+                repaired.join(" and ")
             ));
         }
 
@@ -712,7 +734,8 @@ impl<'a> Loader<'a> {
 
     fn light_definitions(&mut self) -> Result<Vec<LightDef>> {
         let root = self.doc.as_json();
-        let lights = root.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()).map_or(&[][..], |l| &l.lights[..]);
+        let lights =
+            root.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()).map_or(&[][..], |l| &l.lights[..]);
         let mut out = Vec::with_capacity(lights.len());
         for (i, l) in lights.iter().enumerate() {
             let name = l.name.clone().unwrap_or_else(|| format!("light {i}"));
@@ -731,20 +754,30 @@ impl<'a> Loader<'a> {
                     }
                     LightKind::Spot { inner_cone: inner, outer_cone: outer }
                 }
-                _ => return Err(self.error(format_args!("{who} has no valid type and spot parameters; re-export the light"))),
+                _ => {
+                    return Err(
+                        self.error(format_args!("{who} has no valid type and spot parameters; re-export the light"))
+                    )
+                }
             };
             if !(l.intensity.is_finite() && l.intensity >= 0.0) {
-                return Err(self.error(format_args!("{who} has intensity {}; it must be a finite number >= 0", l.intensity)));
+                return Err(
+                    self.error(format_args!("{who} has intensity {}; it must be a finite number >= 0", l.intensity))
+                );
             }
             if !l.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
-                return Err(self.error(format_args!("{who} has colour {:?}; components must be finite and >= 0", l.color)));
+                return Err(
+                    self.error(format_args!("{who} has colour {:?}; components must be finite and >= 0", l.color))
+                );
             }
             let range = match (kind, l.range) {
                 // The extension defines no range for directional lights.
                 (LightKind::Directional, _) | (_, None) => None,
                 (_, Some(r)) if r.is_finite() && r > 0.0 => Some(r),
                 (_, Some(r)) => {
-                    return Err(self.error(format_args!("{who} has range {r}; it must be > 0 (or left out for no cut-off)")))
+                    return Err(
+                        self.error(format_args!("{who} has range {r}; it must be > 0 (or left out for no cut-off)"))
+                    )
                 }
             };
             out.push(LightDef { name, kind, color: l.color, intensity: l.intensity, range });
@@ -761,7 +794,9 @@ impl<'a> Loader<'a> {
             let p = match (&c.type_, &c.perspective) {
                 (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
                 (Checked::Valid(json::camera::Type::Orthographic), _) => {
-                    self.warn(format_args!("{who} is orthographic; weft renders perspective cameras only, so it is skipped"));
+                    self.warn(format_args!(
+                        "{who} is orthographic; weft renders perspective cameras only, so it is skipped"
+                    ));
                     out.push(None);
                     continue;
                 }
@@ -796,7 +831,13 @@ impl<'a> Loader<'a> {
                     return Err(self.error(format_args!("{who} has aspectRatio {a}; it must be > 0 (or left out)")));
                 }
             }
-            out.push(Some(CameraDef { name, yfov: p.yfov, znear: p.znear, zfar: p.zfar, aspect_ratio: p.aspect_ratio }));
+            out.push(Some(CameraDef {
+                name,
+                yfov: p.yfov,
+                znear: p.znear,
+                zfar: p.zfar,
+                aspect_ratio: p.aspect_ratio,
+            }));
         }
         Ok(out)
     }
@@ -809,7 +850,11 @@ impl<'a> Loader<'a> {
             Some(scene) => {
                 if doc.scenes().len() > 1 {
                     let name = scene.name().map(|n| format!(" ('{n}')")).unwrap_or_default();
-                    self.warn(format_args!("has {} scenes; weft renders scene {}{name}", doc.scenes().len(), scene.index()));
+                    self.warn(format_args!(
+                        "has {} scenes; weft renders scene {}{name}",
+                        doc.scenes().len(),
+                        scene.index()
+                    ));
                 }
                 scene.nodes().collect()
             }
@@ -823,7 +868,8 @@ impl<'a> Loader<'a> {
                         }
                     }
                 }
-                let roots: Vec<_> = doc.nodes().filter(|n| !is_child.get(n.index()).copied().unwrap_or(false)).collect();
+                let roots: Vec<_> =
+                    doc.nodes().filter(|n| !is_child.get(n.index()).copied().unwrap_or(false)).collect();
                 if !roots.is_empty() {
                     self.warn("has no scenes; drawing every root node");
                 }
@@ -899,12 +945,16 @@ impl<'a> Loader<'a> {
 
     fn place_light(&mut self, index: usize, world: Mat4, who: &str) -> Result<()> {
         let Some(def) = self.lights.get(index) else {
-            return Err(self.error(format_args!("{who} refers to light {index}, which does not exist; fix the node's KHR_lights_punctual.light")));
+            return Err(self.error(format_args!(
+                "{who} refers to light {index}, which does not exist; fix the node's KHR_lights_punctual.light"
+            )));
         };
         let position = world.w_axis.truncate();
         let Some(direction) = (world * Vec4::new(0.0, 0.0, -1.0, 0.0)).truncate().try_normalize() else {
             let name = def.name.clone();
-            self.warn(format_args!("{who} scales light '{name}' to nothing, so it has no direction; the light is skipped"));
+            self.warn(format_args!(
+                "{who} scales light '{name}' to nothing, so it has no direction; the light is skipped"
+            ));
             return Ok(());
         };
         self.scene.lights.push(Light {
@@ -920,7 +970,9 @@ impl<'a> Loader<'a> {
     }
 
     fn place_camera(&mut self, index: usize, world: Mat4, who: &str) {
-        let Some(Some(def)) = self.cameras.get(index) else { return };
+        let Some(Some(def)) = self.cameras.get(index) else {
+            return;
+        };
         // The view is the inverse of the node's rigid motion: scale (even mirroring) is removed,
         // keeping the view direction (-Z) and the up direction (+Y) of the node.
         let z = world.z_axis.truncate().try_normalize();
@@ -930,7 +982,9 @@ impl<'a> Loader<'a> {
         });
         let (Some(z), Some(y)) = (z, y) else {
             let name = def.name.clone();
-            self.warn(format_args!("{who} scales camera '{name}' to nothing, so it has no orientation; the camera is skipped"));
+            self.warn(format_args!(
+                "{who} scales camera '{name}' to nothing, so it has no orientation; the camera is skipped"
+            ));
             return;
         };
         let x = y.cross(z);

@@ -28,7 +28,10 @@ pub(super) struct Fetched {
 /// Short printable form of a URI: data URIs are long, so only their media type is shown.
 pub(super) fn describe_uri(uri: &str) -> String {
     match uri.strip_prefix("data:") {
-        Some(rest) => format!("an embedded data: URI ({})", rest.split([';', ',']).next().filter(|m| !m.is_empty()).unwrap_or("no media type")),
+        Some(rest) => format!(
+            "an embedded data: URI ({})",
+            rest.split([';', ',']).next().filter(|m| !m.is_empty()).unwrap_or("no media type")
+        ),
         None => format!("'{uri}'"),
     }
 }
@@ -43,7 +46,9 @@ pub(super) fn fetch(uri: &str, base_dir: Option<&Path>, label: &str, what: &str)
         let mime = header.split(';').next().filter(|m| !m.is_empty()).map(str::to_owned);
         let bytes = if header.ends_with(";base64") {
             decode_base64(payload).ok_or_else(|| {
-                Error::input(format!("{label}: {what} has a data: URI whose base64 payload is malformed; re-export the file"))
+                Error::input(format!(
+                    "{label}: {what} has a data: URI whose base64 payload is malformed; re-export the file"
+                ))
             })?
         } else {
             percent_decode(payload)
@@ -150,14 +155,13 @@ pub(super) fn load_image(
 ) -> crate::Result<Decoded> {
     let image_name = image_label(root, index);
     let who = format!("{what} uses {image_name}, which");
-    let image = root
-        .images
-        .get(index)
-        .ok_or_else(|| Error::input(format!("{label}: {what} uses image {index}, which does not exist; fix the texture's source")))?;
+    let image = root.images.get(index).ok_or_else(|| {
+        Error::input(format!("{label}: {what} uses image {index}, which does not exist; fix the texture's source"))
+    })?;
 
     let (bytes, mime, origin) = match (&image.uri, &image.buffer_view) {
         (Some(uri), _) => {
-            let f = fetch(uri, base_dir, label, &format!("{what} ({image_name})"))?;
+            let f = fetch(uri, base_dir, label, &format!("{what} uses image {index}, which"))?;
             let origin = match f.origin {
                 Origin::DataUri => "its data: URI".to_owned(),
                 Origin::File(p) => format!("'{}'", p.display()),
@@ -166,7 +170,10 @@ pub(super) fn load_image(
         }
         (None, Some(view_index)) => {
             let view = root.buffer_views.get(view_index.value()).ok_or_else(|| {
-                Error::input(format!("{label}: {who} uses buffer view {}, which does not exist; re-export the scene", view_index.value()))
+                Error::input(format!(
+                    "{label}: {who} uses buffer view {}, which does not exist; re-export the scene",
+                    view_index.value()
+                ))
             })?;
             let start = view.byte_offset.map_or(0, |o| o.0) as usize;
             let bytes = buffers
@@ -209,7 +216,9 @@ pub(super) fn load_image(
 
     let reader = image::ImageReader::with_format(Cursor::new(&bytes[..]), format);
     let (width, height) = reader.into_dimensions().map_err(|e| {
-        Error::input(format!("{label}: {who} comes from {origin} and could not be decoded as {format:?}: {e}; re-save the image"))
+        Error::input(format!(
+            "{label}: {who} comes from {origin} and could not be decoded as {format:?}: {e}; re-save the image"
+        ))
     })?;
     if width > MAX_TEXTURE_SIZE || height > MAX_TEXTURE_SIZE || width == 0 || height == 0 {
         return Err(Error::input(format!(
@@ -224,7 +233,9 @@ pub(super) fn load_image(
     limits.max_alloc = Some(u64::from(MAX_TEXTURE_SIZE).pow(2) * 8 + (64 << 20));
     reader.limits(limits);
     let decoded = reader.decode().map_err(|e| {
-        Error::input(format!("{label}: {who} comes from {origin} and could not be decoded as {format:?}: {e}; re-save the image"))
+        Error::input(format!(
+            "{label}: {who} comes from {origin} and could not be decoded as {format:?}: {e}; re-save the image"
+        ))
     })?;
     let rgba = decoded.into_rgba8();
     Ok(Decoded { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })

@@ -140,15 +140,15 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
     if indices.len() < 3 {
         return false;
     }
-    let mut corners = Corners { vertices: vertices.as_slice(), indices: &*indices, tangents: vec![None; indices.len()] };
+    let mut corners =
+        Corners { vertices: vertices.as_slice(), indices: &*indices, tangents: vec![None; indices.len()] };
     if !mikktspace::generate_tangents(&mut corners) {
         return false;
     }
     let tangents = corners.tangents;
 
-    let close = |a: [f32; 4], b: [f32; 4]| {
-        a[3].signum() == b[3].signum() && (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4)
-    };
+    let close =
+        |a: [f32; 4], b: [f32; 4]| a[3].signum() == b[3].signum() && (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4);
     let mut assigned: Vec<Option<[f32; 4]>> = vec![None; vertices.len()];
     // The extra copies made of each split vertex.
     let mut copies: HashMap<u32, Vec<u32>> = HashMap::new();

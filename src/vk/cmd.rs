@@ -175,6 +175,11 @@ impl Cmd<'_> {
         unsafe { self.device().cmd_push_constants(self.raw, pipeline.layout, pipeline.push_stages, 0, bytes) };
     }
 
+    /// Push constants given as bytes (for records that define their own byte layout).
+    pub fn push_constant_bytes(&mut self, pipeline: &Pipeline, bytes: &[u8]) {
+        unsafe { self.device().cmd_push_constants(self.raw, pipeline.layout, pipeline.push_stages, 0, bytes) };
+    }
+
     pub fn bind_vertex_buffer(&mut self, buffer: &Buffer) {
         unsafe { self.device().cmd_bind_vertex_buffers(self.raw, 0, &[buffer.raw], &[0]) };
     }
