@@ -1,1 +1,20 @@
+//! The CPU reference: every function the fabric shaders compute, in f64 (the ground truth) and in
+//! f32 (the line-for-line twin of `glsl/include/fabric.glsl` and `glsl/include/weave.glsl`, with
+//! the same names), plus the integrators and the GPU probe's CPU side.
+//!
+//! - [`brdf`]: the Ashikhmin–Shirley lobe, D, Schlick, Lambert, the coupled diffuse, the fabric
+//!   mixture; [`brdf::sampling`]: importance sampling of the lobe and its pdf.
+//! - [`weave`]: the weave at a point and its exact coverage of a box footprint.
+//! - [`furnace`]: white-furnace albedo.
+//! - [`probe`]: the std430 buffers of `glsl/fabric_probe.comp`, their CPU evaluation, the inputs
+//!   (hard cases and random) and the GPU-vs-CPU error bound.
+//!
+//! The BRDF exists twice in this project: here (one source, instantiated in both precisions by a
+//! macro) and in GLSL. Nothing else may carry a copy.
 
+pub mod brdf;
+pub mod furnace;
+pub mod probe;
+pub mod weave;
+
+pub use probe::{probe_cpu_f32, probe_cpu_f64, ProbeInput, ProbeOutput};

@@ -1,0 +1,158 @@
+//! The GLSL twins against the CPU reference, on a Vulkan device (lavapipe by default, or
+//! WEFT_DEVICE), with validation on: `glsl/fabric_probe.comp` on every hard case of the model
+//! page's §5 plus random inputs, under `ProbeBound::GPU`; `glsl/weave.comp` texel by texel against
+//! `weave_texels_cpu` under `WEAVE_TEXEL_TOLERANCE`.
+
+mod common;
+
+use weft::fabric::{
+    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, FabricParams, WeavePattern,
+    WEAVE_TEXEL_TOLERANCE,
+};
+use weft::reference::probe::{
+    probe_check, probe_cpu_f64, probe_inputs, probe_worst_ratio, ProbeBound, ProbeInput, ProbeOutput,
+};
+use weft::vk::{shaders, Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Resource, Stages};
+
+/// Runs fabric_probe.comp on `inputs`.
+fn run_probe(ctx: &weft::vk::Context, inputs: &[ProbeInput]) -> Vec<ProbeOutput> {
+    let count = inputs.len() as u32;
+    let input = ctx
+        .create_buffer_with("probe inputs", BufferUsageFlags::STORAGE_BUFFER, inputs)
+        .unwrap();
+    let output = ctx
+        .create_buffer(
+            "probe outputs",
+            (inputs.len() * std::mem::size_of::<ProbeOutput>()) as u64,
+            BufferUsageFlags::STORAGE_BUFFER,
+            BufferLocation::Readback,
+        )
+        .unwrap();
+    let layout = ctx
+        .create_set_layout(&[
+            Binding {
+                binding: 0,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::COMPUTE,
+            },
+            Binding {
+                binding: 1,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::COMPUTE,
+            },
+        ])
+        .unwrap();
+    let pipeline = ctx
+        .create_compute_pipeline(&ComputeDesc {
+            name: "fabric probe",
+            shader: &shaders::FABRIC_PROBE_COMP,
+            set_layouts: &[&layout],
+            push_constant_size: 4,
+            constants: &[],
+        })
+        .unwrap();
+    let pool = ctx.create_descriptor_pool(1).unwrap();
+    let set = pool
+        .set(
+            &layout,
+            &[(0, Resource::Storage(&input)), (1, Resource::Storage(&output))],
+        )
+        .unwrap();
+    ctx.submit(|cmd| {
+        cmd.bind_pipeline(&pipeline);
+        cmd.bind_sets(&pipeline, 0, &[set]);
+        cmd.push_constant_bytes(&pipeline, &count.to_le_bytes());
+        cmd.dispatch(count.div_ceil(64), 1, 1);
+        cmd.buffer_barrier();
+    })
+    .unwrap();
+    ctx.wait_idle().unwrap();
+    let bytes = output.read().unwrap();
+    let size = std::mem::size_of::<ProbeOutput>();
+    let out = (0..inputs.len())
+        .map(|i| ProbeOutput::from_bytes(&bytes[i * size..(i + 1) * size]))
+        .collect();
+    ctx.check_validation().unwrap();
+    out
+}
+
+#[test]
+fn probe_matches_the_cpu_reference() {
+    let ctx = common::context();
+    let cases = probe_inputs(0xfab, 20_000);
+    let inputs: Vec<ProbeInput> = cases.iter().map(|c| c.input).collect();
+    let got = run_probe(&ctx, &inputs);
+    let mut failures = Vec::new();
+    let mut worst = (0.0, "", String::new());
+    for (c, g) in cases.iter().zip(&got) {
+        let reference = probe_cpu_f64(&c.input);
+        let msgs = probe_check(&c.input, &reference, g, &ProbeBound::GPU);
+        if !msgs.is_empty() {
+            failures.push(format!("{}:\n  {}", c.name, msgs.join("\n  ")));
+        }
+        let (r, name) = probe_worst_ratio(&c.input, &reference, g, &ProbeBound::GPU);
+        if r > worst.0 {
+            worst = (r, name, c.name.clone());
+        }
+    }
+    println!(
+        "probe on {}: {} inputs, worst |gpu - f64|/tolerance = {:.3} ({} of {})",
+        ctx.info().name,
+        cases.len(),
+        worst.0,
+        worst.1,
+        worst.2
+    );
+    assert!(
+        failures.is_empty(),
+        "{} of {} probe inputs out of bound:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn weave_texture_matches_the_cpu_texels() {
+    let renderer = weft::render::Renderer::new(common::context()).unwrap();
+    for pattern in [
+        WeavePattern::plain(),
+        WeavePattern::twill(),
+        WeavePattern::satin(),
+        WeavePattern::from_rows(&["--|", "|-|"]).unwrap(),
+    ] {
+        let p = FabricParams {
+            pattern,
+            gap: 0.004,
+            shadow_width: 0.4,
+            ..Default::default()
+        };
+        let image = renderer.build_weave(&p).unwrap();
+        let level0 = weave_level0_size(&pattern);
+        let mut worst = 0.0f32;
+        for level in 0..weave_mip_count(level0) {
+            let (w, h) = weave_level_size(level0, level);
+            let gpu = renderer.read_weave(&image, level).unwrap();
+            let cpu = weave_texels_cpu(&p.weave_push(w, h));
+            // A readback buffer has at least 16 bytes, so a 1×1 level comes back with padding.
+            assert!(gpu.len() >= cpu.len() * 4);
+            for (i, c) in cpu.iter().enumerate() {
+                for k in 0..4 {
+                    let d = (gpu[4 * i + k] - c[k]).abs();
+                    worst = worst.max(d);
+                    assert!(
+                        d <= WEAVE_TEXEL_TOLERANCE,
+                        "{} level {level} texel ({}, {}) channel {k}: gpu {} cpu {}",
+                        pattern.name(),
+                        i as u32 % w,
+                        i as u32 / w,
+                        gpu[4 * i + k],
+                        c[k]
+                    );
+                }
+            }
+        }
+        println!("weave texture {}: worst |gpu - cpu| = {worst:e}", pattern.name());
+    }
+    renderer.context().check_validation().unwrap();
+}
