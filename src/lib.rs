@@ -5,6 +5,7 @@
 //! every shader function), `render` (the plan and the passes of a frame).
 
 pub mod fabric;
+pub mod package;
 pub mod reference;
 pub mod render;
 pub mod scene;

@@ -1,0 +1,601 @@
+//! The SPIR-V shader package: every module compiled from `glsl/` as `<name>.spv`, a
+//! `manifest.json` that says how to bind and call each one, the shared GLSL under `include/`, and
+//! a `README.md` for the engine developer. Another Vulkan program can use it without weft's Rust
+//! code (`tests/package_consumer.rs` does exactly that).
+//!
+//! The manifest is reflected from the SPIR-V words ([`spirv`]), never typed by hand; only the
+//! prose is: what each module is for ([`MODULE_NOTES`]), what each binding holds
+//! ([`BINDING_MEANINGS`]) and what each specialization constant means ([`SPEC_MEANINGS`]). The
+//! package tests fail when a module, binding or constant lacks its prose, or prose names one that
+//! is gone.
+//!
+//! The output is reproducible: modules sorted by name, JSON keys sorted, no timestamps, so two
+//! writes of the same build are byte-identical.
+
+pub mod spirv;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+
+use crate::vk::{shaders, Shader, Stage};
+use crate::Error;
+pub use spirv::{Access, DescriptorKind, InterfaceVariable, PushConstantRange, SpecConstant, SpecValue, WorkgroupSize};
+
+/// Version of the package layout and of manifest.json's schema; bumped when either changes in a
+/// way a consumer would notice.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// The manifest's file name inside the package.
+pub const MANIFEST_FILE: &str = "manifest.json";
+
+/// The shared GLSL, as shipped under `include/`: what an engine's own shaders can `#include` to
+/// read weft's G-buffer or evaluate the fabric BRDF.
+pub const INCLUDES: &[(&str, &str)] = &[
+    ("fabric.glsl", include_str!("../glsl/include/fabric.glsl")),
+    ("frame.glsl", include_str!("../glsl/include/frame.glsl")),
+    ("pbr.glsl", include_str!("../glsl/include/pbr.glsl")),
+    ("weave.glsl", include_str!("../glsl/include/weave.glsl")),
+];
+
+/// What each module is for and how to call it (Markdown, for README.md), by module name.
+pub const MODULE_NOTES: &[(&str, &str)] = &[
+    (
+        "fabric_probe.comp",
+        "Evaluates every function of the fabric BRDF (`include/fabric.glsl`) and of the weave \
+         (`include/weave.glsl`) on a batch of inputs, one invocation per input: the way to check \
+         that a driver computes the BRDF as weft's CPU reference does. Bind a buffer of `count` \
+         192-byte `ProbeInput` records (std430: `vec4 n, t, k1, k2, point, footprint, coverage` \
+         then the 80-byte `GpuFabric` of `include/fabric.glsl`; `t.w` is the tangent's \
+         handedness, `k1`/`k2` the unit directions to the light and the viewer) and a buffer for \
+         `count` 128-byte `ProbeOutput` records (eight `vec4`: `lobe`, `expo`, `diffuse`, `f`, \
+         `point`, `footprint`, `f_point`, `f_avg`). Push the `uint count`; dispatch \
+         `ceil(count / 64)` groups. weft's Rust twins and error bounds: \
+         `weft::reference::probe`.",
+    ),
+    (
+        "fullscreen.vert",
+        "One triangle covering the viewport, with no vertex input: draw 3 vertices, no vertex \
+         buffer. Writes the screen UV (0..1, y down) at location 0 for `lighting.frag` and \
+         `tonemap.frag`.",
+    ),
+    (
+        "gbuffer.frag",
+        "G-buffer pass, fragment stage: samples the material's textures (and, for fabric, the \
+         weave texture built by `weave.comp`, with derivatives, so the mip level follows the \
+         pixel footprint) and writes five colour targets: albedo (RGBA8 sRGB), normal+tangent \
+         (RGBA16F, octahedral), surface (RGBA16F), fabric coverage (RGBA16F), emissive (RGBA16F). \
+         Render with a D32 depth target. The record layouts are in `include/frame.glsl` and \
+         `include/fabric.glsl`.",
+    ),
+    (
+        "gbuffer.vert",
+        "G-buffer pass, vertex stage: one interleaved vertex buffer with position (location 0, \
+         vec3), normal (1, vec3), tangent (2, vec4, w = handedness), uv (3, vec2) and weave uv (4, \
+         vec2: the uv with whole weave repeats removed per mesh). Push constants per draw: `mat4 \
+         world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
+         (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
+         front faces; the projection flips y.",
+    ),
+    (
+        "lighting.frag",
+        "Deferred lighting, one fullscreen triangle (`fullscreen.vert`): reads the G-buffer \
+         targets and depth written by the G-buffer pass, sums every light with the glTF \
+         metallic-roughness BRDF or the fabric BRDF per material, and writes linear HDR radiance \
+         to one RGBA16F target. No push constants.",
+    ),
+    (
+        "tonemap.frag",
+        "Exposure and tone mapping (Khronos PBR Neutral) of the HDR target, drawn with \
+         `fullscreen.vert`; write to an `R8G8B8A8_SRGB` target, which does the sRGB encoding. \
+         Push `float exposure` (linear scale, 2^EV) and `uint passthrough` (1: no curve).",
+    ),
+    (
+        "weave.comp",
+        "Builds one mip level of a weave coverage texture: one full pattern repeat (so it tiles \
+         with REPEAT addressing), each texel `(c_warp, c_weft, sh, 1)`: the exact area fractions \
+         of warp and weft on top, and the shadow-weighted thread area, of the texel's footprint. \
+         Every level is computed directly (not downsampled), so filtering stays a correct \
+         footprint average. Create an `R16G16B16A16_SFLOAT` image with STORAGE and SAMPLED usage \
+         (32 texels per weave cell at level 0, full mip chain); per level, bind a one-level image \
+         view in GENERAL layout, push the 36-byte `WeavePush` (`uint pattern_lo, pattern_hi` \
+         (bit 8j+i = cell (i, j) weft-up), `uint cols, rows` (1..8), `float gap` (s_g/s_p), \
+         `float shadow_dist`, `float shadow_strength`, `uint width, height` (this level's size)) \
+         and dispatch `ceil(width / 8) × ceil(height / 8)` groups. weft's Rust twins: \
+         `weft::fabric::WeavePush`, `weft::fabric::weave_texels_cpu`.",
+    ),
+];
+
+/// What each descriptor binding holds: (module, set, binding, meaning).
+pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
+    ("fabric_probe.comp", 0, 0, "the inputs: `ProbeInput[count]`"),
+    ("fabric_probe.comp", 0, 1, "the outputs: `ProbeOutput[count]`, written by the shader"),
+    ("gbuffer.frag", 0, 1, "material records (`Material[]`, include/frame.glsl)"),
+    ("gbuffer.frag", 0, 2, "fabric records (`GpuFabric[]`, include/fabric.glsl)"),
+    ("gbuffer.frag", 1, 0, "base colour texture (sRGB)"),
+    ("gbuffer.frag", 1, 1, "metallic-roughness texture (glTF: B metallic, G roughness)"),
+    ("gbuffer.frag", 1, 2, "tangent-space normal texture"),
+    ("gbuffer.frag", 1, 3, "emissive texture (sRGB)"),
+    ("gbuffer.frag", 1, 4, "the material's weave texture (from weave.comp), trilinear, REPEAT"),
+    ("gbuffer.vert", 0, 0, "the frame uniform (`FrameData`, std140, include/frame.glsl)"),
+    ("lighting.frag", 0, 0, "the frame uniform (`FrameData`, std140, include/frame.glsl)"),
+    ("lighting.frag", 0, 1, "lights (`Light[]`, include/frame.glsl)"),
+    ("lighting.frag", 0, 2, "material records (`Material[]`)"),
+    ("lighting.frag", 0, 3, "G-buffer albedo"),
+    ("lighting.frag", 0, 4, "G-buffer normal + tangent"),
+    ("lighting.frag", 0, 5, "G-buffer surface"),
+    ("lighting.frag", 0, 6, "G-buffer fabric coverage"),
+    ("lighting.frag", 0, 7, "G-buffer emissive"),
+    ("lighting.frag", 0, 8, "G-buffer depth (D32)"),
+    ("lighting.frag", 0, 9, "fabric records (`GpuFabric[]`)"),
+    ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
+    ("weave.comp", 0, 0, "the mip level being written: a one-level view of the RGBA16F weave texture"),
+];
+
+/// What each specialization constant means: (module, constant id, meaning). None yet.
+pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[];
+
+/// The package's table of contents: what `manifest.json` holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Manifest {
+    pub format_version: u32,
+    /// The compiler that made the modules (`weft::vk::shaders::COMPILER`).
+    pub compiler: String,
+    pub weft_version: String,
+    /// Sorted by name.
+    pub modules: Vec<ModuleEntry>,
+    /// The files under `include/`, sorted.
+    pub includes: Vec<FileEntry>,
+}
+
+/// One shader module, as reflected from its SPIR-V.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModuleEntry {
+    /// The source file name, e.g. `lighting.frag`.
+    pub name: String,
+    /// The file in the package, e.g. `lighting.frag.spv`.
+    pub file: String,
+    pub stage: Stage,
+    pub entry_point: String,
+    /// SPIR-V version, e.g. "1.6".
+    pub spirv_version: String,
+    pub capabilities: Vec<String>,
+    pub extensions: Vec<String>,
+    /// Sorted by (set, binding).
+    pub bindings: Vec<BindingEntry>,
+    pub push_constants: Option<PushConstantRange>,
+    /// Sorted by id.
+    pub spec_constants: Vec<SpecEntry>,
+    pub workgroup_size: Option<WorkgroupSize>,
+    pub inputs: Vec<InterfaceVariable>,
+    pub outputs: Vec<InterfaceVariable>,
+    /// Lower-case hex SHA-256 of the .spv file.
+    pub sha256: String,
+    pub size: u64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct BindingEntry {
+    pub set: u32,
+    pub binding: u32,
+    pub kind: DescriptorKind,
+    /// Descriptors in the binding (array size); 0 = runtime-sized.
+    pub count: u32,
+    pub access: Access,
+    pub image_format: Option<&'static str>,
+    pub block_size: Option<u32>,
+    pub runtime_array_stride: Option<u32>,
+    /// From [`BINDING_MEANINGS`]; None when the table has no entry.
+    pub meaning: Option<&'static str>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecEntry {
+    pub constant: SpecConstant,
+    /// From [`SPEC_MEANINGS`]; None when the table has no entry.
+    pub meaning: Option<&'static str>,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FileEntry {
+    /// Path inside the package, `/`-separated.
+    pub file: String,
+    pub sha256: String,
+    pub size: u64,
+}
+
+/// Lower-case hex SHA-256.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    format!("{:x}", Sha256::digest(bytes))
+}
+
+pub fn stage_name(stage: Stage) -> &'static str {
+    match stage {
+        Stage::Vertex => "vertex",
+        Stage::Fragment => "fragment",
+        Stage::Compute => "compute",
+    }
+}
+
+/// The `VkShaderStageFlagBits` value of a stage.
+pub fn stage_vk_bit(stage: Stage) -> u32 {
+    match stage {
+        Stage::Vertex => 0x1,
+        Stage::Fragment => 0x10,
+        Stage::Compute => 0x20,
+    }
+}
+
+/// The SPIR-V execution model a stage's module must have.
+fn execution_model(stage: Stage) -> u32 {
+    match stage {
+        Stage::Vertex => 0,
+        Stage::Fragment => 4,
+        Stage::Compute => 5,
+    }
+}
+
+/// The hand-written notes of a module, if any.
+pub fn module_notes(name: &str) -> Option<&'static str> {
+    MODULE_NOTES.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+}
+
+/// Reflects one embedded module into its manifest entry.
+pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
+    let bad = |what: String| Error::device(format!("embedded SPIR-V of {} cannot be reflected: {what}", shader.name));
+    let r = spirv::reflect(shader.spirv).map_err(bad)?;
+    if r.execution_model != execution_model(shader.stage) {
+        return Err(bad(format!(
+            "its entry point is a {} shader, the build table says {}",
+            spirv::execution_model_name(r.execution_model),
+            stage_name(shader.stage)
+        )));
+    }
+    let name = shader.name;
+    let bindings = r
+        .bindings
+        .into_iter()
+        .map(|b| BindingEntry {
+            meaning: BINDING_MEANINGS
+                .iter()
+                .find(|(m, s, n, _)| *m == name && *s == b.set && *n == b.binding)
+                .map(|e| e.3),
+            set: b.set,
+            binding: b.binding,
+            kind: b.kind,
+            count: b.count,
+            access: b.access,
+            image_format: b.image_format,
+            block_size: b.block_size,
+            runtime_array_stride: b.runtime_array_stride,
+        })
+        .collect();
+    let spec_constants = r
+        .spec_constants
+        .into_iter()
+        .map(|c| SpecEntry {
+            meaning: SPEC_MEANINGS.iter().find(|(m, id, _)| *m == name && *id == c.id).map(|e| e.2),
+            constant: c,
+        })
+        .collect();
+    Ok(ModuleEntry {
+        name: name.to_string(),
+        file: format!("{name}.spv"),
+        stage: shader.stage,
+        entry_point: r.entry_point,
+        spirv_version: format!("{}.{}", r.version.0, r.version.1),
+        capabilities: r.capabilities,
+        extensions: r.extensions,
+        bindings,
+        push_constants: r.push_constants,
+        spec_constants,
+        workgroup_size: r.workgroup_size,
+        inputs: r.inputs,
+        outputs: r.outputs,
+        sha256: sha256_hex(shader.spirv),
+        size: shader.spirv.len() as u64,
+    })
+}
+
+/// The manifest of every embedded module, without writing anything.
+pub fn manifest() -> crate::Result<Manifest> {
+    let mut shaders: Vec<&Shader> = shaders::ALL.iter().collect();
+    shaders.sort_by_key(|s| s.name);
+    let modules = shaders.into_iter().map(reflect_module).collect::<crate::Result<Vec<_>>>()?;
+    let mut includes: Vec<FileEntry> = INCLUDES
+        .iter()
+        .map(|(name, text)| FileEntry {
+            file: format!("include/{name}"),
+            sha256: sha256_hex(text.as_bytes()),
+            size: text.len() as u64,
+        })
+        .collect();
+    includes.sort_by(|a, b| a.file.cmp(&b.file));
+    Ok(Manifest {
+        format_version: FORMAT_VERSION,
+        compiler: shaders::COMPILER.to_string(),
+        weft_version: env!("CARGO_PKG_VERSION").to_string(),
+        modules,
+        includes,
+    })
+}
+
+/// Writes the package into `dir` (created if missing): every module as `<name>.spv`,
+/// `manifest.json`, `include/*.glsl` and `README.md`. Files an earlier package in `dir` listed
+/// and this one does not are removed; nothing else in `dir` is touched.
+pub fn write_package(dir: &Path) -> crate::Result<Manifest> {
+    let manifest = manifest()?;
+    std::fs::create_dir_all(dir.join("include")).map_err(io(format!("creating {}", dir.join("include").display())))?;
+    remove_stale_files(dir, &manifest)?;
+    for shader in shaders::ALL {
+        write(&dir.join(format!("{}.spv", shader.name)), shader.spirv)?;
+    }
+    for (name, text) in INCLUDES {
+        write(&dir.join("include").join(name), text.as_bytes())?;
+    }
+    write(&dir.join(MANIFEST_FILE), manifest.to_json().as_bytes())?;
+    write(&dir.join("README.md"), manifest.readme().as_bytes())?;
+    Ok(manifest)
+}
+
+fn io(context: String) -> impl FnOnce(std::io::Error) -> Error {
+    move |source| Error::Io { context, source }
+}
+
+fn write(path: &Path, bytes: &[u8]) -> crate::Result<()> {
+    std::fs::write(path, bytes).map_err(io(format!("writing {}", path.display())))
+}
+
+/// Removes the files that the manifest already in `dir` lists and `new` does not (a module
+/// renamed or deleted since), so the package never carries a stale module.
+fn remove_stale_files(dir: &Path, new: &Manifest) -> crate::Result<()> {
+    let Ok(old) = std::fs::read_to_string(dir.join(MANIFEST_FILE)) else { return Ok(()) };
+    let Ok(old) = serde_json::from_str::<serde_json::Value>(&old) else { return Ok(()) };
+    let listed = |v: &serde_json::Value, key: &str| -> Vec<String> {
+        v[key].as_array().into_iter().flatten().filter_map(|e| e["file"].as_str().map(String::from)).collect()
+    };
+    let keep: Vec<&str> =
+        new.modules.iter().map(|m| m.file.as_str()).chain(new.includes.iter().map(|f| f.file.as_str())).collect();
+    for file in listed(&old, "modules").into_iter().chain(listed(&old, "includes")) {
+        // Only plain relative paths inside the package (the old manifest is data, not trusted).
+        let path = PathBuf::from(&file);
+        let inside = path.components().all(|c| matches!(c, std::path::Component::Normal(_)));
+        if inside && !keep.contains(&file.as_str()) {
+            let p = dir.join(&path);
+            if p.is_file() {
+                std::fs::remove_file(&p).map_err(io(format!("removing stale {}", p.display())))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A JSON value with every object's keys in sorted order, whatever serde_json's map keeps.
+fn sorted(v: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match v {
+        Value::Object(map) => {
+            let mut entries: Vec<(String, Value)> = map.into_iter().collect();
+            entries.sort_by(|a, b| a.0.cmp(&b.0));
+            Value::Object(entries.into_iter().map(|(k, v)| (k, sorted(v))).collect())
+        }
+        Value::Array(items) => Value::Array(items.into_iter().map(sorted).collect()),
+        other => other,
+    }
+}
+
+impl SpecValue {
+    fn json(&self) -> serde_json::Value {
+        match *self {
+            SpecValue::Bool(b) => b.into(),
+            SpecValue::Int(i) => i.into(),
+            SpecValue::UInt(u) => u.into(),
+            SpecValue::Float(f) => f.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for SpecValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SpecValue::Bool(b) => write!(f, "{b}"),
+            SpecValue::Int(i) => write!(f, "{i}"),
+            SpecValue::UInt(u) => write!(f, "{u}"),
+            SpecValue::Float(x) => write!(f, "{x:?}"),
+        }
+    }
+}
+
+impl ModuleEntry {
+    fn json(&self) -> serde_json::Value {
+        use serde_json::json;
+        let bindings: Vec<_> = self
+            .bindings
+            .iter()
+            .map(|b| {
+                let mut v = json!({
+                    "set": b.set,
+                    "binding": b.binding,
+                    "type": b.kind.name(),
+                    "vk_descriptor_type": b.kind.vk_value(),
+                    "count": b.count,
+                    "access": b.access.name(),
+                    "meaning": b.meaning,
+                });
+                if let Some(f) = b.image_format {
+                    v["image_format"] = f.into();
+                }
+                if let Some(s) = b.block_size {
+                    v["block_size"] = s.into();
+                }
+                if let Some(s) = b.runtime_array_stride {
+                    v["runtime_array_stride"] = s.into();
+                }
+                v
+            })
+            .collect();
+        let spec: Vec<_> = self
+            .spec_constants
+            .iter()
+            .map(|c| json!({"id": c.constant.id, "type": c.constant.ty, "default": c.constant.default.json(), "meaning": c.meaning}))
+            .collect();
+        let io = |vars: &[InterfaceVariable]| -> Vec<serde_json::Value> {
+            vars.iter().map(|v| json!({"location": v.location, "type": v.ty})).collect()
+        };
+        let mut v = json!({
+            "name": self.name,
+            "file": self.file,
+            "stage": stage_name(self.stage),
+            "vk_shader_stage": stage_vk_bit(self.stage),
+            "entry_point": self.entry_point,
+            "spirv_version": self.spirv_version,
+            "capabilities": self.capabilities,
+            "extensions": self.extensions,
+            "descriptor_bindings": bindings,
+            "push_constants": self.push_constants.map(|p| json!({"offset": p.offset, "size": p.size})),
+            "specialization_constants": spec,
+            "inputs": io(&self.inputs),
+            "outputs": io(&self.outputs),
+            "sha256": self.sha256,
+            "size": self.size,
+        });
+        if let Some(w) = self.workgroup_size {
+            v["workgroup_size"] = json!(w.size);
+            if w.spec_ids.iter().any(Option::is_some) {
+                v["workgroup_size_spec_ids"] = json!(w.spec_ids);
+            }
+        }
+        v
+    }
+}
+
+impl Manifest {
+    /// `manifest.json`'s text: pretty-printed, keys sorted, ending in a newline.
+    pub fn to_json(&self) -> String {
+        use serde_json::json;
+        let v = json!({
+            "format": "weft-spirv-package",
+            "format_version": self.format_version,
+            "compiler": self.compiler,
+            "weft_version": self.weft_version,
+            "modules": self.modules.iter().map(ModuleEntry::json).collect::<Vec<_>>(),
+            "includes": self.includes.iter().map(|f| json!({"file": f.file, "sha256": f.sha256, "size": f.size})).collect::<Vec<_>>(),
+        });
+        let mut text = serde_json::to_string_pretty(&sorted(v)).expect("a JSON value always serialises");
+        text.push('\n');
+        text
+    }
+
+    pub fn module(&self, name: &str) -> Option<&ModuleEntry> {
+        self.modules.iter().find(|m| m.name == name)
+    }
+
+    /// `README.md`'s text: how to load, bind and call each module, from the manifest and the
+    /// hand-written notes.
+    pub fn readme(&self) -> String {
+        let mut s = String::new();
+        let w = &mut s;
+        let _ = writeln!(w, "# weft SPIR-V shader package\n");
+        let _ = writeln!(
+            w,
+            "The shaders of weft {} (a deferred Vulkan renderer for woven fabric), compiled to SPIR-V, \
+             ready for any Vulkan 1.3 program. Package format {}. Compiler: {}.\n",
+            self.weft_version, self.format_version, self.compiler
+        );
+        let _ = writeln!(w, "## Using a module\n");
+        let _ = writeln!(
+            w,
+            "1. Read `<name>.spv` and check its SHA-256 against `manifest.json`; pass the bytes to \
+             `vkCreateShaderModule` (they are little-endian 32-bit words).\n\
+             2. Create one `VkDescriptorSetLayout` per set from `descriptor_bindings`: `type` is \
+             `VK_DESCRIPTOR_TYPE_<TYPE>` (its value in `vk_descriptor_type`), `count` the \
+             descriptor count (0: runtime-sized), stage flags from the modules that use the binding \
+             (`vk_shader_stage`). For a graphics pipeline, merge the bindings of its two modules.\n\
+             3. Add one `VkPushConstantRange` from `push_constants` (`offset`, `size`) with the stage \
+             flags of every module that declares it.\n\
+             4. Name `entry_point` in `VkPipelineShaderStageCreateInfo`; give \
+             `specialization_constants` by `id` (their defaults apply otherwise).\n\
+             5. Compute: dispatch `ceil(n / workgroup_size)` groups along each axis.\n\n\
+             The device needs Vulkan 1.3 (SPIR-V {}) and the listed `capabilities`. Buffer bindings \
+             give `block_size` (bytes the bound range must hold at least, without a trailing \
+             runtime array) and `runtime_array_stride`; image bindings their `image_format` (GLSL \
+             spelling). `access` says whether the shader reads or writes the resource. `include/` \
+             holds the GLSL the modules were built from, for engines that write their own shaders \
+             against weft's G-buffer or BRDF.\n",
+            self.modules.first().map(|m| m.spirv_version.as_str()).unwrap_or("1.6")
+        );
+        let _ = writeln!(w, "## Modules\n");
+        let _ = writeln!(w, "| module | stage | size | sha256 |\n|---|---|---|---|");
+        for m in &self.modules {
+            let _ = writeln!(w, "| `{}` | {} | {} B | `{}…` |", m.file, stage_name(m.stage), m.size, &m.sha256[..16]);
+        }
+        let _ = writeln!(w);
+        for m in &self.modules {
+            let _ = writeln!(w, "### {}\n", m.name);
+            let _ = writeln!(w, "{}\n", module_notes(&m.name).unwrap_or("(no notes)"));
+            let _ = write!(w, "- file `{}`, {} stage, entry point `{}`", m.file, stage_name(m.stage), m.entry_point);
+            if let Some(g) = m.workgroup_size {
+                let _ = write!(w, ", workgroup size {} × {} × {}", g.size[0], g.size[1], g.size[2]);
+            }
+            let _ = writeln!(w);
+            match m.push_constants {
+                Some(p) => {
+                    let _ = writeln!(w, "- push constants: offset {}, size {} bytes", p.offset, p.size);
+                }
+                None => {
+                    let _ = writeln!(w, "- push constants: none");
+                }
+            }
+            if !m.inputs.is_empty() {
+                let list: Vec<String> = m.inputs.iter().map(|v| format!("{}: `{}`", v.location, v.ty)).collect();
+                let _ = writeln!(w, "- inputs (location: type): {}", list.join(", "));
+            }
+            if !m.outputs.is_empty() {
+                let list: Vec<String> = m.outputs.iter().map(|v| format!("{}: `{}`", v.location, v.ty)).collect();
+                let _ = writeln!(w, "- outputs (location: type): {}", list.join(", "));
+            }
+            for c in &m.spec_constants {
+                let _ = writeln!(
+                    w,
+                    "- specialization constant {} (`{}`, default {}): {}",
+                    c.constant.id,
+                    c.constant.ty,
+                    c.constant.default,
+                    c.meaning.unwrap_or("(no meaning recorded)")
+                );
+            }
+            if m.bindings.is_empty() {
+                let _ = writeln!(w, "- no descriptor bindings");
+            } else {
+                let _ = writeln!(w, "\n| set | binding | type | count | access | holds |\n|---|---|---|---|---|---|");
+                for b in &m.bindings {
+                    let mut kind = b.kind.name().to_string();
+                    if let Some(f) = b.image_format {
+                        let _ = write!(kind, " ({f})");
+                    }
+                    if let Some(stride) = b.runtime_array_stride {
+                        let _ = write!(kind, " ({stride} B per element)");
+                    }
+                    let _ = writeln!(
+                        w,
+                        "| {} | {} | {} | {} | {} | {} |",
+                        b.set,
+                        b.binding,
+                        kind,
+                        b.count,
+                        b.access.name(),
+                        b.meaning.unwrap_or("")
+                    );
+                }
+            }
+            let _ = writeln!(w);
+        }
+        let _ = writeln!(w, "## Files\n");
+        let _ = writeln!(w, "`manifest.json` (everything above, machine-readable), `README.md` (this file), one `.spv` per module, and:\n");
+        for f in &self.includes {
+            let _ = writeln!(w, "- `{}` ({} B, sha256 `{}…`)", f.file, f.size, &f.sha256[..16]);
+        }
+        s
+    }
+}
