@@ -75,14 +75,22 @@ void main() {
     gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
     gb_frame = vec4(oct_encode(n), oct_encode(t));
     gb_surface = vec4(roughness, float(draw.material), sign, 1.0);
-    gb_fabric = vec4(0.0);
+    // The weave is sampled here, with the UV derivatives, because only this pass has them:
+    // trilinear filtering of exact coverages gives the footprint's area fractions. Derivatives are
+    // taken of the interpolated UV alone, before any branch: derivatives in non-uniform control
+    // flow are undefined, and on lavapipe buffer loads read 0 in helper invocations, so the
+    // derivative of anything loaded from a buffer is garbage in quads cut by a triangle edge.
     uint fabric = uint(m.metallic_roughness.z + 0.5);
+    GpuFabric f = fabrics[max(fabric, 1u) - 1u];
+    vec2 uv_dx = dFdx(in_weave_uv);
+    vec2 uv_dy = dFdy(in_weave_uv);
+    vec2 st_scale = f.cell_per_uv / vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+    vec2 st = in_weave_uv * st_scale;
+    vec2 st_dx = uv_dx * st_scale;
+    vec2 st_dy = uv_dy * st_scale;
+    gb_fabric = vec4(0.0);
     if (fabric > 0u) {
-        // The weave is sampled here, with the UV derivatives, because only this pass has them:
-        // trilinear/anisotropic filtering of exact coverages gives the footprint's area fractions.
-        GpuFabric f = fabrics[fabric - 1u];
-        vec2 st = in_weave_uv * f.cell_per_uv / vec2(float(f.cols), float(f.rows));
-        vec3 coverage = textureGrad(weave_tex, st, dFdx(st), dFdy(st)).rgb;
+        vec3 coverage = textureGrad(weave_tex, st, st_dx, st_dy).rgb;
         gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
     }
     gb_emissive = vec4(max(emissive, vec3(0.0)), 0.0);

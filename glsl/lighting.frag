@@ -72,9 +72,10 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
         return dot(dir, dir) > 0.0 ? normalize(dir) * 0.5 + 0.5 : vec3(0.0);
     }
     if (view == DEBUG_DEPTH) {
-        vec4 p = frame.inv_view_proj * vec4(0.0, 0.0, depth, 1.0);
-        float linear = length(p.xyz / p.w - frame.eye.xyz);
-        return vec3(fract(linear));
+        vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+        vec4 p = frame.inv_view_proj * vec4(ndc, depth, 1.0);
+        float dist = length(p.xyz / p.w - frame.eye.xyz);
+        return vec3(fract(dist));
     }
     return vec3(1.0, 0.0, 1.0);
 }
@@ -82,7 +83,7 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gb_depth, px, 0).r;
-    if (depth >= 1.0) {
+    if (depth <= 0.0) {
         // Empty pixel: no surface, no lighting.
         out_color = vec4(frame.debug_view == DEBUG_NONE ? frame.background.rgb : vec3(0.0), 1.0);
         return;

@@ -22,6 +22,12 @@ enum Command {
     Render(RenderArgs),
     /// Print what a frame of the scene needs: passes, lights, materials.
     Plan(PlanArgs),
+    /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
+    Shaders {
+        /// Directory to write the package into (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 #[derive(Args)]
@@ -34,6 +40,15 @@ struct SceneArgs {
     /// Index of the scene's camera to use (default: its first camera, or automatic framing).
     #[arg(long)]
     camera: Option<usize>,
+    /// Place the camera here (X,Y,Z, world space) instead of the scene's camera; needs --target.
+    #[arg(long, allow_hyphen_values = true, requires = "target")]
+    eye: Option<String>,
+    /// The point the --eye camera looks at (X,Y,Z).
+    #[arg(long, allow_hyphen_values = true, requires = "eye")]
+    target: Option<String>,
+    /// Vertical field of view of the --eye camera, in degrees.
+    #[arg(long, default_value_t = 40.0)]
+    fov: f32,
     /// Show a G-buffer target instead of the lit image: albedo, normals, tangents,
     /// roughness-metallic, coverage, thread-dir, depth.
     #[arg(long, default_value = "none")]
@@ -85,6 +100,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Plan(args) => run_plan(args),
+        Command::Shaders { out } => run_shaders(&out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -104,7 +120,7 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
         eprintln!("warning: {w}");
     }
     let (width, height) = render::parse_size(&args.size)?;
-    let options = RenderOptions {
+    let mut options = RenderOptions {
         width,
         height,
         camera: args.camera,
@@ -112,6 +128,11 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
         ..Default::default()
     };
     options.validate()?;
+    if let (Some(eye), Some(target)) = (&args.eye, &args.target) {
+        let eye = render::parse_vec3("--eye", eye)?;
+        let target = render::parse_vec3("--target", target)?;
+        options.camera_override = Some(scene.look_at_camera(eye, target, args.fov.to_radians())?);
+    }
     // Fails early, before any GPU work, if --camera names no camera.
     scene.camera(options.camera)?;
     Ok((scene, options))
@@ -176,6 +197,14 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         println!("draws      {} ({} triangles)", frame.stats.draws, frame.stats.triangles);
         println!("pipelines  {}", frame.stats.pipelines.join(", "));
     }
+    Ok(())
+}
+
+/// Writes the SPIR-V shader package (see weft::package).
+fn run_shaders(out: &std::path::Path) -> anyhow::Result<()> {
+    let manifest = weft::package::write_package(out)?;
+    let bytes: u64 = manifest.modules.iter().map(|m| m.size).sum();
+    println!("wrote {} modules ({bytes} bytes of SPIR-V) to {}", manifest.modules.len(), out.display());
     Ok(())
 }
 

@@ -256,6 +256,11 @@ impl Renderer {
         &self.ctx
     }
 
+    /// Every pipeline the renderer made, with its shaders, set layouts and push-constant size.
+    pub fn pipelines(&self) -> [&Pipeline; 4] {
+        [&self.weave_pipeline, &self.gbuffer_pipeline, &self.lighting_pipeline, &self.tonemap_pipeline]
+    }
+
     /// Uploads a scene: geometry, materials, lights and textures (with mip chains).
     pub fn upload(&self, scene: &Scene) -> crate::Result<GpuScene> {
         let ctx = &self.ctx;
@@ -381,7 +386,10 @@ impl Renderer {
             self.targets = None;
             self.targets = Some(Targets::new(&self.ctx, width, height)?);
         }
-        let camera = scene.camera(options.camera)?;
+        let camera = match &options.camera_override {
+            Some(c) => c.clone(),
+            None => scene.camera(options.camera)?,
+        };
         let frame_data = frame_data(&camera, width, height, gpu, options);
         let frame_buffer = self.ctx.create_buffer_with("frame", BufferUsageFlags::UNIFORM_BUFFER, &[frame_data])?;
 
@@ -583,7 +591,7 @@ fn gbuffer_pass(
     cmd.transition(&targets.depth, Usage::Undefined, Usage::DepthAttachment, None);
     let colors: Vec<Attachment> =
         targets.gbuffer_colors().into_iter().map(|image| Attachment { image, clear: Some([0.0; 4]) }).collect();
-    cmd.begin_rendering(&colors, Some(Attachment { image: &targets.depth, clear: Some([1.0; 4]) }));
+    cmd.begin_rendering(&colors, Some(Attachment { image: &targets.depth, clear: Some([0.0; 4]) }));
     cmd.bind_pipeline(pipeline);
     cmd.bind_vertex_buffer(&scene.vertices);
     cmd.bind_index_buffer(&scene.indices);
@@ -626,10 +634,10 @@ fn tonemap_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, push: &T
 
 fn frame_data(camera: &crate::scene::Camera, width: u32, height: u32, gpu: &GpuScene, options: &RenderOptions) -> FrameData {
     let aspect = width as f32 / height as f32;
-    let mut proj = match camera.zfar {
-        Some(zfar) if zfar > camera.znear => Mat4::perspective_rh(camera.yfov, aspect, camera.znear, zfar),
-        _ => Mat4::perspective_infinite_rh(camera.yfov, aspect, camera.znear),
-    };
+    // Reversed-Z with an infinite far plane: depth 1 at the near plane, 0 at infinity. With D32F
+    // this keeps depth precision nearly uniform, so a cloth 1.5 cm above a ball does not z-fight
+    // at 15 m. The camera's zfar is not needed.
+    let mut proj = Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6));
     // Vulkan's clip space has +Y down; flipping here keeps images upright.
     proj.y_axis.y = -proj.y_axis.y;
     let view_proj = proj * camera.view;

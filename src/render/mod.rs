@@ -70,6 +70,8 @@ pub struct RenderOptions {
     pub height: u32,
     /// Index of the scene's camera; None = the first camera, or automatic framing.
     pub camera: Option<usize>,
+    /// A camera given directly (e.g. by --eye/--target); overrides `camera`.
+    pub camera_override: Option<crate::scene::Camera>,
     /// Exposure in EV: the HDR radiance is scaled by 2^exposure before tone mapping.
     pub exposure: f32,
     pub debug_view: DebugView,
@@ -77,7 +79,14 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 1280, height: 720, camera: None, exposure: 0.0, debug_view: DebugView::None }
+        RenderOptions {
+            width: 1280,
+            height: 720,
+            camera: None,
+            camera_override: None,
+            exposure: 0.0,
+            debug_view: DebugView::None,
+        }
     }
 }
 
@@ -96,6 +105,16 @@ impl RenderOptions {
             )));
         }
         Ok(())
+    }
+}
+
+/// Parses `X,Y,Z`, e.g. `0,1.5,3.5`.
+pub fn parse_vec3(what: &str, text: &str) -> crate::Result<glam::Vec3> {
+    let bad = || Error::input(format!("{what} '{text}' is not three comma-separated numbers X,Y,Z (e.g. 0,1.5,3.5)"));
+    let parts: Vec<f32> = text.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    match parts[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(bad()),
     }
 }
 

@@ -196,6 +196,34 @@ impl Scene {
         }
     }
 
+    /// A camera at `eye` looking at `target` (Y up), with vertical field of view `yfov`; near and
+    /// far planes fitted to the scene's bounds.
+    pub fn look_at_camera(&self, eye: Vec3, target: Vec3, yfov: f32) -> Result<Camera, crate::Error> {
+        let dir = target - eye;
+        if !eye.is_finite() || !target.is_finite() || dir.length() < 1e-6 {
+            return Err(crate::Error::input(format!(
+                "camera eye {eye} and target {target} must be finite and apart"
+            )));
+        }
+        if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+            return Err(crate::Error::input(format!(
+                "field of view {} degrees is out of range: use a value between 0 and 180 (exclusive)",
+                yfov.to_degrees()
+            )));
+        }
+        let up = if dir.normalize().y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
+        let b = self.bounds().unwrap_or(Bounds { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
+        let far = (b.max - b.min).length() + (eye - (b.min + b.max) * 0.5).length();
+        Ok(Camera {
+            name: "--eye/--target".into(),
+            view: Mat4::look_at_rh(eye, target, up),
+            yfov,
+            znear: (far * 1e-4).max(1e-3),
+            zfar: Some(far * 1.5),
+            aspect_ratio: None,
+        })
+    }
+
     /// Frames the scene's bounds: looks at the centre from the +Z side, 20 degrees above.
     pub fn auto_camera(&self) -> Camera {
         let b = self.bounds().unwrap_or(Bounds { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });

@@ -72,6 +72,13 @@ pub struct Pipeline {
     pub(crate) bind_point: vk::PipelineBindPoint,
     pub(crate) push_stages: vk::ShaderStageFlags,
     pub name: String,
+    /// Source file names of the shader modules, in stage order.
+    pub shaders: Vec<&'static str>,
+    /// The bindings of each descriptor set, by set number.
+    pub sets: Vec<Vec<Binding>>,
+    pub push_constant_size: u32,
+    /// Specialization constants the pipeline was made with (id, value).
+    pub constants: Vec<(u32, u32)>,
 }
 
 impl Drop for Pipeline {
@@ -246,7 +253,7 @@ impl Context {
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some())
             .depth_write_enable(desc.depth_format.is_some())
-            .depth_compare_op(vk::CompareOp::LESS);
+            .depth_compare_op(vk::CompareOp::GREATER); // reversed-Z: near is 1, far is 0
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
@@ -285,6 +292,10 @@ impl Context {
             bind_point: vk::PipelineBindPoint::GRAPHICS,
             push_stages: desc.push_stages.0,
             name: desc.name.into(),
+            shaders: vec![desc.vertex.name, desc.fragment.name],
+            sets: desc.set_layouts.iter().map(|s| s.bindings.clone()).collect(),
+            push_constant_size: desc.push_constant_size,
+            constants: desc.fragment_constants.to_vec(),
         })
     }
 
@@ -314,6 +325,10 @@ impl Context {
             bind_point: vk::PipelineBindPoint::COMPUTE,
             push_stages: vk::ShaderStageFlags::COMPUTE,
             name: desc.name.into(),
+            shaders: vec![desc.shader.name],
+            sets: desc.set_layouts.iter().map(|s| s.bindings.clone()).collect(),
+            push_constant_size: desc.push_constant_size,
+            constants: desc.constants.to_vec(),
         })
     }
 
