@@ -6,6 +6,8 @@
 //!   mixture; [`brdf::sampling`]: importance sampling of the lobe and its pdf.
 //! - [`weave`]: the weave at a point and its exact coverage of a box footprint.
 //! - [`furnace`]: white-furnace albedo.
+//! - [`shading`]: the CPU twin of the lighting and tonemap passes (lights, glTF PBR, ambient,
+//!   the fabric branch).
 //! - [`probe`]: the std430 buffers of `glsl/fabric_probe.comp`, their CPU evaluation, the inputs
 //!   (hard cases and random) and the GPU-vs-CPU error bound.
 //!
@@ -15,6 +17,7 @@
 pub mod brdf;
 pub mod furnace;
 pub mod probe;
+pub mod shading;
 pub mod weave;
 
 pub use probe::{probe_cpu_f32, probe_cpu_f64, ProbeInput, ProbeOutput};

@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 
 use crate::fabric::{weave_level0_size, weave_level_size, weave_mip_count, FabricParams};
 use crate::scene::{ColorSpace, Scene, Texture};
@@ -390,7 +390,10 @@ impl Renderer {
             Some(c) => c.clone(),
             None => scene.camera(options.camera)?,
         };
-        let frame_data = frame_data(&camera, width, height, gpu, options);
+        let mut frame_data = FrameData::new(&camera, width, height);
+        frame_data.light_count = gpu.light_count;
+        frame_data.material_count = gpu.material_count;
+        frame_data.debug_view = options.debug_view as u32;
         let frame_buffer = self.ctx.create_buffer_with("frame", BufferUsageFlags::UNIFORM_BUFFER, &[frame_data])?;
 
         let ctx = self.ctx.clone();
@@ -630,33 +633,6 @@ fn tonemap_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, push: &T
     cmd.push_constants(pipeline, push);
     cmd.draw(3);
     cmd.end_rendering();
-}
-
-fn frame_data(camera: &crate::scene::Camera, width: u32, height: u32, gpu: &GpuScene, options: &RenderOptions) -> FrameData {
-    let aspect = width as f32 / height as f32;
-    // Reversed-Z with an infinite far plane: depth 1 at the near plane, 0 at infinity. With D32F
-    // this keeps depth precision nearly uniform, so a cloth 1.5 cm above a ball does not z-fight
-    // at 15 m. The camera's zfar is not needed.
-    let mut proj = Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6));
-    // Vulkan's clip space has +Y down; flipping here keeps images upright.
-    proj.y_axis.y = -proj.y_axis.y;
-    let view_proj = proj * camera.view;
-    let eye = camera.view.inverse().transform_point3(Vec3::ZERO);
-    FrameData {
-        view: camera.view.to_cols_array_2d(),
-        proj: proj.to_cols_array_2d(),
-        view_proj: view_proj.to_cols_array_2d(),
-        inv_view_proj: view_proj.inverse().to_cols_array_2d(),
-        eye: [eye.x, eye.y, eye.z, 1.0],
-        viewport: [width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32],
-        ambient_sky: [0.040, 0.045, 0.055, 0.0],
-        ambient_ground: [0.020, 0.018, 0.015, 0.0],
-        background: [0.010, 0.012, 0.016, 0.0],
-        light_count: gpu.light_count,
-        debug_view: options.debug_view as u32,
-        material_count: gpu.material_count,
-        pad0: 0,
-    }
 }
 
 fn solid(name: &str, rgba: [u8; 4], color_space: ColorSpace) -> Texture {

@@ -1,0 +1,239 @@
+//! The CPU twin of the deferred lighting and tonemap passes (`glsl/lighting.frag`,
+//! `glsl/include/pbr.glsl`, `glsl/tonemap.frag`): lights (KHR_lights_punctual falloff), the glTF
+//! metallic-roughness BRDF, the hemispherical ambient, the fabric branch (which calls the fabric
+//! BRDF of [`super::brdf::single`], not a copy) and the tone curve. In f32, line for line, so a test
+//! can shade a read-back G-buffer on the CPU and compare it with the lighting pass's output, and the
+//! CPU rasterizer can make whole reference images.
+
+use super::brdf::single::{self as fb, Vec3};
+use crate::fabric::GpuFabric;
+use crate::render::gpu::{FrameData, GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
+
+const PI: f32 = std::f32::consts::PI;
+
+fn dot(a: Vec3, b: Vec3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn add(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn mul(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
+}
+fn scale(a: Vec3, s: f32) -> Vec3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn mix(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+    add(scale(a, 1.0 - t), scale(b, t))
+}
+fn normalize(a: Vec3) -> Vec3 {
+    scale(a, 1.0 / dot(a, a).sqrt())
+}
+fn xyz(v: [f32; 4]) -> Vec3 {
+    [v[0], v[1], v[2]]
+}
+
+/// `oct_decode` of frame.glsl: the unit vector of an octahedral encoding.
+pub fn oct_decode(p: [f32; 2]) -> Vec3 {
+    let mut n = [p[0], p[1], 1.0 - p[0].abs() - p[1].abs()];
+    let t = (-n[2]).max(0.0);
+    n[0] += if n[0] >= 0.0 { -t } else { t };
+    n[1] += if n[1] >= 0.0 { -t } else { t };
+    normalize(n)
+}
+
+/// `distance_falloff` of lighting.frag: inverse square, windowed to zero at `range` (0 = none).
+pub fn distance_falloff(dist: f32, range: f32) -> f32 {
+    let inv_sq = 1.0 / (dist * dist).max(1e-8);
+    if range <= 0.0 {
+        return inv_sq;
+    }
+    let r = dist / range;
+    let window = (1.0 - r * r * r * r).clamp(0.0, 1.0);
+    window * window * inv_sq
+}
+
+/// `light_incoming` of lighting.frag: the unit direction to the light and the illuminance it
+/// brings at `p`, per channel.
+pub fn light_incoming(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
+    let kind = light.direction_type[3];
+    let c = light.color_intensity;
+    let color = scale([c[0], c[1], c[2]], c[3]);
+    if kind == LIGHT_DIRECTIONAL {
+        return (scale(xyz(light.direction_type), -1.0), color);
+    }
+    let to_light = sub(xyz(light.position_range), p);
+    let dist = dot(to_light, to_light).sqrt();
+    let l = if dist > 0.0 { scale(to_light, 1.0 / dist) } else { [0.0, 1.0, 0.0] };
+    let mut atten = distance_falloff(dist, light.position_range[3]);
+    if kind == LIGHT_SPOT {
+        let cd = dot(xyz(light.direction_type), scale(l, -1.0));
+        let a = (cd * light.spot[0] + light.spot[1]).clamp(0.0, 1.0);
+        atten *= a * a;
+    }
+    (l, scale(color, atten))
+}
+
+fn ggx_d(n_h: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let d = n_h * n_h * (a2 - 1.0) + 1.0;
+    a2 / (PI * d * d)
+}
+
+fn smith_v(n_l: f32, n_v: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let gv = n_l * (n_v * n_v * (1.0 - a2) + a2).sqrt();
+    let gl = n_v * (n_l * n_l * (1.0 - a2) + a2).sqrt();
+    let s = gv + gl;
+    if s > 0.0 {
+        0.5 / s
+    } else {
+        0.0
+    }
+}
+
+/// `pbr_brdf_cos` of pbr.glsl: the glTF BRDF times n·l.
+pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughness: f32) -> Vec3 {
+    let n_l = dot(n, l);
+    let n_v = dot(n, v);
+    if n_l <= 0.0 || n_v <= 0.0 {
+        return [0.0; 3];
+    }
+    let h = normalize(add(l, v));
+    let n_h = dot(n, h).clamp(0.0, 1.0);
+    let v_h = dot(v, h).clamp(0.0, 1.0);
+    let alpha = (roughness * roughness).max(1e-3);
+    let f0 = mix([0.04; 3], base, metallic);
+    let fw = (1.0 - v_h).powf(5.0);
+    let f = add(f0, scale(sub([1.0; 3], f0), fw));
+    let diffuse = scale(mul(sub([1.0; 3], f), base), (1.0 - metallic) / PI);
+    let specular = scale(f, ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha));
+    scale(add(diffuse, specular), n_l)
+}
+
+/// A surface point as the lighting pass sees it (decoded from the G-buffer, or made by the CPU
+/// rasterizer).
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub tangent: Vec3,
+    /// Handedness: bitangent = sign · n × t.
+    pub sign: f32,
+    pub base_color: Vec3,
+    pub metallic: f32,
+    pub roughness: f32,
+    pub emissive: Vec3,
+    /// (c_warp, c_weft, shadow-weighted thread area), for fabric.
+    pub coverage: Vec3,
+    pub fabric: Option<GpuFabric>,
+}
+
+/// The main body of lighting.frag for a covered pixel: linear HDR radiance towards the eye.
+pub fn shade(frame: &FrameData, lights: &[GpuLight], s: &Surface) -> Vec3 {
+    let n = s.normal;
+    let v = normalize(sub(xyz(frame.eye), s.position));
+    let mut radiance = s.emissive;
+    let ambient = mix(xyz(frame.ambient_ground), xyz(frame.ambient_sky), n[1] * 0.5 + 0.5);
+    let count = (frame.light_count as usize).min(lights.len());
+    match &s.fabric {
+        Some(f) => {
+            let m = fb::FabricMaterial::from_gpu(f);
+            let cov = s.coverage;
+            let tbn = fb::fabric_frame(n, s.tangent, s.sign);
+            let k2 = fb::fabric_local(v, tbn);
+            let c_thread = cov[0] + cov[1];
+            let rd = if c_thread > 0.0 {
+                scale(add(scale(f.rd_warp, cov[0]), scale(f.rd_weft, cov[1])), cov[2] / c_thread)
+            } else {
+                [0.0; 3]
+            };
+            radiance = add(radiance, mul(ambient, rd));
+            for light in &lights[..count] {
+                let (l, e) = light_incoming(light, s.position);
+                let k1 = fb::fabric_local(l, tbn);
+                if k1[2] <= 0.0 || e == [0.0; 3] {
+                    continue;
+                }
+                radiance = add(radiance, scale(mul(e, fb::fabric_brdf(k1, k2, cov, &m)), k1[2]));
+            }
+        }
+        None => {
+            let base = s.base_color;
+            let spec_ambient = scale(mix([0.04; 3], base, s.metallic), (1.0 - s.roughness) * 0.5);
+            radiance = add(radiance, add(scale(mul(ambient, base), 1.0 - s.metallic), mul(ambient, spec_ambient)));
+            for light in &lights[..count] {
+                let (l, e) = light_incoming(light, s.position);
+                if e == [0.0; 3] {
+                    continue;
+                }
+                radiance = add(radiance, mul(e, pbr_brdf_cos(n, v, l, base, s.metallic, s.roughness)));
+            }
+        }
+    }
+    radiance
+}
+
+/// `pbr_neutral` of tonemap.frag (Khronos PBR Neutral).
+pub fn pbr_neutral(color: Vec3) -> Vec3 {
+    const START_COMPRESSION: f32 = 0.8 - 0.04;
+    const DESATURATION: f32 = 0.15;
+    let x = color[0].min(color[1]).min(color[2]);
+    let offset = if x < 0.08 { x - 6.25 * x * x } else { 0.04 };
+    let color = sub(color, [offset; 3]);
+    let peak = color[0].max(color[1]).max(color[2]);
+    if peak < START_COMPRESSION {
+        return color;
+    }
+    let d = 1.0 - START_COMPRESSION;
+    let new_peak = 1.0 - d * d / (peak + d - START_COMPRESSION);
+    let color = scale(color, new_peak / peak);
+    let g = 1.0 - 1.0 / (DESATURATION * (peak - new_peak) + 1.0);
+    mix(color, [new_peak; 3], g)
+}
+
+/// tonemap.frag: exposure (a linear scale, 2^EV), the curve, and the clamp to [0, 1]. The sRGB
+/// encoding after it is the output target's; [`srgb_encode`] is its CPU side.
+pub fn tonemap(hdr: Vec3, exposure: f32) -> Vec3 {
+    let c = if hdr.iter().any(|v| !v.is_finite()) { [0.0; 3] } else { hdr };
+    let c = [c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)];
+    let c = pbr_neutral(scale(c, exposure));
+    [c[0].clamp(0.0, 1.0), c[1].clamp(0.0, 1.0), c[2].clamp(0.0, 1.0)]
+}
+
+/// Linear [0, 1] to an sRGB-encoded byte.
+pub fn srgb_encode(linear: f32) -> u8 {
+    let l = linear.clamp(0.0, 1.0);
+    let s = if l <= 0.0031308 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn oct_decode_round_trips_axes() {
+        assert_eq!(oct_decode([0.0, 0.0]), [0.0, 0.0, 1.0]);
+        let n = oct_decode([1.0, 0.0]);
+        assert!((n[0] - 1.0).abs() < 1e-6 && n[2].abs() < 1e-6);
+    }
+
+    #[test]
+    fn falloff_reaches_zero_at_range() {
+        assert_eq!(distance_falloff(2.0, 2.0), 0.0);
+        assert_eq!(distance_falloff(2.0, 0.0), 0.25);
+    }
+
+    #[test]
+    fn tonemap_is_identity_for_dark_mid_tones_and_bounded() {
+        let c = tonemap([0.3, 0.2, 0.1], 1.0);
+        assert!((c[0] - 0.26).abs() < 1e-6, "{c:?}");
+        let bright = tonemap([1e6, 1e6, 1e6], 1.0);
+        assert!(bright.iter().all(|v| *v <= 1.0 && *v > 0.99));
+        assert_eq!(tonemap([f32::NAN, 0.0, 0.0], 1.0), [0.0; 3]);
+    }
+}
