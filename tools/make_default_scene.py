@@ -315,7 +315,7 @@ def build():
     check_clearances(cloth_mesh[0], metal_centre)
 
     materials = [
-        {"name": "floor", "pbrMetallicRoughness": {"baseColorFactor": [0.42, 0.42, 0.4, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9}},
+        {"name": "floor", "pbrMetallicRoughness": {"baseColorFactor": [0.3, 0.3, 0.29, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.9}},
         {"name": "ball", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.78, 0.74, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.5}},
         {
             "name": "red cloth",
@@ -349,7 +349,7 @@ def build():
 
     lights = [
         {"name": "key (warm sun)", "type": "directional", "color": [1.0, 0.9, 0.78], "intensity": 3.0},
-        {"name": "fill (cool point)", "type": "point", "color": [0.8, 0.88, 1.0], "intensity": 14.0, "range": 12.0},
+        {"name": "fill (cool point)", "type": "point", "color": [0.8, 0.88, 1.0], "intensity": 5.0, "range": 12.0},
         {
             "name": "rim (spot)",
             "type": "spot",
