@@ -3,6 +3,13 @@
 // attributes. Lighting happens later, in lighting.frag, from these targets alone.
 #include "frame.glsl"
 #include "fabric.glsl"
+#include "weave.glsl"
+
+// Accuracy level (model page §4): 0 nearest, 1 filtered-params, 2 mixture, 3 supersampled.
+layout(constant_id = 0) const uint ACCURACY = 2u;
+// Where the coverage comes from: 0 the weave texture, 1 the exact coverage of the footprint box
+// evaluated here (no texture).
+layout(constant_id = 1) const uint WEAVE_SOURCE = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
@@ -90,8 +97,32 @@ void main() {
     vec2 st_dy = uv_dy * st_scale;
     gb_fabric = vec4(0.0);
     if (fabric > 0u) {
-        vec3 coverage = textureGrad(weave_tex, st, st_dx, st_dy).rgb;
-        gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
+        // The footprint as an axis-aligned box in st, half-extent `ext` (a repeat is 1 unit).
+        vec2 ext = 0.5 * (abs(st_dx) + abs(st_dy));
+        vec2 repeat_cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+        if (ACCURACY == 3u) {
+            // Supersampled: the lighting pass evaluates the analytic weave at N x N points of the
+            // footprint, so it gets the footprint itself: st within its repeat, and the extent.
+            gb_fabric = vec4(fract(st), ext);
+        } else if (ACCURACY == 0u) {
+            // Nearest: one texel of level 0, no filtering.
+            ivec2 size = textureSize(weave_tex, 0);
+            ivec2 texel = clamp(ivec2(fract(st) * vec2(size)), ivec2(0), size - 1);
+            vec3 coverage = WEAVE_SOURCE == 1u
+                ? weave_point(weave_from_fabric(f), fract(st.x) * repeat_cells.x, fract(st.y) * repeat_cells.y)
+                : texelFetch(weave_tex, texel, 0).rgb;
+            gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
+        } else {
+            vec3 coverage;
+            if (WEAVE_SOURCE == 1u) {
+                vec2 lo = (fract(st) - ext) * repeat_cells;
+                vec2 hi = (fract(st) + ext) * repeat_cells;
+                coverage = weave_box(weave_from_fabric(f), lo.x, lo.y, hi.x, hi.y);
+            } else {
+                coverage = textureGrad(weave_tex, st, st_dx, st_dy).rgb;
+            }
+            gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
+        }
     }
     gb_emissive = vec4(max(emissive, vec3(0.0)), 0.0);
 }

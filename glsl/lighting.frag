@@ -4,6 +4,14 @@
 #include "frame.glsl"
 #include "pbr.glsl"
 #include "fabric.glsl"
+#include "weave.glsl"
+
+// Accuracy level (model page §4): 0 nearest, 1 filtered-params, 2 mixture, 3 supersampled.
+layout(constant_id = 0) const uint ACCURACY = 2u;
+// N of supersampled:N (N x N footprint samples).
+layout(constant_id = 1) const uint SAMPLES = 1u;
+// 1: shade fabric pixels with the metallic-roughness BRDF (to measure what the fabric model costs).
+layout(constant_id = 2) const uint FABRIC_AS_PBR = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -48,6 +56,34 @@ vec3 light_incoming(Light light, vec3 p, out vec3 l) {
         atten *= a * a;
     }
     return color * atten;
+}
+
+// One fabric BRDF evaluation at the chosen accuracy: nearest and filtered-params evaluate one lobe
+// with coverage-averaged exponents (at a point that is the thread on top's own lobe), mixture and
+// supersampled the two-lobe mixture.
+vec3 fabric_eval(vec3 k1, vec3 k2, vec3 coverage, GpuFabric f) {
+    if (ACCURACY <= 1u) {
+        return fabric_brdf_averaged(k1, k2, coverage, f);
+    }
+    return fabric_brdf(k1, k2, coverage, f);
+}
+
+// Ambient plus every light reflected by the fabric with the given coverage.
+vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f) {
+    float c_thread = coverage.x + coverage.y;
+    vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
+    // Ambient: the threads' diffuse albedo under the hemispherical ambient.
+    vec3 radiance = ambient * rd;
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        vec3 l;
+        vec3 e = light_incoming(lights[i], p, l);
+        vec3 k1 = fabric_local(l, tbn);
+        if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
+            continue;
+        }
+        radiance += e * fabric_eval(k1, k2, coverage, f) * k1.z;
+    }
+    return radiance;
 }
 
 vec3 debug_color(uint view, ivec2 px, float depth) {
@@ -111,25 +147,28 @@ void main() {
     uint material = uint(surface.y + 0.5);
     uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
 
-    if (fabric > 0u) {
-        // The fabric model (docs/fabric-model.md §3): the two-lobe mixture weighted by the weave
-        // coverages the G-buffer pass filtered over the pixel's footprint.
+    if (fabric > 0u && FABRIC_AS_PBR == 0u) {
+        // The fabric model (docs/fabric-model.md §3) with the weave coverages of the pixel's
+        // footprint (filtered by the G-buffer pass), or, supersampled, the analytic weave at
+        // N x N points of the footprint.
         GpuFabric f = fabrics[fabric - 1u];
-        vec3 coverage = texelFetch(gb_fabric, px, 0).rgb;
         mat3 tbn = fabric_frame(n, oct_decode(fr.zw), surface.z);
         vec3 k2 = fabric_local(v, tbn);
-        float c_thread = coverage.x + coverage.y;
-        vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
-        // Ambient: the threads' diffuse albedo under the hemispherical ambient.
-        radiance += ambient * rd;
-        for (uint i = 0u; i < frame.light_count; ++i) {
-            vec3 l;
-            vec3 e = light_incoming(lights[i], p, l);
-            vec3 k1 = fabric_local(l, tbn);
-            if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
-                continue;
+        vec4 g = texelFetch(gb_fabric, px, 0);
+        if (ACCURACY == 3u) {
+            Weave w = weave_from_fabric(f);
+            vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+            vec3 sum = vec3(0.0);
+            for (uint j = 0u; j < SAMPLES; ++j) {
+                for (uint i = 0u; i < SAMPLES; ++i) {
+                    vec2 o = (vec2(float(i), float(j)) + 0.5) / float(SAMPLES) * 2.0 - 1.0;
+                    vec2 s = (g.xy + o * g.zw) * cells;
+                    sum += fabric_radiance(p, ambient, tbn, k2, weave_point(w, s.x, s.y), f);
+                }
             }
-            radiance += e * fabric_brdf(k1, k2, coverage, f) * k1.z;
+            radiance += sum / float(SAMPLES * SAMPLES);
+        } else {
+            radiance += fabric_radiance(p, ambient, tbn, k2, g.rgb, f);
         }
     } else {
         // Hemispherical ambient, so surfaces facing away from every light are not pure black.

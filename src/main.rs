@@ -10,7 +10,11 @@ use weft::scene::{self, Scene};
 use weft::vk::{Context, ContextOptions, DeviceChoice};
 
 #[derive(Parser)]
-#[command(name = "weft", version, about = "A deferred Vulkan renderer for woven fabric")]
+#[command(
+    name = "weft",
+    version,
+    about = "A deferred Vulkan renderer for woven fabric"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -49,6 +53,12 @@ struct SceneArgs {
     /// Vertical field of view of the --eye camera, in degrees.
     #[arg(long, default_value_t = 40.0)]
     fov: f32,
+    /// How the weave becomes reflectance: nearest, filtered-params, mixture, supersampled:N.
+    #[arg(long, default_value = "mixture")]
+    accuracy: String,
+    /// Where coverages come from: rgba8 or rgba16f weave texture, or analytic (no texture).
+    #[arg(long, default_value = "rgba16f")]
+    weave_precision: String,
     /// Show a G-buffer target instead of the lit image: albedo, normals, tangents,
     /// roughness-metallic, coverage, thread-dir, depth.
     #[arg(long, default_value = "none")]
@@ -125,6 +135,8 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
         height,
         camera: args.camera,
         debug_view: DebugView::parse(&args.debug_view)?,
+        accuracy: render::Accuracy::parse(&args.accuracy)?,
+        weave_precision: render::WeavePrecision::parse(&args.weave_precision)?,
         ..Default::default()
     };
     options.validate()?;
@@ -142,10 +154,20 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     let (scene, mut options) = load_scene(&args.scene)?;
     options.exposure = args.exposure;
     options.validate()?;
-    let device = args.device.as_deref().map(DeviceChoice::parse).unwrap_or_else(DeviceChoice::from_env);
-    let ctx = Context::new(&ContextOptions { validate: args.validate, device })?;
+    let device = args
+        .device
+        .as_deref()
+        .map(DeviceChoice::parse)
+        .unwrap_or_else(DeviceChoice::from_env);
+    let ctx = Context::new(&ContextOptions {
+        validate: args.validate,
+        device,
+    })?;
     let info = ctx.info().clone();
-    eprintln!("device: {} ({}, {} {})", info.name, info.device_type, info.driver_name, info.driver_info);
+    eprintln!(
+        "device: {} ({}, {} {})",
+        info.name, info.device_type, info.driver_name, info.driver_info
+    );
     let start = std::time::Instant::now();
     let mut renderer = Renderer::new(ctx)?;
     let setup_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -168,33 +190,49 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         render_ms.remove(0);
         for (i, t) in frame.timings.iter_mut().enumerate() {
             t.wall_ms = median(history.iter().map(|h| h[i].wall_ms).collect());
-            t.gpu_ms = t.gpu_ms.map(|_| median(history.iter().filter_map(|h| h[i].gpu_ms).collect()));
+            t.gpu_ms = t
+                .gpu_ms
+                .map(|_| median(history.iter().filter_map(|h| h[i].gpu_ms).collect()));
         }
     }
     let render_ms = median(render_ms);
     render::write_png(&args.output, frame.width, frame.height, &frame.ldr)?;
-    eprintln!("wrote {} ({}x{})", args.output.display(), frame.width, frame.height);
+    eprintln!(
+        "wrote {} ({}x{})",
+        args.output.display(),
+        frame.width,
+        frame.height
+    );
     if let Some(exr) = &args.exr {
         render::write_exr(exr, frame.width, frame.height, &frame.hdr)?;
         eprintln!("wrote {}", exr.display());
     }
     if args.timings {
         if args.frames > 1 {
-            println!("median of {} warm frames (after the first)", args.frames - 1);
+            println!(
+                "median of {} warm frames (after the first)",
+                args.frames - 1
+            );
         } else {
             println!("one cold frame (includes shader JIT); --frames 10 gives warm medians");
         }
         println!("{:<12} {:>10} {:>10}", "pass", "gpu ms", "wall ms");
         println!("{:<12} {:>10} {:>10.2}", "setup", "-", setup_ms);
         for t in &frame.timings {
-            let gpu = t.gpu_ms.map(|g| format!("{g:.2}")).unwrap_or_else(|| "-".into());
+            let gpu = t
+                .gpu_ms
+                .map(|g| format!("{g:.2}"))
+                .unwrap_or_else(|| "-".into());
             println!("{:<12} {:>10} {:>10.2}", t.name, gpu, t.wall_ms);
         }
         println!("{:<12} {:>10} {:>10.2}", "frame", "-", render_ms);
     }
     if args.stats {
         println!("passes     {}", frame.stats.passes.join(" -> "));
-        println!("draws      {} ({} triangles)", frame.stats.draws, frame.stats.triangles);
+        println!(
+            "draws      {} ({} triangles)",
+            frame.stats.draws, frame.stats.triangles
+        );
         println!("pipelines  {}", frame.stats.pipelines.join(", "));
     }
     Ok(())
@@ -204,7 +242,11 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
 fn run_shaders(out: &std::path::Path) -> anyhow::Result<()> {
     let manifest = weft::package::write_package(out)?;
     let bytes: u64 = manifest.modules.iter().map(|m| m.size).sum();
-    println!("wrote {} modules ({bytes} bytes of SPIR-V) to {}", manifest.modules.len(), out.display());
+    println!(
+        "wrote {} modules ({bytes} bytes of SPIR-V) to {}",
+        manifest.modules.len(),
+        out.display()
+    );
     Ok(())
 }
 

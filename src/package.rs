@@ -21,7 +21,10 @@ use sha2::{Digest, Sha256};
 
 use crate::vk::{shaders, Shader, Stage};
 use crate::Error;
-pub use spirv::{Access, DescriptorKind, InterfaceVariable, PushConstantRange, SpecConstant, SpecValue, WorkgroupSize};
+pub use spirv::{
+    Access, DescriptorKind, InterfaceVariable, PushConstantRange, SpecConstant, SpecValue,
+    WorkgroupSize,
+};
 
 /// Version of the package layout and of manifest.json's schema; bumped when either changes in a
 /// way a consumer would notice.
@@ -110,17 +113,57 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
 /// What each descriptor binding holds: (module, set, binding, meaning).
 pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
     ("fabric_probe.comp", 0, 0, "the inputs: `ProbeInput[count]`"),
-    ("fabric_probe.comp", 0, 1, "the outputs: `ProbeOutput[count]`, written by the shader"),
-    ("gbuffer.frag", 0, 1, "material records (`Material[]`, include/frame.glsl)"),
-    ("gbuffer.frag", 0, 2, "fabric records (`GpuFabric[]`, include/fabric.glsl)"),
+    (
+        "fabric_probe.comp",
+        0,
+        1,
+        "the outputs: `ProbeOutput[count]`, written by the shader",
+    ),
+    (
+        "gbuffer.frag",
+        0,
+        1,
+        "material records (`Material[]`, include/frame.glsl)",
+    ),
+    (
+        "gbuffer.frag",
+        0,
+        2,
+        "fabric records (`GpuFabric[]`, include/fabric.glsl)",
+    ),
     ("gbuffer.frag", 1, 0, "base colour texture (sRGB)"),
-    ("gbuffer.frag", 1, 1, "metallic-roughness texture (glTF: B metallic, G roughness)"),
+    (
+        "gbuffer.frag",
+        1,
+        1,
+        "metallic-roughness texture (glTF: B metallic, G roughness)",
+    ),
     ("gbuffer.frag", 1, 2, "tangent-space normal texture"),
     ("gbuffer.frag", 1, 3, "emissive texture (sRGB)"),
-    ("gbuffer.frag", 1, 4, "the material's weave texture (from weave.comp), trilinear, REPEAT"),
-    ("gbuffer.vert", 0, 0, "the frame uniform (`FrameData`, std140, include/frame.glsl)"),
-    ("lighting.frag", 0, 0, "the frame uniform (`FrameData`, std140, include/frame.glsl)"),
-    ("lighting.frag", 0, 1, "lights (`Light[]`, include/frame.glsl)"),
+    (
+        "gbuffer.frag",
+        1,
+        4,
+        "the material's weave texture (from weave.comp), trilinear, REPEAT",
+    ),
+    (
+        "gbuffer.vert",
+        0,
+        0,
+        "the frame uniform (`FrameData`, std140, include/frame.glsl)",
+    ),
+    (
+        "lighting.frag",
+        0,
+        0,
+        "the frame uniform (`FrameData`, std140, include/frame.glsl)",
+    ),
+    (
+        "lighting.frag",
+        0,
+        1,
+        "lights (`Light[]`, include/frame.glsl)",
+    ),
     ("lighting.frag", 0, 2, "material records (`Material[]`)"),
     ("lighting.frag", 0, 3, "G-buffer albedo"),
     ("lighting.frag", 0, 4, "G-buffer normal + tangent"),
@@ -130,11 +173,30 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
     ("lighting.frag", 0, 8, "G-buffer depth (D32)"),
     ("lighting.frag", 0, 9, "fabric records (`GpuFabric[]`)"),
     ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
-    ("weave.comp", 0, 0, "the mip level being written: a one-level view of the RGBA16F weave texture"),
+    (
+        "weave.comp",
+        0,
+        0,
+        "the mip level being written: a one-level view of the RGBA16F weave texture",
+    ),
 ];
 
-/// What each specialization constant means: (module, constant id, meaning). None yet.
-pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[];
+/// What each specialization constant means: (module, constant id, meaning).
+pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
+    (
+        "gbuffer.frag",
+        0,
+        "ACCURACY: 0 nearest (one level-0 texel), 1 filtered-params, 2 mixture (default), 3 supersampled (writes the footprint, st and half-extent, instead of coverages)",
+    ),
+    ("gbuffer.frag", 1, "WEAVE_SOURCE: 0 the weave texture (default), 1 the exact coverage of the footprint box computed in the shader"),
+    (
+        "lighting.frag",
+        0,
+        "ACCURACY: 0 nearest and 1 filtered-params evaluate one lobe with coverage-averaged exponents, 2 mixture (default) and 3 supersampled the two-lobe mixture; must match gbuffer.frag's",
+    ),
+    ("lighting.frag", 1, "SAMPLES: N of supersampled:N, the footprint is sampled at N x N points (default 1)"),
+    ("lighting.frag", 2, "FABRIC_AS_PBR: 1 shades fabric pixels with the metallic-roughness BRDF, for cost comparisons (default 0)"),
+];
 
 /// The package's table of contents: what `manifest.json` holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -238,12 +300,20 @@ fn execution_model(stage: Stage) -> u32 {
 
 /// The hand-written notes of a module, if any.
 pub fn module_notes(name: &str) -> Option<&'static str> {
-    MODULE_NOTES.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+    MODULE_NOTES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, t)| *t)
 }
 
 /// Reflects one embedded module into its manifest entry.
 pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
-    let bad = |what: String| Error::device(format!("embedded SPIR-V of {} cannot be reflected: {what}", shader.name));
+    let bad = |what: String| {
+        Error::device(format!(
+            "embedded SPIR-V of {} cannot be reflected: {what}",
+            shader.name
+        ))
+    };
     let r = spirv::reflect(shader.spirv).map_err(bad)?;
     if r.execution_model != execution_model(shader.stage) {
         return Err(bad(format!(
@@ -275,7 +345,10 @@ pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
         .spec_constants
         .into_iter()
         .map(|c| SpecEntry {
-            meaning: SPEC_MEANINGS.iter().find(|(m, id, _)| *m == name && *id == c.id).map(|e| e.2),
+            meaning: SPEC_MEANINGS
+                .iter()
+                .find(|(m, id, _)| *m == name && *id == c.id)
+                .map(|e| e.2),
             constant: c,
         })
         .collect();
@@ -302,7 +375,10 @@ pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
 pub fn manifest() -> crate::Result<Manifest> {
     let mut shaders: Vec<&Shader> = shaders::ALL.iter().collect();
     shaders.sort_by_key(|s| s.name);
-    let modules = shaders.into_iter().map(reflect_module).collect::<crate::Result<Vec<_>>>()?;
+    let modules = shaders
+        .into_iter()
+        .map(reflect_module)
+        .collect::<crate::Result<Vec<_>>>()?;
     let mut includes: Vec<FileEntry> = INCLUDES
         .iter()
         .map(|(name, text)| FileEntry {
@@ -326,7 +402,8 @@ pub fn manifest() -> crate::Result<Manifest> {
 /// and this one does not are removed; nothing else in `dir` is touched.
 pub fn write_package(dir: &Path) -> crate::Result<Manifest> {
     let manifest = manifest()?;
-    std::fs::create_dir_all(dir.join("include")).map_err(io(format!("creating {}", dir.join("include").display())))?;
+    std::fs::create_dir_all(dir.join("include"))
+        .map_err(io(format!("creating {}", dir.join("include").display())))?;
     remove_stale_files(dir, &manifest)?;
     for shader in shaders::ALL {
         write(&dir.join(format!("{}.spv", shader.name)), shader.spirv)?;
@@ -350,17 +427,35 @@ fn write(path: &Path, bytes: &[u8]) -> crate::Result<()> {
 /// Removes the files that the manifest already in `dir` lists and `new` does not (a module
 /// renamed or deleted since), so the package never carries a stale module.
 fn remove_stale_files(dir: &Path, new: &Manifest) -> crate::Result<()> {
-    let Ok(old) = std::fs::read_to_string(dir.join(MANIFEST_FILE)) else { return Ok(()) };
-    let Ok(old) = serde_json::from_str::<serde_json::Value>(&old) else { return Ok(()) };
-    let listed = |v: &serde_json::Value, key: &str| -> Vec<String> {
-        v[key].as_array().into_iter().flatten().filter_map(|e| e["file"].as_str().map(String::from)).collect()
+    let Ok(old) = std::fs::read_to_string(dir.join(MANIFEST_FILE)) else {
+        return Ok(());
     };
-    let keep: Vec<&str> =
-        new.modules.iter().map(|m| m.file.as_str()).chain(new.includes.iter().map(|f| f.file.as_str())).collect();
-    for file in listed(&old, "modules").into_iter().chain(listed(&old, "includes")) {
+    let Ok(old) = serde_json::from_str::<serde_json::Value>(&old) else {
+        return Ok(());
+    };
+    let listed = |v: &serde_json::Value, key: &str| -> Vec<String> {
+        v[key]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|e| e["file"].as_str().map(String::from))
+            .collect()
+    };
+    let keep: Vec<&str> = new
+        .modules
+        .iter()
+        .map(|m| m.file.as_str())
+        .chain(new.includes.iter().map(|f| f.file.as_str()))
+        .collect();
+    for file in listed(&old, "modules")
+        .into_iter()
+        .chain(listed(&old, "includes"))
+    {
         // Only plain relative paths inside the package (the old manifest is data, not trusted).
         let path = PathBuf::from(&file);
-        let inside = path.components().all(|c| matches!(c, std::path::Component::Normal(_)));
+        let inside = path
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
         if inside && !keep.contains(&file.as_str()) {
             let p = dir.join(&path);
             if p.is_file() {
@@ -441,7 +536,9 @@ impl ModuleEntry {
             .map(|c| json!({"id": c.constant.id, "type": c.constant.ty, "default": c.constant.default.json(), "meaning": c.meaning}))
             .collect();
         let io = |vars: &[InterfaceVariable]| -> Vec<serde_json::Value> {
-            vars.iter().map(|v| json!({"location": v.location, "type": v.ty})).collect()
+            vars.iter()
+                .map(|v| json!({"location": v.location, "type": v.ty}))
+                .collect()
         };
         let mut v = json!({
             "name": self.name,
@@ -482,7 +579,8 @@ impl Manifest {
             "modules": self.modules.iter().map(ModuleEntry::json).collect::<Vec<_>>(),
             "includes": self.includes.iter().map(|f| json!({"file": f.file, "sha256": f.sha256, "size": f.size})).collect::<Vec<_>>(),
         });
-        let mut text = serde_json::to_string_pretty(&sorted(v)).expect("a JSON value always serialises");
+        let mut text =
+            serde_json::to_string_pretty(&sorted(v)).expect("a JSON value always serialises");
         text.push('\n');
         text
     }
@@ -528,31 +626,60 @@ impl Manifest {
         let _ = writeln!(w, "## Modules\n");
         let _ = writeln!(w, "| module | stage | size | sha256 |\n|---|---|---|---|");
         for m in &self.modules {
-            let _ = writeln!(w, "| `{}` | {} | {} B | `{}…` |", m.file, stage_name(m.stage), m.size, &m.sha256[..16]);
+            let _ = writeln!(
+                w,
+                "| `{}` | {} | {} B | `{}…` |",
+                m.file,
+                stage_name(m.stage),
+                m.size,
+                &m.sha256[..16]
+            );
         }
         let _ = writeln!(w);
         for m in &self.modules {
             let _ = writeln!(w, "### {}\n", m.name);
             let _ = writeln!(w, "{}\n", module_notes(&m.name).unwrap_or("(no notes)"));
-            let _ = write!(w, "- file `{}`, {} stage, entry point `{}`", m.file, stage_name(m.stage), m.entry_point);
+            let _ = write!(
+                w,
+                "- file `{}`, {} stage, entry point `{}`",
+                m.file,
+                stage_name(m.stage),
+                m.entry_point
+            );
             if let Some(g) = m.workgroup_size {
-                let _ = write!(w, ", workgroup size {} × {} × {}", g.size[0], g.size[1], g.size[2]);
+                let _ = write!(
+                    w,
+                    ", workgroup size {} × {} × {}",
+                    g.size[0], g.size[1], g.size[2]
+                );
             }
             let _ = writeln!(w);
             match m.push_constants {
                 Some(p) => {
-                    let _ = writeln!(w, "- push constants: offset {}, size {} bytes", p.offset, p.size);
+                    let _ = writeln!(
+                        w,
+                        "- push constants: offset {}, size {} bytes",
+                        p.offset, p.size
+                    );
                 }
                 None => {
                     let _ = writeln!(w, "- push constants: none");
                 }
             }
             if !m.inputs.is_empty() {
-                let list: Vec<String> = m.inputs.iter().map(|v| format!("{}: `{}`", v.location, v.ty)).collect();
+                let list: Vec<String> = m
+                    .inputs
+                    .iter()
+                    .map(|v| format!("{}: `{}`", v.location, v.ty))
+                    .collect();
                 let _ = writeln!(w, "- inputs (location: type): {}", list.join(", "));
             }
             if !m.outputs.is_empty() {
-                let list: Vec<String> = m.outputs.iter().map(|v| format!("{}: `{}`", v.location, v.ty)).collect();
+                let list: Vec<String> = m
+                    .outputs
+                    .iter()
+                    .map(|v| format!("{}: `{}`", v.location, v.ty))
+                    .collect();
                 let _ = writeln!(w, "- outputs (location: type): {}", list.join(", "));
             }
             for c in &m.spec_constants {
@@ -594,7 +721,13 @@ impl Manifest {
         let _ = writeln!(w, "## Files\n");
         let _ = writeln!(w, "`manifest.json` (everything above, machine-readable), `README.md` (this file), one `.spv` per module, and:\n");
         for f in &self.includes {
-            let _ = writeln!(w, "- `{}` ({} B, sha256 `{}…`)", f.file, f.size, &f.sha256[..16]);
+            let _ = writeln!(
+                w,
+                "- `{}` ({} B, sha256 `{}…`)",
+                f.file,
+                f.size,
+                &f.sha256[..16]
+            );
         }
         s
     }

@@ -25,7 +25,12 @@ fn srgb_to_linear(b: u8) -> f32 {
 
 /// Shades every covered pixel of the last frame's G-buffer on the CPU and compares with the HDR
 /// output. Returns (pixels compared, fabric pixels, worst error relative to the bound).
-fn compare_lighting(renderer: &Renderer, scene: &Scene, options: &RenderOptions, hdr: &[f32]) -> (usize, usize, f32) {
+fn compare_lighting(
+    renderer: &Renderer,
+    scene: &Scene,
+    options: &RenderOptions,
+    hdr: &[f32],
+) -> (usize, usize, f32) {
     let g = renderer.read_gbuffer().expect("gbuffer");
     let camera = match &options.camera_override {
         Some(c) => c.clone(),
@@ -45,12 +50,18 @@ fn compare_lighting(renderer: &Renderer, scene: &Scene, options: &RenderOptions,
             if depth <= 0.0 {
                 continue;
             }
-            let ndc = [(x as f32 + 0.5) / w as f32 * 2.0 - 1.0, (y as f32 + 0.5) / h as f32 * 2.0 - 1.0];
+            let ndc = [
+                (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
+                (y as f32 + 0.5) / h as f32 * 2.0 - 1.0,
+            ];
             let hp = inv_view_proj * glam::Vec4::new(ndc[0], ndc[1], depth, 1.0);
             let p = hp.truncate() / hp.w;
             let px = |v: &[f32], c: usize| v[i * 4 + c];
             let material = px(&g.surface, 1).round() as usize;
-            let fabric = scene.materials[material].fabric.as_ref().map(|f| f.to_gpu());
+            let fabric = scene.materials[material]
+                .fabric
+                .as_ref()
+                .map(|f| f.to_gpu());
             fabric_pixels += fabric.is_some() as usize;
             let s = Surface {
                 position: p.into(),
@@ -96,13 +107,29 @@ fn lighting_pass_matches_cpu_shading_of_the_gbuffer() {
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let scene = scene::default_scene();
     // The scene's camera (threads partly resolved) and a close-up (threads resolved).
-    let close = scene.look_at_camera(Vec3::new(0.15, 1.12, 0.45), Vec3::new(0.0, 1.0, 0.1), 30f32.to_radians()).unwrap();
+    let close = scene
+        .look_at_camera(
+            Vec3::new(0.15, 1.12, 0.45),
+            Vec3::new(0.0, 1.0, 0.1),
+            30f32.to_radians(),
+        )
+        .unwrap();
     for (name, camera) in [("scene camera", None), ("close-up", Some(close))] {
-        let options = RenderOptions { width: 192, height: 108, camera_override: camera, ..Default::default() };
+        let options = RenderOptions {
+            width: 192,
+            height: 108,
+            camera_override: camera,
+            ..Default::default()
+        };
         let frame = renderer.render(&scene, &options).expect("render");
         let (compared, fabric, worst) = compare_lighting(&renderer, &scene, &options, &frame.hdr);
-        println!("{name}: {compared} pixels ({fabric} fabric), worst error {worst:.3} of the bound");
-        assert!(compared > 192 * 108 / 3 && fabric > 1000, "{name}: too few pixels compared: {compared}, {fabric} fabric");
+        println!(
+            "{name}: {compared} pixels ({fabric} fabric), worst error {worst:.3} of the bound"
+        );
+        assert!(
+            compared > 192 * 108 / 3 && fabric > 1000,
+            "{name}: too few pixels compared: {compared}, {fabric} fabric"
+        );
     }
 }
 
@@ -120,8 +147,16 @@ fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
     }
     Scene {
         source: "test patch".into(),
-        meshes: vec![Mesh { name: "patch".into(), vertices, indices: vec![0, 2, 1, 0, 3, 2], material: 0 }],
-        draws: vec![Draw { mesh: 0, world: Mat4::IDENTITY }],
+        meshes: vec![Mesh {
+            name: "patch".into(),
+            vertices,
+            indices: vec![0, 2, 1, 0, 3, 2],
+            material: 0,
+        }],
+        draws: vec![Draw {
+            mesh: 0,
+            world: Mat4::IDENTITY,
+        }],
         materials: vec![Material {
             name: "cloth".into(),
             metallic: 0.0,
@@ -159,9 +194,16 @@ fn highlight_of_a_thread_along_t_is_stretched_across_it() {
     let scene = patch_scene(fabric, [0.0, 0.0]);
     // Looking straight down from beside the lamp; the camera's up is +Z, so screen x is world +X
     // (along the thread) and screen y is world +Z (across it).
-    let camera = scene.look_at_camera(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 90f32.to_radians()).unwrap();
+    let camera = scene
+        .look_at_camera(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 90f32.to_radians())
+        .unwrap();
     let (w, h) = (128usize, 128usize);
-    let options = RenderOptions { width: w as u32, height: h as u32, camera_override: Some(camera), ..Default::default() };
+    let options = RenderOptions {
+        width: w as u32,
+        height: h as u32,
+        camera_override: Some(camera),
+        ..Default::default()
+    };
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let frame = renderer.render(&scene, &options).expect("render");
     // Second moments of the highlight's luminance about its centroid, in pixels.
@@ -187,7 +229,9 @@ fn highlight_of_a_thread_along_t_is_stretched_across_it() {
         }
     }
     let (spread_along, spread_across) = ((vxx / sum).sqrt(), (vyy / sum).sqrt());
-    println!("highlight spread: {spread_along:.2} px along the thread, {spread_across:.2} px across it");
+    println!(
+        "highlight spread: {spread_along:.2} px along the thread, {spread_across:.2} px across it"
+    );
     assert!(
         spread_across > 3.0 * spread_along,
         "the highlight must be stretched across the thread: {spread_along:.2} px along, {spread_across:.2} px across"
@@ -197,12 +241,17 @@ fn highlight_of_a_thread_along_t_is_stretched_across_it() {
 #[test]
 fn huge_texture_coordinates_keep_the_weave() {
     // The same patch near the UV origin and at u, v = 1e7: the coverage images must agree.
-    let fabric = FabricParams { repeat: 0.25, ..Default::default() };
+    let fabric = FabricParams {
+        repeat: 0.25,
+        ..Default::default()
+    };
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let mut images = Vec::new();
     for origin in [[0.0f32, 0.0], [1.0e7, -1.0e7]] {
         let scene = patch_scene(fabric.clone(), origin);
-        let camera = scene.look_at_camera(Vec3::new(0.0, 1.5, 0.0), Vec3::ZERO, 60f32.to_radians()).unwrap();
+        let camera = scene
+            .look_at_camera(Vec3::new(0.0, 1.5, 0.0), Vec3::ZERO, 60f32.to_radians())
+            .unwrap();
         let options = RenderOptions {
             width: 96,
             height: 96,
@@ -213,8 +262,97 @@ fn huge_texture_coordinates_keep_the_weave() {
         images.push(renderer.render(&scene, &options).expect("render").hdr);
     }
     // 1e7 and -1e7 are whole multiples of the repeat (0.25): the pattern lines up exactly.
-    let max_diff = images[0].iter().zip(&images[1]).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
-    let covered = images[0].chunks_exact(4).filter(|p| p[0] + p[1] > 0.0).count();
+    let max_diff = images[0]
+        .iter()
+        .zip(&images[1])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0f32, f32::max);
+    let covered = images[0]
+        .chunks_exact(4)
+        .filter(|p| p[0] + p[1] > 0.0)
+        .count();
     assert!(covered > 96 * 96 / 2);
-    assert!(max_diff < 2e-3, "the weave at u = 1e7 differs from the weave at 0 by {max_diff}");
+    assert!(
+        max_diff < 2e-3,
+        "the weave at u = 1e7 differs from the weave at 0 by {max_diff}"
+    );
+}
+
+#[test]
+fn accuracy_levels_render_clean_and_mixture_is_closest_to_ground_truth_far_away() {
+    use weft::render::{Accuracy, WeavePrecision};
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let scene = scene::default_scene();
+    let far = scene
+        .look_at_camera(
+            Vec3::new(0.0, 6.0, 14.0),
+            Vec3::new(0.0, 0.4, 0.0),
+            20f32.to_radians(),
+        )
+        .unwrap();
+    let render = |r: &mut Renderer, accuracy, weave_precision| {
+        let options = RenderOptions {
+            width: 160,
+            height: 90,
+            camera_override: Some(far.clone()),
+            accuracy,
+            weave_precision,
+            ..Default::default()
+        };
+        let frame = r
+            .render(&scene, &options)
+            .unwrap_or_else(|e| panic!("{}: {e}", accuracy.name()));
+        assert!(
+            frame.hdr.iter().all(|v| v.is_finite()),
+            "{}: non-finite output",
+            accuracy.name()
+        );
+        frame.hdr
+    };
+    // Ground truth: the analytic weave at 16 x 16 points of each pixel's footprint.
+    let truth = render(
+        &mut renderer,
+        Accuracy::Supersampled(16),
+        WeavePrecision::Analytic,
+    );
+    let rmse = |img: &[f32]| {
+        let sum: f64 = img
+            .iter()
+            .zip(&truth)
+            .map(|(a, b)| ((a - b) as f64).powi(2))
+            .sum();
+        (sum / img.len() as f64).sqrt()
+    };
+    let mut errors = Vec::new();
+    for (accuracy, precision) in [
+        (Accuracy::Nearest, WeavePrecision::Rgba16f),
+        (Accuracy::FilteredParams, WeavePrecision::Rgba16f),
+        (Accuracy::Mixture, WeavePrecision::Rgba8),
+        (Accuracy::Mixture, WeavePrecision::Rgba16f),
+        (Accuracy::Mixture, WeavePrecision::Analytic),
+        (Accuracy::Supersampled(4), WeavePrecision::Rgba16f),
+    ] {
+        let e = rmse(&render(&mut renderer, accuracy, precision));
+        println!(
+            "far view, {} / {}: RMSE {e:.5} against supersampled:16",
+            accuracy.name(),
+            precision.name()
+        );
+        errors.push((accuracy, precision, e));
+    }
+    let err =
+        |a: Accuracy, p: WeavePrecision| errors.iter().find(|e| e.0 == a && e.1 == p).unwrap().2;
+    let mixture = err(Accuracy::Mixture, WeavePrecision::Rgba16f);
+    assert!(
+        mixture < err(Accuracy::Nearest, WeavePrecision::Rgba16f),
+        "mixture must beat nearest far away"
+    );
+    assert!(
+        mixture < err(Accuracy::FilteredParams, WeavePrecision::Rgba16f),
+        "mixture must beat filtered-params far away"
+    );
+    assert!(
+        mixture < err(Accuracy::Supersampled(4), WeavePrecision::Rgba16f),
+        "mixture must beat 4x4 supersampling far away"
+    );
 }

@@ -35,7 +35,14 @@ fn every_module_passes_spirv_val_for_vulkan_1_3() {
     let mut failures = Vec::new();
     for m in &manifest.modules {
         let path = dir.path().join(&m.file);
-        let out = spirv_tool("spirv-val", &["--target-env".as_ref(), "vulkan1.3".as_ref(), path.as_os_str()]);
+        let out = spirv_tool(
+            "spirv-val",
+            &[
+                "--target-env".as_ref(),
+                "vulkan1.3".as_ref(),
+                path.as_os_str(),
+            ],
+        );
         if !out.status.success() {
             failures.push(format!(
                 "{}: {}{}",
@@ -45,14 +52,23 @@ fn every_module_passes_spirv_val_for_vulkan_1_3() {
             ));
         }
     }
-    assert!(failures.is_empty(), "spirv-val rejected:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "spirv-val rejected:\n{}",
+        failures.join("\n")
+    );
 }
 
 /// What `spirv-dis` says of a module: (set, binding) of every decorated variable, LocalSize, and
 /// the SPIR-V version: an oracle independent of weft's reader.
 fn disassembled(path: &Path) -> (BTreeSet<(u32, u32)>, Option<[u32; 3]>, String) {
     let out = spirv_tool("spirv-dis", &["--raw-id".as_ref(), path.as_os_str()]);
-    assert!(out.status.success(), "spirv-dis {}: {}", path.display(), String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "spirv-dis {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).expect("UTF-8 disassembly");
     let mut sets: BTreeMap<String, u32> = BTreeMap::new();
     let mut bindings: BTreeMap<String, u32> = BTreeMap::new();
@@ -74,7 +90,10 @@ fn disassembled(path: &Path) -> (BTreeSet<(u32, u32)>, Option<[u32; 3]>, String)
             _ => {}
         }
     }
-    let pairs = bindings.iter().map(|(id, b)| (*sets.get(id).expect("a binding without a set"), *b)).collect();
+    let pairs = bindings
+        .iter()
+        .map(|(id, b)| (*sets.get(id).expect("a binding without a set"), *b))
+        .collect();
     (pairs, local_size, version)
 }
 
@@ -83,9 +102,15 @@ fn reflection_agrees_with_the_disassembler() {
     let (dir, manifest) = write_temp();
     for m in &manifest.modules {
         let (pairs, local_size, version) = disassembled(&dir.path().join(&m.file));
-        let reflected: BTreeSet<(u32, u32)> = m.bindings.iter().map(|b| (b.set, b.binding)).collect();
+        let reflected: BTreeSet<(u32, u32)> =
+            m.bindings.iter().map(|b| (b.set, b.binding)).collect();
         assert_eq!(reflected, pairs, "{}: descriptor bindings", m.name);
-        assert_eq!(m.workgroup_size.map(|w| w.size), local_size, "{}: LocalSize", m.name);
+        assert_eq!(
+            m.workgroup_size.map(|w| w.size),
+            local_size,
+            "{}: LocalSize",
+            m.name
+        );
         assert_eq!(m.spirv_version, version, "{}: SPIR-V version", m.name);
     }
 }
@@ -119,16 +144,21 @@ fn stages_of(s: Stages) -> Vec<Stage> {
 #[test]
 fn manifest_matches_the_renderers_pipelines() {
     let manifest = package::manifest().expect("reflect the embedded modules");
-    let ctx = Context::new(&ContextOptions { validate: true, device: DeviceChoice::Cpu })
-        .expect("a lavapipe device with the validation layer (run tools/setup)");
-    let renderer = Renderer::new(ctx).expect("renderer");
+    let ctx = Context::new(&ContextOptions {
+        validate: true,
+        device: DeviceChoice::Cpu,
+    })
+    .expect("a lavapipe device with the validation layer (run tools/setup)");
+    let mut renderer = Renderer::new(ctx).expect("renderer");
     let mut used = BTreeSet::new();
-    for p in renderer.pipelines() {
+    for p in renderer.pipelines().expect("the default pipeline variants") {
         let modules: Vec<&ModuleEntry> = p
             .shaders
             .iter()
             .map(|s| {
-                manifest.module(s).unwrap_or_else(|| panic!("pipeline {} uses {s}, which the manifest lacks", p.name))
+                manifest.module(s).unwrap_or_else(|| {
+                    panic!("pipeline {} uses {s}, which the manifest lacks", p.name)
+                })
             })
             .collect();
         used.extend(p.shaders.iter().copied());
@@ -138,9 +168,14 @@ fn manifest_matches_the_renderers_pipelines() {
         for m in &modules {
             for b in &m.bindings {
                 let kind = binding_kind(b.kind).unwrap_or_else(|| {
-                    panic!("{} set {} binding {}: {:?} has no weft BindingKind", m.name, b.set, b.binding, b.kind)
+                    panic!(
+                        "{} set {} binding {}: {:?} has no weft BindingKind",
+                        m.name, b.set, b.binding, b.kind
+                    )
                 });
-                let entry = reflected.entry((b.set, b.binding)).or_insert((kind, Vec::new()));
+                let entry = reflected
+                    .entry((b.set, b.binding))
+                    .or_insert((kind, Vec::new()));
                 assert_eq!(
                     entry.0, kind,
                     "pipeline {}: modules disagree on set {} binding {}",
@@ -154,7 +189,9 @@ fn manifest_matches_the_renderers_pipelines() {
             .iter()
             .enumerate()
             .flat_map(|(set, bindings)| {
-                bindings.iter().map(move |b| ((set as u32, b.binding), (b.kind, stages_of(b.stages))))
+                bindings
+                    .iter()
+                    .map(move |b| ((set as u32, b.binding), (b.kind, stages_of(b.stages))))
             })
             .collect();
         let kinds = |m: &BTreeMap<(u32, u32), (BindingKind, Vec<Stage>)>| -> Vec<((u32, u32), BindingKind)> {
@@ -177,11 +214,21 @@ fn manifest_matches_the_renderers_pipelines() {
             );
         }
 
-        let push_end = modules.iter().filter_map(|m| m.push_constants.map(|r| r.offset + r.size)).max().unwrap_or(0);
-        assert_eq!(p.push_constant_size, push_end, "pipeline {}: push-constant size vs reflected", p.name);
+        let push_end = modules
+            .iter()
+            .filter_map(|m| m.push_constants.map(|r| r.offset + r.size))
+            .max()
+            .unwrap_or(0);
+        assert_eq!(
+            p.push_constant_size, push_end,
+            "pipeline {}: push-constant size vs reflected",
+            p.name
+        );
 
-        let declared: BTreeSet<u32> =
-            modules.iter().flat_map(|m| m.spec_constants.iter().map(|c| c.constant.id)).collect();
+        let declared: BTreeSet<u32> = modules
+            .iter()
+            .flat_map(|m| m.spec_constants.iter().map(|c| c.constant.id))
+            .collect();
         for (id, _) in &p.constants {
             assert!(
                 declared.contains(id),
@@ -190,8 +237,16 @@ fn manifest_matches_the_renderers_pipelines() {
             );
         }
     }
-    let unused: Vec<&str> = manifest.modules.iter().map(|m| m.name.as_str()).filter(|n| !used.contains(n)).collect();
-    assert_eq!(unused, STANDALONE, "modules no pipeline uses (checked only by the package consumer)");
+    let unused: Vec<&str> = manifest
+        .modules
+        .iter()
+        .map(|m| m.name.as_str())
+        .filter(|n| !used.contains(n))
+        .collect();
+    assert_eq!(
+        unused, STANDALONE,
+        "modules no pipeline uses (checked only by the package consumer)"
+    );
 }
 
 /// Every file under `dir`, relative, sorted.
@@ -220,7 +275,10 @@ fn two_writes_are_byte_identical() {
     let (fa, fb) = (files(a.path()), files(b.path()));
     assert_eq!(fa, fb, "the two packages hold different files");
     for f in &fa {
-        let (x, y) = (std::fs::read(a.path().join(f)).unwrap(), std::fs::read(b.path().join(f)).unwrap());
+        let (x, y) = (
+            std::fs::read(a.path().join(f)).unwrap(),
+            std::fs::read(b.path().join(f)).unwrap(),
+        );
         assert!(x == y, "{} differs between two writes", f.display());
     }
     // Writing again over a package changes nothing either.
@@ -247,9 +305,10 @@ fn keys_sorted(v: &serde_json::Value, at: &str) {
                 keys_sorted(x, &format!("{at}.{k}"));
             }
         }
-        serde_json::Value::Array(items) => {
-            items.iter().enumerate().for_each(|(i, x)| keys_sorted(x, &format!("{at}[{i}]")))
-        }
+        serde_json::Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| keys_sorted(x, &format!("{at}[{i}]"))),
         _ => {}
     }
 }
@@ -269,15 +328,20 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
     names.sort();
     let listed: Vec<&str> = manifest.modules.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(listed, names, "the manifest must list every module, sorted");
-    let json_names: Vec<&str> =
-        json["modules"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    let json_names: Vec<&str> = json["modules"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
     assert_eq!(json_names, names);
 
     let readme = std::fs::read_to_string(dir.path().join("README.md")).expect("README.md");
     let mut embedded: Vec<_> = shaders::ALL.iter().collect();
     embedded.sort_by_key(|s| s.name);
     for (m, shader) in manifest.modules.iter().zip(embedded) {
-        let bytes = std::fs::read(dir.path().join(&m.file)).unwrap_or_else(|e| panic!("{}: {e}", m.file));
+        let bytes =
+            std::fs::read(dir.path().join(&m.file)).unwrap_or_else(|e| panic!("{}: {e}", m.file));
         assert_eq!(m.file, format!("{}.spv", m.name));
         assert_eq!(bytes, shader.spirv, "{} is not the embedded module", m.file);
         assert_eq!(m.sha256, package::sha256_hex(&bytes), "{}: hash", m.name);
@@ -285,15 +349,28 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
         assert_eq!(m.sha256.len(), 64);
         assert_eq!(m.stage, shader.stage);
         assert_eq!(m.entry_point, "main");
-        assert!(m.capabilities.iter().any(|c| c == "Shader"), "{}: {:?}", m.name, m.capabilities);
+        assert!(
+            m.capabilities.iter().any(|c| c == "Shader"),
+            "{}: {:?}",
+            m.name,
+            m.capabilities
+        );
         assert_eq!(
             m.workgroup_size.is_some(),
             m.stage == Stage::Compute,
             "{}: a workgroup size exactly for compute",
             m.name
         );
-        assert!(readme.contains(&format!("### {}", m.name)), "README.md has no section for {}", m.name);
-        assert!(package::module_notes(&m.name).is_some(), "{}: no entry in package::MODULE_NOTES", m.name);
+        assert!(
+            readme.contains(&format!("### {}", m.name)),
+            "README.md has no section for {}",
+            m.name
+        );
+        assert!(
+            package::module_notes(&m.name).is_some(),
+            "{}: no entry in package::MODULE_NOTES",
+            m.name
+        );
         for b in &m.bindings {
             assert!(
                 b.meaning.is_some(),
@@ -302,10 +379,21 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
                 b.set,
                 b.binding
             );
-            assert!(b.count >= 1, "{}: binding {} count {}", m.name, b.binding, b.count);
+            assert!(
+                b.count >= 1,
+                "{}: binding {} count {}",
+                m.name,
+                b.binding,
+                b.count
+            );
         }
         for c in &m.spec_constants {
-            assert!(c.meaning.is_some(), "{} constant {}: no entry in package::SPEC_MEANINGS", m.name, c.constant.id);
+            assert!(
+                c.meaning.is_some(),
+                "{} constant {}: no entry in package::SPEC_MEANINGS",
+                m.name,
+                c.constant.id
+            );
         }
     }
     let weave = manifest.module("weave.comp").expect("weave.comp");
@@ -316,25 +404,51 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
     );
     let b = &weave.bindings[0];
     assert_eq!(
-        (weave.bindings.len(), b.set, b.binding, b.kind, b.image_format),
+        (
+            weave.bindings.len(),
+            b.set,
+            b.binding,
+            b.kind,
+            b.image_format
+        ),
         (1, 0, 0, DescriptorKind::StorageImage, Some("rgba16f"))
     );
-    let probe = manifest.module("fabric_probe.comp").expect("fabric_probe.comp");
+    let probe = manifest
+        .module("fabric_probe.comp")
+        .expect("fabric_probe.comp");
     assert_eq!(probe.workgroup_size.unwrap().size, [64, 1, 1]);
-    assert_eq!(probe.push_constants.map(|p| (p.offset, p.size)), Some((0, 4)));
-    let strides: Vec<_> = probe.bindings.iter().map(|b| (b.binding, b.kind, b.runtime_array_stride)).collect();
+    assert_eq!(
+        probe.push_constants.map(|p| (p.offset, p.size)),
+        Some((0, 4))
+    );
+    let strides: Vec<_> = probe
+        .bindings
+        .iter()
+        .map(|b| (b.binding, b.kind, b.runtime_array_stride))
+        .collect();
     assert_eq!(
         strides,
         vec![
-            (0, DescriptorKind::StorageBuffer, Some(std::mem::size_of::<weft::reference::ProbeInput>() as u32)),
-            (1, DescriptorKind::StorageBuffer, Some(std::mem::size_of::<weft::reference::ProbeOutput>() as u32)),
+            (
+                0,
+                DescriptorKind::StorageBuffer,
+                Some(std::mem::size_of::<weft::reference::ProbeInput>() as u32)
+            ),
+            (
+                1,
+                DescriptorKind::StorageBuffer,
+                Some(std::mem::size_of::<weft::reference::ProbeOutput>() as u32)
+            ),
         ]
     );
 
     // The prose states numbers the code owns: keep them in step.
     let notes = package::module_notes("weave.comp").unwrap();
     for needle in [
-        format!("{} texels per weave cell", weft::fabric::WEAVE_TEXELS_PER_CELL),
+        format!(
+            "{} texels per weave cell",
+            weft::fabric::WEAVE_TEXELS_PER_CELL
+        ),
         format!("{}-byte `WeavePush`", weave.push_constants.unwrap().size),
         format!(
             "ceil(width / {}) × ceil(height / {})",
@@ -342,30 +456,49 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
             weave.workgroup_size.unwrap().size[1]
         ),
     ] {
-        assert!(notes.contains(&needle), "MODULE_NOTES of weave.comp should say \"{needle}\"");
+        assert!(
+            notes.contains(&needle),
+            "MODULE_NOTES of weave.comp should say \"{needle}\""
+        );
     }
     let notes = package::module_notes("fabric_probe.comp").unwrap();
     for needle in [
-        format!("{}-byte `ProbeInput`", std::mem::size_of::<weft::reference::ProbeInput>()),
-        format!("{}-byte `ProbeOutput`", std::mem::size_of::<weft::reference::ProbeOutput>()),
+        format!(
+            "{}-byte `ProbeInput`",
+            std::mem::size_of::<weft::reference::ProbeInput>()
+        ),
+        format!(
+            "{}-byte `ProbeOutput`",
+            std::mem::size_of::<weft::reference::ProbeOutput>()
+        ),
         format!("ceil(count / {})", probe.workgroup_size.unwrap().size[0]),
     ] {
-        assert!(notes.contains(&needle), "MODULE_NOTES of fabric_probe.comp should say \"{needle}\"");
+        assert!(
+            notes.contains(&needle),
+            "MODULE_NOTES of fabric_probe.comp should say \"{needle}\""
+        );
     }
 
     // The hand-written tables name only what exists.
     for (name, _) in package::MODULE_NOTES {
-        assert!(manifest.module(name).is_some(), "MODULE_NOTES names {name}, which is not a module");
+        assert!(
+            manifest.module(name).is_some(),
+            "MODULE_NOTES names {name}, which is not a module"
+        );
     }
     for (name, set, binding, _) in package::BINDING_MEANINGS {
-        let m = manifest.module(name).unwrap_or_else(|| panic!("BINDING_MEANINGS names {name}, which is not a module"));
+        let m = manifest
+            .module(name)
+            .unwrap_or_else(|| panic!("BINDING_MEANINGS names {name}, which is not a module"));
         assert!(
             m.bindings.iter().any(|b| b.set == *set && b.binding == *binding),
             "BINDING_MEANINGS names {name} set {set} binding {binding}, which the module does not use"
         );
     }
     for (name, id, _) in package::SPEC_MEANINGS {
-        let m = manifest.module(name).unwrap_or_else(|| panic!("SPEC_MEANINGS names {name}, which is not a module"));
+        let m = manifest
+            .module(name)
+            .unwrap_or_else(|| panic!("SPEC_MEANINGS names {name}, which is not a module"));
         assert!(
             m.spec_constants.iter().any(|c| c.constant.id == *id),
             "SPEC_MEANINGS names {name} constant {id}, which it lacks"
@@ -383,7 +516,10 @@ fn includes_are_the_projects_glsl_include_directory() {
         .collect();
     expected.sort();
     let listed: Vec<&str> = manifest.includes.iter().map(|f| f.file.as_str()).collect();
-    assert_eq!(listed, expected, "package::INCLUDES must list every file of glsl/include/");
+    assert_eq!(
+        listed, expected,
+        "package::INCLUDES must list every file of glsl/include/"
+    );
     for f in &manifest.includes {
         let shipped = std::fs::read(dir.path().join(&f.file)).unwrap();
         let source = std::fs::read(src.join(f.file.trim_start_matches("include/"))).unwrap();
@@ -401,14 +537,29 @@ fn rewriting_removes_modules_an_older_package_listed_and_nothing_else() {
     // Pretend an older package had a module that no longer exists, and a hostile entry.
     let mut old: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("manifest.json")).unwrap()).unwrap();
-    old["modules"].as_array_mut().unwrap().push(serde_json::json!({"name": "gone.comp", "file": "gone.comp.spv"}));
-    old["modules"].as_array_mut().unwrap().push(serde_json::json!({"name": "evil", "file": "../outside.spv"}));
+    old["modules"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"name": "gone.comp", "file": "gone.comp.spv"}));
+    old["modules"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"name": "evil", "file": "../outside.spv"}));
     std::fs::write(d.join("manifest.json"), old.to_string()).unwrap();
     std::fs::write(d.join("gone.comp.spv"), b"old").unwrap();
     std::fs::write(d.join("notes.txt"), b"mine").unwrap();
     std::fs::write(dir.path().join("outside.spv"), b"not the package's").unwrap();
     package::write_package(d).expect("rewrite");
-    assert!(!d.join("gone.comp.spv").exists(), "a module the old manifest listed was left behind");
-    assert!(d.join("notes.txt").exists(), "a file the package never wrote was removed");
-    assert!(dir.path().join("outside.spv").exists(), "a path outside the package was removed");
+    assert!(
+        !d.join("gone.comp.spv").exists(),
+        "a module the old manifest listed was left behind"
+    );
+    assert!(
+        d.join("notes.txt").exists(),
+        "a file the package never wrote was removed"
+    );
+    assert!(
+        dir.path().join("outside.spv").exists(),
+        "a path outside the package was removed"
+    );
 }

@@ -5,6 +5,7 @@
 //! render pass that follows another in the same command buffer read far too short, so one pass per
 //! submit is what gives honest per-pass timings (see docs/architecture.md).
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::Mat4;
@@ -12,9 +13,9 @@ use glam::Mat4;
 use crate::fabric::{weave_level0_size, weave_level_size, weave_mip_count, FabricParams};
 use crate::scene::{ColorSpace, Scene, Texture};
 use crate::vk::{
-    shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd, Context,
-    ComputeDesc, Cull, DescriptorSet, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags, Pipeline,
-    Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
+    shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd,
+    ComputeDesc, Context, Cull, DescriptorSet, Filter, Format, GraphicsDesc, Image, ImageDesc,
+    ImageUsageFlags, Pipeline, Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
 };
 use crate::Error;
 
@@ -31,6 +32,7 @@ pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
 pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
 pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
 
 /// Floats per vertex in the G-buffer pass's vertex buffer: position, normal, tangent, uv, weave uv.
 const VERTEX_FLOATS: usize = 14;
@@ -92,14 +94,24 @@ impl Targets {
             surface: t("gbuffer surface", SURFACE_FORMAT, color | read)?,
             fabric: t("gbuffer fabric coverage", FABRIC_FORMAT, color | read)?,
             emissive: t("gbuffer emissive", EMISSIVE_FORMAT, color | read)?,
-            depth: t("gbuffer depth", DEPTH_FORMAT, ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED | read)?,
+            depth: t(
+                "gbuffer depth",
+                DEPTH_FORMAT,
+                ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED | read,
+            )?,
             hdr: t("hdr", HDR_FORMAT, color | read)?,
             ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
         })
     }
 
     fn gbuffer_colors(&self) -> [&Image; 5] {
-        [&self.albedo, &self.frame, &self.surface, &self.fabric, &self.emissive]
+        [
+            &self.albedo,
+            &self.frame,
+            &self.surface,
+            &self.fabric,
+            &self.emissive,
+        ]
     }
 }
 
@@ -120,8 +132,10 @@ pub struct GpuScene {
     materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
     fabrics: Buffer,
-    /// One weave texture per distinct weave, and per material the weave it uses.
+    /// One weave texture per distinct weave (RGBA16F, and an RGBA8 copy), and per material the
+    /// weave it uses.
     weaves: Vec<Image>,
+    weaves8: Vec<Image>,
     material_weave: Vec<Option<usize>>,
     lights: Buffer,
     light_count: u32,
@@ -142,8 +156,10 @@ pub struct Renderer {
     tonemap_layout: SetLayout,
     weave_layout: SetLayout,
     weave_pipeline: Pipeline,
-    gbuffer_pipeline: Pipeline,
-    lighting_pipeline: Pipeline,
+    /// Pipeline variants by their specialization constants (Filament-style: one per feature set
+    /// a frame asks for, made on first use).
+    gbuffer_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
+    lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     tonemap_pipeline: Pipeline,
     linear: Sampler,
     nearest: Sampler,
@@ -153,28 +169,67 @@ pub struct Renderer {
 }
 
 fn sampled(binding: u32, stages: Stages) -> Binding {
-    Binding { binding, kind: BindingKind::SampledImage, stages }
+    Binding {
+        binding,
+        kind: BindingKind::SampledImage,
+        stages,
+    }
 }
 
 impl Renderer {
     pub fn new(ctx: Context) -> crate::Result<Renderer> {
         let frame_layout = ctx.create_set_layout(&[
-            Binding { binding: 0, kind: BindingKind::UniformBuffer, stages: Stages::GRAPHICS },
-            Binding { binding: 1, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
-            Binding { binding: 2, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
+            Binding {
+                binding: 0,
+                kind: BindingKind::UniformBuffer,
+                stages: Stages::GRAPHICS,
+            },
+            Binding {
+                binding: 1,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
+            Binding {
+                binding: 2,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
         ])?;
-        let material_layout = ctx.create_set_layout(&(0..5).map(|b| sampled(b, Stages::FRAGMENT)).collect::<Vec<_>>())?;
+        let material_layout = ctx.create_set_layout(
+            &(0..5)
+                .map(|b| sampled(b, Stages::FRAGMENT))
+                .collect::<Vec<_>>(),
+        )?;
         let mut lighting_bindings = vec![
-            Binding { binding: 0, kind: BindingKind::UniformBuffer, stages: Stages::FRAGMENT },
-            Binding { binding: 1, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
-            Binding { binding: 2, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT },
+            Binding {
+                binding: 0,
+                kind: BindingKind::UniformBuffer,
+                stages: Stages::FRAGMENT,
+            },
+            Binding {
+                binding: 1,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
+            Binding {
+                binding: 2,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
         ];
         lighting_bindings.extend((3..9).map(|b| sampled(b, Stages::FRAGMENT)));
-        lighting_bindings.push(Binding { binding: 9, kind: BindingKind::StorageBuffer, stages: Stages::FRAGMENT });
+        lighting_bindings.push(Binding {
+            binding: 9,
+            kind: BindingKind::StorageBuffer,
+            stages: Stages::FRAGMENT,
+        });
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
-        let weave_layout =
-            ctx.create_set_layout(&[Binding { binding: 0, kind: BindingKind::StorageImage, stages: Stages::COMPUTE }])?;
+        let weave_layout = ctx.create_set_layout(&[Binding {
+            binding: 0,
+            kind: BindingKind::StorageImage,
+            stages: Stages::COMPUTE,
+        }])?;
         let weave_pipeline = ctx.create_compute_pipeline(&ComputeDesc {
             name: "weave",
             shader: &shaders::WEAVE_COMP,
@@ -183,40 +238,6 @@ impl Renderer {
             constants: &[],
         })?;
 
-        let vertex_layout = VertexLayout {
-            stride: (VERTEX_FLOATS * 4) as u32,
-            attributes: vec![
-                (0, Format::R32G32B32_SFLOAT, 0),
-                (1, Format::R32G32B32_SFLOAT, 12),
-                (2, Format::R32G32B32A32_SFLOAT, 24),
-                (3, Format::R32G32_SFLOAT, 40),
-                (4, Format::R32G32_SFLOAT, 48),
-            ],
-        };
-        let gbuffer_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
-            name: "gbuffer",
-            vertex: &shaders::GBUFFER_VERT,
-            fragment: &shaders::GBUFFER_FRAG,
-            vertex_layout: Some(vertex_layout),
-            color_formats: &[ALBEDO_FORMAT, FRAME_FORMAT, SURFACE_FORMAT, FABRIC_FORMAT, EMISSIVE_FORMAT],
-            depth_format: Some(DEPTH_FORMAT),
-            set_layouts: &[&frame_layout, &material_layout],
-            push_constant_size: std::mem::size_of::<DrawPush>() as u32,
-            push_stages: Stages::GRAPHICS,
-            fragment_constants: &[],
-        })?;
-        let lighting_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
-            name: "lighting",
-            vertex: &shaders::FULLSCREEN_VERT,
-            fragment: &shaders::LIGHTING_FRAG,
-            vertex_layout: None,
-            color_formats: &[HDR_FORMAT],
-            depth_format: None,
-            set_layouts: &[&lighting_layout],
-            push_constant_size: 0,
-            push_stages: Stages::FRAGMENT,
-            fragment_constants: &[],
-        })?;
         let tonemap_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
             name: "tonemap",
             vertex: &shaders::FULLSCREEN_VERT,
@@ -231,8 +252,14 @@ impl Renderer {
         })?;
         let linear = ctx.create_sampler(Filter::LinearRepeat)?;
         let nearest = ctx.create_sampler(Filter::NearestClamp)?;
-        let white = upload_texture(&ctx, &solid("default white", [255, 255, 255, 255], ColorSpace::Srgb))?;
-        let flat_normal = upload_texture(&ctx, &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear))?;
+        let white = upload_texture(
+            &ctx,
+            &solid("default white", [255, 255, 255, 255], ColorSpace::Srgb),
+        )?;
+        let flat_normal = upload_texture(
+            &ctx,
+            &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear),
+        )?;
         Ok(Renderer {
             ctx,
             frame_layout,
@@ -241,8 +268,8 @@ impl Renderer {
             tonemap_layout,
             weave_layout,
             weave_pipeline,
-            gbuffer_pipeline,
-            lighting_pipeline,
+            gbuffer_variants: HashMap::new(),
+            lighting_variants: HashMap::new(),
             tonemap_pipeline,
             linear,
             nearest,
@@ -256,9 +283,86 @@ impl Renderer {
         &self.ctx
     }
 
-    /// Every pipeline the renderer made, with its shaders, set layouts and push-constant size.
-    pub fn pipelines(&self) -> [&Pipeline; 4] {
-        [&self.weave_pipeline, &self.gbuffer_pipeline, &self.lighting_pipeline, &self.tonemap_pipeline]
+    /// Every pipeline the renderer has made so far (the default variants at least), with its
+    /// shaders, set layouts, push-constant size and specialization constants.
+    pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
+        self.variants(&RenderOptions::default())?;
+        let mut all = vec![&self.weave_pipeline, &self.tonemap_pipeline];
+        all.extend(self.gbuffer_variants.values());
+        all.extend(self.lighting_variants.values());
+        Ok(all)
+    }
+
+    /// The G-buffer and lighting pipeline variants `options` needs, made if missing; returns their
+    /// keys (specialization constants).
+    fn variants(
+        &mut self,
+        options: &RenderOptions,
+    ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
+        let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
+        let gbuffer_key = vec![(0, options.accuracy.code()), (1, source)];
+        let lighting_key = vec![
+            (0, options.accuracy.code()),
+            (1, options.accuracy.samples()),
+            (2, options.fabric_as_pbr as u32),
+        ];
+        if !self.gbuffer_variants.contains_key(&gbuffer_key) {
+            let vertex_layout = VertexLayout {
+                stride: (VERTEX_FLOATS * 4) as u32,
+                attributes: vec![
+                    (0, Format::R32G32B32_SFLOAT, 0),
+                    (1, Format::R32G32B32_SFLOAT, 12),
+                    (2, Format::R32G32B32A32_SFLOAT, 24),
+                    (3, Format::R32G32_SFLOAT, 40),
+                    (4, Format::R32G32_SFLOAT, 48),
+                ],
+            };
+            let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!(
+                    "gbuffer[accuracy={}, weave={}]",
+                    options.accuracy.code(),
+                    source
+                ),
+                vertex: &shaders::GBUFFER_VERT,
+                fragment: &shaders::GBUFFER_FRAG,
+                vertex_layout: Some(vertex_layout),
+                color_formats: &[
+                    ALBEDO_FORMAT,
+                    FRAME_FORMAT,
+                    SURFACE_FORMAT,
+                    FABRIC_FORMAT,
+                    EMISSIVE_FORMAT,
+                ],
+                depth_format: Some(DEPTH_FORMAT),
+                set_layouts: &[&self.frame_layout, &self.material_layout],
+                push_constant_size: std::mem::size_of::<DrawPush>() as u32,
+                push_stages: Stages::GRAPHICS,
+                fragment_constants: &gbuffer_key,
+            })?;
+            self.gbuffer_variants.insert(gbuffer_key.clone(), pipeline);
+        }
+        if !self.lighting_variants.contains_key(&lighting_key) {
+            let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!(
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}]",
+                    options.accuracy.code(),
+                    options.accuracy.samples(),
+                    options.fabric_as_pbr as u32
+                ),
+                vertex: &shaders::FULLSCREEN_VERT,
+                fragment: &shaders::LIGHTING_FRAG,
+                vertex_layout: None,
+                color_formats: &[HDR_FORMAT],
+                depth_format: None,
+                set_layouts: &[&self.lighting_layout],
+                push_constant_size: 0,
+                push_stages: Stages::FRAGMENT,
+                fragment_constants: &lighting_key,
+            })?;
+            self.lighting_variants
+                .insert(lighting_key.clone(), pipeline);
+        }
+        Ok((gbuffer_key, lighting_key))
     }
 
     /// Uploads a scene: geometry, materials, lights and textures (with mip chains).
@@ -268,8 +372,15 @@ impl Renderer {
         let mut indices = Vec::new();
         let mut mesh_ranges = Vec::new();
         for mesh in &scene.meshes {
-            mesh_ranges.push((indices.len() as u32, mesh.indices.len() as u32, vertices.len() as i32));
-            let fabric = scene.materials.get(mesh.material).and_then(|m| m.fabric.as_ref());
+            mesh_ranges.push((
+                indices.len() as u32,
+                mesh.indices.len() as u32,
+                vertices.len() as i32,
+            ));
+            let fabric = scene
+                .materials
+                .get(mesh.material)
+                .and_then(|m| m.fabric.as_ref());
             let weave_offset = fabric.map(|f| weave_uv_offset(f, mesh)).unwrap_or([0.0; 2]);
             vertices.extend(mesh.vertices.iter().map(|v| {
                 let mut w = [0f32; VERTEX_FLOATS];
@@ -298,11 +409,16 @@ impl Renderer {
                 vertex_offset,
                 material: mesh.material as u32,
                 world: d.world,
-                double_sided: scene.materials.get(mesh.material).is_some_and(|m| m.double_sided),
+                double_sided: scene
+                    .materials
+                    .get(mesh.material)
+                    .is_some_and(|m| m.double_sided),
             });
         }
-        let vertices = ctx.create_buffer_with("vertices", BufferUsageFlags::VERTEX_BUFFER, &vertices)?;
-        let indices = ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
+        let vertices =
+            ctx.create_buffer_with("vertices", BufferUsageFlags::VERTEX_BUFFER, &vertices)?;
+        let indices =
+            ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
         // Fabric records, and one weave texture per distinct weave (materials that differ only in
         // colour or exponents share one).
         let mut fabric_bytes: Vec<u8> = Vec::new();
@@ -317,11 +433,14 @@ impl Renderer {
                     let g = f.to_gpu();
                     fabric_bytes.extend_from_slice(&g.to_bytes());
                     let key = weave_key(f);
-                    let w = weave_keys.iter().position(|k| *k == key).unwrap_or_else(|| {
-                        weave_keys.push(key);
-                        weave_params.push(f.clone());
-                        weave_keys.len() - 1
-                    });
+                    let w = weave_keys
+                        .iter()
+                        .position(|k| *k == key)
+                        .unwrap_or_else(|| {
+                            weave_keys.push(key);
+                            weave_params.push(f.clone());
+                            weave_keys.len() - 1
+                        });
                     material_weave.push(Some(w));
                 }
                 None => {
@@ -333,33 +452,59 @@ impl Renderer {
         if fabric_bytes.is_empty() {
             fabric_bytes = vec![0; 80]; // a storage buffer cannot be empty
         }
-        let fabrics = ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
-        let weaves = weave_params.iter().map(|f| self.build_weave(f)).collect::<crate::Result<Vec<_>>>()?;
+        let fabrics =
+            ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+        let weaves = weave_params
+            .iter()
+            .map(|f| self.build_weave(f))
+            .collect::<crate::Result<Vec<_>>>()?;
+        let weaves8 = weaves
+            .iter()
+            .map(|w| self.convert_weave(w, WEAVE_FORMAT_8))
+            .collect::<crate::Result<Vec<_>>>()?;
         let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
             vec![GpuMaterial::new(&Default::default(), None)]
         } else {
-            scene.materials.iter().zip(&fabric_index).map(|(m, f)| GpuMaterial::new(m, *f)).collect()
+            scene
+                .materials
+                .iter()
+                .zip(&fabric_index)
+                .map(|(m, f)| GpuMaterial::new(m, *f))
+                .collect()
         };
         let material_textures = scene
             .materials
             .iter()
-            .map(|m| [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture])
+            .map(|m| {
+                [
+                    m.base_color_texture,
+                    m.metallic_roughness_texture,
+                    m.normal_texture,
+                    m.emissive_texture,
+                ]
+            })
             .collect();
         let material_count = materials.len() as u32;
-        let materials = ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
+        let materials =
+            ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
         let mut lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
         let light_count = lights.len() as u32;
         if lights.is_empty() {
             lights.push(bytemuck::Zeroable::zeroed()); // a storage buffer cannot be empty
         }
         let lights = ctx.create_buffer_with("lights", BufferUsageFlags::STORAGE_BUFFER, &lights)?;
-        let textures = scene.textures.iter().map(|t| upload_texture(ctx, t)).collect::<crate::Result<Vec<_>>>()?;
+        let textures = scene
+            .textures
+            .iter()
+            .map(|t| upload_texture(ctx, t))
+            .collect::<crate::Result<Vec<_>>>()?;
         Ok(GpuScene {
             vertices,
             indices,
             materials,
             fabrics,
             weaves,
+            weaves8,
             material_weave,
             lights,
             light_count,
@@ -378,9 +523,15 @@ impl Renderer {
     }
 
     /// Renders one frame of an uploaded scene.
-    pub fn render_frame(&mut self, scene: &Scene, gpu: &GpuScene, options: &RenderOptions) -> crate::Result<Frame> {
+    pub fn render_frame(
+        &mut self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: &RenderOptions,
+    ) -> crate::Result<Frame> {
         options.validate()?;
         let plan = Plan::new(scene, options);
+        let (gbuffer_key, lighting_key) = self.variants(options)?;
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
             self.targets = None;
@@ -394,10 +545,16 @@ impl Renderer {
         frame_data.light_count = gpu.light_count;
         frame_data.material_count = gpu.material_count;
         frame_data.debug_view = options.debug_view as u32;
-        let frame_buffer = self.ctx.create_buffer_with("frame", BufferUsageFlags::UNIFORM_BUFFER, &[frame_data])?;
+        let frame_buffer = self.ctx.create_buffer_with(
+            "frame",
+            BufferUsageFlags::UNIFORM_BUFFER,
+            &[frame_data],
+        )?;
 
         let ctx = self.ctx.clone();
         let targets = self.targets.as_ref().expect("created above");
+        let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
+        let lighting_pipeline = &self.lighting_variants[&lighting_key];
         let pool = ctx.create_descriptor_pool(4 + gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
         let mut timings = Vec::new();
@@ -408,28 +565,33 @@ impl Renderer {
         };
 
         // Times one pass: a submission of its own between two timestamps.
-        let mut timed = |name: &'static str, record: &mut dyn FnMut(&mut Cmd)| -> crate::Result<()> {
-            let start = Instant::now();
-            ctx.submit(|cmd| {
-                if let Some(q) = &queries {
-                    cmd.reset_queries(q);
-                    cmd.timestamp(q, 0);
-                }
-                record(cmd);
-                if let Some(q) = &queries {
-                    cmd.timestamp(q, 1);
-                }
-            })?;
-            let gpu_ms = match &queries {
-                Some(q) => {
-                    let t = q.read_ns(2)?;
-                    Some((t[1] - t[0]) / 1e6)
-                }
-                None => None,
+        let mut timed =
+            |name: &'static str, record: &mut dyn FnMut(&mut Cmd)| -> crate::Result<()> {
+                let start = Instant::now();
+                ctx.submit(|cmd| {
+                    if let Some(q) = &queries {
+                        cmd.reset_queries(q);
+                        cmd.timestamp(q, 0);
+                    }
+                    record(cmd);
+                    if let Some(q) = &queries {
+                        cmd.timestamp(q, 1);
+                    }
+                })?;
+                let gpu_ms = match &queries {
+                    Some(q) => {
+                        let t = q.read_ns(2)?;
+                        Some((t[1] - t[0]) / 1e6)
+                    }
+                    None => None,
+                };
+                timings.push(PassTiming {
+                    name,
+                    gpu_ms,
+                    wall_ms: start.elapsed().as_secs_f64() * 1e3,
+                });
+                Ok(())
             };
-            timings.push(PassTiming { name, gpu_ms, wall_ms: start.elapsed().as_secs_f64() * 1e3 });
-            Ok(())
-        };
 
         for pass in &plan.passes {
             match pass {
@@ -453,6 +615,11 @@ impl Renderer {
                                 }
                             };
                             let weave = match gpu.material_weave.get(m).copied().flatten() {
+                                Some(w)
+                                    if options.weave_precision == super::WeavePrecision::Rgba8 =>
+                                {
+                                    &gpu.weaves8[w]
+                                }
                                 Some(w) => &gpu.weaves[w],
                                 None => &self.white,
                             };
@@ -469,9 +636,16 @@ impl Renderer {
                         })
                         .collect::<crate::Result<Vec<_>>>()?;
                     timed("gbuffer", &mut |cmd| {
-                        gbuffer_pass(cmd, &self.gbuffer_pipeline, gpu, frame_set, &material_sets, targets)
+                        gbuffer_pass(
+                            cmd,
+                            gbuffer_pipeline,
+                            gpu,
+                            frame_set,
+                            &material_sets,
+                            targets,
+                        )
                     })?;
-                    stats.pipelines.push(self.gbuffer_pipeline.name.clone());
+                    stats.pipelines.push(gbuffer_pipeline.name.clone());
                 }
                 Pass::Lighting => {
                     let set = pool.set(
@@ -489,16 +663,23 @@ impl Renderer {
                             (9, Resource::Storage(&gpu.fabrics)),
                         ],
                     )?;
-                    timed("lighting", &mut |cmd| lighting_pass(cmd, &self.lighting_pipeline, set, targets))?;
-                    stats.pipelines.push(self.lighting_pipeline.name.clone());
+                    timed("lighting", &mut |cmd| {
+                        lighting_pass(cmd, lighting_pipeline, set, targets)
+                    })?;
+                    stats.pipelines.push(lighting_pipeline.name.clone());
                 }
                 Pass::Tonemap => {
-                    let set = pool.set(&self.tonemap_layout, &[(0, Resource::Sampled(&targets.hdr, &self.nearest))])?;
+                    let set = pool.set(
+                        &self.tonemap_layout,
+                        &[(0, Resource::Sampled(&targets.hdr, &self.nearest))],
+                    )?;
                     let push = TonemapPush {
                         exposure: 2f32.powf(options.exposure),
                         passthrough: (options.debug_view != super::DebugView::None) as u32,
                     };
-                    timed("tonemap", &mut |cmd| tonemap_pass(cmd, &self.tonemap_pipeline, set, &push, targets))?;
+                    timed("tonemap", &mut |cmd| {
+                        tonemap_pass(cmd, &self.tonemap_pipeline, set, &push, targets)
+                    })?;
                     stats.pipelines.push(self.tonemap_pipeline.name.clone());
                 }
             }
@@ -508,11 +689,26 @@ impl Renderer {
         let start = Instant::now();
         let ldr = read_image(&ctx, &targets.ldr, Usage::ColorAttachment, 4)?;
         let hdr_half = read_image(&ctx, &targets.hdr, Usage::FragmentRead, 8)?;
-        let hdr: Vec<f32> = hdr_half.chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect();
-        timings.push(PassTiming { name: "readback", gpu_ms: None, wall_ms: start.elapsed().as_secs_f64() * 1e3 });
+        let hdr: Vec<f32> = hdr_half
+            .chunks_exact(2)
+            .map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]])))
+            .collect();
+        timings.push(PassTiming {
+            name: "readback",
+            gpu_ms: None,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+        });
         drop(pool);
         ctx.check_validation()?;
-        Ok(Frame { width, height, ldr, hdr, timings, stats, plan })
+        Ok(Frame {
+            width,
+            height,
+            ldr,
+            hdr,
+            timings,
+            stats,
+            plan,
+        })
     }
 
     /// Builds a weave texture: every mip level computed by weave.comp as the exact coverage of its
@@ -520,13 +716,19 @@ impl Renderer {
     pub fn build_weave(&self, fabric: &FabricParams) -> crate::Result<Image> {
         let ctx = &self.ctx;
         let level0 = weave_level0_size(&fabric.pattern);
-        let mut desc = ImageDesc::new_2d("weave", WEAVE_FORMAT, level0.0, level0.1)
-            .usage(ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_SRC);
+        let mut desc = ImageDesc::new_2d("weave", WEAVE_FORMAT, level0.0, level0.1).usage(
+            ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_SRC,
+        );
         desc.mip_levels = weave_mip_count(level0);
         let image = ctx.create_image(&desc)?;
         let pool = ctx.create_descriptor_pool(desc.mip_levels)?;
         let sets = (0..desc.mip_levels)
-            .map(|level| pool.set(&self.weave_layout, &[(0, Resource::StorageImage(&image, level))]))
+            .map(|level| {
+                pool.set(
+                    &self.weave_layout,
+                    &[(0, Resource::StorageImage(&image, level))],
+                )
+            })
             .collect::<crate::Result<Vec<_>>>()?;
         ctx.submit(|cmd| {
             cmd.transition(&image, Usage::Undefined, Usage::ComputeWrite, None);
@@ -542,20 +744,51 @@ impl Renderer {
         Ok(image)
     }
 
+    /// A copy of a weave texture in another format (every level converted by a same-size blit:
+    /// RGBA8 rounds each coverage to 1/255).
+    fn convert_weave(&self, weave: &Image, format: Format) -> crate::Result<Image> {
+        let mut desc = weave.desc.clone();
+        desc.name = format!("{} ({format:?})", desc.name);
+        desc.format = format;
+        desc.usage = ImageUsageFlags::SAMPLED
+            | ImageUsageFlags::TRANSFER_DST
+            | ImageUsageFlags::TRANSFER_SRC;
+        let image = self.ctx.create_image(&desc)?;
+        self.ctx.submit(|cmd| {
+            cmd.transition(weave, Usage::FragmentRead, Usage::TransferSrc, None);
+            cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
+            for level in 0..desc.mip_levels {
+                cmd.blit_level(weave, &image, level);
+            }
+            cmd.transition(weave, Usage::TransferSrc, Usage::FragmentRead, None);
+            cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
+        })?;
+        Ok(image)
+    }
+
     /// Reads mip `level` of a weave texture back as RGBA f32 (for tests).
     pub fn read_weave(&self, image: &Image, level: u32) -> crate::Result<Vec<f32>> {
         let raw = read_image_level(&self.ctx, image, level, Usage::FragmentRead, 8)?;
-        Ok(raw.chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect())
+        Ok(raw
+            .chunks_exact(2)
+            .map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]])))
+            .collect())
     }
 
     /// Reads back the G-buffer of the last frame (for tests and debugging): albedo RGBA8,
     /// then the four RGBA16F targets as f32, then depth.
     pub fn read_gbuffer(&self) -> crate::Result<GBufferReadback> {
-        let t = self.targets.as_ref().ok_or_else(|| Error::input("no frame has been rendered yet"))?;
+        let t = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| Error::input("no frame has been rendered yet"))?;
         let ctx = &self.ctx;
         let half = |img: &Image| -> crate::Result<Vec<f32>> {
             let raw = read_image(ctx, img, Usage::FragmentRead, 8)?;
-            Ok(raw.chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect())
+            Ok(raw
+                .chunks_exact(2)
+                .map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]])))
+                .collect())
         };
         let depth_raw = read_image(ctx, &t.depth, Usage::FragmentRead, 4)?;
         Ok(GBufferReadback {
@@ -564,7 +797,10 @@ impl Renderer {
             surface: half(&t.surface)?,
             fabric: half(&t.fabric)?,
             emissive: half(&t.emissive)?,
-            depth: depth_raw.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+            depth: depth_raw
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect(),
         })
     }
 }
@@ -591,10 +827,27 @@ fn gbuffer_pass(
     for img in targets.gbuffer_colors() {
         cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
     }
-    cmd.transition(&targets.depth, Usage::Undefined, Usage::DepthAttachment, None);
-    let colors: Vec<Attachment> =
-        targets.gbuffer_colors().into_iter().map(|image| Attachment { image, clear: Some([0.0; 4]) }).collect();
-    cmd.begin_rendering(&colors, Some(Attachment { image: &targets.depth, clear: Some([0.0; 4]) }));
+    cmd.transition(
+        &targets.depth,
+        Usage::Undefined,
+        Usage::DepthAttachment,
+        None,
+    );
+    let colors: Vec<Attachment> = targets
+        .gbuffer_colors()
+        .into_iter()
+        .map(|image| Attachment {
+            image,
+            clear: Some([0.0; 4]),
+        })
+        .collect();
+    cmd.begin_rendering(
+        &colors,
+        Some(Attachment {
+            image: &targets.depth,
+            clear: Some([0.0; 4]),
+        }),
+    );
     cmd.bind_pipeline(pipeline);
     cmd.bind_vertex_buffer(&scene.vertices);
     cmd.bind_index_buffer(&scene.indices);
@@ -602,7 +855,11 @@ fn gbuffer_pass(
     for draw in &scene.draws {
         let material = draw.material.min(scene.material_count - 1);
         cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
-        cmd.set_cull(if draw.double_sided { Cull::None } else { Cull::Back });
+        cmd.set_cull(if draw.double_sided {
+            Cull::None
+        } else {
+            Cull::Back
+        });
         cmd.push_constants(pipeline, &DrawPush::new(draw.world, material));
         cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
     }
@@ -610,24 +867,52 @@ fn gbuffer_pass(
     for img in targets.gbuffer_colors() {
         cmd.transition(img, Usage::ColorAttachment, Usage::FragmentRead, None);
     }
-    cmd.transition(&targets.depth, Usage::DepthAttachment, Usage::FragmentRead, None);
+    cmd.transition(
+        &targets.depth,
+        Usage::DepthAttachment,
+        Usage::FragmentRead,
+        None,
+    );
 }
 
 /// Reads the G-buffer, writes HDR radiance.
 fn lighting_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, targets: &Targets) {
     cmd.transition(&targets.hdr, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(&[Attachment { image: &targets.hdr, clear: None }], None);
+    cmd.begin_rendering(
+        &[Attachment {
+            image: &targets.hdr,
+            clear: None,
+        }],
+        None,
+    );
     cmd.bind_pipeline(pipeline);
     cmd.bind_sets(pipeline, 0, &[set]);
     cmd.draw(3);
     cmd.end_rendering();
-    cmd.transition(&targets.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
+    cmd.transition(
+        &targets.hdr,
+        Usage::ColorAttachment,
+        Usage::FragmentRead,
+        None,
+    );
 }
 
 /// Reads HDR, writes the display-referred 8-bit image.
-fn tonemap_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, push: &TonemapPush, targets: &Targets) {
+fn tonemap_pass(
+    cmd: &mut Cmd,
+    pipeline: &Pipeline,
+    set: DescriptorSet,
+    push: &TonemapPush,
+    targets: &Targets,
+) {
     cmd.transition(&targets.ldr, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(&[Attachment { image: &targets.ldr, clear: None }], None);
+    cmd.begin_rendering(
+        &[Attachment {
+            image: &targets.ldr,
+            clear: None,
+        }],
+        None,
+    );
     cmd.bind_pipeline(pipeline);
     cmd.bind_sets(pipeline, 0, &[set]);
     cmd.push_constants(pipeline, push);
@@ -636,7 +921,13 @@ fn tonemap_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, push: &T
 }
 
 fn solid(name: &str, rgba: [u8; 4], color_space: ColorSpace) -> Texture {
-    Texture { name: name.into(), width: 1, height: 1, color_space, rgba8: rgba.to_vec() }
+    Texture {
+        name: name.into(),
+        width: 1,
+        height: 1,
+        color_space,
+        rgba8: rgba.to_vec(),
+    }
 }
 
 /// Uploads an RGBA8 texture and builds its mip chain by linear blits.
@@ -657,10 +948,18 @@ fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
     }
     let image = ctx.create_image(
         &ImageDesc::new_2d(texture.name.clone(), format, texture.width, texture.height)
-            .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST | ImageUsageFlags::TRANSFER_SRC)
+            .usage(
+                ImageUsageFlags::SAMPLED
+                    | ImageUsageFlags::TRANSFER_DST
+                    | ImageUsageFlags::TRANSFER_SRC,
+            )
             .full_mips(),
     )?;
-    let staging = ctx.create_buffer_with("texture staging", BufferUsageFlags::TRANSFER_SRC, &texture.rgba8)?;
+    let staging = ctx.create_buffer_with(
+        "texture staging",
+        BufferUsageFlags::TRANSFER_SRC,
+        &texture.rgba8,
+    )?;
     ctx.submit(|cmd| {
         cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
         cmd.copy_buffer_to_image(&staging, &image);
@@ -693,7 +992,15 @@ fn weave_uv_offset(fabric: &FabricParams, mesh: &crate::scene::Mesh) -> [f64; 2]
 /// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
 fn weave_key(fabric: &FabricParams) -> [u32; 7] {
     let p = fabric.weave_push(0, 0);
-    [p.pattern_lo, p.pattern_hi, p.cols, p.rows, p.gap.to_bits(), p.shadow_dist.to_bits(), p.shadow_strength.to_bits()]
+    [
+        p.pattern_lo,
+        p.pattern_hi,
+        p.cols,
+        p.rows,
+        p.gap.to_bits(),
+        p.shadow_dist.to_bits(),
+        p.shadow_strength.to_bits(),
+    ]
 }
 
 /// Copies mip 0 of `image` (currently in `from` usage) to the host; `texel` bytes per texel.
@@ -701,7 +1008,13 @@ fn read_image(ctx: &Context, image: &Image, from: Usage, texel: u64) -> crate::R
     read_image_level(ctx, image, 0, from, texel)
 }
 
-fn read_image_level(ctx: &Context, image: &Image, level: u32, from: Usage, texel: u64) -> crate::Result<Vec<u8>> {
+fn read_image_level(
+    ctx: &Context,
+    image: &Image,
+    level: u32,
+    from: Usage,
+    texel: u64,
+) -> crate::Result<Vec<u8>> {
     let w = (image.desc.width >> level).max(1);
     let h = (image.desc.height >> level).max(1);
     let buffer = ctx.create_buffer(

@@ -33,7 +33,8 @@ impl FrameData {
         let aspect = width as f32 / height as f32;
         // Reversed-Z keeps D32F depth precision nearly uniform, so a cloth 1.5 cm above a ball
         // does not z-fight at 15 m. The camera's zfar is not needed.
-        let mut proj = Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6));
+        let mut proj =
+            Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6));
         proj.y_axis.y = -proj.y_axis.y;
         let view_proj = proj * camera.view;
         let eye = camera.view.inverse().transform_point3(Vec3::ZERO);
@@ -43,7 +44,12 @@ impl FrameData {
             view_proj: view_proj.to_cols_array_2d(),
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
             eye: [eye.x, eye.y, eye.z, 1.0],
-            viewport: [width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32],
+            viewport: [
+                width as f32,
+                height as f32,
+                1.0 / width as f32,
+                1.0 / height as f32,
+            ],
             ambient_sky: AMBIENT_SKY,
             ambient_ground: AMBIENT_GROUND,
             background: BACKGROUND,
@@ -79,7 +85,10 @@ impl GpuLight {
         let (kind, spot) = match light.kind {
             LightKind::Directional => (LIGHT_DIRECTIONAL, [0.0; 4]),
             LightKind::Point => (LIGHT_POINT, [0.0; 4]),
-            LightKind::Spot { inner_cone, outer_cone } => {
+            LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } => {
                 // KHR_lights_punctual's recommended spot falloff, as a scale and offset of cos.
                 let cos_outer = outer_cone.cos();
                 let cos_inner = inner_cone.cos();
@@ -89,9 +98,19 @@ impl GpuLight {
         };
         let d = light.direction.normalize_or(Vec3::NEG_Y);
         GpuLight {
-            position_range: [light.position.x, light.position.y, light.position.z, light.range.unwrap_or(0.0)],
+            position_range: [
+                light.position.x,
+                light.position.y,
+                light.position.z,
+                light.range.unwrap_or(0.0),
+            ],
             direction_type: [d.x, d.y, d.z, kind],
-            color_intensity: [light.color[0], light.color[1], light.color[2], light.intensity],
+            color_intensity: [
+                light.color[0],
+                light.color[1],
+                light.color[2],
+                light.intensity,
+            ],
             spot,
         }
     }
@@ -137,7 +156,11 @@ impl DrawPush {
     pub fn new(world: Mat4, material: u32) -> DrawPush {
         let m3 = glam::Mat3::from_mat4(world);
         let det = m3.determinant();
-        let inv_t = if det.abs() > 1e-30 { m3.inverse().transpose() } else { glam::Mat3::IDENTITY };
+        let inv_t = if det.abs() > 1e-30 {
+            m3.inverse().transpose()
+        } else {
+            glam::Mat3::IDENTITY
+        };
         let c = |v: Vec3| [v.x, v.y, v.z, 0.0];
         DrawPush {
             world: world.to_cols_array_2d(),

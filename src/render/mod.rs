@@ -55,12 +55,129 @@ impl DebugView {
     }
 
     pub fn parse(text: &str) -> crate::Result<DebugView> {
-        DebugView::ALL.iter().copied().find(|v| v.name() == text).ok_or_else(|| {
+        DebugView::ALL
+            .iter()
+            .copied()
+            .find(|v| v.name() == text)
+            .ok_or_else(|| {
+                Error::input(format!(
+                    "unknown debug view '{text}': choose one of {}",
+                    DebugView::ALL
+                        .iter()
+                        .map(|v| v.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+    }
+}
+
+/// How the fabric's weave is turned into reflectance over a pixel (model page §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Accuracy {
+    /// One texel of the level-0 weave texture, no mips; one lobe (the thread on top).
+    Nearest,
+    /// Filtered coverages; one lobe with coverage-averaged exponents (cheap and wrong far away).
+    FilteredParams,
+    /// Filtered coverages; the two-lobe mixture of §3 (the default).
+    #[default]
+    Mixture,
+    /// The analytic weave at N x N points of the pixel's footprint, two lobes each: converges to
+    /// the ground truth as N grows.
+    Supersampled(u32),
+}
+
+impl Accuracy {
+    /// The largest N of `supersampled:N`.
+    pub const MAX_SAMPLES: u32 = 64;
+
+    pub fn name(self) -> String {
+        match self {
+            Accuracy::Nearest => "nearest".into(),
+            Accuracy::FilteredParams => "filtered-params".into(),
+            Accuracy::Mixture => "mixture".into(),
+            Accuracy::Supersampled(n) => format!("supersampled:{n}"),
+        }
+    }
+
+    pub fn parse(text: &str) -> crate::Result<Accuracy> {
+        let bad = || {
             Error::input(format!(
-                "unknown debug view '{text}': choose one of {}",
-                DebugView::ALL.iter().map(|v| v.name()).collect::<Vec<_>>().join(", ")
+                "unknown accuracy '{text}': choose nearest, filtered-params, mixture or supersampled:N (N from 1 to {})",
+                Accuracy::MAX_SAMPLES
             ))
-        })
+        };
+        match text {
+            "nearest" => Ok(Accuracy::Nearest),
+            "filtered-params" => Ok(Accuracy::FilteredParams),
+            "mixture" => Ok(Accuracy::Mixture),
+            _ => {
+                let n = text.strip_prefix("supersampled:").ok_or_else(bad)?;
+                let n: u32 = n.parse().map_err(|_| bad())?;
+                if (1..=Accuracy::MAX_SAMPLES).contains(&n) {
+                    Ok(Accuracy::Supersampled(n))
+                } else {
+                    Err(bad())
+                }
+            }
+        }
+    }
+
+    /// The specialization constant value (`ACCURACY` in gbuffer.frag and lighting.frag).
+    pub fn code(self) -> u32 {
+        match self {
+            Accuracy::Nearest => 0,
+            Accuracy::FilteredParams => 1,
+            Accuracy::Mixture => 2,
+            Accuracy::Supersampled(_) => 3,
+        }
+    }
+
+    pub fn samples(self) -> u32 {
+        match self {
+            Accuracy::Supersampled(n) => n,
+            _ => 1,
+        }
+    }
+}
+
+/// Where the G-buffer pass gets the weave coverage from (model page §4, precision axis).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum WeavePrecision {
+    /// The weave texture in RGBA8 UNORM.
+    Rgba8,
+    /// The weave texture in RGBA16F (the default).
+    #[default]
+    Rgba16f,
+    /// No texture: the exact coverage of the pixel's footprint box, evaluated in the shader.
+    Analytic,
+}
+
+impl WeavePrecision {
+    pub const ALL: [WeavePrecision; 3] = [
+        WeavePrecision::Rgba8,
+        WeavePrecision::Rgba16f,
+        WeavePrecision::Analytic,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            WeavePrecision::Rgba8 => "rgba8",
+            WeavePrecision::Rgba16f => "rgba16f",
+            WeavePrecision::Analytic => "analytic",
+        }
+    }
+
+    pub fn parse(text: &str) -> crate::Result<WeavePrecision> {
+        WeavePrecision::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name() == text)
+            .ok_or_else(|| {
+                Error::input(format!(
+                    "unknown weave precision '{text}': choose rgba8, rgba16f or analytic"
+                ))
+            })
     }
 }
 
@@ -75,6 +192,11 @@ pub struct RenderOptions {
     /// Exposure in EV: the HDR radiance is scaled by 2^exposure before tone mapping.
     pub exposure: f32,
     pub debug_view: DebugView,
+    pub accuracy: Accuracy,
+    pub weave_precision: WeavePrecision,
+    /// Shade fabric pixels with the metallic-roughness BRDF instead (for measuring what the
+    /// fabric model costs on the same G-buffer).
+    pub fabric_as_pbr: bool,
 }
 
 impl Default for RenderOptions {
@@ -86,6 +208,9 @@ impl Default for RenderOptions {
             camera_override: None,
             exposure: 0.0,
             debug_view: DebugView::None,
+            accuracy: Accuracy::Mixture,
+            weave_precision: WeavePrecision::Rgba16f,
+            fabric_as_pbr: false,
         }
     }
 }
@@ -98,6 +223,14 @@ impl RenderOptions {
                 self.width, self.height
             )));
         }
+        if let Accuracy::Supersampled(n) = self.accuracy {
+            if !(1..=Accuracy::MAX_SAMPLES).contains(&n) {
+                return Err(Error::input(format!(
+                    "supersampled:{n} is out of range: N must be between 1 and {}",
+                    Accuracy::MAX_SAMPLES
+                )));
+            }
+        }
         if !self.exposure.is_finite() || self.exposure.abs() > 64.0 {
             return Err(Error::input(format!(
                 "exposure {} EV is out of range: use a finite value between -64 and 64",
@@ -108,19 +241,62 @@ impl RenderOptions {
     }
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn accuracy_names_round_trip() {
+        for a in [
+            Accuracy::Nearest,
+            Accuracy::FilteredParams,
+            Accuracy::Mixture,
+            Accuracy::Supersampled(8),
+        ] {
+            assert_eq!(Accuracy::parse(&a.name()).unwrap(), a);
+        }
+        for bad in [
+            "supersampled:0",
+            "supersampled:65",
+            "supersampled:x",
+            "fast",
+            "",
+        ] {
+            assert!(Accuracy::parse(bad).is_err(), "{bad}");
+        }
+        for p in WeavePrecision::ALL {
+            assert_eq!(WeavePrecision::parse(p.name()).unwrap(), p);
+        }
+    }
+}
+
 /// Parses `X,Y,Z`, e.g. `0,1.5,3.5`.
 pub fn parse_vec3(what: &str, text: &str) -> crate::Result<glam::Vec3> {
-    let bad = || Error::input(format!("{what} '{text}' is not three comma-separated numbers X,Y,Z (e.g. 0,1.5,3.5)"));
-    let parts: Vec<f32> = text.split(',').map(|p| p.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| bad())?;
+    let bad = || {
+        Error::input(format!(
+            "{what} '{text}' is not three comma-separated numbers X,Y,Z (e.g. 0,1.5,3.5)"
+        ))
+    };
+    let parts: Vec<f32> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
     match parts[..] {
-        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(glam::Vec3::new(x, y, z)),
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => {
+            Ok(glam::Vec3::new(x, y, z))
+        }
         _ => Err(bad()),
     }
 }
 
 /// Parses `WxH`, e.g. `1920x1080`.
 pub fn parse_size(text: &str) -> crate::Result<(u32, u32)> {
-    let bad = || Error::input(format!("size '{text}' is not WIDTHxHEIGHT (e.g. 1920x1080)"));
+    let bad = || {
+        Error::input(format!(
+            "size '{text}' is not WIDTHxHEIGHT (e.g. 1920x1080)"
+        ))
+    };
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
     let w: u32 = w.trim().parse().map_err(|_| bad())?;
     let h: u32 = h.trim().parse().map_err(|_| bad())?;

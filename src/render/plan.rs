@@ -60,7 +60,11 @@ impl Plan {
                 LightKind::Spot { .. } => lights.spot += 1,
             }
         }
-        let triangles = scene.draws.iter().map(|d| scene.meshes[d.mesh].indices.len() / 3).sum();
+        let triangles = scene
+            .draws
+            .iter()
+            .map(|d| scene.meshes[d.mesh].indices.len() / 3)
+            .sum();
         Plan {
             width: options.width,
             height: options.height,
@@ -68,7 +72,11 @@ impl Plan {
             draws: scene.draws.len(),
             triangles,
             lights,
-            fabric_materials: scene.materials.iter().filter(|m| m.fabric.is_some()).count(),
+            fabric_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.fabric.is_some())
+                .count(),
             textures: scene.textures.len(),
             debug_view: options.debug_view,
         }
@@ -82,8 +90,20 @@ impl Plan {
 impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "output      {}x{}", self.width, self.height)?;
-        writeln!(f, "passes      {}", self.passes.iter().map(|p| p.name()).collect::<Vec<_>>().join(" -> "))?;
-        writeln!(f, "draws       {} ({} triangles)", self.draws, self.triangles)?;
+        writeln!(
+            f,
+            "passes      {}",
+            self.passes
+                .iter()
+                .map(|p| p.name())
+                .collect::<Vec<_>>()
+                .join(" -> ")
+        )?;
+        writeln!(
+            f,
+            "draws       {} ({} triangles)",
+            self.draws, self.triangles
+        )?;
         writeln!(
             f,
             "lights      {} directional, {} point, {} spot",

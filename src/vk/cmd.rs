@@ -40,9 +40,21 @@ impl Usage {
                 S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
                 A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ,
             ),
-            Usage::FragmentRead => (L::SHADER_READ_ONLY_OPTIMAL, S::FRAGMENT_SHADER, A::SHADER_SAMPLED_READ),
-            Usage::ComputeRead => (L::SHADER_READ_ONLY_OPTIMAL, S::COMPUTE_SHADER, A::SHADER_SAMPLED_READ),
-            Usage::ComputeWrite => (L::GENERAL, S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ),
+            Usage::FragmentRead => (
+                L::SHADER_READ_ONLY_OPTIMAL,
+                S::FRAGMENT_SHADER,
+                A::SHADER_SAMPLED_READ,
+            ),
+            Usage::ComputeRead => (
+                L::SHADER_READ_ONLY_OPTIMAL,
+                S::COMPUTE_SHADER,
+                A::SHADER_SAMPLED_READ,
+            ),
+            Usage::ComputeWrite => (
+                L::GENERAL,
+                S::COMPUTE_SHADER,
+                A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
+            ),
             Usage::TransferSrc => (L::TRANSFER_SRC_OPTIMAL, S::ALL_TRANSFER, A::TRANSFER_READ),
             Usage::TransferDst => (L::TRANSFER_DST_OPTIMAL, S::ALL_TRANSFER, A::TRANSFER_WRITE),
         }
@@ -73,7 +85,13 @@ impl Cmd<'_> {
     }
 
     /// Barrier: `image` (mips `levels`, or all when None) goes from `from` to `to`.
-    pub fn transition(&mut self, image: &Image, from: Usage, to: Usage, levels: Option<(u32, u32)>) {
+    pub fn transition(
+        &mut self,
+        image: &Image,
+        from: Usage,
+        to: Usage,
+        levels: Option<(u32, u32)>,
+    ) {
         let (old_layout, src_stage, src_access) = from.parts();
         let (new_layout, dst_stage, dst_access) = to.parts();
         let (base, count) = levels.unwrap_or((0, image.desc.mip_levels));
@@ -111,25 +129,53 @@ impl Cmd<'_> {
     /// Begins dynamic rendering over the full extent of the first attachment, and sets the
     /// viewport and scissor to it.
     pub fn begin_rendering(&mut self, colors: &[Attachment], depth: Option<Attachment>) {
-        let extent = colors.first().or(depth.as_ref()).map(|a| a.image.extent()).unwrap_or((1, 1));
+        let extent = colors
+            .first()
+            .or(depth.as_ref())
+            .map(|a| a.image.extent())
+            .unwrap_or((1, 1));
         let attachment = |a: &Attachment, layout: vk::ImageLayout, depth: bool| {
             let clear = match (a.clear, depth) {
-                (Some(c), false) => vk::ClearValue { color: vk::ClearColorValue { float32: c } },
-                (Some(c), true) => vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: c[0], stencil: 0 } },
+                (Some(c), false) => vk::ClearValue {
+                    color: vk::ClearColorValue { float32: c },
+                },
+                (Some(c), true) => vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: c[0],
+                        stencil: 0,
+                    },
+                },
                 (None, _) => vk::ClearValue::default(),
             };
             vk::RenderingAttachmentInfo::default()
                 .image_view(a.image.view)
                 .image_layout(layout)
-                .load_op(if a.clear.is_some() { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD })
+                .load_op(if a.clear.is_some() {
+                    vk::AttachmentLoadOp::CLEAR
+                } else {
+                    vk::AttachmentLoadOp::LOAD
+                })
                 .store_op(vk::AttachmentStoreOp::STORE)
                 .clear_value(clear)
         };
-        let color_infos: Vec<_> =
-            colors.iter().map(|a| attachment(a, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, false)).collect();
-        let depth_info = depth.as_ref().map(|a| attachment(a, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, true));
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width: extent.0, height: extent.1 } };
-        let mut info = vk::RenderingInfo::default().render_area(area).layer_count(1).color_attachments(&color_infos);
+        let color_infos: Vec<_> = colors
+            .iter()
+            .map(|a| attachment(a, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, false))
+            .collect();
+        let depth_info = depth
+            .as_ref()
+            .map(|a| attachment(a, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, true));
+        let area = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D {
+                width: extent.0,
+                height: extent.1,
+            },
+        };
+        let mut info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&color_infos);
         if let Some(d) = depth_info.as_ref() {
             info = info.depth_attachment(d);
         }
@@ -145,7 +191,8 @@ impl Cmd<'_> {
             };
             self.device().cmd_set_viewport(self.raw, 0, &[viewport]);
             self.device().cmd_set_scissor(self.raw, 0, &[area]);
-            self.device().cmd_set_cull_mode(self.raw, vk::CullModeFlags::NONE);
+            self.device()
+                .cmd_set_cull_mode(self.raw, vk::CullModeFlags::NONE);
         }
     }
 
@@ -162,30 +209,64 @@ impl Cmd<'_> {
     }
 
     pub fn bind_pipeline(&mut self, pipeline: &Pipeline) {
-        unsafe { self.device().cmd_bind_pipeline(self.raw, pipeline.bind_point, pipeline.raw) };
+        unsafe {
+            self.device()
+                .cmd_bind_pipeline(self.raw, pipeline.bind_point, pipeline.raw)
+        };
     }
 
     pub fn bind_sets(&mut self, pipeline: &Pipeline, first: u32, sets: &[DescriptorSet]) {
         let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
-        unsafe { self.device().cmd_bind_descriptor_sets(self.raw, pipeline.bind_point, pipeline.layout, first, &raw, &[]) };
+        unsafe {
+            self.device().cmd_bind_descriptor_sets(
+                self.raw,
+                pipeline.bind_point,
+                pipeline.layout,
+                first,
+                &raw,
+                &[],
+            )
+        };
     }
 
     pub fn push_constants<T: bytemuck::Pod>(&mut self, pipeline: &Pipeline, value: &T) {
         let bytes = bytemuck::bytes_of(value);
-        unsafe { self.device().cmd_push_constants(self.raw, pipeline.layout, pipeline.push_stages, 0, bytes) };
+        unsafe {
+            self.device().cmd_push_constants(
+                self.raw,
+                pipeline.layout,
+                pipeline.push_stages,
+                0,
+                bytes,
+            )
+        };
     }
 
     /// Push constants given as bytes (for records that define their own byte layout).
     pub fn push_constant_bytes(&mut self, pipeline: &Pipeline, bytes: &[u8]) {
-        unsafe { self.device().cmd_push_constants(self.raw, pipeline.layout, pipeline.push_stages, 0, bytes) };
+        unsafe {
+            self.device().cmd_push_constants(
+                self.raw,
+                pipeline.layout,
+                pipeline.push_stages,
+                0,
+                bytes,
+            )
+        };
     }
 
     pub fn bind_vertex_buffer(&mut self, buffer: &Buffer) {
-        unsafe { self.device().cmd_bind_vertex_buffers(self.raw, 0, &[buffer.raw], &[0]) };
+        unsafe {
+            self.device()
+                .cmd_bind_vertex_buffers(self.raw, 0, &[buffer.raw], &[0])
+        };
     }
 
     pub fn bind_index_buffer(&mut self, buffer: &Buffer) {
-        unsafe { self.device().cmd_bind_index_buffer(self.raw, buffer.raw, 0, vk::IndexType::UINT32) };
+        unsafe {
+            self.device()
+                .cmd_bind_index_buffer(self.raw, buffer.raw, 0, vk::IndexType::UINT32)
+        };
     }
 
     pub fn draw(&mut self, vertices: u32) {
@@ -193,7 +274,10 @@ impl Cmd<'_> {
     }
 
     pub fn draw_indexed(&mut self, index_count: u32, first_index: u32, vertex_offset: i32) {
-        unsafe { self.device().cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0) };
+        unsafe {
+            self.device()
+                .cmd_draw_indexed(self.raw, index_count, 1, first_index, vertex_offset, 0)
+        };
     }
 
     pub fn dispatch(&mut self, x: u32, y: u32, z: u32) {
@@ -209,9 +293,19 @@ impl Cmd<'_> {
                 base_array_layer: 0,
                 layer_count: 1,
             })
-            .image_extent(vk::Extent3D { width: image.desc.width, height: image.desc.height, depth: 1 });
+            .image_extent(vk::Extent3D {
+                width: image.desc.width,
+                height: image.desc.height,
+                depth: 1,
+            });
         unsafe {
-            self.device().cmd_copy_buffer_to_image(self.raw, buffer.raw, image.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+            self.device().cmd_copy_buffer_to_image(
+                self.raw,
+                buffer.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
         };
     }
 
@@ -226,9 +320,19 @@ impl Cmd<'_> {
                 base_array_layer: 0,
                 layer_count: 1,
             })
-            .image_extent(vk::Extent3D { width: w, height: h, depth: 1 });
+            .image_extent(vk::Extent3D {
+                width: w,
+                height: h,
+                depth: 1,
+            });
         unsafe {
-            self.device().cmd_copy_image_to_buffer(self.raw, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
+            self.device().cmd_copy_image_to_buffer(
+                self.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                &[region],
+            )
         };
     }
 
@@ -238,8 +342,18 @@ impl Cmd<'_> {
         let levels = image.desc.mip_levels;
         let (mut w, mut h) = (image.desc.width as i32, image.desc.height as i32);
         for level in 1..levels {
-            self.transition(image, Usage::TransferDst, Usage::TransferSrc, Some((level - 1, 1)));
-            self.transition(image, Usage::Undefined, Usage::TransferDst, Some((level, 1)));
+            self.transition(
+                image,
+                Usage::TransferDst,
+                Usage::TransferSrc,
+                Some((level - 1, 1)),
+            );
+            self.transition(
+                image,
+                Usage::Undefined,
+                Usage::TransferDst,
+                Some((level, 1)),
+            );
             let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
             let layers = |mip_level| vk::ImageSubresourceLayers {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -269,14 +383,51 @@ impl Cmd<'_> {
         self.transition(image, Usage::TransferDst, to, Some((levels - 1, 1)));
     }
 
+    /// Copies mip `level` of `src` (in `TransferSrc` usage) into the same level of `dst` (in
+    /// `TransferDst`), converting the format; both levels must have the same size.
+    pub fn blit_level(&mut self, src: &Image, dst: &Image, level: u32) {
+        let w = (src.desc.width >> level).max(1) as i32;
+        let h = (src.desc.height >> level).max(1) as i32;
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: level,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let region = vk::ImageBlit::default()
+            .src_subresource(layers)
+            .src_offsets([vk::Offset3D::default(), vk::Offset3D { x: w, y: h, z: 1 }])
+            .dst_subresource(layers)
+            .dst_offsets([vk::Offset3D::default(), vk::Offset3D { x: w, y: h, z: 1 }]);
+        unsafe {
+            self.device().cmd_blit_image(
+                self.raw,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+                vk::Filter::NEAREST,
+            )
+        };
+    }
+
     pub fn reset_queries(&mut self, pool: &QueryPool) {
-        unsafe { self.device().cmd_reset_query_pool(self.raw, pool.raw, 0, pool.count) };
+        unsafe {
+            self.device()
+                .cmd_reset_query_pool(self.raw, pool.raw, 0, pool.count)
+        };
     }
 
     /// Writes a timestamp once all previously submitted work has finished.
     pub fn timestamp(&mut self, pool: &QueryPool, index: u32) {
         unsafe {
-            self.device().cmd_write_timestamp2(self.raw, vk::PipelineStageFlags2::ALL_COMMANDS, pool.raw, index)
+            self.device().cmd_write_timestamp2(
+                self.raw,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                pool.raw,
+                index,
+            )
         };
     }
 }
@@ -289,7 +440,8 @@ impl Context {
             .command_pool(self.shared.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        let raw = unsafe { device.allocate_command_buffers(&alloc) }.map_err(vkerr("vkAllocateCommandBuffers"))?[0];
+        let raw = unsafe { device.allocate_command_buffers(&alloc) }
+            .map_err(vkerr("vkAllocateCommandBuffers"))?[0];
         struct Free<'a>(&'a Shared, vk::CommandBuffer, vk::Fence);
         impl Drop for Free<'_> {
             fn drop(&mut self) {
@@ -297,22 +449,32 @@ impl Context {
                     if self.2 != vk::Fence::null() {
                         self.0.device.destroy_fence(self.2, None);
                     }
-                    self.0.device.free_command_buffers(self.0.command_pool, &[self.1]);
+                    self.0
+                        .device
+                        .free_command_buffers(self.0.command_pool, &[self.1]);
                 }
             }
         }
         let mut guard = Free(&self.shared, raw, vk::Fence::null());
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-        unsafe { device.begin_command_buffer(raw, &begin) }.map_err(vkerr("vkBeginCommandBuffer"))?;
-        let mut cmd = Cmd { shared: &self.shared, raw };
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(raw, &begin) }
+            .map_err(vkerr("vkBeginCommandBuffer"))?;
+        let mut cmd = Cmd {
+            shared: &self.shared,
+            raw,
+        };
         let result = record(&mut cmd);
         unsafe { device.end_command_buffer(raw) }.map_err(vkerr("vkEndCommandBuffer"))?;
-        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.map_err(vkerr("vkCreateFence"))?;
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .map_err(vkerr("vkCreateFence"))?;
         guard.2 = fence;
         let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(raw)];
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos)];
-        unsafe { device.queue_submit2(self.shared.queue, &submit, fence) }.map_err(vkerr("vkQueueSubmit2"))?;
-        unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.map_err(vkerr("vkWaitForFences"))?;
+        unsafe { device.queue_submit2(self.shared.queue, &submit, fence) }
+            .map_err(vkerr("vkQueueSubmit2"))?;
+        unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }
+            .map_err(vkerr("vkWaitForFences"))?;
         Ok(result)
     }
 }
