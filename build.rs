@@ -42,7 +42,10 @@ fn main() {
         };
         let file_name = src.file_name().unwrap().to_string_lossy().into_owned();
         let mut options = shaderc::CompileOptions::new().expect("shaderc options");
-        options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
+        options.set_target_env(
+            shaderc::TargetEnv::Vulkan,
+            shaderc::EnvVersion::Vulkan1_3 as u32,
+        );
         options.set_target_spirv(shaderc::SpirvVersion::V1_6);
         options.set_source_language(shaderc::SourceLanguage::GLSL);
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
@@ -57,7 +60,13 @@ fn main() {
                 })
                 .map_err(|e| format!("{from}: cannot include \"{name}\" from glsl/include/: {e}"))
         });
-        match compiler.compile_into_spirv(&text, kind, &format!("glsl/{file_name}"), "main", Some(&options)) {
+        match compiler.compile_into_spirv(
+            &text,
+            kind,
+            &format!("glsl/{file_name}"),
+            "main",
+            Some(&options),
+        ) {
             Ok(artifact) => {
                 let ident = file_name.replace('.', "_").to_uppercase();
                 let spv = out.join(format!("{file_name}.spv"));
@@ -79,8 +88,17 @@ fn main() {
         panic!("GLSL compilation failed:\n{}", failures.join("\n"));
     }
     writeln!(table, "pub const ALL: &[Shader] = &[{}];", names.join(", ")).unwrap();
-    writeln!(table, "/// The compiler that made these modules (versions pinned by Cargo.lock).").unwrap();
-    writeln!(table, "pub const COMPILER: &str = {:?};", compiler_version(&root)).unwrap();
+    writeln!(
+        table,
+        "/// The compiler that made these modules (versions pinned by Cargo.lock)."
+    )
+    .unwrap();
+    writeln!(
+        table,
+        "pub const COMPILER: &str = {:?};",
+        compiler_version(&root)
+    )
+    .unwrap();
     std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
 }
 
@@ -91,7 +109,10 @@ fn compiler_version(root: &Path) -> String {
     let mut version = String::from("unknown");
     while let Some(line) = lines.next() {
         if line.trim() == "name = \"shaderc-sys\"" {
-            if let Some(v) = lines.next().and_then(|l| l.trim().strip_prefix("version = ")) {
+            if let Some(v) = lines
+                .next()
+                .and_then(|l| l.trim().strip_prefix("version = "))
+            {
                 version = v.trim_matches('"').to_string();
             }
         }

@@ -14,12 +14,18 @@ pub enum Error {
     Device(String),
     /// A Vulkan call failed where it should not.
     #[error("Vulkan error in {what}: {result}")]
-    Vulkan { what: &'static str, result: ash::vk::Result },
+    Vulkan {
+        what: &'static str,
+        result: ash::vk::Result,
+    },
     /// The validation layer reported errors or warnings (only when validation is on).
     #[error("Vulkan validation reported {} message(s):\n{}", .0.len(), .0.join("\n"))]
     Validation(Vec<String>),
     #[error("{context}: {source}")]
-    Io { context: String, source: std::io::Error },
+    Io {
+        context: String,
+        source: std::io::Error,
+    },
 }
 
 impl Error {

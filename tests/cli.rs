@@ -4,7 +4,10 @@ use std::process::Command;
 
 fn weft() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env("WEFT_DEVICE", std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()));
+    c.env(
+        "WEFT_DEVICE",
+        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
+    );
     c
 }
 
@@ -26,14 +29,24 @@ fn no_vulkan_driver_says_what_to_install() {
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("No Vulkan driver found") && err.contains("apt-get install"), "{err}");
-    assert_eq!(err.trim().lines().count(), 1, "one sentence, not a backtrace: {err}");
+    assert!(
+        err.contains("No Vulkan driver found") && err.contains("apt-get install"),
+        "{err}"
+    );
+    assert_eq!(
+        err.trim().lines().count(),
+        1,
+        "one sentence, not a backtrace: {err}"
+    );
     assert!(!dir.join("x.png").exists());
 }
 
 #[test]
 fn missing_scene_file_is_named() {
-    let out = weft().args(["render", "/nonexistent/scene.gltf"]).output().unwrap();
+    let out = weft()
+        .args(["render", "/nonexistent/scene.gltf"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("/nonexistent/scene.gltf"), "{err}");
@@ -55,7 +68,10 @@ fn bad_size_is_explained() {
     let out = weft().args(["render", "--size", "big"]).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("WIDTHxHEIGHT"));
-    let out = weft().args(["render", "--size", "100000x100000"]).output().unwrap();
+    let out = weft()
+        .args(["render", "--size", "100000x100000"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("between 1 and"));
 }
@@ -66,15 +82,30 @@ fn render_writes_png_and_exr() {
     let png = dir.join("out.png");
     let exr = dir.join("out.exr");
     let out = weft()
-        .args(["render", "--validate", "--size", "128x72", "--timings", "--stats", "-o"])
+        .args([
+            "render",
+            "--validate",
+            "--size",
+            "128x72",
+            "--timings",
+            "--stats",
+            "-o",
+        ])
         .arg(&png)
         .arg("--exr")
         .arg(&exr)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("lighting") && stdout.contains("gbuffer -> lighting -> tonemap"), "{stdout}");
+    assert!(
+        stdout.contains("lighting") && stdout.contains("gbuffer -> lighting -> tonemap"),
+        "{stdout}"
+    );
     let img = image::open(&png).unwrap().to_rgba8();
     assert_eq!(img.dimensions(), (128, 72));
     let hdr = image::open(&exr).unwrap().to_rgba32f();
@@ -87,6 +118,9 @@ fn plan_prints_the_default_scene() {
     let out = weft().args(["plan", "--json"]).output().unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["passes"], serde_json::json!(["gbuffer", "lighting", "tonemap"]));
+    assert_eq!(
+        v["passes"],
+        serde_json::json!(["gbuffer", "lighting", "tonemap"])
+    );
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
 }

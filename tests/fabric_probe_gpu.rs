@@ -6,13 +6,16 @@
 mod common;
 
 use weft::fabric::{
-    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, FabricParams, WeavePattern,
-    WEAVE_TEXEL_TOLERANCE,
+    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, FabricParams,
+    WeavePattern, WEAVE_TEXEL_TOLERANCE,
 };
 use weft::reference::probe::{
-    probe_check, probe_cpu_f64, probe_inputs, probe_worst_ratio, ProbeBound, ProbeInput, ProbeOutput,
+    probe_check, probe_cpu_f64, probe_inputs, probe_worst_ratio, ProbeBound, ProbeInput,
+    ProbeOutput,
 };
-use weft::vk::{shaders, Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Resource, Stages};
+use weft::vk::{
+    shaders, Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Resource, Stages,
+};
 
 /// Runs fabric_probe.comp on `inputs`.
 fn run_probe(ctx: &weft::vk::Context, inputs: &[ProbeInput]) -> Vec<ProbeOutput> {
@@ -55,7 +58,10 @@ fn run_probe(ctx: &weft::vk::Context, inputs: &[ProbeInput]) -> Vec<ProbeOutput>
     let set = pool
         .set(
             &layout,
-            &[(0, Resource::Storage(&input)), (1, Resource::Storage(&output))],
+            &[
+                (0, Resource::Storage(&input)),
+                (1, Resource::Storage(&output)),
+            ],
         )
         .unwrap();
     ctx.submit(|cmd| {
@@ -152,7 +158,10 @@ fn weave_texture_matches_the_cpu_texels() {
                 }
             }
         }
-        println!("weave texture {}: worst |gpu - cpu| = {worst:e}", pattern.name());
+        println!(
+            "weave texture {}: worst |gpu - cpu| = {worst:e}",
+            pattern.name()
+        );
     }
     renderer.context().check_validation().unwrap();
 }

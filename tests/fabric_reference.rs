@@ -8,10 +8,12 @@ use proptest::prelude::*;
 use std::f64::consts::PI;
 use weft::fabric::{weave_level_size, weave_texels_cpu, FabricParams, WeavePattern};
 use weft::reference::brdf::{double, sampling, single};
-use weft::reference::furnace::{diffuse_albedo, fabric_albedo, fabric_albedo_quadrature, lobe_albedo};
+use weft::reference::furnace::{
+    diffuse_albedo, fabric_albedo, fabric_albedo_quadrature, lobe_albedo,
+};
 use weft::reference::probe::{
-    probe_check, probe_cpu_f32, probe_cpu_f64, probe_hard_cases, probe_random, probe_tolerance, ProbeBound,
-    PROBE_OUTPUTS, PROBE_OUTPUT_NAMES,
+    probe_check, probe_cpu_f32, probe_cpu_f64, probe_hard_cases, probe_random, probe_tolerance,
+    ProbeBound, PROBE_OUTPUTS, PROBE_OUTPUT_NAMES,
 };
 use weft::reference::weave::{self as weave_ref, double as wd, single as ws};
 
@@ -118,7 +120,13 @@ fn peak_at_hn_1_is_the_closed_form() {
                 (got - closed).abs() <= 1e-14 * closed,
                 "f64 ({eu},{ev},{rs}): {got} vs {closed}"
             );
-            let g32 = single::as_lobe([0.0, 0.0, 1.0], [0.0, 0.0, 1.0], eu as f32, ev as f32, rs as f32) as f64;
+            let g32 = single::as_lobe(
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, 1.0],
+                eu as f32,
+                ev as f32,
+                rs as f32,
+            ) as f64;
             assert!(
                 (g32 - closed).abs() <= 1e-6 * closed,
                 "f32 ({eu},{ev},{rs}): {g32} vs {closed}"
@@ -128,7 +136,10 @@ fn peak_at_hn_1_is_the_closed_form() {
             // D at the peak: sqrt((eu+1)(ev+1))/(2π).
             let d = double::as_d(n, eu, ev);
             let d_closed = ((eu + 1.0) * (ev + 1.0)).sqrt() / (2.0 * PI);
-            assert!((d - d_closed).abs() <= 1e-14 * d_closed, "D {d} vs {d_closed}");
+            assert!(
+                (d - d_closed).abs() <= 1e-14 * d_closed,
+                "D {d} vs {d_closed}"
+            );
             // §5.2: |k| slightly above 1, h·n > 1 after rounding: still the peak, Fresnel clamped.
             let k = [0.0f32, 0.0, 1.000_000_2];
             let g = single::as_lobe(k, k, eu as f32, ev as f32, rs as f32) as f64;
@@ -152,11 +163,20 @@ fn tiny_tangential_components_are_harmless() {
     ] {
         for &(eu, ev) in &[(1e6f32, 0.0f32), (0.0, 1e6), (1e6, 1e6), (1e4, 0.1)] {
             let p = single::as_power(hu, hv, 1.0, eu, ev);
-            assert!(p.is_finite() && (p - 1.0).abs() < 1e-6, "as_power({hu},{hv}) = {p}");
+            assert!(
+                p.is_finite() && (p - 1.0).abs() < 1e-6,
+                "as_power({hu},{hv}) = {p}"
+            );
             let e = single::as_exponent(hu, hv, eu, ev);
-            assert!(e.is_finite() && e >= eu.min(ev) && e <= eu.max(ev), "E = {e}");
+            assert!(
+                e.is_finite() && e >= eu.min(ev) && e <= eu.max(ev),
+                "E = {e}"
+            );
             let e64 = double::as_exponent(hu as f64, hv as f64, eu as f64, ev as f64);
-            assert!((e as f64 - e64).abs() <= 1e-6 * e64.max(1.0), "E f32 {e} vs f64 {e64}");
+            assert!(
+                (e as f64 - e64).abs() <= 1e-6 * e64.max(1.0),
+                "E f32 {e} vs f64 {e64}"
+            );
         }
     }
     // E is never formed as 0/0.
@@ -298,7 +318,11 @@ fn highlight_is_stretched_across_the_thread() {
         gap: 0.0,
         ..Default::default()
     };
-    let c = weave_ref::weave_point_uv(&p, 0.25 * p.repeat as f64 / 2.0, 0.5 * p.repeat as f64 / 2.0);
+    let c = weave_ref::weave_point_uv(
+        &p,
+        0.25 * p.repeat as f64 / 2.0,
+        0.5 * p.repeat as f64 / 2.0,
+    );
     assert_eq!((c[0], c[1]), (0.0, 1.0));
 }
 
@@ -370,7 +394,11 @@ fn borders_are_gap() {
 #[test]
 fn huge_and_negative_coordinates_keep_the_pattern() {
     // A dyadic repeat, so shifting by whole repeats is exact in f64.
-    for pattern in [WeavePattern::plain(), WeavePattern::twill(), WeavePattern::satin()] {
+    for pattern in [
+        WeavePattern::plain(),
+        WeavePattern::twill(),
+        WeavePattern::satin(),
+    ] {
         let p = FabricParams {
             pattern,
             repeat: 0.0625,
@@ -385,9 +413,18 @@ fn huge_and_negative_coordinates_keep_the_pattern() {
             let u = rng.range(0.0, ru);
             let v = rng.range(0.0, rv);
             let here = weave_ref::weave_point_uv(&p, u, v);
-            for &(ku, kv) in &[(1e8, -3e7), (-1e9, 1e9), (-1.0, -2.0), (160_000_000.0, 160_000_000.0)] {
+            for &(ku, kv) in &[
+                (1e8, -3e7),
+                (-1e9, 1e9),
+                (-1.0, -2.0),
+                (160_000_000.0, 160_000_000.0),
+            ] {
                 let (uu, vv) = (u + ku * ru, v + kv * rv);
-                assert_eq!(weave_ref::weave_point_uv(&p, uu, vv), here, "f64 at ({uu}, {vv})");
+                assert_eq!(
+                    weave_ref::weave_point_uv(&p, uu, vv),
+                    here,
+                    "f64 at ({uu}, {vv})"
+                );
                 // The f32 path, given coordinates reduced per repeat in f64, agrees unless the
                 // point is within f32 rounding of a region border.
                 let [x, y] = weave_ref::reduce_to_repeat(&p, uu, vv);
@@ -408,7 +445,10 @@ fn huge_and_negative_coordinates_keep_the_pattern() {
                 }
                 // Without the reduction, f32 has lost the pattern at 1e7 texture units.
                 if ku.abs() >= 1e8 {
-                    let [nx, ny] = [(uu as f32) * (2.0 / p.repeat), (vv as f32) * (2.0 / p.repeat)];
+                    let [nx, ny] = [
+                        (uu as f32) * (2.0 / p.repeat),
+                        (vv as f32) * (2.0 / p.repeat),
+                    ];
                     if class(ws::weave_point(&w32, nx, ny).map(|x| x as f64)) != class(here) {
                         naive_wrong += 1;
                     }
@@ -469,11 +509,20 @@ fn analytic_repeat(p: &FabricParams) -> [f64; 4] {
 #[test]
 fn whole_repeat_coverage_is_analytic() {
     let mut rng = weft::reference::probe::XorShift::new(3);
-    let mut patterns = vec![WeavePattern::plain(), WeavePattern::twill(), WeavePattern::satin()];
+    let mut patterns = vec![
+        WeavePattern::plain(),
+        WeavePattern::twill(),
+        WeavePattern::satin(),
+    ];
     for _ in 0..20 {
-        let (c, r) = (1 + (rng.next_u64() % 8) as usize, 1 + (rng.next_u64() % 8) as usize);
+        let (c, r) = (
+            1 + (rng.next_u64() % 8) as usize,
+            1 + (rng.next_u64() % 8) as usize,
+        );
         let bits = rng.next_u64();
-        patterns.push(WeavePattern::from_fn(c, r, |i, j| bits >> (8 * j + i) & 1 == 1));
+        patterns.push(WeavePattern::from_fn(c, r, |i, j| {
+            bits >> (8 * j + i) & 1 == 1
+        }));
     }
     for pattern in patterns {
         for &(gap, sw, ss) in &[
@@ -514,14 +563,18 @@ fn whole_repeat_coverage_is_analytic() {
                 let g = (gap / 0.05) as f64;
                 let sh = 1.0 - 4.0 * g * g - ss as f64 * sw as f64 * (1.0 - 2.0 * g);
                 assert!(
-                    (want[0] - (1.0 - 4.0 * g * g) / 2.0).abs() < 1e-12 && (want[2] - sh).abs() < 1e-6,
+                    (want[0] - (1.0 - 4.0 * g * g) / 2.0).abs() < 1e-12
+                        && (want[2] - sh).abs() < 1e-6,
                     "{want:?}"
                 );
             }
             // The weave texture's last level is the same average.
             let t = weave_texels_cpu(&p.weave_push(1, 1));
             for k in 0..3 {
-                assert!((t[0][k] as f64 - want[k]).abs() < 2e-6, "texel {t:?} vs {want:?}");
+                assert!(
+                    (t[0][k] as f64 - want[k]).abs() < 2e-6,
+                    "texel {t:?} vs {want:?}"
+                );
             }
         }
     }
@@ -536,7 +589,11 @@ fn box_coverage_is_the_mean_of_point_samples() {
     let n = 400usize;
     let mut worst = 0.0f64;
     for case in 0..60 {
-        let pattern = [WeavePattern::plain(), WeavePattern::twill(), WeavePattern::satin()][case % 3];
+        let pattern = [
+            WeavePattern::plain(),
+            WeavePattern::twill(),
+            WeavePattern::satin(),
+        ][case % 3];
         let p = FabricParams {
             pattern,
             repeat: 0.05,
@@ -608,7 +665,12 @@ fn gap_limits() {
     }
     // Loading clamps s_g > s_p/2 with a warning.
     let mut w = Vec::new();
-    let q = FabricParams::from_gltf_extension(&serde_json::json!({"repeat": 0.05, "gap": 0.1}), "m", &mut w).unwrap();
+    let q = FabricParams::from_gltf_extension(
+        &serde_json::json!({"repeat": 0.05, "gap": 0.1}),
+        "m",
+        &mut w,
+    )
+    .unwrap();
     assert_eq!(q.gap, 0.025);
     assert_eq!(w.len(), 1);
 }
@@ -618,7 +680,12 @@ fn repeat_to_zero() {
     // s_p → 0 (clamped at 1e-6 on load): a footprint of one texture unit covers 10^12 repeats and
     // its coverage is the repeat average; points still classify.
     let mut w = Vec::new();
-    let p = FabricParams::from_gltf_extension(&serde_json::json!({"repeat": 0.0, "gap": 0.0}), "m", &mut w).unwrap();
+    let p = FabricParams::from_gltf_extension(
+        &serde_json::json!({"repeat": 0.0, "gap": 0.0}),
+        "m",
+        &mut w,
+    )
+    .unwrap();
     assert_eq!(p.repeat, 1e-6);
     assert_eq!(w.len(), 1);
     let p = FabricParams { gap: 1e-7, ..p };
@@ -669,7 +736,11 @@ fn mirrored_uvs_mirror_the_pattern() {
         for _ in 0..5000 {
             let x = rng.range(-30.0, 30.0);
             let y = rng.range(-30.0, 30.0);
-            assert_eq!(wd::weave_point(&wp, -x, y), wd::weave_point(&wm, x, y), "({x}, {y})");
+            assert_eq!(
+                wd::weave_point(&wp, -x, y),
+                wd::weave_point(&wm, x, y),
+                "({x}, {y})"
+            );
             let (w, h) = (rng.range(0.01, 3.0), rng.range(0.01, 3.0));
             let a = wd::weave_box(&wp, -x - w, y, -x, y + h);
             let b = wd::weave_box(&wm, x, y, x + w, y + h);
@@ -800,7 +871,10 @@ fn importance_sampling_pdf_integrates_to_one() {
             }
             total += inner * 2.0 * PI / nphi as f64;
         }
-        assert!((total - 1.0).abs() < 2e-3, "∫D dω = {total} for ({eu},{ev})");
+        assert!(
+            (total - 1.0).abs() < 2e-3,
+            "∫D dω = {total} for ({eu},{ev})"
+        );
     }
     // The sampler draws h with pdf D: E[g(h)] over samples = ∫ g D dω (quadrature, moderate e).
     for &(eu, ev) in &[(2.0, 30.0), (50.0, 5.0)] {
@@ -809,7 +883,12 @@ fn importance_sampling_pdf_integrates_to_one() {
         let mut mc = 0.0;
         for i in 0..n {
             for j in 0..n {
-                let h = sampling::sample_h(eu, ev, (i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                let h = sampling::sample_h(
+                    eu,
+                    ev,
+                    (i as f64 + 0.5) / n as f64,
+                    (j as f64 + 0.5) / n as f64,
+                );
                 mc += g(h) / (n * n) as f64;
             }
         }
@@ -824,16 +903,31 @@ fn importance_sampling_pdf_integrates_to_one() {
                 quad += g(h) * double::as_d(h, eu, ev) / nm as f64 * 2.0 * PI / nphi as f64;
             }
         }
-        assert!((mc - quad).abs() < 2e-3 * quad, "sampler E[g] {mc} vs ∫gD {quad}");
+        assert!(
+            (mc - quad).abs() < 2e-3 * quad,
+            "sampler E[g] {mc} vs ∫gD {quad}"
+        );
     }
     // pdf(k2) integrates to the fraction of samples that land above the surface.
-    for &(eu, ev, th) in &[(10.0f64, 100.0f64, 0.3f64), (5.0, 5.0, 1.2), (100.0, 1.0, 1.45)] {
+    for &(eu, ev, th) in &[
+        (10.0f64, 100.0f64, 0.3f64),
+        (5.0, 5.0, 1.2),
+        (100.0, 1.0, 1.45),
+    ] {
         let k1 = [th.sin(), 0.0, th.cos()];
         let n = 400;
         let mut valid = 0usize;
         for i in 0..n {
             for j in 0..n {
-                if sampling::sample_k2(k1, eu, ev, (i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64).is_some() {
+                if sampling::sample_k2(
+                    k1,
+                    eu,
+                    ev,
+                    (i as f64 + 0.5) / n as f64,
+                    (j as f64 + 0.5) / n as f64,
+                )
+                .is_some()
+                {
                     valid += 1;
                 }
             }
@@ -846,7 +940,10 @@ fn importance_sampling_pdf_integrates_to_one() {
             let st = (1.0 - mu * mu).sqrt();
             for j in 0..nphi {
                 let phi = 2.0 * PI * (j as f64 + 0.5) / nphi as f64;
-                integral += sampling::pdf_k2(k1, [st * phi.cos(), st * phi.sin(), mu], eu, ev) / nm as f64 * 2.0 * PI
+                integral += sampling::pdf_k2(k1, [st * phi.cos(), st * phi.sin(), mu], eu, ev)
+                    / nm as f64
+                    * 2.0
+                    * PI
                     / nphi as f64;
             }
         }
@@ -860,9 +957,17 @@ fn importance_sampling_pdf_integrates_to_one() {
 #[test]
 fn white_furnace() {
     let angles = [0.0f64, 30.0, 60.0, 80.0, 89.0];
-    let lobes = [(1.0, 1.0), (10.0, 1.0), (200.0, 10.0), (1e4, 10.0), (1e6, 1e6)];
+    let lobes = [
+        (1.0, 1.0),
+        (10.0, 1.0),
+        (200.0, 10.0),
+        (1e4, 10.0),
+        (1e6, 1e6),
+    ];
     let n = 256;
-    println!("White furnace: albedo ∫ f (n·k2) dω2 of a weft-covered point (c_weft = 1, s = 1), Rd = 1.");
+    println!(
+        "White furnace: albedo ∫ f (n·k2) dω2 of a weft-covered point (c_weft = 1, s = 1), Rd = 1."
+    );
     println!(
         "{:>8} {:>12} {:>5} | {:>8} {:>8} | {:>14} {:>14}",
         "θ1 (°)", "e_along/ac", "Rs", "lobe", "coupled", "Lambert+lobe", "coupled+lobe"
@@ -919,7 +1024,10 @@ fn furnace_integrators_agree() {
         let cov = [0.3, 0.6, 0.8];
         let is = fabric_albedo(k1, &m, cov, 400)[0];
         let q = fabric_albedo_quadrature(k1, &m, cov, 1000)[0];
-        assert!((is - q).abs() < 5e-3 * q.max(0.1), "IS {is} vs quadrature {q}");
+        assert!(
+            (is - q).abs() < 5e-3 * q.max(0.1),
+            "IS {is} vs quadrature {q}"
+        );
     }
 }
 
@@ -982,7 +1090,10 @@ fn degenerate_frames_are_finite_and_orthonormal() {
             for b in 0..3 {
                 let d = single::dot(f[a], f[b]);
                 let want = if a == b { 1.0 } else { 0.0 };
-                assert!((d - want).abs() < 1e-5, "{n:?} {t:?}: frame not orthonormal {f:?}");
+                assert!(
+                    (d - want).abs() < 1e-5,
+                    "{n:?} {t:?}: frame not orthonormal {f:?}"
+                );
             }
         }
     }

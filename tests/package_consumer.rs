@@ -24,10 +24,12 @@ use serde_json::Value;
 use sha2::{Digest, Sha256};
 
 use weft::fabric::{
-    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, FabricParams, WeavePattern,
-    WEAVE_TEXEL_TOLERANCE,
+    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, FabricParams,
+    WeavePattern, WEAVE_TEXEL_TOLERANCE,
 };
-use weft::reference::probe::{probe_check, probe_cpu_f64, probe_inputs, ProbeBound, ProbeInput, ProbeOutput};
+use weft::reference::probe::{
+    probe_check, probe_cpu_f64, probe_inputs, ProbeBound, ProbeInput, ProbeOutput,
+};
 
 // =============================================================================================
 // The package on disk.
@@ -75,15 +77,27 @@ impl Package {
             String::from_utf8_lossy(&out.stdout),
             String::from_utf8_lossy(&out.stderr)
         );
-        let text = std::fs::read_to_string(dir.join("manifest.json")).expect("the package has a manifest.json");
+        let text = std::fs::read_to_string(dir.join("manifest.json"))
+            .expect("the package has a manifest.json");
         let manifest: Value = serde_json::from_str(&text).expect("manifest.json is JSON");
-        assert_eq!(manifest["format_version"], 1, "this consumer reads package format 1");
-        Package { dir: dir.to_path_buf(), manifest }
+        assert_eq!(
+            manifest["format_version"], 1,
+            "this consumer reads package format 1"
+        );
+        Package {
+            dir: dir.to_path_buf(),
+            manifest,
+        }
     }
 
     fn module(&self, name: &str) -> &Value {
-        let modules = self.manifest["modules"].as_array().expect("manifest.modules");
-        modules.iter().find(|m| m["name"] == name).unwrap_or_else(|| panic!("the package has no module {name}"))
+        let modules = self.manifest["modules"]
+            .as_array()
+            .expect("manifest.modules");
+        modules
+            .iter()
+            .find(|m| m["name"] == name)
+            .unwrap_or_else(|| panic!("the package has no module {name}"))
     }
 
     /// The module's SPIR-V words, after checking its size and SHA-256 against the manifest.
@@ -92,14 +106,23 @@ impl Package {
         let file = m["file"].as_str().expect("module.file");
         let bytes = std::fs::read(self.dir.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(Some(bytes.len() as u64), m["size"].as_u64(), "{file}: size");
-        assert_eq!(Some(format!("{:x}", Sha256::digest(&bytes)).as_str()), m["sha256"].as_str(), "{file}: sha256");
-        ash::util::read_spv(&mut std::io::Cursor::new(bytes)).expect("a whole number of SPIR-V words")
+        assert_eq!(
+            Some(format!("{:x}", Sha256::digest(&bytes)).as_str()),
+            m["sha256"].as_str(),
+            "{file}: sha256"
+        );
+        ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+            .expect("a whole number of SPIR-V words")
     }
 
     fn compute_module(&self, name: &str) -> ComputeModule {
         let m = self.module(name);
         assert_eq!(m["stage"], "compute", "{name}");
-        let u32_of = |v: &Value| v.as_u64().and_then(|x| u32::try_from(x).ok()).expect("a u32 in manifest.json");
+        let u32_of = |v: &Value| {
+            v.as_u64()
+                .and_then(|x| u32::try_from(x).ok())
+                .expect("a u32 in manifest.json")
+        };
         let bindings = m["descriptor_bindings"]
             .as_array()
             .expect("module.descriptor_bindings")
@@ -109,7 +132,9 @@ impl Package {
                 ManifestBinding {
                     binding: u32_of(&b["binding"]),
                     ty: vk::DescriptorType::from_raw(
-                        b["vk_descriptor_type"].as_i64().expect("vk_descriptor_type") as i32
+                        b["vk_descriptor_type"]
+                            .as_i64()
+                            .expect("vk_descriptor_type") as i32,
                     ),
                     count: u32_of(&b["count"]),
                     runtime_array_stride: b["runtime_array_stride"].as_u64(),
@@ -124,11 +149,14 @@ impl Package {
             assert_eq!(push["offset"], 0, "{name}: push constants start at 0");
             u32_of(&push["size"])
         };
-        let size = m["workgroup_size"].as_array().expect("a compute module has workgroup_size");
+        let size = m["workgroup_size"]
+            .as_array()
+            .expect("a compute module has workgroup_size");
         ComputeModule {
             name: name.to_string(),
             words: self.spirv(name),
-            entry_point: CString::new(m["entry_point"].as_str().expect("entry_point")).expect("no nul in the name"),
+            entry_point: CString::new(m["entry_point"].as_str().expect("entry_point"))
+                .expect("no nul in the name"),
             capabilities: m["capabilities"]
                 .as_array()
                 .unwrap()
@@ -178,7 +206,11 @@ unsafe extern "system" fn on_validation_message(
 ) -> vk::Bool32 {
     if !data.is_null() && !sink.is_null() {
         let text = unsafe { (*data).p_message };
-        let text = if text.is_null() { "(no text)".into() } else { unsafe { CStr::from_ptr(text) }.to_string_lossy() };
+        let text = if text.is_null() {
+            "(no text)".into()
+        } else {
+            unsafe { CStr::from_ptr(text) }.to_string_lossy()
+        };
         let sink = unsafe { &*(sink as *const Mutex<Vec<String>>) };
         sink.lock().unwrap().push(format!("[{severity:?}] {text}"));
     }
@@ -204,7 +236,8 @@ impl Buffer {
 
 impl Gpu {
     fn new() -> Gpu {
-        let entry = unsafe { ash::Entry::load() }.expect("the Vulkan loader (install libvulkan1; run tools/setup)");
+        let entry = unsafe { ash::Entry::load() }
+            .expect("the Vulkan loader (install libvulkan1; run tools/setup)");
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap();
         assert!(
             layers.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)),
@@ -214,7 +247,8 @@ impl Gpu {
         let messages: Box<Mutex<Vec<String>>> = Box::default();
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
             )
             .message_type(
                 vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -227,7 +261,9 @@ impl Gpu {
         let mut validation_features =
             vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync_validation);
         // The package is SPIR-V 1.6: it needs a Vulkan 1.3 instance and device.
-        let app = vk::ApplicationInfo::default().application_name(c"package consumer").api_version(vk::API_VERSION_1_3);
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"package consumer")
+            .api_version(vk::API_VERSION_1_3);
         let layer_names = [VALIDATION_LAYER.as_ptr()];
         let extension_names = [ash::ext::debug_utils::NAME.as_ptr()];
         let instance_info = vk::InstanceCreateInfo::default()
@@ -237,10 +273,15 @@ impl Gpu {
             .push_next(&mut validation_features)
             // Chained here too, so instance creation and destruction are validated.
             .push_next(&mut messenger_info);
-        let instance = unsafe { entry.create_instance(&instance_info, None) }.expect("a Vulkan 1.3 instance");
+        let instance =
+            unsafe { entry.create_instance(&instance_info, None) }.expect("a Vulkan 1.3 instance");
         let debug_utils = ash::ext::debug_utils::Instance::new(&entry, &instance);
-        let messenger_info = vk::DebugUtilsMessengerCreateInfoEXT { p_next: std::ptr::null(), ..messenger_info };
-        let messenger = unsafe { debug_utils.create_debug_utils_messenger(&messenger_info, None) }.unwrap();
+        let messenger_info = vk::DebugUtilsMessengerCreateInfoEXT {
+            p_next: std::ptr::null(),
+            ..messenger_info
+        };
+        let messenger =
+            unsafe { debug_utils.create_debug_utils_messenger(&messenger_info, None) }.unwrap();
 
         // lavapipe: the CPU device, Vulkan 1.3, with a compute queue.
         let (physical, family) = unsafe { instance.enumerate_physical_devices() }
@@ -257,10 +298,12 @@ impl Gpu {
             })
             .expect("no Vulkan 1.3 CPU device: install Mesa's lavapipe (mesa-vulkan-drivers; run tools/setup)");
         let priorities = [1.0];
-        let queue_info =
-            [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
         let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
-        let device = unsafe { instance.create_device(physical, &device_info, None) }.expect("a lavapipe device");
+        let device = unsafe { instance.create_device(physical, &device_info, None) }
+            .expect("a lavapipe device");
         let queue = unsafe { device.get_device_queue(family, 0) };
         let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(family);
         let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.unwrap();
@@ -293,14 +336,22 @@ impl Gpu {
         (0..self.memory_properties.memory_type_count)
             .find(|&i| {
                 allowed & (1 << i) != 0
-                    && self.memory_properties.memory_types[i as usize].property_flags.contains(wanted)
+                    && self.memory_properties.memory_types[i as usize]
+                        .property_flags
+                        .contains(wanted)
             })
             .unwrap_or_else(|| panic!("no memory type with {wanted:?}"))
     }
 
     fn buffer(&self, size: u64, usage: vk::BufferUsageFlags) -> Buffer {
         let d = &self.device;
-        let raw = unsafe { d.create_buffer(&vk::BufferCreateInfo::default().size(size).usage(usage), None) }.unwrap();
+        let raw = unsafe {
+            d.create_buffer(
+                &vk::BufferCreateInfo::default().size(size).usage(usage),
+                None,
+            )
+        }
+        .unwrap();
         let req = unsafe { d.get_buffer_memory_requirements(raw) };
         let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
         let info = vk::MemoryAllocateInfo::default()
@@ -308,9 +359,14 @@ impl Gpu {
             .memory_type_index(self.memory_type(req.memory_type_bits, host));
         let memory = unsafe { d.allocate_memory(&info, None) }.unwrap();
         unsafe { d.bind_buffer_memory(raw, memory, 0) }.unwrap();
-        let mapped =
-            unsafe { d.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()) }.unwrap() as *mut u8;
-        Buffer { raw, memory, size, mapped }
+        let mapped = unsafe { d.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()) }
+            .unwrap() as *mut u8;
+        Buffer {
+            raw,
+            memory,
+            size,
+            mapped,
+        }
     }
 
     fn destroy_buffer(&self, b: Buffer) {
@@ -328,7 +384,8 @@ impl Gpu {
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
         let cmd = unsafe { d.allocate_command_buffers(&info) }.unwrap()[0];
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         unsafe { d.begin_command_buffer(cmd, &begin) }.unwrap();
         record(cmd);
         unsafe { d.end_command_buffer(cmd) }.unwrap();
@@ -352,7 +409,8 @@ impl Gpu {
         }
         self.assert_clean("destroying the device");
         unsafe {
-            self.debug_utils.destroy_debug_utils_messenger(self.messenger, None);
+            self.debug_utils
+                .destroy_debug_utils_messenger(self.messenger, None);
             self.instance.destroy_instance(None);
         }
     }
@@ -393,7 +451,10 @@ impl Kernel {
             })
             .collect();
         let set_layout = unsafe {
-            d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
+            d.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                None,
+            )
         }
         .unwrap();
         let set_layouts = [set_layout];
@@ -407,23 +468,35 @@ impl Kernel {
             layout_info = layout_info.push_constant_ranges(&push_ranges);
         }
         let layout = unsafe { d.create_pipeline_layout(&layout_info, None) }.unwrap();
-        let shader =
-            unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&module.words), None) }
-                .unwrap();
+        let shader = unsafe {
+            d.create_shader_module(
+                &vk::ShaderModuleCreateInfo::default().code(&module.words),
+                None,
+            )
+        }
+        .unwrap();
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(shader)
             .name(&module.entry_point);
-        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
-        let pipeline = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
-            .unwrap_or_else(|(_, e)| panic!("creating the {} pipeline: {e}", module.name))[0];
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout);
+        let pipeline =
+            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
+                .unwrap_or_else(|(_, e)| panic!("creating the {} pipeline: {e}", module.name))[0];
         unsafe { d.destroy_shader_module(shader, None) };
         let sizes: Vec<_> = module
             .bindings
             .iter()
-            .map(|b| vk::DescriptorPoolSize { ty: b.ty, descriptor_count: b.count * max_sets })
+            .map(|b| vk::DescriptorPoolSize {
+                ty: b.ty,
+                descriptor_count: b.count * max_sets,
+            })
             .collect();
-        let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets).pool_sizes(&sizes);
+        let pool_info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(max_sets)
+            .pool_sizes(&sizes);
         let descriptor_pool = unsafe { d.create_descriptor_pool(&pool_info, None) }.unwrap();
         Kernel {
             set_layout,
@@ -437,24 +510,47 @@ impl Kernel {
 
     fn allocate_set(&self, gpu: &Gpu) -> vk::DescriptorSet {
         let layouts = [self.set_layout];
-        let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptor_pool).set_layouts(&layouts);
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.descriptor_pool)
+            .set_layouts(&layouts);
         unsafe { gpu.device.allocate_descriptor_sets(&info) }.unwrap()[0]
     }
 
     /// Frees every set allocated so far.
     fn reset_sets(&self, gpu: &Gpu) {
-        unsafe { gpu.device.reset_descriptor_pool(self.descriptor_pool, vk::DescriptorPoolResetFlags::empty()) }
-            .unwrap();
+        unsafe {
+            gpu.device
+                .reset_descriptor_pool(self.descriptor_pool, vk::DescriptorPoolResetFlags::empty())
+        }
+        .unwrap();
     }
 
     /// Records one dispatch covering `invocations` (x, y, z), rounded up to whole workgroups.
-    fn dispatch(&self, gpu: &Gpu, cmd: vk::CommandBuffer, set: vk::DescriptorSet, push: &[u8], invocations: [u32; 3]) {
-        assert_eq!(push.len() as u32, self.push_constant_size, "push constants of the size manifest.json gives");
+    fn dispatch(
+        &self,
+        gpu: &Gpu,
+        cmd: vk::CommandBuffer,
+        set: vk::DescriptorSet,
+        push: &[u8],
+        invocations: [u32; 3],
+    ) {
+        assert_eq!(
+            push.len() as u32,
+            self.push_constant_size,
+            "push constants of the size manifest.json gives"
+        );
         let d = &gpu.device;
         let groups = |axis: usize| invocations[axis].div_ceil(self.workgroup_size[axis]);
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[set], &[]);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[set],
+                &[],
+            );
             if !push.is_empty() {
                 d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
@@ -464,10 +560,12 @@ impl Kernel {
 
     fn destroy(self, gpu: &Gpu) {
         unsafe {
-            gpu.device.destroy_descriptor_pool(self.descriptor_pool, None);
+            gpu.device
+                .destroy_descriptor_pool(self.descriptor_pool, None);
             gpu.device.destroy_pipeline(self.pipeline, None);
             gpu.device.destroy_pipeline_layout(self.layout, None);
-            gpu.device.destroy_descriptor_set_layout(self.set_layout, None);
+            gpu.device
+                .destroy_descriptor_set_layout(self.set_layout, None);
         }
     }
 }
@@ -507,8 +605,17 @@ fn build_weave_texture(
 ) -> Vec<Vec<[f32; 4]>> {
     let d = &gpu.device;
     let target = module.binding(0);
-    assert_eq!(target.ty, vk::DescriptorType::STORAGE_IMAGE, "weave.comp writes a storage image at binding 0");
-    let format = vk_format(target.image_format.as_deref().expect("a storage image declares its format"));
+    assert_eq!(
+        target.ty,
+        vk::DescriptorType::STORAGE_IMAGE,
+        "weave.comp writes a storage image at binding 0"
+    );
+    let format = vk_format(
+        target
+            .image_format
+            .as_deref()
+            .expect("a storage image declares its format"),
+    );
 
     let level0 = weave_level0_size(&params.pattern);
     let levels = weave_mip_count(level0);
@@ -516,7 +623,11 @@ fn build_weave_texture(
     let image_info = vk::ImageCreateInfo::default()
         .image_type(vk::ImageType::TYPE_2D)
         .format(format)
-        .extent(vk::Extent3D { width: level0.0, height: level0.1, depth: 1 })
+        .extent(vk::Extent3D {
+            width: level0.0,
+            height: level0.1,
+            depth: 1,
+        })
         .mip_levels(levels)
         .array_layers(1)
         .samples(vk::SampleCountFlags::TYPE_1)
@@ -528,7 +639,9 @@ fn build_weave_texture(
     let req = unsafe { d.get_image_memory_requirements(image) };
     let alloc = vk::MemoryAllocateInfo::default()
         .allocation_size(req.size)
-        .memory_type_index(gpu.memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL));
+        .memory_type_index(
+            gpu.memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL),
+        );
     let memory = unsafe { d.allocate_memory(&alloc, None) }.unwrap();
     unsafe { d.bind_image_memory(image, memory, 0) }.unwrap();
     let range = |level: u32, count: u32| vk::ImageSubresourceRange {
@@ -577,7 +690,11 @@ fn build_weave_texture(
             Some(here)
         })
         .collect();
-    let total = offsets.last().unwrap() + sizes.last().map(|&(w, h)| w as u64 * h as u64 * TEXEL_BYTES).unwrap();
+    let total = offsets.last().unwrap()
+        + sizes
+            .last()
+            .map(|&(w, h)| w as u64 * h as u64 * TEXEL_BYTES)
+            .unwrap();
     let readback = gpu.buffer(total, vk::BufferUsageFlags::TRANSFER_DST);
 
     gpu.run(|cmd| unsafe {
@@ -635,10 +752,20 @@ fn build_weave_texture(
                     layer_count: 1,
                 },
                 image_offset: vk::Offset3D::default(),
-                image_extent: vk::Extent3D { width: w, height: h, depth: 1 },
+                image_extent: vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                },
             })
             .collect();
-        d.cmd_copy_image_to_buffer(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback.raw, &regions);
+        d.cmd_copy_image_to_buffer(
+            cmd,
+            image,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            readback.raw,
+            &regions,
+        );
         let to_host = vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
             .dst_access_mask(vk::AccessFlags::HOST_READ);
@@ -653,14 +780,20 @@ fn build_weave_texture(
         );
     });
 
-    let halves: Vec<f32> =
-        readback.bytes().chunks_exact(2).map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]]))).collect();
+    let halves: Vec<f32> = readback
+        .bytes()
+        .chunks_exact(2)
+        .map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]])))
+        .collect();
     let texels = sizes
         .iter()
         .zip(&offsets)
         .map(|(&(w, h), &offset)| {
             let start = (offset / 2) as usize;
-            halves[start..start + (w * h * 4) as usize].chunks_exact(4).map(|t| [t[0], t[1], t[2], t[3]]).collect()
+            halves[start..start + (w * h * 4) as usize]
+                .chunks_exact(4)
+                .map(|t| [t[0], t[1], t[2], t[3]])
+                .collect()
         })
         .collect();
 
@@ -688,10 +821,23 @@ fn weave_textures_built_from_the_package_match_the_cpu_reference() {
 
     let variants = [
         ("plain (defaults)", FabricParams::default()),
-        ("twill", FabricParams { pattern: WeavePattern::twill(), gap: 0.008, shadow_width: 0.5, ..Default::default() }),
+        (
+            "twill",
+            FabricParams {
+                pattern: WeavePattern::twill(),
+                gap: 0.008,
+                shadow_width: 0.5,
+                ..Default::default()
+            },
+        ),
         (
             "satin",
-            FabricParams { pattern: WeavePattern::satin(), gap: 0.0, shadow_strength: 1.0, ..Default::default() },
+            FabricParams {
+                pattern: WeavePattern::satin(),
+                gap: 0.0,
+                shadow_strength: 1.0,
+                ..Default::default()
+            },
         ),
         (
             "custom 3x2",
@@ -737,7 +883,11 @@ fn weave_textures_built_from_the_package_match_the_cpu_reference() {
     }
     kernel.destroy(&gpu);
     gpu.destroy();
-    assert!(failures.is_empty(), "weave texels outside WEAVE_TEXEL_TOLERANCE:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "weave texels outside WEAVE_TEXEL_TOLERANCE:\n{}",
+        failures.join("\n")
+    );
 }
 
 // =============================================================================================
@@ -756,13 +906,29 @@ fn the_brdf_evaluated_from_the_package_matches_the_cpu_reference() {
     let cases = probe_inputs(0x5eed, 4000);
     let count = cases.len() as u64;
     let (inputs, outputs) = (module.binding(0), module.binding(1));
-    let in_stride = inputs.runtime_array_stride.expect("the inputs are a runtime array");
-    let out_stride = outputs.runtime_array_stride.expect("the outputs are a runtime array");
-    assert_eq!(in_stride, std::mem::size_of::<ProbeInput>() as u64, "ProbeInput's size");
-    assert_eq!(out_stride, std::mem::size_of::<ProbeOutput>() as u64, "ProbeOutput's size");
+    let in_stride = inputs
+        .runtime_array_stride
+        .expect("the inputs are a runtime array");
+    let out_stride = outputs
+        .runtime_array_stride
+        .expect("the outputs are a runtime array");
+    assert_eq!(
+        in_stride,
+        std::mem::size_of::<ProbeInput>() as u64,
+        "ProbeInput's size"
+    );
+    assert_eq!(
+        out_stride,
+        std::mem::size_of::<ProbeOutput>() as u64,
+        "ProbeOutput's size"
+    );
 
     let mut input_buffer = gpu.buffer(count * in_stride, vk::BufferUsageFlags::STORAGE_BUFFER);
-    for (slot, case) in input_buffer.bytes_mut().chunks_exact_mut(in_stride as usize).zip(&cases) {
+    for (slot, case) in input_buffer
+        .bytes_mut()
+        .chunks_exact_mut(in_stride as usize)
+        .zip(&cases)
+    {
         slot.copy_from_slice(&case.input.to_bytes());
     }
     let mut output_buffer = gpu.buffer(count * out_stride, vk::BufferUsageFlags::STORAGE_BUFFER);
@@ -771,8 +937,16 @@ fn the_brdf_evaluated_from_the_package_matches_the_cpu_reference() {
 
     let set = kernel.allocate_set(&gpu);
     let infos = [
-        [vk::DescriptorBufferInfo { buffer: input_buffer.raw, offset: 0, range: vk::WHOLE_SIZE }],
-        [vk::DescriptorBufferInfo { buffer: output_buffer.raw, offset: 0, range: vk::WHOLE_SIZE }],
+        [vk::DescriptorBufferInfo {
+            buffer: input_buffer.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }],
+        [vk::DescriptorBufferInfo {
+            buffer: output_buffer.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }],
     ];
     let writes: Vec<_> = [inputs, outputs]
         .into_iter()
@@ -808,7 +982,10 @@ fn the_brdf_evaluated_from_the_package_matches_the_cpu_reference() {
     gpu.assert_clean("running the probe");
 
     let mut failures = Vec::new();
-    for (case, bytes) in cases.iter().zip(output_buffer.bytes().chunks_exact(out_stride as usize)) {
+    for (case, bytes) in cases
+        .iter()
+        .zip(output_buffer.bytes().chunks_exact(out_stride as usize))
+    {
         let got = ProbeOutput::from_bytes(bytes);
         let reference = probe_cpu_f64(&case.input);
         let messages = probe_check(&case.input, &reference, &got, &ProbeBound::GPU);
@@ -816,7 +993,10 @@ fn the_brdf_evaluated_from_the_package_matches_the_cpu_reference() {
             failures.push(format!("{}:\n    {}", case.name, messages.join("\n    ")));
         }
     }
-    eprintln!("probe: {count} inputs through fabric_probe.comp.spv, {} outside ProbeBound::GPU", failures.len());
+    eprintln!(
+        "probe: {count} inputs through fabric_probe.comp.spv, {} outside ProbeBound::GPU",
+        failures.len()
+    );
 
     gpu.destroy_buffer(input_buffer);
     gpu.destroy_buffer(output_buffer);

@@ -8,22 +8,39 @@ use weft::scene;
 
 fn render(options: &RenderOptions) -> weft::render::Frame {
     let mut renderer = Renderer::new(common::context()).expect("renderer");
-    renderer.render(&scene::default_scene(), options).expect("render without validation messages")
+    renderer
+        .render(&scene::default_scene(), options)
+        .expect("render without validation messages")
 }
 
 #[test]
 fn default_scene_renders_clean_and_lit() {
-    let options = RenderOptions { width: 320, height: 180, ..Default::default() };
+    let options = RenderOptions {
+        width: 320,
+        height: 180,
+        ..Default::default()
+    };
     let frame = render(&options);
     assert_eq!(frame.ldr.len(), 320 * 180 * 4);
     assert_eq!(frame.hdr.len(), 320 * 180 * 4);
-    assert!(frame.hdr.iter().all(|v| v.is_finite()), "non-finite value in the HDR image");
+    assert!(
+        frame.hdr.iter().all(|v| v.is_finite()),
+        "non-finite value in the HDR image"
+    );
     // Lit: clearly brighter than the background, and not flat.
     let mean = common::mean_rgb(&frame.ldr);
     assert!(mean > 20.0, "image too dark: mean {mean}");
-    let lum: Vec<f64> = frame.ldr.chunks_exact(4).map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0).collect();
+    let lum: Vec<f64> = frame
+        .ldr
+        .chunks_exact(4)
+        .map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0)
+        .collect();
     let var = lum.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lum.len() as f64;
-    assert!(var.sqrt() > 10.0, "image has almost no contrast: std dev {}", var.sqrt());
+    assert!(
+        var.sqrt() > 10.0,
+        "image has almost no contrast: std dev {}",
+        var.sqrt()
+    );
     // Every pass the plan lists ran.
     assert_eq!(frame.stats.passes, vec!["gbuffer", "lighting", "tonemap"]);
     assert!(frame.stats.draws >= 3);
@@ -35,8 +52,15 @@ fn every_debug_view_renders_clean() {
     let scene = scene::default_scene();
     let mut means = Vec::new();
     for view in DebugView::ALL {
-        let options = RenderOptions { width: 96, height: 54, debug_view: view, ..Default::default() };
-        let frame = renderer.render(&scene, &options).unwrap_or_else(|e| panic!("debug view {}: {e}", view.name()));
+        let options = RenderOptions {
+            width: 96,
+            height: 54,
+            debug_view: view,
+            ..Default::default()
+        };
+        let frame = renderer
+            .render(&scene, &options)
+            .unwrap_or_else(|e| panic!("debug view {}: {e}", view.name()));
         assert!(frame.hdr.iter().all(|v| v.is_finite()));
         means.push((view.name(), common::mean_rgb(&frame.ldr)));
     }
@@ -51,8 +75,13 @@ fn validation_messages_fail_the_frame() {
     let ctx = common::context();
     assert!(ctx.validating());
     ctx.provoke_validation_error();
-    let err = ctx.check_validation().expect_err("the validation layer must report the invalid call");
-    assert!(err.to_string().contains("VUID"), "unexpected message: {err}");
+    let err = ctx
+        .check_validation()
+        .expect_err("the validation layer must report the invalid call");
+    assert!(
+        err.to_string().contains("VUID"),
+        "unexpected message: {err}"
+    );
     // And the check leaves the context clean for the next frame.
     ctx.check_validation().expect("messages were taken");
 }
@@ -61,7 +90,11 @@ fn validation_messages_fail_the_frame() {
 fn gbuffer_holds_unit_normals_and_known_material() {
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let scene = scene::default_scene();
-    let options = RenderOptions { width: 160, height: 90, ..Default::default() };
+    let options = RenderOptions {
+        width: 160,
+        height: 90,
+        ..Default::default()
+    };
     renderer.render(&scene, &options).expect("render");
     let g = renderer.read_gbuffer().expect("gbuffer readback");
     let mut covered = 0;
@@ -71,7 +104,10 @@ fn gbuffer_holds_unit_normals_and_known_material() {
         }
         covered += 1;
         let material = g.surface[i * 4 + 1];
-        assert!(material >= 0.0 && (material as usize) < scene.materials.len(), "material index {material}");
+        assert!(
+            material >= 0.0 && (material as usize) < scene.materials.len(),
+            "material index {material}"
+        );
         let sign = g.surface[i * 4 + 2];
         assert!(sign == 1.0 || sign == -1.0);
     }
@@ -81,8 +117,18 @@ fn gbuffer_holds_unit_normals_and_known_material() {
 #[test]
 fn image_too_large_for_the_device_is_a_clear_error() {
     let mut renderer = Renderer::new(common::context()).expect("renderer");
-    let options = RenderOptions { width: 100_000, height: 100_000, ..Default::default() };
-    let err = renderer.render(&scene::default_scene(), &options).err().expect("must fail");
+    let options = RenderOptions {
+        width: 100_000,
+        height: 100_000,
+        ..Default::default()
+    };
+    let err = renderer
+        .render(&scene::default_scene(), &options)
+        .err()
+        .expect("must fail");
     let msg = err.to_string();
-    assert!(msg.contains("100000x100000") && msg.contains("--size"), "{msg}");
+    assert!(
+        msg.contains("100000x100000") && msg.contains("--size"),
+        "{msg}"
+    );
 }

@@ -16,8 +16,8 @@ mod texture;
 
 pub use pattern::{WeavePattern, MAX_CELLS};
 pub use texture::{
-    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, WeavePush, WEAVE_TEXELS_PER_CELL,
-    WEAVE_TEXEL_TOLERANCE,
+    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, WeavePush,
+    WEAVE_TEXELS_PER_CELL, WEAVE_TEXEL_TOLERANCE,
 };
 
 use crate::scene::Warning;
@@ -219,7 +219,11 @@ impl FabricParams {
             e_along: p.e_along,
             e_across: p.e_across,
             cell_per_uv: (2.0 / p.repeat as f64) as f32,
-            flags: if p.coupled_diffuse { FLAG_COUPLED_DIFFUSE } else { 0 },
+            flags: if p.coupled_diffuse {
+                FLAG_COUPLED_DIFFUSE
+            } else {
+                0
+            },
             shadow_strength: p.shadow_strength,
             pattern_lo: p.pattern.bits_lo(),
             pattern_hi: p.pattern.bits_hi(),
@@ -330,7 +334,10 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     fn err(&self, field: &str, what: String) -> Error {
-        Error::input(format!("material '{}': {EXTENSION_NAME}.{field} {what}", self.material))
+        Error::input(format!(
+            "material '{}': {EXTENSION_NAME}.{field} {what}",
+            self.material
+        ))
     }
 
     /// A finite number, or an error.
@@ -371,7 +378,12 @@ impl Ctx<'_> {
     }
 
     /// `[r, g, b]` or one number for grey, each in [0, 1].
-    fn colour(&self, field: &str, v: &serde_json::Value, warnings: &mut Vec<Warning>) -> crate::Result<[f32; 3]> {
+    fn colour(
+        &self,
+        field: &str,
+        v: &serde_json::Value,
+        warnings: &mut Vec<Warning>,
+    ) -> crate::Result<[f32; 3]> {
         if v.is_number() {
             let x = self.number(field, v, 0.0, 1.0, "", warnings)?;
             return Ok([x; 3]);
@@ -407,8 +419,12 @@ impl Ctx<'_> {
         }
         if let Some(rows) = v.as_array() {
             let strs: Option<Vec<&str>> = rows.iter().map(|r| r.as_str()).collect();
-            let strs =
-                strs.ok_or_else(|| self.err("pattern", format!("must be an array of strings, got {}", short(v))))?;
+            let strs = strs.ok_or_else(|| {
+                self.err(
+                    "pattern",
+                    format!("must be an array of strings, got {}", short(v)),
+                )
+            })?;
             return WeavePattern::from_rows(&strs).map_err(|e| self.err("pattern", e));
         }
         Err(self.err(
@@ -459,7 +475,9 @@ mod tests {
 
     #[test]
     fn defaults_and_separate_colours() {
-        let (p, w) = parse(json!({"rd": 0.3, "rd_weft": [0.1, 0.2, 0.3], "coupled_diffuse": true, "pattern": "satin"}));
+        let (p, w) = parse(
+            json!({"rd": 0.3, "rd_weft": [0.1, 0.2, 0.3], "coupled_diffuse": true, "pattern": "satin"}),
+        );
         let p = p.unwrap();
         assert!(w.is_empty());
         assert_eq!(p.rd_warp, [0.3; 3]);
@@ -541,7 +559,10 @@ mod tests {
             g.gap,
             g.shadow_dist,
         ];
-        assert!(floats.iter().chain(g.rd_warp.iter()).all(|x| x.is_finite()), "{g:?}");
+        assert!(
+            floats.iter().chain(g.rd_warp.iter()).all(|x| x.is_finite()),
+            "{g:?}"
+        );
         assert_eq!(g.e_across, 1e6);
         assert_eq!(g.e_along, 200.0);
         assert!(g.gap <= 0.5);

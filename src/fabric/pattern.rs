@@ -200,14 +200,18 @@ impl WeavePattern {
             return None;
         }
         let bits = lo as u64 | (hi as u64) << 32;
-        let p = Self::from_fn(cols as usize, rows as usize, |i, j| bits >> (8 * j + i) & 1 == 1);
+        let p = Self::from_fn(cols as usize, rows as usize, |i, j| {
+            bits >> (8 * j + i) & 1 == 1
+        });
         (p.weft_up == bits).then_some(p)
     }
 
     /// The pattern seen with u mirrored (`u → -u`): column `i` becomes column `cols - 1 - i`.
     pub fn mirrored_u(&self) -> Self {
         let c = self.cols();
-        Self::from_fn(c, self.rows(), |i, j| self.is_weft_up((c - 1 - i) as isize, j as isize))
+        Self::from_fn(c, self.rows(), |i, j| {
+            self.is_weft_up((c - 1 - i) as isize, j as isize)
+        })
     }
 
     /// Fraction of the repeat's cells that are weft-up.
@@ -238,7 +242,10 @@ mod tests {
             );
         }
         assert_eq!(WeavePattern::plain().to_rows(), vec!["-|", "|-"]);
-        assert_eq!(WeavePattern::twill().to_rows(), vec!["-|||", "|-||", "||-|", "|||-"]);
+        assert_eq!(
+            WeavePattern::twill().to_rows(),
+            vec!["-|||", "|-||", "||-|", "|||-"]
+        );
         assert_eq!(
             WeavePattern::satin().to_rows(),
             vec!["-||||", "||-||", "||||-", "|-|||", "|||-|"]

@@ -77,7 +77,11 @@ impl WeavePush {
 
     /// The same push constants for another level size.
     pub fn with_size(&self, width: u32, height: u32) -> WeavePush {
-        WeavePush { width, height, ..*self }
+        WeavePush {
+            width,
+            height,
+            ..*self
+        }
     }
 }
 
@@ -92,7 +96,10 @@ pub fn weave_level0_size(pattern: &super::WeavePattern) -> (u32, u32) {
 
 /// The size of mip `level` in Vulkan's convention: `max(1, floor(size / 2^level))`.
 pub fn weave_level_size(level0: (u32, u32), level: u32) -> (u32, u32) {
-    ((level0.0 >> level.min(31)).max(1), (level0.1 >> level.min(31)).max(1))
+    (
+        (level0.0 >> level.min(31)).max(1),
+        (level0.1 >> level.min(31)).max(1),
+    )
 }
 
 /// The number of levels of a full mip chain down to 1 × 1.

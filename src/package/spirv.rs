@@ -235,9 +235,18 @@ enum Type {
 
 #[derive(Clone, Debug)]
 enum Constant {
-    Scalar { ty: u32, words: Vec<u32>, spec: bool },
-    Bool { value: bool, spec: bool },
-    Composite { parts: Vec<u32> },
+    Scalar {
+        ty: u32,
+        words: Vec<u32>,
+        spec: bool,
+    },
+    Bool {
+        value: bool,
+        spec: bool,
+    },
+    Composite {
+        parts: Vec<u32>,
+    },
 }
 
 #[derive(Default)]
@@ -285,9 +294,15 @@ struct Module {
 /// Reflects a module given as little-endian bytes.
 pub fn reflect(bytes: &[u8]) -> Result<Reflection, String> {
     if bytes.len() % 4 != 0 || bytes.len() < 20 {
-        return Err(format!("{} bytes is not a SPIR-V module (a multiple of 4, at least 20)", bytes.len()));
+        return Err(format!(
+            "{} bytes is not a SPIR-V module (a multiple of 4, at least 20)",
+            bytes.len()
+        ));
     }
-    let words: Vec<u32> = bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    let words: Vec<u32> = bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
     Module::parse(&words)?.reflect()
 }
 
@@ -297,7 +312,8 @@ fn literal_string(words: &[u32]) -> Result<(String, usize), String> {
     for (i, w) in words.iter().enumerate() {
         for b in w.to_le_bytes() {
             if b == 0 {
-                let s = String::from_utf8(bytes).map_err(|_| "a literal string is not UTF-8".to_string())?;
+                let s = String::from_utf8(bytes)
+                    .map_err(|_| "a literal string is not UTF-8".to_string())?;
                 return Ok((s, i + 1));
             }
             bytes.push(b);
@@ -309,7 +325,10 @@ fn literal_string(words: &[u32]) -> Result<(String, usize), String> {
 impl Module {
     fn parse(words: &[u32]) -> Result<Module, String> {
         if words[0] != MAGIC {
-            return Err(format!("bad magic number {:#010x} (a big-endian or non-SPIR-V file?)", words[0]));
+            return Err(format!(
+                "bad magic number {:#010x} (a big-endian or non-SPIR-V file?)",
+                words[0]
+            ));
         }
         let mut m = Module {
             version: ((words[1] >> 16) & 0xff, (words[1] >> 8) & 0xff),
@@ -332,7 +351,10 @@ impl Module {
             let ops = &words[at + 1..at + count];
             let need = |n: usize| {
                 if ops.len() < n {
-                    Err(format!("opcode {opcode} at word {at} has {} operands, needs {n}", ops.len()))
+                    Err(format!(
+                        "opcode {opcode} at word {at} has {} operands, needs {n}",
+                        ops.len()
+                    ))
                 } else {
                     Ok(())
                 }
@@ -359,11 +381,15 @@ impl Module {
                 }
                 OP_DECORATE => {
                     need(2)?;
-                    m.decorations.on_id.insert((ops[0], ops[1]), ops.get(2).copied().unwrap_or(0));
+                    m.decorations
+                        .on_id
+                        .insert((ops[0], ops[1]), ops.get(2).copied().unwrap_or(0));
                 }
                 OP_MEMBER_DECORATE => {
                     need(3)?;
-                    m.decorations.on_member.insert((ops[0], ops[1], ops[2]), ops.get(3).copied().unwrap_or(0));
+                    m.decorations
+                        .on_member
+                        .insert((ops[0], ops[1], ops[2]), ops.get(3).copied().unwrap_or(0));
                 }
                 OP_TYPE_VOID | OP_TYPE_BOOL | OP_TYPE_SAMPLER | OP_TYPE_ACCELERATION_STRUCTURE => {
                     need(1)?;
@@ -377,7 +403,13 @@ impl Module {
                 }
                 OP_TYPE_INT => {
                     need(3)?;
-                    m.types.insert(ops[0], Type::Int { width: ops[1], signed: ops[2] == 1 });
+                    m.types.insert(
+                        ops[0],
+                        Type::Int {
+                            width: ops[1],
+                            signed: ops[2] == 1,
+                        },
+                    );
                 }
                 OP_TYPE_FLOAT => {
                     need(2)?;
@@ -385,15 +417,34 @@ impl Module {
                 }
                 OP_TYPE_VECTOR => {
                     need(3)?;
-                    m.types.insert(ops[0], Type::Vector { component: ops[1], count: ops[2] });
+                    m.types.insert(
+                        ops[0],
+                        Type::Vector {
+                            component: ops[1],
+                            count: ops[2],
+                        },
+                    );
                 }
                 OP_TYPE_MATRIX => {
                     need(3)?;
-                    m.types.insert(ops[0], Type::Matrix { column: ops[1], count: ops[2] });
+                    m.types.insert(
+                        ops[0],
+                        Type::Matrix {
+                            column: ops[1],
+                            count: ops[2],
+                        },
+                    );
                 }
                 OP_TYPE_IMAGE => {
                     need(8)?;
-                    m.types.insert(ops[0], Type::Image { dim: ops[2], sampled: ops[6], format: ops[7] });
+                    m.types.insert(
+                        ops[0],
+                        Type::Image {
+                            dim: ops[2],
+                            sampled: ops[6],
+                            format: ops[7],
+                        },
+                    );
                 }
                 OP_TYPE_SAMPLED_IMAGE => {
                     need(2)?;
@@ -401,15 +452,27 @@ impl Module {
                 }
                 OP_TYPE_ARRAY => {
                     need(3)?;
-                    m.types.insert(ops[0], Type::Array { element: ops[1], length: ops[2] });
+                    m.types.insert(
+                        ops[0],
+                        Type::Array {
+                            element: ops[1],
+                            length: ops[2],
+                        },
+                    );
                 }
                 OP_TYPE_RUNTIME_ARRAY => {
                     need(2)?;
-                    m.types.insert(ops[0], Type::RuntimeArray { element: ops[1] });
+                    m.types
+                        .insert(ops[0], Type::RuntimeArray { element: ops[1] });
                 }
                 OP_TYPE_STRUCT => {
                     need(1)?;
-                    m.types.insert(ops[0], Type::Struct { members: ops[1..].to_vec() });
+                    m.types.insert(
+                        ops[0],
+                        Type::Struct {
+                            members: ops[1..].to_vec(),
+                        },
+                    );
                 }
                 OP_TYPE_POINTER => {
                     need(3)?;
@@ -418,9 +481,19 @@ impl Module {
                 OP_CONSTANT | OP_SPEC_CONSTANT => {
                     need(3)?;
                     let spec = opcode == OP_SPEC_CONSTANT;
-                    m.constants.insert(ops[1], Constant::Scalar { ty: ops[0], words: ops[2..].to_vec(), spec });
+                    m.constants.insert(
+                        ops[1],
+                        Constant::Scalar {
+                            ty: ops[0],
+                            words: ops[2..].to_vec(),
+                            spec,
+                        },
+                    );
                 }
-                OP_CONSTANT_TRUE | OP_CONSTANT_FALSE | OP_SPEC_CONSTANT_TRUE | OP_SPEC_CONSTANT_FALSE => {
+                OP_CONSTANT_TRUE
+                | OP_CONSTANT_FALSE
+                | OP_SPEC_CONSTANT_TRUE
+                | OP_SPEC_CONSTANT_FALSE => {
                     need(2)?;
                     let value = matches!(opcode, OP_CONSTANT_TRUE | OP_SPEC_CONSTANT_TRUE);
                     let spec = matches!(opcode, OP_SPEC_CONSTANT_TRUE | OP_SPEC_CONSTANT_FALSE);
@@ -428,7 +501,12 @@ impl Module {
                 }
                 OP_CONSTANT_COMPOSITE | OP_SPEC_CONSTANT_COMPOSITE => {
                     need(2)?;
-                    m.constants.insert(ops[1], Constant::Composite { parts: ops[2..].to_vec() });
+                    m.constants.insert(
+                        ops[1],
+                        Constant::Composite {
+                            parts: ops[2..].to_vec(),
+                        },
+                    );
                 }
                 OP_VARIABLE => {
                     need(3)?;
@@ -444,7 +522,9 @@ impl Module {
     }
 
     fn ty(&self, id: u32) -> Result<&Type, String> {
-        self.types.get(&id).ok_or_else(|| format!("type %{id} is not declared"))
+        self.types
+            .get(&id)
+            .ok_or_else(|| format!("type %{id} is not declared"))
     }
 
     /// The value of an integer constant (a specialization constant's default), for array lengths
@@ -457,7 +537,10 @@ impl Module {
     }
 
     fn reflect(&self) -> Result<Reflection, String> {
-        let entry = self.entry_points.first().ok_or("the module has no entry point")?;
+        let entry = self
+            .entry_points
+            .first()
+            .ok_or("the module has no entry point")?;
         // Since SPIR-V 1.4 the entry point's interface lists every global variable it uses; before
         // that, only inputs and outputs, so every declared resource is taken.
         let listed: BTreeSet<u32> = entry.interface.iter().copied().collect();
@@ -480,11 +563,17 @@ impl Module {
                 }
                 SC_PUSH_CONSTANT if uses(id) => {
                     let (offset, end) = self.struct_extent(pointee)?;
-                    push_constants = Some(PushConstantRange { offset, size: end - offset });
+                    push_constants = Some(PushConstantRange {
+                        offset,
+                        size: end - offset,
+                    });
                 }
                 SC_INPUT | SC_OUTPUT if listed.contains(&id) => {
                     if let Some(location) = self.decorations.get(id, DEC_LOCATION) {
-                        let v = InterfaceVariable { location, ty: self.glsl_type(pointee)? };
+                        let v = InterfaceVariable {
+                            location,
+                            ty: self.glsl_type(pointee)?,
+                        };
                         if storage == SC_INPUT {
                             inputs.push(v)
                         } else {
@@ -496,21 +585,39 @@ impl Module {
             }
         }
         bindings.sort_by_key(|b| (b.set, b.binding));
-        if let Some(w) = bindings.windows(2).find(|w| (w[0].set, w[0].binding) == (w[1].set, w[1].binding)) {
-            return Err(format!("two resources share set {} binding {}", w[0].set, w[0].binding));
+        if let Some(w) = bindings
+            .windows(2)
+            .find(|w| (w[0].set, w[0].binding) == (w[1].set, w[1].binding))
+        {
+            return Err(format!(
+                "two resources share set {} binding {}",
+                w[0].set, w[0].binding
+            ));
         }
         inputs.sort();
         outputs.sort();
 
         let mut spec_constants = Vec::new();
         for (&id, c) in &self.constants {
-            let Some(spec_id) = self.decorations.get(id, DEC_SPEC_ID) else { continue };
+            let Some(spec_id) = self.decorations.get(id, DEC_SPEC_ID) else {
+                continue;
+            };
             let (ty, default) = match c {
-                Constant::Bool { value, spec: true } => ("bool".to_string(), SpecValue::Bool(*value)),
-                Constant::Scalar { ty, words, spec: true } => self.scalar_value(*ty, words)?,
+                Constant::Bool { value, spec: true } => {
+                    ("bool".to_string(), SpecValue::Bool(*value))
+                }
+                Constant::Scalar {
+                    ty,
+                    words,
+                    spec: true,
+                } => self.scalar_value(*ty, words)?,
                 _ => continue,
             };
-            spec_constants.push(SpecConstant { id: spec_id, ty, default });
+            spec_constants.push(SpecConstant {
+                id: spec_id,
+                ty,
+                default,
+            });
         }
         spec_constants.sort_by_key(|c| c.id);
 
@@ -518,7 +625,11 @@ impl Module {
             version: self.version,
             entry_point: entry.name.clone(),
             execution_model: entry.model,
-            capabilities: self.capabilities.iter().map(|&c| capability_name(c)).collect(),
+            capabilities: self
+                .capabilities
+                .iter()
+                .map(|&c| capability_name(c))
+                .collect(),
             extensions: self.extensions.clone(),
             bindings,
             push_constants,
@@ -530,14 +641,22 @@ impl Module {
     }
 
     /// A descriptor binding, or None for a variable without DescriptorSet/Binding.
-    fn binding(&self, id: u32, pointee: u32, storage: u32) -> Result<Option<DescriptorBinding>, String> {
+    fn binding(
+        &self,
+        id: u32,
+        pointee: u32,
+        storage: u32,
+    ) -> Result<Option<DescriptorBinding>, String> {
         let d = &self.decorations;
-        let (Some(set), Some(binding)) = (d.get(id, DEC_DESCRIPTOR_SET), d.get(id, DEC_BINDING)) else {
+        let (Some(set), Some(binding)) = (d.get(id, DEC_DESCRIPTOR_SET), d.get(id, DEC_BINDING))
+        else {
             return Ok(None);
         };
         let (mut ty_id, mut count) = (pointee, 1);
         match self.ty(pointee)? {
-            Type::Array { element, length } => (ty_id, count) = (*element, self.constant_u32(*length)?),
+            Type::Array { element, length } => {
+                (ty_id, count) = (*element, self.constant_u32(*length)?)
+            }
             Type::RuntimeArray { element } => (ty_id, count) = (*element, 0),
             _ => {}
         }
@@ -563,7 +682,8 @@ impl Module {
             (SC_STORAGE_BUFFER, Type::Struct { members }) => {
                 block = Some(self.block_layout(ty_id)?);
                 // glslang puts readonly/writeonly on the block's members.
-                let all = |dec| (0..members.len() as u32).all(|k| d.member(ty_id, k, dec).is_some());
+                let all =
+                    |dec| (0..members.len() as u32).all(|k| d.member(ty_id, k, dec).is_some());
                 non_writable |= !members.is_empty() && all(DEC_NON_WRITABLE);
                 non_readable |= !members.is_empty() && all(DEC_NON_READABLE);
                 DescriptorKind::StorageBuffer
@@ -580,7 +700,14 @@ impl Module {
                 non_writable = true;
                 DescriptorKind::AccelerationStructure
             }
-            (SC_UNIFORM_CONSTANT, Type::Image { dim, sampled, format }) => {
+            (
+                SC_UNIFORM_CONSTANT,
+                Type::Image {
+                    dim,
+                    sampled,
+                    format,
+                },
+            ) => {
                 image_format = image_format_name(*format);
                 let storage_image = *sampled == 2;
                 if !storage_image {
@@ -594,9 +721,9 @@ impl Module {
                     (_, true) => DescriptorKind::StorageImage,
                 }
             }
-            (_, other) => {
-                return Err(format!("resource %{id} (set {set}, binding {binding}) has an unexpected type {other:?}"))
-            }
+            (_, other) => return Err(format!(
+                "resource %{id} (set {set}, binding {binding}) has an unexpected type {other:?}"
+            )),
         };
         let access = match (non_writable, non_readable) {
             (true, _) => Access::ReadOnly,
@@ -621,12 +748,16 @@ impl Module {
 
     /// A buffer block's size without its trailing runtime array, and that array's stride.
     fn block_layout(&self, id: u32) -> Result<(u32, Option<u32>), String> {
-        let Type::Struct { members } = self.ty(id)? else { return Err(format!("%{id} is not a struct")) };
+        let Type::Struct { members } = self.ty(id)? else {
+            return Err(format!("%{id} is not a struct"));
+        };
         if let Some(&last) = members.last() {
             if let Type::RuntimeArray { .. } = self.ty(last)? {
                 let k = members.len() as u32 - 1;
-                let offset =
-                    self.decorations.member(id, k, DEC_OFFSET).ok_or(format!("member {k} of %{id} has no Offset"))?;
+                let offset = self
+                    .decorations
+                    .member(id, k, DEC_OFFSET)
+                    .ok_or(format!("member {k} of %{id} has no Offset"))?;
                 let stride = self
                     .decorations
                     .get(last, DEC_ARRAY_STRIDE)
@@ -639,12 +770,16 @@ impl Module {
 
     /// (lowest member offset, end of the last byte) of an explicitly laid out struct.
     fn struct_extent(&self, id: u32) -> Result<(u32, u32), String> {
-        let Type::Struct { members } = self.ty(id)? else { return Err(format!("%{id} is not a struct")) };
+        let Type::Struct { members } = self.ty(id)? else {
+            return Err(format!("%{id} is not a struct"));
+        };
         let (mut lo, mut hi) = (u32::MAX, 0);
         for (k, &member) in members.iter().enumerate() {
             let k = k as u32;
-            let offset =
-                self.decorations.member(id, k, DEC_OFFSET).ok_or(format!("member {k} of %{id} has no Offset"))?;
+            let offset = self
+                .decorations
+                .member(id, k, DEC_OFFSET)
+                .ok_or(format!("member {k} of %{id} has no Offset"))?;
             let size = self.size_of(member, self.decorations.member(id, k, DEC_MATRIX_STRIDE))?;
             lo = lo.min(offset);
             hi = hi.max(offset + size);
@@ -671,23 +806,48 @@ impl Module {
             }
             Type::RuntimeArray { .. } => 0,
             Type::Struct { .. } => self.struct_extent(id)?.1,
-            other => return Err(format!("%{id} ({other:?}) has no size in an explicit layout")),
+            other => {
+                return Err(format!(
+                    "%{id} ({other:?}) has no size in an explicit layout"
+                ))
+            }
         })
     }
 
     fn scalar_value(&self, ty: u32, words: &[u32]) -> Result<(String, SpecValue), String> {
         let wide = |w: &[u32]| w[0] as u64 | (w.get(1).copied().unwrap_or(0) as u64) << 32;
         Ok(match self.ty(ty)? {
-            Type::Int { width, signed: true } => {
+            Type::Int {
+                width,
+                signed: true,
+            } => {
                 // Narrower literals are sign-extended to 32 bits by the SPIR-V rules.
-                let v = if *width == 64 { wide(words) as i64 } else { words[0] as i32 as i64 };
+                let v = if *width == 64 {
+                    wide(words) as i64
+                } else {
+                    words[0] as i32 as i64
+                };
                 (format!("int{width}"), SpecValue::Int(v))
             }
-            Type::Int { width, signed: false } => {
-                (format!("uint{width}"), SpecValue::UInt(if *width == 64 { wide(words) } else { words[0] as u64 }))
-            }
-            Type::Float { width: 64 } => ("float64".into(), SpecValue::Float(f64::from_bits(wide(words)))),
-            Type::Float { width: 32 } => ("float32".into(), SpecValue::Float(f32::from_bits(words[0]) as f64)),
+            Type::Int {
+                width,
+                signed: false,
+            } => (
+                format!("uint{width}"),
+                SpecValue::UInt(if *width == 64 {
+                    wide(words)
+                } else {
+                    words[0] as u64
+                }),
+            ),
+            Type::Float { width: 64 } => (
+                "float64".into(),
+                SpecValue::Float(f64::from_bits(wide(words))),
+            ),
+            Type::Float { width: 32 } => (
+                "float32".into(),
+                SpecValue::Float(f32::from_bits(words[0]) as f64),
+            ),
             Type::Float { width } => (format!("float{width}"), SpecValue::UInt(words[0] as u64)),
             other => return Err(format!("a specialization constant has type {other:?}")),
         })
@@ -697,19 +857,24 @@ impl Module {
     /// wins over LocalSize. None for a non-compute entry point.
     fn workgroup_size(&self, entry: &EntryPoint) -> Result<Option<WorkgroupSize>, String> {
         let axis = |id: u32| -> Result<(u32, Option<u32>), String> {
-            Ok((self.constant_u32(id)?, self.decorations.get(id, DEC_SPEC_ID)))
+            Ok((
+                self.constant_u32(id)?,
+                self.decorations.get(id, DEC_SPEC_ID),
+            ))
         };
         let from_ids = |ids: &[u32]| -> Result<WorkgroupSize, String> {
             if ids.len() < 3 {
                 return Err("a workgroup size has fewer than 3 components".into());
             }
             let (x, y, z) = (axis(ids[0])?, axis(ids[1])?, axis(ids[2])?);
-            Ok(WorkgroupSize { size: [x.0, y.0, z.0], spec_ids: [x.1, y.1, z.1] })
+            Ok(WorkgroupSize {
+                size: [x.0, y.0, z.0],
+                spec_ids: [x.1, y.1, z.1],
+            })
         };
-        let builtin = self
-            .constants
-            .iter()
-            .find(|(&id, _)| self.decorations.get(id, DEC_BUILT_IN) == Some(BUILT_IN_WORKGROUP_SIZE));
+        let builtin = self.constants.iter().find(|(&id, _)| {
+            self.decorations.get(id, DEC_BUILT_IN) == Some(BUILT_IN_WORKGROUP_SIZE)
+        });
         if let Some((_, Constant::Composite { parts })) = builtin {
             return from_ids(parts).map(Some);
         }
@@ -720,7 +885,10 @@ impl Module {
             if s.len() < 3 {
                 return Err("LocalSize has fewer than 3 operands".into());
             }
-            return Ok(Some(WorkgroupSize { size: [s[0], s[1], s[2]], spec_ids: [None; 3] }));
+            return Ok(Some(WorkgroupSize {
+                size: [s[0], s[1], s[2]],
+                spec_ids: [None; 3],
+            }));
         }
         Ok(None)
     }
@@ -741,8 +909,15 @@ impl Module {
         Ok(match self.ty(id)? {
             Type::Vector { component, count } => format!("{}vec{count}", scalar(*component)?.1),
             Type::Matrix { column, count } => match self.ty(*column)? {
-                Type::Vector { component, count: rows } => {
-                    let p = if scalar(*component)?.0 == "double" { "d" } else { "" };
+                Type::Vector {
+                    component,
+                    count: rows,
+                } => {
+                    let p = if scalar(*component)?.0 == "double" {
+                        "d"
+                    } else {
+                        ""
+                    };
                     if rows == count {
                         format!("{p}mat{count}")
                     } else {
@@ -752,7 +927,11 @@ impl Module {
                 other => return Err(format!("matrix column {other:?}")),
             },
             Type::Array { element, length } => {
-                format!("{}[{}]", self.glsl_type(*element)?, self.constant_u32(*length)?)
+                format!(
+                    "{}[{}]",
+                    self.glsl_type(*element)?,
+                    self.constant_u32(*length)?
+                )
             }
             Type::Struct { .. } => "struct".into(),
             _ => scalar(id)?.0.into(),
@@ -803,7 +982,11 @@ const CAPABILITIES: &[(u32, &str)] = &[
 
 /// The SPIR-V name of a capability (`Capability<N>` for one not in [`CAPABILITIES`]).
 fn capability_name(c: u32) -> String {
-    CAPABILITIES.iter().find(|(n, _)| *n == c).map(|(_, s)| s.to_string()).unwrap_or_else(|| format!("Capability{c}"))
+    CAPABILITIES
+        .iter()
+        .find(|(n, _)| *n == c)
+        .map(|(_, s)| s.to_string())
+        .unwrap_or_else(|| format!("Capability{c}"))
 }
 
 /// The SPIR-V name of an execution model.
@@ -838,7 +1021,9 @@ mod tests {
     fn name(s: &str) -> Vec<u32> {
         let mut b = s.as_bytes().to_vec();
         b.resize((b.len() / 4 + 1) * 4, 0);
-        b.chunks(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
+        b.chunks(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
     }
 
     #[test]
@@ -874,7 +1059,13 @@ mod tests {
         let r = reflect(&m).unwrap();
         assert_eq!(r.entry_point, "main");
         assert_eq!(r.capabilities, vec!["Shader"]);
-        assert_eq!(r.workgroup_size, Some(WorkgroupSize { size: [16, 1, 1], spec_ids: [Some(3), None, None] }));
+        assert_eq!(
+            r.workgroup_size,
+            Some(WorkgroupSize {
+                size: [16, 1, 1],
+                spec_ids: [Some(3), None, None]
+            })
+        );
         assert_eq!(r.bindings.len(), 1);
         let b = &r.bindings[0];
         assert_eq!(
@@ -883,8 +1074,22 @@ mod tests {
         );
         assert_eq!(b.block_size, Some(20));
         assert_eq!(r.spec_constants.len(), 2);
-        assert_eq!(r.spec_constants[0], SpecConstant { id: 0, ty: "float32".into(), default: SpecValue::Float(0.5) });
-        assert_eq!(r.spec_constants[1], SpecConstant { id: 3, ty: "uint32".into(), default: SpecValue::UInt(16) });
+        assert_eq!(
+            r.spec_constants[0],
+            SpecConstant {
+                id: 0,
+                ty: "float32".into(),
+                default: SpecValue::Float(0.5)
+            }
+        );
+        assert_eq!(
+            r.spec_constants[1],
+            SpecConstant {
+                id: 3,
+                ty: "uint32".into(),
+                default: SpecValue::UInt(16)
+            }
+        );
     }
 
     #[test]

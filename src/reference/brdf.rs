@@ -171,7 +171,8 @@ macro_rules! fabric_brdf_precision {
                                 + z2 * (1.0 / 7.0
                                     + z2 * (1.0 / 9.0
                                         + z2 * (1.0 / 11.0
-                                            + z2 * (1.0 / 13.0 + z2 * (1.0 / 15.0 + z2 * (1.0 / 17.0))))))));
+                                            + z2 * (1.0 / 13.0
+                                                + z2 * (1.0 / 15.0 + z2 * (1.0 / 17.0))))))));
                     (-(a / (2.0 - s)) * p).exp()
                 } else {
                     (a / s * hn.ln()).exp()
@@ -257,7 +258,12 @@ macro_rules! fabric_brdf_precision {
             /// the coverage-weighted means of the two orientations', times the thread coverage.
             /// Cheap and wrong at a distance (averaging exponents is not averaging lobes); kept so
             /// that its error can be measured. Equal to [`fabric_brdf`] at a point.
-            pub fn fabric_brdf_averaged(k1: Vec3, k2: Vec3, coverage: Vec3, m: &FabricMaterial) -> Vec3 {
+            pub fn fabric_brdf_averaged(
+                k1: Vec3,
+                k2: Vec3,
+                coverage: Vec3,
+                m: &FabricMaterial,
+            ) -> Vec3 {
                 let nk1 = k1[2];
                 let nk2 = k2[2];
                 let c_warp = coverage[0];
@@ -287,7 +293,11 @@ macro_rules! fabric_brdf_precision {
     };
 }
 
-fabric_brdf_precision!(single, f32, "The f32 path: the twin of `glsl/include/fabric.glsl`.");
+fabric_brdf_precision!(
+    single,
+    f32,
+    "The f32 path: the twin of `glsl/include/fabric.glsl`."
+);
 fabric_brdf_precision!(double, f64, "The f64 reference.");
 
 /// Importance sampling of the A–S lobe (model page §1), in f64, for the furnace tests and the

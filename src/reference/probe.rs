@@ -346,15 +346,24 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
     // Per orientation: (error of the lobe, error of D, error of hn^E).
     let lobe_err = |eu: f64, ev: f64| -> (f64, f64, f64) {
         let power = as_power(h[0], h[1], h[2], eu, ev);
-        let x = if power > 0.0 { -power.ln() } else { f64::INFINITY };
+        let x = if power > 0.0 {
+            -power.ln()
+        } else {
+            f64::INFINITY
+        };
         let e = as_exponent(h[0], h[1], eu, ev);
-        let log_branch = if s >= SERIES_MAX_S { e / h[2].max(1e-300) } else { 0.0 };
+        let log_branch = if s >= SERIES_MAX_S {
+            e / h[2].max(1e-300)
+        } else {
+            0.0
+        };
         let dx = b.x_rel * x + dir_h * (2.0 * (eu * h[0].abs() + ev * h[1].abs()) + log_branch);
         let rel = if x.is_finite() { exp_err(dx) } else { 0.0 };
         let norm8 = ((eu + 1.0) * (ev + 1.0)).sqrt() / (8.0 * std::f64::consts::PI);
         let norm2 = 4.0 * norm8;
         let rho_f1 = if facing { norm8 * power / denom } else { 0.0 };
-        let rho = (rel + b.rel + 3.0 * b.dir / nk_max) * rho_f1 + if facing { b.floor * norm8 / denom } else { 0.0 };
+        let rho = (rel + b.rel + 3.0 * b.dir / nk_max) * rho_f1
+            + if facing { b.floor * norm8 / denom } else { 0.0 };
         let d = (rel + b.rel) * norm2 * power + b.floor * norm2;
         let p = (rel + b.rel) * power + b.floor;
         (rho + 1e-30, d + 1e-30, p + 1e-30)
@@ -387,7 +396,11 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         if !facing || !(c_thread > 0.0) {
             return 0.0;
         }
-        let rd_max = m.rd_warp.iter().chain(m.rd_weft.iter()).fold(0.0f64, |a, &x| a.max(x));
+        let rd_max = m
+            .rd_warp
+            .iter()
+            .chain(m.rd_weft.iter())
+            .fold(0.0f64, |a, &x| a.max(x));
         let diffuse = if m.coupled {
             coupled_diffuse(m.rs, nk1, nk2)
         } else {
@@ -443,7 +456,12 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
 
 /// Compares `got` (GPU or f32 CPU) with `reference` (from [`probe_cpu_f64`]) under `bound`: one
 /// message per output component that is not finite or differs by more than its tolerance.
-pub fn probe_check(input: &ProbeInput, reference: &ProbeOutput, got: &ProbeOutput, bound: &ProbeBound) -> Vec<String> {
+pub fn probe_check(
+    input: &ProbeInput,
+    reference: &ProbeOutput,
+    got: &ProbeOutput,
+    bound: &ProbeBound,
+) -> Vec<String> {
     let tol = probe_tolerance(input, bound).to_array();
     let r = reference.to_array();
     let g = got.to_array();
@@ -714,17 +732,24 @@ pub fn probe_hard_cases() -> Vec<ProbeCase> {
     // 8. Weave: borders, negative and (pre-reduced) huge coordinates, s_g = 0, s_g → s_p/2,
     //    s_p → 0, boxes over many repeats, degenerate boxes. Dyadic values so the borders are
     //    exact in f32 and f64 alike.
-    let weave_params = |pattern: WeavePattern, repeat: f32, gap: f32, sw: f32, ss: f32| FabricParams {
-        pattern,
-        repeat,
-        gap,
-        shadow_width: sw,
-        shadow_strength: ss,
-        ..Default::default()
-    };
+    let weave_params =
+        |pattern: WeavePattern, repeat: f32, gap: f32, sw: f32, ss: f32| FabricParams {
+            pattern,
+            repeat,
+            gap,
+            shadow_width: sw,
+            shadow_strength: ss,
+            ..Default::default()
+        };
     let variants = [
-        ("plain", weave_params(WeavePattern::plain(), 0.5, 0.0625, 0.25, 0.5)),
-        ("plain s_g=0", weave_params(WeavePattern::plain(), 0.5, 0.0, 0.25, 0.5)),
+        (
+            "plain",
+            weave_params(WeavePattern::plain(), 0.5, 0.0625, 0.25, 0.5),
+        ),
+        (
+            "plain s_g=0",
+            weave_params(WeavePattern::plain(), 0.5, 0.0, 0.25, 0.5),
+        ),
         (
             "plain s_g=s_p/2",
             weave_params(WeavePattern::plain(), 0.5, 0.25, 0.25, 0.5),
@@ -741,8 +766,14 @@ pub fn probe_hard_cases() -> Vec<ProbeCase> {
             "plain shadow 1/1",
             weave_params(WeavePattern::plain(), 0.5, 0.0625, 1.0, 1.0),
         ),
-        ("twill", weave_params(WeavePattern::twill(), 0.5, 0.0625, 0.5, 0.5)),
-        ("satin", weave_params(WeavePattern::satin(), 0.5, 0.125, 0.75, 0.25)),
+        (
+            "twill",
+            weave_params(WeavePattern::twill(), 0.5, 0.0625, 0.5, 0.5),
+        ),
+        (
+            "satin",
+            weave_params(WeavePattern::satin(), 0.5, 0.125, 0.75, 0.25),
+        ),
         (
             "custom 3x2",
             weave_params(
@@ -802,7 +833,11 @@ pub fn probe_hard_cases() -> Vec<ProbeCase> {
     let degenerate: [(&str, [f32; 4], [f32; 4]); 4] = [
         ("zero normal", [0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 1.0]),
         ("zero tangent", [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
-        ("tangent along n", [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 2.0, 1.0]),
+        (
+            "tangent along n",
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 2.0, 1.0],
+        ),
         ("sign 0", [0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0]),
     ];
     for (name, n, t) in degenerate {
@@ -869,8 +904,16 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
             },
             e_along: exponent(&mut rng),
             e_across: exponent(&mut rng),
-            rd_warp: [rng.next_f64() as f32, rng.next_f64() as f32, rng.next_f64() as f32],
-            rd_weft: [rng.next_f64() as f32, rng.next_f64() as f32, rng.next_f64() as f32],
+            rd_warp: [
+                rng.next_f64() as f32,
+                rng.next_f64() as f32,
+                rng.next_f64() as f32,
+            ],
+            rd_weft: [
+                rng.next_f64() as f32,
+                rng.next_f64() as f32,
+                rng.next_f64() as f32,
+            ],
             rs: rng.next_f64() as f32,
             shadow_strength: rng.next_f64() as f32,
             shadow_width: rng.next_f64() as f32,

@@ -67,7 +67,11 @@ pub fn light_incoming(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
     }
     let to_light = sub(xyz(light.position_range), p);
     let dist = dot(to_light, to_light).sqrt();
-    let l = if dist > 0.0 { scale(to_light, 1.0 / dist) } else { [0.0, 1.0, 0.0] };
+    let l = if dist > 0.0 {
+        scale(to_light, 1.0 / dist)
+    } else {
+        [0.0, 1.0, 0.0]
+    };
     let mut atten = distance_falloff(dist, light.position_range[3]);
     if kind == LIGHT_SPOT {
         let cd = dot(xyz(light.direction_type), scale(l, -1.0));
@@ -137,7 +141,11 @@ pub fn shade(frame: &FrameData, lights: &[GpuLight], s: &Surface) -> Vec3 {
     let n = s.normal;
     let v = normalize(sub(xyz(frame.eye), s.position));
     let mut radiance = s.emissive;
-    let ambient = mix(xyz(frame.ambient_ground), xyz(frame.ambient_sky), n[1] * 0.5 + 0.5);
+    let ambient = mix(
+        xyz(frame.ambient_ground),
+        xyz(frame.ambient_sky),
+        n[1] * 0.5 + 0.5,
+    );
     let count = (frame.light_count as usize).min(lights.len());
     match &s.fabric {
         Some(f) => {
@@ -147,7 +155,10 @@ pub fn shade(frame: &FrameData, lights: &[GpuLight], s: &Surface) -> Vec3 {
             let k2 = fb::fabric_local(v, tbn);
             let c_thread = cov[0] + cov[1];
             let rd = if c_thread > 0.0 {
-                scale(add(scale(f.rd_warp, cov[0]), scale(f.rd_weft, cov[1])), cov[2] / c_thread)
+                scale(
+                    add(scale(f.rd_warp, cov[0]), scale(f.rd_weft, cov[1])),
+                    cov[2] / c_thread,
+                )
             } else {
                 [0.0; 3]
             };
@@ -158,19 +169,31 @@ pub fn shade(frame: &FrameData, lights: &[GpuLight], s: &Surface) -> Vec3 {
                 if k1[2] <= 0.0 || e == [0.0; 3] {
                     continue;
                 }
-                radiance = add(radiance, scale(mul(e, fb::fabric_brdf(k1, k2, cov, &m)), k1[2]));
+                radiance = add(
+                    radiance,
+                    scale(mul(e, fb::fabric_brdf(k1, k2, cov, &m)), k1[2]),
+                );
             }
         }
         None => {
             let base = s.base_color;
             let spec_ambient = scale(mix([0.04; 3], base, s.metallic), (1.0 - s.roughness) * 0.5);
-            radiance = add(radiance, add(scale(mul(ambient, base), 1.0 - s.metallic), mul(ambient, spec_ambient)));
+            radiance = add(
+                radiance,
+                add(
+                    scale(mul(ambient, base), 1.0 - s.metallic),
+                    mul(ambient, spec_ambient),
+                ),
+            );
             for light in &lights[..count] {
                 let (l, e) = light_incoming(light, s.position);
                 if e == [0.0; 3] {
                     continue;
                 }
-                radiance = add(radiance, mul(e, pbr_brdf_cos(n, v, l, base, s.metallic, s.roughness)));
+                radiance = add(
+                    radiance,
+                    mul(e, pbr_brdf_cos(n, v, l, base, s.metallic, s.roughness)),
+                );
             }
         }
     }
@@ -198,16 +221,28 @@ pub fn pbr_neutral(color: Vec3) -> Vec3 {
 /// tonemap.frag: exposure (a linear scale, 2^EV), the curve, and the clamp to [0, 1]. The sRGB
 /// encoding after it is the output target's; [`srgb_encode`] is its CPU side.
 pub fn tonemap(hdr: Vec3, exposure: f32) -> Vec3 {
-    let c = if hdr.iter().any(|v| !v.is_finite()) { [0.0; 3] } else { hdr };
+    let c = if hdr.iter().any(|v| !v.is_finite()) {
+        [0.0; 3]
+    } else {
+        hdr
+    };
     let c = [c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)];
     let c = pbr_neutral(scale(c, exposure));
-    [c[0].clamp(0.0, 1.0), c[1].clamp(0.0, 1.0), c[2].clamp(0.0, 1.0)]
+    [
+        c[0].clamp(0.0, 1.0),
+        c[1].clamp(0.0, 1.0),
+        c[2].clamp(0.0, 1.0),
+    ]
 }
 
 /// Linear [0, 1] to an sRGB-encoded byte.
 pub fn srgb_encode(linear: f32) -> u8 {
     let l = linear.clamp(0.0, 1.0);
-    let s = if l <= 0.0031308 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 };
+    let s = if l <= 0.0031308 {
+        12.92 * l
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
     (s * 255.0 + 0.5) as u8
 }
 

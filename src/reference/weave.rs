@@ -87,7 +87,10 @@ macro_rules! weave_precision {
             /// Where to sample the weave texture (one repeat, REPEAT addressing) for texture
             /// coordinates `uv`: `uv · cell_per_uv / (cols, rows)`.
             pub fn weave_st(uv: [$t; 2], cell_per_uv: $t, cols: u32, rows: u32) -> [$t; 2] {
-                [uv[0] * cell_per_uv / cols as $t, uv[1] * cell_per_uv / rows as $t]
+                [
+                    uv[0] * cell_per_uv / cols as $t,
+                    uv[1] * cell_per_uv / rows as $t,
+                ]
             }
 
             /// Is cell `(i, j)` weft-up? `i < cols`, `j < rows`.
@@ -202,9 +205,10 @@ macro_rules! weave_precision {
                     x_band[k] = weave_measure(x0, x1, px, c + g, c + 1.0 - g);
                     x_low[k] = weave_measure(x0, x1, px, c, c + dive);
                     x_high[k] = weave_measure(x0, x1, px, c + 1.0 - dive, c + 1.0);
-                    x_strip[k] = weave_measure(x0, x1, px, c, c + g) + weave_measure(x0, x1, px, c + 1.0 - g, c + 1.0);
-                    x_strip_dark[k] =
-                        weave_measure(x0, x1, px, c + q, c + g) + weave_measure(x0, x1, px, c + 1.0 - g, c + 1.0 - q);
+                    x_strip[k] = weave_measure(x0, x1, px, c, c + g)
+                        + weave_measure(x0, x1, px, c + 1.0 - g, c + 1.0);
+                    x_strip_dark[k] = weave_measure(x0, x1, px, c + q, c + g)
+                        + weave_measure(x0, x1, px, c + 1.0 - g, c + 1.0 - q);
                 }
                 let mut warp: $t = 0.0;
                 let mut weft: $t = 0.0;
@@ -218,9 +222,10 @@ macro_rules! weave_precision {
                     let y_band = weave_measure(y0, y1, py, r + g, r + 1.0 - g);
                     let y_low = weave_measure(y0, y1, py, r, r + dive);
                     let y_high = weave_measure(y0, y1, py, r + 1.0 - dive, r + 1.0);
-                    let y_strip = weave_measure(y0, y1, py, r, r + g) + weave_measure(y0, y1, py, r + 1.0 - g, r + 1.0);
-                    let y_strip_dark =
-                        weave_measure(y0, y1, py, r + q, r + g) + weave_measure(y0, y1, py, r + 1.0 - g, r + 1.0 - q);
+                    let y_strip = weave_measure(y0, y1, py, r, r + g)
+                        + weave_measure(y0, y1, py, r + 1.0 - g, r + 1.0);
+                    let y_strip_dark = weave_measure(y0, y1, py, r + q, r + g)
+                        + weave_measure(y0, y1, py, r + 1.0 - g, r + 1.0 - q);
                     let below = (j + w.rows - 1) % w.rows;
                     let above = (j + 1) % w.rows;
                     for i in 0..w.cols {
@@ -229,14 +234,16 @@ macro_rules! weave_precision {
                             // Weft on top across the cell; the warp shows in the strips beside it.
                             let left = !weave_weft_up(w, (i + w.cols - 1) % w.cols, j);
                             let right = !weave_weft_up(w, (i + 1) % w.cols, j);
-                            let dive_x = (if left { x_low[k] } else { 0.0 }) + (if right { x_high[k] } else { 0.0 });
+                            let dive_x = (if left { x_low[k] } else { 0.0 })
+                                + (if right { x_high[k] } else { 0.0 });
                             weft += x_full[k] * y_band;
                             warp += x_band[k] * y_strip;
                             dark += dive_x * y_band + x_band[k] * y_strip_dark;
                         } else {
                             let lo = weave_weft_up(w, i, below);
                             let hi = weave_weft_up(w, i, above);
-                            let dive_y = (if lo { y_low } else { 0.0 }) + (if hi { y_high } else { 0.0 });
+                            let dive_y =
+                                (if lo { y_low } else { 0.0 }) + (if hi { y_high } else { 0.0 });
                             warp += x_band[k] * y_full;
                             weft += x_strip[k] * y_band;
                             dark += x_band[k] * dive_y + x_strip_dark[k] * y_band;
@@ -253,7 +260,11 @@ macro_rules! weave_precision {
     };
 }
 
-weave_precision!(single, f32, "The f32 path: the twin of `glsl/include/weave.glsl`.");
+weave_precision!(
+    single,
+    f32,
+    "The f32 path: the twin of `glsl/include/weave.glsl`."
+);
 weave_precision!(double, f64, "The f64 reference.");
 
 use crate::fabric::FabricParams;

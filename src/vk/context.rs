@@ -38,7 +38,9 @@ impl DeviceChoice {
 
     /// The choice named by `WEFT_DEVICE`, or `Auto`.
     pub fn from_env() -> DeviceChoice {
-        std::env::var("WEFT_DEVICE").map(|v| DeviceChoice::parse(&v)).unwrap_or_default()
+        std::env::var("WEFT_DEVICE")
+            .map(|v| DeviceChoice::parse(&v))
+            .unwrap_or_default()
     }
 }
 
@@ -121,7 +123,9 @@ unsafe extern "system" fn debug_callback(
         if data.p_message.is_null() {
             String::from("(no message)")
         } else {
-            CStr::from_ptr(data.p_message).to_string_lossy().into_owned()
+            CStr::from_ptr(data.p_message)
+                .to_string_lossy()
+                .into_owned()
         }
     };
     let level = if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
@@ -143,18 +147,23 @@ fn no_driver(detail: &str) -> Error {
 }
 
 pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
-    move |result| match result {
+    move |result| {
+        match result {
         vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
             Error::device(format!("{what}: the device ran out of memory ({result}); try a smaller --size or a smaller scene"))
         }
         _ => Error::Vulkan { what, result },
     }
+    }
 }
 
 impl Context {
     pub fn new(options: &ContextOptions) -> crate::Result<Context> {
-        let entry = unsafe { ash::Entry::load() }
-            .map_err(|e| no_driver(&format!("the Vulkan loader libvulkan.so.1 could not be loaded: {e}")))?;
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| {
+            no_driver(&format!(
+                "the Vulkan loader libvulkan.so.1 could not be loaded: {e}"
+            ))
+        })?;
 
         let mut layers: Vec<*const i8> = Vec::new();
         let mut extensions: Vec<*const i8> = Vec::new();
@@ -183,7 +192,8 @@ impl Context {
         let messages: Box<Mutex<Vec<String>>> = Box::new(Mutex::new(Vec::new()));
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
             )
             .message_type(
                 vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -197,14 +207,17 @@ impl Context {
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
         if options.validate {
-            create_info = create_info.push_next(&mut validation_features).push_next(&mut messenger_info);
+            create_info = create_info
+                .push_next(&mut validation_features)
+                .push_next(&mut messenger_info);
         }
-        let instance = unsafe { entry.create_instance(&create_info, None) }.map_err(|e| match e {
-            vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
-                no_driver(&format!("creating a Vulkan 1.3 instance failed: {e}"))
-            }
-            other => vkerr("vkCreateInstance")(other),
-        })?;
+        let instance =
+            unsafe { entry.create_instance(&create_info, None) }.map_err(|e| match e {
+                vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
+                    no_driver(&format!("creating a Vulkan 1.3 instance failed: {e}"))
+                }
+                other => vkerr("vkCreateInstance")(other),
+            })?;
         let debug = if options.validate {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             // A fresh copy: the one above was chained into the instance's pNext list.
@@ -225,7 +238,10 @@ impl Context {
 
         // From here on, a failure must still destroy the instance: keep it in a guard.
         struct InstanceGuard(
-            Option<(ash::Instance, Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>)>,
+            Option<(
+                ash::Instance,
+                Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+            )>,
         );
         impl Drop for InstanceGuard {
             fn drop(&mut self) {
@@ -256,7 +272,11 @@ impl Context {
         // instead of a second, so CPU devices filter trilinearly; real GPUs get up to 16x.
         let anisotropy = supported.features.sampler_anisotropy == vk::TRUE && !info.is_cpu();
         let float64 = supported.features.shader_float64 == vk::TRUE;
-        let (dr, s2, m4) = (supported13.dynamic_rendering, supported13.synchronization2, supported13.maintenance4);
+        let (dr, s2, m4) = (
+            supported13.dynamic_rendering,
+            supported13.synchronization2,
+            supported13.maintenance4,
+        );
         if dr != vk::TRUE || s2 != vk::TRUE || m4 != vk::TRUE {
             return Err(Error::NoVulkan(format!(
                 "The Vulkan device '{}' lacks dynamic rendering, synchronization2 or maintenance4, which weft needs: update the driver (Mesa >= 22) or choose another device with --device / WEFT_DEVICE.",
@@ -275,8 +295,12 @@ impl Context {
         let base_features = vk::PhysicalDeviceFeatures::default()
             .sampler_anisotropy(anisotropy)
             .shader_float64(float64);
-        let mut features = vk::PhysicalDeviceFeatures2::default().features(base_features).push_next(&mut features13);
-        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_infos).push_next(&mut features);
+        let mut features = vk::PhysicalDeviceFeatures2::default()
+            .features(base_features)
+            .push_next(&mut features13);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_infos)
+            .push_next(&mut features);
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .map_err(vkerr("vkCreateDevice"))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -305,7 +329,9 @@ impl Context {
                     device.destroy_command_pool(command_pool, None);
                     device.destroy_device(None);
                 }
-                return Err(Error::device(format!("creating the memory allocator failed: {e}")));
+                return Err(Error::device(format!(
+                    "creating the memory allocator failed: {e}"
+                )));
             }
         };
 
@@ -337,7 +363,11 @@ impl Context {
 
     /// Every validation warning and error reported since the last call.
     pub fn take_validation_messages(&self) -> Vec<String> {
-        self.shared.messages.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default()
+        self.shared
+            .messages
+            .lock()
+            .map(|mut v| std::mem::take(&mut *v))
+            .unwrap_or_default()
     }
 
     /// `Err(Error::Validation)` if the validation layer reported anything since the last call.
@@ -354,7 +384,9 @@ impl Context {
     /// test can prove that validation messages are caught. Harmless to the driver.
     #[doc(hidden)]
     pub fn provoke_validation_error(&self) {
-        let info = vk::BufferCreateInfo::default().size(16).usage(vk::BufferUsageFlags::empty());
+        let info = vk::BufferCreateInfo::default()
+            .size(16)
+            .usage(vk::BufferUsageFlags::empty());
         if let Ok(b) = unsafe { self.shared.device.create_buffer(&info, None) } {
             unsafe { self.shared.device.destroy_buffer(b, None) };
         }
@@ -379,19 +411,31 @@ fn choose_device(
     instance: &ash::Instance,
     devices: &[vk::PhysicalDevice],
     choice: &DeviceChoice,
-) -> crate::Result<(vk::PhysicalDevice, u32, DeviceInfo, vk::PhysicalDeviceLimits)> {
+) -> crate::Result<(
+    vk::PhysicalDevice,
+    u32,
+    DeviceInfo,
+    vk::PhysicalDeviceLimits,
+)> {
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
         unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
         let props = props2.properties;
-        let name = unsafe { CStr::from_ptr(props.device_name.as_ptr()) }.to_string_lossy().into_owned();
-        let driver_name = unsafe { CStr::from_ptr(driver.driver_name.as_ptr()) }.to_string_lossy().into_owned();
-        let driver_info = unsafe { CStr::from_ptr(driver.driver_info.as_ptr()) }.to_string_lossy().into_owned();
+        let name = unsafe { CStr::from_ptr(props.device_name.as_ptr()) }
+            .to_string_lossy()
+            .into_owned();
+        let driver_name = unsafe { CStr::from_ptr(driver.driver_name.as_ptr()) }
+            .to_string_lossy()
+            .into_owned();
+        let driver_info = unsafe { CStr::from_ptr(driver.driver_info.as_ptr()) }
+            .to_string_lossy()
+            .into_owned();
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let family = families.iter().position(|f| {
-            f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+            f.queue_flags
+                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
         });
         let v = props.api_version;
         let info = DeviceInfo {
@@ -399,14 +443,27 @@ fn choose_device(
             device_type: device_type_name(props.device_type).into(),
             driver_name,
             driver_info,
-            api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
+            api_version: format!(
+                "{}.{}.{}",
+                vk::api_version_major(v),
+                vk::api_version_minor(v),
+                vk::api_version_patch(v)
+            ),
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
             timestamp_period_ns: props.limits.timestamp_period,
             timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE
                 && family.is_some_and(|f| families[f].timestamp_valid_bits > 0),
         };
         let usable = family.is_some() && v >= vk::API_VERSION_1_3;
-        candidates.push((index, pd, family.unwrap_or(0) as u32, info, props.limits, props.device_type, usable));
+        candidates.push((
+            index,
+            pd,
+            family.unwrap_or(0) as u32,
+            info,
+            props.limits,
+            props.device_type,
+            usable,
+        ));
     }
     let rank = |t: vk::PhysicalDeviceType| match t {
         vk::PhysicalDeviceType::DISCRETE_GPU => 0,
@@ -418,17 +475,28 @@ fn choose_device(
     let list = || {
         candidates
             .iter()
-            .map(|c| format!("{}: {} ({}, Vulkan {})", c.0, c.3.name, c.3.device_type, c.3.api_version))
+            .map(|c| {
+                format!(
+                    "{}: {} ({}, Vulkan {})",
+                    c.0, c.3.name, c.3.device_type, c.3.api_version
+                )
+            })
             .collect::<Vec<_>>()
             .join("; ")
     };
     let chosen = match choice {
-        DeviceChoice::Auto => candidates.iter().filter(|c| c.6).min_by_key(|c| (rank(c.5), c.0)),
-        DeviceChoice::Cpu => candidates.iter().find(|c| c.6 && c.5 == vk::PhysicalDeviceType::CPU),
+        DeviceChoice::Auto => candidates
+            .iter()
+            .filter(|c| c.6)
+            .min_by_key(|c| (rank(c.5), c.0)),
+        DeviceChoice::Cpu => candidates
+            .iter()
+            .find(|c| c.6 && c.5 == vk::PhysicalDeviceType::CPU),
         DeviceChoice::Named(n) => {
             let lower = n.to_ascii_lowercase();
             candidates.iter().find(|c| {
-                c.6 && (n.parse::<usize>().ok() == Some(c.0) || c.3.name.to_ascii_lowercase().contains(&lower))
+                c.6 && (n.parse::<usize>().ok() == Some(c.0)
+                    || c.3.name.to_ascii_lowercase().contains(&lower))
             })
         }
     };

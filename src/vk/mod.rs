@@ -18,8 +18,8 @@ pub use ash::vk::{BufferUsageFlags, ImageUsageFlags};
 pub use cmd::{Attachment, Cmd, Cull, Usage};
 pub use context::{Context, ContextOptions, DeviceChoice, DeviceInfo};
 pub use pipeline::{
-    Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline, Resource, SetLayout,
-    Stages, VertexLayout,
+    Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline,
+    Resource, SetLayout, Stages, VertexLayout,
 };
 pub use resources::{Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler};
 

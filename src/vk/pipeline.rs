@@ -60,7 +60,11 @@ pub struct SetLayout {
 
 impl Drop for SetLayout {
     fn drop(&mut self) {
-        unsafe { self.shared.device.destroy_descriptor_set_layout(self.raw, None) };
+        unsafe {
+            self.shared
+                .device
+                .destroy_descriptor_set_layout(self.raw, None)
+        };
     }
 }
 
@@ -85,7 +89,9 @@ impl Drop for Pipeline {
     fn drop(&mut self) {
         unsafe {
             self.shared.device.destroy_pipeline(self.raw, None);
-            self.shared.device.destroy_pipeline_layout(self.layout, None);
+            self.shared
+                .device
+                .destroy_pipeline_layout(self.layout, None);
         }
     }
 }
@@ -158,14 +164,26 @@ impl Drop for ShaderModule<'_> {
     }
 }
 
-fn module<'a>(shared: &'a Shared, shader: &Shader, expect: Stage) -> crate::Result<ShaderModule<'a>> {
+fn module<'a>(
+    shared: &'a Shared,
+    shader: &Shader,
+    expect: Stage,
+) -> crate::Result<ShaderModule<'a>> {
     if shader.stage != expect {
-        return Err(Error::device(format!("shader {} is a {:?} shader, used as {:?}", shader.name, shader.stage, expect)));
+        return Err(Error::device(format!(
+            "shader {} is a {:?} shader, used as {:?}",
+            shader.name, shader.stage, expect
+        )));
     }
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(shader.spirv))
-        .map_err(|e| Error::device(format!("embedded SPIR-V of {} is malformed: {e}", shader.name)))?;
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(shader.spirv)).map_err(|e| {
+        Error::device(format!(
+            "embedded SPIR-V of {} is malformed: {e}",
+            shader.name
+        ))
+    })?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
-    let raw = unsafe { shared.device.create_shader_module(&info, None) }.map_err(vkerr("vkCreateShaderModule"))?;
+    let raw = unsafe { shared.device.create_shader_module(&info, None) }
+        .map_err(vkerr("vkCreateShaderModule"))?;
     Ok(ShaderModule { shared, raw })
 }
 
@@ -178,7 +196,11 @@ fn specialization(constants: &[(u32, u32)]) -> Specialization {
     let mut entries = Vec::new();
     let mut data = Vec::new();
     for (i, &(id, value)) in constants.iter().enumerate() {
-        entries.push(vk::SpecializationMapEntry { constant_id: id, offset: (i * 4) as u32, size: 4 });
+        entries.push(vk::SpecializationMapEntry {
+            constant_id: id,
+            offset: (i * 4) as u32,
+            size: 4,
+        });
         data.extend_from_slice(&value.to_ne_bytes());
     }
     Specialization { entries, data }
@@ -199,17 +221,31 @@ impl Context {
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&vk_bindings);
         let raw = unsafe { self.shared.device.create_descriptor_set_layout(&info, None) }
             .map_err(vkerr("vkCreateDescriptorSetLayout"))?;
-        Ok(SetLayout { shared: self.shared.clone(), raw, bindings: bindings.to_vec() })
+        Ok(SetLayout {
+            shared: self.shared.clone(),
+            raw,
+            bindings: bindings.to_vec(),
+        })
     }
 
-    fn pipeline_layout(&self, sets: &[&SetLayout], push_size: u32, stages: vk::ShaderStageFlags) -> crate::Result<vk::PipelineLayout> {
+    fn pipeline_layout(
+        &self,
+        sets: &[&SetLayout],
+        push_size: u32,
+        stages: vk::ShaderStageFlags,
+    ) -> crate::Result<vk::PipelineLayout> {
         let raw_sets: Vec<_> = sets.iter().map(|s| s.raw).collect();
-        let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_size }];
+        let ranges = [vk::PushConstantRange {
+            stage_flags: stages,
+            offset: 0,
+            size: push_size,
+        }];
         let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&raw_sets);
         if push_size > 0 {
             info = info.push_constant_ranges(&ranges);
         }
-        unsafe { self.shared.device.create_pipeline_layout(&info, None) }.map_err(vkerr("vkCreatePipelineLayout"))
+        unsafe { self.shared.device.create_pipeline_layout(&info, None) }
+            .map_err(vkerr("vkCreatePipelineLayout"))
     }
 
     pub fn create_graphics_pipeline(&self, desc: &GraphicsDesc) -> crate::Result<Pipeline> {
@@ -217,9 +253,14 @@ impl Context {
         let vs = module(&self.shared, desc.vertex, Stage::Vertex)?;
         let fs = module(&self.shared, desc.fragment, Stage::Fragment)?;
         let spec = specialization(desc.fragment_constants);
-        let spec_info = vk::SpecializationInfo::default().map_entries(&spec.entries).data(&spec.data);
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&spec.entries)
+            .data(&spec.data);
         let stages = [
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs.raw).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vs.raw)
+                .name(c"main"),
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(fs.raw)
@@ -228,10 +269,21 @@ impl Context {
         ];
         let (vbind, vattrs) = match &desc.vertex_layout {
             Some(l) => (
-                vec![vk::VertexInputBindingDescription { binding: 0, stride: l.stride, input_rate: vk::VertexInputRate::VERTEX }],
+                vec![vk::VertexInputBindingDescription {
+                    binding: 0,
+                    stride: l.stride,
+                    input_rate: vk::VertexInputRate::VERTEX,
+                }],
                 l.attributes
                     .iter()
-                    .map(|&(location, format, offset)| vk::VertexInputAttributeDescription { location, binding: 0, format, offset })
+                    .map(
+                        |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                            location,
+                            binding: 0,
+                            format,
+                            offset,
+                        },
+                    )
                     .collect(),
             ),
             None => (vec![], vec![]),
@@ -239,8 +291,11 @@ impl Context {
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&vbind)
             .vertex_attribute_descriptions(&vattrs);
-        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
         // glTF front faces are counter-clockwise. The projection flips Y (Vulkan clip space is
         // Y-down), and Vulkan's facing test is defined in that Y-down framebuffer space, so
         // counter-clockwise stays front.
@@ -249,7 +304,8 @@ impl Context {
             .cull_mode(vk::CullModeFlags::BACK)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some())
             .depth_write_enable(desc.depth_format.is_some())
@@ -257,15 +313,26 @@ impl Context {
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
-            .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+            .map(|_| {
+                vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+            })
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
+        let dynamic_states = [
+            vk::DynamicState::VIEWPORT,
+            vk::DynamicState::SCISSOR,
+            vk::DynamicState::CULL_MODE,
+        ];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(desc.color_formats)
             .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
-        let layout = self.pipeline_layout(desc.set_layouts, desc.push_constant_size, desc.push_stages.0)?;
+        let layout = self.pipeline_layout(
+            desc.set_layouts,
+            desc.push_constant_size,
+            desc.push_stages.0,
+        )?;
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
@@ -278,7 +345,9 @@ impl Context {
             .dynamic_state(&dynamic)
             .layout(layout)
             .push_next(&mut rendering);
-        let raw = match unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) } {
+        let raw = match unsafe {
+            device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        } {
             Ok(p) => p[0],
             Err((_, e)) => {
                 unsafe { device.destroy_pipeline_layout(layout, None) };
@@ -293,7 +362,11 @@ impl Context {
             push_stages: desc.push_stages.0,
             name: desc.name.into(),
             shaders: vec![desc.vertex.name, desc.fragment.name],
-            sets: desc.set_layouts.iter().map(|s| s.bindings.clone()).collect(),
+            sets: desc
+                .set_layouts
+                .iter()
+                .map(|s| s.bindings.clone())
+                .collect(),
             push_constant_size: desc.push_constant_size,
             constants: desc.fragment_constants.to_vec(),
         })
@@ -303,15 +376,25 @@ impl Context {
         let device = &self.shared.device;
         let cs = module(&self.shared, desc.shader, Stage::Compute)?;
         let spec = specialization(desc.constants);
-        let spec_info = vk::SpecializationInfo::default().map_entries(&spec.entries).data(&spec.data);
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&spec.entries)
+            .data(&spec.data);
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(cs.raw)
             .name(c"main")
             .specialization_info(&spec_info);
-        let layout = self.pipeline_layout(desc.set_layouts, desc.push_constant_size, vk::ShaderStageFlags::COMPUTE)?;
-        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
-        let raw = match unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) } {
+        let layout = self.pipeline_layout(
+            desc.set_layouts,
+            desc.push_constant_size,
+            vk::ShaderStageFlags::COMPUTE,
+        )?;
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout);
+        let raw = match unsafe {
+            device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+        } {
             Ok(p) => p[0],
             Err((_, e)) => {
                 unsafe { device.destroy_pipeline_layout(layout, None) };
@@ -326,7 +409,11 @@ impl Context {
             push_stages: vk::ShaderStageFlags::COMPUTE,
             name: desc.name.into(),
             shaders: vec![desc.shader.name],
-            sets: desc.set_layouts.iter().map(|s| s.bindings.clone()).collect(),
+            sets: desc
+                .set_layouts
+                .iter()
+                .map(|s| s.bindings.clone())
+                .collect(),
             push_constant_size: desc.push_constant_size,
             constants: desc.constants.to_vec(),
         })
@@ -336,29 +423,58 @@ impl Context {
     pub fn create_descriptor_pool(&self, max_sets: u32) -> crate::Result<DescriptorPool> {
         let n = max_sets.max(1) * 16;
         let sizes = [
-            vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: n },
-            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: n },
-            vk::DescriptorPoolSize { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, descriptor_count: n },
-            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_IMAGE, descriptor_count: n },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::UNIFORM_BUFFER,
+                descriptor_count: n,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: n,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                descriptor_count: n,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_IMAGE,
+                descriptor_count: n,
+            },
         ];
-        let info = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets.max(1)).pool_sizes(&sizes);
-        let raw = unsafe { self.shared.device.create_descriptor_pool(&info, None) }.map_err(vkerr("vkCreateDescriptorPool"))?;
-        Ok(DescriptorPool { shared: self.shared.clone(), raw })
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(max_sets.max(1))
+            .pool_sizes(&sizes);
+        let raw = unsafe { self.shared.device.create_descriptor_pool(&info, None) }
+            .map_err(vkerr("vkCreateDescriptorPool"))?;
+        Ok(DescriptorPool {
+            shared: self.shared.clone(),
+            raw,
+        })
     }
 }
 
 impl DescriptorPool {
     /// Allocates a set of `layout` and writes `resources` (binding, resource) into it.
-    pub fn set(&self, layout: &SetLayout, resources: &[(u32, Resource)]) -> crate::Result<DescriptorSet> {
+    pub fn set(
+        &self,
+        layout: &SetLayout,
+        resources: &[(u32, Resource)],
+    ) -> crate::Result<DescriptorSet> {
         let layouts = [layout.raw];
-        let info = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.raw).set_layouts(&layouts);
-        let raw = unsafe { self.shared.device.allocate_descriptor_sets(&info) }.map_err(vkerr("vkAllocateDescriptorSets"))?[0];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.raw)
+            .set_layouts(&layouts);
+        let raw = unsafe { self.shared.device.allocate_descriptor_sets(&info) }
+            .map_err(vkerr("vkAllocateDescriptorSets"))?[0];
         let mut buffer_infos = Vec::new();
         let mut image_infos = Vec::new();
         for (_, r) in resources {
             match r {
                 Resource::Uniform(b) | Resource::Storage(b) => {
-                    buffer_infos.push([vk::DescriptorBufferInfo { buffer: b.raw, offset: 0, range: vk::WHOLE_SIZE }])
+                    buffer_infos.push([vk::DescriptorBufferInfo {
+                        buffer: b.raw,
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    }])
                 }
                 Resource::Sampled(img, s) => image_infos.push([vk::DescriptorImageInfo {
                     sampler: s.raw,
@@ -367,7 +483,11 @@ impl DescriptorPool {
                 }]),
                 Resource::StorageImage(img, level) => image_infos.push([vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
-                    image_view: if img.mip_views.is_empty() { img.view } else { img.mip_views[*level as usize] },
+                    image_view: if img.mip_views.is_empty() {
+                        img.view
+                    } else {
+                        img.mip_views[*level as usize]
+                    },
                     image_layout: vk::ImageLayout::GENERAL,
                 }]),
             }
@@ -375,23 +495,29 @@ impl DescriptorPool {
         let (mut bi, mut ii) = (0, 0);
         let mut writes = Vec::new();
         for (binding, r) in resources {
-            let w = vk::WriteDescriptorSet::default().dst_set(raw).dst_binding(*binding);
+            let w = vk::WriteDescriptorSet::default()
+                .dst_set(raw)
+                .dst_binding(*binding);
             let w = match r {
                 Resource::Uniform(_) => {
                     bi += 1;
-                    w.descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&buffer_infos[bi - 1])
+                    w.descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                        .buffer_info(&buffer_infos[bi - 1])
                 }
                 Resource::Storage(_) => {
                     bi += 1;
-                    w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(&buffer_infos[bi - 1])
+                    w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .buffer_info(&buffer_infos[bi - 1])
                 }
                 Resource::Sampled(..) => {
                     ii += 1;
-                    w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(&image_infos[ii - 1])
+                    w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                        .image_info(&image_infos[ii - 1])
                 }
                 Resource::StorageImage(..) => {
                     ii += 1;
-                    w.descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(&image_infos[ii - 1])
+                    w.descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                        .image_info(&image_infos[ii - 1])
                 }
             };
             writes.push(w);

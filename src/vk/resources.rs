@@ -45,7 +45,10 @@ impl Buffer {
         let start = offset as usize;
         let end = start + bytes.len();
         if end > slice.len() {
-            return Err(Error::device(format!("write of {} bytes past the end of buffer '{name}'", bytes.len())));
+            return Err(Error::device(format!(
+                "write of {} bytes past the end of buffer '{name}'",
+                bytes.len()
+            )));
         }
         slice[start..end].copy_from_slice(bytes);
         Ok(())
@@ -85,7 +88,14 @@ pub struct ImageDesc {
 
 impl ImageDesc {
     pub fn new_2d(name: impl Into<String>, format: vk::Format, width: u32, height: u32) -> Self {
-        ImageDesc { name: name.into(), format, width, height, mip_levels: 1, usage: vk::ImageUsageFlags::empty() }
+        ImageDesc {
+            name: name.into(),
+            format,
+            width,
+            height,
+            mip_levels: 1,
+            usage: vk::ImageUsageFlags::empty(),
+        }
     }
     pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
         self.usage |= usage;
@@ -99,7 +109,10 @@ impl ImageDesc {
 }
 
 pub fn is_depth(format: vk::Format) -> bool {
-    matches!(format, vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT)
+    matches!(
+        format,
+        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT
+    )
 }
 
 pub struct Image {
@@ -205,7 +218,10 @@ impl Context {
     ) -> crate::Result<Buffer> {
         let size = size.max(16);
         let device = &self.shared.device;
-        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None) }.map_err(vkerr("vkCreateBuffer"))?;
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let location = match location {
@@ -234,9 +250,16 @@ impl Context {
                 return Err(alloc_error(name, e));
             }
         };
-        let buffer = Buffer { shared: self.shared.clone(), raw, allocation: Some(allocation), size, name: name.into() };
+        let buffer = Buffer {
+            shared: self.shared.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+            name: name.into(),
+        };
         let a = buffer.allocation.as_ref().expect("just set");
-        unsafe { device.bind_buffer_memory(raw, a.memory(), a.offset()) }.map_err(vkerr("vkBindBufferMemory"))?;
+        unsafe { device.bind_buffer_memory(raw, a.memory(), a.offset()) }
+            .map_err(vkerr("vkBindBufferMemory"))?;
         Ok(buffer)
     }
 
@@ -247,7 +270,12 @@ impl Context {
         usage: vk::BufferUsageFlags,
         data: &[T],
     ) -> crate::Result<Buffer> {
-        let mut b = self.create_buffer(name, std::mem::size_of_val(data) as u64, usage, BufferLocation::Upload)?;
+        let mut b = self.create_buffer(
+            name,
+            std::mem::size_of_val(data) as u64,
+            usage,
+            BufferLocation::Upload,
+        )?;
         b.write(0, data)?;
         Ok(b)
     }
@@ -264,7 +292,11 @@ impl Context {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
-            .extent(vk::Extent3D { width: desc.width, height: desc.height, depth: 1 })
+            .extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            })
             .mip_levels(desc.mip_levels)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
@@ -273,11 +305,16 @@ impl Context {
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let raw = unsafe { device.create_image(&info, None) }.map_err(|e| match e {
-            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => Error::device(format!(
-                "image '{}' of {}x{} does not fit in device memory: choose a smaller --size",
-                desc.name, desc.width, desc.height
-            )),
-            other => Error::Vulkan { what: "vkCreateImage", result: other },
+            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+                Error::device(format!(
+                    "image '{}' of {}x{} does not fit in device memory: choose a smaller --size",
+                    desc.name, desc.width, desc.height
+                ))
+            }
+            other => Error::Vulkan {
+                what: "vkCreateImage",
+                result: other,
+            },
         })?;
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
         let allocation = self
@@ -310,7 +347,8 @@ impl Context {
             desc: desc.clone(),
         };
         let a = image.allocation.as_ref().expect("just set");
-        unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.map_err(vkerr("vkBindImageMemory"))?;
+        unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }
+            .map_err(vkerr("vkBindImageMemory"))?;
         let aspect = image.aspect();
         let make_view = |base: u32, count: u32| {
             let info = vk::ImageViewCreateInfo::default()
@@ -344,10 +382,18 @@ impl Context {
                 vk::SamplerAddressMode::REPEAT,
                 self.shared.anisotropy,
             ),
-            Filter::NearestRepeat => (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST, vk::SamplerAddressMode::REPEAT, false),
-            Filter::NearestClamp => {
-                (vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST, vk::SamplerAddressMode::CLAMP_TO_EDGE, false)
-            }
+            Filter::NearestRepeat => (
+                vk::Filter::NEAREST,
+                vk::SamplerMipmapMode::NEAREST,
+                vk::SamplerAddressMode::REPEAT,
+                false,
+            ),
+            Filter::NearestClamp => (
+                vk::Filter::NEAREST,
+                vk::SamplerMipmapMode::NEAREST,
+                vk::SamplerAddressMode::CLAMP_TO_EDGE,
+                false,
+            ),
         };
         let max_aniso = self.shared.limits.max_sampler_anisotropy.min(16.0);
         let info = vk::SamplerCreateInfo::default()
@@ -361,8 +407,12 @@ impl Context {
             .max_anisotropy(if aniso { max_aniso } else { 1.0 })
             .min_lod(0.0)
             .max_lod(vk::LOD_CLAMP_NONE);
-        let raw = unsafe { self.shared.device.create_sampler(&info, None) }.map_err(vkerr("vkCreateSampler"))?;
-        Ok(Sampler { shared: self.shared.clone(), raw })
+        let raw = unsafe { self.shared.device.create_sampler(&info, None) }
+            .map_err(vkerr("vkCreateSampler"))?;
+        Ok(Sampler {
+            shared: self.shared.clone(),
+            raw,
+        })
     }
 
     /// A timestamp query pool, or None where the device has no timestamps.
@@ -370,8 +420,15 @@ impl Context {
         if !self.shared.info.timestamps {
             return Ok(None);
         }
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(count);
-        let raw = unsafe { self.shared.device.create_query_pool(&info, None) }.map_err(vkerr("vkCreateQueryPool"))?;
-        Ok(Some(QueryPool { shared: self.shared.clone(), raw, count }))
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(count);
+        let raw = unsafe { self.shared.device.create_query_pool(&info, None) }
+            .map_err(vkerr("vkCreateQueryPool"))?;
+        Ok(Some(QueryPool {
+            shared: self.shared.clone(),
+            raw,
+            count,
+        }))
     }
 }
