@@ -12,6 +12,9 @@ layout(constant_id = 0) const uint ACCURACY = 2u;
 layout(constant_id = 1) const uint SAMPLES = 1u;
 // 1: shade fabric pixels with the metallic-roughness BRDF (to measure what the fabric model costs).
 layout(constant_id = 2) const uint FABRIC_AS_PBR = 0u;
+// Light types the scene has (bit 0 directional, 1 point, 2 spot): the code for the others is
+// compiled out (the plan sets this from the scene).
+layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -39,18 +42,30 @@ float distance_falloff(float dist, float range) {
 }
 
 // Direction to the light (unit) and the illuminance it brings, per colour channel.
+// Zero, without the falloff's work, where a point or spot light's range cannot reach p.
 vec3 light_incoming(Light light, vec3 p, out vec3 l) {
     uint type = uint(light.direction_type.w + 0.5);
     vec3 color = light.color_intensity.rgb * light.color_intensity.a;
-    if (type == LIGHT_DIRECTIONAL) {
+    if ((LIGHT_TYPES & 1u) != 0u && type == LIGHT_DIRECTIONAL) {
         l = -light.direction_type.xyz;
         return color;
     }
+    if ((LIGHT_TYPES & 6u) == 0u) {
+        l = vec3(0.0, 1.0, 0.0);
+        return vec3(0.0);
+    }
     vec3 to_light = light.position_range.xyz - p;
-    float dist = length(to_light);
+    float range = light.position_range.w;
+    float dist2 = dot(to_light, to_light);
+    if (range > 0.0 && dist2 >= range * range) {
+        // Culled: out of range.
+        l = vec3(0.0, 1.0, 0.0);
+        return vec3(0.0);
+    }
+    float dist = sqrt(dist2);
     l = dist > 0.0 ? to_light / dist : vec3(0.0, 1.0, 0.0);
     float atten = distance_falloff(dist, light.position_range.w);
-    if (type == LIGHT_SPOT) {
+    if ((LIGHT_TYPES & 4u) != 0u && type == LIGHT_SPOT) {
         float cd = dot(light.direction_type.xyz, -l);
         float a = clamp(cd * light.spot.x + light.spot.y, 0.0, 1.0);
         atten *= a * a;

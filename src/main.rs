@@ -234,6 +234,10 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             frame.stats.draws, frame.stats.triangles
         );
         println!("pipelines  {}", frame.stats.pipelines.join(", "));
+        println!(
+            "weave      {} texture(s), {} dispatch(es) at upload",
+            frame.stats.weave_textures, frame.stats.weave_dispatches
+        );
     }
     Ok(())
 }
@@ -267,6 +271,17 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "triangles": plan.triangles,
             "lights": {"directional": plan.lights.directional, "point": plan.lights.point, "spot": plan.lights.spot},
             "fabric_materials": plan.fabric_materials,
+            "weaves": plan.weaves.iter().map(|w| serde_json::json!({
+                "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "materials": w.materials,
+            })).collect::<Vec<_>>(),
+            "features": {
+                "gaps": plan.features.gaps,
+                "thread_shadowing": plan.features.thread_shadowing,
+                "fresnel": plan.features.fresnel,
+                "coupled_diffuse": plan.features.coupled_diffuse,
+                "far_field_mixture": plan.features.far_field_mixture,
+            },
+            "light_types_mask": plan.light_types_mask(),
             "textures": plan.textures,
             "debug_view": plan.debug_view.name(),
         });

@@ -196,6 +196,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ),
     ("lighting.frag", 1, "SAMPLES: N of supersampled:N, the footprint is sampled at N x N points (default 1)"),
     ("lighting.frag", 2, "FABRIC_AS_PBR: 1 shades fabric pixels with the metallic-roughness BRDF, for cost comparisons (default 0)"),
+    ("lighting.frag", 3, "LIGHT_TYPES: bit mask of the light types whose code is compiled in: 1 directional, 2 point, 4 spot (default 7, all)"),
 ];
 
 /// The package's table of contents: what `manifest.json` holds.

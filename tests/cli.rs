@@ -103,7 +103,7 @@ fn render_writes_png_and_exr() {
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("lighting") && stdout.contains("gbuffer -> lighting -> tonemap"),
+        stdout.contains("lighting") && stdout.contains("weave -> gbuffer -> lighting -> tonemap"),
         "{stdout}"
     );
     let img = image::open(&png).unwrap().to_rgba8();
@@ -120,7 +120,7 @@ fn plan_prints_the_default_scene() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         v["passes"],
-        serde_json::json!(["gbuffer", "lighting", "tonemap"])
+        serde_json::json!(["weave", "gbuffer", "lighting", "tonemap"])
     );
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
 }

@@ -66,7 +66,12 @@ pub fn light_incoming(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
         return (scale(xyz(light.direction_type), -1.0), color);
     }
     let to_light = sub(xyz(light.position_range), p);
-    let dist = dot(to_light, to_light).sqrt();
+    let range = light.position_range[3];
+    let dist2 = dot(to_light, to_light);
+    if range > 0.0 && dist2 >= range * range {
+        return ([0.0, 1.0, 0.0], [0.0; 3]);
+    }
+    let dist = dist2.sqrt();
     let l = if dist > 0.0 {
         scale(to_light, 1.0 / dist)
     } else {

@@ -20,7 +20,7 @@ use crate::vk::{
 use crate::Error;
 
 use super::gpu::{DrawPush, FrameData, GpuLight, GpuMaterial, TonemapPush};
-use super::plan::{Pass, Plan};
+use super::plan::{weave_key, Pass, Plan};
 use super::RenderOptions;
 
 pub const ALBEDO_FORMAT: Format = Format::R8G8B8A8_SRGB;
@@ -54,6 +54,9 @@ pub struct FrameStats {
     pub draws: usize,
     pub triangles: usize,
     pub pipelines: Vec<String>,
+    /// Weave textures of the scene (built by the weave pass at upload) and the pass's dispatches.
+    pub weave_textures: usize,
+    pub weave_dispatches: u32,
 }
 
 /// A rendered frame, read back.
@@ -286,7 +289,8 @@ impl Renderer {
     /// Every pipeline the renderer has made so far (the default variants at least), with its
     /// shaders, set layouts, push-constant size and specialization constants.
     pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
-        self.variants(&RenderOptions::default())?;
+        let options = RenderOptions::default();
+        self.variants(&options, &Plan::new(&Scene::default(), &options))?;
         let mut all = vec![&self.weave_pipeline, &self.tonemap_pipeline];
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
@@ -298,13 +302,16 @@ impl Renderer {
     fn variants(
         &mut self,
         options: &RenderOptions,
+        plan: &Plan,
     ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
         let gbuffer_key = vec![(0, options.accuracy.code()), (1, source)];
+        let light_types = if options.all_features { 7 } else { plan.light_types_mask() };
         let lighting_key = vec![
             (0, options.accuracy.code()),
             (1, options.accuracy.samples()),
             (2, options.fabric_as_pbr as u32),
+            (3, light_types),
         ];
         if !self.gbuffer_variants.contains_key(&gbuffer_key) {
             let vertex_layout = VertexLayout {
@@ -344,7 +351,7 @@ impl Renderer {
         if !self.lighting_variants.contains_key(&lighting_key) {
             let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}]",
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}]",
                     options.accuracy.code(),
                     options.accuracy.samples(),
                     options.fabric_as_pbr as u32
@@ -531,7 +538,7 @@ impl Renderer {
     ) -> crate::Result<Frame> {
         options.validate()?;
         let plan = Plan::new(scene, options);
-        let (gbuffer_key, lighting_key) = self.variants(options)?;
+        let (gbuffer_key, lighting_key) = self.variants(options, &plan)?;
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
             self.targets = None;
@@ -595,6 +602,12 @@ impl Renderer {
 
         for pass in &plan.passes {
             match pass {
+                Pass::Weave => {
+                    // The weave pass ran when the scene was uploaded (once per distinct weave,
+                    // one dispatch per mip level); a frame reuses its textures.
+                    stats.weave_textures = gpu.weaves.len();
+                    stats.weave_dispatches = gpu.weaves.iter().map(|w| w.desc.mip_levels).sum();
+                }
                 Pass::GBuffer => {
                     let frame_set = pool.set(
                         &self.frame_layout,
@@ -987,20 +1000,6 @@ fn weave_uv_offset(fabric: &FabricParams, mesh: &crate::scene::Mesh) -> [f64; 2]
         }
     }
     offset
-}
-
-/// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
-fn weave_key(fabric: &FabricParams) -> [u32; 7] {
-    let p = fabric.weave_push(0, 0);
-    [
-        p.pattern_lo,
-        p.pattern_hi,
-        p.cols,
-        p.rows,
-        p.gap.to_bits(),
-        p.shadow_dist.to_bits(),
-        p.shadow_strength.to_bits(),
-    ]
 }
 
 /// Copies mip 0 of `image` (currently in `from` usage) to the host; `texel` bytes per texel.

@@ -7,7 +7,7 @@ pub mod plan;
 
 pub use frame::{f16_to_f32, Frame, FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer};
 pub use output::{write_exr, write_png};
-pub use plan::{Pass, Plan};
+pub use plan::{FabricFeatures, Pass, Plan, WeavePlan};
 
 use crate::Error;
 
@@ -197,6 +197,9 @@ pub struct RenderOptions {
     /// Shade fabric pixels with the metallic-roughness BRDF instead (for measuring what the
     /// fabric model costs on the same G-buffer).
     pub fabric_as_pbr: bool,
+    /// Compile every feature in, whatever the scene needs (to check that what the plan skips
+    /// changes nothing).
+    pub all_features: bool,
 }
 
 impl Default for RenderOptions {
@@ -211,6 +214,7 @@ impl Default for RenderOptions {
             accuracy: Accuracy::Mixture,
             weave_precision: WeavePrecision::Rgba16f,
             fabric_as_pbr: false,
+            all_features: false,
         }
     }
 }

@@ -6,10 +6,12 @@ use std::fmt;
 
 use crate::scene::{LightKind, Scene};
 
-use super::{DebugView, RenderOptions};
+use super::{Accuracy, DebugView, RenderOptions};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
+    /// Compute pass, once per distinct weave, when the scene is uploaded: the coverage textures.
+    Weave,
     /// Raster pass writing the G-buffer targets and depth.
     GBuffer,
     /// Fullscreen pass: lights x materials from the G-buffer into the HDR target.
@@ -21,6 +23,7 @@ pub enum Pass {
 impl Pass {
     pub fn name(self) -> &'static str {
         match self {
+            Pass::Weave => "weave",
             Pass::GBuffer => "gbuffer",
             Pass::Lighting => "lighting",
             Pass::Tonemap => "tonemap",
@@ -36,6 +39,38 @@ pub struct LightCounts {
     pub spot: usize,
 }
 
+/// One weave texture to build.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeavePlan {
+    pub pattern: String,
+    pub width: u32,
+    pub height: u32,
+    pub levels: u32,
+    /// The fabric materials that share it.
+    pub materials: Vec<String>,
+}
+
+/// Which parts of the fabric model any material needs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FabricFeatures {
+    /// Some weave has gaps between threads (s_g > 0).
+    pub gaps: bool,
+    /// Some weave darkens threads where they dive under others (shadow strength and width > 0).
+    pub thread_shadowing: bool,
+    /// Some material has a specular lobe (Rs > 0).
+    pub fresnel: bool,
+    /// Some material uses the A-S coupled diffuse instead of Lambert.
+    pub coupled_diffuse: bool,
+    /// The far-field two-lobe mixture is evaluated (accuracy mixture or supersampled).
+    pub far_field_mixture: bool,
+}
+
+/// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
+pub(crate) fn weave_key(fabric: &crate::fabric::FabricParams) -> [u32; 7] {
+    let p = fabric.weave_push(0, 0);
+    [p.pattern_lo, p.pattern_hi, p.cols, p.rows, p.gap.to_bits(), p.shadow_dist.to_bits(), p.shadow_strength.to_bits()]
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
     pub width: u32,
@@ -46,11 +81,22 @@ pub struct Plan {
     pub lights: LightCounts,
     /// Materials that use the fabric model (the rest use glTF metallic-roughness).
     pub fabric_materials: usize,
+    /// One per distinct weave (materials differing only in colour or exponents share one).
+    pub weaves: Vec<WeavePlan>,
+    pub features: FabricFeatures,
     pub textures: usize,
     pub debug_view: DebugView,
 }
 
 impl Plan {
+    /// The light types present, as lighting.frag's LIGHT_TYPES bits (1 directional, 2 point,
+    /// 4 spot). A scene with no lights compiles no light code at all.
+    pub fn light_types_mask(&self) -> u32 {
+        (self.lights.directional > 0) as u32
+            | ((self.lights.point > 0) as u32) << 1
+            | ((self.lights.spot > 0) as u32) << 2
+    }
+
     pub fn new(scene: &Scene, options: &RenderOptions) -> Plan {
         let mut lights = LightCounts::default();
         for l in &scene.lights {
@@ -60,23 +106,49 @@ impl Plan {
                 LightKind::Spot { .. } => lights.spot += 1,
             }
         }
-        let triangles = scene
-            .draws
-            .iter()
-            .map(|d| scene.meshes[d.mesh].indices.len() / 3)
-            .sum();
+        let triangles = scene.draws.iter().map(|d| scene.meshes[d.mesh].indices.len() / 3).sum();
+        let mut keys = Vec::new();
+        let mut weaves: Vec<WeavePlan> = Vec::new();
+        let mut features = FabricFeatures::default();
+        for m in &scene.materials {
+            let Some(f) = &m.fabric else { continue };
+            let g = f.to_gpu();
+            features.gaps |= g.gap > 0.0;
+            features.thread_shadowing |= g.shadow_strength > 0.0 && g.shadow_dist > 0.0;
+            features.fresnel |= g.rs > 0.0;
+            features.coupled_diffuse |= f.coupled_diffuse;
+            let key = weave_key(f);
+            match keys.iter().position(|k| *k == key) {
+                Some(i) => weaves[i].materials.push(m.name.clone()),
+                None => {
+                    keys.push(key);
+                    let (width, height) = crate::fabric::weave_level0_size(&f.pattern);
+                    weaves.push(WeavePlan {
+                        pattern: f.pattern.name(),
+                        width,
+                        height,
+                        levels: crate::fabric::weave_mip_count((width, height)),
+                        materials: vec![m.name.clone()],
+                    });
+                }
+            }
+        }
+        features.far_field_mixture =
+            !weaves.is_empty() && matches!(options.accuracy, Accuracy::Mixture | Accuracy::Supersampled(_));
+        let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
+        if !weaves.is_empty() {
+            passes.insert(0, Pass::Weave);
+        }
         Plan {
             width: options.width,
             height: options.height,
-            passes: vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap],
+            passes,
             draws: scene.draws.len(),
             triangles,
             lights,
-            fabric_materials: scene
-                .materials
-                .iter()
-                .filter(|m| m.fabric.is_some())
-                .count(),
+            fabric_materials: scene.materials.iter().filter(|m| m.fabric.is_some()).count(),
+            weaves,
+            features,
             textures: scene.textures.len(),
             debug_view: options.debug_view,
         }
@@ -110,6 +182,17 @@ impl fmt::Display for Plan {
             self.lights.directional, self.lights.point, self.lights.spot
         )?;
         writeln!(f, "materials   {} fabric", self.fabric_materials)?;
+        for w in &self.weaves {
+            let materials = w.materials.join(", ");
+            writeln!(f, "weave       {} {}x{}, {} levels, for {materials}", w.pattern, w.width, w.height, w.levels)?;
+        }
+        let ft = &self.features;
+        writeln!(
+            f,
+            "features    gaps {}, thread shadowing {}, fresnel {}, coupled diffuse {}, far-field mixture {}",
+            ft.gaps, ft.thread_shadowing, ft.fresnel, ft.coupled_diffuse, ft.far_field_mixture
+        )?;
+        writeln!(f, "light code  {:#05b} (1 directional, 2 point, 4 spot)", self.light_types_mask())?;
         writeln!(f, "textures    {}", self.textures)?;
         write!(f, "debug view  {}", self.debug_view.name())
     }
