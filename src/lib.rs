@@ -4,6 +4,7 @@
 //! `fabric` (the cloth material's parameters and weave patterns), `reference` (the CPU twin of
 //! every shader function), `render` (the plan and the passes of a frame).
 
+pub mod bench;
 pub mod fabric;
 pub mod package;
 pub mod reference;

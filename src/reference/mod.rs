@@ -17,6 +17,7 @@
 pub mod brdf;
 pub mod furnace;
 pub mod probe;
+pub mod raster;
 pub mod shading;
 pub mod weave;
 

@@ -129,7 +129,14 @@ impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
         GpuMaterial {
             base_color: m.base_color,
-            emissive_normal: [m.emissive[0], m.emissive[1], m.emissive[2], m.normal_scale],
+            // Without a normal texture the scale is 0: the default 1x1 texture's 128/255 decodes
+            // to 0.0039, not 0, and would tilt every normal by 0.32 degrees.
+            emissive_normal: [
+                m.emissive[0],
+                m.emissive[1],
+                m.emissive[2],
+                if m.normal_texture.is_some() { m.normal_scale } else { 0.0 },
+            ],
             metallic_roughness: [
                 m.metallic,
                 m.roughness,

@@ -1,0 +1,471 @@
+//! A small CPU rasterizer: whole reference images of a [`Scene`] with the reference shading
+//! ([`super::shading::shade`]), to compare with the GPU's frames (tests/regression.rs).
+//!
+//! It does what the G-buffer pass does, without its storage formats: the same camera and
+//! projection ([`FrameData::new`]: reversed-Z, infinite far plane, Y flipped), triangles clipped at
+//! the near plane, back faces culled unless the material is double-sided (whose back faces get
+//! the flipped normal), a depth test per pixel centre, perspective-correct interpolation, and the
+//! shading frame of `gbuffer.frag` (normal, tangent made orthogonal to it, handedness sign).
+//!
+//! Where it differs on purpose, it is the more exact of the two:
+//! - **Weave coverage** is the exact box coverage ([`weave_box_uv`], f64) of the pixel's footprint
+//!   in texture space: the parallelogram spanned by the UV derivatives, which come from the
+//!   triangle's plane (central differences of the perspective-correct interpolation one pixel
+//!   either side). The parallelogram is cut into `subdivisions²` pieces, each replaced by its
+//!   axis-aligned bounding box. The GPU instead samples a trilinear-filtered f16 texture with an
+//!   isotropic footprint (anisotropic filtering is off on lavapipe).
+//! - Nothing is quantised: no RGBA8 base colour, no f16 octahedral normals or coverages, no
+//!   8-bit normal-map texel (the GPU's flat default normal is 128/255, not exactly 0.5).
+//!
+//! Textures are not sampled: a material with any texture is refused with an error (the
+//! reference scenes have none).
+
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+
+use super::shading::{self, Surface};
+use super::weave::weave_box_uv;
+use crate::fabric::FabricParams;
+use crate::render::gpu::{FrameData, GpuLight};
+use crate::scene::{Camera, Material, Scene};
+use crate::Error;
+
+/// What to render.
+#[derive(Clone, Debug)]
+pub struct RasterOptions {
+    pub width: u32,
+    pub height: u32,
+    pub camera: Camera,
+    /// Exposure in EV, as `RenderOptions::exposure`.
+    pub exposure: f32,
+    /// The pixel footprint is cut into `subdivisions²` parallelograms for the weave coverage (1 =
+    /// the bounding box of the whole footprint).
+    pub subdivisions: u32,
+}
+
+/// A CPU-rendered image, laid out as `render::Frame`.
+pub struct RasterImage {
+    pub width: u32,
+    pub height: u32,
+    /// Display-referred RGBA8, sRGB-encoded, rows top to bottom.
+    pub ldr: Vec<u8>,
+    /// Linear HDR radiance before exposure, RGBA f32, rows top to bottom.
+    pub hdr: Vec<f32>,
+    /// Whether a surface covers the pixel.
+    pub covered: Vec<bool>,
+}
+
+/// A vertex after the vertex stage: clip position and the attributes the fragment stage reads.
+#[derive(Clone, Copy, Debug)]
+struct ClipVertex {
+    clip: Vec4,
+    world: Vec3,
+    normal: Vec3,
+    tangent: Vec4,
+    uv: Vec2,
+}
+
+impl ClipVertex {
+    fn lerp(a: &ClipVertex, b: &ClipVertex, t: f32) -> ClipVertex {
+        ClipVertex {
+            clip: a.clip.lerp(b.clip, t),
+            world: a.world.lerp(b.world, t),
+            normal: a.normal.lerp(b.normal, t),
+            tangent: a.tangent.lerp(b.tangent, t),
+            uv: a.uv.lerp(b.uv, t),
+        }
+    }
+}
+
+/// What a drawn triangle needs besides its vertices.
+struct DrawMaterial<'a> {
+    material: &'a Material,
+    /// The sanitised fabric parameters (for the weave) and the GPU record (for shading).
+    fabric: Option<(FabricParams, crate::fabric::GpuFabric)>,
+}
+
+/// The nearest surface found so far at one pixel.
+#[derive(Clone, Copy)]
+struct Fragment {
+    depth: f32,
+    surface: Surface,
+}
+
+/// Renders `scene` on the CPU.
+pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterImage> {
+    let (width, height) = (options.width, options.height);
+    if width == 0
+        || height == 0
+        || width > crate::render::MAX_SIZE
+        || height > crate::render::MAX_SIZE
+    {
+        return Err(Error::input(format!(
+            "reference image size {width}x{height} is out of range"
+        )));
+    }
+    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+    let mut frame = FrameData::new(&options.camera, width, height);
+    frame.light_count = lights.len() as u32;
+    frame.material_count = scene.materials.len().max(1) as u32;
+    let view_proj = Mat4::from_cols_array_2d(&frame.view_proj);
+    let eye = Vec3::new(frame.eye[0], frame.eye[1], frame.eye[2]);
+
+    let default_material = Material::default();
+    let materials: Vec<DrawMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| {
+            if [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture]
+                .iter()
+                .any(Option::is_some)
+            {
+                return Err(Error::input(format!(
+                    "material '{}' of {} has textures: the CPU reference rasterizer does not sample textures",
+                    m.name, scene.source
+                )));
+            }
+            Ok(DrawMaterial { material: m, fabric: m.fabric.as_ref().map(|f| (f.sanitized(), f.to_gpu())) })
+        })
+        .collect::<crate::Result<_>>()?;
+    let fallback = DrawMaterial {
+        material: &default_material,
+        fabric: None,
+    };
+
+    let mut fragments: Vec<Option<Fragment>> = vec![None; (width * height) as usize];
+    let raster = Raster {
+        width,
+        height,
+        subdivisions: options.subdivisions.max(1),
+    };
+    for draw in &scene.draws {
+        let mesh = &scene.meshes[draw.mesh];
+        let dm = materials.get(mesh.material).unwrap_or(&fallback);
+        let world3 = Mat3::from_mat4(draw.world);
+        let det = world3.determinant();
+        let normal_matrix = if det.abs() > 1e-30 {
+            world3.inverse().transpose()
+        } else {
+            Mat3::IDENTITY
+        };
+        let tangent_sign = if det < 0.0 { -1.0 } else { 1.0 };
+        let vertices: Vec<ClipVertex> = mesh
+            .vertices
+            .iter()
+            .map(|v| {
+                let world = draw.world.transform_point3(Vec3::from(v.position));
+                let t = world3 * Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
+                ClipVertex {
+                    clip: view_proj * world.extend(1.0),
+                    world,
+                    normal: normal_matrix * Vec3::from(v.normal),
+                    tangent: t.extend(v.tangent[3] * tangent_sign),
+                    uv: Vec2::from(v.uv),
+                }
+            })
+            .collect();
+        for tri in mesh.indices.chunks_exact(3) {
+            let Some(v) = tri
+                .iter()
+                .map(|&i| vertices.get(i as usize).copied())
+                .collect::<Option<Vec<_>>>()
+            else {
+                continue;
+            };
+            // glTF front faces are counter-clockwise as seen by the viewer; a mirroring world
+            // transform reverses the winding.
+            let face = (v[1].world - v[0].world).cross(v[2].world - v[0].world);
+            let front = (face.dot(eye - v[0].world) > 0.0) == (det >= 0.0);
+            if !front && !dm.material.double_sided {
+                continue;
+            }
+            let polygon = clip_near(&[v[0], v[1], v[2]]);
+            for k in 1..polygon.len().saturating_sub(1) {
+                raster.triangle(
+                    [&polygon[0], &polygon[k], &polygon[k + 1]],
+                    front,
+                    dm,
+                    &mut fragments,
+                );
+            }
+        }
+    }
+
+    let exposure = 2f32.powf(options.exposure);
+    let background = [
+        frame.background[0],
+        frame.background[1],
+        frame.background[2],
+    ];
+    let mut image = RasterImage {
+        width,
+        height,
+        ldr: Vec::with_capacity(fragments.len() * 4),
+        hdr: Vec::with_capacity(fragments.len() * 4),
+        covered: fragments.iter().map(Option::is_some).collect(),
+    };
+    for fragment in &fragments {
+        let hdr = match fragment {
+            Some(f) => shading::shade(&frame, &lights, &f.surface),
+            None => background,
+        };
+        let display = shading::tonemap(hdr, exposure);
+        image.hdr.extend_from_slice(&[hdr[0], hdr[1], hdr[2], 1.0]);
+        image.ldr.extend_from_slice(&[
+            shading::srgb_encode(display[0]),
+            shading::srgb_encode(display[1]),
+            shading::srgb_encode(display[2]),
+            255,
+        ]);
+    }
+    Ok(image)
+}
+
+/// Clips a triangle to the near plane. With the reversed-Z infinite projection clip z is the near
+/// distance and w the view depth, so the visible side is `w - z ≥ 0` (depth ≤ 1); there is no far
+/// plane, and x and y need no clipping since only pixels inside the image are visited.
+fn clip_near(tri: &[ClipVertex; 3]) -> Vec<ClipVertex> {
+    let d = |v: &ClipVertex| v.clip.w - v.clip.z;
+    let mut out = Vec::with_capacity(4);
+    for i in 0..3 {
+        let (a, b) = (&tri[i], &tri[(i + 1) % 3]);
+        let (da, db) = (d(a), d(b));
+        if da >= 0.0 {
+            out.push(*a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(ClipVertex::lerp(a, b, da / (da - db)));
+        }
+    }
+    out
+}
+
+struct Raster {
+    width: u32,
+    height: u32,
+    subdivisions: u32,
+}
+
+/// A triangle in screen space: pixel coordinates (x right, y down), NDC depth and 1/w per vertex.
+struct ScreenTriangle {
+    p: [Vec2; 3],
+    depth: [f32; 3],
+    inv_w: [f32; 3],
+    area: f32,
+}
+
+impl ScreenTriangle {
+    /// Perspective-correct barycentric weights at pixel position `q` (also outside the triangle:
+    /// the plane's extension, for derivatives), and the screen-linear ones (for depth).
+    fn weights(&self, q: Vec2) -> ([f32; 3], [f32; 3]) {
+        let e = edge_weights(&self.p, q, self.area);
+        let pw = [
+            e[0] * self.inv_w[0],
+            e[1] * self.inv_w[1],
+            e[2] * self.inv_w[2],
+        ];
+        let s = pw[0] + pw[1] + pw[2];
+        ([pw[0] / s, pw[1] / s, pw[2] / s], e)
+    }
+}
+
+/// Screen-space barycentric weights of `q` in the triangle `p` of signed area `area`.
+fn edge_weights(p: &[Vec2; 3], q: Vec2, area: f32) -> [f32; 3] {
+    [
+        edge(p[1], p[2], q) / area,
+        edge(p[2], p[0], q) / area,
+        edge(p[0], p[1], q) / area,
+    ]
+}
+
+fn edge(a: Vec2, b: Vec2, q: Vec2) -> f32 {
+    (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x)
+}
+
+/// The top-left rule for a triangle of positive area in y-down pixel coordinates: a pixel centre
+/// exactly on an edge belongs to the triangle only if the edge is a top or a left edge, so a
+/// centre on an edge shared by two triangles is drawn once.
+fn owns_edge(a: Vec2, b: Vec2) -> bool {
+    let d = b - a;
+    (d.y == 0.0 && d.x < 0.0) || d.y > 0.0
+}
+
+impl Raster {
+    fn triangle(
+        &self,
+        v: [&ClipVertex; 3],
+        front: bool,
+        dm: &DrawMaterial,
+        fragments: &mut [Option<Fragment>],
+    ) {
+        let (w, h) = (self.width as f32, self.height as f32);
+        let to_screen =
+            |c: Vec4| Vec2::new((c.x / c.w * 0.5 + 0.5) * w, (c.y / c.w * 0.5 + 0.5) * h);
+        let mut v = v;
+        let mut p = [
+            to_screen(v[0].clip),
+            to_screen(v[1].clip),
+            to_screen(v[2].clip),
+        ];
+        let mut area = edge(p[0], p[1], p[2]);
+        if !(area.abs() > 0.0) || !area.is_finite() {
+            return;
+        }
+        if area < 0.0 {
+            v.swap(1, 2);
+            p.swap(1, 2);
+            area = -area;
+        }
+        let tri = ScreenTriangle {
+            p,
+            depth: [
+                v[0].clip.z / v[0].clip.w,
+                v[1].clip.z / v[1].clip.w,
+                v[2].clip.z / v[2].clip.w,
+            ],
+            inv_w: [1.0 / v[0].clip.w, 1.0 / v[1].clip.w, 1.0 / v[2].clip.w],
+            area,
+        };
+        let min = p[0].min(p[1]).min(p[2]);
+        let max = p[0].max(p[1]).max(p[2]);
+        let x0 = (min.x - 0.5).ceil().max(0.0) as u32;
+        let y0 = (min.y - 0.5).ceil().max(0.0) as u32;
+        let x1 = ((max.x - 0.5).floor().min(w - 1.0)).max(-1.0) as i64;
+        let y1 = ((max.y - 0.5).floor().min(h - 1.0)).max(-1.0) as i64;
+        let owns = [
+            owns_edge(p[1], p[2]),
+            owns_edge(p[2], p[0]),
+            owns_edge(p[0], p[1]),
+        ];
+        for y in y0 as i64..=y1 {
+            for x in x0 as i64..=x1 {
+                let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let e = [
+                    edge(p[1], p[2], q),
+                    edge(p[2], p[0], q),
+                    edge(p[0], p[1], q),
+                ];
+                if !(0..3).all(|i| e[i] > 0.0 || (e[i] == 0.0 && owns[i])) {
+                    continue;
+                }
+                let (_, lin) = tri.weights(q);
+                let depth = lin[0] * tri.depth[0] + lin[1] * tri.depth[1] + lin[2] * tri.depth[2];
+                let index = (y as u32 * self.width + x as u32) as usize;
+                // Reversed-Z: greater is nearer (the pipeline's compare op is GREATER).
+                if fragments[index].is_some_and(|f| !(depth > f.depth)) || !(depth > 0.0) {
+                    continue;
+                }
+                let surface = self.surface(&tri, &v, q, front, dm);
+                fragments[index] = Some(Fragment { depth, surface });
+            }
+        }
+    }
+
+    /// The surface at pixel centre `q`, as gbuffer.frag computes it (less its quantisation).
+    fn surface(
+        &self,
+        tri: &ScreenTriangle,
+        v: &[&ClipVertex; 3],
+        q: Vec2,
+        front: bool,
+        dm: &DrawMaterial,
+    ) -> Surface {
+        let (b, _) = tri.weights(q);
+        let mix3 =
+            |f: &dyn Fn(&ClipVertex) -> Vec3| f(v[0]) * b[0] + f(v[1]) * b[1] + f(v[2]) * b[2];
+        let position = mix3(&|c| c.world);
+        let mut n = mix3(&|c| c.normal);
+        if !(n.length_squared() > 1e-20) {
+            n = (v[1].world - v[0].world).cross(v[2].world - v[0].world);
+        }
+        n = if n.length_squared() > 1e-30 {
+            n.normalize()
+        } else {
+            Vec3::Y
+        };
+        if !front {
+            n = -n;
+        }
+        let t_in = mix3(&|c| c.tangent.truncate());
+        let sign_in = v[0].tangent.w * b[0] + v[1].tangent.w * b[1] + v[2].tangent.w * b[2];
+        let t = t_in - n * n.dot(t_in);
+        let t = if t.length_squared() > 1e-20 {
+            t.normalize()
+        } else {
+            any_tangent(n)
+        };
+        let m = dm.material;
+        let mut surface = Surface {
+            position: position.to_array(),
+            normal: n.to_array(),
+            tangent: t.to_array(),
+            sign: if sign_in < 0.0 { -1.0 } else { 1.0 },
+            base_color: [
+                m.base_color[0].clamp(0.0, 1.0),
+                m.base_color[1].clamp(0.0, 1.0),
+                m.base_color[2].clamp(0.0, 1.0),
+            ],
+            metallic: m.metallic.clamp(0.0, 1.0),
+            roughness: m.roughness.clamp(0.0, 1.0),
+            emissive: [
+                m.emissive[0].max(0.0),
+                m.emissive[1].max(0.0),
+                m.emissive[2].max(0.0),
+            ],
+            coverage: [0.0; 3],
+            fabric: None,
+        };
+        if let Some((params, gpu)) = &dm.fabric {
+            let uv_at = |q: Vec2| {
+                let (b, _) = tri.weights(q);
+                v[0].uv * b[0] + v[1].uv * b[1] + v[2].uv * b[2]
+            };
+            let uv = uv_at(q);
+            // Derivatives of the UV along the pixel grid, from the triangle's plane.
+            let dx = (uv_at(q + Vec2::X) - uv_at(q - Vec2::X)) * 0.5;
+            let dy = (uv_at(q + Vec2::Y) - uv_at(q - Vec2::Y)) * 0.5;
+            surface.coverage = footprint_coverage(params, uv, dx, dy, self.subdivisions);
+            surface.fabric = Some(*gpu);
+        }
+        surface
+    }
+}
+
+/// `any_tangent` of frame.glsl: a unit vector orthogonal to n.
+fn any_tangent(n: Vec3) -> Vec3 {
+    let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    a.cross(n).normalize()
+}
+
+/// The weave coverage `(c_warp, c_weft, sh)` of the pixel footprint `{uv + a·dx + b·dy : a, b in
+/// [-1/2, 1/2]}`: the mean of the exact box coverages of the bounding boxes of its `k × k` pieces
+/// (equal areas, and every coverage is an area fraction, so the mean is the footprint's).
+pub fn footprint_coverage(params: &FabricParams, uv: Vec2, dx: Vec2, dy: Vec2, k: u32) -> [f32; 3] {
+    let k = k.max(1);
+    let (uv, dx, dy) = (uv.as_dvec2(), dx.as_dvec2(), dy.as_dvec2());
+    let half =
+        glam::DVec2::new(dx.x.abs() + dy.x.abs(), dx.y.abs() + dy.y.abs()) * (0.5 / k as f64);
+    let mut sum = [0.0f64; 3];
+    for j in 0..k {
+        for i in 0..k {
+            let a = (i as f64 + 0.5) / k as f64 - 0.5;
+            let b = (j as f64 + 0.5) / k as f64 - 0.5;
+            let c = uv + dx * a + dy * b;
+            let cov = weave_box_uv(
+                params,
+                c.x - half.x,
+                c.x + half.x,
+                c.y - half.y,
+                c.y + half.y,
+            );
+            for (s, v) in sum.iter_mut().zip(cov) {
+                *s += v;
+            }
+        }
+    }
+    let n = (k * k) as f64;
+    [
+        (sum[0] / n) as f32,
+        (sum[1] / n) as f32,
+        (sum[2] / n) as f32,
+    ]
+}

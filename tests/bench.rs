@@ -1,0 +1,168 @@
+//! `weft bench` on a tiny configuration, with validation on: the CSV and the plot are written and
+//! the table has a row for every measurement. No timing assertions: machines are noisy.
+
+mod common;
+
+use weft::bench::{self, BenchConfig, View};
+use weft::render::{Accuracy, WeavePrecision};
+
+#[test]
+fn tiny_bench_writes_every_row_the_csv_and_the_plot() {
+    let out = tempfile::tempdir().expect("a temporary directory");
+    let config = BenchConfig {
+        views: vec![View::Mid, View::Far],
+        variants: vec![
+            (Accuracy::Nearest, WeavePrecision::Rgba8),
+            (Accuracy::Mixture, WeavePrecision::Rgba16f),
+            (Accuracy::Mixture, WeavePrecision::Analytic),
+            (Accuracy::Supersampled(2), WeavePrecision::Analytic),
+        ],
+        ground_truth: Accuracy::Supersampled(4),
+        size: (96, 54),
+        frames: 1,
+        warmup: 0,
+        large_frames: 1,
+        resolutions: vec![(64, 36), (96, 54)],
+        light_counts: vec![1, 3],
+        lights_size: (64, 36),
+        pbr_size: Some((64, 36)),
+        pbr_views: vec![View::CloseUp],
+        out: out.path().join("bench"),
+        progress: false,
+    };
+    let report = bench::run(common::context(), &config).expect("the bench runs");
+
+    assert_eq!(report.ground_truth.len(), 2);
+    assert_eq!(report.accuracy.len(), 2 * 4);
+    assert_eq!(report.resolutions.len(), 2);
+    assert_eq!(report.lights.len(), 2);
+    assert_eq!(report.pbr.len(), 1);
+    for r in &report.accuracy {
+        assert!(
+            r.flip_mean.is_finite() && (0.0..=1.0).contains(&r.flip_mean),
+            "{r:?}"
+        );
+        assert!(r.rmse.is_finite() && r.rmse >= 0.0, "{r:?}");
+        assert!(
+            r.times.gbuffer_ms >= 0.0 && r.times.lighting_ms >= 0.0,
+            "{r:?}"
+        );
+    }
+    // The default scene's cloth is on screen in every view.
+    for g in &report.ground_truth {
+        assert!(g.fabric_fraction > 0.0 && g.fabric_fraction < 1.0, "{g:?}");
+    }
+
+    let table = report.table();
+    for r in &report.accuracy {
+        let row = format!(
+            "{:<9} {:<16} {:<9}",
+            r.view.name(),
+            r.level.name(),
+            r.precision.name()
+        );
+        assert!(
+            table.lines().any(|l| l.starts_with(&row)),
+            "no table row for {row:?} in\n{table}"
+        );
+    }
+    for size in ["64x36", "96x54"] {
+        assert!(
+            table.lines().any(|l| l.starts_with(size)),
+            "no resolution row {size} in\n{table}"
+        );
+    }
+    for n in ["1 ", "3 "] {
+        assert!(
+            table.lines().any(|l| l.starts_with(n)),
+            "no light-count row {n:?} in\n{table}"
+        );
+    }
+    assert!(
+        table.contains("ms per megapixel") && table.contains("ms per light"),
+        "{table}"
+    );
+    assert!(
+        table.contains("close-up") && table.contains("fabric lighting"),
+        "{table}"
+    );
+
+    let csv = std::fs::read_to_string(&report.csv).expect("bench.csv is written");
+    let lines: Vec<&str> = csv.lines().collect();
+    let columns = lines[0].split(',').count();
+    for l in &lines {
+        assert_eq!(l.split(',').count(), columns, "ragged CSV line {l:?}");
+    }
+    let count = |section: &str| {
+        lines
+            .iter()
+            .filter(|l| l.split(',').next() == Some(section))
+            .count()
+    };
+    assert_eq!(count("ground-truth"), 2);
+    assert_eq!(count("accuracy"), 8);
+    assert_eq!(count("resolution"), 2);
+    assert_eq!(count("lights"), 2);
+    assert_eq!(count("pbr-fabric"), 1);
+    assert_eq!(count("fit-resolution"), 1);
+    assert_eq!(count("fit-lights"), 1);
+
+    let png = image::open(&report.png)
+        .expect("bench.png is a readable image")
+        .to_rgb8();
+    assert!(png.width() >= 640 && png.height() >= 400);
+    // Something was drawn in the plot area: not all of it is the white background.
+    let drawn = png.pixels().filter(|p| p.0 != [255, 255, 255]).count();
+    assert!(
+        drawn > (png.width() * png.height()) as usize / 50,
+        "the plot is nearly empty"
+    );
+}
+
+#[test]
+fn presets_are_consistent() {
+    for config in [BenchConfig::default(), BenchConfig::quick()] {
+        assert!(!config.views.is_empty() && !config.variants.is_empty());
+        assert!(config.frames >= 1 && config.light_counts.iter().all(|&n| n >= 1));
+        assert!(matches!(config.ground_truth, Accuracy::Supersampled(n) if n >= 8));
+    }
+    let full = BenchConfig::default();
+    assert_eq!(full.views.len(), 4);
+    // nearest, filtered-params and mixture at every precision; supersampled:2/4/8 analytic only.
+    assert_eq!(full.variants, bench::default_variants());
+    assert_eq!(full.variants.len(), 3 * WeavePrecision::ALL.len() + 3);
+    for level in bench::LEVELS {
+        assert!(
+            full.variants.iter().any(|v| v.0 == level),
+            "{level:?} missing"
+        );
+    }
+    assert!(full.resolutions.contains(&(3840, 2160)));
+    assert_eq!(full.light_counts, vec![1, 4, 16, 64]);
+    assert_eq!(full.pbr_size, Some((1920, 1080)));
+}
+
+#[test]
+fn views_are_deterministic_and_distinct() {
+    let scene = weft::scene::default_scene();
+    let cams: Vec<_> = View::ALL
+        .iter()
+        .map(|v| v.camera(&scene).expect("a camera"))
+        .collect();
+    for (i, a) in cams.iter().enumerate() {
+        let again = View::ALL[i].camera(&scene).unwrap();
+        assert_eq!(a.view, again.view);
+        for b in &cams[i + 1..] {
+            assert_ne!(a.view, b.view);
+        }
+    }
+    for v in View::ALL {
+        assert_eq!(View::parse(v.name()).unwrap(), v);
+    }
+    let lit = bench::with_point_lights(&scene, 16);
+    assert_eq!(lit.lights.len(), 16);
+    assert!(lit
+        .lights
+        .iter()
+        .all(|l| l.range.is_some() && l.position.is_finite()));
+}

@@ -1,0 +1,402 @@
+//! Image regression (project issue 5): every case of `regression/cases.rs` is rendered on lavapipe
+//! with the validation layer on and compared with its golden `tests/golden/<case>.png` (FLIP and
+//! per-channel differences); some are also compared with the CPU reference rasterizer
+//! (`weft::reference::raster`) or with their own mirror image. Every case's images and figures go
+//! to `target/regression/` with one `index.html`; the test fails afterwards, naming each case
+//! that is out of bounds.
+//!
+//! `WEFT_BLESS=1` (what `tools/bless` sets) writes the goldens and `tests/golden/VERSION` instead
+//! of comparing with them. docs/regression.md explains the suite, the page and the bounds.
+
+#[path = "regression/cases.rs"]
+mod cases;
+mod common;
+#[path = "regression/metrics.rs"]
+mod metrics;
+#[path = "regression/report.rs"]
+mod report;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use cases::{Case, HEIGHT, WIDTH};
+use metrics::{compare, mirror_x};
+use report::{write_index, write_png, Row, Shown};
+use weft::reference::raster::{self, RasterOptions};
+use weft::reference::shading;
+use weft::render::{RenderOptions, Renderer};
+use weft::scene::Scene;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn golden_dir() -> PathBuf {
+    root().join("tests/golden")
+}
+
+/// Where the images and the index page go (git-ignored with the rest of target/).
+fn report_dir() -> PathBuf {
+    root().join("target/regression")
+}
+
+/// The device and driver an image was rendered with, as tests/golden/VERSION records them. One
+/// line each; the test compares all of them, since each can change the images (the Mesa release,
+/// LLVM, and llvmpipe's vector width, which is in the device name).
+fn version_lines(info: &weft::vk::DeviceInfo) -> Vec<String> {
+    vec![
+        format!("device: {}", info.name),
+        format!("driver: {}", info.driver_name),
+        format!("driver_info: {}", info.driver_info),
+    ]
+}
+
+fn read_version() -> Option<Vec<String>> {
+    let text = std::fs::read_to_string(golden_dir().join("VERSION")).ok()?;
+    Some(
+        text.lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+            .map(str::to_owned)
+            .collect(),
+    )
+}
+
+fn write_version(lines: &[String]) {
+    let mut text = String::from(
+        "# The device and driver tests/golden/*.png were rendered with; written by tools/bless, checked by\n\
+         # tests/regression.rs (lavapipe output is identical only for the same Mesa, LLVM and vector width).\n",
+    );
+    for l in lines {
+        text.push_str(l);
+        text.push('\n');
+    }
+    std::fs::write(golden_dir().join("VERSION"), text).expect("write tests/golden/VERSION");
+}
+
+fn read_png(path: &Path) -> Option<(u32, u32, Vec<u8>)> {
+    let img = image::open(path).ok()?.to_rgba8();
+    Some((img.width(), img.height(), img.into_raw()))
+}
+
+fn load_scene(cache: &mut HashMap<&'static str, Scene>, path: &'static str) -> Scene {
+    cache
+        .entry(path)
+        .or_insert_with(|| {
+            let scene =
+                weft::scene::load(&root().join(path)).unwrap_or_else(|e| panic!("{path}: {e}"));
+            assert!(
+                scene.warnings.is_empty(),
+                "{path} loads with warnings: {:?}",
+                scene.warnings
+            );
+            scene
+        })
+        .clone()
+}
+
+#[test]
+fn image_regression() {
+    let started = Instant::now();
+    let bless = std::env::var("WEFT_BLESS").is_ok_and(|v| v == "1");
+    let dir = report_dir();
+    std::fs::create_dir_all(&dir).expect("create target/regression");
+    // Images of cases that no longer exist would only confuse whoever opens the folder.
+    for entry in std::fs::read_dir(&dir).expect("read target/regression").flatten() {
+        let path = entry.path();
+        if path.extension().is_some_and(|e| e == "png" || e == "html") {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    std::fs::create_dir_all(golden_dir()).expect("create tests/golden");
+
+    let ctx = common::context();
+    let info = ctx.info().clone();
+    let version = version_lines(&info);
+    let mut renderer = Renderer::new(ctx).expect("renderer");
+
+    // A golden made by another driver would differ for that reason alone: say so rather than
+    // showing a confusing diff (the images are still rendered and compared, for the page).
+    let version_problem = if bless {
+        write_version(&version);
+        None
+    } else {
+        match read_version() {
+            None => Some("tests/golden/VERSION is missing: there are no goldens; make them with tools/bless (after looking at the images)".to_string()),
+            Some(golden) if golden != version => {
+                // Name only what differs, without the keys: "goldens were made with Mesa 22.3.6
+                // (LLVM 15.0.6), this is Mesa 23.0.0 (LLVM 15.0.7)".
+                let value = |l: &String| l.split_once(": ").map_or(l.clone(), |(_, v)| v.to_string());
+                let differ = |a: &[String], b: &[String]| {
+                    let d: Vec<String> = a.iter().filter(|l| !b.contains(l)).map(value).collect();
+                    if d.is_empty() { "(nothing recorded)".to_string() } else { d.join(" on ") }
+                };
+                Some(format!(
+                    "goldens were made with {}, this is {}: re-bless with tools/bless after checking the images (target/regression/index.html)",
+                    differ(&golden, &version),
+                    differ(&version, &golden)
+                ))
+            }
+            Some(_) => None,
+        }
+    };
+
+    let mut scenes = HashMap::new();
+    let mut rows = Vec::new();
+    for case in cases::cases() {
+        rows.push(run_case(&case, &mut renderer, &mut scenes, bless, &dir));
+    }
+
+    let header = format!(
+        "{} on {} ({}, {}) in {:.1} s.{}",
+        if bless {
+            "Goldens blessed (written)"
+        } else {
+            "Compared with the goldens"
+        },
+        info.name,
+        info.driver_name,
+        info.driver_info,
+        started.elapsed().as_secs_f64(),
+        version_problem
+            .as_ref()
+            .map(|p| format!(" <b>{p}</b>"))
+            .unwrap_or_default()
+    );
+    write_index(&dir, &header, &rows);
+    for row in &rows {
+        for s in &row.shown {
+            println!(
+                "{:<26} {:<22} {}",
+                row.case.name,
+                s.title,
+                s.figures.summary(&s.tolerance)
+            );
+        }
+    }
+    println!("index: {}", dir.join("index.html").display());
+
+    if let Some(problem) = version_problem {
+        panic!("{problem}");
+    }
+    let failures: Vec<String> = rows
+        .iter()
+        .filter(|r| !r.passed())
+        .map(|r| {
+            let mut why: Vec<String> = r
+                .note
+                .iter()
+                .filter(|n| n.starts_with("FAIL"))
+                .cloned()
+                .collect();
+            why.extend(
+                r.shown
+                    .iter()
+                    .filter(|s| !s.violations.is_empty())
+                    .map(|s| format!("{}: {}", s.title, s.violations.join("; "))),
+            );
+            format!("  {}: {}", r.case.name, why.join(" | "))
+        })
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} regression cases failed (images and figures: {}):\n{}",
+        failures.len(),
+        rows.len(),
+        dir.join("index.html").display(),
+        failures.join("\n")
+    );
+}
+
+/// The mean linear radiance over `block × block` pixels, tone-mapped and sRGB-encoded as the
+/// tonemap pass does (RGBA8).
+fn block_means(hdr: &[f32], width: u32, height: u32, block: u32, exposure_ev: f32) -> Vec<u8> {
+    let (bw, bh) = (width / block, height / block);
+    let mut out = Vec::with_capacity((bw * bh * 4) as usize);
+    for by in 0..bh {
+        for bx in 0..bw {
+            let mut sum = [0.0f64; 3];
+            for y in by * block..(by + 1) * block {
+                for x in bx * block..(bx + 1) * block {
+                    let i = ((y * width + x) * 4) as usize;
+                    for c in 0..3 {
+                        sum[c] += hdr[i + c] as f64;
+                    }
+                }
+            }
+            let n = (block * block) as f64;
+            let mean = [
+                (sum[0] / n) as f32,
+                (sum[1] / n) as f32,
+                (sum[2] / n) as f32,
+            ];
+            let display = shading::tonemap(mean, 2f32.powf(exposure_ev));
+            out.extend_from_slice(&[
+                shading::srgb_encode(display[0]),
+                shading::srgb_encode(display[1]),
+                shading::srgb_encode(display[2]),
+                255,
+            ]);
+        }
+    }
+    out
+}
+
+fn run_case(
+    case: &Case,
+    renderer: &mut Renderer,
+    scenes: &mut HashMap<&'static str, Scene>,
+    bless: bool,
+    dir: &Path,
+) -> Row {
+    let scene = load_scene(scenes, case.scene);
+    let options = RenderOptions {
+        width: WIDTH,
+        height: HEIGHT,
+        camera: case.camera,
+        debug_view: case.debug_view,
+        accuracy: case.accuracy,
+        weave_precision: case.weave_precision,
+        ..Default::default()
+    };
+    let start = Instant::now();
+    let frame = renderer
+        .render(&scene, &options)
+        .unwrap_or_else(|e| panic!("case {}: {e}", case.name));
+    let render_ms = start.elapsed().as_secs_f64() * 1e3;
+    let file = |suffix: &str| format!("{}-{suffix}.png", case.name);
+    write_png(&dir.join(file("actual")), WIDTH, HEIGHT, &frame.ldr);
+
+    let mut row = Row {
+        case: case.clone(),
+        render_ms,
+        note: None,
+        shown: Vec::new(),
+    };
+    let golden_path = golden_dir().join(format!("{}.png", case.name));
+    if bless {
+        write_png(&golden_path, WIDTH, HEIGHT, &frame.ldr);
+        row.note = Some(format!("blessed: wrote tests/golden/{}.png", case.name));
+    }
+    match read_png(&golden_path) {
+        None => {
+            row.note = Some(format!(
+                "FAIL: no golden tests/golden/{}.png: look at target/regression/{}, then make it with tools/bless",
+                case.name,
+                file("actual")
+            ));
+        }
+        Some((w, h, _)) if (w, h) != (WIDTH, HEIGHT) => {
+            row.note = Some(format!(
+                "FAIL: golden tests/golden/{}.png is {w}x{h}, the case renders {WIDTH}x{HEIGHT}: re-bless with tools/bless",
+                case.name
+            ));
+        }
+        Some((_, _, golden)) => {
+            write_png(&dir.join(file("expected")), WIDTH, HEIGHT, &golden);
+            let cmp = compare(&golden, &frame.ldr, WIDTH, HEIGHT, case.golden.abs);
+            write_png(&dir.join(file("difference")), WIDTH, HEIGHT, &cmp.error_map);
+            row.shown.push(Shown {
+                title: "GPU vs golden",
+                violations: case.golden.violations(&cmp.figures),
+                figures: cmp.figures,
+                tolerance: case.golden,
+                images: [file("expected"), file("actual"), file("difference")],
+                captions: ["expected (golden)", "actual (lavapipe)", "FLIP error"],
+            });
+        }
+    }
+
+    if let Some(tol) = case.cpu {
+        let camera = match case.camera {
+            Some(i) => scene.cameras[i].clone(),
+            None => scene.camera(None).expect("a camera"),
+        };
+        let start = Instant::now();
+        let cpu = raster::render(
+            &scene,
+            &RasterOptions {
+                width: WIDTH,
+                height: HEIGHT,
+                camera,
+                exposure: options.exposure,
+                subdivisions: tol.subdivisions,
+            },
+        )
+        .unwrap_or_else(|e| panic!("case {}: CPU reference: {e}", case.name));
+        println!(
+            "{:<26} CPU reference in {:.0} ms",
+            case.name,
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        write_png(&dir.join(file("cpu")), WIDTH, HEIGHT, &cpu.ldr);
+        let cmp = compare(&cpu.ldr, &frame.ldr, WIDTH, HEIGHT, tol.full.abs);
+        write_png(
+            &dir.join(file("cpu-difference")),
+            WIDTH,
+            HEIGHT,
+            &cmp.error_map,
+        );
+        row.shown.push(Shown {
+            title: "GPU vs CPU reference",
+            violations: tol.full.violations(&cmp.figures),
+            figures: cmp.figures,
+            tolerance: tol.full,
+            images: [file("cpu"), file("actual"), file("cpu-difference")],
+            captions: ["CPU reference (raster.rs)", "GPU (lavapipe)", "FLIP error"],
+        });
+        // The same in means over blocks of pixels (of the linear radiance, tone-mapped after):
+        // the two weave filters differ in shape, not in what they average, so this isolates
+        // everything else (camera, geometry, lights, BRDF).
+        let b = cases::CPU_BLOCK;
+        let (bw, bh) = (WIDTH / b, HEIGHT / b);
+        let cpu_blocks = block_means(&cpu.hdr, WIDTH, HEIGHT, b, options.exposure);
+        let gpu_blocks = block_means(&frame.hdr, WIDTH, HEIGHT, b, options.exposure);
+        write_png(&dir.join(file("cpu-blocks")), bw, bh, &cpu_blocks);
+        write_png(&dir.join(file("blocks")), bw, bh, &gpu_blocks);
+        let cmp = compare(&cpu_blocks, &gpu_blocks, bw, bh, tol.blocks.abs);
+        write_png(
+            &dir.join(file("cpu-blocks-difference")),
+            bw,
+            bh,
+            &cmp.error_map,
+        );
+        row.shown.push(Shown {
+            title: "GPU vs CPU reference, block means",
+            violations: tol.blocks.violations(&cmp.figures),
+            figures: cmp.figures,
+            tolerance: tol.blocks,
+            images: [
+                file("cpu-blocks"),
+                file("blocks"),
+                file("cpu-blocks-difference"),
+            ],
+            captions: [
+                "CPU reference, block means",
+                "GPU, block means",
+                "FLIP error",
+            ],
+        });
+    }
+
+    if let Some(tol) = case.mirror {
+        let mirrored = mirror_x(&frame.ldr, WIDTH);
+        write_png(&dir.join(file("mirrored")), WIDTH, HEIGHT, &mirrored);
+        let cmp = compare(&frame.ldr, &mirrored, WIDTH, HEIGHT, tol.abs);
+        write_png(
+            &dir.join(file("mirror-difference")),
+            WIDTH,
+            HEIGHT,
+            &cmp.error_map,
+        );
+        row.shown.push(Shown {
+            title: "GPU vs its mirror image",
+            violations: tol.violations(&cmp.figures),
+            figures: cmp.figures,
+            tolerance: tol,
+            images: [file("actual"), file("mirrored"), file("mirror-difference")],
+            captions: ["GPU (lavapipe)", "mirrored left to right", "FLIP error"],
+        });
+    }
+    row
+}

@@ -1,0 +1,369 @@
+#!/usr/bin/env python3
+"""Writes the image-regression scenes: assets/scenes/*.glb (tests/regression.rs renders them).
+
+Each scene stresses one thing (docs/regression.md has the list and what each golden should show):
+
+  closeup       a gently curved plain-weave patch 10 cm from the camera: single threads resolved
+  far           a rippled sheet 4 m away whose weave repeat (2 mm) is far below a pixel (~2 cm)
+  grazing       a patch lit by a light 5 degrees above it; camera 0 looks across it at 7 degrees,
+                camera 1 from above (the grazing light alone)
+  many_lights   cloth, balls and a floor under 24 lights: 8 point, 8 spot, 8 directional
+  twill_satin   a denim twill patch beside a satin one (pattern "twill" / "satin")
+  mirrored_uv   the same twill twice, the right copy with u mirrored (tangent w = -1): the two
+                halves of the image must be mirror images
+  spheres       non-fabric glTF metallic-roughness: metallic 0 and 1 x roughness 0.05 .. 1
+
+Python 3 standard library only; the output is byte-for-byte deterministic. The geometry helpers
+and the glTF writer are those of tools/make_default_scene.py (imported). Y is up, units are
+metres. Run from anywhere:  python3 tools/make_scenes.py
+"""
+
+import math
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import make_default_scene as base  # noqa: E402  (the shared helpers: grid_mesh, Builder, write_glb, ...)
+from make_default_scene import Builder, grid_mesh, look_rotation, r, write_glb  # noqa: E402
+
+OUT = os.path.join(os.path.dirname(HERE), "assets", "scenes")
+ASPECT = 16.0 / 9.0
+
+# --- shared pieces --------------------------------------------------------------------------------
+
+
+def fabric(name, pattern="plain", repeat=0.05, gap=0.005, rd=None, rd_warp=None, rd_weft=None, rs=0.04,
+           e_along=200.0, e_across=10.0, base_color=(0.5, 0.5, 0.5)):
+    ext = {"pattern": pattern, "repeat": repeat, "gap": gap, "e_along": e_along, "e_across": e_across, "rs": rs,
+           "shadow_strength": 0.5, "shadow_width": 0.25}
+    if rd is not None:
+        ext["rd"] = list(rd)
+    if rd_warp is not None:
+        ext["rd_warp"] = list(rd_warp)
+    if rd_weft is not None:
+        ext["rd_weft"] = list(rd_weft)
+    return {
+        "name": name,
+        "pbrMetallicRoughness": {"baseColorFactor": list(base_color) + [1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
+        "doubleSided": True,
+        "extensions": {"WEFT_materials_fabric": ext},
+    }
+
+
+def pbr(name, color, metallic, roughness):
+    return {"name": name, "pbrMetallicRoughness": {"baseColorFactor": list(color) + [1.0], "metallicFactor": metallic,
+                                                   "roughnessFactor": roughness}}
+
+
+def patch(x0, x1, z0, z1, y=lambda x, z: 0.0, uv_per_m=1.0, mirror_u=False):
+    """A patch of the plane y = y(x, z) over [x0, x1] x [z0, z1], facing +Y. Texture u runs along +x
+    (along -x with mirror_u: the tangent then points -x and its w is -1), v along -z (so that
+    w = +1 for the unmirrored patch), uv = metres * uv_per_m, starting at 0."""
+
+    def f(u, v):
+        x = x1 + (x0 - x1) * u if mirror_u else x0 + (x1 - x0) * u
+        z = z1 + (z0 - z1) * v
+        return [x, y(x, z), z]
+
+    def normal(u, v):
+        p = f(u, v)
+        e = 1e-4
+        dydx = (y(p[0] + e, p[2]) - y(p[0] - e, p[2])) / (2 * e)
+        dydz = (y(p[0], p[2] + e) - y(p[0], p[2] - e)) / (2 * e)
+        return base.normalize([-dydx, 1.0, -dydz])
+
+    return f, normal, ((x1 - x0) * uv_per_m, (z1 - z0) * uv_per_m)
+
+
+def patch_mesh(x0, x1, z0, z1, nu, nv, **kw):
+    f, normal, uv_scale = patch(x0, x1, z0, z1, **kw)
+    return grid_mesh(f, nu, nv, uv_scale, normal_fn=normal)
+
+
+def unit_sphere(u, v):
+    theta, phi = v * math.pi, u * 2.0 * math.pi
+    return [math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi)]
+
+
+def unit_sphere_normal(u, v):
+    return base.normalize(unit_sphere(u, v)) if 0.0 < v < 1.0 else [0.0, 1.0 if v < 0.5 else -1.0, 0.0]
+
+
+def sphere_mesh(nu=32, nv=16):
+    return grid_mesh(unit_sphere, nu, nv, (1.0, 1.0), normal_fn=unit_sphere_normal, v_clamp=0.02)
+
+
+def camera_node(name, eye, target, index):
+    return {"name": name, "translation": [r(c) for c in eye], "rotation": look_rotation(eye, target), "camera": index}
+
+
+def camera_def(name, yfov_deg, znear):
+    return {"name": name, "type": "perspective",
+            "perspective": {"yfov": r(math.radians(yfov_deg)), "aspectRatio": r(ASPECT), "znear": znear, "zfar": 100.0}}
+
+
+def light_node(name, index, at, target=None):
+    node = {"name": name, "translation": [r(c) for c in at], "extensions": {"KHR_lights_punctual": {"light": index}}}
+    if target is not None:
+        node["rotation"] = look_rotation(at, target)
+    return node
+
+
+def directional(name, color, intensity):
+    return {"name": name, "type": "directional", "color": [r(c) for c in color], "intensity": r(intensity)}
+
+
+def point(name, color, intensity, rng=10.0):
+    return {"name": name, "type": "point", "color": [r(c) for c in color], "intensity": r(intensity), "range": rng}
+
+
+def spot(name, color, intensity, inner, outer, rng=10.0):
+    return {"name": name, "type": "spot", "color": [r(c) for c in color], "intensity": r(intensity), "range": rng,
+            "spot": {"innerConeAngle": r(inner), "outerConeAngle": r(outer)}}
+
+
+def document(name, b, materials, meshes, nodes, lights, cameras):
+    """The glTF document: one root node whose children are `nodes` (flat: no node has children)."""
+    doc = {
+        "asset": {"version": "2.0", "generator": "weft tools/make_scenes.py"},
+        "extensionsUsed": ["KHR_lights_punctual", "WEFT_materials_fabric"],
+        "extensions": {"KHR_lights_punctual": {"lights": lights}},
+        "scene": 0,
+        "scenes": [{"name": name, "nodes": [0]}],
+        "nodes": [{"name": name, "children": list(range(1, len(nodes) + 1))}] + nodes,
+        "cameras": cameras,
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+    }
+    if not any("WEFT_materials_fabric" in m.get("extensions", {}) for m in materials):
+        doc["extensionsUsed"] = ["KHR_lights_punctual"]
+    while len(b.bin) % 4:
+        b.bin.append(0)
+    return doc, bytes(b.bin)
+
+
+# --- the scenes -----------------------------------------------------------------------------------
+
+
+def closeup():
+    """A 28 cm x 22 cm plain-weave patch, bent along x with a 1 m radius, seen from 10 cm (it fills
+    the view).
+    Texture: 10 units per metre, repeat 0.08 units = 8 mm, so a repeat is ~16 px at 144 px height
+    and a cell ~8 px; the gap (10 % of the repeat, 4 % of the area) is ~1 px wide."""
+    b = Builder()
+    bend = 1.0
+    mesh = patch_mesh(-0.14, 0.14, -0.16, 0.06, 24, 20, y=lambda x, z: -x * x / (2.0 * bend), uv_per_m=10.0)
+    materials = [fabric("two-colour plain weave", repeat=0.08, gap=0.008, rd_warp=(0.55, 0.10, 0.07),
+                        rd_weft=(0.62, 0.46, 0.12), base_color=(0.6, 0.3, 0.1))]
+    meshes = [{"name": "patch", "primitives": [b.primitive(mesh, 0)]}]
+    lights = [directional("key", (1.0, 0.95, 0.9), 2.5), point("near point", (0.9, 0.95, 1.0), 0.08, rng=2.0)]
+    nodes = [
+        {"name": "patch", "mesh": 0},
+        light_node("key", 0, [0.3, 0.6, 0.5], [0.0, 0.0, 0.0]),
+        light_node("near point", 1, [-0.03, 0.06, 0.02]),
+        camera_node("10 cm", [0.0, 0.075, 0.066], [0.0, 0.0, 0.0], 0),
+    ]
+    return document("close-up", b, materials, meshes, nodes, lights, [camera_def("10 cm", 40.0, 0.01)])
+
+
+def far():
+    """A 3 m x 3 m sheet with ripples along z (so highlights move over it) seen from 3.5 m. Texture:
+    one unit per metre, repeat 0.002 = 2 mm, while a pixel covers ~2 cm: ten repeats and more per
+    pixel, more at the far edge. Only the repeat-averaged coverage should be visible."""
+    b = Builder()
+    mesh = patch_mesh(-1.5, 1.5, -1.5, 1.5, 12, 48, y=lambda x, z: 0.06 * math.sin(2.0 * math.pi * z / 0.6), uv_per_m=1.0)
+    materials = [fabric("fine blue weave", repeat=0.002, gap=0.0002, rd=(0.10, 0.22, 0.55), e_along=300.0, e_across=8.0,
+                        base_color=(0.1, 0.2, 0.5))]
+    meshes = [{"name": "sheet", "primitives": [b.primitive(mesh, 0)]}]
+    lights = [directional("key", (1.0, 0.93, 0.85), 3.0), point("fill", (0.8, 0.9, 1.0), 6.0, rng=12.0)]
+    nodes = [
+        {"name": "sheet", "mesh": 0},
+        light_node("key", 0, [-1.0, 2.0, -3.0], [0.0, 0.0, 0.0]),
+        light_node("fill", 1, [1.5, 1.2, 1.5]),
+        camera_node("3.5 m", [0.0, 1.6, 2.6], [0.0, -0.1, -0.3], 0),
+    ]
+    return document("far view", b, materials, meshes, nodes, lights, [camera_def("3.5 m", 40.0, 0.1)])
+
+
+def grazing():
+    """A 1 m x 2 m plain weave (2 cm repeat) under a directional light 5 degrees above its plane,
+    from behind and to the side, so that the cloth's forward-scattering sheen faces the camera.
+    Camera 0: 7 degrees above the plane, looking across it (resolved weave in front, minified far
+    below a pixel behind); camera 1: from 60 degrees above (the grazing light alone)."""
+    b = Builder()
+    mesh = patch_mesh(-0.5, 0.5, -1.5, 0.5, 8, 16, uv_per_m=1.0)
+    materials = [fabric("grey plain weave", repeat=0.02, gap=0.002, rd=(0.45, 0.45, 0.42), e_along=200.0, e_across=10.0,
+                        base_color=(0.45, 0.45, 0.42))]
+    meshes = [{"name": "patch", "primitives": [b.primitive(mesh, 0)]}]
+    elevation = math.radians(5.0)
+    side = math.radians(20.0)  # from behind (-z), turned 20 degrees toward +x
+    light_from = [math.cos(elevation) * math.sin(side), math.sin(elevation), -math.cos(elevation) * math.cos(side)]
+    lights = [directional("grazing sun", (1.0, 0.9, 0.75), 15.0)]
+    view_el = math.radians(7.0)
+    nodes = [
+        {"name": "patch", "mesh": 0},
+        light_node("grazing sun", 0, base.scale(light_from, 3.0), [0.0, 0.0, 0.0]),
+        camera_node("grazing view", [0.0, 0.9 * math.tan(view_el), 0.4], [0.0, 0.0, -0.5], 0),
+        camera_node("from above", [0.0, 1.5, 0.5], [0.0, 0.0, -0.4], 1),
+    ]
+    cams = [camera_def("grazing view", 40.0, 0.01), camera_def("from above", 45.0, 0.05)]
+    return document("grazing", b, materials, meshes, nodes, lights, cams)
+
+
+def hue(h):
+    """A saturated colour of hue h in [0, 1)."""
+    k = [(5.0 + h * 6.0) % 6.0, (3.0 + h * 6.0) % 6.0, (1.0 + h * 6.0) % 6.0]
+    return [1.0 - 0.75 * max(0.0, min(k_, 4.0 - k_, 1.0)) for k_ in k]
+
+
+def many_lights():
+    """A rippled cloth, two balls and a floor under 24 lights: 8 coloured points in a ring, 8 spots
+    from above aimed at the centre, 8 weak directional lights from all around."""
+    b = Builder()
+    cloth = patch_mesh(-0.7, 0.7, -0.7, 0.7, 24, 24, y=lambda x, z: 0.25 + 0.04 * math.sin(5.0 * x) * math.cos(4.0 * z),
+                       uv_per_m=1.0)
+    floor = patch_mesh(-3.0, 3.0, -3.0, 3.0, 1, 1, uv_per_m=1.0)
+    ball = sphere_mesh()
+    materials = [
+        fabric("white plain weave", repeat=0.03, gap=0.003, rd=(0.6, 0.6, 0.6), base_color=(0.6, 0.6, 0.6)),
+        pbr("floor", (0.3, 0.3, 0.3), 0.0, 0.8),
+        pbr("plastic", (0.7, 0.7, 0.7), 0.0, 0.35),
+        pbr("chrome", (0.95, 0.95, 0.95), 1.0, 0.15),
+    ]
+    ball_prim = b.primitive(ball, 2)
+    meshes = [
+        {"name": "cloth", "primitives": [b.primitive(cloth, 0)]},
+        {"name": "floor", "primitives": [b.primitive(floor, 1)]},
+        {"name": "plastic ball", "primitives": [ball_prim]},
+        {"name": "chrome ball", "primitives": [dict(ball_prim, material=3)]},
+    ]
+    lights, nodes = [], [
+        {"name": "cloth", "mesh": 0},
+        {"name": "floor", "mesh": 1},
+        {"name": "plastic ball", "mesh": 2, "translation": [-0.95, 0.2, 0.55], "scale": [0.2, 0.2, 0.2]},
+        {"name": "chrome ball", "mesh": 3, "translation": [0.95, 0.2, 0.55], "scale": [0.2, 0.2, 0.2]},
+    ]
+    for i in range(8):
+        a = 2.0 * math.pi * i / 8.0
+        lights.append(point("point %d" % i, hue(i / 8.0), 0.9, rng=4.0))
+        nodes.append(light_node("point %d" % i, len(lights) - 1, [1.2 * math.cos(a), 0.5, 1.2 * math.sin(a)]))
+    for i in range(8):
+        a = 2.0 * math.pi * (i + 0.5) / 8.0
+        at = [1.6 * math.cos(a), 2.2, 1.6 * math.sin(a)]
+        lights.append(spot("spot %d" % i, hue((i + 0.5) / 8.0), 6.0, 0.12, 0.3, rng=8.0))
+        nodes.append(light_node("spot %d" % i, len(lights) - 1, at, [0.35 * math.cos(a), 0.25, 0.35 * math.sin(a)]))
+    for i in range(8):
+        a = 2.0 * math.pi * i / 8.0 + 0.3
+        el = math.radians(15.0 + 10.0 * (i % 4))
+        frm = [math.cos(a) * math.cos(el), math.sin(el), math.sin(a) * math.cos(el)]
+        lights.append(directional("sun %d" % i, hue((i + 0.25) / 8.0), 0.12))
+        nodes.append(light_node("sun %d" % i, len(lights) - 1, base.scale(frm, 5.0), [0.0, 0.0, 0.0]))
+    nodes.append(camera_node("front", [0.0, 1.7, 2.6], [0.0, 0.2, 0.0], 0))
+    return document("many lights", b, materials, meshes, nodes, lights, [camera_def("front", 40.0, 0.05)])
+
+
+def twill_satin():
+    """Denim (3/1 twill, indigo warp, white weft) beside a red and gold 5-harness satin, both 14 cm
+    square, seen from 28 cm. Texture: 10 units per metre, repeat 0.12 = 12 mm (cells of 6 mm,
+    ~5 px at 144 px height), so the twill's diagonal and the satin's scattered weft dots show."""
+    b = Builder()
+    left = patch_mesh(-0.15, -0.01, -0.07, 0.07, 8, 8, uv_per_m=10.0)
+    right = patch_mesh(0.01, 0.15, -0.07, 0.07, 8, 8, uv_per_m=10.0)
+    materials = [
+        fabric("denim twill", pattern="twill", repeat=0.12, gap=0.01, rd_warp=(0.06, 0.10, 0.32), rd_weft=(0.75, 0.74, 0.70),
+               e_along=150.0, e_across=8.0, base_color=(0.1, 0.15, 0.35)),
+        fabric("satin", pattern="satin", repeat=0.12, gap=0.006, rd_warp=(0.70, 0.52, 0.12), rd_weft=(0.45, 0.04, 0.05),
+               rs=0.06, e_along=600.0, e_across=20.0, base_color=(0.6, 0.4, 0.1)),
+    ]
+    meshes = [{"name": "twill", "primitives": [b.primitive(left, 0)]},
+              {"name": "satin", "primitives": [b.primitive(right, 1)]}]
+    lights = [directional("key", (1.0, 0.95, 0.9), 3.0), point("fill", (0.85, 0.9, 1.0), 0.3, rng=3.0)]
+    nodes = [
+        {"name": "twill", "mesh": 0},
+        {"name": "satin", "mesh": 1},
+        light_node("key", 0, [0.2, 0.5, 0.6], [0.0, 0.0, 0.0]),
+        light_node("fill", 1, [-0.1, 0.2, 0.15]),
+        camera_node("front", [0.0, 0.22, 0.17], [0.0, 0.0, 0.0], 0),
+    ]
+    return document("twill and satin", b, materials, meshes, nodes, lights, [camera_def("front", 40.0, 0.02)])
+
+
+def mirrored_uv():
+    """The same twill twice, left with u along +x (tangent w = +1), right with u along -x (tangent
+    w = -1). Camera and lights lie in the plane x = 0, so the right half must be the mirror image
+    of the left, the twill's diagonal included."""
+    b = Builder()
+    left = patch_mesh(-0.15, -0.005, -0.07, 0.07, 8, 8, uv_per_m=10.0)
+    right = patch_mesh(0.005, 0.15, -0.07, 0.07, 8, 8, uv_per_m=10.0, mirror_u=True)
+    assert all(t[3] == 1.0 for t in left[2]) and all(t[3] == -1.0 for t in right[2])
+    materials = [fabric("green twill", pattern="twill", repeat=0.12, gap=0.01, rd_warp=(0.08, 0.35, 0.12),
+                        rd_weft=(0.70, 0.66, 0.50), e_along=200.0, e_across=10.0, base_color=(0.1, 0.35, 0.15))]
+    meshes = [{"name": "u along +x", "primitives": [b.primitive(left, 0)]},
+              {"name": "u along -x (mirrored, w = -1)", "primitives": [b.primitive(right, 0)]}]
+    lights = [directional("key", (1.0, 0.95, 0.9), 3.0), point("near", (0.9, 0.95, 1.0), 0.25, rng=3.0)]
+    nodes = [
+        {"name": "left", "mesh": 0},
+        {"name": "right (mirrored)", "mesh": 1},
+        light_node("key", 0, [0.0, 0.5, 0.6], [0.0, 0.0, 0.0]),
+        light_node("near", 1, [0.0, 0.12, -0.05]),
+        camera_node("front", [0.0, 0.22, 0.17], [0.0, 0.0, 0.0], 0),
+    ]
+    return document("mirrored uv", b, materials, meshes, nodes, lights, [camera_def("front", 40.0, 0.02)])
+
+
+ROUGHNESS = [0.05, 0.25, 0.5, 0.75, 1.0]
+
+
+def spheres():
+    """Ten balls of radius 0.2 m on a dark floor: back row metallic 1 (gold), front row metallic 0
+    (red plastic), roughness 0.05, 0.25, 0.5, 0.75, 1 from left to right. One sphere geometry."""
+    b = Builder()
+    ball = sphere_mesh()
+    floor = patch_mesh(-4.0, 4.0, -4.0, 4.0, 1, 1, uv_per_m=1.0)
+    materials = [pbr("floor", (0.18, 0.18, 0.2), 0.0, 0.9)]
+    for m, color in ((1.0, (1.0, 0.78, 0.34)), (0.0, (0.8, 0.12, 0.08))):
+        for rough in ROUGHNESS:
+            materials.append(pbr("metallic %g roughness %g" % (m, rough), color, m, rough))
+    ball_prim = b.primitive(ball, 1)
+    meshes = [{"name": "floor", "primitives": [b.primitive(floor, 0)]}]
+    nodes = [{"name": "floor", "mesh": 0}]
+    for k in range(10):
+        meshes.append({"name": materials[k + 1]["name"], "primitives": [dict(ball_prim, material=k + 1)]})
+        row, col = divmod(k, 5)
+        nodes.append({"name": materials[k + 1]["name"], "mesh": k + 1,
+                      "translation": [r(-1.0 + 0.5 * col), 0.2, r(-0.45 + 0.65 * row)], "scale": [0.2, 0.2, 0.2]})
+    lights = [directional("key", (1.0, 0.96, 0.9), 3.0), point("fill", (0.8, 0.88, 1.0), 3.0, rng=10.0)]
+    nodes += [
+        light_node("key", 0, [1.0, 2.0, 1.5], [0.0, 0.0, 0.0]),
+        light_node("fill", 1, [-1.5, 1.0, 1.5]),
+        camera_node("front", [0.0, 1.7, 2.3], [0.0, 0.05, -0.1], 0),
+    ]
+    return document("metallic-roughness spheres", b, materials, meshes, nodes, lights, [camera_def("front", 35.0, 0.05)])
+
+
+SCENES = {
+    "closeup": closeup,
+    "far": far,
+    "grazing": grazing,
+    "many_lights": many_lights,
+    "twill_satin": twill_satin,
+    "mirrored_uv": mirrored_uv,
+    "spheres": spheres,
+}
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    for name, build in SCENES.items():
+        doc, binary = build()
+        path = os.path.join(OUT, name + ".glb")
+        write_glb(path, doc, binary)
+        print("wrote %s (%d bytes)" % (os.path.relpath(path), os.path.getsize(path)))
+
+
+if __name__ == "__main__":
+    main()
