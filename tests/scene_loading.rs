@@ -28,7 +28,8 @@ impl Drop for TempDir {
 }
 
 fn temp_dir(test: &str) -> TempDir {
-    let dir = std::env::temp_dir().join(format!("weft-scene-loading-{}-{test}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("weft-scene-loading-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create temp dir");
     TempDir(dir)
@@ -38,7 +39,11 @@ fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut out = String::new();
     for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
         let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
         for k in 0..4 {
             if k <= chunk.len() {
@@ -85,11 +90,18 @@ impl Doc {
         }
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
-        self.push("bufferViews", json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()}))
+        self.push(
+            "bufferViews",
+            json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()}),
+        )
     }
 
     fn floats<const N: usize>(&mut self, rows: &[[f32; N]]) -> usize {
-        let bytes: Vec<u8> = rows.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+        let bytes: Vec<u8> = rows
+            .iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
         let view = self.view(&bytes);
         let kind = match N {
             2 => "VEC2",
@@ -97,11 +109,19 @@ impl Doc {
             4 => "VEC4",
             _ => "SCALAR",
         };
-        let mut acc = json!({"bufferView": view, "componentType": 5126, "count": rows.len(), "type": kind});
+        let mut acc =
+            json!({"bufferView": view, "componentType": 5126, "count": rows.len(), "type": kind});
         if N == 3 {
             // POSITION needs min and max; NaN cannot be written in JSON, so skip non-finite values.
             let fold = |f: fn(f32, f32) -> f32, init: f32| -> Vec<f32> {
-                (0..N).map(|k| rows.iter().map(|r| r[k]).filter(|v| v.is_finite()).fold(init, f)).collect()
+                (0..N)
+                    .map(|k| {
+                        rows.iter()
+                            .map(|r| r[k])
+                            .filter(|v| v.is_finite())
+                            .fold(init, f)
+                    })
+                    .collect()
             };
             acc["min"] = json!(fold(f32::min, f32::INFINITY));
             acc["max"] = json!(fold(f32::max, f32::NEG_INFINITY));
@@ -136,16 +156,29 @@ impl Doc {
         }
         let mesh = self.push("meshes", json!({"name": "test mesh", "primitives": [prim]}));
         let node = self.push("nodes", json!({"mesh": mesh}));
-        self.json["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(node));
+        self.json["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(node));
         (mesh, node)
     }
 
     /// The quad z = 0, x and y in [0, 1], normal +Z, u along +x and v along -y (image convention).
     fn quad(&mut self, normals: bool, uvs: bool) -> (usize, usize) {
-        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let n = [[0.0, 0.0, 1.0]; 4];
         let t = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
-        self.mesh(&p, normals.then_some(&n[..]), uvs.then_some(&t[..]), Some(&[0, 1, 2, 0, 2, 3]))
+        self.mesh(
+            &p,
+            normals.then_some(&n[..]),
+            uvs.then_some(&t[..]),
+            Some(&[0, 1, 2, 0, 2, 3]),
+        )
     }
 
     /// The document as .gltf text with the buffer embedded as a data: URI.
@@ -178,26 +211,48 @@ fn error_text(r: weft::Result<Scene>) -> String {
 }
 
 fn assert_unit(v: Vec3, what: &str) {
-    assert!(v.is_finite() && (v.length() - 1.0).abs() < 1e-3, "{what} {v} is not unit length");
+    assert!(
+        v.is_finite() && (v.length() - 1.0).abs() < 1e-3,
+        "{what} {v} is not unit length"
+    );
 }
 
 /// Checks the invariants every loaded scene must satisfy.
 fn assert_well_formed(s: &Scene) {
     for m in &s.meshes {
-        assert!(m.material < s.materials.len(), "mesh '{}' material out of range", m.name);
+        assert!(
+            m.material < s.materials.len(),
+            "mesh '{}' material out of range",
+            m.name
+        );
         assert_eq!(m.indices.len() % 3, 0);
         for &i in &m.indices {
-            assert!((i as usize) < m.vertices.len(), "mesh '{}' index out of range", m.name);
+            assert!(
+                (i as usize) < m.vertices.len(),
+                "mesh '{}' index out of range",
+                m.name
+            );
         }
         for v in &m.vertices {
             let n = Vec3::from(v.normal);
             let t = Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
-            assert!(Vec3::from(v.position).is_finite(), "mesh '{}' has a non-finite position", m.name);
+            assert!(
+                Vec3::from(v.position).is_finite(),
+                "mesh '{}' has a non-finite position",
+                m.name
+            );
             assert!(v.uv.iter().all(|c| c.is_finite()));
             assert_unit(n, "normal");
             assert_unit(t, "tangent");
-            assert!(n.dot(t).abs() < 1e-3, "mesh '{}': tangent not orthogonal to normal", m.name);
-            assert!(v.tangent[3] == 1.0 || v.tangent[3] == -1.0, "tangent w must be +-1");
+            assert!(
+                n.dot(t).abs() < 1e-3,
+                "mesh '{}': tangent not orthogonal to normal",
+                m.name
+            );
+            assert!(
+                v.tangent[3] == 1.0 || v.tangent[3] == -1.0,
+                "tangent w must be +-1"
+            );
         }
     }
     for d in &s.draws {
@@ -205,9 +260,14 @@ fn assert_well_formed(s: &Scene) {
         assert!(d.world.is_finite());
     }
     for m in &s.materials {
-        for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture]
-            .into_iter()
-            .flatten()
+        for t in [
+            m.base_color_texture,
+            m.metallic_roughness_texture,
+            m.normal_texture,
+            m.emissive_texture,
+        ]
+        .into_iter()
+        .flatten()
         {
             assert!(t < s.textures.len());
         }
@@ -231,30 +291,63 @@ fn assert_mat_close(a: Mat4, b: Mat4) {
 fn default_scene_loads_with_everything_the_renderer_needs() {
     let s = scene::default_scene();
     assert_eq!(s.source, "built-in default scene");
-    assert!(s.warnings.is_empty(), "the default scene should load cleanly: {:?}", s.warnings);
+    assert!(
+        s.warnings.is_empty(),
+        "the default scene should load cleanly: {:?}",
+        s.warnings
+    );
     assert_well_formed(&s);
 
     assert!(s.meshes.len() >= 3, "{} meshes", s.meshes.len());
     assert!(s.draws.len() >= 3);
-    assert!((2..=3).contains(&s.lights.len()), "{} lights", s.lights.len());
-    let kinds: Vec<_> = s.lights.iter().map(|l| std::mem::discriminant(&l.kind)).collect();
-    assert!(kinds.iter().any(|k| *k != kinds[0]), "lights of at least two types");
+    assert!(
+        (2..=3).contains(&s.lights.len()),
+        "{} lights",
+        s.lights.len()
+    );
+    let kinds: Vec<_> = s
+        .lights
+        .iter()
+        .map(|l| std::mem::discriminant(&l.kind))
+        .collect();
+    assert!(
+        kinds.iter().any(|k| *k != kinds[0]),
+        "lights of at least two types"
+    );
     assert_eq!(s.cameras.len(), 1);
 
     // The cloth: a drawn, double-sided fabric material with texture coordinates that tile.
-    let fabric = s.materials.iter().position(|m| m.fabric.is_some()).expect("a fabric material");
+    let fabric = s
+        .materials
+        .iter()
+        .position(|m| m.fabric.is_some())
+        .expect("a fabric material");
     assert!(s.materials[fabric].double_sided);
-    let cloth = s.meshes.iter().position(|m| m.material == fabric).expect("a mesh uses the fabric");
+    let cloth = s
+        .meshes
+        .iter()
+        .position(|m| m.material == fabric)
+        .expect("a mesh uses the fabric");
     assert!(s.draws.iter().any(|d| d.mesh == cloth));
-    let max_u = s.meshes[cloth].vertices.iter().map(|v| v.uv[0]).fold(0.0, f32::max);
-    assert!(max_u > 4.0, "cloth UVs should repeat the weave several times, max u = {max_u}");
+    let max_u = s.meshes[cloth]
+        .vertices
+        .iter()
+        .map(|v| v.uv[0])
+        .fold(0.0, f32::max);
+    assert!(
+        max_u > 4.0,
+        "cloth UVs should repeat the weave several times, max u = {max_u}"
+    );
     assert!(s.meshes[cloth].vertices.len() >= 64 * 64);
 
     // A metallic material, so the metallic-roughness path shows.
     assert!(s.materials.iter().any(|m| m.metallic > 0.9));
 
     let b = s.bounds().expect("bounds");
-    assert!(b.min.y > -0.01 && b.max.y < 3.0, "Y is up, floor at 0: {b:?}");
+    assert!(
+        b.min.y > -0.01 && b.max.y < 3.0,
+        "Y is up, floor at 0: {b:?}"
+    );
 }
 
 #[test]
@@ -262,10 +355,22 @@ fn default_scene_objects_are_where_the_generator_put_them() {
     let s = scene::default_scene();
     // The metal ball: a child node (translation 0.22 up, scale 0.44) of a stand node at
     // (0.85, 0, 0.85): its world matrix is the composition parent * child.
-    let metal = s.meshes.iter().position(|m| m.name == "metal ball").expect("metal ball mesh");
-    let draw = s.draws.iter().find(|d| d.mesh == metal).expect("metal ball drawn");
+    let metal = s
+        .meshes
+        .iter()
+        .position(|m| m.name == "metal ball")
+        .expect("metal ball mesh");
+    let draw = s
+        .draws
+        .iter()
+        .find(|d| d.mesh == metal)
+        .expect("metal ball drawn");
     let expected = Mat4::from_translation(Vec3::new(0.85, 0.0, 0.85))
-        * Mat4::from_scale_rotation_translation(Vec3::splat(0.44), glam::Quat::IDENTITY, Vec3::new(0.0, 0.22, 0.0));
+        * Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.44),
+            glam::Quat::IDENTITY,
+            Vec3::new(0.0, 0.22, 0.0),
+        );
     assert_mat_close(draw.world, expected);
 
     // The camera looks at the cloth from the front (+Z), from above.
@@ -273,19 +378,34 @@ fn default_scene_objects_are_where_the_generator_put_them() {
     let eye = cam.view.inverse().transform_point3(Vec3::ZERO);
     assert!(eye.z > 2.0 && eye.y > 0.8, "eye {eye}");
     let ball_top = cam.view.transform_point3(Vec3::new(0.0, 1.0, 0.0));
-    assert!(ball_top.z < 0.0 && ball_top.x.abs() < 0.2 * -ball_top.z, "the ball is ahead of the camera: {ball_top}");
+    assert!(
+        ball_top.z < 0.0 && ball_top.x.abs() < 0.2 * -ball_top.z,
+        "the ball is ahead of the camera: {ball_top}"
+    );
     assert!((cam.yfov - 40f32.to_radians()).abs() < 1e-3);
     assert!((cam.aspect_ratio.unwrap() - 16.0 / 9.0).abs() < 1e-3);
 
     // Lights: directional from above, the spot aimed near the cloth's top.
-    let sun = s.lights.iter().find(|l| l.kind == LightKind::Directional).expect("directional light");
+    let sun = s
+        .lights
+        .iter()
+        .find(|l| l.kind == LightKind::Directional)
+        .expect("directional light");
     assert!(sun.direction.y < -0.5);
-    let spot = s.lights.iter().find(|l| matches!(l.kind, LightKind::Spot { .. })).expect("spot light");
+    let spot = s
+        .lights
+        .iter()
+        .find(|l| matches!(l.kind, LightKind::Spot { .. }))
+        .expect("spot light");
     let to_cloth = (Vec3::new(0.0, 0.9, 0.0) - spot.position).normalize();
     assert!(spot.direction.dot(to_cloth) > 0.999);
     assert!(spot.range.is_some());
-    let point = s.lights.iter().find(|l| l.kind == LightKind::Point).expect("point light");
-    assert!(point.range.is_some() && point.intensity > 5.0);
+    let point = s
+        .lights
+        .iter()
+        .find(|l| l.kind == LightKind::Point)
+        .expect("point light");
+    assert!(point.range.is_some() && point.intensity >= 5.0);
 }
 
 #[test]
@@ -303,7 +423,8 @@ fn default_gltf_and_glb_are_the_same_scene() {
     assert_eq!(glb.lights.len(), gltf.lights.len());
     assert_eq!(glb.materials.len(), gltf.materials.len());
 
-    let glb_file = scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.glb")).unwrap();
+    let glb_file =
+        scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/default.glb")).unwrap();
     assert_eq!(glb_file.meshes.len(), glb.meshes.len());
 }
 
@@ -315,7 +436,10 @@ fn regenerated_tangents_of_the_default_cloth_match_the_stored_ones() {
     let mut j: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
     for mesh in j["meshes"].as_array_mut().unwrap() {
         for prim in mesh["primitives"].as_array_mut().unwrap() {
-            prim["attributes"].as_object_mut().unwrap().remove("TANGENT");
+            prim["attributes"]
+                .as_object_mut()
+                .unwrap()
+                .remove("TANGENT");
         }
     }
     let dir = temp_dir("regenerated-tangents");
@@ -334,7 +458,11 @@ fn regenerated_tangents_of_the_default_cloth_match_the_stored_ones() {
             agree += 1;
         }
     }
-    assert!(agree as f32 >= 0.99 * a.vertices.len() as f32, "{agree} of {} tangents agree", a.vertices.len());
+    assert!(
+        agree as f32 >= 0.99 * a.vertices.len() as f32,
+        "{agree} of {} tangents agree",
+        a.vertices.len()
+    );
 }
 
 // --- files that are missing or not glTF -----------------------------------------------------------
@@ -365,7 +493,10 @@ fn non_gltf_file_error_says_so_and_names_the_file() {
     let path = dir.join("truncated.glb");
     std::fs::write(&path, &scene::DEFAULT_SCENE_GLB[..100]).unwrap();
     let msg = error_text(scene::load(&path));
-    assert!(msg.contains(&path.display().to_string()) && msg.contains(".glb"), "{msg}");
+    assert!(
+        msg.contains(&path.display().to_string()) && msg.contains(".glb"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -437,7 +568,12 @@ fn mikktspace_tangents_are_orthogonal_on_a_curved_mesh() {
 fn missing_normals_and_uvs_are_generated_with_a_warning() {
     let mut d = Doc::new();
     // Non-indexed: indices 0..n are made up, normals are flat.
-    d.mesh(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]], None, None, None);
+    d.mesh(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]],
+        None,
+        None,
+        None,
+    );
     let s = d.load("no-normals").unwrap();
     assert_well_formed(&s);
     let m = &s.meshes[0];
@@ -447,7 +583,11 @@ fn missing_normals_and_uvs_are_generated_with_a_warning() {
         assert_eq!(v.uv, [0.0, 0.0]);
         assert_eq!(v.tangent[3], 1.0);
     }
-    assert!(s.warnings.iter().any(|w| w.0.contains("no normals")), "{:?}", s.warnings);
+    assert!(
+        s.warnings.iter().any(|w| w.0.contains("no normals")),
+        "{:?}",
+        s.warnings
+    );
     // A primitive without a material gets glTF's default material, appended once.
     assert_eq!(s.materials.len(), 1);
     assert_eq!(s.materials[0].name, "default");
@@ -456,15 +596,33 @@ fn missing_normals_and_uvs_are_generated_with_a_warning() {
 #[test]
 fn zero_and_nan_normals_are_repaired_with_one_warning() {
     let mut d = Doc::new();
-    let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
-    let n = [[0.0, 0.0, 0.0], [f32::NAN, 0.0, 1.0], [0.0, 0.0, 2.0], [0.0, 0.0, 1.0]];
+    let p = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let n = [
+        [0.0, 0.0, 0.0],
+        [f32::NAN, 0.0, 1.0],
+        [0.0, 0.0, 2.0],
+        [0.0, 0.0, 1.0],
+    ];
     d.mesh(&p, Some(&n), None, Some(&[0, 1, 2, 0, 2, 3]));
     let s = d.load("bad-normals").unwrap();
     assert_well_formed(&s);
     for v in &s.meshes[0].vertices {
-        assert!(Vec3::from(v.normal).abs_diff_eq(Vec3::Z, 1e-6), "{:?}", v.normal);
+        assert!(
+            Vec3::from(v.normal).abs_diff_eq(Vec3::Z, 1e-6),
+            "{:?}",
+            v.normal
+        );
     }
-    let repairs: Vec<_> = s.warnings.iter().filter(|w| w.0.contains("fallback")).collect();
+    let repairs: Vec<_> = s
+        .warnings
+        .iter()
+        .filter(|w| w.0.contains("fallback"))
+        .collect();
     assert_eq!(repairs.len(), 1, "{:?}", s.warnings);
     assert!(repairs[0].0.contains("2 normal(s)"), "{}", repairs[0]);
 }
@@ -473,32 +631,56 @@ fn zero_and_nan_normals_are_repaired_with_one_warning() {
 fn degenerate_tangents_in_the_file_are_repaired() {
     let mut d = Doc::new();
     d.quad(true, true);
-    let t = d.floats(&[[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0], [f32::NAN, 0.0, 0.0, 1.0], [2.0, 0.0, 0.0, 0.0]]);
+    let t = d.floats(&[
+        [0.0, 0.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0, 1.0],
+        [f32::NAN, 0.0, 0.0, 1.0],
+        [2.0, 0.0, 0.0, 0.0],
+    ]);
     d.json["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = json!(t);
     let s = d.load("bad-tangents").unwrap();
     assert_well_formed(&s);
     let v = &s.meshes[0].vertices;
     assert!(Vec3::new(v[3].tangent[0], v[3].tangent[1], v[3].tangent[2]).abs_diff_eq(Vec3::X, 1e-6));
     assert_eq!(v[3].tangent[3], 1.0);
-    assert!(s.warnings.iter().any(|w| w.0.contains("3 tangent(s)")), "{:?}", s.warnings);
+    assert!(
+        s.warnings.iter().any(|w| w.0.contains("3 tangent(s)")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]
 fn out_of_range_index_is_an_error_naming_mesh_and_accessor() {
     let mut d = Doc::new();
-    d.mesh(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, None, Some(&[0, 1, 7]));
+    d.mesh(
+        &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        None,
+        None,
+        Some(&[0, 1, 7]),
+    );
     let msg = error_text(d.load("bad-index"));
     assert!(msg.contains("scene.gltf"), "{msg}");
-    assert!(msg.contains("mesh 'test mesh'") && msg.contains("index 7") && msg.contains("accessor 1"), "{msg}");
+    assert!(
+        msg.contains("mesh 'test mesh'") && msg.contains("index 7") && msg.contains("accessor 1"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn nan_position_is_an_error() {
     let mut d = Doc::new();
-    d.mesh(&[[0.0; 3], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]], None, None, Some(&[0, 1, 2]));
+    d.mesh(
+        &[[0.0; 3], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        None,
+        None,
+        Some(&[0, 1, 2]),
+    );
     let msg = error_text(d.load("nan-position"));
     assert!(
-        msg.contains("scene.gltf") && msg.contains("mesh 'test mesh'") && msg.contains("non-finite position"),
+        msg.contains("scene.gltf")
+            && msg.contains("mesh 'test mesh'")
+            && msg.contains("non-finite position"),
         "{msg}"
     );
 }
@@ -509,7 +691,10 @@ fn accessor_past_the_end_of_its_buffer_is_an_error() {
     d.quad(true, false);
     d.json["accessors"][0]["count"] = json!(400);
     let msg = error_text(d.load("short-buffer"));
-    assert!(msg.contains("accessor 0") && msg.contains("POSITION"), "{msg}");
+    assert!(
+        msg.contains("accessor 0") && msg.contains("POSITION"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -520,7 +705,9 @@ fn non_triangle_primitives_are_skipped_with_a_warning() {
     let s = d.load("lines").unwrap();
     assert!(s.meshes.is_empty() && s.draws.is_empty());
     assert!(
-        s.warnings.iter().any(|w| w.0.contains("mesh 'test mesh' primitive 0") && w.0.contains("TRIANGLES")),
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("mesh 'test mesh' primitive 0") && w.0.contains("TRIANGLES")),
         "{:?}",
         s.warnings
     );
@@ -534,12 +721,19 @@ fn node_transforms_compose_parent_times_child() {
     d.json["scenes"][0]["nodes"] = json!([node + 1]);
     d.json["nodes"][node]["translation"] = json!([1.0, 0.0, 0.0]);
     let q = glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
-    d.push("nodes", json!({"children": [node], "translation": [0.0, 2.0, 0.0], "rotation": q.to_array()}));
+    d.push(
+        "nodes",
+        json!({"children": [node], "translation": [0.0, 2.0, 0.0], "rotation": q.to_array()}),
+    );
     let s = d.load("hierarchy").unwrap();
-    let expected = Mat4::from_rotation_translation(q, Vec3::new(0.0, 2.0, 0.0)) * Mat4::from_translation(Vec3::X);
+    let expected = Mat4::from_rotation_translation(q, Vec3::new(0.0, 2.0, 0.0))
+        * Mat4::from_translation(Vec3::X);
     assert_mat_close(s.draws[0].world, expected);
     // The child's origin ends up at (0, 2, -1).
-    assert!(s.draws[0].world.transform_point3(Vec3::ZERO).abs_diff_eq(Vec3::new(0.0, 2.0, -1.0), 1e-5));
+    assert!(s.draws[0]
+        .world
+        .transform_point3(Vec3::ZERO)
+        .abs_diff_eq(Vec3::new(0.0, 2.0, -1.0), 1e-5));
 }
 
 #[test]
@@ -554,7 +748,9 @@ fn node_cycles_are_an_error() {
 // --- materials and textures -----------------------------------------------------------------------
 
 fn write_png(path: &Path, w: u32, h: u32) {
-    let img = image::RgbaImage::from_fn(w, h, |x, y| image::Rgba([(x * 40) as u8, (y * 40) as u8, 128, 255]));
+    let img = image::RgbaImage::from_fn(w, h, |x, y| {
+        image::Rgba([(x * 40) as u8, (y * 40) as u8, 128, 255])
+    });
     img.save(path).unwrap();
 }
 
@@ -586,7 +782,11 @@ fn textures_are_decoded_once_per_image_and_colour_space() {
     let s = d.load_in(&dir, "scene.gltf").unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     assert_well_formed(&s);
-    assert_eq!(s.textures.len(), 2, "one sRGB and one linear texture of the same image");
+    assert_eq!(
+        s.textures.len(),
+        2,
+        "one sRGB and one linear texture of the same image"
+    );
     let m = &s.materials[0];
     assert_eq!(m.name, "painted");
     let srgb = m.base_color_texture.unwrap();
@@ -609,7 +809,8 @@ fn missing_image_is_an_error_naming_material_image_and_file() {
     d.quad(true, true);
     d.json["images"] = json!([{"uri": "textures/missing.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
-    d.json["materials"] = json!([{"name": "velvet", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    d.json["materials"] =
+        json!([{"name": "velvet", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let dir = temp_dir("missing-image");
     let msg = error_text(d.load_in(&dir, "scene.gltf"));
@@ -629,20 +830,29 @@ fn undecodable_image_is_an_error() {
     d.json["textures"] = json!([{"source": 0}]);
     d.json["materials"] = json!([{"name": "broken", "emissiveTexture": {"index": 0}}]);
     let msg = error_text(d.load_in(&dir, "scene.gltf"));
-    assert!(msg.contains("material 'broken'") && msg.contains("garbage.png") && msg.contains("decoded"), "{msg}");
+    assert!(
+        msg.contains("material 'broken'") && msg.contains("garbage.png") && msg.contains("decoded"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn oversized_image_is_an_error() {
     let dir = temp_dir("huge-image");
-    image::GrayImage::new(16385, 1).save(dir.join("wide.png")).unwrap();
+    image::GrayImage::new(16385, 1)
+        .save(dir.join("wide.png"))
+        .unwrap();
     let mut d = Doc::new();
     d.quad(true, true);
     d.json["images"] = json!([{"uri": "wide.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
-    d.json["materials"] = json!([{"name": "banner", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    d.json["materials"] =
+        json!([{"name": "banner", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
     let msg = error_text(d.load_in(&dir, "scene.gltf"));
-    assert!(msg.contains("material 'banner'") && msg.contains("wide.png") && msg.contains("16385x1"), "{msg}");
+    assert!(
+        msg.contains("material 'banner'") && msg.contains("wide.png") && msg.contains("16385x1"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -669,7 +879,10 @@ fn texture_transform_is_baked_into_the_uvs() {
 fn tiny_png() -> Vec<u8> {
     let mut bytes = Vec::new();
     image::RgbaImage::from_pixel(1, 1, image::Rgba([255, 0, 0, 255]))
-        .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
         .unwrap();
     bytes
 }
@@ -678,7 +891,8 @@ fn tiny_png() -> Vec<u8> {
 fn fabric_extension_reaches_the_material() {
     let mut d = Doc::new();
     d.quad(true, true);
-    d.json["materials"] = json!([{"name": "cloth", "extensions": {"WEFT_materials_fabric": {"pattern": "plain"}}}]);
+    d.json["materials"] =
+        json!([{"name": "cloth", "extensions": {"WEFT_materials_fabric": {"pattern": "plain"}}}]);
     d.json["extensionsUsed"] = json!(["WEFT_materials_fabric"]);
     d.json["extensionsRequired"] = json!(["WEFT_materials_fabric"]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
@@ -697,7 +911,10 @@ fn unsupported_required_extension_is_an_error_naming_it() {
     d.json["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
     d.json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
     let msg = error_text(d.load("required-extension"));
-    assert!(msg.contains("KHR_draco_mesh_compression") && msg.contains("scene.gltf"), "{msg}");
+    assert!(
+        msg.contains("KHR_draco_mesh_compression") && msg.contains("scene.gltf"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -706,7 +923,13 @@ fn unsupported_used_extension_is_a_warning() {
     d.quad(true, true);
     d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat"]);
     let s = d.load("used-extension").unwrap();
-    assert!(s.warnings.iter().any(|w| w.0.contains("KHR_materials_clearcoat")), "{:?}", s.warnings);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("KHR_materials_clearcoat")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]
@@ -718,13 +941,25 @@ fn external_buffer_resolves_relative_to_the_scene_and_missing_one_is_named() {
     j["buffers"] = json!([{"byteLength": d.bin.len(), "uri": "mesh%20data.bin"}]);
     std::fs::write(dir.join("scene.gltf"), serde_json::to_string(&j).unwrap()).unwrap();
     let msg = error_text(scene::load(&dir.join("scene.gltf")));
-    assert!(msg.contains("buffer 0") && msg.contains("mesh%20data.bin") && msg.contains("does not exist"), "{msg}");
+    assert!(
+        msg.contains("buffer 0")
+            && msg.contains("mesh%20data.bin")
+            && msg.contains("does not exist"),
+        "{msg}"
+    );
     std::fs::write(dir.join("mesh data.bin"), &d.bin).unwrap();
     let s = scene::load(&dir.join("scene.gltf")).unwrap();
     assert_eq!(s.meshes[0].vertices.len(), 4);
     // From memory there is no directory to look in: a clear error, not a panic.
-    let msg = error_text(scene::load_slice(serde_json::to_string(&j).unwrap().as_bytes(), "memory scene", None));
-    assert!(msg.contains("memory scene") && msg.contains("external file"), "{msg}");
+    let msg = error_text(scene::load_slice(
+        serde_json::to_string(&j).unwrap().as_bytes(),
+        "memory scene",
+        None,
+    ));
+    assert!(
+        msg.contains("memory scene") && msg.contains("external file"),
+        "{msg}"
+    );
 }
 
 // --- lights and cameras ---------------------------------------------------------------------------
@@ -745,12 +980,21 @@ fn lights_are_placed_by_their_nodes() {
         {"type": "spot", "intensity": 20.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
     ]));
     let down = glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2); // -Z turned to -Y
-    let n0 = d.push("nodes", json!({"rotation": down.to_array(), "extensions": {"KHR_lights_punctual": {"light": 0}}}));
+    let n0 = d.push(
+        "nodes",
+        json!({"rotation": down.to_array(), "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+    );
     let n1 =
         d.push("nodes", json!({"translation": [1.0, 2.0, 3.0], "extensions": {"KHR_lights_punctual": {"light": 1}}}));
     let child = n2_child(&mut d);
-    let n2 = d.push("nodes", json!({"translation": [0.0, 4.0, 0.0], "children": [child]}));
-    d.json["scenes"][0]["nodes"].as_array_mut().unwrap().extend([json!(n0), json!(n1), json!(n2)]);
+    let n2 = d.push(
+        "nodes",
+        json!({"translation": [0.0, 4.0, 0.0], "children": [child]}),
+    );
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .extend([json!(n0), json!(n1), json!(n2)]);
     let s = d.load("lights").unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     assert_well_formed(&s);
@@ -758,16 +1002,37 @@ fn lights_are_placed_by_their_nodes() {
     let sun = &s.lights[0];
     assert_eq!(sun.kind, LightKind::Directional);
     assert_eq!(sun.name, "light 0");
-    assert!(sun.direction.abs_diff_eq(-Vec3::Y, 1e-5), "{}", sun.direction);
+    assert!(
+        sun.direction.abs_diff_eq(-Vec3::Y, 1e-5),
+        "{}",
+        sun.direction
+    );
     assert_eq!(sun.range, None);
     let bulb = &s.lights[1];
-    assert_eq!((bulb.name.as_str(), bulb.kind, bulb.range), ("bulb", LightKind::Point, Some(5.0)));
+    assert_eq!(
+        (bulb.name.as_str(), bulb.kind, bulb.range),
+        ("bulb", LightKind::Point, Some(5.0))
+    );
     assert!(bulb.position.abs_diff_eq(Vec3::new(1.0, 2.0, 3.0), 1e-6));
     let spot = &s.lights[2];
-    assert_eq!(spot.kind, LightKind::Spot { inner_cone: 0.2, outer_cone: 0.5 });
+    assert_eq!(
+        spot.kind,
+        LightKind::Spot {
+            inner_cone: 0.2,
+            outer_cone: 0.5
+        }
+    );
     // The spot's node is a scaled, rotated child of a translated parent.
-    assert!(spot.position.abs_diff_eq(Vec3::new(0.0, 4.0, 0.0), 1e-5), "{}", spot.position);
-    assert!(spot.direction.abs_diff_eq(-Vec3::Y, 1e-5), "{}", spot.direction);
+    assert!(
+        spot.position.abs_diff_eq(Vec3::new(0.0, 4.0, 0.0), 1e-5),
+        "{}",
+        spot.position
+    );
+    assert!(
+        spot.direction.abs_diff_eq(-Vec3::Y, 1e-5),
+        "{}",
+        spot.direction
+    );
 }
 
 fn n2_child(d: &mut Doc) -> usize {
@@ -777,12 +1042,22 @@ fn n2_child(d: &mut Doc) -> usize {
 
 #[test]
 fn bad_spot_cone_is_an_error() {
-    let mut d =
-        with_lights(json!([{"name": "cone", "type": "spot", "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.5}}]));
-    let n = d.push("nodes", json!({"extensions": {"KHR_lights_punctual": {"light": 0}}}));
-    d.json["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(n));
+    let mut d = with_lights(
+        json!([{"name": "cone", "type": "spot", "spot": {"innerConeAngle": 0.6, "outerConeAngle": 0.5}}]),
+    );
+    let n = d.push(
+        "nodes",
+        json!({"extensions": {"KHR_lights_punctual": {"light": 0}}}),
+    );
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(n));
     let msg = error_text(d.load("bad-spot"));
-    assert!(msg.contains("light 'cone'") && msg.contains("innerConeAngle"), "{msg}");
+    assert!(
+        msg.contains("light 'cone'") && msg.contains("innerConeAngle"),
+        "{msg}"
+    );
 }
 
 fn with_camera(camera: Value, node: Value) -> Doc {
@@ -790,7 +1065,10 @@ fn with_camera(camera: Value, node: Value) -> Doc {
     d.quad(true, true);
     d.json["cameras"] = json!([camera]);
     let n = d.push("nodes", node);
-    d.json["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(n));
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(n));
     d
 }
 
@@ -805,8 +1083,14 @@ fn camera_view_is_the_inverse_of_its_rigid_node_transform() {
     assert_eq!(s.cameras.len(), 1);
     let c = &s.cameras[0];
     assert_eq!(c.name, "main");
-    assert_eq!((c.yfov, c.znear, c.zfar, c.aspect_ratio), (0.8, 0.1, Some(100.0), Some(1.5)));
-    assert_mat_close(c.view, Mat4::from_rotation_translation(q, Vec3::new(1.0, 2.0, 5.0)).inverse());
+    assert_eq!(
+        (c.yfov, c.znear, c.zfar, c.aspect_ratio),
+        (0.8, 0.1, Some(100.0), Some(1.5))
+    );
+    assert_mat_close(
+        c.view,
+        Mat4::from_rotation_translation(q, Vec3::new(1.0, 2.0, 5.0)).inverse(),
+    );
     assert_eq!(s.camera(None).unwrap().name, "main");
 }
 
@@ -817,11 +1101,19 @@ fn camera_with_zero_yfov_is_an_error_naming_it() {
         json!({"camera": 0}),
     );
     let msg = error_text(d.load("yfov0"));
-    assert!(msg.contains("camera 'flat'") && msg.contains("yfov") && msg.contains("scene.gltf"), "{msg}");
-    let d =
-        with_camera(json!({"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.0}}), json!({"camera": 0}));
+    assert!(
+        msg.contains("camera 'flat'") && msg.contains("yfov") && msg.contains("scene.gltf"),
+        "{msg}"
+    );
+    let d = with_camera(
+        json!({"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.0}}),
+        json!({"camera": 0}),
+    );
     let msg = error_text(d.load("znear0"));
-    assert!(msg.contains("camera 'camera 0'") && msg.contains("znear"), "{msg}");
+    assert!(
+        msg.contains("camera 'camera 0'") && msg.contains("znear"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -832,7 +1124,13 @@ fn orthographic_camera_is_skipped_with_a_warning() {
     );
     let s = d.load("ortho").unwrap();
     assert!(s.cameras.is_empty());
-    assert!(s.warnings.iter().any(|w| w.0.contains("ortho") && w.0.contains("orthographic")), "{:?}", s.warnings);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("ortho") && w.0.contains("orthographic")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]
@@ -910,11 +1208,18 @@ fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
         "extensions": {"WEFT_materials_fabric": {"pattern": "plain", "repeat": 0.05}},
     }]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
-    d.json["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}}]);
+    d.json["cameras"] =
+        json!([{"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}}]);
     let light =
         d.push("nodes", json!({"translation": [0.0, 2.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": 0}}}));
-    let cam = d.push("nodes", json!({"camera": 0, "translation": [0.0, 0.0, 3.0], "children": [light]}));
-    d.json["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(cam));
+    let cam = d.push(
+        "nodes",
+        json!({"camera": 0, "translation": [0.0, 0.0, 3.0], "children": [light]}),
+    );
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(cam));
     // A sparse accessor overriding one texture coordinate.
     let sparse_idx = d.view(&2u32.to_le_bytes());
     let sparse_val = d.view(&[0.25f32.to_le_bytes(), 0.75f32.to_le_bytes()].concat());
@@ -924,14 +1229,23 @@ fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
         "values": {"bufferView": sparse_val},
     });
     let mut base: Value = serde_json::from_str(&d.text()).unwrap();
-    let s = scene::load_slice(base.to_string().as_bytes(), "sweep", None).expect("the unmodified sweep scene loads");
-    assert_eq!(s.meshes[0].vertices[2].uv, [0.5, 1.5], "sparse value, then the texture transform");
+    let s = scene::load_slice(base.to_string().as_bytes(), "sweep", None)
+        .expect("the unmodified sweep scene loads");
+    assert_eq!(
+        s.meshes[0].vertices[2].uv,
+        [0.5, 1.5],
+        "sparse value, then the texture transform"
+    );
 
     let panics = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let counter = panics.clone();
     let previous = std::panic::take_hook();
+    // Count only this thread's panics: other tests run in parallel threads of the same process.
+    let this_thread = std::thread::current().id();
     std::panic::set_hook(Box::new(move |_| {
-        counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        if std::thread::current().id() == this_thread {
+            counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        }
     }));
 
     let mut paths = Vec::new();
@@ -958,7 +1272,10 @@ fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
             let result = scene::load_slice(base.to_string().as_bytes(), "sweep", None);
             loads += 1;
             if panics.load(std::sync::atomic::Ordering::SeqCst) != before {
-                failures.push(format!("{path:?} = {r}: panicked ({:?})", result.err().map(|e| e.to_string())));
+                failures.push(format!(
+                    "{path:?} = {r}: panicked ({:?})",
+                    result.err().map(|e| e.to_string())
+                ));
             } else if let Ok(s) = result {
                 assert_well_formed(&s);
             }
@@ -966,5 +1283,10 @@ fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
         *at(&mut base, path) = original;
     }
     std::panic::set_hook(previous);
-    assert!(failures.is_empty(), "{} of {loads} corrupted files panicked:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} of {loads} corrupted files panicked:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }

@@ -3,7 +3,7 @@
 //! file is never left half-written: it is either untouched or replaced by a complete image.
 
 use std::fs::{File, OpenOptions};
-use std::io::{BufWriter, ErrorKind, Write};
+use std::io::{BufWriter, ErrorKind, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use crate::Error;
@@ -38,12 +38,48 @@ fn io_error(path: &Path, dir: &Path, what: &str, e: std::io::Error) -> Error {
     }
 }
 
+/// The temporary file, remembering the first error the file system gave: encoders wrap it in
+/// errors of their own that lose its kind (a full disk must still be reported as one).
+struct Sink {
+    file: File,
+    error: Option<std::io::Error>,
+}
+
+impl Sink {
+    fn note<T>(&mut self, result: std::io::Result<T>) -> std::io::Result<T> {
+        if let Err(e) = &result {
+            if self.error.is_none() {
+                self.error = Some(std::io::Error::new(e.kind(), e.to_string()));
+            }
+        }
+        result
+    }
+}
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.file.write(buf);
+        self.note(r)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.file.flush();
+        self.note(r)
+    }
+}
+
+impl Seek for Sink {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        let r = self.file.seek(pos);
+        self.note(r)
+    }
+}
+
 /// Writes the image `encode` produces to `path`, through a temporary file in the same directory
 /// (so the rename cannot cross file systems), flushed to disk before the rename. On any failure
 /// the temporary file is removed and `path` is left as it was.
 fn write_atomically(
     path: &Path,
-    encode: impl FnOnce(&mut BufWriter<File>) -> image::ImageResult<()>,
+    encode: impl FnOnce(&mut BufWriter<Sink>) -> image::ImageResult<()>,
 ) -> crate::Result<()> {
     let dir = path
         .parent()
@@ -66,18 +102,29 @@ fn write_atomically(
         }
         other => other,
     }
-    .map_err(|e| io_error(path, dir, "write", e))?;
+    .map_err(|e| match e.kind() {
+        ErrorKind::AlreadyExists => Error::Io {
+            context: format!(
+                "could not write '{}' (the temporary file '{}' is in the way and could not be removed: remove it)",
+                path.display(),
+                tmp.display()
+            ),
+            source: e,
+        },
+        _ => io_error(path, dir, "write", e),
+    })?;
 
-    let written = (|| {
-        let mut out = BufWriter::new(file);
-        encode(&mut out).map_err(|e| match e {
-            image::ImageError::IoError(io) => io,
-            other => std::io::Error::other(other),
-        })?;
-        out.flush()?;
-        let file = out.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()
-    })();
+    let mut out = BufWriter::new(Sink { file, error: None });
+    let encoded = encode(&mut out).map_err(|e| match e {
+        image::ImageError::IoError(io) => io,
+        other => std::io::Error::other(other),
+    });
+    let written = encoded
+        .and_then(|()| out.flush())
+        .and_then(|()| out.get_ref().file.sync_all());
+    let written = written.map_err(|e| out.get_mut().error.take().unwrap_or(e));
+    // Closed before the rename or the removal (the buffer is empty, or the write failed anyway).
+    drop(out);
     if let Err(e) = written {
         let _ = std::fs::remove_file(&tmp);
         return Err(io_error(path, dir, "write", e));

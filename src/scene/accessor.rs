@@ -67,7 +67,9 @@ fn decode_f32(t: DataType, normalized: bool, b: &[u8]) -> f32 {
         (DataType::U8, true) => b[0] as f32 / 255.0,
         (DataType::I16, true) => (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0),
         (DataType::U16, true) => u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
-        (DataType::U32, true) => (u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64 / u32::MAX as f64) as f32,
+        (DataType::U32, true) => {
+            (u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64 / u32::MAX as f64) as f32
+        }
     }
 }
 
@@ -96,9 +98,17 @@ fn strided_bytes<'b>(
     span: Span,
     buffers: &'b [Vec<u8>],
 ) -> crate::Result<&'b [u8]> {
-    let Span { offset, count, elem: elem_size, stride } = span;
+    let Span {
+        offset,
+        count,
+        elem: elem_size,
+        stride,
+    } = span;
     let buffer = buffers.get(view.buffer().index()).ok_or_else(|| {
-        use_.error(accessor, format_args!("uses buffer {} that was not loaded", view.buffer().index()))
+        use_.error(
+            accessor,
+            format_args!("uses buffer {} that was not loaded", view.buffer().index()),
+        )
     })?;
     let view_end = view.offset().checked_add(view.length());
     let view_bytes = view_end.and_then(|end| buffer.get(view.offset()..end)).ok_or_else(|| {
@@ -117,8 +127,10 @@ fn strided_bytes<'b>(
     if count == 0 {
         return Ok(&view_bytes[..0]);
     }
-    let needed =
-        stride.checked_mul(count - 1).and_then(|n| n.checked_add(elem_size)).and_then(|n| n.checked_add(offset));
+    let needed = stride
+        .checked_mul(count - 1)
+        .and_then(|n| n.checked_add(elem_size))
+        .and_then(|n| n.checked_add(offset));
     match needed {
         Some(end) if end <= view_bytes.len() => Ok(&view_bytes[offset..end]),
         _ => Err(use_.error(
@@ -141,11 +153,22 @@ pub(super) fn read_f32(
     buffers: &[Vec<u8>],
     use_: &Use,
 ) -> crate::Result<Vec<f32>> {
-    read(acc, expect, buffers, use_, |t, b| decode_f32(t, acc.normalized(), b), 0.0)
+    read(
+        acc,
+        expect,
+        buffers,
+        use_,
+        |t, b| decode_f32(t, acc.normalized(), b),
+        0.0,
+    )
 }
 
 /// Reads a scalar accessor of unsigned integers (vertex indices).
-pub(super) fn read_u32(acc: &gltf::Accessor, buffers: &[Vec<u8>], use_: &Use) -> crate::Result<Vec<u32>> {
+pub(super) fn read_u32(
+    acc: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    use_: &Use,
+) -> crate::Result<Vec<u32>> {
     match acc.data_type() {
         DataType::U8 | DataType::U16 | DataType::U32 => {}
         other => {
@@ -183,9 +206,12 @@ fn read<T: Copy>(
     let csize = component_size(acc.data_type());
     let elem = n * csize;
     let count = acc.count();
-    let total = count
-        .checked_mul(n)
-        .ok_or_else(|| use_.error(index, format_args!("claims {count} elements, more than any buffer can hold")))?;
+    let total = count.checked_mul(n).ok_or_else(|| {
+        use_.error(
+            index,
+            format_args!("claims {count} elements, more than any buffer can hold"),
+        )
+    })?;
 
     let mut out = Vec::new();
     match acc.view() {
@@ -201,7 +227,18 @@ fn read<T: Copy>(
                 ));
             }
             // Checked before allocating, so a bogus count cannot exhaust memory.
-            let bytes = strided_bytes(use_, index, &view, Span { offset: acc.offset(), count, elem, stride }, buffers)?;
+            let bytes = strided_bytes(
+                use_,
+                index,
+                &view,
+                Span {
+                    offset: acc.offset(),
+                    count,
+                    elem,
+                    stride,
+                },
+                buffers,
+            )?;
             out.reserve_exact(total);
             for i in 0..count {
                 let e = &bytes[i * stride..i * stride + elem];
@@ -211,7 +248,10 @@ fn read<T: Copy>(
         // No buffer view: zeros, then the sparse substitutions below. Nothing bounds the count
         // here, so cap it at something no real mesh reaches.
         None if total > 1 << 26 => {
-            return Err(use_.error(index, format_args!("claims {count} elements without a buffer view")));
+            return Err(use_.error(
+                index,
+                format_args!("claims {count} elements without a buffer view"),
+            ));
         }
         None => out.resize(total, zero),
     }
@@ -233,7 +273,12 @@ fn read<T: Copy>(
             use_,
             index,
             &indices.view(),
-            Span { offset: indices.offset(), count: scount, elem: isize, stride: isize },
+            Span {
+                offset: indices.offset(),
+                count: scount,
+                elem: isize,
+                stride: isize,
+            },
             buffers,
         )?;
         let values = sparse.values();
@@ -241,7 +286,12 @@ fn read<T: Copy>(
             use_,
             index,
             &values.view(),
-            Span { offset: values.offset(), count: scount, elem, stride: elem },
+            Span {
+                offset: values.offset(),
+                count: scount,
+                elem,
+                stride: elem,
+            },
             buffers,
         )?;
         for (k, ib) in ibytes.chunks_exact(isize).enumerate() {

@@ -23,9 +23,25 @@ use gltf::mesh::{Mode, Semantic};
 use super::accessor::{self, Use};
 use super::resources;
 use super::tangents::{self, UvTransform};
-use super::{Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Texture, Vertex, Warning};
+use super::{
+    Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Texture, Vertex, Warning,
+};
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
+
+/// Limits that keep an absurd or hostile file from exhausting memory or time: a few hundred bytes
+/// of JSON can make many primitives read one large accessor, or many nodes draw one large mesh.
+/// Each is far beyond what weft renders at interactive rates; the messages say how to get under
+/// them (docs/robustness.md lists them with the catalogue of bad inputs).
+///
+/// Vertices read, summed over primitives (a primitive reading a shared accessor counts it again):
+/// 2^25, a vertex buffer of about 1.9 GiB on the GPU, under the 2 GiB single allocation that many
+/// drivers (lavapipe included) allow.
+pub(super) const MAX_VERTICES: usize = 1 << 25;
+/// Indices read, summed over primitives: 2^28 (1 GiB of indices, 89 million triangles).
+pub(super) const MAX_INDICES: usize = 1 << 28;
+/// Triangles drawn, summed over every node that draws a mesh: 2^28.
+pub(super) const MAX_DRAWN_TRIANGLES: u64 = 1 << 28;
 
 /// The built-in default scene (written by `tools/make_default_scene.py`).
 pub const DEFAULT_SCENE_GLB: &[u8] = include_bytes!("../../assets/default.glb");
@@ -36,8 +52,12 @@ const DEFAULT_SCENE_SOURCE: &str = "built-in default scene";
 const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
 
 /// Extensions a file may list in `extensionsRequired`.
-const SUPPORTED_EXTENSIONS: &[&str] =
-    &["KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength", FABRIC_EXTENSION];
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+    FABRIC_EXTENSION,
+];
 
 /// The scene embedded in the binary: a draped cloth over a ball on a floor, a metal ball, three
 /// lights and a camera.
@@ -101,18 +121,31 @@ fn load_checked(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<S
         base_dir,
         doc: &doc,
         buffers: &buffers,
-        scene: Scene { source: source.to_owned(), warnings, ..Scene::default() },
+        scene: Scene {
+            source: source.to_owned(),
+            warnings,
+            ..Scene::default()
+        },
         textures: HashMap::new(),
         material_uv: Vec::new(),
         default_material: None,
         mesh_ids: vec![None; doc.meshes().len()],
         lights: Vec::new(),
         cameras: Vec::new(),
+        vertices_read: 0,
+        indices_read: 0,
+        texture_bytes_left: resources::MAX_TEXTURE_BYTES,
+        triangles_drawn: 0,
     };
     loader.load_materials()?;
     loader.lights = loader.light_definitions()?;
     loader.cameras = loader.camera_definitions()?;
     loader.walk_nodes()?;
+    if loader.scene.draws.is_empty() {
+        loader.warn(
+            "has nothing to draw: no node of the scene places a mesh with triangles, so the image shows only the background",
+        );
+    }
     Ok(loader.scene)
 }
 
@@ -125,16 +158,33 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
         ))
     };
     let (text, bin): (std::borrow::Cow<[u8]>, Option<Vec<u8>>) = if bytes.starts_with(b"glTF") {
-        let glb = gltf::Glb::from_slice(bytes).map_err(|e| {
+        let broken = |why: &dyn std::fmt::Display| {
             Error::input(format!(
-                "'{source}' starts like a binary glTF (.glb) file but its container is broken ({e}); the file is truncated or damaged: re-export it"
+                "'{source}' starts like a binary glTF (.glb) file but its container is broken ({why}); the file is truncated or damaged: re-export it"
             ))
-        })?;
+        };
+        // The gltf crate subtracts the header's size from the declared length unchecked (an
+        // overflow panic in builds with overflow checks): refuse such headers first.
+        let declared = bytes
+            .get(8..12)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        match declared {
+            None => return Err(broken(&"the 12-byte header is incomplete")),
+            Some(length) if length < 12 => {
+                return Err(broken(&format_args!(
+                "the header declares a total length of {length} bytes, less than the header itself"
+            )))
+            }
+            Some(_) => {}
+        }
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| broken(&e))?;
         (glb.json, glb.bin.map(|b| b.into_owned()))
     } else {
         (std::borrow::Cow::Borrowed(bytes), None)
     };
-    let text = text.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(&text);
+    let text = text
+        .strip_prefix(b"\xEF\xBB\xBF".as_slice())
+        .unwrap_or(&text);
 
     let value: serde_json::Value = match serde_json::from_slice(text) {
         Ok(v) => v,
@@ -147,7 +197,10 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
             });
         }
     };
-    let version = value.get("asset").and_then(|a| a.get("version")).and_then(|v| v.as_str());
+    let version = value
+        .get("asset")
+        .and_then(|a| a.get("version"))
+        .and_then(|v| v.as_str());
     match version {
         None => return Err(not_gltf("its JSON has no \"asset\": {\"version\": \"2.0\"} object")),
         Some(v) if !v.starts_with("2.") => {
@@ -168,7 +221,11 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
 /// Refuses required extensions weft cannot honour and warns about used ones it ignores. Removes
 /// weft's own extension from `extensionsRequired`, since the gltf crate's validator only knows its own.
 fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warning>) -> Result<()> {
-    if let Some(ext) = root.extensions_required.iter().find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str())) {
+    if let Some(ext) = root
+        .extensions_required
+        .iter()
+        .find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
+    {
         return Err(Error::input(format!(
             "{label} requires the glTF extension '{ext}', which weft does not support (it supports {}); re-export the scene without that extension (for example, turn off mesh compression in the exporter)",
             SUPPORTED_EXTENSIONS.join(", ")
@@ -208,17 +265,21 @@ fn validate(root: &json::Root, label: &str) -> Result<()> {
     }
 
     let mut problems: Vec<String> = Vec::new();
-    root.validate(root, json::Path::new, &mut |path: &dyn Fn() -> json::Path, error| {
-        use json::validation::Error as E;
-        let what = match error {
-            E::IndexOutOfBounds => "refers to an object that does not exist",
-            E::Invalid => "has an invalid value",
-            E::Missing => "is required but missing",
-            E::Oversize => "is too large",
-            E::Unsupported => "is not supported",
-        };
-        problems.push(format!("{} {what}", path()));
-    });
+    root.validate(
+        root,
+        json::Path::new,
+        &mut |path: &dyn Fn() -> json::Path, error| {
+            use json::validation::Error as E;
+            let what = match error {
+                E::IndexOutOfBounds => "refers to an object that does not exist",
+                E::Invalid => "has an invalid value",
+                E::Missing => "is required but missing",
+                E::Oversize => "is too large",
+                E::Unsupported => "is not supported",
+            };
+            problems.push(format!("{} {what}", path()));
+        },
+    );
     match problems.split_first() {
         None => Ok(()),
         Some((first, rest)) => Err(Error::input(format!(
@@ -264,11 +325,18 @@ struct Loader<'a> {
     lights: Vec<LightDef>,
     /// None for orthographic cameras, which are skipped.
     cameras: Vec<Option<CameraDef>>,
+    /// What the file has cost so far, against the limits above.
+    vertices_read: usize,
+    indices_read: usize,
+    texture_bytes_left: u64,
+    triangles_drawn: u64,
 }
 
 impl<'a> Loader<'a> {
     fn warn(&mut self, message: impl std::fmt::Display) {
-        self.scene.warnings.push(Warning(format!("{}: {message}", self.label)));
+        self.scene
+            .warnings
+            .push(Warning(format!("{}: {message}", self.label)));
     }
 
     fn error(&self, message: impl std::fmt::Display) -> Error {
@@ -287,8 +355,15 @@ impl<'a> Loader<'a> {
         Ok(())
     }
 
-    fn material(&mut self, m: &gltf::Material<'a>, index: usize) -> Result<(Material, UvTransform)> {
-        let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {index}"));
+    fn material(
+        &mut self,
+        m: &gltf::Material<'a>,
+        index: usize,
+    ) -> Result<(Material, UvTransform)> {
+        let name = m
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("material {index}"));
         let who = format!("material '{name}'");
         let pbr = m.pbr_metallic_roughness();
 
@@ -310,10 +385,17 @@ impl<'a> Loader<'a> {
         finite("KHR_materials_emissive_strength", &[emissive_strength])?;
         let emissive_factor = m.emissive_factor();
         finite("emissiveFactor", &emissive_factor)?;
+        let emissive = Vec3::from(emissive_factor) * emissive_strength;
+        finite(
+            "emitted radiance (emissiveFactor times KHR_materials_emissive_strength, which overflows)",
+            &emissive.to_array(),
+        )?;
 
         let clamp01 = |what: &str, v: f32, loader: &mut Self| -> f32 {
             if !(0.0..=1.0).contains(&v) {
-                loader.warn(format_args!("{who} has {what} {v}, outside [0, 1]; clamped"));
+                loader.warn(format_args!(
+                    "{who} has {what} {v}, outside [0, 1]; clamped"
+                ));
             }
             v.clamp(0.0, 1.0)
         };
@@ -344,19 +426,30 @@ impl<'a> Loader<'a> {
             loader.texture(&info_tex, color_space, &who, slot_name)
         };
 
-        let info_transform = |info: &gltf::texture::Info| -> Result<Option<(UvTransform, Option<u32>)>> {
-            match info.texture_transform() {
-                None => Ok(None),
-                Some(t) => {
-                    let uv = UvTransform { offset: t.offset(), rotation: t.rotation(), scale: t.scale() };
-                    finite(
-                        "KHR_texture_transform",
-                        &[uv.offset[0], uv.offset[1], uv.rotation, uv.scale[0], uv.scale[1]],
-                    )?;
-                    Ok(Some((uv, t.tex_coord())))
+        let info_transform =
+            |info: &gltf::texture::Info| -> Result<Option<(UvTransform, Option<u32>)>> {
+                match info.texture_transform() {
+                    None => Ok(None),
+                    Some(t) => {
+                        let uv = UvTransform {
+                            offset: t.offset(),
+                            rotation: t.rotation(),
+                            scale: t.scale(),
+                        };
+                        finite(
+                            "KHR_texture_transform",
+                            &[
+                                uv.offset[0],
+                                uv.offset[1],
+                                uv.rotation,
+                                uv.scale[0],
+                                uv.scale[1],
+                            ],
+                        )?;
+                        Ok(Some((uv, t.tex_coord())))
+                    }
                 }
-            }
-        };
+            };
 
         let base_color_texture = match pbr.base_color_texture() {
             Some(info) => Some(slot(
@@ -417,10 +510,15 @@ impl<'a> Loader<'a> {
             None => None,
         };
         if m.occlusion_texture().is_some() {
-            self.warn(format_args!("{who} has an occlusion texture, which weft does not use"));
+            self.warn(format_args!(
+                "{who} has an occlusion texture, which weft does not use"
+            ));
         }
         if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            self.warn(format_args!("{who} has alphaMode {:?}; weft draws every material opaque", m.alpha_mode()));
+            self.warn(format_args!(
+                "{who} has alphaMode {:?}; weft draws every material opaque",
+                m.alpha_mode()
+            ));
         }
 
         // One set of texture coordinates per mesh: the transform is baked into them, which is
@@ -438,12 +536,14 @@ impl<'a> Loader<'a> {
         };
 
         let fabric = match m.extensions().and_then(|e| e.get(FABRIC_EXTENSION)) {
-            Some(value) => Some(FabricParams::from_gltf_extension(value, &name, &mut self.scene.warnings).map_err(
-                |e| match e {
-                    Error::Input(msg) => self.error(msg),
-                    other => other,
-                },
-            )?),
+            Some(value) => Some(
+                FabricParams::from_gltf_extension(value, &name, &mut self.scene.warnings).map_err(
+                    |e| match e {
+                        Error::Input(msg) => self.error(msg),
+                        other => other,
+                    },
+                )?,
+            ),
             None => None,
         };
 
@@ -452,7 +552,7 @@ impl<'a> Loader<'a> {
             base_color,
             metallic,
             roughness,
-            emissive: (Vec3::from(emissive_factor) * emissive_strength).to_array(),
+            emissive: emissive.to_array(),
             normal_scale,
             base_color_texture,
             metallic_roughness_texture,
@@ -465,7 +565,11 @@ impl<'a> Loader<'a> {
     }
 
     /// KHR_texture_transform from raw JSON (normal textures).
-    fn parse_texture_transform(&self, v: &serde_json::Value, who: &str) -> Result<(UvTransform, Option<u32>)> {
+    fn parse_texture_transform(
+        &self,
+        v: &serde_json::Value,
+        who: &str,
+    ) -> Result<(UvTransform, Option<u32>)> {
         let bad = || {
             self.error(format_args!(
                 "{who}'s normal texture has a malformed KHR_texture_transform ({v}); offset and scale must be [x, y] numbers, rotation a number, texCoord an unsigned integer"
@@ -488,10 +592,27 @@ impl<'a> Loader<'a> {
         };
         let tex_coord = match v.get("texCoord") {
             None => None,
-            Some(t) => Some(t.as_u64().and_then(|t| u32::try_from(t).ok()).ok_or_else(bad)?),
+            Some(t) => Some(
+                t.as_u64()
+                    .and_then(|t| u32::try_from(t).ok())
+                    .ok_or_else(bad)?,
+            ),
         };
-        let uv = UvTransform { offset: pair("offset", [0.0, 0.0])?, rotation, scale: pair("scale", [1.0, 1.0])? };
-        if ![uv.offset[0], uv.offset[1], uv.rotation, uv.scale[0], uv.scale[1]].iter().all(|x| x.is_finite()) {
+        let uv = UvTransform {
+            offset: pair("offset", [0.0, 0.0])?,
+            rotation,
+            scale: pair("scale", [1.0, 1.0])?,
+        };
+        if ![
+            uv.offset[0],
+            uv.offset[1],
+            uv.rotation,
+            uv.scale[0],
+            uv.scale[1],
+        ]
+        .iter()
+        .all(|x| x.is_finite())
+        {
             return Err(bad());
         }
         Ok((uv, tex_coord))
@@ -512,7 +633,15 @@ impl<'a> Loader<'a> {
         }
         let root = self.doc.as_json();
         let what = format!("{who} ({slot})");
-        let decoded = resources::load_image(root, self.buffers, image, self.base_dir, &self.label, &what)?;
+        let decoded = resources::load_image(
+            root,
+            self.buffers,
+            image,
+            self.base_dir,
+            &self.label,
+            &what,
+            &mut self.texture_bytes_left,
+        )?;
         let space = match color_space {
             ColorSpace::Srgb => "sRGB",
             ColorSpace::Linear => "linear",
@@ -536,7 +665,10 @@ impl<'a> Loader<'a> {
         if let Some(Some(ids)) = self.mesh_ids.get(mesh.index()) {
             return Ok(ids.clone());
         }
-        let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+        let name = mesh
+            .name()
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("mesh {}", mesh.index()));
         let several = mesh.primitives().len() > 1;
         let mut ids = Vec::new();
         for prim in mesh.primitives() {
@@ -548,7 +680,11 @@ impl<'a> Loader<'a> {
                 ));
                 continue;
             }
-            let mesh_name = if several { format!("{name} (primitive {})", prim.index()) } else { name.clone() };
+            let mesh_name = if several {
+                format!("{name} (primitive {})", prim.index())
+            } else {
+                name.clone()
+            };
             if let Some(m) = self.primitive(&prim, &who, mesh_name)? {
                 self.scene.meshes.push(m);
                 ids.push(self.scene.meshes.len() - 1);
@@ -570,18 +706,41 @@ impl<'a> Loader<'a> {
         }
     }
 
-    fn primitive(&mut self, prim: &gltf::Primitive<'a>, who: &str, name: String) -> Result<Option<Mesh>> {
+    fn primitive(
+        &mut self,
+        prim: &gltf::Primitive<'a>,
+        who: &str,
+        name: String,
+    ) -> Result<Option<Mesh>> {
         let buffers = self.buffers;
         let read = |semantic: &Semantic, dims: Dimensions| -> Result<Option<(usize, Vec<f32>)>> {
             match prim.get(semantic) {
                 None => Ok(None),
                 Some(acc) => {
                     let what = format!("{who}, attribute {}", semantic.to_string());
-                    let values = accessor::read_f32(&acc, dims, buffers, &Use { source: &self.label, what: &what })?;
+                    let values = accessor::read_f32(
+                        &acc,
+                        dims,
+                        buffers,
+                        &Use {
+                            source: &self.label,
+                            what: &what,
+                        },
+                    )?;
                     Ok(Some((acc.index(), values)))
                 }
             }
         };
+        // Counted before reading, so the limit also bounds the time spent on primitives that turn
+        // out to have no triangles.
+        let claimed = prim.get(&Semantic::Positions).map_or(0, |a| a.count());
+        self.vertices_read = self.vertices_read.saturating_add(claimed);
+        if self.vertices_read > MAX_VERTICES {
+            return Err(self.error(format_args!(
+                "{who} brings the vertices read to {}, more than weft's limit of {MAX_VERTICES} for a scene (primitives that share an accessor count it each time); decimate or split the scene, or give primitives their own, smaller accessors",
+                self.vertices_read
+            )));
+        }
         let (pos_accessor, positions) = read(&Semantic::Positions, Dimensions::Vec3)?.ok_or_else(|| {
             self.error(format_args!("{who} has no POSITION attribute; every primitive needs one: re-export the mesh"))
         })?;
@@ -594,7 +753,11 @@ impl<'a> Loader<'a> {
         let normals = read(&Semantic::Normals, Dimensions::Vec3)?;
         let tangents = read(&Semantic::Tangents, Dimensions::Vec4)?;
         let uvs = read(&Semantic::TexCoords(0), Dimensions::Vec2)?;
-        for (semantic, attr, n) in [("NORMAL", &normals, 3), ("TANGENT", &tangents, 4), ("TEXCOORD_0", &uvs, 2)] {
+        for (semantic, attr, n) in [
+            ("NORMAL", &normals, 3),
+            ("TANGENT", &tangents, 4),
+            ("TEXCOORD_0", &uvs, 2),
+        ] {
             if let Some((acc, values)) = attr {
                 if values.len() / n != count {
                     return Err(self.error(format_args!(
@@ -605,17 +768,40 @@ impl<'a> Loader<'a> {
             }
         }
         if prim.get(&Semantic::Colors(0)).is_some() {
-            self.warn(format_args!("{who} has vertex colours (COLOR_0), which weft ignores"));
+            self.warn(format_args!(
+                "{who} has vertex colours (COLOR_0), which weft ignores"
+            ));
         }
         if prim.morph_targets().len() > 0 {
-            self.warn(format_args!("{who} has morph targets, which weft ignores (it draws the base shape)"));
+            self.warn(format_args!(
+                "{who} has morph targets, which weft ignores (it draws the base shape)"
+            ));
         }
 
         let mut indices = match prim.indices() {
             Some(acc) => {
                 let what = format!("{who}, indices");
-                let indices = accessor::read_u32(&acc, buffers, &Use { source: &self.label, what: &what })?;
-                if let Some((k, &i)) = indices.iter().enumerate().find(|(_, &i)| i as usize >= count) {
+                self.indices_read = self.indices_read.saturating_add(acc.count());
+                if self.indices_read > MAX_INDICES {
+                    return Err(self.error(format_args!(
+                        "{who} brings the indices read to {}, more than weft's limit of {MAX_INDICES} ({} million triangles) for a scene; decimate the meshes or split the scene",
+                        self.indices_read,
+                        MAX_INDICES / 3 / 1_000_000
+                    )));
+                }
+                let indices = accessor::read_u32(
+                    &acc,
+                    buffers,
+                    &Use {
+                        source: &self.label,
+                        what: &what,
+                    },
+                )?;
+                if let Some((k, &i)) = indices
+                    .iter()
+                    .enumerate()
+                    .find(|(_, &i)| i as usize >= count)
+                {
                     return Err(self.error(format_args!(
                         "{who}: index accessor {} holds index {i} at position {k}, but the primitive has only {count} vertices (POSITION accessor {pos_accessor}); fix the indices or re-export the mesh",
                         acc.index()
@@ -640,8 +826,10 @@ impl<'a> Loader<'a> {
 
         // Positions: a non-finite vertex in a triangle breaks rasterisation, bounds and tangents.
         let position = |v: usize| [positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]];
-        if let Some((corner, &v)) =
-            indices.iter().enumerate().find(|(_, &v)| !position(v as usize).iter().all(|c| c.is_finite()))
+        if let Some((corner, &v)) = indices
+            .iter()
+            .enumerate()
+            .find(|(_, &v)| !position(v as usize).iter().all(|c| c.is_finite()))
         {
             return Err(self.error(format_args!(
                 "{who}: vertex {v} of triangle {} has the non-finite position {:?} (POSITION accessor {pos_accessor}); fix or delete that vertex in your modelling tool and re-export",
@@ -654,23 +842,39 @@ impl<'a> Loader<'a> {
             .map(|v| Vertex {
                 // Vertices no triangle uses are never drawn; keep them finite all the same.
                 position: position(v).map(|c| if c.is_finite() { c } else { 0.0 }),
-                normal: normals.as_ref().map_or([0.0; 3], |(_, n)| [n[3 * v], n[3 * v + 1], n[3 * v + 2]]),
-                tangent: tangents
+                normal: normals
                     .as_ref()
-                    .map_or([0.0; 4], |(_, t)| [t[4 * v], t[4 * v + 1], t[4 * v + 2], t[4 * v + 3]]),
-                uv: uvs.as_ref().map_or([0.0; 2], |(_, t)| [t[2 * v], t[2 * v + 1]]),
+                    .map_or([0.0; 3], |(_, n)| [n[3 * v], n[3 * v + 1], n[3 * v + 2]]),
+                tangent: tangents.as_ref().map_or([0.0; 4], |(_, t)| {
+                    [t[4 * v], t[4 * v + 1], t[4 * v + 2], t[4 * v + 3]]
+                }),
+                uv: uvs
+                    .as_ref()
+                    .map_or([0.0; 2], |(_, t)| [t[2 * v], t[2 * v + 1]]),
             })
             .collect();
 
         let material = self.material_index(prim);
-        let uv_transform =
-            prim.material().index().and_then(|m| self.material_uv.get(m)).copied().unwrap_or(UvTransform::IDENTITY);
+        let uv_transform = prim
+            .material()
+            .index()
+            .and_then(|m| self.material_uv.get(m))
+            .copied()
+            .unwrap_or(UvTransform::IDENTITY);
 
         if uvs.is_some() {
-            let bad = vertices.iter().filter(|v| !v.uv.iter().all(|c| c.is_finite())).count();
+            let bad = vertices
+                .iter()
+                .filter(|v| !v.uv.iter().all(|c| c.is_finite()))
+                .count();
             if bad > 0 {
-                self.warn(format_args!("{who} has {bad} non-finite texture coordinate(s); replaced by (0, 0)"));
-                for v in vertices.iter_mut().filter(|v| !v.uv.iter().all(|c| c.is_finite())) {
+                self.warn(format_args!(
+                    "{who} has {bad} non-finite texture coordinate(s); replaced by (0, 0)"
+                ));
+                for v in vertices
+                    .iter_mut()
+                    .filter(|v| !v.uv.iter().all(|c| c.is_finite()))
+                {
                     v.uv = [0.0, 0.0];
                 }
             }
@@ -727,15 +931,23 @@ impl<'a> Loader<'a> {
             ));
         }
 
-        Ok(Some(Mesh { name, vertices, indices, material }))
+        Ok(Some(Mesh {
+            name,
+            vertices,
+            indices,
+            material,
+        }))
     }
 
     // --- lights and cameras ---------------------------------------------------------------------
 
     fn light_definitions(&mut self) -> Result<Vec<LightDef>> {
         let root = self.doc.as_json();
-        let lights =
-            root.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()).map_or(&[][..], |l| &l.lights[..]);
+        let lights = root
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .map_or(&[][..], |l| &l.lights[..]);
         let mut out = Vec::with_capacity(lights.len());
         for (i, l) in lights.iter().enumerate() {
             let name = l.name.clone().unwrap_or_else(|| format!("light {i}"));
@@ -747,40 +959,56 @@ impl<'a> Loader<'a> {
                 (Checked::Valid(Type::Spot), Some(spot)) => {
                     let (inner, outer) = (spot.inner_cone_angle, spot.outer_cone_angle);
                     let half_pi = std::f32::consts::FRAC_PI_2;
-                    if !(inner.is_finite() && outer.is_finite() && 0.0 <= inner && inner < outer && outer <= half_pi) {
+                    if !(inner.is_finite()
+                        && outer.is_finite()
+                        && 0.0 <= inner
+                        && inner < outer
+                        && outer <= half_pi)
+                    {
                         return Err(self.error(format_args!(
                             "{who} has innerConeAngle {inner} and outerConeAngle {outer}; they must satisfy 0 <= inner < outer <= pi/2 (radians): fix the spot angles"
                         )));
                     }
-                    LightKind::Spot { inner_cone: inner, outer_cone: outer }
+                    LightKind::Spot {
+                        inner_cone: inner,
+                        outer_cone: outer,
+                    }
                 }
                 _ => {
-                    return Err(
-                        self.error(format_args!("{who} has no valid type and spot parameters; re-export the light"))
-                    )
+                    return Err(self.error(format_args!(
+                        "{who} has no valid type and spot parameters; re-export the light"
+                    )))
                 }
             };
             if !(l.intensity.is_finite() && l.intensity >= 0.0) {
-                return Err(
-                    self.error(format_args!("{who} has intensity {}; it must be a finite number >= 0", l.intensity))
-                );
+                return Err(self.error(format_args!(
+                    "{who} has intensity {}; it must be a finite number >= 0",
+                    l.intensity
+                )));
             }
             if !l.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
-                return Err(
-                    self.error(format_args!("{who} has colour {:?}; components must be finite and >= 0", l.color))
-                );
+                return Err(self.error(format_args!(
+                    "{who} has colour {:?}; components must be finite and >= 0",
+                    l.color
+                )));
             }
             let range = match (kind, l.range) {
                 // The extension defines no range for directional lights.
                 (LightKind::Directional, _) | (_, None) => None,
                 (_, Some(r)) if r.is_finite() && r > 0.0 => Some(r),
                 (_, Some(r)) => {
-                    return Err(
-                        self.error(format_args!("{who} has range {r}; it must be > 0 (or left out for no cut-off)"))
-                    )
+                    return Err(self.error(format_args!(
+                        "{who} has range {r}; it must be > 0 (or left out for no cut-off)"
+                    )))
                 }
             };
-            out.push(LightDef { name, kind, color: l.color, intensity: l.intensity, range });
+            out.push(LightDef {
+                name,
+                kind,
+                color: l.color,
+                intensity: l.intensity,
+                range,
+            });
         }
         Ok(out)
     }
@@ -828,7 +1056,9 @@ impl<'a> Loader<'a> {
             }
             if let Some(a) = p.aspect_ratio {
                 if !(a.is_finite() && a > 0.0) {
-                    return Err(self.error(format_args!("{who} has aspectRatio {a}; it must be > 0 (or left out)")));
+                    return Err(self.error(format_args!(
+                        "{who} has aspectRatio {a}; it must be > 0 (or left out)"
+                    )));
                 }
             }
             out.push(Some(CameraDef {
@@ -849,7 +1079,10 @@ impl<'a> Loader<'a> {
         let roots: Vec<gltf::Node<'a>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
             Some(scene) => {
                 if doc.scenes().len() > 1 {
-                    let name = scene.name().map(|n| format!(" ('{n}')")).unwrap_or_default();
+                    let name = scene
+                        .name()
+                        .map(|n| format!(" ('{n}')"))
+                        .unwrap_or_default();
                     self.warn(format_args!(
                         "has {} scenes; weft renders scene {}{name}",
                         doc.scenes().len(),
@@ -868,8 +1101,10 @@ impl<'a> Loader<'a> {
                         }
                     }
                 }
-                let roots: Vec<_> =
-                    doc.nodes().filter(|n| !is_child.get(n.index()).copied().unwrap_or(false)).collect();
+                let roots: Vec<_> = doc
+                    .nodes()
+                    .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
+                    .collect();
                 if !roots.is_empty() {
                     self.warn("has no scenes; drawing every root node");
                 }
@@ -878,9 +1113,16 @@ impl<'a> Loader<'a> {
         };
 
         let mut visited = vec![false; doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node<'a>, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+        let mut stack: Vec<(gltf::Node<'a>, Mat4)> = roots
+            .into_iter()
+            .rev()
+            .map(|n| (n, Mat4::IDENTITY))
+            .collect();
         while let Some((node, parent)) = stack.pop() {
-            let name = node.name().map(str::to_owned).unwrap_or_else(|| format!("node {}", node.index()));
+            let name = node
+                .name()
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("node {}", node.index()));
             let who = format!("node '{name}' (node {})", node.index());
             match visited.get_mut(node.index()) {
                 Some(seen) if !*seen => *seen = true,
@@ -899,9 +1141,19 @@ impl<'a> Loader<'a> {
 
             if let Some(mesh) = node.mesh() {
                 if node.skin().is_some() {
-                    self.warn(format_args!("{who} is skinned; weft ignores skins and draws the mesh in its bind pose"));
+                    self.warn(format_args!(
+                        "{who} is skinned; weft ignores skins and draws the mesh in its bind pose"
+                    ));
                 }
                 for id in self.mesh_ids(&mesh)? {
+                    let triangles = self.scene.meshes.get(id).map_or(0, |m| m.indices.len() / 3);
+                    self.triangles_drawn = self.triangles_drawn.saturating_add(triangles as u64);
+                    if self.triangles_drawn > MAX_DRAWN_TRIANGLES {
+                        return Err(self.error(format_args!(
+                            "{who} brings the triangles drawn to {}, more than weft's limit of {MAX_DRAWN_TRIANGLES} per frame; draw fewer copies of the mesh or decimate it",
+                            self.triangles_drawn
+                        )));
+                    }
                     self.scene.draws.push(Draw { mesh: id, world });
                 }
             }
@@ -928,7 +1180,11 @@ impl<'a> Loader<'a> {
     fn local_transform(&self, node: &gltf::Node<'a>, who: &str) -> Result<Mat4> {
         Ok(match node.transform() {
             gltf::scene::Transform::Matrix { matrix } => Mat4::from_cols_array_2d(&matrix),
-            gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+            gltf::scene::Transform::Decomposed {
+                translation,
+                rotation,
+                scale,
+            } => {
                 let q = Quat::from_array(rotation);
                 // glTF requires unit quaternions; exporters round, so normalise, but a zero one is wrong.
                 let q = if q.length_squared() > 1e-12 && q.is_finite() {
@@ -950,7 +1206,10 @@ impl<'a> Loader<'a> {
             )));
         };
         let position = world.w_axis.truncate();
-        let Some(direction) = (world * Vec4::new(0.0, 0.0, -1.0, 0.0)).truncate().try_normalize() else {
+        let Some(direction) = (world * Vec4::new(0.0, 0.0, -1.0, 0.0))
+            .truncate()
+            .try_normalize()
+        else {
             let name = def.name.clone();
             self.warn(format_args!(
                 "{who} scales light '{name}' to nothing, so it has no direction; the light is skipped"

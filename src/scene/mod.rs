@@ -12,7 +12,7 @@ mod accessor;
 mod gltf_load;
 mod resources;
 mod tangents;
-pub use gltf_load::{load, load_slice, default_scene, DEFAULT_SCENE_GLB};
+pub use gltf_load::{default_scene, load, load_slice, DEFAULT_SCENE_GLB};
 
 /// One vertex as the G-buffer pass reads it (std430-compatible, 48 bytes).
 #[repr(C)]
@@ -101,7 +101,10 @@ pub enum LightKind {
     Directional,
     Point,
     /// Cone angles in radians, as in KHR_lights_punctual.
-    Spot { inner_cone: f32, outer_cone: f32 },
+    Spot {
+        inner_cone: f32,
+        outer_cone: f32,
+    },
 }
 
 /// A punctual light in world space (KHR_lights_punctual units: lux for directional, candela otherwise).
@@ -198,7 +201,12 @@ impl Scene {
 
     /// A camera at `eye` looking at `target` (Y up), with vertical field of view `yfov`; near and
     /// far planes fitted to the scene's bounds.
-    pub fn look_at_camera(&self, eye: Vec3, target: Vec3, yfov: f32) -> Result<Camera, crate::Error> {
+    pub fn look_at_camera(
+        &self,
+        eye: Vec3,
+        target: Vec3,
+        yfov: f32,
+    ) -> Result<Camera, crate::Error> {
         let dir = target - eye;
         if !eye.is_finite() || !target.is_finite() || dir.length() < 1e-6 {
             return Err(crate::Error::input(format!(
@@ -211,22 +219,60 @@ impl Scene {
                 yfov.to_degrees()
             )));
         }
-        let up = if dir.normalize().y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
-        let b = self.bounds().unwrap_or(Bounds { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
+        let up = if dir.normalize().y.abs() > 0.999 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        let b = self.bounds().unwrap_or(Bounds {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        });
         let far = (b.max - b.min).length() + (eye - (b.min + b.max) * 0.5).length();
+        // Bounds near the f32 limit overflow `far`: then the far plane is infinite.
+        let (znear, zfar) = if (far * 1.5).is_finite() {
+            ((far * 1e-4).max(1e-3), Some(far * 1.5))
+        } else {
+            (1e-3, None)
+        };
+        let view = Mat4::look_at_rh(eye, target, up);
+        if !view.is_finite() {
+            return Err(crate::Error::input(format!(
+                "camera eye {eye} and target {target} are too far from the origin to render in 32-bit floating point; move them closer"
+            )));
+        }
         Ok(Camera {
             name: "--eye/--target".into(),
-            view: Mat4::look_at_rh(eye, target, up),
+            view,
             yfov,
-            znear: (far * 1e-4).max(1e-3),
-            zfar: Some(far * 1.5),
+            znear,
+            zfar,
             aspect_ratio: None,
         })
     }
 
-    /// Frames the scene's bounds: looks at the centre from the +Z side, 20 degrees above.
+    /// Frames the scene's bounds: looks at the centre from the +Z side, 20 degrees above. Bounds
+    /// too large to frame in f32 (coordinates near +-3e38) get the framing of the unit cube.
     pub fn auto_camera(&self) -> Camera {
-        let b = self.bounds().unwrap_or(Bounds { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) });
+        let unit = Bounds {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        let camera = Self::framing(self.bounds().unwrap_or(unit));
+        let usable = camera.view.is_finite()
+            && camera.znear.is_finite()
+            && camera.znear > 0.0
+            && camera
+                .zfar
+                .is_some_and(|f| f.is_finite() && f > camera.znear);
+        if usable {
+            camera
+        } else {
+            Self::framing(unit)
+        }
+    }
+
+    fn framing(b: Bounds) -> Camera {
         let center = (b.min + b.max) * 0.5;
         let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
         let yfov = 45f32.to_radians();

@@ -12,6 +12,12 @@ use crate::Error;
 /// maxImageDimension2D that Vulkan drivers commonly report).
 pub(super) const MAX_TEXTURE_SIZE: u32 = 16384;
 
+/// Decoded RGBA8 bytes of all of a scene's textures together (4 GiB: sixteen 8192 x 8192
+/// textures; an image used both as colour and as data is decoded, and counted, twice). Checked
+/// from the image headers before decoding, so a few small, highly compressed files cannot make
+/// weft allocate tens of gigabytes.
+pub(super) const MAX_TEXTURE_BYTES: u64 = 1 << 32;
+
 /// Where a URI's bytes came from, for messages.
 pub(super) enum Origin {
     DataUri,
@@ -30,7 +36,10 @@ pub(super) fn describe_uri(uri: &str) -> String {
     match uri.strip_prefix("data:") {
         Some(rest) => format!(
             "an embedded data: URI ({})",
-            rest.split([';', ',']).next().filter(|m| !m.is_empty()).unwrap_or("no media type")
+            rest.split([';', ','])
+                .next()
+                .filter(|m| !m.is_empty())
+                .unwrap_or("no media type")
         ),
         None => format!("'{uri}'"),
     }
@@ -38,12 +47,21 @@ pub(super) fn describe_uri(uri: &str) -> String {
 
 /// Reads a URI relative to `base_dir`. `what` says who refers to it ("buffer 0", "material 'x'
 /// (base colour texture) image 2"); `label` is the scene, for messages.
-pub(super) fn fetch(uri: &str, base_dir: Option<&Path>, label: &str, what: &str) -> crate::Result<Fetched> {
+pub(super) fn fetch(
+    uri: &str,
+    base_dir: Option<&Path>,
+    label: &str,
+    what: &str,
+) -> crate::Result<Fetched> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (header, payload) = rest.split_once(',').ok_or_else(|| {
             Error::input(format!("{label}: {what} has a data: URI with no ',' before its payload; re-export the file"))
         })?;
-        let mime = header.split(';').next().filter(|m| !m.is_empty()).map(str::to_owned);
+        let mime = header
+            .split(';')
+            .next()
+            .filter(|m| !m.is_empty())
+            .map(str::to_owned);
         let bytes = if header.ends_with(";base64") {
             decode_base64(payload).ok_or_else(|| {
                 Error::input(format!(
@@ -53,14 +71,23 @@ pub(super) fn fetch(uri: &str, base_dir: Option<&Path>, label: &str, what: &str)
         } else {
             percent_decode(payload)
         };
-        return Ok(Fetched { bytes, mime, origin: Origin::DataUri });
+        return Ok(Fetched {
+            bytes,
+            mime,
+            origin: Origin::DataUri,
+        });
     }
 
-    let relative = if let Some(path) = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+    let relative = if let Some(path) = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))
+    {
         PathBuf::from(String::from_utf8_lossy(&percent_decode(path)).into_owned())
     } else if let Some((scheme, _)) = uri.split_once(':').filter(|(s, _)| {
         // A one-letter "scheme" is a Windows drive ("C:\..."), not a URI scheme.
-        s.len() > 1 && s.chars().all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+        s.len() > 1
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
     }) {
         return Err(Error::input(format!(
             "{label}: {what} refers to '{uri}', a '{scheme}:' URI that weft cannot fetch; download the file, put it beside the scene and refer to it by a relative path"
@@ -144,7 +171,8 @@ pub(super) fn image_label(root: &json::Root, index: usize) -> String {
     }
 }
 
-/// Fetches and decodes image `index`. `what` names the material and slot that use it.
+/// Fetches and decodes image `index`. `what` names the material and slot that use it;
+/// `bytes_left` is what remains of [`MAX_TEXTURE_BYTES`], reduced by this image's decoded size.
 pub(super) fn load_image(
     root: &json::Root,
     buffers: &[Vec<u8>],
@@ -152,11 +180,14 @@ pub(super) fn load_image(
     base_dir: Option<&Path>,
     label: &str,
     what: &str,
+    bytes_left: &mut u64,
 ) -> crate::Result<Decoded> {
     let image_name = image_label(root, index);
     let who = format!("{what} uses {image_name}, which");
     let image = root.images.get(index).ok_or_else(|| {
-        Error::input(format!("{label}: {what} uses image {index}, which does not exist; fix the texture's source"))
+        Error::input(format!(
+            "{label}: {what} uses image {index}, which does not exist; fix the texture's source"
+        ))
     })?;
 
     let (bytes, mime, origin) = match (&image.uri, &image.buffer_view) {
@@ -225,6 +256,14 @@ pub(super) fn load_image(
             "{label}: {who} comes from {origin} and is {width}x{height} pixels; textures must be between 1 and {MAX_TEXTURE_SIZE} pixels on each side: scale the image down"
         )));
     }
+    let decoded_bytes = u64::from(width) * u64::from(height) * 4;
+    if decoded_bytes > *bytes_left {
+        return Err(Error::input(format!(
+            "{label}: {who} comes from {origin} and is {width}x{height} pixels, which brings the scene's decoded textures past weft's limit of {} GiB; scale the textures down",
+            MAX_TEXTURE_BYTES >> 30
+        )));
+    }
+    *bytes_left -= decoded_bytes;
     let mut reader = image::ImageReader::with_format(Cursor::new(&bytes[..]), format);
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIZE);
@@ -238,7 +277,11 @@ pub(super) fn load_image(
         ))
     })?;
     let rgba = decoded.into_rgba8();
-    Ok(Decoded { width: rgba.width(), height: rgba.height(), rgba8: rgba.into_raw() })
+    Ok(Decoded {
+        width: rgba.width(),
+        height: rgba.height(),
+        rgba8: rgba.into_raw(),
+    })
 }
 
 /// Standard or URL-safe base64, padding optional, whitespace ignored. None if malformed.
@@ -283,7 +326,9 @@ pub(super) fn percent_decode(text: &str) -> Vec<u8> {
     let mut i = 0;
     while i < b.len() {
         if b[i] == b'%' && i + 2 < b.len() {
-            let hex = std::str::from_utf8(&b[i + 1..i + 3]).ok().and_then(|h| u8::from_str_radix(h, 16).ok());
+            let hex = std::str::from_utf8(&b[i + 1..i + 3])
+                .ok()
+                .and_then(|h| u8::from_str_radix(h, 16).ok());
             if let Some(v) = hex {
                 out.push(v);
                 i += 3;
@@ -299,6 +344,34 @@ pub(super) fn percent_decode(text: &str) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn decoded_textures_are_counted_against_the_budget_before_decoding() {
+        let mut png = Vec::new();
+        image::RgbaImage::new(2, 2)
+            .write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let root: json::Root = serde_json::from_value(serde_json::json!({
+            "asset": {"version": "2.0"},
+            "bufferViews": [{"buffer": 0, "byteLength": png.len()}],
+            "images": [{"bufferView": 0, "mimeType": "image/png"}],
+        }))
+        .unwrap();
+        let buffers = vec![png];
+        let load =
+            |left: &mut u64| load_image(&root, &buffers, 0, None, "'t.gltf'", "material 'm'", left);
+        // A 2x2 RGBA8 image is 16 bytes: one byte short of room is an error, and nothing is spent.
+        let mut left = 15;
+        let err = load(&mut left).err().expect("over the budget").to_string();
+        assert!(
+            err.contains("2x2 pixels") && err.contains("limit of 4 GiB"),
+            "{err}"
+        );
+        assert_eq!(left, 15);
+        let mut left = 16;
+        assert_eq!(load(&mut left).unwrap().rgba8.len(), 16);
+        assert_eq!(left, 0);
+    }
 
     #[test]
     fn base64_round_trips_known_values() {

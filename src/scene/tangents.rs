@@ -28,22 +28,36 @@ pub(super) fn face_normal_sums(vertices: &[Vertex], indices: &[u32]) -> Vec<Vec3
     sums
 }
 
+/// `v` scaled to unit length without overflow or underflow on the way (a normal of (1e30, 0, 0)
+/// is +X; `normalize` would square 1e30 to infinity and return zero); None for a zero-length or
+/// non-finite `v`.
+pub(super) fn direction(v: Vec3) -> Option<Vec3> {
+    let largest = v.abs().max_element();
+    if !(largest.is_finite() && largest > 0.0) {
+        return None;
+    }
+    (v / largest).try_normalize()
+}
+
 /// Gives every vertex the normalised sum of its faces' normals: smooth where triangles share
 /// vertices, flat where they do not.
 pub(super) fn generate_normals(vertices: &mut [Vertex], indices: &[u32]) {
     let sums = face_normal_sums(vertices, indices);
     for (v, n) in vertices.iter_mut().zip(sums) {
-        v.normal = n.normalize_or_zero().to_array();
+        v.normal = direction(n).unwrap_or(Vec3::ZERO).to_array();
     }
 }
 
 /// Replaces zero-length or non-finite normals (by the faces' normal, or +Y where the faces are
 /// degenerate too) and normalises the rest. Returns how many were replaced.
 pub(super) fn repair_normals(vertices: &mut [Vertex], indices: &[u32]) -> usize {
-    let is_bad = |n: Vec3| !n.is_finite() || n.length_squared() < 1e-12;
+    // Shorter than 1e-6 (compared without squaring, which underflows or overflows).
+    let is_bad = |n: Vec3| direction(n).is_none_or(|d| n.dot(d) < 1e-6);
     if !vertices.iter().any(|v| is_bad(Vec3::from(v.normal))) {
         for v in vertices.iter_mut() {
-            v.normal = Vec3::from(v.normal).normalize().to_array();
+            v.normal = direction(Vec3::from(v.normal))
+                .unwrap_or(Vec3::Y)
+                .to_array();
         }
         return 0;
     }
@@ -53,9 +67,9 @@ pub(super) fn repair_normals(vertices: &mut [Vertex], indices: &[u32]) -> usize 
         let n = Vec3::from(v.normal);
         v.normal = if is_bad(n) {
             repaired += 1;
-            sum.try_normalize().unwrap_or(Vec3::Y).to_array()
+            direction(sum).unwrap_or(Vec3::Y).to_array()
         } else {
-            n.normalize().to_array()
+            direction(n).unwrap_or(Vec3::Y).to_array()
         };
     }
     repaired
@@ -78,11 +92,12 @@ pub(super) fn repair_tangents(vertices: &mut [Vertex]) -> usize {
     for v in vertices.iter_mut() {
         let n = Vec3::from(v.normal);
         let t4 = Vec4::from(v.tangent);
-        let t = t4.truncate();
         let w = if t4.w < 0.0 { -1.0 } else { 1.0 };
+        // Unit length first, so huge or tiny tangents do not overflow or underflow below.
+        let t = direction(t4.truncate()).unwrap_or(Vec3::ZERO);
         // A tangent (nearly) parallel to the normal leaves no usable direction in the surface.
         let residual = t - n * n.dot(t);
-        let t = if t.is_finite() && residual.length() > 1e-3 * t.length() {
+        let t = if residual.length() > 1e-3 {
             // Gram-Schmidt of a nearly parallel tangent loses precision: a second pass restores it.
             let t = residual.normalize();
             (t - n * n.dot(t)).normalize()
@@ -109,51 +124,76 @@ pub(super) fn arbitrary_tangents(vertices: &mut [Vertex]) {
 /// the vertex is split. Returns false if MikkTSpace could not run (the caller then falls back to
 /// arbitrary tangents).
 pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32]) -> bool {
+    /// The triangles MikkTSpace sees: `faces` lists the mesh's triangles that have one.
     struct Corners<'a> {
         vertices: &'a [Vertex],
         indices: &'a [u32],
+        faces: &'a [usize],
+        /// Per corner of the mesh (not of `faces`).
         tangents: Vec<Option<[f32; 4]>>,
+    }
+    impl Corners<'_> {
+        fn vertex(&self, face: usize, vert: usize) -> &Vertex {
+            &self.vertices[self.indices[self.faces[face] * 3 + vert] as usize]
+        }
     }
     impl mikktspace::Geometry for Corners<'_> {
         fn num_faces(&self) -> usize {
-            self.indices.len() / 3
+            self.faces.len()
         }
         fn num_vertices_of_face(&self, _face: usize) -> usize {
             3
         }
         fn position(&self, face: usize, vert: usize) -> [f32; 3] {
-            self.vertices[self.indices[face * 3 + vert] as usize].position
+            self.vertex(face, vert).position
         }
         fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
-            self.vertices[self.indices[face * 3 + vert] as usize].normal
+            self.vertex(face, vert).normal
         }
         fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-            self.vertices[self.indices[face * 3 + vert] as usize].uv
+            self.vertex(face, vert).uv
         }
         fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
-            if let Some(slot) = self.tangents.get_mut(face * 3 + vert) {
+            let corner = self.faces.get(face).map(|f| f * 3 + vert);
+            if let Some(slot) = corner.and_then(|c| self.tangents.get_mut(c)) {
                 *slot = Some(tangent);
             }
         }
     }
 
-    if indices.len() < 3 {
+    // mikktspace 0.3 mishandles triangles with two corners at one position (its own test for
+    // "degenerate"): a mesh of only such triangles makes it read far out of bounds. They have no
+    // tangent frame anyway, so it is not shown them; their corners get what the vertex gets.
+    let position = |corner: usize| vertices.get(indices[corner] as usize).map(|v| v.position);
+    let faces: Vec<usize> = (0..indices.len() / 3)
+        .filter(|&t| {
+            let [a, b, c] = [position(3 * t), position(3 * t + 1), position(3 * t + 2)];
+            a.is_some() && b.is_some() && c.is_some() && a != b && a != c && b != c
+        })
+        .collect();
+    if faces.is_empty() || !mikktspace_can_weld(vertices, indices, &faces) {
         return false;
     }
-    let mut corners =
-        Corners { vertices: vertices.as_slice(), indices: &*indices, tangents: vec![None; indices.len()] };
+    let mut corners = Corners {
+        vertices: vertices.as_slice(),
+        indices: &*indices,
+        faces: &faces,
+        tangents: vec![None; indices.len()],
+    };
     if !mikktspace::generate_tangents(&mut corners) {
         return false;
     }
     let tangents = corners.tangents;
 
-    let close =
-        |a: [f32; 4], b: [f32; 4]| a[3].signum() == b[3].signum() && (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4);
+    let close = |a: [f32; 4], b: [f32; 4]| {
+        a[3].signum() == b[3].signum() && (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4)
+    };
     let mut assigned: Vec<Option<[f32; 4]>> = vec![None; vertices.len()];
     // The extra copies made of each split vertex.
     let mut copies: HashMap<u32, Vec<u32>> = HashMap::new();
     for (corner, index) in indices.iter_mut().enumerate() {
-        // MikkTSpace skips degenerate triangles; their corners keep whatever the vertex gets.
+        // Degenerate triangles (not shown to MikkTSpace, or skipped by it): their corners keep
+        // whatever the vertex gets.
         let Some(t) = tangents[corner] else { continue };
         let v = *index as usize;
         match assigned[v] {
@@ -163,9 +203,11 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
             }
             Some(existing) if close(existing, t) => {}
             Some(_) => {
-                let found = copies
-                    .get(index)
-                    .and_then(|c| c.iter().copied().find(|&copy| close(vertices[copy as usize].tangent, t)));
+                let found = copies.get(index).and_then(|c| {
+                    c.iter()
+                        .copied()
+                        .find(|&copy| close(vertices[copy as usize].tangent, t))
+                });
                 *index = match found {
                     Some(copy) => copy,
                     None => {
@@ -190,6 +232,33 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
     true
 }
 
+/// Whether MikkTSpace's vertex welding can run on these triangles without panicking.
+///
+/// mikktspace 0.3 sorts the corners into cells along the axis of largest extent and indexes one
+/// past its table (a panic) when the last cell is empty, which happens when that extent is zero
+/// (every corner at one point: a collapsed mesh) or overflows f32 (positions beyond +-1.7e38).
+/// Such meshes get arbitrary tangents instead; nobody can see their tangents anyway.
+fn mikktspace_can_weld(vertices: &[Vertex], indices: &[u32], faces: &[usize]) -> bool {
+    let mut min = Vec3::splat(f32::INFINITY);
+    let mut max = Vec3::splat(f32::NEG_INFINITY);
+    for i in faces
+        .iter()
+        .flat_map(|&f| indices.get(3 * f..3 * f + 3).unwrap_or(&[]))
+    {
+        let Some(v) = vertices.get(*i as usize) else {
+            return false;
+        };
+        let p = Vec3::from(v.position);
+        if !p.is_finite() {
+            return false;
+        }
+        min = min.min(p);
+        max = max.max(p);
+    }
+    let extent = max - min;
+    extent.is_finite() && extent.max_element() > 0.0
+}
+
 /// Applies a KHR_texture_transform (offset, rotation, scale) to texture coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct UvTransform {
@@ -199,7 +268,11 @@ pub(super) struct UvTransform {
 }
 
 impl UvTransform {
-    pub const IDENTITY: UvTransform = UvTransform { offset: [0.0, 0.0], rotation: 0.0, scale: [1.0, 1.0] };
+    pub const IDENTITY: UvTransform = UvTransform {
+        offset: [0.0, 0.0],
+        rotation: 0.0,
+        scale: [1.0, 1.0],
+    };
 
     /// uv' = T * R * S * uv, with R as the extension defines it (counter-clockwise in UV space,
     /// which is clockwise on the image because v points down).
@@ -207,7 +280,10 @@ impl UvTransform {
         let (s, c) = self.rotation.sin_cos();
         let x = uv[0] * self.scale[0];
         let y = uv[1] * self.scale[1];
-        [c * x + s * y + self.offset[0], -s * x + c * y + self.offset[1]]
+        [
+            c * x + s * y + self.offset[0],
+            -s * x + c * y + self.offset[1],
+        ]
     }
 
     /// Whether the transform changes the direction of +u or the handedness of the UV frame, which

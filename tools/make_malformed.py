@@ -1,0 +1,572 @@
+#!/usr/bin/env python3
+"""Writes the catalogue of malformed and hostile scene files under tests/malformed/, and its table
+tests/malformed/README.md (file, what is wrong, expected outcome), which tests/robustness.rs reads.
+
+Each file is a small, well-formed scene (a lit quad) with one thing broken. Python 3 standard
+library only; the output is byte-for-byte deterministic. Large inputs (ten million triangles, a
+decoded texture of absurd size) are not written here: the catalogue holds header-only files that
+claim the size, or tests/robustness.rs builds them at run time.
+
+Run from anywhere:  python3 tools/make_malformed.py
+"""
+
+import base64
+import json
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(os.path.dirname(HERE), "tests", "malformed")
+
+NAN = float("nan")
+INF = float("inf")
+
+# --- building glTF documents ----------------------------------------------------------------------
+
+
+class Doc:
+    """A glTF document with one buffer: views and accessors are appended as an entry needs them."""
+
+    def __init__(self):
+        self.json = {
+            "asset": {"version": "2.0", "generator": "weft tools/make_malformed.py"},
+            "scene": 0,
+            "scenes": [{"nodes": []}],
+            "nodes": [],
+            "meshes": [],
+            "accessors": [],
+            "bufferViews": [],
+        }
+        self.bin = bytearray()
+
+    def push(self, key, value):
+        self.json.setdefault(key, []).append(value)
+        return len(self.json[key]) - 1
+
+    def view(self, data):
+        while len(self.bin) % 4:
+            self.bin.append(0)
+        offset = len(self.bin)
+        self.bin.extend(data)
+        return self.push("bufferViews", {"buffer": 0, "byteOffset": offset, "byteLength": len(data)})
+
+    def floats(self, rows, kind):
+        n = len(rows[0])
+        data = b"".join(struct.pack("<%df" % n, *row) for row in rows)
+        acc = {"bufferView": self.view(data), "componentType": 5126, "count": len(rows), "type": kind}
+        if kind == "VEC3":
+            # POSITION needs bounds; JSON has no NaN, so they are taken over the finite values.
+            finite = [[v for v in (row[k] for row in rows) if v == v and abs(v) != INF] for k in range(3)]
+            acc["min"] = [min(f) if f else 0.0 for f in finite]
+            acc["max"] = [max(f) if f else 0.0 for f in finite]
+        return self.push("accessors", acc)
+
+    def indices(self, idx):
+        data = struct.pack("<%dI" % len(idx), *idx)
+        return self.push(
+            "accessors", {"bufferView": self.view(data), "componentType": 5125, "count": len(idx), "type": "SCALAR"}
+        )
+
+    def mesh(self, positions, normals=None, uvs=None, tangents=None, indices=None, material=None):
+        """A one-primitive mesh drawn by a new root node; returns the primitive's JSON object."""
+        attributes = {"POSITION": self.floats(positions, "VEC3")}
+        if normals is not None:
+            attributes["NORMAL"] = self.floats(normals, "VEC3")
+        if uvs is not None:
+            attributes["TEXCOORD_0"] = self.floats(uvs, "VEC2")
+        if tangents is not None:
+            attributes["TANGENT"] = self.floats(tangents, "VEC4")
+        prim = {"attributes": attributes}
+        if indices is not None:
+            prim["indices"] = self.indices(indices)
+        if material is not None:
+            prim["material"] = material
+        mesh = self.push("meshes", {"name": "quad", "primitives": [prim]})
+        node = self.push("nodes", {"name": "quad", "mesh": mesh})
+        self.json["scenes"][0]["nodes"].append(node)
+        return prim
+
+    def light(self):
+        """A directional key light from the front, above."""
+        self.json.setdefault("extensionsUsed", []).append("KHR_lights_punctual")
+        self.json["extensions"] = {
+            "KHR_lights_punctual": {"lights": [{"type": "directional", "intensity": 3.0, "color": [1.0, 1.0, 1.0]}]}
+        }
+        # -Z of the node, rotated 30 degrees down about X: a quaternion [x, y, z, w].
+        node = self.push(
+            "nodes",
+            {"name": "key", "rotation": [-0.258819, 0.0, 0.0, 0.965926], "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        )
+        self.json["scenes"][0]["nodes"].append(node)
+
+
+QUAD_P = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]
+QUAD_N = [[0.0, 0.0, 1.0]] * 4
+QUAD_UV = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]
+QUAD_T = [[1.0, 0.0, 0.0, 1.0]] * 4
+QUAD_I = [0, 1, 2, 0, 2, 3]
+
+
+def quad_doc(positions=QUAD_P, normals=QUAD_N, uvs=QUAD_UV, tangents=None, indices=QUAD_I, material=True):
+    """The base scene: a lit, textured-coordinate quad with a plain material."""
+    d = Doc()
+    if material:
+        d.json["materials"] = [{"name": "grey", "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.6, 0.6, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6}}]
+    d.mesh(positions, normals, uvs, tangents, indices, 0 if material else None)
+    d.light()
+    return d
+
+
+def b64(data):
+    return base64.b64encode(bytes(data)).decode("ascii")
+
+
+def gltf(d, buffers=None):
+    """The document as .gltf text, its buffer embedded as a data: URI (or `buffers`, if given)."""
+    j = json.loads(json.dumps(d.json))
+    if buffers is None:
+        buffers = [{"byteLength": len(d.bin), "uri": "data:application/octet-stream;base64," + b64(d.bin)}]
+    if buffers:
+        j["buffers"] = buffers
+    return (json.dumps(j, indent=1, sort_keys=True) + "\n").encode("utf-8")
+
+
+def glb(d, with_bin=True):
+    """The document as a .glb: JSON chunk, then the buffer as the binary chunk."""
+    j = json.loads(json.dumps(d.json))
+    binary = bytes(d.bin) + b"\0" * (-len(d.bin) % 4)
+    j["buffers"] = [{"byteLength": len(d.bin)}]
+    text = json.dumps(j, separators=(",", ":"), sort_keys=True).encode("utf-8")
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<I4s", len(text), b"JSON") + text
+    if with_bin:
+        chunks += struct.pack("<I4s", len(binary), b"BIN\0") + binary
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+
+
+def png_chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+
+def png(width, height, rows=None):
+    """An RGBA8 PNG. `rows` None: a header that claims width x height followed by one short IDAT
+    (a few bytes of pixels, far fewer than the size claims) and IEND."""
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)
+    if rows is None:
+        raw = b"\0" + b"\x80" * 64
+    else:
+        raw = b"".join(b"\0" + bytes(r) for r in rows)
+    return b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", ihdr) + png_chunk(b"IDAT", zlib.compress(raw, 9)) + png_chunk(b"IEND", b"")
+
+
+def textured_doc(image):
+    """The quad with a base colour texture from `image` (a JSON image object)."""
+    d = quad_doc()
+    d.json["images"] = [image]
+    d.json["textures"] = [{"source": 0}]
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    return d
+
+
+def png_uri(data):
+    return "data:image/png;base64," + b64(data)
+
+
+# --- the catalogue --------------------------------------------------------------------------------
+#
+# Each entry: file name, its bytes, what is wrong, the expected outcome, extra CLI arguments.
+# Outcomes, as tests/robustness.rs reads them from the table:
+#   error: `fragment`              loading (or the CLI) fails; the message holds the fragment and
+#                                  the file name; the CLI exits with 1
+#   renders                        loads without warnings and renders finite HDR and LDR images
+#   renders, warning: `fragment`   renders, and one of the loader's warnings holds the fragment
+
+ENTRIES = []
+
+
+def entry(name, data, what, expected, args=""):
+    assert "|" not in what + expected + args, name
+    ENTRIES.append((name, data, what, expected, args))
+
+
+def fabric_doc(fabric):
+    d = quad_doc()
+    d.json["materials"][0]["extensions"] = {"WEFT_materials_fabric": fabric}
+    d.json["extensionsUsed"].append("WEFT_materials_fabric")
+    return d
+
+
+def camera_doc(perspective):
+    d = quad_doc()
+    d.json["cameras"] = [{"type": "perspective", "perspective": perspective}]
+    node = d.push("nodes", {"name": "eye", "camera": 0, "translation": [0.0, 0.0, 4.0]})
+    d.json["scenes"][0]["nodes"].append(node)
+    return d
+
+
+def build():
+    # Controls: what the broken files are broken from.
+    entry("valid-quad.gltf", gltf(quad_doc()), "nothing: the control every other file is a variation of", "renders")
+    entry("valid-quad.glb", glb(quad_doc()), "nothing: the control as a binary .glb", "renders")
+
+    # --- the container ---------------------------------------------------------------------------
+    good = glb(quad_doc())
+    entry("truncated-in-json.glb", good[:40], ".glb cut off inside its JSON chunk", "error: `container is broken`")
+    entry("truncated-in-bin.glb", good[: len(good) - 37], ".glb cut off inside its binary chunk (the header still claims the full length)", "error: `container is broken`")
+    entry("glb-header-only.glb", good[:12], ".glb with a header and nothing else", "error: `container is broken`")
+    entry("glb-length-below-header.glb", struct.pack("<4sII", b"glTF", 2, 4) + good[12:], ".glb header whose total length (4) is smaller than the header itself", "error: `container is broken`")
+    entry("glb-version-1.glb", struct.pack("<4sII", b"glTF", 1, len(good)) + good[12:], ".glb container version 1", "error: `container is broken`")
+    bad_chunk = bytearray(good)
+    bad_chunk[16:20] = b"JSOX"
+    entry("glb-unknown-chunk.glb", bytes(bad_chunk), ".glb whose first chunk is not JSON", "error: `container is broken`")
+    entry("glb-missing-bin-chunk.glb", glb(quad_doc(), with_bin=False), ".glb whose buffer has no uri but the file has no binary chunk", "error: `has no uri`")
+    entry("empty.gltf", b"", "an empty file", "error: `neither JSON nor a .glb`")
+    entry("not-json.gltf", b"solid cube\nfacet normal 0 0 1\n", "an STL file named .gltf", "error: `neither JSON nor a .glb`")
+    entry("broken-json.gltf", gltf(quad_doc())[:-40], ".gltf JSON cut off in the middle", "error: `does not parse`")
+    entry("no-asset.gltf", b"{}\n", "JSON without the required \"asset\" object", "error: `\"asset\"`")
+    entry("gltf-1.0.gltf", b'{"asset": {"version": "1.0"}, "meshes": {}}\n', "a glTF 1.0 file", "error: `glTF 1.0 file`")
+    nested = b'{"asset": {"version": "2.0"}, "extras": ' + b"[" * 20000 + b"]" * 20000 + b"}\n"
+    entry("deep-nesting.gltf", nested, "JSON nested 20000 arrays deep in \"extras\" (a stack-overflow attempt)", "error: `recursion limit`")
+
+    # --- buffers -----------------------------------------------------------------------------------
+    d = quad_doc()
+    entry("missing-buffer.gltf", gltf(d, [{"byteLength": len(d.bin), "uri": "missing-buffer.bin"}]), "the buffer's file does not exist", "error: `missing-buffer.bin' does not exist`")
+    entry("buffer-shorter-than-declared.gltf", gltf(d, [{"byteLength": len(d.bin) + 1000, "uri": "data:application/octet-stream;base64," + b64(d.bin)}]), "the buffer holds 1000 bytes fewer than its byteLength", "error: `holds only`")
+    entry("buffer-without-uri.gltf", gltf(d, [{"byteLength": len(d.bin)}]), "a .gltf buffer with no uri (only a .glb may do that)", "error: `has no uri`")
+    entry("buffer-bad-base64.gltf", gltf(d, [{"byteLength": len(d.bin), "uri": "data:application/octet-stream;base64,@@@@"}]), "the buffer's data: URI is not base64", "error: `base64 payload is malformed`")
+    entry("buffer-remote-uri.gltf", gltf(d, [{"byteLength": len(d.bin), "uri": "https://example.com/quad.bin"}]), "the buffer is on the web", "error: `cannot fetch`")
+    entry("buffer-uri-is-directory.gltf", gltf(d, [{"byteLength": len(d.bin), "uri": "."}]), "the buffer's uri names a directory", "error: `could not be read`")
+    entry("no-buffers.gltf", gltf(d, []), "buffer views refer to buffer 0, but there are no buffers", "error: `refers to an object that does not exist`")
+    d = quad_doc()
+    d.json["bufferViews"][0]["byteOffset"] = 1 << 20
+    entry("bufferview-past-buffer.gltf", gltf(d), "a buffer view starts 1 MiB into a buffer of a few hundred bytes", "error: `that buffer holds only`")
+    d = quad_doc()
+    d.json["accessors"][0]["count"] = 1000
+    entry("accessor-past-view.gltf", gltf(d), "the POSITION accessor claims 1000 vertices; its buffer view holds 4", "error: `but the view is only`")
+    d = quad_doc()
+    d.json["accessors"][0]["count"] = 4294967295
+    entry("accessor-huge-count.gltf", gltf(d), "the POSITION accessor claims 2^32 - 1 vertices", "error: `more than weft's limit of 33554432`")
+    d = quad_doc()
+    d.json["accessors"][3]["count"] = 300000000
+    entry("indices-huge-count.gltf", gltf(d), "the index accessor claims 3 x 10^8 indices", "error: `more than weft's limit of 268435456`")
+    # One mesh of a million (degenerate) triangles from an index accessor without a buffer view,
+    # drawn by 300 nodes: 3 x 10^8 triangles a frame from 8 kB of JSON.
+    d = Doc()
+    pos = d.floats([[0.0, 0.0, 0.0]], "VEC3")
+    zero = d.view(struct.pack("<I", 0))
+    idx = d.push("accessors", {"componentType": 5125, "count": 3000000, "type": "SCALAR", "sparse": {"count": 1, "indices": {"bufferView": zero, "componentType": 5125}, "values": {"bufferView": zero}}})
+    mesh = d.push("meshes", {"primitives": [{"attributes": {"POSITION": pos}, "indices": idx}]})
+    for k in range(300):
+        d.json["scenes"][0]["nodes"].append(d.push("nodes", {"mesh": mesh, "translation": [k * 0.01, 0.0, 0.0]}))
+    entry("instanced-too-often.gltf", gltf(d), "300 nodes draw one mesh of a million triangles (from an index accessor without a buffer view)", "error: `brings the triangles drawn to`")
+    d = quad_doc()
+    d.json["accessors"][0]["byteOffset"] = 4294967295
+    entry("accessor-huge-offset.gltf", gltf(d), "the POSITION accessor starts 4 GiB into its buffer view", "error: `reads accessor 0`")
+    d = quad_doc()
+    d.json["bufferViews"][0]["byteStride"] = 4
+    entry("stride-too-small.gltf", gltf(d), "a buffer view of 12-byte positions with a byte stride of 4", "error: `byte stride`")
+    d = quad_doc()
+    del d.json["accessors"][0]["bufferView"]
+    d.json["accessors"][0]["count"] = 30000000
+    sparse_idx = d.view(struct.pack("<I", 1))
+    sparse_val = d.view(struct.pack("<3f", 1.0, 0.0, 0.0))
+    d.json["accessors"][0]["sparse"] = {"count": 1, "indices": {"bufferView": sparse_idx, "componentType": 5125}, "values": {"bufferView": sparse_val}}
+    entry("accessor-no-view-huge-count.gltf", gltf(d), "a sparse POSITION accessor without a buffer view (zeros, one substitution) claiming 3 x 10^7 vertices: a 2 kB file asking for gigabytes", "error: `without a buffer view`")
+    d = quad_doc()
+    sparse_idx = d.view(struct.pack("<I", 9))
+    sparse_val = d.view(struct.pack("<3f", 0.0, 0.0, 1.0))
+    d.json["accessors"][0]["sparse"] = {"count": 1, "indices": {"bufferView": sparse_idx, "componentType": 5125}, "values": {"bufferView": sparse_val}}
+    entry("sparse-index-out-of-range.gltf", gltf(d), "a sparse accessor substitutes element 9 of 4", "error: `sparse substitution for element 9`")
+
+    # --- accessors and indices -----------------------------------------------------------------
+    d = quad_doc()
+    d.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = 99
+    entry("attribute-accessor-out-of-range.gltf", gltf(d), "NORMAL refers to accessor 99; there are 4", "error: `accessor 99`")
+    d = quad_doc()
+    d.json["meshes"][0]["primitives"][0]["indices"] = 99
+    entry("indices-accessor-out-of-range.gltf", gltf(d), "the indices refer to accessor 99; there are 4", "error: `refers to an object that does not exist`")
+    entry("index-out-of-range.gltf", gltf(quad_doc(indices=[0, 1, 2, 0, 2, 7])), "a triangle uses vertex 7 of 4", "error: `holds index 7`")
+    entry("index-max-u32.gltf", gltf(quad_doc(indices=[0, 1, 4294967295])), "a triangle uses vertex 2^32 - 1", "error: `holds index 4294967295`")
+    d = quad_doc()
+    d.json["accessors"][3]["componentType"] = 5126
+    entry("indices-float.gltf", gltf(d), "indices stored as floats", "error: `indices must be unsigned`")
+    d = quad_doc()
+    d.json["accessors"][0]["type"] = "VEC2"
+    entry("position-vec2.gltf", gltf(d), "POSITION declared VEC2", "error: `has type VEC2 where VEC3 is required`")
+    d = quad_doc()
+    d.json["accessors"][1]["count"] = 3
+    entry("attribute-count-mismatch.gltf", gltf(d), "NORMAL has 3 elements, POSITION 4", "error: `must have the same count`")
+    d = quad_doc()
+    del d.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+    entry("no-position.gltf", gltf(d), "a primitive without POSITION", "error: `POSITION`")
+    entry("index-count-not-multiple-of-3.gltf", gltf(quad_doc(indices=[0, 1, 2, 0, 2, 3, 0])), "7 indices: the last is not a triangle", "renders, warning: `not a multiple of 3`")
+    d = quad_doc()
+    d.json["meshes"][0]["primitives"][0]["mode"] = 0
+    entry("points-only.gltf", gltf(d), "the only primitive is POINTS", "renders, warning: `draws only TRIANGLES`")
+
+    # --- numbers that are not numbers ----------------------------------------------------------
+    entry("nan-position.gltf", gltf(quad_doc(positions=[[-1.0, -1.0, 0.0], [1.0, NAN, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])), "a vertex position is NaN", "error: `non-finite position`")
+    entry("inf-position.glb", glb(quad_doc(positions=[[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [INF, 1.0, 0.0], [-1.0, 1.0, 0.0]])), "a vertex position is +Inf (.glb)", "error: `non-finite position`")
+    entry("huge-positions.gltf", gltf(quad_doc(positions=[[-3e38, -3e38, 0.0], [3e38, -3e38, 0.0], [3e38, 3e38, 0.0], [-3e38, 3e38, 0.0]])), "positions near the f32 limit (finite, but their differences overflow: made mikktspace panic, and automatic framing NaN)", "renders")
+    entry("nan-normals.gltf", gltf(quad_doc(normals=[[NAN, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, INF, 1.0], [0.0, 0.0, 1.0]])), "two normals are NaN and Inf", "renders, warning: `2 normal(s)`")
+    entry("huge-normals.gltf", gltf(quad_doc(normals=[[0.0, 0.0, 3e38]] * 2 + [[1e30, 0.0, 1e30], [0.0, -1e-30, 1e-30]])), "normals of length 3e38 and 1.4e30 (valid directions, which normalising by squaring turned into zero) and 1.4e-30 (too short: replaced)", "renders, warning: `1 normal(s)`")
+    entry("huge-tangents.gltf", gltf(quad_doc(tangents=[[3e38, 0.0, 0.0, 1.0], [1e30, 1e30, 0.0, -1.0], [1e-30, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0, 1.0]])), "tangents of length 3e38, 1.4e30 and 1e-30", "renders")
+    entry("zero-length-normals.gltf", gltf(quad_doc(normals=[[0.0, 0.0, 0.0]] * 4)), "every normal is (0, 0, 0)", "renders, warning: `4 normal(s)`")
+    entry("nan-tangents.gltf", gltf(quad_doc(tangents=[[NAN, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0], [1.0, 0.0, 0.0, NAN]])), "tangents NaN, zero, parallel to the normal, and with a NaN sign", "renders, warning: `3 tangent(s)`")
+    entry("nan-uvs.gltf", gltf(quad_doc(uvs=[[NAN, 0.0], [1.0, INF], [1.0, 0.0], [-INF, NAN]])), "texture coordinates NaN and Inf", "renders, warning: `non-finite texture coordinate`")
+    entry("huge-uvs.gltf", gltf(quad_doc(uvs=[[0.0, 0.0], [3e38, 0.0], [3e38, -3e38], [0.0, 3e38]])), "texture coordinates near the f32 limit (MikkTSpace and the weave divide by their differences)", "renders")
+    entry("degenerate-triangles.gltf", gltf(quad_doc(positions=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0]], indices=[0, 1, 2, 0, 0, 0, 1, 1, 3, 0, 1, 3])), "zero-area triangles (collinear, repeated vertices) beside one good one", "renders, warning: `tangent(s)`")
+    entry("coincident-corners.gltf", gltf(quad_doc(positions=[[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [-1.0, -1.0, 0.0], [-1.0, 1.0, 0.0]])), "every triangle has two corners at one position (made mikktspace read out of bounds; found by tests/fuzz_mutate.rs)", "renders")
+    entry("collapsed-mesh.gltf", gltf(quad_doc(positions=[[0.5, 0.5, 0.5]] * 4)), "every vertex at one point (made mikktspace panic)", "renders")
+    entry("all-triangles-degenerate.gltf", gltf(quad_doc(positions=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [0.0, 0.0, 0.0]], normals=None, indices=[0, 1, 2, 0, 3, 0])), "every triangle has zero area, and there are no normals to fall back on", "renders, warning: `no normals`")
+    d = quad_doc()
+    d.json["nodes"][0]["rotation"] = [0.0, 0.0, 0.0, 0.0]
+    entry("zero-quaternion.gltf", gltf(d), "a node rotation of (0, 0, 0, 0)", "error: `not a unit quaternion`")
+    d = quad_doc()
+    d.json["nodes"][0]["scale"] = [1e30, 1e30, 1e30]
+    d.json["nodes"][0]["children"] = [d.push("nodes", {"name": "child", "scale": [1e30, 1e30, 1e30], "mesh": 0})]
+    entry("scale-overflow.gltf", gltf(d), "nested node scales of 1e30 overflow to infinity", "error: `world transform that is not finite`")
+    d = quad_doc()
+    d.json["nodes"][0]["scale"] = [0.0, 0.0, 0.0]
+    entry("zero-scale.gltf", gltf(d), "the mesh's node scales it to nothing", "renders")
+    d = quad_doc()
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = [1e39, 0.5, 0.5, 1.0]
+    entry("material-overflowing-factor.gltf", gltf(d), "a base colour factor of 1e39 (infinite as f32)", "error: `non-finite baseColorFactor`")
+    d = quad_doc()
+    d.json["materials"][0]["emissiveFactor"] = [1.0, 1.0, 1.0]
+    d.json["materials"][0]["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": 1e38}}
+    d.json["extensionsUsed"].append("KHR_materials_emissive_strength")
+    entry("emissive-huge.gltf", gltf(d), "emissive strength 1e38 (beyond half float, the HDR target's format)", "renders")
+    d = quad_doc()
+    d.json["materials"][0]["emissiveFactor"] = [4.0, 1.0, 1.0]
+    d.json["materials"][0]["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": 1e38}}
+    d.json["extensionsUsed"].append("KHR_materials_emissive_strength")
+    entry("emissive-overflow.gltf", gltf(d), "emissive factor 4 times strength 1e38: each finite, the product not (found by tests/fuzz_mutate.rs)", "error: `emitted radiance`")
+    d = quad_doc()
+    d.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = 1e30
+    entry("light-huge-intensity.gltf", gltf(d), "a directional light of 1e30 lux (beyond half float, the HDR target's format)", "renders")
+    d = quad_doc()
+    d.json["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = 7.0
+    d.json["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = -2.0
+    entry("material-out-of-range.gltf", gltf(d), "metallic 7 and roughness -2", "renders, warning: `outside [0, 1]; clamped`")
+
+    # --- textures --------------------------------------------------------------------------------
+    entry("missing-texture.gltf", gltf(textured_doc({"uri": "missing-texture.png"})), "the base colour texture's file does not exist", "error: `missing-texture.png' does not exist`")
+    entry("texture-absurd-size.gltf", gltf(textured_doc({"uri": png_uri(png(100000, 100000))})), "a PNG whose header claims 100000x100000 pixels (40 GB decoded)", "error: `100000x100000 pixels`")
+    entry("texture-zero-size.gltf", gltf(textured_doc({"uri": png_uri(png(0, 0))})), "a PNG whose header claims 0x0 pixels", "error: `could not be decoded`")
+    entry("texture-at-limit-truncated.gltf", gltf(textured_doc({"uri": png_uri(png(16384, 16384))})), "a PNG claiming 16384x16384 (the largest allowed; 1 GiB decoded) with only a few bytes of pixels", "error: `could not be decoded`")
+    entry("texture-not-an-image.gltf", gltf(textured_doc({"uri": "data:application/octet-stream;base64," + b64(b"definitely not pixels" * 4)})), "the texture's bytes are text", "error: `weft reads PNG and JPEG`")
+    corrupt = bytearray(png(4, 4, [[200, 100, 50, 255] * 4] * 4))
+    corrupt[40:48] = b"\xff" * 8
+    entry("texture-corrupt-png.gltf", gltf(textured_doc({"uri": png_uri(bytes(corrupt))})), "a 4x4 PNG with its compressed pixels overwritten", "error: `could not be decoded`")
+    entry("texture-gif.gltf", gltf(textured_doc({"uri": "data:image/gif;base64," + b64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")})), "a GIF texture (glTF allows PNG and JPEG)", "error: `weft reads PNG and JPEG`")
+    d = quad_doc()
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 5}
+    entry("texture-index-out-of-range.gltf", gltf(d), "the material uses texture 5; there are none", "error: `refers to an object that does not exist`")
+    d = textured_doc({"bufferView": 0, "mimeType": "image/png"})
+    d.json["bufferViews"][0]["byteLength"] = 48
+    entry("texture-from-geometry-view.gltf", gltf(d), "the image is read from the positions' buffer view", "error: `could not be decoded as Png`")
+
+    # --- extensions ------------------------------------------------------------------------------
+    d = quad_doc()
+    d.json["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+    d.json["extensionsUsed"].append("KHR_draco_mesh_compression")
+    entry("unsupported-required-extension.gltf", gltf(d), "requires KHR_draco_mesh_compression", "error: `requires the glTF extension 'KHR_draco_mesh_compression'`")
+    d = quad_doc()
+    d.json["extensionsUsed"].append("EXT_meshopt_compression")
+    entry("unsupported-used-extension.gltf", gltf(d), "uses (without requiring) an extension weft does not know", "renders, warning: `which weft ignores`")
+    entry(
+        "fabric-all-out-of-range.gltf",
+        gltf(fabric_doc({
+            "pattern": "twill", "repeat": -5.0, "gap": 99.0, "e_along": -1.0, "e_across": 1e30,
+            "rd": [2.0, -1.0, 0.5], "rd_warp": 7.0, "rd_weft": [-3.0, 4.0, 1e30], "rs": 5.0,
+            "shadow_strength": -2.0, "shadow_width": 40.0, "shiny": True,
+        })),
+        "WEFT_materials_fabric with every numeric field outside its range (and an unknown field)",
+        "renders, warning: `clamped`",
+    )
+    entry("fabric-wrong-types.gltf", gltf(fabric_doc({"repeat": "wide", "rd": [0.5, 0.5]})), "WEFT_materials_fabric with a string repeat and a two-number rd", "error: `WEFT_materials_fabric.rd must be`")
+    entry("fabric-unknown-pattern.gltf", gltf(fabric_doc({"pattern": "houndstooth"})), "WEFT_materials_fabric pattern \"houndstooth\"", "error: `houndstooth`")
+    entry("fabric-not-an-object.gltf", gltf(fabric_doc([1, 2, 3])), "WEFT_materials_fabric is an array", "error: `must be a JSON object`")
+    entry("fabric-huge-custom-pattern.gltf", gltf(fabric_doc({"pattern": ["10" * 500] * 9})), "WEFT_materials_fabric custom pattern of 9 rows of 1000 cells (at most 8 x 8 are allowed)", "error: `pattern`")
+
+    # --- scenes, cameras, lights -----------------------------------------------------------------
+    d = Doc()
+    d.light()
+    entry("no-meshes.gltf", gltf(d), "a scene with a light and 0 meshes", "renders, warning: `nothing to draw`")
+    entry("no-scenes-no-nodes.gltf", b'{"asset": {"version": "2.0"}}\n', "only the asset object: no scenes, nodes or meshes", "renders, warning: `nothing to draw`")
+    entry("camera-zero-fov.gltf", gltf(camera_doc({"yfov": 0.0, "znear": 0.1})), "a perspective camera with yfov 0", "error: `has yfov 0 rad`")
+    entry("camera-negative-fov.gltf", gltf(camera_doc({"yfov": -0.7, "znear": 0.1})), "a perspective camera with yfov -0.7", "error: `has yfov -0.7 rad`")
+    entry("camera-fov-pi.gltf", gltf(camera_doc({"yfov": 3.2, "znear": 0.1})), "a perspective camera with yfov 3.2 (more than 180 degrees)", "error: `has yfov 3.2 rad`")
+    entry("camera-znear-zero.gltf", gltf(camera_doc({"yfov": 0.7, "znear": 0.0})), "a perspective camera with znear 0", "error: `has znear 0`")
+    entry("camera-zfar-before-znear.gltf", gltf(camera_doc({"yfov": 0.7, "znear": 1.0, "zfar": 0.5})), "zfar 0.5 in front of znear 1", "error: `zfar must be greater than znear`")
+    entry("valid-quad-fov-zero.gltf", gltf(quad_doc()), "a valid scene, rendered with --eye/--target and --fov 0", "error: `field of view 0 degrees`", "--eye 0,0,4 --target 0,0,0 --fov 0")
+    entry("valid-quad-fov-negative.gltf", gltf(quad_doc()), "a valid scene, rendered with --eye/--target and --fov=-30", "error: `field of view -30`", "--eye 0,0,4 --target 0,0,0 --fov=-30")
+    entry("valid-quad-size-100000.gltf", gltf(quad_doc()), "a valid scene, rendered with --size 100000x100000", "error: `between 1 and 16384`", "--size 100000x100000")
+    entry("valid-quad-size-zero.gltf", gltf(quad_doc()), "a valid scene, rendered with --size 0x720", "error: `between 1 and 16384`", "--size 0x720")
+    entry("valid-quad-camera-7.gltf", gltf(quad_doc()), "a valid scene without cameras, rendered with --camera 7", "error: `camera 7 does not exist`", "--camera 7")
+    d = quad_doc()
+    d.json["nodes"][0]["children"] = [0]
+    entry("node-cycle.gltf", gltf(d), "a node that is its own child", "error: `reached twice`")
+    d = quad_doc()
+    d.json["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = -3.0
+    entry("light-negative-intensity.gltf", gltf(d), "a light with intensity -3", "error: `has intensity -3`")
+    d = quad_doc()
+    d.json["extensions"]["KHR_lights_punctual"]["lights"] = [{"type": "spot", "spot": {"innerConeAngle": 1.0, "outerConeAngle": 0.5}}]
+    entry("light-bad-spot-cone.gltf", gltf(d), "a spot light whose inner cone is wider than its outer cone", "error: `innerConeAngle 1 and outerConeAngle 0.5`")
+    d = quad_doc()
+    d.json["nodes"][1]["extensions"]["KHR_lights_punctual"]["light"] = 3
+    entry("light-index-out-of-range.gltf", gltf(d), "a node refers to light 3; there is one", "error: `light refers to an object that does not exist`")
+
+    # Made at run time by tests/robustness.rs (120 MB of indices): listed so the table is complete.
+    ENTRIES.append((
+        "ten-million-triangles.glb", None,
+        "10 million triangles: one index buffer of 30 million indices over a 2049 x 2049 vertex grid, made by the test at run time (not committed)",
+        "renders", "--size 320x180",
+    ))
+
+
+# --- fuzz seeds -----------------------------------------------------------------------------------
+#
+# Valid scenes that between them use every part of glTF the loader reads, for the coverage-guided
+# fuzzer (tools/fuzz/corpus/scene_loader/seed-*; the fuzzer's own finds sit beside them).
+
+CORPUS = os.path.join(HERE, "fuzz", "corpus", "scene_loader")
+
+
+def seeds():
+    out = []
+    with open(os.path.join(os.path.dirname(HERE), "assets", "default.gltf"), "rb") as f:
+        out.append(("seed-default-scene.gltf", f.read()))
+    out.append(("seed-quad.gltf", gltf(quad_doc())))
+    out.append(("seed-quad.glb", glb(quad_doc())))
+
+    tiny = png(2, 2, [[255, 0, 0, 255, 0, 255, 0, 255], [0, 0, 255, 255, 255, 255, 255, 128]])
+    d = quad_doc(tangents=QUAD_T)
+    d.json["images"] = [{"uri": png_uri(tiny)}, {"bufferView": d.view(tiny), "mimeType": "image/png", "name": "in-buffer"}]
+    d.json["samplers"] = [{"magFilter": 9728, "wrapS": 33071}]
+    d.json["textures"] = [{"source": 0, "sampler": 0}, {"source": 1}]
+    transform = {"KHR_texture_transform": {"offset": [0.5, 0.0], "rotation": 0.3, "scale": [2.0, 2.0], "texCoord": 0}}
+    d.json["materials"][0] = {
+        "name": "textured",
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": 0, "extensions": transform},
+            "metallicRoughnessTexture": {"index": 1, "texCoord": 1},
+        },
+        "normalTexture": {"index": 1, "scale": 0.5, "extensions": transform},
+        "occlusionTexture": {"index": 0},
+        "emissiveTexture": {"index": 0},
+        "emissiveFactor": [1.0, 0.5, 0.0],
+        "alphaMode": "BLEND",
+        "doubleSided": True,
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}},
+    }
+    d.json["extensionsUsed"] += ["KHR_texture_transform", "KHR_materials_emissive_strength"]
+    out.append(("seed-textured.gltf", gltf(d)))
+
+    d = fabric_doc({
+        "pattern": ["|-|", "-|-"], "repeat": 0.1, "gap": 0.01, "e_along": 150.0, "e_across": 8.0,
+        "rd_warp": [0.6, 0.1, 0.1], "rd_weft": 0.3, "rs": 0.05, "shadow_strength": 0.4,
+        "shadow_width": 0.3, "coupled_diffuse": True, "extras": {"note": "seed"},
+    })
+    d.json["extensionsRequired"] = ["WEFT_materials_fabric"]
+    out.append(("seed-fabric.gltf", gltf(d)))
+    out.append(("seed-fabric-satin.glb", glb(fabric_doc({"pattern": "satin", "rd": [0.2, 0.3, 0.4]}))))
+
+    d = quad_doc()
+    d.json["extensions"]["KHR_lights_punctual"]["lights"] += [
+        {"type": "point", "intensity": 40.0, "range": 10.0, "color": [1.0, 0.8, 0.6], "name": "bulb"},
+        {"type": "spot", "intensity": 90.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}},
+    ]
+    d.json["cameras"] = [
+        {"type": "perspective", "name": "main", "perspective": {"yfov": 0.8, "znear": 0.05, "zfar": 100.0, "aspectRatio": 1.5}},
+        {"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}},
+    ]
+    bulb = d.push("nodes", {"translation": [1.0, 2.0, 1.0], "extensions": {"KHR_lights_punctual": {"light": 1}}})
+    spot = d.push("nodes", {"matrix": [1, 0, 0, 0, 0, 0, -1, 0, 0, 1, 0, 0, 0, 3, 0, 1], "extensions": {"KHR_lights_punctual": {"light": 2}}})
+    cam = d.push("nodes", {"camera": 0, "translation": [0.0, 0.5, 4.0], "scale": [2.0, 2.0, 2.0], "children": [bulb, spot]})
+    ortho = d.push("nodes", {"camera": 1, "rotation": [0.0, 0.7071068, 0.0, 0.7071068]})
+    d.json["scenes"][0]["nodes"] += [cam, ortho]
+    d.json["scenes"].append({"name": "second", "nodes": [0]})
+    out.append(("seed-lights-cameras.gltf", gltf(d)))
+
+    # Interleaved attributes in one strided view, normalised integer UVs, byte indices, a sparse
+    # accessor, a second (line) primitive, morph targets, vertex colours, a skin, a reused mesh.
+    d = quad_doc()
+    inter = b"".join(struct.pack("<3f3f", *(p + n)) for p, n in zip(QUAD_P, QUAD_N))
+    v = d.view(inter)
+    d.json["bufferViews"][v]["byteStride"] = 24
+    pos = d.push("accessors", {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]})
+    nrm = d.push("accessors", {"bufferView": v, "byteOffset": 12, "componentType": 5126, "count": 4, "type": "VEC3"})
+    uv = d.push("accessors", {"bufferView": d.view(bytes([0, 255, 255, 255, 255, 0, 0, 0])), "componentType": 5121, "normalized": True, "count": 4, "type": "VEC2"})
+    idx = d.push("accessors", {"bufferView": d.view(bytes([0, 1, 2, 0, 2, 3])), "componentType": 5121, "count": 6, "type": "SCALAR"})
+    col = d.push("accessors", {"bufferView": d.view(struct.pack("<16H", *([65535] * 16))), "componentType": 5123, "normalized": True, "count": 4, "type": "VEC4"})
+    sp_i = d.view(struct.pack("<H", 2))
+    sp_v = d.view(struct.pack("<3f", 0.0, 0.0, 0.5))
+    d.json["accessors"][pos]["sparse"] = {"count": 1, "indices": {"bufferView": sp_i, "componentType": 5123}, "values": {"bufferView": sp_v}}
+    morph = d.push("accessors", {"componentType": 5126, "count": 4, "type": "VEC3", "sparse": {"count": 1, "indices": {"bufferView": sp_i, "componentType": 5123}, "values": {"bufferView": sp_v}}})
+    lines = d.push("accessors", {"bufferView": d.view(struct.pack("<4H", 0, 1, 1, 2)), "componentType": 5123, "count": 4, "type": "SCALAR"})
+    mesh = d.push("meshes", {"name": "packed", "weights": [0.5], "primitives": [
+        {"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv, "COLOR_0": col}, "indices": idx, "material": 0, "targets": [{"POSITION": morph}]},
+        {"attributes": {"POSITION": pos}, "indices": lines, "mode": 1},
+    ]})
+    joint = d.push("nodes", {"name": "joint"})
+    d.json["skins"] = [{"joints": [joint]}]
+    a = d.push("nodes", {"mesh": mesh, "skin": 0, "translation": [2.5, 0.0, 0.0]})
+    b = d.push("nodes", {"mesh": mesh, "translation": [-2.5, 0.0, 0.0], "children": [joint]})
+    d.json["scenes"][0]["nodes"] += [a, b]
+    out.append(("seed-packed-attributes.glb", glb(d)))
+
+    # No scene: every root node is drawn; no indices, no normals, no UVs.
+    d = Doc()
+    d.mesh([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.5], [2.0, 1.0, 0.0], [1.0, 2.0, 0.0]])
+    del d.json["scene"]
+    del d.json["scenes"]
+    out.append(("seed-no-scene-no-indices.gltf", gltf(d)))
+    return out
+
+
+def main():
+    os.makedirs(CORPUS, exist_ok=True)
+    for name, data in seeds():
+        with open(os.path.join(CORPUS, name), "wb") as f:
+            f.write(data)
+    build()
+    os.makedirs(OUT, exist_ok=True)
+    keep = {"README.md"}
+    total = 0
+    for name, data, _, _, _ in ENTRIES:
+        if data is None:
+            continue
+        keep.add(name)
+        with open(os.path.join(OUT, name), "wb") as f:
+            f.write(data)
+        total += len(data)
+    for stale in sorted(set(os.listdir(OUT)) - keep):
+        os.remove(os.path.join(OUT, stale))
+    lines = [
+        "# Malformed and hostile scene files",
+        "",
+        "Written by `tools/make_malformed.py` (do not edit by hand: edit the script and run it again);",
+        "checked by `tests/robustness.rs`, which reads this table. Each file is the same small scene (a",
+        "lit quad) with one thing broken. *Expected*: `error:` the load (or the command line) fails with",
+        "a message holding the fragment and naming the file (where the file is at fault), and `weft`",
+        "exits with 1, having written nothing; `renders`: the scene loads and renders on lavapipe with",
+        "validation on, with finite HDR and LDR images, and, where a `warning:` is given, one of the",
+        "loader's warnings holds it. *Arguments* are added to `weft render FILE` (and to the render",
+        "options of the in-process test).",
+        "",
+        "| file | what is wrong | expected | arguments |",
+        "|---|---|---|---|",
+    ]
+    for name, _, what, expected, args in ENTRIES:
+        lines.append("| `%s` | %s | %s | %s |" % (name, what, expected, "`%s`" % args if args else ""))
+    lines.append("")
+    with open(os.path.join(OUT, "README.md"), "w", encoding="utf-8", newline="\n") as f:
+        f.write("\n".join(lines))
+    print("wrote %d files (%d bytes) and README.md to %s, and %d fuzz seeds to %s" % (len(keep) - 1, total, OUT, len(seeds()), CORPUS))
+
+
+if __name__ == "__main__":
+    main()
