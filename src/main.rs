@@ -26,6 +26,9 @@ enum Command {
     Render(RenderArgs),
     /// Print what a frame of the scene needs: passes, lights, materials.
     Plan(PlanArgs),
+    /// Measure what accuracy costs in time: every accuracy level and weave precision against a
+    /// supersampled ground truth, growth with resolution and lights, fabric vs PBR lighting cost.
+    Bench(BenchArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
     Shaders {
         /// Directory to write the package into (created if missing).
@@ -97,6 +100,22 @@ struct RenderArgs {
 }
 
 #[derive(Args)]
+struct BenchArgs {
+    /// A short run (about 15 s on lavapipe): smaller images, fewer levels.
+    #[arg(long)]
+    quick: bool,
+    /// Where bench.csv and bench.png go.
+    #[arg(long, default_value = "target/bench")]
+    out: PathBuf,
+    /// Timed frames per measurement (medians of these, after warm-up).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name. Also WEFT_DEVICE.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+#[derive(Args)]
 struct PlanArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -111,6 +130,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(args),
         Command::Plan(args) => run_plan(args),
         Command::Shaders { out } => run_shaders(&out),
+        Command::Bench(args) => run_bench(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -239,6 +259,35 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             frame.stats.weave_textures, frame.stats.weave_dispatches
         );
     }
+    Ok(())
+}
+
+fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
+    let mut config = if args.quick {
+        weft::bench::BenchConfig::quick()
+    } else {
+        weft::bench::BenchConfig::default()
+    };
+    config.out = args.out;
+    if let Some(f) = args.frames {
+        config.frames = f;
+    }
+    let device = args
+        .device
+        .as_deref()
+        .map(DeviceChoice::parse)
+        .unwrap_or_else(DeviceChoice::from_env);
+    let ctx = Context::new(&ContextOptions {
+        validate: false,
+        device,
+    })?;
+    let report = weft::bench::run(ctx, &config)?;
+    println!("{}", report.table());
+    println!(
+        "wrote {} and {}",
+        config.out.join("bench.csv").display(),
+        config.out.join("bench.png").display()
+    );
     Ok(())
 }
 
