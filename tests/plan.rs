@@ -9,7 +9,11 @@ use weft::render::{Pass, Plan, RenderOptions, Renderer};
 use weft::scene::{self, Light, LightKind, Scene};
 
 fn options() -> RenderOptions {
-    RenderOptions { width: 96, height: 54, ..Default::default() }
+    RenderOptions {
+        width: 96,
+        height: 54,
+        ..Default::default()
+    }
 }
 
 fn without_fabric(mut scene: Scene) -> Scene {
@@ -33,13 +37,20 @@ fn a_scene_with_no_fabric_runs_no_weave_pass() {
     let mut renderer = Renderer::new(common::context()).unwrap();
     let frame = renderer.render(&scene, &options()).unwrap();
     assert_eq!(frame.stats.passes, vec!["gbuffer", "lighting", "tonemap"]);
-    assert_eq!((frame.stats.weave_textures, frame.stats.weave_dispatches), (0, 0));
+    assert_eq!(
+        (frame.stats.weave_textures, frame.stats.weave_dispatches),
+        (0, 0)
+    );
 }
 
 #[test]
 fn materials_with_the_same_weave_share_one_texture() {
     let mut scene = scene::default_scene();
-    let cloth = scene.materials.iter().position(|m| m.fabric.is_some()).unwrap();
+    let cloth = scene
+        .materials
+        .iter()
+        .position(|m| m.fabric.is_some())
+        .unwrap();
     // A second cloth that differs only in colour and exponents, and a third with another weave.
     let mut blue = scene.materials[cloth].clone();
     blue.name = "blue cloth".into();
@@ -49,7 +60,10 @@ fn materials_with_the_same_weave_share_one_texture() {
     f.e_along = 50.0;
     let mut twill = scene.materials[cloth].clone();
     twill.name = "twill cloth".into();
-    twill.fabric = Some(FabricParams { pattern: weft::fabric::WeavePattern::twill(), ..Default::default() });
+    twill.fabric = Some(FabricParams {
+        pattern: weft::fabric::WeavePattern::twill(),
+        ..Default::default()
+    });
     scene.materials.push(blue);
     scene.materials.push(twill);
     // Give the two new materials something to draw.
@@ -57,7 +71,10 @@ fn materials_with_the_same_weave_share_one_texture() {
         let mut mesh = scene.meshes[0].clone();
         mesh.material = material;
         scene.meshes.push(mesh);
-        scene.draws.push(weft::scene::Draw { mesh: scene.meshes.len() - 1, world: glam::Mat4::from_translation(Vec3::X * 10.0) });
+        scene.draws.push(weft::scene::Draw {
+            mesh: scene.meshes.len() - 1,
+            world: glam::Mat4::from_translation(Vec3::X * 10.0),
+        });
     }
     let plan = Plan::new(&scene, &options());
     assert_eq!(plan.weaves.len(), 2, "{:?}", plan.weaves);
@@ -75,14 +92,38 @@ fn only_directional_lights_compile_no_point_light_code_and_skipping_changes_noth
     let mut renderer = Renderer::new(common::context()).unwrap();
     let planned = renderer.render(&scene, &options()).unwrap();
     assert!(
-        planned.stats.pipelines.iter().any(|p| p.starts_with("lighting[") && p.contains("light_types=1]")),
+        planned
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p.starts_with("lighting[") && p.contains("light_types=1]")),
         "{:?}",
         planned.stats.pipelines
     );
-    let forced = renderer.render(&scene, &RenderOptions { all_features: true, ..options() }).unwrap();
-    assert!(forced.stats.pipelines.iter().any(|p| p.contains("light_types=7]")));
-    let max_diff = planned.hdr.iter().zip(&forced.hdr).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
-    assert_eq!(max_diff, 0.0, "compiling out absent light types changed the image");
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                all_features: true,
+                ..options()
+            },
+        )
+        .unwrap();
+    assert!(forced
+        .stats
+        .pipelines
+        .iter()
+        .any(|p| p.contains("light_types=7]")));
+    let max_diff = planned
+        .hdr
+        .iter()
+        .zip(&forced.hdr)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0f32, f32::max);
+    assert_eq!(
+        max_diff, 0.0,
+        "compiling out absent light types changed the image"
+    );
     assert_eq!(planned.ldr, forced.ldr);
 }
 
@@ -104,5 +145,8 @@ fn lights_out_of_range_are_culled_and_change_nothing() {
     let mut renderer = Renderer::new(common::context()).unwrap();
     let a = renderer.render(&scene, &options()).unwrap();
     let b = renderer.render(&with_far_lights, &options()).unwrap();
-    assert_eq!(a.hdr, b.hdr, "lights whose range cannot reach the scene must add nothing");
+    assert_eq!(
+        a.hdr, b.hdr,
+        "lights whose range cannot reach the scene must add nothing"
+    );
 }

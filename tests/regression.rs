@@ -102,7 +102,10 @@ fn image_regression() {
     let dir = report_dir();
     std::fs::create_dir_all(&dir).expect("create target/regression");
     // Images of cases that no longer exist would only confuse whoever opens the folder.
-    for entry in std::fs::read_dir(&dir).expect("read target/regression").flatten() {
+    for entry in std::fs::read_dir(&dir)
+        .expect("read target/regression")
+        .flatten()
+    {
         let path = entry.path();
         if path.extension().is_some_and(|e| e == "png" || e == "html") {
             let _ = std::fs::remove_file(path);

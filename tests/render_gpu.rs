@@ -42,7 +42,10 @@ fn default_scene_renders_clean_and_lit() {
         var.sqrt()
     );
     // Every pass the plan lists ran.
-    assert_eq!(frame.stats.passes, vec!["weave", "gbuffer", "lighting", "tonemap"]);
+    assert_eq!(
+        frame.stats.passes,
+        vec!["weave", "gbuffer", "lighting", "tonemap"]
+    );
     assert!(frame.stats.draws >= 3);
 }
 

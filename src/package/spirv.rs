@@ -721,9 +721,11 @@ impl Module {
                     (_, true) => DescriptorKind::StorageImage,
                 }
             }
-            (_, other) => return Err(format!(
+            (_, other) => {
+                return Err(format!(
                 "resource %{id} (set {set}, binding {binding}) has an unexpected type {other:?}"
-            )),
+            ))
+            }
         };
         let access = match (non_writable, non_readable) {
             (true, _) => Access::ReadOnly,

@@ -306,7 +306,11 @@ impl Renderer {
     ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
         let gbuffer_key = vec![(0, options.accuracy.code()), (1, source)];
-        let light_types = if options.all_features { 7 } else { plan.light_types_mask() };
+        let light_types = if options.all_features {
+            7
+        } else {
+            plan.light_types_mask()
+        };
         let lighting_key = vec![
             (0, options.accuracy.code()),
             (1, options.accuracy.samples()),

@@ -135,7 +135,11 @@ impl GpuMaterial {
                 m.emissive[0],
                 m.emissive[1],
                 m.emissive[2],
-                if m.normal_texture.is_some() { m.normal_scale } else { 0.0 },
+                if m.normal_texture.is_some() {
+                    m.normal_scale
+                } else {
+                    0.0
+                },
             ],
             metallic_roughness: [
                 m.metallic,

@@ -68,7 +68,15 @@ pub struct FabricFeatures {
 /// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
 pub(crate) fn weave_key(fabric: &crate::fabric::FabricParams) -> [u32; 7] {
     let p = fabric.weave_push(0, 0);
-    [p.pattern_lo, p.pattern_hi, p.cols, p.rows, p.gap.to_bits(), p.shadow_dist.to_bits(), p.shadow_strength.to_bits()]
+    [
+        p.pattern_lo,
+        p.pattern_hi,
+        p.cols,
+        p.rows,
+        p.gap.to_bits(),
+        p.shadow_dist.to_bits(),
+        p.shadow_strength.to_bits(),
+    ]
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -106,7 +114,11 @@ impl Plan {
                 LightKind::Spot { .. } => lights.spot += 1,
             }
         }
-        let triangles = scene.draws.iter().map(|d| scene.meshes[d.mesh].indices.len() / 3).sum();
+        let triangles = scene
+            .draws
+            .iter()
+            .map(|d| scene.meshes[d.mesh].indices.len() / 3)
+            .sum();
         let mut keys = Vec::new();
         let mut weaves: Vec<WeavePlan> = Vec::new();
         let mut features = FabricFeatures::default();
@@ -133,8 +145,11 @@ impl Plan {
                 }
             }
         }
-        features.far_field_mixture =
-            !weaves.is_empty() && matches!(options.accuracy, Accuracy::Mixture | Accuracy::Supersampled(_));
+        features.far_field_mixture = !weaves.is_empty()
+            && matches!(
+                options.accuracy,
+                Accuracy::Mixture | Accuracy::Supersampled(_)
+            );
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
         if !weaves.is_empty() {
             passes.insert(0, Pass::Weave);
@@ -146,7 +161,11 @@ impl Plan {
             draws: scene.draws.len(),
             triangles,
             lights,
-            fabric_materials: scene.materials.iter().filter(|m| m.fabric.is_some()).count(),
+            fabric_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.fabric.is_some())
+                .count(),
             weaves,
             features,
             textures: scene.textures.len(),
@@ -184,7 +203,11 @@ impl fmt::Display for Plan {
         writeln!(f, "materials   {} fabric", self.fabric_materials)?;
         for w in &self.weaves {
             let materials = w.materials.join(", ");
-            writeln!(f, "weave       {} {}x{}, {} levels, for {materials}", w.pattern, w.width, w.height, w.levels)?;
+            writeln!(
+                f,
+                "weave       {} {}x{}, {} levels, for {materials}",
+                w.pattern, w.width, w.height, w.levels
+            )?;
         }
         let ft = &self.features;
         writeln!(
@@ -192,7 +215,11 @@ impl fmt::Display for Plan {
             "features    gaps {}, thread shadowing {}, fresnel {}, coupled diffuse {}, far-field mixture {}",
             ft.gaps, ft.thread_shadowing, ft.fresnel, ft.coupled_diffuse, ft.far_field_mixture
         )?;
-        writeln!(f, "light code  {:#05b} (1 directional, 2 point, 4 spot)", self.light_types_mask())?;
+        writeln!(
+            f,
+            "light code  {:#05b} (1 directional, 2 point, 4 spot)",
+            self.light_types_mask()
+        )?;
         writeln!(f, "textures    {}", self.textures)?;
         write!(f, "debug view  {}", self.debug_view.name())
     }
