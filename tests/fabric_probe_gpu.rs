@@ -67,7 +67,7 @@ fn run_probe(ctx: &weft::vk::Context, inputs: &[ProbeInput]) -> Vec<ProbeOutput>
     ctx.submit(|cmd| {
         cmd.bind_pipeline(&pipeline);
         cmd.bind_sets(&pipeline, 0, &[set]);
-        cmd.push_constant_bytes(&pipeline, &count.to_le_bytes());
+        cmd.push_constants(&pipeline, &count);
         cmd.dispatch(count.div_ceil(64), 1, 1);
         cmd.buffer_barrier();
     })

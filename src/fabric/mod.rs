@@ -131,33 +131,10 @@ const _: () = {
 impl GpuFabric {
     /// The struct's bytes as the shader reads them (little-endian, no padding).
     pub fn to_bytes(&self) -> [u8; 80] {
-        let words: [u32; 20] = [
-            self.rd_warp[0].to_bits(),
-            self.rd_warp[1].to_bits(),
-            self.rd_warp[2].to_bits(),
-            self.rs.to_bits(),
-            self.rd_weft[0].to_bits(),
-            self.rd_weft[1].to_bits(),
-            self.rd_weft[2].to_bits(),
-            self.e_along.to_bits(),
-            self.e_across.to_bits(),
-            self.cell_per_uv.to_bits(),
-            self.flags,
-            self.shadow_strength.to_bits(),
-            self.pattern_lo,
-            self.pattern_hi,
-            self.cols,
-            self.rows,
-            self.gap.to_bits(),
-            self.shadow_dist.to_bits(),
-            self._pad0,
-            self._pad1,
-        ];
-        let mut out = [0u8; 80];
-        for (k, w) in words.iter().enumerate() {
-            out[4 * k..4 * k + 4].copy_from_slice(&w.to_le_bytes());
-        }
-        out
+        // The struct is #[repr(C)] and Pod with no padding: its bytes are the std430 layout.
+        bytemuck::bytes_of(self)
+            .try_into()
+            .expect("the size is asserted at compile time")
     }
 }
 

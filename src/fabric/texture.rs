@@ -57,22 +57,10 @@ const _: () = {
 impl WeavePush {
     /// The push constants' bytes (little-endian).
     pub fn to_bytes(&self) -> [u8; 36] {
-        let words = [
-            self.pattern_lo,
-            self.pattern_hi,
-            self.cols,
-            self.rows,
-            self.gap.to_bits(),
-            self.shadow_dist.to_bits(),
-            self.shadow_strength.to_bits(),
-            self.width,
-            self.height,
-        ];
-        let mut out = [0u8; 36];
-        for (k, w) in words.iter().enumerate() {
-            out[4 * k..4 * k + 4].copy_from_slice(&w.to_le_bytes());
-        }
-        out
+        // The struct is #[repr(C)] and Pod with no padding: its bytes are the push-constant layout.
+        bytemuck::bytes_of(self)
+            .try_into()
+            .expect("the size is asserted at compile time")
     }
 
     /// The same push constants for another level size.

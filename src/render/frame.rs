@@ -753,7 +753,7 @@ impl Renderer {
             for (level, set) in sets.iter().enumerate() {
                 let (w, h) = weave_level_size(level0, level as u32);
                 cmd.bind_sets(&self.weave_pipeline, 0, &[*set]);
-                cmd.push_constant_bytes(&self.weave_pipeline, &fabric.weave_push(w, h).to_bytes());
+                cmd.push_constants(&self.weave_pipeline, &fabric.weave_push(w, h));
                 cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             }
             cmd.transition(&image, Usage::ComputeWrite, Usage::FragmentRead, None);

@@ -242,19 +242,6 @@ impl Cmd<'_> {
         };
     }
 
-    /// Push constants given as bytes (for records that define their own byte layout).
-    pub fn push_constant_bytes(&mut self, pipeline: &Pipeline, bytes: &[u8]) {
-        unsafe {
-            self.device().cmd_push_constants(
-                self.raw,
-                pipeline.layout,
-                pipeline.push_stages,
-                0,
-                bytes,
-            )
-        };
-    }
-
     pub fn bind_vertex_buffer(&mut self, buffer: &Buffer) {
         unsafe {
             self.device()
