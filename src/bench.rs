@@ -770,6 +770,7 @@ pub fn with_point_lights(scene: &Scene, n: u32) -> Scene {
                 range: Some(6.0),
                 position: Vec3::new(1.8 * phi.cos(), 0.8 + 1.6 * t, 1.8 * phi.sin()),
                 direction: Vec3::NEG_Y,
+                shadow: None,
             }
         })
         .collect();

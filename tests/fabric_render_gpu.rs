@@ -153,10 +153,7 @@ fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
             indices: vec![0, 2, 1, 0, 3, 2],
             material: 0,
         }],
-        draws: vec![Draw {
-            mesh: 0,
-            world: Mat4::IDENTITY,
-        }],
+        draws: vec![Draw::new(0, Mat4::IDENTITY)],
         materials: vec![Material {
             name: "cloth".into(),
             metallic: 0.0,
@@ -172,6 +169,7 @@ fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
             range: None,
             position: Vec3::new(0.0, 0.5, 0.0),
             direction: Vec3::NEG_Y,
+            shadow: None,
         }],
         ..Default::default()
     }

@@ -71,10 +71,10 @@ fn materials_with_the_same_weave_share_one_texture() {
         let mut mesh = scene.meshes[0].clone();
         mesh.material = material;
         scene.meshes.push(mesh);
-        scene.draws.push(weft::scene::Draw {
-            mesh: scene.meshes.len() - 1,
-            world: glam::Mat4::from_translation(Vec3::X * 10.0),
-        });
+        scene.draws.push(weft::scene::Draw::new(
+            scene.meshes.len() - 1,
+            glam::Mat4::from_translation(Vec3::X * 10.0),
+        ));
     }
     let plan = Plan::new(&scene, &options());
     assert_eq!(plan.weaves.len(), 2, "{:?}", plan.weaves);
@@ -140,6 +140,7 @@ fn lights_out_of_range_are_culled_and_change_nothing() {
             range: Some(1.0),
             position: Vec3::new(50.0 + i as f32, 5.0, 0.0),
             direction: Vec3::NEG_Y,
+            shadow: None,
         });
     }
     let mut renderer = Renderer::new(common::context()).unwrap();

@@ -1154,7 +1154,7 @@ impl<'a> Loader<'a> {
                             self.triangles_drawn
                         )));
                     }
-                    self.scene.draws.push(Draw { mesh: id, world });
+                    self.scene.draws.push(Draw::new(id, world));
                 }
             }
             if let Some(camera) = node.camera() {
@@ -1224,6 +1224,7 @@ impl<'a> Loader<'a> {
             range: def.range,
             position,
             direction,
+            shadow: None,
         });
         Ok(())
     }

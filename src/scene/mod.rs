@@ -39,6 +39,23 @@ pub struct Mesh {
 pub struct Draw {
     pub mesh: usize,
     pub world: Mat4,
+    /// Whether this instance occludes shadow-casting lights (node `extras.cast_shadows`,
+    /// default true).
+    pub cast_shadows: bool,
+    /// Whether shadows darken this instance (node `extras.receive_shadows`, default true).
+    pub receive_shadows: bool,
+}
+
+impl Draw {
+    /// An instance that casts and receives shadows (the glTF default).
+    pub fn new(mesh: usize, world: Mat4) -> Draw {
+        Draw {
+            mesh,
+            world,
+            cast_shadows: true,
+            receive_shadows: true,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -119,6 +136,30 @@ pub struct Light {
     pub position: Vec3,
     /// Direction the light travels (the node's -Z), unit length.
     pub direction: Vec3,
+    /// Shadow map settings when the light casts shadows (directional and spot lights only; the
+    /// light's `extras.shadows` in glTF). None = no shadows, no shadow map.
+    pub shadow: Option<Shadow>,
+}
+
+/// How a light's shadow map is made and filtered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shadow {
+    /// Shadow map size in texels (square), 64..=4096.
+    pub resolution: u32,
+    /// PCF filter radius in shadow-map texels, 0..=8 (0 = one hardware-compared bilinear tap).
+    pub filter_radius: f32,
+    /// Constant depth bias in shadow-map texels (scaled by the slope in the shader), 0..=64.
+    pub bias: f32,
+}
+
+impl Default for Shadow {
+    fn default() -> Shadow {
+        Shadow {
+            resolution: 1024,
+            filter_radius: 1.5,
+            bias: 1.0,
+        }
+    }
 }
 
 /// A perspective camera in world space.
