@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 use serde_json::{json, Value};
-use weft::scene::{self, ColorSpace, LightKind, Scene};
+use weft::scene::{self, ColorSpace, LightKind, Scene, Shadow};
 
 // --- helpers --------------------------------------------------------------------------------------
 
@@ -278,6 +278,20 @@ fn assert_well_formed(s: &Scene) {
     for l in &s.lights {
         assert_unit(l.direction, "light direction");
         assert!(l.position.is_finite());
+        if let Some(sh) = l.shadow {
+            assert!(
+                l.kind != LightKind::Point,
+                "point light '{}' has a shadow map",
+                l.name
+            );
+            assert!(
+                (64..=4096).contains(&sh.resolution)
+                    && (0.0..=8.0).contains(&sh.filter_radius)
+                    && (0.0..=64.0).contains(&sh.bias),
+                "light '{}' has shadow settings out of range: {sh:?}",
+                l.name
+            );
+        }
     }
 }
 
@@ -1163,6 +1177,383 @@ fn glb_written_by_hand_loads() {
     assert_eq!(s.source, "hand.glb");
 }
 
+// --- shadows --------------------------------------------------------------------------------------
+
+#[test]
+fn shadows_scene_asks_for_the_expected_shadow_maps_and_flags() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/shadows.glb");
+    let s = scene::load(&path).expect("assets/scenes/shadows.glb loads");
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_well_formed(&s);
+    let light = |name: &str| {
+        s.lights
+            .iter()
+            .find(|l| l.name == name)
+            .unwrap_or_else(|| panic!("no light '{name}'"))
+    };
+    let sun = light("sun");
+    assert_eq!(sun.kind, LightKind::Directional);
+    assert_eq!(sun.shadow, Some(Shadow::default()));
+    // About 40 degrees above the cloth: the light travels down at 40 degrees.
+    let elevation = (-sun.direction.y).asin().to_degrees();
+    assert!((elevation - 40.0).abs() < 0.1, "sun elevation {elevation}");
+    let spot = light("spot");
+    assert!(matches!(spot.kind, LightKind::Spot { .. }));
+    assert_eq!(
+        spot.shadow,
+        Some(Shadow {
+            resolution: 512,
+            filter_radius: 2.5,
+            bias: Shadow::default().bias,
+        })
+    );
+    assert!(
+        spot.direction.y < -0.9,
+        "the spot points down: {}",
+        spot.direction
+    );
+    let fill = light("fill");
+    assert_eq!((fill.kind, fill.shadow), (LightKind::Point, None));
+    assert_eq!(s.lights.len(), 3);
+
+    // Every instance casts and receives, except the small ball: its parent node says
+    // "cast_shadows": false and the ball inherits it.
+    assert_eq!(s.draws.len(), 4);
+    for d in &s.draws {
+        let name = s.meshes[d.mesh].name.as_str();
+        let expected = (name != "small ball", true);
+        assert_eq!(
+            (d.cast_shadows, d.receive_shadows),
+            expected,
+            "draw of mesh '{name}'"
+        );
+    }
+    assert!(s
+        .draws
+        .iter()
+        .any(|d| s.meshes[d.mesh].name == "small ball" && !d.cast_shadows));
+    assert_eq!(s.cameras.len(), 1);
+}
+
+/// One light of each kind asked for (`light` values are KHR_lights_punctual lights), each placed
+/// by its own root node, over the test quad.
+fn with_placed_lights(lights: Value) -> Doc {
+    let n = lights.as_array().map_or(0, |l| l.len());
+    let mut d = with_lights(lights);
+    for i in 0..n {
+        let node = d.push(
+            "nodes",
+            json!({"translation": [0.0, 2.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": i}}}),
+        );
+        d.json["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(node));
+    }
+    d
+}
+
+fn load_text(d: &Doc, source: &str) -> weft::Result<Scene> {
+    scene::load_slice(d.text().as_bytes(), source, None)
+}
+
+#[test]
+fn light_extras_shadows_give_the_shadow_settings() {
+    let spot = |extras: Value| json!({"type": "spot", "intensity": 5.0, "spot": {"outerConeAngle": 0.5}, "extras": extras});
+    let d = with_placed_lights(json!([
+        {"name": "sun", "type": "directional", "extras": {"shadows": true}},
+        spot(json!({"shadows": {"resolution": 2048, "filter_radius": 2.0, "bias": 1.5}})),
+        spot(json!({"shadows": {"bias": 0.25}})),
+        spot(json!({"shadows": {}})),
+        spot(json!({"shadows": false})),
+        // Other applications' extras are no concern of weft's.
+        spot(json!({"blender_light_id": 7, "note": "key"})),
+        spot(json!("not an object")),
+        spot(json!([1, 2, 3])),
+        {"type": "directional"},
+        {"type": "directional", "extras": {"shadows": {"resolution": 64, "filter_radius": 0, "bias": 64}}},
+        {"type": "directional", "extras": {"shadows": {"resolution": 4096, "filter_radius": 8.0, "bias": 0}}},
+    ]));
+    let s = load_text(&d, "shadow settings").unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_well_formed(&s);
+    let shadows: Vec<Option<Shadow>> = s.lights.iter().map(|l| l.shadow).collect();
+    let sh = |resolution, filter_radius, bias| {
+        Some(Shadow {
+            resolution,
+            filter_radius,
+            bias,
+        })
+    };
+    assert_eq!(
+        shadows,
+        vec![
+            Some(Shadow::default()),
+            sh(2048, 2.0, 1.5),
+            sh(1024, 1.5, 0.25),
+            Some(Shadow::default()),
+            None,
+            None,
+            None,
+            None,
+            None,
+            sh(64, 0.0, 64.0),
+            sh(4096, 8.0, 0.0),
+        ]
+    );
+    assert_eq!(Shadow::default(), sh(1024, 1.5, 1.0).unwrap());
+}
+
+#[test]
+fn a_point_light_asking_for_shadows_gets_a_warning_and_none() {
+    let d = with_placed_lights(json!([
+        {"name": "bulb", "type": "point", "intensity": 5.0, "extras": {"shadows": true}},
+        {"name": "sun", "type": "directional", "extras": {"shadows": true}},
+        {"name": "quiet bulb", "type": "point", "intensity": 5.0, "extras": {"shadows": false}},
+    ]));
+    let s = load_text(&d, "point shadows").unwrap();
+    assert_eq!(s.lights[0].shadow, None);
+    assert_eq!(s.lights[1].shadow, Some(Shadow::default()));
+    assert_eq!(s.lights[2].shadow, None);
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    let w = &s.warnings[0].0;
+    assert!(
+        w.contains("light 'bulb'")
+            && w.contains("point light")
+            && w.contains("without shadows")
+            && w.contains("point shadows"),
+        "{w}"
+    );
+}
+
+#[test]
+fn out_of_range_shadow_settings_are_clamped_with_a_warning() {
+    let d = with_placed_lights(json!([
+        {"name": "sun", "type": "directional",
+         "extras": {"shadows": {"resolution": -5, "filter_radius": 100, "bias": -1, "softness": 3}}},
+        {"name": "moon", "type": "directional",
+         "extras": {"shadows": {"resolution": 1000000, "filter_radius": 1e30, "bias": 1e30}}},
+        {"name": "odd", "type": "directional", "extras": {"shadows": {"resolution": 1000.4}}},
+    ]));
+    let s = load_text(&d, "clamped shadows").unwrap();
+    assert_well_formed(&s);
+    assert_eq!(
+        s.lights.iter().map(|l| l.shadow).collect::<Vec<_>>(),
+        vec![
+            Some(Shadow {
+                resolution: 64,
+                filter_radius: 8.0,
+                bias: 0.0
+            }),
+            Some(Shadow {
+                resolution: 4096,
+                filter_radius: 8.0,
+                bias: 64.0
+            }),
+            Some(Shadow {
+                resolution: 1000,
+                ..Shadow::default()
+            }),
+        ]
+    );
+    let all: Vec<&str> = s.warnings.iter().map(|w| w.0.as_str()).collect();
+    assert_eq!(all.len(), 8, "{all:#?}");
+    for needle in [
+        "light 'sun' (KHR_lights_punctual light 0) has extras.shadows.resolution = -5, which is outside [64, 4096]; clamped to 64",
+        "extras.shadows.filter_radius = 100, which is outside [0, 8]; clamped to 8",
+        "extras.shadows.bias = -1, which is outside [0, 64]; clamped to 0",
+        "unknown key 'softness' in extras.shadows (ignored)",
+        "light 'moon' (KHR_lights_punctual light 1) has extras.shadows.resolution = 1000000",
+        "light 'odd' (KHR_lights_punctual light 2) has extras.shadows.resolution = 1000.4, which is not a whole number of texels; rounded to 1000",
+    ] {
+        assert!(
+            all.iter().any(|w| w.contains(needle)),
+            "no warning holds `{needle}`:\n{all:#?}"
+        );
+    }
+    assert!(all.iter().all(|w| w.contains("clamped shadows")));
+}
+
+#[test]
+fn shadow_settings_of_the_wrong_type_are_errors_naming_light_and_key() {
+    let cases: &[(Value, &str, &str)] = &[
+        (
+            json!({"shadows": "yes"}),
+            "extras.shadows = \"yes\"",
+            "must be true",
+        ),
+        (json!({"shadows": 1}), "extras.shadows = 1", "must be true"),
+        (
+            json!({"shadows": null}),
+            "extras.shadows = null",
+            "must be true",
+        ),
+        (
+            json!({"shadows": [2048]}),
+            "extras.shadows = [2048]",
+            "must be true",
+        ),
+        (
+            json!({"shadows": {"resolution": "2048"}}),
+            "extras.shadows.resolution = \"2048\", not a number",
+            "must be a number",
+        ),
+        (
+            json!({"shadows": {"filter_radius": [1, 2]}}),
+            "extras.shadows.filter_radius = [1,2]",
+            "must be a number",
+        ),
+        (
+            json!({"shadows": {"bias": true}}),
+            "extras.shadows.bias = true",
+            "must be a number",
+        ),
+        (
+            json!({"shadows": {"bias": null}}),
+            "extras.shadows.bias = null",
+            "must be a number",
+        ),
+        (
+            json!({"shadows": {"resolution": 1e300}}),
+            "extras.shadows.resolution = 1e+300, a number too large for 32-bit floating point",
+            "must be a number (the shadow map's size in texels, 64 to 4096)",
+        ),
+    ];
+    for (extras, key, fix) in cases {
+        let d = with_placed_lights(json!([
+            {"type": "directional"},
+            {"name": "key light", "type": "spot", "spot": {"outerConeAngle": 0.5}, "extras": extras},
+        ]));
+        let msg = error_text(load_text(&d, "typed shadows"));
+        for needle in [
+            "typed shadows",
+            "light 'key light' (KHR_lights_punctual light 1)",
+            key,
+            fix,
+        ] {
+            assert!(msg.contains(needle), "`{needle}` missing from: {msg}");
+        }
+    }
+}
+
+#[test]
+fn node_shadow_flags_apply_to_the_node_and_are_inherited() {
+    let mut d = Doc::new();
+    d.quad(true, true); // node 0: a root with no extras
+    let node = |d: &mut Doc, x: f32, extras: Value, children: Vec<usize>| -> usize {
+        let mut n = json!({"mesh": 0, "translation": [x, 0.0, 0.0], "extras": extras});
+        if !children.is_empty() {
+            n["children"] = json!(children);
+        }
+        d.push("nodes", n)
+    };
+    // 1 (cast false) > 2 (inherits) > 3 (cast true again, receive false) > 4 (inherits both)
+    let n4 = node(&mut d, 4.0, json!({}), vec![]);
+    let n3 = node(
+        &mut d,
+        3.0,
+        json!({"cast_shadows": true, "receive_shadows": false}),
+        vec![n4],
+    );
+    let n2 = node(&mut d, 2.0, json!({"name": "someone else's"}), vec![n3]);
+    let n1 = node(&mut d, 1.0, json!({"cast_shadows": false}), vec![n2]);
+    // 5 (receive false) beside them, with a child 6 that only sets cast false.
+    let n6 = node(&mut d, 6.0, json!({"cast_shadows": false}), vec![]);
+    let n5 = node(&mut d, 5.0, json!({"receive_shadows": false}), vec![n6]);
+    // 7: extras that are not an object are some other application's: defaults.
+    let n7 = node(&mut d, 7.0, json!(["x"]), vec![]);
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .extend([json!(n1), json!(n5), json!(n7)]);
+    let s = load_text(&d, "node flags").unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let mut flags: Vec<(i32, bool, bool)> = s
+        .draws
+        .iter()
+        .map(|d| {
+            (
+                d.world.w_axis.x.round() as i32,
+                d.cast_shadows,
+                d.receive_shadows,
+            )
+        })
+        .collect();
+    flags.sort();
+    // World x: the translations add up along the hierarchy (1, 1+2, 1+2+3, ...).
+    assert_eq!(
+        flags,
+        vec![
+            (0, true, true),    // the quad's root node: the defaults
+            (1, false, true),   // cast_shadows false
+            (3, false, true),   // inherited from 1
+            (5, true, false),   // receive_shadows false
+            (6, true, false),   // cast_shadows true again, receive_shadows false
+            (7, true, true),    // extras not an object
+            (10, true, false),  // inherited from 6
+            (11, false, false), // cast_shadows false, receive_shadows false inherited from 5
+        ]
+    );
+}
+
+#[test]
+fn node_shadow_flags_of_the_wrong_type_are_errors_naming_node_and_key() {
+    for (extras, needle) in [
+        (json!({"cast_shadows": 3}), "extras.cast_shadows = 3"),
+        (
+            json!({"cast_shadows": "false"}),
+            "extras.cast_shadows = \"false\"",
+        ),
+        (
+            json!({"receive_shadows": null}),
+            "extras.receive_shadows = null",
+        ),
+        (
+            json!({"cast_shadows": true, "receive_shadows": [false]}),
+            "extras.receive_shadows = [false]",
+        ),
+    ] {
+        let mut d = Doc::new();
+        d.quad(true, true);
+        let child = d.push(
+            "nodes",
+            json!({"name": "lamp post", "mesh": 0, "extras": extras}),
+        );
+        d.json["nodes"][0]["children"] = json!([child]);
+        let msg = error_text(load_text(&d, "typed flags"));
+        for n in [
+            "typed flags",
+            "node 'lamp post' (node 1)",
+            needle,
+            "must be true or false",
+        ] {
+            assert!(msg.contains(n), "`{n}` missing from: {msg}");
+        }
+    }
+}
+
+#[test]
+fn shadows_asked_for_on_a_node_are_ignored_with_a_warning() {
+    let mut d = with_lights(json!([{"type": "directional"}]));
+    let n = d.push(
+        "nodes",
+        json!({"name": "sun node", "extras": {"shadows": true}, "extensions": {"KHR_lights_punctual": {"light": 0}}}),
+    );
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(n));
+    let s = load_text(&d, "node shadows").unwrap();
+    assert_eq!(s.lights[0].shadow, None);
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert!(
+        s.warnings[0].0.contains("node 'sun node'")
+            && s.warnings[0].0.contains("in its own extras"),
+        "{}",
+        s.warnings[0]
+    );
+}
+
 // --- robustness -----------------------------------------------------------------------------------
 
 /// Every path to a leaf (and to each array and object) of a JSON document.
@@ -1198,7 +1589,8 @@ fn at<'v>(v: &'v mut Value, path: &[Value]) -> &'v mut Value {
 fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
     // A small scene that uses every feature the loader reads.
     let mut d = with_lights(json!([
-        {"type": "spot", "intensity": 20.0, "range": 4.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
+        {"type": "spot", "intensity": 20.0, "range": 4.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5},
+         "extras": {"shadows": {"resolution": 512, "filter_radius": 2.0, "bias": 1.0}}},
     ]));
     d.json["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64(&tiny_png()))}]);
     d.json["textures"] = json!([{"source": 0}]);
@@ -1214,7 +1606,8 @@ fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
         d.push("nodes", json!({"translation": [0.0, 2.0, 0.0], "extensions": {"KHR_lights_punctual": {"light": 0}}}));
     let cam = d.push(
         "nodes",
-        json!({"camera": 0, "translation": [0.0, 0.0, 3.0], "children": [light]}),
+        json!({"camera": 0, "translation": [0.0, 0.0, 3.0], "children": [light],
+               "extras": {"cast_shadows": false, "receive_shadows": true}}),
     );
     d.json["scenes"][0]["nodes"]
         .as_array_mut()

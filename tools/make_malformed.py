@@ -418,6 +418,15 @@ def build():
     d = quad_doc()
     d.json["nodes"][1]["extensions"]["KHR_lights_punctual"]["light"] = 3
     entry("light-index-out-of-range.gltf", gltf(d), "a node refers to light 3; there is one", "error: `light refers to an object that does not exist`")
+    d = quad_doc()
+    d.json["extensions"]["KHR_lights_punctual"]["lights"][0]["extras"] = {"shadows": "yes"}
+    entry("light-shadows-string.gltf", gltf(d), "a light asks for shadows with \"extras\": {\"shadows\": \"yes\"} (true, false or an object is allowed)", "error: `extras.shadows = \"yes\"`")
+    d = quad_doc()
+    d.json["extensions"]["KHR_lights_punctual"]["lights"][0]["extras"] = {"shadows": {"resolution": -5, "filter_radius": 99, "bias": -3}}
+    entry("light-shadows-out-of-range.gltf", gltf(d), "a light's shadow map settings resolution -5, filter_radius 99 and bias -3", "renders, warning: `resolution = -5, which is outside [64, 4096]; clamped to 64`")
+    d = quad_doc()
+    d.json["nodes"][0]["extras"] = {"cast_shadows": 3}
+    entry("node-cast-shadows-number.gltf", gltf(d), "a node's \"extras\": {\"cast_shadows\": 3} (true or false is allowed)", "error: `extras.cast_shadows = 3`")
 
     # Made at run time by tests/robustness.rs (120 MB of indices): listed so the table is complete.
     ENTRIES.append((

@@ -12,6 +12,9 @@ Each scene stresses one thing (docs/regression.md has the list and what each gol
   mirrored_uv   the same twill twice, the right copy with u mirrored (tangent w = -1): the two
                 halves of the image must be mirror images
   spheres       non-fabric glTF metallic-roughness: metallic 0 and 1 x roughness 0.05 .. 1
+  shadows       a cloth under a ball and a floating box, lit by a directional and a spot light
+                that ask for shadow maps (light "extras": {"shadows": ...}) and a point light that
+                does not; one small ball does not cast (node "extras": {"cast_shadows": false})
 
 Python 3 standard library only; the output is byte-for-byte deterministic. The geometry helpers
 and the glTF writer are those of tools/make_default_scene.py (imported). Y is up, units are
@@ -93,6 +96,33 @@ def unit_sphere_normal(u, v):
 
 def sphere_mesh(nu=32, nv=16):
     return grid_mesh(unit_sphere, nu, nv, (1.0, 1.0), normal_fn=unit_sphere_normal, v_clamp=0.02)
+
+
+def box_mesh(half):
+    """A cube of half-size `half` centred on the origin: six flat faces of one quad each, with
+    their own normals, tangents and texture coordinates (0..1 per face)."""
+    faces = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            n = [0.0, 0.0, 0.0]
+            n[axis] = sign
+            # Two in-face axes a, b with cross(a, b) = n.
+            a = [0.0, 0.0, 0.0]
+            a[(axis + 1) % 3] = 1.0
+            b = base.cross(n, a)
+
+            def f(u, v, n=n, a=a, b=b):
+                return [half * (n[k] + (2.0 * u - 1.0) * a[k] + (2.0 * v - 1.0) * b[k]) for k in range(3)]
+
+            faces.append(grid_mesh(f, 1, 1, (1.0, 1.0), normal_fn=lambda u, v, n=n: list(n)))
+    pos, nrm, tan, uvs, idx = [], [], [], [], []
+    for fp, fn, ft, fu, fi in faces:
+        idx += [len(pos) + i for i in fi]
+        pos += fp
+        nrm += fn
+        tan += ft
+        uvs += fu
+    return pos, nrm, tan, uvs, idx
 
 
 def camera_node(name, eye, target, index):
@@ -345,6 +375,61 @@ def spheres():
     return document("metallic-roughness spheres", b, materials, meshes, nodes, lights, [camera_def("front", 35.0, 0.05)])
 
 
+SUN_ELEVATION = math.radians(40.0)
+SUN_AZIMUTH = math.radians(-140.0)  # from behind the objects, on the left as the camera sees them
+
+
+def shadows():
+    """A 3 m x 3 m plain-weave cloth on the ground (y = 0) with a red plastic ball resting on it, a
+    grey box floating 12 cm above it and, in front, a small ball that casts no shadow: its node's
+    parent has "extras": {"cast_shadows": false}, which the ball inherits. Lights: a sun 40 degrees
+    above the cloth with "extras": {"shadows": true} (the default shadow map), a spot from above
+    aimed down at the cloth between the objects with {"resolution": 512, "filter_radius": 2.5}, and
+    a weak point light without shadows. The camera looks at the group from a 3/4 view above."""
+    b = Builder()
+    cloth = patch_mesh(-1.5, 1.5, -1.5, 1.5, 16, 16, uv_per_m=1.0)
+    ball = sphere_mesh()
+    box = box_mesh(0.2)
+    materials = [
+        fabric("sand plain weave", repeat=0.03, gap=0.003, rd=(0.62, 0.55, 0.42), base_color=(0.62, 0.55, 0.42)),
+        pbr("red plastic", (0.8, 0.12, 0.08), 0.0, 0.35),
+        pbr("grey box", (0.5, 0.5, 0.52), 0.0, 0.6),
+        pbr("brushed steel", (0.9, 0.9, 0.92), 1.0, 0.3),
+    ]
+    meshes = [
+        {"name": "cloth", "primitives": [b.primitive(cloth, 0)]},
+        {"name": "ball", "primitives": [b.primitive(ball, 1)]},
+        {"name": "box", "primitives": [b.primitive(box, 2)]},
+    ]
+    meshes.append({"name": "small ball", "primitives": [dict(meshes[1]["primitives"][0], material=3)]})
+    elevation, azimuth = SUN_ELEVATION, SUN_AZIMUTH
+    sun_from = [math.cos(elevation) * math.cos(azimuth), math.sin(elevation), math.cos(elevation) * math.sin(azimuth)]
+    sun = directional("sun", (1.0, 0.95, 0.88), 2.5)
+    sun["extras"] = {"shadows": True}
+    lamp = spot("spot", (1.0, 0.9, 0.75), 12.0, 0.3, 0.5, rng=10.0)
+    lamp["extras"] = {"shadows": {"resolution": 512, "filter_radius": 2.5}}
+    lights = [sun, lamp, point("fill", (0.8, 0.88, 1.0), 0.6, rng=8.0)]
+    ball_radius = 0.3
+    nodes = [
+        {"name": "cloth", "mesh": 0},
+        {"name": "ball", "mesh": 1, "translation": [-0.45, r(ball_radius + 0.005), 0.1], "scale": [ball_radius] * 3},
+        # The box floats: its shadow must stay detached from it (no peter-panning hides the gap).
+        {"name": "floating box", "mesh": 2, "translation": [0.45, 0.32, -0.25],
+         "rotation": [0.0, r(math.sin(math.radians(15.0))), 0.0, r(math.cos(math.radians(15.0)))]},
+        # Its child (appended below) is the small ball: it inherits cast_shadows = false.
+        {"name": "no shadow caster", "translation": [0.3, 0.0, 0.65], "extras": {"cast_shadows": False}},
+        light_node("sun", 0, base.scale(sun_from, 5.0), [0.0, 0.0, 0.0]),
+        light_node("spot", 1, [0.25, 2.4, 0.45], [0.05, 0.0, 0.1]),
+        light_node("fill", 2, [-1.4, 1.2, 1.6]),
+        camera_node("3/4 view", [1.5, 1.15, 1.8], [0.0, 0.12, 0.05], 0),
+    ]
+    doc, binary = document("shadows", b, materials, meshes, nodes, lights, [camera_def("3/4 view", 40.0, 0.05)])
+    small = 0.08
+    doc["nodes"].append({"name": "small ball", "mesh": 3, "translation": [0.0, r(small + 0.002), 0.0], "scale": [small] * 3})
+    doc["nodes"][4]["children"] = [len(doc["nodes"]) - 1]
+    return doc, binary
+
+
 SCENES = {
     "closeup": closeup,
     "far": far,
@@ -353,12 +438,20 @@ SCENES = {
     "twill_satin": twill_satin,
     "mirrored_uv": mirrored_uv,
     "spheres": spheres,
+    "shadows": shadows,
 }
 
 
 def main():
+    """Writes every scene, or only those named on the command line (python3 tools/make_scenes.py
+    shadows)."""
+    names = sys.argv[1:] or list(SCENES)
+    unknown = [n for n in names if n not in SCENES]
+    if unknown:
+        sys.exit("unknown scene(s) %s; known: %s" % (", ".join(unknown), ", ".join(SCENES)))
     os.makedirs(OUT, exist_ok=True)
-    for name, build in SCENES.items():
+    for name in names:
+        build = SCENES[name]
         doc, binary = build()
         path = os.path.join(OUT, name + ".glb")
         write_glb(path, doc, binary)

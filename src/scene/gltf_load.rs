@@ -24,7 +24,8 @@ use super::accessor::{self, Use};
 use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
-    Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Texture, Vertex, Warning,
+    Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Texture, Vertex,
+    Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -296,6 +297,51 @@ struct LightDef {
     color: [f32; 3],
     intensity: f32,
     range: Option<f32>,
+    shadow: Option<Shadow>,
+}
+
+/// Whether a node's meshes cast and receive shadows: set by the node's `extras.cast_shadows` /
+/// `extras.receive_shadows`, inherited from the parent otherwise.
+#[derive(Clone, Copy)]
+struct ShadowFlags {
+    cast: bool,
+    receive: bool,
+}
+
+impl ShadowFlags {
+    const DEFAULT: ShadowFlags = ShadowFlags {
+        cast: true,
+        receive: true,
+    };
+}
+
+/// What weft reads from a light's `extras.shadows` (docs/scene-format.md).
+const SHADOW_KEYS: &str = "resolution, filter_radius, bias";
+/// Shadow map size in texels.
+const SHADOW_RESOLUTION_RANGE: (f64, f64) = (64.0, 4096.0);
+/// PCF filter radius in shadow-map texels.
+const SHADOW_FILTER_RADIUS_RANGE: (f64, f64) = (0.0, 8.0);
+/// Constant depth bias in shadow-map texels.
+const SHADOW_BIAS_RANGE: (f64, f64) = (0.0, 64.0);
+
+/// A JSON value for a message, cut to a readable length.
+fn short_json(v: &serde_json::Value) -> String {
+    let s = v.to_string();
+    if s.chars().count() > 60 {
+        format!("{}…", s.chars().take(60).collect::<String>())
+    } else {
+        s
+    }
+}
+
+/// The `extras` of a glTF object as JSON, when it is an object; other values (extras belong to
+/// any application) are no concern of weft's.
+fn extras_object(extras: &json::Extras) -> Option<serde_json::Map<String, serde_json::Value>> {
+    let raw = extras.as_ref()?;
+    match serde_json::from_str(raw.get()) {
+        Ok(serde_json::Value::Object(map)) => Some(map),
+        _ => None,
+    }
 }
 
 /// A perspective camera before a node places it.
@@ -1002,15 +1048,111 @@ impl<'a> Loader<'a> {
                     )))
                 }
             };
+            let shadow = self.light_shadow(&l.extras, kind, &who)?;
             out.push(LightDef {
                 name,
                 kind,
                 color: l.color,
                 intensity: l.intensity,
                 range,
+                shadow,
             });
         }
         Ok(out)
+    }
+
+    /// The shadow settings a light asks for with `extras.shadows` (docs/scene-format.md): `true`
+    /// for the defaults, an object of optional `resolution`, `filter_radius` and `bias`, `false`
+    /// or absent for none. Numbers out of range are clamped with a warning, unknown keys warned
+    /// about; a value of the wrong type is an error. Point lights get a warning and no shadows.
+    fn light_shadow(
+        &mut self,
+        extras: &json::Extras,
+        kind: LightKind,
+        who: &str,
+    ) -> Result<Option<Shadow>> {
+        let Some(value) = extras_object(extras).and_then(|mut e| e.remove("shadows")) else {
+            return Ok(None);
+        };
+        let example = r#"{"resolution": 2048, "filter_radius": 1.5, "bias": 1.0}"#;
+        let fields = match value {
+            serde_json::Value::Bool(false) => return Ok(None),
+            serde_json::Value::Bool(true) => serde_json::Map::new(),
+            serde_json::Value::Object(map) => map,
+            other => {
+                return Err(self.error(format_args!(
+                    "{who} has extras.shadows = {}; it must be true (shadows with the default settings), false (no shadows) or an object such as {example} (each key optional): fix the light's extras",
+                    short_json(&other)
+                )))
+            }
+        };
+        let mut shadow = Shadow::default();
+        for (key, v) in &fields {
+            let (lo, hi, what) = match key.as_str() {
+                "resolution" => (
+                    SHADOW_RESOLUTION_RANGE.0,
+                    SHADOW_RESOLUTION_RANGE.1,
+                    "the shadow map's size in texels",
+                ),
+                "filter_radius" => (
+                    SHADOW_FILTER_RADIUS_RANGE.0,
+                    SHADOW_FILTER_RADIUS_RANGE.1,
+                    "the PCF filter radius in shadow-map texels",
+                ),
+                "bias" => (
+                    SHADOW_BIAS_RANGE.0,
+                    SHADOW_BIAS_RANGE.1,
+                    "the depth bias in shadow-map texels",
+                ),
+                other => {
+                    self.warn(format_args!(
+                        "{who} has an unknown key '{other}' in extras.shadows (ignored); known keys: {SHADOW_KEYS}"
+                    ));
+                    continue;
+                }
+            };
+            let x = match v.as_f64() {
+                Some(x) if x.is_finite() && x.abs() <= f64::from(f32::MAX) => x,
+                _ => {
+                    let problem = if v.is_number() {
+                        "a number too large for 32-bit floating point"
+                    } else {
+                        "not a number"
+                    };
+                    return Err(self.error(format_args!(
+                        "{who} has extras.shadows.{key} = {}, {problem}; it must be a number ({what}, {lo} to {hi}): write one there, or remove the key for the default",
+                        short_json(v)
+                    )));
+                }
+            };
+            let mut c = x.clamp(lo, hi);
+            if key == "resolution" {
+                c = c.round();
+            }
+            if c != x {
+                let why = if (lo..=hi).contains(&x) {
+                    "is not a whole number of texels; rounded to".to_string()
+                } else {
+                    format!("is outside [{lo}, {hi}]; clamped to")
+                };
+                self.warn(format_args!(
+                    "{who} has extras.shadows.{key} = {}, which {why} {c}",
+                    short_json(v)
+                ));
+            }
+            match key.as_str() {
+                "resolution" => shadow.resolution = c as u32,
+                "filter_radius" => shadow.filter_radius = c as f32,
+                _ => shadow.bias = c as f32,
+            }
+        }
+        if kind == LightKind::Point {
+            self.warn(format_args!(
+                "{who} is a point light and asks for shadows (extras.shadows); weft casts shadows from directional and spot lights only, so this light is rendered without shadows"
+            ));
+            return Ok(None);
+        }
+        Ok(Some(shadow))
     }
 
     fn camera_definitions(&mut self) -> Result<Vec<Option<CameraDef>>> {
@@ -1113,12 +1255,12 @@ impl<'a> Loader<'a> {
         };
 
         let mut visited = vec![false; doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node<'a>, Mat4)> = roots
+        let mut stack: Vec<(gltf::Node<'a>, Mat4, ShadowFlags)> = roots
             .into_iter()
             .rev()
-            .map(|n| (n, Mat4::IDENTITY))
+            .map(|n| (n, Mat4::IDENTITY, ShadowFlags::DEFAULT))
             .collect();
-        while let Some((node, parent)) = stack.pop() {
+        while let Some((node, parent, inherited)) = stack.pop() {
             let name = node
                 .name()
                 .map(str::to_owned)
@@ -1138,6 +1280,7 @@ impl<'a> Loader<'a> {
                     "{who} has a world transform that is not finite (check its and its parents' translation, rotation, scale or matrix)"
                 )));
             }
+            let flags = self.node_shadow_flags(node.index(), inherited, &who)?;
 
             if let Some(mesh) = node.mesh() {
                 if node.skin().is_some() {
@@ -1154,7 +1297,11 @@ impl<'a> Loader<'a> {
                             self.triangles_drawn
                         )));
                     }
-                    self.scene.draws.push(Draw::new(id, world));
+                    self.scene.draws.push(Draw {
+                        cast_shadows: flags.cast,
+                        receive_shadows: flags.receive,
+                        ..Draw::new(id, world)
+                    });
                 }
             }
             if let Some(camera) = node.camera() {
@@ -1171,10 +1318,50 @@ impl<'a> Loader<'a> {
                 self.place_light(light, world, &who)?;
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {
-                stack.push((child, world));
+                stack.push((child, world, flags));
             }
         }
         Ok(())
+    }
+
+    /// The node's `extras.cast_shadows` and `extras.receive_shadows` (true or false), each
+    /// `inherited` from the parent when absent (docs/scene-format.md).
+    fn node_shadow_flags(
+        &mut self,
+        index: usize,
+        inherited: ShadowFlags,
+        who: &str,
+    ) -> Result<ShadowFlags> {
+        let extras = self
+            .doc
+            .as_json()
+            .nodes
+            .get(index)
+            .and_then(|n| extras_object(&n.extras));
+        let Some(extras) = extras else {
+            return Ok(inherited);
+        };
+        let flag = |key: &str, inherited: bool| -> Result<bool> {
+            match extras.get(key) {
+                None => Ok(inherited),
+                Some(serde_json::Value::Bool(b)) => Ok(*b),
+                Some(other) => Err(self.error(format_args!(
+                    "{who} has extras.{key} = {}; it must be true or false (false: this node and its descendants {}; a descendant may set it again): fix the node's extras",
+                    short_json(other),
+                    if key == "cast_shadows" { "cast no shadows" } else { "are not darkened by shadows" },
+                ))),
+            }
+        };
+        let flags = ShadowFlags {
+            cast: flag("cast_shadows", inherited.cast)?,
+            receive: flag("receive_shadows", inherited.receive)?,
+        };
+        if extras.contains_key("shadows") {
+            self.warn(format_args!(
+                "{who} has extras.shadows, which weft ignores on a node: a light asks for shadows in its own extras (in the KHR_lights_punctual \"lights\" list), and a node sets extras.cast_shadows / extras.receive_shadows"
+            ));
+        }
+        Ok(flags)
     }
 
     fn local_transform(&self, node: &gltf::Node<'a>, who: &str) -> Result<Mat4> {
@@ -1224,7 +1411,7 @@ impl<'a> Loader<'a> {
             range: def.range,
             position,
             direction,
-            shadow: None,
+            shadow: def.shadow,
         });
         Ok(())
     }

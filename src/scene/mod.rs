@@ -3,7 +3,9 @@
 //! `load` turns a glTF 2.0 file (`.gltf` or `.glb`) into a [`Scene`]: the node hierarchy is
 //! flattened into [`Draw`]s with world matrices, tangents are generated (MikkTSpace) where the file
 //! has none, lights come from `KHR_lights_punctual`, and the fabric extension
-//! (`WEFT_materials_fabric`) is parsed into [`crate::fabric::FabricParams`].
+//! (`WEFT_materials_fabric`) is parsed into [`crate::fabric::FabricParams`]. Shadow settings come
+//! from `extras`: a light's `shadows`, a node's `cast_shadows` / `receive_shadows` (the convention
+//! is in `docs/scene-format.md`).
 //! [`default_scene`] is the built-in scene embedded in the binary.
 
 use glam::{Mat4, Vec3};
