@@ -20,7 +20,7 @@ struct ProbeInput {
     GpuFabric fabric;
 };
 
-// Rust twin: weft::reference::probe::ProbeOutput (128 bytes).
+// Rust twin: weft::reference::probe::ProbeOutput (160 bytes).
 struct ProbeOutput {
     vec4 lobe;       // ρs weft-oriented, ρs warp-oriented, D(h) weft-oriented, F(h·k)
     vec4 expo;       // E(h) weft, E(h) warp, h·n, h·k
@@ -30,6 +30,8 @@ struct ProbeOutput {
     vec4 footprint;  // weave_box (c_warp, c_weft, sh), 0
     vec4 f_point;    // fabric_brdf with the point's coverage (rgb), 0
     vec4 f_avg;      // fabric_brdf_averaged with the input coverage (rgb), 0
+    vec4 phong;      // phong_brdf (rgb), phong_lobe with fabric_phong_exponent
+    vec4 plain_as;   // plain_as_brdf (rgb), 0
 };
 
 // set 0, binding 0: the inputs.
@@ -67,6 +69,8 @@ void main() {
     vec3 f = fabric_brdf(k1, k2, cov, m);
     vec3 f_point = fabric_brdf(k1, k2, p, m);
     vec3 f_avg = fabric_brdf_averaged(k1, k2, cov, m);
+    vec3 phong = phong_brdf(k1, k2, m);
+    vec3 plain_as = plain_as_brdf(k1, k2, m);
 
     ProbeOutput o;
     o.lobe = vec4(
@@ -89,5 +93,7 @@ void main() {
     o.footprint = vec4(b, 0.0);
     o.f_point = vec4(f_point, 0.0);
     o.f_avg = vec4(f_avg, 0.0);
+    o.phong = vec4(phong, phong_lobe(k1, k2, fabric_phong_exponent(m)));
+    o.plain_as = vec4(plain_as, 0.0);
     outputs[id] = o;
 }

@@ -10,6 +10,9 @@ layout(constant_id = 0) const uint ACCURACY = 2u;
 // Where the coverage comes from: 0 the weave texture, 1 the exact coverage of the footprint box
 // evaluated here (no texture).
 layout(constant_id = 1) const uint WEAVE_SOURCE = 0u;
+// How fabric is shaded (SHADING_* in frame.glsl): Gouraud adds the vertex stage's lighting to
+// the emitted radiance; the others change nothing here.
+layout(constant_id = 2) const uint SHADING = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
@@ -38,6 +41,7 @@ layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec4 in_tangent;
 layout(location = 3) in vec2 in_uv;
 layout(location = 4) in vec2 in_weave_uv;
+layout(location = 5) in vec3 in_gouraud;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
@@ -123,6 +127,9 @@ void main() {
             }
             gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
         }
+    }
+    if (SHADING == SHADING_GOURAUD) {
+        emissive += in_gouraud;
     }
     gb_emissive = vec4(max(emissive, vec3(0.0)), 0.0);
 }

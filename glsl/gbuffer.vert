@@ -1,8 +1,21 @@
 #version 460
-// G-buffer pass, vertex stage: object space to world and clip space.
+// G-buffer pass, vertex stage: object space to world and clip space. With SHADING = Gouraud it
+// also lights fabric vertices (the Phong reflection model, as fixed-function pipelines did) for
+// `weft compare`; the fragment stage adds the interpolated result to the emitted radiance.
 #include "frame.glsl"
 
+// How fabric is shaded (SHADING_* in frame.glsl); only Gouraud does work here.
+layout(constant_id = 2) const uint SHADING = 0u;
+// Light types the scene has, as in lighting.frag.
+layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
+
+#include "fabric.glsl"
+#include "lights.glsl"
+
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
+layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -26,6 +39,31 @@ layout(location = 1) out vec3 out_normal;
 layout(location = 2) out vec4 out_tangent;
 layout(location = 3) out vec2 out_uv;
 layout(location = 4) out vec2 out_weave_uv;
+layout(location = 5) out vec3 out_gouraud;
+
+// The Phong reflection model at a fabric vertex: hemispherical ambient and every light, with the
+// normal turned towards the viewer (the vertex stage cannot know which face will be drawn).
+vec3 gouraud(vec3 p, vec3 n, vec4 tangent, GpuFabric f) {
+    vec3 v = normalize(frame.eye.xyz - p);
+    if (dot(n, v) < 0.0) {
+        n = -n;
+    }
+    mat3 tbn = fabric_frame(n, tangent.xyz, tangent.w);
+    n = tbn[2];
+    vec3 k2 = fabric_local(v, tbn);
+    vec3 ambient = mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
+    vec3 radiance = ambient * fabric_mean_rd(f);
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        vec3 l;
+        vec3 e = light_incoming(lights[i], p, l);
+        vec3 k1 = fabric_local(l, tbn);
+        if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
+            continue;
+        }
+        radiance += e * phong_brdf(k1, k2, f) * k1.z;
+    }
+    return radiance;
+}
 
 void main() {
     vec4 world_pos = draw.world * vec4(in_position, 1.0);
@@ -35,5 +73,12 @@ void main() {
     out_tangent = vec4(mat3(draw.world) * in_tangent.xyz, in_tangent.w * draw.tangent_sign);
     out_uv = in_uv;
     out_weave_uv = in_weave_uv;
+    out_gouraud = vec3(0.0);
+    if (SHADING == SHADING_GOURAUD) {
+        uint fabric = uint(materials[draw.material].metallic_roughness.z + 0.5);
+        if (fabric > 0u) {
+            out_gouraud = gouraud(world_pos.xyz, out_normal, out_tangent, fabrics[fabric - 1u]);
+        }
+    }
     gl_Position = frame.view_proj * world_pos;
 }

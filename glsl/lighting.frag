@@ -15,6 +15,12 @@ layout(constant_id = 2) const uint FABRIC_AS_PBR = 0u;
 // Light types the scene has (bit 0 directional, 1 point, 2 spot): the code for the others is
 // compiled out (the plan sets this from the scene).
 layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
+// How fabric is shaded (SHADING_* in frame.glsl): the fabric model (default), or for
+// `weft compare` Gouraud (lit per vertex by gbuffer.vert, carried in the emissive target), Phong,
+// or plain single-lobe Ashikhmin–Shirley.
+layout(constant_id = 4) const uint SHADING = 0u;
+
+#include "lights.glsl"
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -29,49 +35,6 @@ layout(set = 0, binding = 9, std430) readonly buffer Fabrics { GpuFabric fabrics
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
-
-// Irradiance-style falloff of KHR_lights_punctual: inverse square, windowed to zero at range.
-float distance_falloff(float dist, float range) {
-    float inv_sq = 1.0 / max(dist * dist, 1e-8);
-    if (range <= 0.0) {
-        return inv_sq;
-    }
-    float r = dist / range;
-    float window = clamp(1.0 - r * r * r * r, 0.0, 1.0);
-    return window * window * inv_sq;
-}
-
-// Direction to the light (unit) and the illuminance it brings, per colour channel.
-// Zero, without the falloff's work, where a point or spot light's range cannot reach p.
-vec3 light_incoming(Light light, vec3 p, out vec3 l) {
-    uint type = uint(light.direction_type.w + 0.5);
-    vec3 color = light.color_intensity.rgb * light.color_intensity.a;
-    if ((LIGHT_TYPES & 1u) != 0u && type == LIGHT_DIRECTIONAL) {
-        l = -light.direction_type.xyz;
-        return color;
-    }
-    if ((LIGHT_TYPES & 6u) == 0u) {
-        l = vec3(0.0, 1.0, 0.0);
-        return vec3(0.0);
-    }
-    vec3 to_light = light.position_range.xyz - p;
-    float range = light.position_range.w;
-    float dist2 = dot(to_light, to_light);
-    if (range > 0.0 && dist2 >= range * range) {
-        // Culled: out of range.
-        l = vec3(0.0, 1.0, 0.0);
-        return vec3(0.0);
-    }
-    float dist = sqrt(dist2);
-    l = dist > 0.0 ? to_light / dist : vec3(0.0, 1.0, 0.0);
-    float atten = distance_falloff(dist, light.position_range.w);
-    if ((LIGHT_TYPES & 4u) != 0u && type == LIGHT_SPOT) {
-        float cd = dot(light.direction_type.xyz, -l);
-        float a = clamp(cd * light.spot.x + light.spot.y, 0.0, 1.0);
-        atten *= a * a;
-    }
-    return color * atten;
-}
 
 // One fabric BRDF evaluation at the chosen accuracy: nearest and filtered-params evaluate one lobe
 // with coverage-averaged exponents (at a point that is the thread on top's own lobe), mixture and
@@ -97,6 +60,22 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, Gpu
             continue;
         }
         radiance += e * fabric_eval(k1, k2, coverage, f) * k1.z;
+    }
+    return radiance;
+}
+
+// Ambient plus every light reflected by one of the comparison models (Phong or plain A–S).
+vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f) {
+    vec3 radiance = ambient * fabric_mean_rd(f);
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        vec3 l;
+        vec3 e = light_incoming(lights[i], p, l);
+        vec3 k1 = fabric_local(l, tbn);
+        if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
+            continue;
+        }
+        vec3 brdf = SHADING == SHADING_PHONG ? phong_brdf(k1, k2, f) : plain_as_brdf(k1, k2, f);
+        radiance += e * brdf * k1.z;
     }
     return radiance;
 }
@@ -170,7 +149,11 @@ void main() {
         mat3 tbn = fabric_frame(n, oct_decode(fr.zw), surface.z);
         vec3 k2 = fabric_local(v, tbn);
         vec4 g = texelFetch(gb_fabric, px, 0);
-        if (ACCURACY == 3u) {
+        if (SHADING == SHADING_GOURAUD) {
+            // Lit per vertex by gbuffer.vert: the emissive target already holds it.
+        } else if (SHADING != SHADING_FABRIC) {
+            radiance += classic_radiance(p, ambient, tbn, k2, f);
+        } else if (ACCURACY == 3u) {
             Weave w = weave_from_fabric(f);
             vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
             vec3 sum = vec3(0.0);

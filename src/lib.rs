@@ -5,6 +5,7 @@
 //! every shader function), `render` (the plan and the passes of a frame).
 
 pub mod bench;
+pub mod compare;
 pub mod fabric;
 pub mod package;
 pub mod reference;

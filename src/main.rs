@@ -29,6 +29,9 @@ enum Command {
     /// Measure what accuracy costs in time: every accuracy level and weave precision against a
     /// supersampled ground truth, growth with resolution and lights, fabric vs PBR lighting cost.
     Bench(BenchArgs),
+    /// The paper's figure: the scene's fabric under Gouraud, Phong, plain Ashikhmin-Shirley and
+    /// the fabric model, side by side and labelled, in one PNG.
+    Compare(CompareArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
     Shaders {
         /// Directory to write the package into (created if missing).
@@ -41,9 +44,9 @@ enum Command {
 struct SceneArgs {
     /// A .gltf or .glb file; the built-in default scene when left out.
     scene: Option<PathBuf>,
-    /// Output size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1280x720")]
-    size: String,
+    /// Output size, WIDTHxHEIGHT (default 1280x720; for compare, each panel's, default 480x360).
+    #[arg(long)]
+    size: Option<String>,
     /// Index of the scene's camera to use (default: its first camera, or automatic framing).
     #[arg(long)]
     camera: Option<usize>,
@@ -66,6 +69,10 @@ struct SceneArgs {
     /// roughness-metallic, coverage, thread-dir, depth.
     #[arg(long, default_value = "none")]
     debug_view: String,
+    /// How fabric is shaded: fabric (the model), or for comparison gouraud, phong,
+    /// ashikhmin-shirley (one lobe, no weave).
+    #[arg(long, default_value = "fabric")]
+    shading: String,
 }
 
 #[derive(Args)]
@@ -100,6 +107,24 @@ struct RenderArgs {
 }
 
 #[derive(Args)]
+struct CompareArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output PNG: the four panels in a row, each labelled.
+    #[arg(short, long, default_value = "figure.png")]
+    output: PathBuf,
+    /// Exposure in EV (stops), as for render.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Turn on the Vulkan validation layer; any message it reports fails the run.
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name. Also WEFT_DEVICE.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+#[derive(Args)]
 struct BenchArgs {
     /// A short run (about 15 s on lavapipe): smaller images, fewer levels.
     #[arg(long)]
@@ -131,6 +156,7 @@ fn main() -> ExitCode {
         Command::Plan(args) => run_plan(args),
         Command::Shaders { out } => run_shaders(&out),
         Command::Bench(args) => run_bench(args),
+        Command::Compare(args) => run_compare(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -142,6 +168,13 @@ fn main() -> ExitCode {
 }
 
 fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
+    load_scene_sized(args, "1280x720")
+}
+
+fn load_scene_sized(
+    args: &SceneArgs,
+    default_size: &str,
+) -> anyhow::Result<(Scene, RenderOptions)> {
     let scene = match &args.scene {
         Some(path) => scene::load(path)?,
         None => scene::default_scene(),
@@ -149,7 +182,7 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    let (width, height) = render::parse_size(&args.size)?;
+    let (width, height) = render::parse_size(args.size.as_deref().unwrap_or(default_size))?;
     let mut options = RenderOptions {
         width,
         height,
@@ -157,6 +190,7 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
         debug_view: DebugView::parse(&args.debug_view)?,
         accuracy: render::Accuracy::parse(&args.accuracy)?,
         weave_precision: render::WeavePrecision::parse(&args.weave_precision)?,
+        shading: render::Shading::parse(&args.shading)?,
         ..Default::default()
     };
     options.validate()?;
@@ -259,6 +293,42 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             frame.stats.weave_textures, frame.stats.weave_dispatches
         );
     }
+    Ok(())
+}
+
+fn open_device(device: Option<&str>, validate: bool) -> anyhow::Result<Context> {
+    let device = device
+        .map(DeviceChoice::parse)
+        .unwrap_or_else(DeviceChoice::from_env);
+    let ctx = Context::new(&ContextOptions { validate, device })?;
+    let info = ctx.info().clone();
+    eprintln!(
+        "device: {} ({}, {} {})",
+        info.name, info.device_type, info.driver_name, info.driver_info
+    );
+    Ok(ctx)
+}
+
+fn run_compare(args: CompareArgs) -> anyhow::Result<()> {
+    let (scene, mut options) = load_scene_sized(&args.scene, "480x360")?;
+    options.exposure = args.exposure;
+    options.validate()?;
+    let ctx = open_device(args.device.as_deref(), args.validate)?;
+    let mut renderer = Renderer::new(ctx)?;
+    let figure = weft::compare::figure(&mut renderer, &scene, &options)?;
+    render::write_png(&args.output, figure.width, figure.height, &figure.rgba)?;
+    eprintln!(
+        "wrote {} ({}x{}: {})",
+        args.output.display(),
+        figure.width,
+        figure.height,
+        figure
+            .panels
+            .iter()
+            .map(|(s, _)| s.label())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     Ok(())
 }
 

@@ -38,6 +38,7 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 pub const INCLUDES: &[(&str, &str)] = &[
     ("fabric.glsl", include_str!("../glsl/include/fabric.glsl")),
     ("frame.glsl", include_str!("../glsl/include/frame.glsl")),
+    ("lights.glsl", include_str!("../glsl/include/lights.glsl")),
     ("pbr.glsl", include_str!("../glsl/include/pbr.glsl")),
     ("weave.glsl", include_str!("../glsl/include/weave.glsl")),
 ];
@@ -52,8 +53,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          192-byte `ProbeInput` records (std430: `vec4 n, t, k1, k2, point, footprint, coverage` \
          then the 80-byte `GpuFabric` of `include/fabric.glsl`; `t.w` is the tangent's \
          handedness, `k1`/`k2` the unit directions to the light and the viewer) and a buffer for \
-         `count` 128-byte `ProbeOutput` records (eight `vec4`: `lobe`, `expo`, `diffuse`, `f`, \
-         `point`, `footprint`, `f_point`, `f_avg`). Push the `uint count`; dispatch \
+         `count` 160-byte `ProbeOutput` records (ten `vec4`: `lobe`, `expo`, `diffuse`, `f`, \
+         `point`, `footprint`, `f_point`, `f_avg`, `phong`, `plain_as`). Push the `uint count`; dispatch \
          `ceil(count / 64)` groups. weft's Rust twins and error bounds: \
          `weft::reference::probe`.",
     ),
@@ -76,7 +77,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "gbuffer.vert",
         "G-buffer pass, vertex stage: one interleaved vertex buffer with position (location 0, \
          vec3), normal (1, vec3), tangent (2, vec4, w = handedness), uv (3, vec2) and weave uv (4, \
-         vec2: the uv with whole weave repeats removed per mesh). Push constants per draw: `mat4 \
+         vec2: the uv with whole weave repeats removed per mesh), and, for SHADING = 1 (Gouraud), \
+         per-vertex lighting of fabric at location 5 for gbuffer.frag. Push constants per draw: `mat4 \
          world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
          (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
          front faces; the projection flips y.",
@@ -153,6 +155,24 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         "the frame uniform (`FrameData`, std140, include/frame.glsl)",
     ),
     (
+        "gbuffer.vert",
+        0,
+        1,
+        "material records (`Material[]`; read only when SHADING = 1, Gouraud)",
+    ),
+    (
+        "gbuffer.vert",
+        0,
+        2,
+        "fabric records (`GpuFabric[]`; read only when SHADING = 1, Gouraud)",
+    ),
+    (
+        "gbuffer.vert",
+        0,
+        3,
+        "lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)",
+    ),
+    (
         "lighting.frag",
         0,
         0,
@@ -189,6 +209,9 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
         "ACCURACY: 0 nearest (one level-0 texel), 1 filtered-params, 2 mixture (default), 3 supersampled (writes the footprint, st and half-extent, instead of coverages)",
     ),
     ("gbuffer.frag", 1, "WEAVE_SOURCE: 0 the weave texture (default), 1 the exact coverage of the footprint box computed in the shader"),
+    ("gbuffer.frag", 2, "SHADING: how fabric is shaded, as gbuffer.vert's and lighting.frag's; 1 (Gouraud) adds the vertex stage's lighting to the emissive target"),
+    ("gbuffer.vert", 2, "SHADING: how fabric is shaded: 0 the fabric model (default), 1 Gouraud (the Phong reflection model per vertex, written for gbuffer.frag), 2 Phong, 3 plain Ashikhmin-Shirley; only 1 does work in this stage"),
+    ("gbuffer.vert", 3, "LIGHT_TYPES: as lighting.frag's, for the per-vertex lighting of SHADING = 1 (default 7, all)"),
     (
         "lighting.frag",
         0,
@@ -197,6 +220,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 1, "SAMPLES: N of supersampled:N, the footprint is sampled at N x N points (default 1)"),
     ("lighting.frag", 2, "FABRIC_AS_PBR: 1 shades fabric pixels with the metallic-roughness BRDF, for cost comparisons (default 0)"),
     ("lighting.frag", 3, "LIGHT_TYPES: bit mask of the light types whose code is compiled in: 1 directional, 2 point, 4 spot (default 7, all)"),
+    ("lighting.frag", 4, "SHADING: how fabric pixels are shaded: 0 the fabric model (default), 1 Gouraud (the G-buffer's emissive already holds the per-vertex lighting), 2 the Phong reflection model, 3 one Ashikhmin-Shirley lobe without the weave (the models of `weft compare`)"),
 ];
 
 /// The package's table of contents: what `manifest.json` holds.

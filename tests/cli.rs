@@ -124,3 +124,41 @@ fn plan_prints_the_default_scene() {
     );
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
 }
+
+#[test]
+fn compare_writes_the_labelled_figure_and_rejects_unknown_shading() {
+    let dir = temp("compare");
+    let png = dir.join("figure.png");
+    let out = weft()
+        .args(["compare", "--validate", "--size", "160x90", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("Gouraud, Phong, Ashikhmin-Shirley, Fabric model"),
+        "{err}"
+    );
+    // Four 160-px panels with 4-px margins in a row, a label strip under them.
+    let img = image::open(&png).unwrap();
+    assert_eq!(img.width(), 4 + 4 * (160 + 4));
+    assert!(img.height() > 90 + 8, "{}", img.height());
+
+    let out = weft()
+        .args(["render", "--shading", "flat", "-o"])
+        .arg(dir.join("x.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unknown shading 'flat'") && err.contains("gouraud"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

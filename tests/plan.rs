@@ -96,7 +96,7 @@ fn only_directional_lights_compile_no_point_light_code_and_skipping_changes_noth
             .stats
             .pipelines
             .iter()
-            .any(|p| p.starts_with("lighting[") && p.contains("light_types=1]")),
+            .any(|p| p.starts_with("lighting[") && p.contains("light_types=1,")),
         "{:?}",
         planned.stats.pipelines
     );
@@ -113,7 +113,7 @@ fn only_directional_lights_compile_no_point_light_code_and_skipping_changes_noth
         .stats
         .pipelines
         .iter()
-        .any(|p| p.contains("light_types=7]")));
+        .any(|p| p.starts_with("lighting[") && p.contains("light_types=7,")));
     let max_diff = planned
         .hdr
         .iter()

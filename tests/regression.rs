@@ -260,15 +260,24 @@ fn run_case(
         debug_view: case.debug_view,
         accuracy: case.accuracy,
         weave_precision: case.weave_precision,
+        shading: case.shading,
         ..Default::default()
     };
     let start = Instant::now();
-    let frame = renderer
-        .render(&scene, &options)
-        .unwrap_or_else(|e| panic!("case {}: {e}", case.name));
+    // A figure case renders weft compare's figure (four panels at the case size, labelled).
+    let (width, height, ldr, frame) = if case.figure {
+        let fig = weft::compare::figure(renderer, &scene, &options)
+            .unwrap_or_else(|e| panic!("case {}: {e}", case.name));
+        (fig.width, fig.height, fig.rgba, None)
+    } else {
+        let frame = renderer
+            .render(&scene, &options)
+            .unwrap_or_else(|e| panic!("case {}: {e}", case.name));
+        (WIDTH, HEIGHT, frame.ldr.clone(), Some(frame))
+    };
     let render_ms = start.elapsed().as_secs_f64() * 1e3;
     let file = |suffix: &str| format!("{}-{suffix}.png", case.name);
-    write_png(&dir.join(file("actual")), WIDTH, HEIGHT, &frame.ldr);
+    write_png(&dir.join(file("actual")), width, height, &ldr);
 
     let mut row = Row {
         case: case.clone(),
@@ -278,7 +287,7 @@ fn run_case(
     };
     let golden_path = golden_dir().join(format!("{}.png", case.name));
     if bless {
-        write_png(&golden_path, WIDTH, HEIGHT, &frame.ldr);
+        write_png(&golden_path, width, height, &ldr);
         row.note = Some(format!("blessed: wrote tests/golden/{}.png", case.name));
     }
     match read_png(&golden_path) {
@@ -289,16 +298,16 @@ fn run_case(
                 file("actual")
             ));
         }
-        Some((w, h, _)) if (w, h) != (WIDTH, HEIGHT) => {
+        Some((w, h, _)) if (w, h) != (width, height) => {
             row.note = Some(format!(
-                "FAIL: golden tests/golden/{}.png is {w}x{h}, the case renders {WIDTH}x{HEIGHT}: re-bless with tools/bless",
+                "FAIL: golden tests/golden/{}.png is {w}x{h}, the case renders {width}x{height}: re-bless with tools/bless",
                 case.name
             ));
         }
         Some((_, _, golden)) => {
-            write_png(&dir.join(file("expected")), WIDTH, HEIGHT, &golden);
-            let cmp = compare(&golden, &frame.ldr, WIDTH, HEIGHT, case.golden.abs);
-            write_png(&dir.join(file("difference")), WIDTH, HEIGHT, &cmp.error_map);
+            write_png(&dir.join(file("expected")), width, height, &golden);
+            let cmp = compare(&golden, &ldr, width, height, case.golden.abs);
+            write_png(&dir.join(file("difference")), width, height, &cmp.error_map);
             row.shown.push(Shown {
                 title: "GPU vs golden",
                 violations: case.golden.violations(&cmp.figures),
@@ -310,6 +319,9 @@ fn run_case(
         }
     }
 
+    let Some(frame) = frame else {
+        return row;
+    };
     if let Some(tol) = case.cpu {
         let camera = match case.camera {
             Some(i) => scene.cameras[i].clone(),
@@ -324,6 +336,7 @@ fn run_case(
                 camera,
                 exposure: options.exposure,
                 subdivisions: tol.subdivisions,
+                shading: case.shading,
             },
         )
         .unwrap_or_else(|e| panic!("case {}: CPU reference: {e}", case.name));

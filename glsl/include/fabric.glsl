@@ -203,4 +203,52 @@ vec3 fabric_brdf_averaged(vec3 k1, vec3 k2, vec3 coverage, GpuFabric m) {
     return w * (c_warp * m.rd_warp + c_weft * m.rd_weft) + spec;
 }
 
+// ---- The comparison models of `weft compare` (paper figs. 1, 2): the same material without its
+// weave. Both use the threads' mean albedo and the material's Rs and exponents.
+
+// Mean diffuse albedo of the two threads (a plain weave shows both in equal parts).
+vec3 fabric_mean_rd(GpuFabric m) {
+    return 0.5 * (m.rd_warp + m.rd_weft);
+}
+
+// Exponent of the Phong lobe that stands for the material's A–S lobes: the mean A–S exponent
+// over 4 (a lobe around the half vector with exponent E is about as wide as a Phong lobe around
+// the mirror direction with exponent E/4).
+float fabric_phong_exponent(GpuFabric m) {
+    return 0.125 * (m.e_along + m.e_across);
+}
+
+// The normalised Phong lobe (e + 2)/(2π)·(r·k2)^e, r = k1 mirrored about n; exactly 0 when
+// either direction is back-facing or r·k2 <= 0.
+float phong_lobe(vec3 k1, vec3 k2, float e) {
+    if (!(k1.z > 0.0 && k2.z > 0.0)) {
+        return 0.0;
+    }
+    float rk = k1.z * k2.z - k1.x * k2.x - k1.y * k2.y;
+    if (!(rk > 0.0)) {
+        return 0.0;
+    }
+    return (e + 2.0) / (2.0 * FABRIC_PI) * exp(e * log(min(rk, 1.0)));
+}
+
+// The Phong reflection model: Lambert with the mean albedo plus Rs times the Phong lobe.
+vec3 phong_brdf(vec3 k1, vec3 k2, GpuFabric m) {
+    if (!(k1.z > 0.0 && k2.z > 0.0)) {
+        return vec3(0.0);
+    }
+    return fabric_mean_rd(m) * lambert() + m.rs * phong_lobe(k1, k2, fabric_phong_exponent(m));
+}
+
+// Plain (single-lobe) Ashikhmin–Shirley: the mean albedo with the material's diffuse term, and
+// one A–S lobe for threads along t everywhere: no weave, no gaps, no thread shadowing.
+vec3 plain_as_brdf(vec3 k1, vec3 k2, GpuFabric m) {
+    float nk1 = k1.z;
+    float nk2 = k2.z;
+    if (!(nk1 > 0.0 && nk2 > 0.0)) {
+        return vec3(0.0);
+    }
+    float diffuse = (m.flags & FABRIC_FLAG_COUPLED_DIFFUSE) != 0u ? coupled_diffuse(m.rs, nk1, nk2) : lambert();
+    return fabric_mean_rd(m) * diffuse + as_lobe(k1, k2, m.e_along, m.e_across, m.rs);
+}
+
 #endif // WEFT_FABRIC_GLSL

@@ -17,6 +17,12 @@ const uint DEBUG_THREAD_DIR = 6u;
 const uint DEBUG_DEPTH = 7u;
 const uint DEBUG_UV = 8u;
 
+// How fabric materials are shaded (the SHADING specialization constant; `weft compare`).
+const uint SHADING_FABRIC = 0u;    // the fabric model (the default)
+const uint SHADING_GOURAUD = 1u;   // the Phong reflection model per vertex, interpolated
+const uint SHADING_PHONG = 2u;     // the Phong reflection model per pixel
+const uint SHADING_PLAIN_AS = 3u;  // one Ashikhmin–Shirley lobe per pixel, no weave
+
 struct FrameData {
     mat4 view;
     mat4 proj;

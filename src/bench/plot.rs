@@ -83,6 +83,23 @@ impl Canvas {
         }
     }
 
+    /// Copies an RGBA8 image (display-referred bytes, alpha ignored) with its top-left corner at
+    /// (x, y); what falls outside the canvas is cut off.
+    pub fn image(&mut self, x: i32, y: i32, width: u32, height: u32, rgba: &[u8]) {
+        for row in 0..height as i32 {
+            for col in 0..width as i32 {
+                let i = ((row as u32 * width + col as u32) * 4) as usize;
+                let Some(p) = rgba.get(i..i + 3) else { return };
+                let c = [
+                    p[0] as f32 / 255.0,
+                    p[1] as f32 / 255.0,
+                    p[2] as f32 / 255.0,
+                ];
+                self.blend(x + col, y + row, c, 1.0);
+            }
+        }
+    }
+
     pub fn fill_rect(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, c: Rgb) {
         for y in y0..y1 {
             for x in x0..x1 {

@@ -289,6 +289,73 @@ macro_rules! fabric_brdf_precision {
                     w * (c_warp * m.rd_warp[2] + c_weft * m.rd_weft[2]) + spec,
                 ]
             }
+
+            // ---- The comparison models of `weft compare` (paper figs. 1, 2): the same material
+            // without its weave.
+
+            /// Mean diffuse albedo of the two threads.
+            pub fn fabric_mean_rd(m: &FabricMaterial) -> Vec3 {
+                [
+                    0.5 * (m.rd_warp[0] + m.rd_weft[0]),
+                    0.5 * (m.rd_warp[1] + m.rd_weft[1]),
+                    0.5 * (m.rd_warp[2] + m.rd_weft[2]),
+                ]
+            }
+
+            /// Exponent of the Phong lobe that stands for the material's A–S lobes: the mean A–S
+            /// exponent over 4 (a half-vector lobe with exponent E is about as wide as a
+            /// mirror-direction lobe with exponent E/4).
+            pub fn fabric_phong_exponent(m: &FabricMaterial) -> $t {
+                0.125 * (m.e_along + m.e_across)
+            }
+
+            /// The normalised Phong lobe `(e + 2)/(2π)·(r·k2)^e`, `r` = `k1` mirrored about `n`;
+            /// exactly 0 when either direction is back-facing or `r·k2 <= 0`.
+            pub fn phong_lobe(k1: Vec3, k2: Vec3, e: $t) -> $t {
+                if !(k1[2] > 0.0 && k2[2] > 0.0) {
+                    return 0.0;
+                }
+                let rk = k1[2] * k2[2] - k1[0] * k2[0] - k1[1] * k2[1];
+                if !(rk > 0.0) {
+                    return 0.0;
+                }
+                (e + 2.0) / (2.0 * PI) * (e * rk.min(1.0).ln()).exp()
+            }
+
+            /// The Phong reflection model: Lambert with the mean albedo plus `rs` times the Phong
+            /// lobe.
+            pub fn phong_brdf(k1: Vec3, k2: Vec3, m: &FabricMaterial) -> Vec3 {
+                if !(k1[2] > 0.0 && k2[2] > 0.0) {
+                    return [0.0; 3];
+                }
+                let rd = fabric_mean_rd(m);
+                let spec = m.rs * phong_lobe(k1, k2, fabric_phong_exponent(m));
+                let d = lambert();
+                [rd[0] * d + spec, rd[1] * d + spec, rd[2] * d + spec]
+            }
+
+            /// Plain (single-lobe) Ashikhmin–Shirley: the mean albedo with the material's diffuse
+            /// term, and one A–S lobe for threads along `t` everywhere (no weave, no gaps, no
+            /// thread shadowing).
+            pub fn plain_as_brdf(k1: Vec3, k2: Vec3, m: &FabricMaterial) -> Vec3 {
+                let nk1 = k1[2];
+                let nk2 = k2[2];
+                if !(nk1 > 0.0 && nk2 > 0.0) {
+                    return [0.0; 3];
+                }
+                let diffuse = if m.coupled {
+                    coupled_diffuse(m.rs, nk1, nk2)
+                } else {
+                    lambert()
+                };
+                let rd = fabric_mean_rd(m);
+                let spec = as_lobe(k1, k2, m.e_along, m.e_across, m.rs);
+                [
+                    rd[0] * diffuse + spec,
+                    rd[1] * diffuse + spec,
+                    rd[2] * diffuse + spec,
+                ]
+            }
         }
     };
 }

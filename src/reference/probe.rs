@@ -80,7 +80,7 @@ pub struct ProbeInput {
     pub fabric: GpuFabric,
 }
 
-/// One probe output (std430, 128 bytes; `ProbeOutput` in `glsl/fabric_probe.comp`).
+/// One probe output (std430, 160 bytes; `ProbeOutput` in `glsl/fabric_probe.comp`).
 ///
 /// | offset | field | x | y | z | w |
 /// |---|---|---|---|---|---|
@@ -92,6 +92,8 @@ pub struct ProbeInput {
 /// | 80 | `footprint` | c_warp | c_weft | sh | 0 |
 /// | 96 | `f_point` | f with the point's coverage, r | g | b | 0 |
 /// | 112 | `f_avg` | `fabric_brdf_averaged` with the input coverage, r | g | b | 0 |
+/// | 128 | `phong` | `phong_brdf`, r | g | b | `phong_lobe` (exponent `fabric_phong_exponent`) |
+/// | 144 | `plain_as` | `plain_as_brdf`, r | g | b | 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ProbeOutput {
@@ -103,17 +105,19 @@ pub struct ProbeOutput {
     pub footprint: [f32; 4],
     pub f_point: [f32; 4],
     pub f_avg: [f32; 4],
+    pub phong: [f32; 4],
+    pub plain_as: [f32; 4],
 }
 
 const _: () = {
     assert!(std::mem::size_of::<ProbeInput>() == 192);
     assert!(std::mem::offset_of!(ProbeInput, coverage) == 96);
     assert!(std::mem::offset_of!(ProbeInput, fabric) == 112);
-    assert!(std::mem::size_of::<ProbeOutput>() == 128);
+    assert!(std::mem::size_of::<ProbeOutput>() == 160);
     assert!(std::mem::offset_of!(ProbeOutput, f_point) == 96);
 };
 
-/// Names of the 32 output components, in memory order (for messages).
+/// Names of the 40 output components, in memory order (for messages).
 #[rustfmt::skip]
 pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "rho_weft", "rho_warp", "d_weft", "fresnel",
@@ -124,10 +128,12 @@ pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "footprint.c_warp", "footprint.c_weft", "footprint.sh", "footprint.w",
     "f_point.r", "f_point.g", "f_point.b", "f_point.w",
     "f_avg.r", "f_avg.g", "f_avg.b", "f_avg.w",
+    "phong.r", "phong.g", "phong.b", "phong_lobe",
+    "plain_as.r", "plain_as.g", "plain_as.b", "plain_as.w",
 ];
 
 /// Number of f32 components of a [`ProbeOutput`].
-pub const PROBE_OUTPUTS: usize = 32;
+pub const PROBE_OUTPUTS: usize = 40;
 
 impl ProbeOutput {
     pub fn to_array(&self) -> [f32; PROBE_OUTPUTS] {
@@ -141,6 +147,8 @@ impl ProbeOutput {
             self.footprint,
             self.f_point,
             self.f_avg,
+            self.phong,
+            self.plain_as,
         ]
         .iter()
         .enumerate()
@@ -161,10 +169,12 @@ impl ProbeOutput {
             footprint: v(5),
             f_point: v(6),
             f_avg: v(7),
+            phong: v(8),
+            plain_as: v(9),
         }
     }
 
-    /// Reads one output from the shader's buffer bytes (little-endian, 128 bytes).
+    /// Reads one output from the shader's buffer bytes (little-endian, 160 bytes).
     pub fn from_bytes(b: &[u8]) -> Self {
         let mut a = [0.0f32; PROBE_OUTPUTS];
         for (k, x) in a.iter_mut().enumerate() {
@@ -225,6 +235,8 @@ macro_rules! probe_eval {
             let f = fabric_brdf(k1, k2, cov, &m);
             let f_point = fabric_brdf(k1, k2, p, &m);
             let f_avg = fabric_brdf_averaged(k1, k2, cov, &m);
+            let phong = phong_brdf(k1, k2, &m);
+            let plain_as = plain_as_brdf(k1, k2, &m);
             let out: [$t; PROBE_OUTPUTS] = [
                 as_lobe(k1, k2, m.e_along, m.e_across, m.rs),
                 as_lobe(k1, k2, m.e_across, m.e_along, m.rs),
@@ -257,6 +269,14 @@ macro_rules! probe_eval {
                 f_avg[0],
                 f_avg[1],
                 f_avg[2],
+                0.0,
+                phong[0],
+                phong[1],
+                phong[2],
+                phong_lobe(k1, k2, fabric_phong_exponent(&m)),
+                plain_as[0],
+                plain_as[1],
+                plain_as[2],
                 0.0,
             ];
             ProbeOutput::from_array(&out.map(|x| x as f32))
@@ -440,6 +460,41 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         0.0
     };
 
+    // The comparison models. Phong's lobe (e + 2)/(2π)·(r·k2)^e: r·k2 is a sum of three products
+    // of direction components (error 3·dir), which the power multiplies by e/(r·k2); the
+    // exponent e·ln(r·k2) carries x_rel. Where r·k2 is within that error of 0, either side of the
+    // cut-off is right: allow the lobe's value there.
+    let e_phong = fabric_phong_exponent(&m);
+    let rk = k1[0] * -k2[0] + k1[1] * -k2[1] + k1[2] * k2[2];
+    let lobe_norm = (e_phong + 2.0) / (2.0 * std::f64::consts::PI);
+    let phong_lobe_tol = if facing {
+        let p = phong_lobe(k1, k2, e_phong);
+        let drk = 3.0 * b.dir;
+        let rel = if rk > drk {
+            exp_err(e_phong * drk / (rk - drk) + b.x_rel * e_phong * -rk.min(1.0).ln())
+        } else {
+            0.0
+        };
+        let cut = if rk.abs() <= drk {
+            lobe_norm * (2.0 * drk).min(1.0).powf(e_phong)
+        } else {
+            0.0
+        };
+        (rel + b.rel) * p + cut + b.floor * lobe_norm + 1e-30
+    } else {
+        1e-30
+    };
+    let phong_tol = if facing {
+        m.rs * phong_lobe_tol + diffuse_err([0.5, 0.5, 1.0]) + 1e-30
+    } else {
+        1e-30
+    };
+    let plain_tol = if facing {
+        rho_weft + diffuse_err([0.5, 0.5, 1.0]) + 1e-30
+    } else {
+        1e-30
+    };
+
     #[rustfmt::skip]
     let out = [
         rho_weft, rho_warp, d_weft, b.rel + 5.0 * b.dir,
@@ -450,6 +505,8 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         box_tol, box_tol, box_tol * (1.0 + input.fabric.shadow_strength as f64), 0.0,
         fp_tol, fp_tol, fp_tol, 0.0,
         f_avg_tol, f_avg_tol, f_avg_tol, 0.0,
+        phong_tol, phong_tol, phong_tol, phong_lobe_tol,
+        plain_tol, plain_tol, plain_tol, 0.0,
     ];
     ProbeOutput::from_array(&out.map(|x| x as f32))
 }

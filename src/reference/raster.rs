@@ -40,6 +40,9 @@ pub struct RasterOptions {
     /// The pixel footprint is cut into `subdivisions²` parallelograms for the weave coverage (1 =
     /// the bounding box of the whole footprint).
     pub subdivisions: u32,
+    /// How fabric is shaded (`RenderOptions::shading`); Gouraud lights fabric vertices as
+    /// gbuffer.vert does and interpolates the result.
+    pub shading: crate::render::Shading,
 }
 
 /// A CPU-rendered image, laid out as `render::Frame`.
@@ -62,6 +65,8 @@ struct ClipVertex {
     normal: Vec3,
     tangent: Vec4,
     uv: Vec2,
+    /// Per-vertex lighting (Gouraud shading of fabric), else zero.
+    gouraud: Vec3,
 }
 
 impl ClipVertex {
@@ -72,6 +77,7 @@ impl ClipVertex {
             normal: a.normal.lerp(b.normal, t),
             tangent: a.tangent.lerp(b.tangent, t),
             uv: a.uv.lerp(b.uv, t),
+            gouraud: a.gouraud.lerp(b.gouraud, t),
         }
     }
 }
@@ -154,12 +160,28 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
             .map(|v| {
                 let world = draw.world.transform_point3(Vec3::from(v.position));
                 let t = world3 * Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
+                let normal = normal_matrix * Vec3::from(v.normal);
+                let tangent = t.extend(v.tangent[3] * tangent_sign);
+                let gouraud = match &dm.fabric {
+                    Some((_, gpu)) if options.shading == crate::render::Shading::Gouraud => {
+                        Vec3::from(shading::gouraud_vertex(
+                            &frame,
+                            &lights,
+                            world.to_array(),
+                            normal.to_array(),
+                            tangent.to_array(),
+                            gpu,
+                        ))
+                    }
+                    _ => Vec3::ZERO,
+                };
                 ClipVertex {
                     clip: view_proj * world.extend(1.0),
                     world,
-                    normal: normal_matrix * Vec3::from(v.normal),
-                    tangent: t.extend(v.tangent[3] * tangent_sign),
+                    normal,
+                    tangent,
                     uv: Vec2::from(v.uv),
+                    gouraud,
                 }
             })
             .collect();
@@ -205,7 +227,7 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
     };
     for fragment in &fragments {
         let hdr = match fragment {
-            Some(f) => shading::shade(&frame, &lights, &f.surface),
+            Some(f) => shading::shade_with(&frame, &lights, &f.surface, options.shading),
             None => background,
         };
         let display = shading::tonemap(hdr, exposure);
@@ -406,11 +428,15 @@ impl Raster {
             ],
             metallic: m.metallic.clamp(0.0, 1.0),
             roughness: m.roughness.clamp(0.0, 1.0),
-            emissive: [
-                m.emissive[0].max(0.0),
-                m.emissive[1].max(0.0),
-                m.emissive[2].max(0.0),
-            ],
+            emissive: {
+                // gbuffer.frag adds the interpolated vertex lighting (Gouraud) to the emission.
+                let g = mix3(&|c| c.gouraud);
+                [
+                    (m.emissive[0] + g.x).max(0.0),
+                    (m.emissive[1] + g.y).max(0.0),
+                    (m.emissive[2] + g.z).max(0.0),
+                ]
+            },
             coverage: [0.0; 3],
             fabric: None,
         };

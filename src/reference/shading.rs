@@ -8,6 +8,7 @@
 use super::brdf::single::{self as fb, Vec3};
 use crate::fabric::GpuFabric;
 use crate::render::gpu::{FrameData, GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
+use crate::render::Shading;
 
 const PI: f32 = std::f32::consts::PI;
 
@@ -141,8 +142,49 @@ pub struct Surface {
     pub fabric: Option<GpuFabric>,
 }
 
+/// `gouraud` of gbuffer.vert: the Phong reflection model at a fabric vertex (world position `p`,
+/// normal `n`, glTF tangent with handedness), ambient and every light, with the normal turned
+/// towards the viewer.
+pub fn gouraud_vertex(
+    frame: &FrameData,
+    lights: &[GpuLight],
+    p: Vec3,
+    n: Vec3,
+    tangent: [f32; 4],
+    f: &GpuFabric,
+) -> Vec3 {
+    let m = fb::FabricMaterial::from_gpu(f);
+    let v = normalize(sub(xyz(frame.eye), p));
+    let n = if dot(n, v) < 0.0 { scale(n, -1.0) } else { n };
+    let tbn = fb::fabric_frame(n, xyz(tangent), tangent[3]);
+    let n = tbn[2];
+    let k2 = fb::fabric_local(v, tbn);
+    let ambient = mix(
+        xyz(frame.ambient_ground),
+        xyz(frame.ambient_sky),
+        n[1] * 0.5 + 0.5,
+    );
+    let mut radiance = mul(ambient, fb::fabric_mean_rd(&m));
+    let count = (frame.light_count as usize).min(lights.len());
+    for light in &lights[..count] {
+        let (l, e) = light_incoming(light, p);
+        let k1 = fb::fabric_local(l, tbn);
+        if k1[2] <= 0.0 || e == [0.0; 3] {
+            continue;
+        }
+        radiance = add(radiance, scale(mul(e, fb::phong_brdf(k1, k2, &m)), k1[2]));
+    }
+    radiance
+}
+
 /// The main body of lighting.frag for a covered pixel: linear HDR radiance towards the eye.
 pub fn shade(frame: &FrameData, lights: &[GpuLight], s: &Surface) -> Vec3 {
+    shade_with(frame, lights, s, Shading::Fabric)
+}
+
+/// [`shade`] with fabric shaded by `shading` (lighting.frag's SHADING): for Gouraud the surface's
+/// emissive must already hold the interpolated [`gouraud_vertex`] lighting, as the G-buffer's does.
+pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: Shading) -> Vec3 {
     let n = s.normal;
     let v = normalize(sub(xyz(frame.eye), s.position));
     let mut radiance = s.emissive;
@@ -158,6 +200,26 @@ pub fn shade(frame: &FrameData, lights: &[GpuLight], s: &Surface) -> Vec3 {
             let cov = s.coverage;
             let tbn = fb::fabric_frame(n, s.tangent, s.sign);
             let k2 = fb::fabric_local(v, tbn);
+            if shading == Shading::Gouraud {
+                return radiance;
+            }
+            if shading != Shading::Fabric {
+                radiance = add(radiance, mul(ambient, fb::fabric_mean_rd(&m)));
+                for light in &lights[..count] {
+                    let (l, e) = light_incoming(light, s.position);
+                    let k1 = fb::fabric_local(l, tbn);
+                    if k1[2] <= 0.0 || e == [0.0; 3] {
+                        continue;
+                    }
+                    let brdf = if shading == Shading::Phong {
+                        fb::phong_brdf(k1, k2, &m)
+                    } else {
+                        fb::plain_as_brdf(k1, k2, &m)
+                    };
+                    radiance = add(radiance, scale(mul(e, brdf), k1[2]));
+                }
+                return radiance;
+            }
             let c_thread = cov[0] + cov[1];
             let rd = if c_thread > 0.0 {
                 scale(

@@ -181,6 +181,8 @@ fn sampled(binding: u32, stages: Stages) -> Binding {
 
 impl Renderer {
     pub fn new(ctx: Context) -> crate::Result<Renderer> {
+        // Frame, materials, fabrics, and lights (the vertex stage reads the last three only when
+        // it lights vertices for Gouraud shading).
         let frame_layout = ctx.create_set_layout(&[
             Binding {
                 binding: 0,
@@ -190,12 +192,17 @@ impl Renderer {
             Binding {
                 binding: 1,
                 kind: BindingKind::StorageBuffer,
-                stages: Stages::FRAGMENT,
+                stages: Stages::GRAPHICS,
             },
             Binding {
                 binding: 2,
                 kind: BindingKind::StorageBuffer,
-                stages: Stages::FRAGMENT,
+                stages: Stages::GRAPHICS,
+            },
+            Binding {
+                binding: 3,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::VERTEX,
             },
         ])?;
         let material_layout = ctx.create_set_layout(
@@ -251,7 +258,7 @@ impl Renderer {
             set_layouts: &[&tonemap_layout],
             push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
             push_stages: Stages::FRAGMENT,
-            fragment_constants: &[],
+            constants: &[],
         })?;
         let linear = ctx.create_sampler(Filter::LinearRepeat)?;
         let nearest = ctx.create_sampler(Filter::NearestClamp)?;
@@ -305,17 +312,32 @@ impl Renderer {
         plan: &Plan,
     ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
-        let gbuffer_key = vec![(0, options.accuracy.code()), (1, source)];
         let light_types = if options.all_features {
             7
         } else {
             plan.light_types_mask()
         };
+        let shading = options.shading as u32;
+        // Gouraud lights vertices: only then does the G-buffer pass depend on the light types.
+        let gbuffer_key = vec![
+            (0, options.accuracy.code()),
+            (1, source),
+            (2, shading),
+            (
+                3,
+                if options.shading == super::Shading::Gouraud {
+                    light_types
+                } else {
+                    7
+                },
+            ),
+        ];
         let lighting_key = vec![
             (0, options.accuracy.code()),
             (1, options.accuracy.samples()),
             (2, options.fabric_as_pbr as u32),
             (3, light_types),
+            (4, shading),
         ];
         if !self.gbuffer_variants.contains_key(&gbuffer_key) {
             let vertex_layout = VertexLayout {
@@ -330,9 +352,9 @@ impl Renderer {
             };
             let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[accuracy={}, weave={}]",
+                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}]",
                     options.accuracy.code(),
-                    source
+                    gbuffer_key[3].1
                 ),
                 vertex: &shaders::GBUFFER_VERT,
                 fragment: &shaders::GBUFFER_FRAG,
@@ -348,14 +370,14 @@ impl Renderer {
                 set_layouts: &[&self.frame_layout, &self.material_layout],
                 push_constant_size: std::mem::size_of::<DrawPush>() as u32,
                 push_stages: Stages::GRAPHICS,
-                fragment_constants: &gbuffer_key,
+                constants: &gbuffer_key,
             })?;
             self.gbuffer_variants.insert(gbuffer_key.clone(), pipeline);
         }
         if !self.lighting_variants.contains_key(&lighting_key) {
             let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}]",
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}]",
                     options.accuracy.code(),
                     options.accuracy.samples(),
                     options.fabric_as_pbr as u32
@@ -368,7 +390,7 @@ impl Renderer {
                 set_layouts: &[&self.lighting_layout],
                 push_constant_size: 0,
                 push_stages: Stages::FRAGMENT,
-                fragment_constants: &lighting_key,
+                constants: &lighting_key,
             })?;
             self.lighting_variants
                 .insert(lighting_key.clone(), pipeline);
@@ -619,6 +641,7 @@ impl Renderer {
                             (0, Resource::Uniform(&frame_buffer)),
                             (1, Resource::Storage(&gpu.materials)),
                             (2, Resource::Storage(&gpu.fabrics)),
+                            (3, Resource::Storage(&gpu.lights)),
                         ],
                     )?;
                     let material_sets = (0..gpu.material_count as usize)

@@ -72,6 +72,69 @@ impl DebugView {
     }
 }
 
+/// How fabric materials are shaded: the fabric model, or one of the simpler models the paper
+/// compares it with (figures 1, 2 and 4; `weft compare`). Other materials are not affected.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Shading {
+    /// The fabric model (docs/fabric-model.md §3).
+    #[default]
+    Fabric = 0,
+    /// The Phong reflection model evaluated per vertex and interpolated (paper figure 1).
+    Gouraud = 1,
+    /// The Phong reflection model per pixel (paper figure 2a).
+    Phong = 2,
+    /// One Ashikhmin–Shirley lobe per pixel, threads along the tangent everywhere, no weave
+    /// (paper figure 2b).
+    PlainAshikhminShirley = 3,
+}
+
+impl Shading {
+    /// In the order of the comparison figure: simplest first.
+    pub const ALL: [Shading; 4] = [
+        Shading::Gouraud,
+        Shading::Phong,
+        Shading::PlainAshikhminShirley,
+        Shading::Fabric,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shading::Fabric => "fabric",
+            Shading::Gouraud => "gouraud",
+            Shading::Phong => "phong",
+            Shading::PlainAshikhminShirley => "ashikhmin-shirley",
+        }
+    }
+
+    /// The label under the model's panel in the comparison figure.
+    pub fn label(self) -> &'static str {
+        match self {
+            Shading::Fabric => "Fabric model",
+            Shading::Gouraud => "Gouraud",
+            Shading::Phong => "Phong",
+            Shading::PlainAshikhminShirley => "Ashikhmin-Shirley",
+        }
+    }
+
+    pub fn parse(text: &str) -> crate::Result<Shading> {
+        Shading::ALL
+            .iter()
+            .copied()
+            .find(|s| s.name() == text)
+            .ok_or_else(|| {
+                Error::input(format!(
+                    "unknown shading '{text}': choose one of {}",
+                    Shading::ALL
+                        .iter()
+                        .map(|s| s.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+    }
+}
+
 /// How the fabric's weave is turned into reflectance over a pixel (model page §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Accuracy {
@@ -197,6 +260,8 @@ pub struct RenderOptions {
     /// Shade fabric pixels with the metallic-roughness BRDF instead (for measuring what the
     /// fabric model costs on the same G-buffer).
     pub fabric_as_pbr: bool,
+    /// How fabric materials are shaded (the fabric model unless comparing).
+    pub shading: Shading,
     /// Compile every feature in, whatever the scene needs (to check that what the plan skips
     /// changes nothing).
     pub all_features: bool,
@@ -214,6 +279,7 @@ impl Default for RenderOptions {
             accuracy: Accuracy::Mixture,
             weave_precision: WeavePrecision::Rgba16f,
             fabric_as_pbr: false,
+            shading: Shading::Fabric,
             all_features: false,
         }
     }
@@ -271,6 +337,10 @@ mod tests {
         for p in WeavePrecision::ALL {
             assert_eq!(WeavePrecision::parse(p.name()).unwrap(), p);
         }
+        for s in Shading::ALL {
+            assert_eq!(Shading::parse(s.name()).unwrap(), s);
+        }
+        assert!(Shading::parse("flat").is_err());
     }
 }
 

@@ -114,8 +114,9 @@ pub struct GraphicsDesc<'a> {
     pub set_layouts: &'a [&'a SetLayout],
     pub push_constant_size: u32,
     pub push_stages: Stages,
-    /// Specialization constants (id, value) for the fragment stage.
-    pub fragment_constants: &'a [(u32, u32)],
+    /// Specialization constants (id, value), given to both stages (Vulkan ignores an id a stage
+    /// does not declare, so the vertex and fragment shaders share one numbering).
+    pub constants: &'a [(u32, u32)],
 }
 
 pub struct ComputeDesc<'a> {
@@ -252,7 +253,7 @@ impl Context {
         let device = &self.shared.device;
         let vs = module(&self.shared, desc.vertex, Stage::Vertex)?;
         let fs = module(&self.shared, desc.fragment, Stage::Fragment)?;
-        let spec = specialization(desc.fragment_constants);
+        let spec = specialization(desc.constants);
         let spec_info = vk::SpecializationInfo::default()
             .map_entries(&spec.entries)
             .data(&spec.data);
@@ -260,7 +261,8 @@ impl Context {
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(vs.raw)
-                .name(c"main"),
+                .name(c"main")
+                .specialization_info(&spec_info),
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(fs.raw)
@@ -368,7 +370,7 @@ impl Context {
                 .map(|s| s.bindings.clone())
                 .collect(),
             push_constant_size: desc.push_constant_size,
-            constants: desc.fragment_constants.to_vec(),
+            constants: desc.constants.to_vec(),
         })
     }
 

@@ -2,7 +2,7 @@
 //! must be to its golden (and, for some, to the CPU reference image). docs/regression.md explains
 //! every bound.
 
-use weft::render::{Accuracy, DebugView, WeavePrecision};
+use weft::render::{Accuracy, DebugView, Shading, WeavePrecision};
 
 use super::metrics::Tolerance;
 
@@ -42,6 +42,10 @@ pub struct Case {
     /// The fabric accuracy level and weave precision (model page §4); the defaults elsewhere.
     pub accuracy: Accuracy,
     pub weave_precision: WeavePrecision,
+    /// How fabric is shaded (the fabric model but for the comparison cases).
+    pub shading: Shading,
+    /// Render `weft compare`'s figure (four labelled panels of WIDTH x HEIGHT) instead of a frame.
+    pub figure: bool,
     pub golden: Tolerance,
     /// Also compare with the CPU reference image (src/reference/raster.rs) within these bounds.
     pub cpu: Option<CpuBounds>,
@@ -60,6 +64,8 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         debug_view: DebugView::None,
         accuracy: Accuracy::Mixture,
         weave_precision: WeavePrecision::Rgba16f,
+        shading: Shading::Fabric,
+        figure: false,
         golden: GOLDEN,
         cpu: None,
         mirror: None,
@@ -139,6 +145,28 @@ pub const CPU_FAR: CpuBounds = CpuBounds {
         flip_p99: 0.07,
         abs: 6,
         fail_fraction: 0.01,
+    },
+};
+
+/// The comparison models (Gouraud, Phong, plain A–S) on the far sheet have no weave, so of the
+/// differences above only (2) remains (for Gouraud also the f16 emissive target that carries the
+/// vertex lighting). Measured on lavapipe: per pixel mean FLIP 0.0047 to 0.0049, p99 0.016 to
+/// 0.017, max 1/255 everywhere; block means mean FLIP 0.0027 to 0.0047, p99 to 0.015, max 1/255.
+/// Bounds 2x the mean and p99 and 2/255 per pixel: a light moved, an exponent changed or a lobe
+/// turned by 90° moves highlights by many 1/255.
+pub const CPU_CLASSIC: CpuBounds = CpuBounds {
+    subdivisions: 1,
+    full: Tolerance {
+        flip_mean: 0.01,
+        flip_p99: 0.035,
+        abs: 2,
+        fail_fraction: 0.001,
+    },
+    blocks: Tolerance {
+        flip_mean: 0.01,
+        flip_p99: 0.03,
+        abs: 2,
+        fail_fraction: 0.001,
     },
 };
 
@@ -265,6 +293,28 @@ pub fn cases() -> Vec<Case> {
             accuracy: Accuracy::FilteredParams,
             cpu: Some(CPU_FILTERED_PARAMS),
             ..case("far-filtered-params", "assets/scenes/far.glb", "the far view with one lobe of coverage-averaged exponents: the sheen bands change shape (wrong far away, by design)")
+        },
+    ]);
+    // The paper's figure (weft compare), and each comparison model against the CPU reference.
+    cases.push(Case {
+        figure: true,
+        ..case("compare", DEFAULT_SCENE, "weft compare on the default scene: the red cloth under Gouraud, Phong, plain Ashikhmin-Shirley and the fabric model, labelled; only the cloth changes")
+    });
+    cases.extend([
+        Case {
+            shading: Shading::Gouraud,
+            cpu: Some(CPU_CLASSIC),
+            ..case("far-gouraud", "assets/scenes/far.glb", "the far sheet lit per vertex (Phong reflection model): soft, blurred highlights that follow the mesh, no anisotropy")
+        },
+        Case {
+            shading: Shading::Phong,
+            cpu: Some(CPU_CLASSIC),
+            ..case("far-phong", "assets/scenes/far.glb", "the far sheet with per-pixel Phong: round highlights on the ripples, no anisotropy")
+        },
+        Case {
+            shading: Shading::PlainAshikhminShirley,
+            cpu: Some(CPU_CLASSIC),
+            ..case("far-ashikhmin-shirley", "assets/scenes/far.glb", "the far sheet with one A-S lobe (threads along u everywhere): highlights stretched one way only")
         },
     ]);
     let views: [(&'static str, DebugView, &'static str); 7] = [
