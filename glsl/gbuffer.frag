@@ -32,7 +32,7 @@ layout(push_constant, std430) uniform Draw {
     vec4 normal_matrix[3];
     uint material;
     float tangent_sign;
-    uint pad0;
+    uint flags;             // bit 0: the draw receives shadows
     uint pad1;
 } draw;
 
@@ -45,7 +45,7 @@ layout(location = 5) in vec3 in_gouraud;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
-layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1
+layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1 if it receives shadows
 layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, shadow-weighted thread area, 1 if fabric
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance
 
@@ -85,7 +85,7 @@ void main() {
 
     gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
     gb_frame = vec4(oct_encode(n), oct_encode(t));
-    gb_surface = vec4(roughness, float(draw.material), sign, 1.0);
+    gb_surface = vec4(roughness, float(draw.material), sign, (draw.flags & 1u) != 0u ? 1.0 : 0.0);
     // The weave is sampled here, with the UV derivatives, because only this pass has them:
     // trilinear filtering of exact coverages gives the footprint's area fractions. Derivatives are
     // taken of the interpolated UV alone, before any branch: derivatives in non-uniform control

@@ -8,6 +8,8 @@
 layout(constant_id = 2) const uint SHADING = 0u;
 // Light types the scene has, as in lighting.frag.
 layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
+// Lights out of range are skipped (as lighting.frag's RANGE_CULLING).
+const uint RANGE_CULLING = 1u;
 
 #include "fabric.glsl"
 #include "lights.glsl"
@@ -22,7 +24,7 @@ layout(push_constant, std430) uniform Draw {
     vec4 normal_matrix[3];  // columns of the inverse-transpose of world's 3x3 part
     uint material;
     float tangent_sign;     // -1 where world mirrors (negative determinant), else 1
-    uint pad0;
+    uint flags;             // bit 0: the draw receives shadows
     uint pad1;
 } draw;
 

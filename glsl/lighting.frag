@@ -19,8 +19,13 @@ layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
 // `weft compare` Gouraud (lit per vertex by gbuffer.vert, carried in the emissive target), Phong,
 // or plain single-lobe Ashikhmin–Shirley.
 layout(constant_id = 4) const uint SHADING = 0u;
+// 1: shadow maps are sampled (some light casts, something casts and something receives); 0: the
+// shadow code is compiled out.
+layout(constant_id = 5) const uint SHADOWS = 0u;
+// 1: a point or spot light whose range cannot reach the pixel is skipped before its falloff and
+// BRDF (the default); 0: every light is evaluated everywhere (to show the culling changes nothing).
+layout(constant_id = 6) const uint RANGE_CULLING = 1u;
 
-#include "lights.glsl"
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -32,9 +37,60 @@ layout(set = 0, binding = 6) uniform sampler2D gb_fabric;
 layout(set = 0, binding = 7) uniform sampler2D gb_emissive;
 layout(set = 0, binding = 8) uniform sampler2D gb_depth;
 layout(set = 0, binding = 9, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
+// The shadow atlas (D32, one square tile per shadow-casting light) and its tiles.
+layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;
+layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
+
+#include "lights.glsl"
+
+// How much of light `light` reaches world point p with normal n (1 lit, 0 shadowed), from its
+// shadow map with PCF: 3 x 3 bilinear depth comparisons `radius` tile texels apart, tent-weighted.
+// 1 for lights without a shadow map, surfaces that do not receive, and points outside the map.
+float shadow_factor(Light light, vec3 p, vec3 n, float receives) {
+    if (SHADOWS == 0u) {
+        return 1.0;
+    }
+    int index = int(light.spot.z + 0.5) - 1;
+    if (index < 0 || receives < 0.5) {
+        return 1.0;
+    }
+    Shadow s = shadows[index];
+    // Normal offset: move the look-up point off the surface by about a texel's footprint, so a
+    // lit surface does not shadow itself (acne), scaled with the distance for a perspective map.
+    float offset = s.params.x;
+    if (s.params.y > 0.5) {
+        offset *= length(light.position_range.xyz - p);
+    }
+    vec4 clip = s.clip_from_world * vec4(p + n * offset, 1.0);
+    if (!(clip.w > 0.0)) {
+        return 1.0;
+    }
+    vec3 ndc = clip.xyz / clip.w;
+    if (any(greaterThan(abs(ndc.xy), vec2(1.0))) || ndc.z > 1.0 || ndc.z < 0.0) {
+        return 1.0;
+    }
+    vec2 uv = s.tile.xy + (ndc.xy * 0.5 + 0.5) * s.tile.zw;
+    float texel = s.params.w;
+    // Keep every bilinear footprint inside the tile.
+    vec2 lo = s.tile.xy + vec2(texel);
+    vec2 hi = s.tile.xy + s.tile.zw - vec2(texel);
+    float radius = s.params.z;
+    if (radius <= 0.0) {
+        return texture(shadow_atlas, vec3(clamp(uv, lo, hi), ndc.z));
+    }
+    float sum = 0.0;
+    for (int j = -1; j <= 1; ++j) {
+        for (int i = -1; i <= 1; ++i) {
+            float w = float((2 - abs(i)) * (2 - abs(j)));
+            vec2 q = clamp(uv + vec2(float(i), float(j)) * radius * texel, lo, hi);
+            sum += w * texture(shadow_atlas, vec3(q, ndc.z));
+        }
+    }
+    return sum / 16.0;
+}
 
 // One fabric BRDF evaluation at the chosen accuracy: nearest and filtered-params evaluate one lobe
 // with coverage-averaged exponents (at a point that is the thread on top's own lobe), mixture and
@@ -47,7 +103,7 @@ vec3 fabric_eval(vec3 k1, vec3 k2, vec3 coverage, GpuFabric f) {
 }
 
 // Ambient plus every light reflected by the fabric with the given coverage.
-vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f) {
+vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, float receives) {
     float c_thread = coverage.x + coverage.y;
     vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
     // Ambient: the threads' diffuse albedo under the hemispherical ambient.
@@ -59,13 +115,13 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, Gpu
         if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
             continue;
         }
-        radiance += e * fabric_eval(k1, k2, coverage, f) * k1.z;
+        radiance += e * (fabric_eval(k1, k2, coverage, f) * k1.z * shadow_factor(lights[i], p, tbn[2], receives));
     }
     return radiance;
 }
 
 // Ambient plus every light reflected by one of the comparison models (Phong or plain A–S).
-vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f) {
+vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f, float receives) {
     vec3 radiance = ambient * fabric_mean_rd(f);
     for (uint i = 0u; i < frame.light_count; ++i) {
         vec3 l;
@@ -75,7 +131,7 @@ vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f) {
             continue;
         }
         vec3 brdf = SHADING == SHADING_PHONG ? phong_brdf(k1, k2, f) : plain_as_brdf(k1, k2, f);
-        radiance += e * brdf * k1.z;
+        radiance += e * brdf * (k1.z * shadow_factor(lights[i], p, tbn[2], receives));
     }
     return radiance;
 }
@@ -135,6 +191,7 @@ void main() {
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
     float roughness = surface.x;
+    float receives = surface.w;
 
     vec3 radiance = texelFetch(gb_emissive, px, 0).rgb;
     vec3 ambient = mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
@@ -152,7 +209,7 @@ void main() {
         if (SHADING == SHADING_GOURAUD) {
             // Lit per vertex by gbuffer.vert: the emissive target already holds it.
         } else if (SHADING != SHADING_FABRIC) {
-            radiance += classic_radiance(p, ambient, tbn, k2, f);
+            radiance += classic_radiance(p, ambient, tbn, k2, f, receives);
         } else if (ACCURACY == 3u) {
             Weave w = weave_from_fabric(f);
             vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
@@ -161,12 +218,12 @@ void main() {
                 for (uint i = 0u; i < SAMPLES; ++i) {
                     vec2 o = (vec2(float(i), float(j)) + 0.5) / float(SAMPLES) * 2.0 - 1.0;
                     vec2 s = (g.xy + o * g.zw) * cells;
-                    sum += fabric_radiance(p, ambient, tbn, k2, weave_point(w, s.x, s.y), f);
+                    sum += fabric_radiance(p, ambient, tbn, k2, weave_point(w, s.x, s.y), f, receives);
                 }
             }
             radiance += sum / float(SAMPLES * SAMPLES);
         } else {
-            radiance += fabric_radiance(p, ambient, tbn, k2, g.rgb, f);
+            radiance += fabric_radiance(p, ambient, tbn, k2, g.rgb, f, receives);
         }
     } else {
         // Hemispherical ambient, so surfaces facing away from every light are not pure black.
@@ -177,7 +234,11 @@ void main() {
             if (all(equal(e, vec3(0.0)))) {
                 continue;
             }
-            radiance += e * pbr_brdf_cos(n, v, l, base, metallic, roughness);
+            vec3 c = pbr_brdf_cos(n, v, l, base, metallic, roughness);
+            if (all(equal(c, vec3(0.0)))) {
+                continue;
+            }
+            radiance += e * c * shadow_factor(lights[i], p, n, receives);
         }
     }
     out_color = vec4(radiance, 1.0);

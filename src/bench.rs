@@ -777,6 +777,36 @@ pub fn with_point_lights(scene: &Scene, n: u32) -> Scene {
     lit
 }
 
+/// The scene with its lights replaced by `n` point lights of range `range` spread evenly over
+/// the scene's footprint (a Fibonacci lattice over the bounds in x and z, 0.3 above the top of
+/// the geometry's lower half): local lamps, each reaching only the part of the scene under it.
+pub fn with_local_point_lights(scene: &Scene, n: u32, range: f32) -> Scene {
+    let mut lit = scene.clone();
+    let b = scene.bounds().unwrap_or(crate::scene::Bounds {
+        min: Vec3::splat(-1.0),
+        max: Vec3::splat(1.0),
+    });
+    let size = b.max - b.min;
+    let y = b.min.y + 0.5 * size.y + 0.3;
+    lit.lights = (0..n)
+        .map(|i| {
+            let u = (i as f32 + 0.5) / n as f32;
+            let v = (i as f32 * 0.618_034).fract();
+            Light {
+                name: format!("local point light {i}"),
+                kind: LightKind::Point,
+                color: [1.0, 0.9, 0.8],
+                intensity: 1.5,
+                range: Some(range),
+                position: Vec3::new(b.min.x + u * size.x, y, b.min.z + v * size.z),
+                direction: Vec3::NEG_Y,
+                shadow: None,
+            }
+        })
+        .collect();
+    lit
+}
+
 fn write_text(path: &Path, text: &str) -> crate::Result<()> {
     std::fs::write(path, text).map_err(|e| Error::Io {
         context: format!("writing '{}'", path.display()),

@@ -91,6 +91,20 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          to one RGBA16F target. No push constants.",
     ),
     (
+        "shadow.frag",
+        "Shadow pass, fragment stage: empty (depth only); pair it with `shadow.vert`.",
+    ),
+    (
+        "shadow.vert",
+        "Shadow pass, vertex stage: depth-only rendering of shadow casters into one light's tile of \
+         a D32 shadow atlas (reversed-Z: clear to 0, depth compare GREATER, nearest to the light \
+         is 1). The G-buffer pass's vertex buffer (position at location 0, the other attributes \
+         ignored); push `mat4 clip_from_object` (the light's projection x view x the draw's world \
+         matrix, 64 bytes, vertex stage) per draw, viewport and scissor on the light's tile, no \
+         culling. `lighting.frag` samples the atlas with a comparison sampler (GREATER_OR_EQUAL, \
+         linear, clamp) through the `Shadow` records of `include/frame.glsl`.",
+    ),
+    (
         "tonemap.frag",
         "Exposure and tone mapping (Khronos PBR Neutral) of the HDR target, drawn with \
          `fullscreen.vert`; write to an `R8G8B8A8_SRGB` target, which does the sRGB encoding. \
@@ -192,6 +206,18 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
     ("lighting.frag", 0, 7, "G-buffer emissive"),
     ("lighting.frag", 0, 8, "G-buffer depth (D32)"),
     ("lighting.frag", 0, 9, "fabric records (`GpuFabric[]`)"),
+    (
+        "lighting.frag",
+        0,
+        10,
+        "the shadow atlas (D32) with a comparison sampler (GREATER_OR_EQUAL, linear, clamp); any depth image when SHADOWS = 0",
+    ),
+    (
+        "lighting.frag",
+        0,
+        11,
+        "shadow records (`Shadow[]`, include/frame.glsl), indexed by `Light.spot.z - 1`",
+    ),
     ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
     (
         "weave.comp",
@@ -220,6 +246,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 1, "SAMPLES: N of supersampled:N, the footprint is sampled at N x N points (default 1)"),
     ("lighting.frag", 2, "FABRIC_AS_PBR: 1 shades fabric pixels with the metallic-roughness BRDF, for cost comparisons (default 0)"),
     ("lighting.frag", 3, "LIGHT_TYPES: bit mask of the light types whose code is compiled in: 1 directional, 2 point, 4 spot (default 7, all)"),
+    ("lighting.frag", 5, "SHADOWS: 1 samples the shadow atlas for lights with a shadow record (Light.spot.z > 0) on pixels that receive (G-buffer surface.w = 1); 0 (default) compiles the shadow code out"),
+    ("lighting.frag", 6, "RANGE_CULLING: 1 (default) skips point and spot lights whose range cannot reach the pixel before their falloff and BRDF; 0 evaluates every light everywhere (same image)"),
     ("lighting.frag", 4, "SHADING: how fabric pixels are shaded: 0 the fabric model (default), 1 Gouraud (the G-buffer's emissive already holds the per-vertex lighting), 2 the Phong reflection model, 3 one Ashikhmin-Shirley lobe without the weave (the models of `weft compare`)"),
 ];
 

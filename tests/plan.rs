@@ -104,7 +104,10 @@ fn only_directional_lights_compile_no_point_light_code_and_skipping_changes_noth
         .render(
             &scene,
             &RenderOptions {
-                all_features: true,
+                force: weft::render::Force {
+                    light_types: true,
+                    ..Default::default()
+                },
                 ..options()
             },
         )
@@ -150,4 +153,208 @@ fn lights_out_of_range_are_culled_and_change_nothing() {
         a.hdr, b.hdr,
         "lights whose range cannot reach the scene must add nothing"
     );
+}
+
+fn shadows_scene() -> Scene {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/shadows.glb");
+    scene::load(std::path::Path::new(path)).expect("shadows.glb")
+}
+
+/// Largest absolute difference of two frames' linear radiance.
+fn max_hdr_diff(a: &weft::render::Frame, b: &weft::render::Frame) -> f32 {
+    a.hdr
+        .iter()
+        .zip(&b.hdr)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0f32, f32::max)
+}
+
+fn lighting_pipeline(frame: &weft::render::Frame) -> String {
+    frame
+        .stats
+        .pipelines
+        .iter()
+        .find(|p| p.starts_with("lighting["))
+        .cloned()
+        .unwrap_or_default()
+}
+
+#[test]
+fn a_light_without_shadows_creates_no_shadow_map() {
+    // The default scene's lights do not ask for shadows.
+    let scene = scene::default_scene();
+    assert!(scene.lights.iter().all(|l| l.shadow.is_none()));
+    let plan = Plan::new(&scene, &options());
+    assert!(plan.shadows.is_empty() && !plan.runs(Pass::Shadow) && !plan.shadow_sampling);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let frame = renderer.render(&scene, &options()).unwrap();
+    assert!(!frame.stats.passes.contains(&"shadow"));
+    assert_eq!((frame.stats.shadow_maps, frame.stats.shadow_draws), (0, 0));
+    assert!(lighting_pipeline(&frame).contains("shadows=0"));
+
+    // In the shadow scene only the sun and the spot ask; the point light gets no map.
+    let scene = shadows_scene();
+    let plan = Plan::new(&scene, &options());
+    let names: Vec<&str> = plan.shadows.iter().map(|s| s.name.as_str()).collect();
+    let asking: Vec<&str> = scene
+        .lights
+        .iter()
+        .filter(|l| l.shadow.is_some())
+        .map(|l| l.name.as_str())
+        .collect();
+    assert_eq!(names, asking);
+    assert!(scene
+        .lights
+        .iter()
+        .any(|l| l.kind == LightKind::Point && l.shadow.is_none()));
+    let frame = renderer.render(&scene, &options()).unwrap();
+    assert_eq!(
+        frame.stats.passes,
+        vec!["weave", "gbuffer", "shadow", "lighting", "tonemap"]
+    );
+    assert_eq!(frame.stats.shadow_maps, 2);
+    // Every draw but the one that asks not to cast, into each map.
+    let casters = scene.draws.iter().filter(|d| d.cast_shadows).count();
+    assert!(casters < scene.draws.len());
+    assert_eq!(frame.stats.shadow_draws, 2 * casters);
+}
+
+#[test]
+fn shadows_only_darken_and_the_non_caster_casts_nothing() {
+    let scene = shadows_scene();
+    let mut unshadowed = scene.clone();
+    for l in &mut unshadowed.lights {
+        l.shadow = None;
+    }
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let lit = renderer.render(&unshadowed, &options()).unwrap();
+    let shadowed = renderer.render(&scene, &options()).unwrap();
+    let pixels = lit.hdr.len() / 4;
+    let mut darker = 0;
+    for i in 0..pixels {
+        for c in 0..3 {
+            let (a, b) = (lit.hdr[4 * i + c], shadowed.hdr[4 * i + c]);
+            assert!(
+                b <= a * (1.0 + 1e-6) + 1e-9,
+                "pixel {i}: shadowed {b} > lit {a}"
+            );
+        }
+        if shadowed.hdr[4 * i] < 0.8 * lit.hdr[4 * i] {
+            darker += 1;
+        }
+    }
+    // The sun's and the spot's shadows of the ball and the box cover a good part of the cloth.
+    assert!(
+        darker * 20 > pixels,
+        "{darker} of {pixels} pixels in shadow"
+    );
+
+    // Without the non-casting steel ball the image is the same: it casts nothing.
+    let steel = scene
+        .draws
+        .iter()
+        .position(|d| !d.cast_shadows)
+        .expect("a non-casting draw");
+    let mut without = scene.clone();
+    let mut moved = scene.clone();
+    without.draws.remove(steel);
+    // (Removing it also removes its own pixels; compare only where neither frame sees it: the
+    // pixels where the image with it equals the one without it must be all but the ball's.)
+    moved.draws[steel].cast_shadows = true;
+    let a = renderer.render(&without, &options()).unwrap();
+    let b = renderer.render(&scene, &options()).unwrap();
+    let c = renderer.render(&moved, &options()).unwrap();
+    let differ = |x: &weft::render::Frame, y: &weft::render::Frame| {
+        (0..pixels)
+            .filter(|&i| (0..3).any(|k| x.hdr[4 * i + k] != y.hdr[4 * i + k]))
+            .count()
+    };
+    // Casting, the steel ball darkens cloth pixels beyond its own silhouette.
+    assert!(
+        differ(&a, &c) > differ(&a, &b),
+        "{} vs {}",
+        differ(&a, &c),
+        differ(&a, &b)
+    );
+}
+
+#[test]
+fn nothing_receiving_runs_no_shadow_pass_and_forcing_it_changes_nothing() {
+    let mut scene = shadows_scene();
+    for d in &mut scene.draws {
+        d.receive_shadows = false;
+    }
+    let plan = Plan::new(&scene, &options());
+    assert!(plan.shadows.is_empty() && !plan.runs(Pass::Shadow) && !plan.shadow_sampling);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let planned = renderer.render(&scene, &options()).unwrap();
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    shadows: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    assert_eq!(forced.stats.shadow_maps, 2);
+    assert!(lighting_pipeline(&forced).contains("shadows=1"));
+    assert!(lighting_pipeline(&planned).contains("shadows=0"));
+    assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+    assert_eq!(planned.ldr, forced.ldr);
+
+    // Shadow sampling compiled in with no light asking changes nothing either.
+    let scene = scene::default_scene();
+    let planned = renderer.render(&scene, &options()).unwrap();
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    shadows: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    assert!(lighting_pipeline(&forced).contains("shadows=1"));
+    assert_eq!(forced.stats.shadow_maps, 0);
+    assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+}
+
+#[test]
+fn range_culling_changes_nothing() {
+    // 256 point lights of 0.6 m range over the default scene: most pixels are out of reach of
+    // most lights.
+    let scene = weft::bench::with_local_point_lights(&scene::default_scene(), 256, 0.6);
+    let plan = Plan::new(&scene, &options());
+    assert!(plan.range_culling);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let culled = renderer.render(&scene, &options()).unwrap();
+    let all = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    no_range_culling: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    let mut dark = scene.clone();
+    dark.lights.clear();
+    let unlit = renderer.render(&dark, &options()).unwrap();
+    assert!(
+        max_hdr_diff(&culled, &unlit) > 0.05,
+        "the local lights must light something"
+    );
+    assert!(lighting_pipeline(&culled).contains("range_culling=1"));
+    assert!(lighting_pipeline(&all).contains("range_culling=0"));
+    assert_eq!(max_hdr_diff(&culled, &all), 0.0);
 }

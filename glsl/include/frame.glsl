@@ -47,7 +47,17 @@ struct Light {
     vec4 position_range;   // xyz world position; w: range (0 = infinite)
     vec4 direction_type;   // xyz: direction the light travels; w: LIGHT_* as float
     vec4 color_intensity;  // rgb colour, a: intensity (lux for directional, candela otherwise)
-    vec4 spot;             // x: angle scale, y: angle offset (KHR_lights_punctual spot falloff)
+    vec4 spot;             // x: angle scale, y: angle offset (KHR_lights_punctual spot falloff),
+                           // z: index + 1 of the light's Shadow record (0 = casts none)
+};
+
+// One light's shadow map: a square tile of the shadow atlas (std430, 96 bytes).
+struct Shadow {
+    mat4 clip_from_world;  // the light's projection x view (reversed-Z)
+    vec4 tile;             // xy: the tile's origin in atlas uv, zw: its size in atlas uv
+    vec4 params;           // x: normal offset (world units per unit of distance to the light for
+                           // spot lights, world units for directional), y: 1 spot (perspective),
+                           // z: PCF radius in tile texels, w: one tile texel in atlas uv
 };
 
 struct Material {

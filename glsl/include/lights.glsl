@@ -3,7 +3,8 @@
 // vertex, for Gouraud shading in `weft compare`).
 //
 // The includer declares `const uint LIGHT_TYPES` (bit 0 directional, 1 point, 2 spot): code for
-// the types not in it is compiled out.
+// the types not in it is compiled out; and `const uint RANGE_CULLING` (1: lights out of range
+// return nothing before the falloff; 0: the falloff, which is 0 there too, is always evaluated).
 #ifndef WEFT_LIGHTS_GLSL
 #define WEFT_LIGHTS_GLSL
 
@@ -36,7 +37,7 @@ vec3 light_incoming(Light light, vec3 p, out vec3 l) {
     vec3 to_light = light.position_range.xyz - p;
     float range = light.position_range.w;
     float dist2 = dot(to_light, to_light);
-    if (range > 0.0 && dist2 >= range * range) {
+    if (RANGE_CULLING != 0u && range > 0.0 && dist2 >= range * range) {
         // Culled: out of range.
         l = vec3(0.0, 1.0, 0.0);
         return vec3(0.0);

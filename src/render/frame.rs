@@ -19,7 +19,10 @@ use crate::vk::{
 };
 use crate::Error;
 
-use super::gpu::{DrawPush, FrameData, GpuLight, GpuMaterial, TonemapPush};
+use super::gpu::{
+    DrawPush, FrameData, GpuLight, GpuMaterial, GpuShadow, ShadowPush, TonemapPush,
+    DRAW_RECEIVES_SHADOWS,
+};
 use super::plan::{weave_key, Pass, Plan};
 use super::RenderOptions;
 
@@ -33,6 +36,7 @@ pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
 pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
+pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
 
 /// Floats per vertex in the G-buffer pass's vertex buffer: position, normal, tangent, uv, weave uv.
 const VERTEX_FLOATS: usize = 14;
@@ -57,6 +61,9 @@ pub struct FrameStats {
     /// Weave textures of the scene (built by the weave pass at upload) and the pass's dispatches.
     pub weave_textures: usize,
     pub weave_dispatches: u32,
+    /// Shadow maps rendered, and the caster draws into them.
+    pub shadow_maps: usize,
+    pub shadow_draws: usize,
 }
 
 /// A rendered frame, read back.
@@ -126,6 +133,8 @@ struct DrawRange {
     material: u32,
     world: Mat4,
     double_sided: bool,
+    cast_shadows: bool,
+    receive_shadows: bool,
 }
 
 /// A scene's data on the GPU.
@@ -141,6 +150,9 @@ pub struct GpuScene {
     weaves8: Vec<Image>,
     material_weave: Vec<Option<usize>>,
     lights: Buffer,
+    /// The light records as uploaded (no shadow maps): a frame with shadows uploads a copy with
+    /// each caster's shadow index.
+    light_records: Vec<GpuLight>,
     light_count: u32,
     material_count: u32,
     /// Per material: base colour, metallic-roughness, normal and emissive textures (indices into
@@ -164,10 +176,16 @@ pub struct Renderer {
     gbuffer_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     tonemap_pipeline: Pipeline,
+    shadow_pipeline: Pipeline,
     linear: Sampler,
     nearest: Sampler,
+    shadow_sampler: Sampler,
     white: Image,
     flat_normal: Image,
+    /// A 1 x 1 shadow atlas at depth 0 (everything lit), bound when no shadow map is rendered.
+    no_shadows: Image,
+    /// The shadow atlas of the last frame that had shadows (kept while the size stays).
+    shadow_atlas: Option<Image>,
     targets: Option<Targets>,
 }
 
@@ -233,6 +251,12 @@ impl Renderer {
             kind: BindingKind::StorageBuffer,
             stages: Stages::FRAGMENT,
         });
+        lighting_bindings.push(sampled(10, Stages::FRAGMENT));
+        lighting_bindings.push(Binding {
+            binding: 11,
+            kind: BindingKind::StorageBuffer,
+            stages: Stages::FRAGMENT,
+        });
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
         let weave_layout = ctx.create_set_layout(&[Binding {
@@ -260,6 +284,43 @@ impl Renderer {
             push_stages: Stages::FRAGMENT,
             constants: &[],
         })?;
+        let shadow_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: "shadow",
+            vertex: &shaders::SHADOW_VERT,
+            fragment: &shaders::SHADOW_FRAG,
+            vertex_layout: Some(VertexLayout {
+                stride: (VERTEX_FLOATS * 4) as u32,
+                attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
+            }),
+            color_formats: &[],
+            depth_format: Some(SHADOW_FORMAT),
+            set_layouts: &[],
+            push_constant_size: std::mem::size_of::<ShadowPush>() as u32,
+            push_stages: Stages::VERTEX,
+            constants: &[],
+        })?;
+        let shadow_sampler = ctx.create_sampler(Filter::ShadowCompare)?;
+        let no_shadows = ctx.create_image(
+            &ImageDesc::new_2d("no shadows", SHADOW_FORMAT, 1, 1)
+                .usage(ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED),
+        )?;
+        ctx.submit(|cmd| {
+            cmd.transition(&no_shadows, Usage::Undefined, Usage::DepthAttachment, None);
+            cmd.begin_rendering(
+                &[],
+                Some(Attachment {
+                    image: &no_shadows,
+                    clear: Some([0.0; 4]),
+                }),
+            );
+            cmd.end_rendering();
+            cmd.transition(
+                &no_shadows,
+                Usage::DepthAttachment,
+                Usage::FragmentRead,
+                None,
+            );
+        })?;
         let linear = ctx.create_sampler(Filter::LinearRepeat)?;
         let nearest = ctx.create_sampler(Filter::NearestClamp)?;
         let white = upload_texture(
@@ -281,10 +342,14 @@ impl Renderer {
             gbuffer_variants: HashMap::new(),
             lighting_variants: HashMap::new(),
             tonemap_pipeline,
+            shadow_pipeline,
             linear,
             nearest,
+            shadow_sampler,
             white,
             flat_normal,
+            no_shadows,
+            shadow_atlas: None,
             targets: None,
         })
     }
@@ -298,7 +363,11 @@ impl Renderer {
     pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
         let options = RenderOptions::default();
         self.variants(&options, &Plan::new(&Scene::default(), &options))?;
-        let mut all = vec![&self.weave_pipeline, &self.tonemap_pipeline];
+        let mut all = vec![
+            &self.weave_pipeline,
+            &self.tonemap_pipeline,
+            &self.shadow_pipeline,
+        ];
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
         Ok(all)
@@ -312,7 +381,7 @@ impl Renderer {
         plan: &Plan,
     ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
-        let light_types = if options.all_features {
+        let light_types = if options.force.light_types {
             7
         } else {
             plan.light_types_mask()
@@ -338,6 +407,8 @@ impl Renderer {
             (2, options.fabric_as_pbr as u32),
             (3, light_types),
             (4, shading),
+            (5, plan.shadow_sampling as u32),
+            (6, plan.range_culling as u32),
         ];
         if !self.gbuffer_variants.contains_key(&gbuffer_key) {
             let vertex_layout = VertexLayout {
@@ -377,10 +448,12 @@ impl Renderer {
         if !self.lighting_variants.contains_key(&lighting_key) {
             let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}]",
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}]",
                     options.accuracy.code(),
                     options.accuracy.samples(),
-                    options.fabric_as_pbr as u32
+                    options.fabric_as_pbr as u32,
+                    plan.shadow_sampling as u32,
+                    plan.range_culling as u32
                 ),
                 vertex: &shaders::FULLSCREEN_VERT,
                 fragment: &shaders::LIGHTING_FRAG,
@@ -446,6 +519,8 @@ impl Renderer {
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.double_sided),
+                cast_shadows: d.cast_shadows,
+                receive_shadows: d.receive_shadows,
             });
         }
         let vertices =
@@ -525,6 +600,7 @@ impl Renderer {
         if lights.is_empty() {
             lights.push(bytemuck::Zeroable::zeroed()); // a storage buffer cannot be empty
         }
+        let light_records = lights.clone();
         let lights = ctx.create_buffer_with("lights", BufferUsageFlags::STORAGE_BUFFER, &lights)?;
         let textures = scene
             .textures
@@ -540,6 +616,7 @@ impl Renderer {
             weaves8,
             material_weave,
             lights,
+            light_records,
             light_count,
             material_count,
             material_textures,
@@ -583,6 +660,61 @@ impl Renderer {
             BufferUsageFlags::UNIFORM_BUFFER,
             &[frame_data],
         )?;
+
+        // Shadow maps: the atlas, one record per map, and the lights with their map's index.
+        let bounds = scene.bounds();
+        let shadow_maps = match &bounds {
+            Some(b) if !plan.shadows.is_empty() => {
+                let layout = super::shadow::AtlasLayout::new(&plan.shadows);
+                let size = layout.size();
+                if self.shadow_atlas.as_ref().map(|a| a.extent()) != Some((size, size)) {
+                    self.shadow_atlas = None;
+                    self.shadow_atlas = Some(self.ctx.create_image(
+                        &ImageDesc::new_2d("shadow atlas", SHADOW_FORMAT, size, size).usage(
+                            ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED,
+                        ),
+                    )?);
+                }
+                super::shadow::shadow_records(&plan.shadows, &scene.lights, b, &layout)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, (record, m))| {
+                        let (x, y) = layout.origin(i);
+                        (record, m, (x, y, plan.shadows[i].resolution))
+                    })
+                    .collect::<Vec<_>>()
+            }
+            _ => Vec::new(),
+        };
+        let mut shadow_records: Vec<GpuShadow> = shadow_maps.iter().map(|s| s.0).collect();
+        let frame_lights = if shadow_maps.is_empty() {
+            None
+        } else {
+            let mut records = gpu.light_records.clone();
+            for (i, s) in plan.shadows.iter().enumerate() {
+                if let Some(r) = records.get_mut(s.light) {
+                    r.spot[2] = i as f32 + 1.0;
+                }
+            }
+            Some(self.ctx.create_buffer_with(
+                "lights with shadows",
+                BufferUsageFlags::STORAGE_BUFFER,
+                &records,
+            )?)
+        };
+        if shadow_records.is_empty() {
+            shadow_records.push(bytemuck::Zeroable::zeroed()); // a storage buffer cannot be empty
+        }
+        let shadow_buffer = self.ctx.create_buffer_with(
+            "shadows",
+            BufferUsageFlags::STORAGE_BUFFER,
+            &shadow_records,
+        )?;
+        let lights_buffer = frame_lights.as_ref().unwrap_or(&gpu.lights);
+        let atlas = match (&self.shadow_atlas, shadow_maps.is_empty()) {
+            (Some(a), false) => a,
+            _ => &self.no_shadows,
+        };
 
         let ctx = self.ctx.clone();
         let targets = self.targets.as_ref().expect("created above");
@@ -687,12 +819,27 @@ impl Renderer {
                     })?;
                     stats.pipelines.push(gbuffer_pipeline.name.clone());
                 }
+                Pass::Shadow => {
+                    let tiles: Vec<(u32, u32, u32, Mat4)> = shadow_maps
+                        .iter()
+                        .map(|(_, m, (x, y, r))| (*x, *y, *r, *m))
+                        .collect();
+                    if !tiles.is_empty() {
+                        timed("shadow", &mut |cmd| {
+                            shadow_pass(cmd, &self.shadow_pipeline, gpu, atlas, &tiles)
+                        })?;
+                        stats.pipelines.push(self.shadow_pipeline.name.clone());
+                        stats.shadow_maps = tiles.len();
+                        stats.shadow_draws =
+                            tiles.len() * gpu.draws.iter().filter(|d| d.cast_shadows).count();
+                    }
+                }
                 Pass::Lighting => {
                     let set = pool.set(
                         &self.lighting_layout,
                         &[
                             (0, Resource::Uniform(&frame_buffer)),
-                            (1, Resource::Storage(&gpu.lights)),
+                            (1, Resource::Storage(lights_buffer)),
                             (2, Resource::Storage(&gpu.materials)),
                             (3, Resource::Sampled(&targets.albedo, &self.nearest)),
                             (4, Resource::Sampled(&targets.frame, &self.nearest)),
@@ -701,6 +848,8 @@ impl Renderer {
                             (7, Resource::Sampled(&targets.emissive, &self.nearest)),
                             (8, Resource::Sampled(&targets.depth, &self.nearest)),
                             (9, Resource::Storage(&gpu.fabrics)),
+                            (10, Resource::Sampled(atlas, &self.shadow_sampler)),
+                            (11, Resource::Storage(&shadow_buffer)),
                         ],
                     )?;
                     timed("lighting", &mut |cmd| {
@@ -900,7 +1049,11 @@ fn gbuffer_pass(
         } else {
             Cull::Back
         });
-        cmd.push_constants(pipeline, &DrawPush::new(draw.world, material));
+        let mut push = DrawPush::new(draw.world, material);
+        if !draw.receive_shadows {
+            push.flags &= !DRAW_RECEIVES_SHADOWS;
+        }
+        cmd.push_constants(pipeline, &push);
         cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
     }
     cmd.end_rendering();
@@ -913,6 +1066,39 @@ fn gbuffer_pass(
         Usage::FragmentRead,
         None,
     );
+}
+
+/// Renders every caster into each light's tile of the shadow atlas (depth only, both faces).
+fn shadow_pass(
+    cmd: &mut Cmd,
+    pipeline: &Pipeline,
+    scene: &GpuScene,
+    atlas: &Image,
+    tiles: &[(u32, u32, u32, Mat4)],
+) {
+    cmd.transition(atlas, Usage::Undefined, Usage::DepthAttachment, None);
+    cmd.begin_rendering(
+        &[],
+        Some(Attachment {
+            image: atlas,
+            clear: Some([0.0; 4]),
+        }),
+    );
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_vertex_buffer(&scene.vertices);
+    cmd.bind_index_buffer(&scene.indices);
+    for &(x, y, resolution, clip_from_world) in tiles {
+        cmd.set_viewport(x, y, resolution, resolution);
+        for draw in scene.draws.iter().filter(|d| d.cast_shadows) {
+            let push = ShadowPush {
+                clip_from_object: (clip_from_world * draw.world).to_cols_array_2d(),
+            };
+            cmd.push_constants(pipeline, &push);
+            cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+        }
+    }
+    cmd.end_rendering();
+    cmd.transition(atlas, Usage::DepthAttachment, Usage::FragmentRead, None);
 }
 
 /// Reads the G-buffer, writes HDR radiance.

@@ -159,9 +159,14 @@ pub struct DrawPush {
     pub normal_matrix: [[f32; 4]; 3],
     pub material: u32,
     pub tangent_sign: f32,
-    pub pad: [u32; 2],
+    /// Bit 0 ([`DRAW_RECEIVES_SHADOWS`]): shadows darken this draw.
+    pub flags: u32,
+    pub pad: u32,
 }
 const _: () = assert!(std::mem::size_of::<DrawPush>() == 128);
+
+/// `DrawPush::flags`: the draw receives shadows.
+pub const DRAW_RECEIVES_SHADOWS: u32 = 1;
 
 impl DrawPush {
     pub fn new(world: Mat4, material: u32) -> DrawPush {
@@ -178,9 +183,31 @@ impl DrawPush {
             normal_matrix: [c(inv_t.x_axis), c(inv_t.y_axis), c(inv_t.z_axis)],
             material,
             tangent_sign: if det < 0.0 { -1.0 } else { 1.0 },
-            pad: [0; 2],
+            flags: DRAW_RECEIVES_SHADOWS,
+            pad: 0,
         }
     }
+}
+
+/// One light's shadow map: `Shadow` of glsl/include/frame.glsl (std430, 96 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuShadow {
+    /// The light's projection x view (reversed-Z), column-major.
+    pub clip_from_world: [[f32; 4]; 4],
+    /// xy: the tile's origin in atlas uv, zw: its size in atlas uv.
+    pub tile: [f32; 4],
+    /// x: normal offset (world units, per unit of distance for spot lights), y: 1 for spot
+    /// (perspective), z: PCF radius in tile texels, w: one texel in atlas uv.
+    pub params: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuShadow>() == 96);
+
+/// Push constants of the shadow pass, one per caster and light (64 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowPush {
+    pub clip_from_object: [[f32; 4]; 4],
 }
 
 #[repr(C)]

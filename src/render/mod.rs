@@ -4,10 +4,11 @@ mod frame;
 pub mod gpu;
 mod output;
 pub mod plan;
+pub mod shadow;
 
 pub use frame::{f16_to_f32, Frame, FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer};
 pub use output::{write_exr, write_png};
-pub use plan::{FabricFeatures, Pass, Plan, WeavePlan};
+pub use plan::{FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
 
 use crate::Error;
 
@@ -133,6 +134,31 @@ impl Shading {
                 ))
             })
     }
+}
+
+/// The effects the plan can skip, forced on (`RenderOptions::force`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Force {
+    /// Compile every light type's code in (LIGHT_TYPES = 7), not only the scene's.
+    pub light_types: bool,
+    /// Render a shadow map for every light that asks, even when nothing casts or receives, and
+    /// compile shadow sampling in even when there is no map.
+    pub shadows: bool,
+    /// Evaluate every light at every pixel: no per-pixel range culling.
+    pub no_range_culling: bool,
+}
+
+impl Force {
+    pub const NONE: Force = Force {
+        light_types: false,
+        shadows: false,
+        no_range_culling: false,
+    };
+    pub const ALL: Force = Force {
+        light_types: true,
+        shadows: true,
+        no_range_culling: true,
+    };
 }
 
 /// How the fabric's weave is turned into reflectance over a pixel (model page §4).
@@ -262,9 +288,9 @@ pub struct RenderOptions {
     pub fabric_as_pbr: bool,
     /// How fabric materials are shaded (the fabric model unless comparing).
     pub shading: Shading,
-    /// Compile every feature in, whatever the scene needs (to check that what the plan skips
-    /// changes nothing).
-    pub all_features: bool,
+    /// Effects to force on whatever the scene needs (to check, and to measure, that what the plan
+    /// skips changes nothing).
+    pub force: Force,
 }
 
 impl Default for RenderOptions {
@@ -280,7 +306,7 @@ impl Default for RenderOptions {
             weave_precision: WeavePrecision::Rgba16f,
             fabric_as_pbr: false,
             shading: Shading::Fabric,
-            all_features: false,
+            force: Force::NONE,
         }
     }
 }

@@ -14,6 +14,8 @@ pub enum Pass {
     Weave,
     /// Raster pass writing the G-buffer targets and depth.
     GBuffer,
+    /// Depth-only raster pass: every shadow-casting light's map, one tile each of the atlas.
+    Shadow,
     /// Fullscreen pass: lights x materials from the G-buffer into the HDR target.
     Lighting,
     /// Exposure, tone curve and sRGB encoding into the 8-bit target.
@@ -25,6 +27,7 @@ impl Pass {
         match self {
             Pass::Weave => "weave",
             Pass::GBuffer => "gbuffer",
+            Pass::Shadow => "shadow",
             Pass::Lighting => "lighting",
             Pass::Tonemap => "tonemap",
         }
@@ -79,6 +82,24 @@ pub(crate) fn weave_key(fabric: &crate::fabric::FabricParams) -> [u32; 7] {
     ]
 }
 
+/// One shadow map to render: a light that asks for shadows (directional or spot), when something
+/// casts and something receives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadowPlan {
+    /// Index into the scene's lights.
+    pub light: usize,
+    pub name: String,
+    /// Tile size in texels (the light's request, shrunk if the atlas would exceed
+    /// [`MAX_ATLAS`]).
+    pub resolution: u32,
+    pub filter_radius: f32,
+    pub bias: f32,
+}
+
+/// The largest shadow atlas side, in texels (every Vulkan device supports 4096; lavapipe and
+/// desktop GPUs 16384).
+pub const MAX_ATLAS: u32 = 8192;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
     pub width: u32,
@@ -92,6 +113,15 @@ pub struct Plan {
     /// One per distinct weave (materials differing only in colour or exponents share one).
     pub weaves: Vec<WeavePlan>,
     pub features: FabricFeatures,
+    /// Shadow maps to render (empty: no shadow pass and no shadow sampling).
+    pub shadows: Vec<ShadowPlan>,
+    /// Draws that cast and that receive shadows.
+    pub shadow_casters: usize,
+    pub shadow_receivers: usize,
+    /// Whether lighting.frag samples shadow maps (some are planned, or forced).
+    pub shadow_sampling: bool,
+    /// Whether point and spot lights out of range are skipped per pixel (on unless forced off).
+    pub range_culling: bool,
     pub textures: usize,
     pub debug_view: DebugView,
 }
@@ -150,7 +180,39 @@ impl Plan {
                 options.accuracy,
                 Accuracy::Mixture | Accuracy::Supersampled(_)
             );
+        // Shadows: lights that ask (point lights cannot: the loader warned), when something casts
+        // and something receives, or every light that asks when forced.
+        let shadow_casters = scene.draws.iter().filter(|d| d.cast_shadows).count();
+        let shadow_receivers = scene.draws.iter().filter(|d| d.receive_shadows).count();
+        let useful = shadow_casters > 0 && shadow_receivers > 0;
+        let mut shadows: Vec<ShadowPlan> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.kind != LightKind::Point && (useful || options.force.shadows))
+            .filter_map(|(i, l)| {
+                l.shadow.map(|s| ShadowPlan {
+                    light: i,
+                    name: l.name.clone(),
+                    resolution: s.resolution.clamp(1, 4096),
+                    filter_radius: s.filter_radius,
+                    bias: s.bias,
+                })
+            })
+            .collect();
+        // Shrink every tile alike if the atlas would be too large.
+        let layout = super::shadow::AtlasLayout::new(&shadows);
+        if layout.size() > MAX_ATLAS {
+            let cell = MAX_ATLAS / layout.cells;
+            for s in &mut shadows {
+                s.resolution =
+                    (s.resolution as u64 * cell as u64 / layout.cell as u64).max(1) as u32;
+            }
+        }
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
+        if !shadows.is_empty() {
+            passes.insert(1, Pass::Shadow);
+        }
         if !weaves.is_empty() {
             passes.insert(0, Pass::Weave);
         }
@@ -168,6 +230,11 @@ impl Plan {
                 .count(),
             weaves,
             features,
+            shadow_sampling: !shadows.is_empty() || options.force.shadows,
+            shadows,
+            shadow_casters,
+            shadow_receivers,
+            range_culling: !options.force.no_range_culling,
             textures: scene.textures.len(),
             debug_view: options.debug_view,
         }
@@ -219,6 +286,28 @@ impl fmt::Display for Plan {
             f,
             "light code  {:#05b} (1 directional, 2 point, 4 spot)",
             self.light_types_mask()
+        )?;
+        if self.shadows.is_empty() {
+            writeln!(
+                f,
+                "shadows     none ({} casting, {} receiving draws)",
+                self.shadow_casters, self.shadow_receivers
+            )?;
+        }
+        for s in &self.shadows {
+            writeln!(
+                f,
+                "shadow map  {} {r}x{r}, PCF radius {} texels, bias {} texels",
+                s.name,
+                s.filter_radius,
+                s.bias,
+                r = s.resolution
+            )?;
+        }
+        writeln!(
+            f,
+            "lighting    shadow sampling {}, range culling {}",
+            self.shadow_sampling, self.range_culling
         )?;
         writeln!(f, "textures    {}", self.textures)?;
         write!(f, "debug view  {}", self.debug_view.name())

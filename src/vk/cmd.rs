@@ -196,6 +196,30 @@ impl Cmd<'_> {
         }
     }
 
+    /// Restricts drawing to the rectangle (x, y, width, height) of the attachments: viewport and
+    /// scissor both.
+    pub fn set_viewport(&mut self, x: u32, y: u32, width: u32, height: u32) {
+        let viewport = vk::Viewport {
+            x: x as f32,
+            y: y as f32,
+            width: width as f32,
+            height: height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D {
+                x: x as i32,
+                y: y as i32,
+            },
+            extent: vk::Extent2D { width, height },
+        };
+        unsafe {
+            self.device().cmd_set_viewport(self.raw, 0, &[viewport]);
+            self.device().cmd_set_scissor(self.raw, 0, &[scissor]);
+        }
+    }
+
     pub fn end_rendering(&mut self) {
         unsafe { self.device().cmd_end_rendering(self.raw) };
     }

@@ -175,6 +175,10 @@ pub enum Filter {
     NearestRepeat,
     /// Nearest, clamped: for reading render targets.
     NearestClamp,
+    /// Depth comparison for shadow maps (`sampler2DShadow`): bilinear over the 2 x 2 compare
+    /// results, clamped; a texel passes where the reference depth is greater than or equal to it
+    /// (reversed-Z: nearer to the light, or level with the nearest occluder).
+    ShadowCompare,
 }
 
 /// Timestamp queries, read back in nanoseconds.
@@ -388,8 +392,12 @@ impl Context {
                 vk::SamplerAddressMode::REPEAT,
                 false,
             ),
-            Filter::NearestClamp => (
-                vk::Filter::NEAREST,
+            Filter::NearestClamp | Filter::ShadowCompare => (
+                if filter == Filter::ShadowCompare {
+                    vk::Filter::LINEAR
+                } else {
+                    vk::Filter::NEAREST
+                },
                 vk::SamplerMipmapMode::NEAREST,
                 vk::SamplerAddressMode::CLAMP_TO_EDGE,
                 false,
@@ -406,7 +414,9 @@ impl Context {
             .anisotropy_enable(aniso)
             .max_anisotropy(if aniso { max_aniso } else { 1.0 })
             .min_lod(0.0)
-            .max_lod(vk::LOD_CLAMP_NONE);
+            .max_lod(vk::LOD_CLAMP_NONE)
+            .compare_enable(filter == Filter::ShadowCompare)
+            .compare_op(vk::CompareOp::GREATER_OR_EQUAL);
         let raw = unsafe { self.shared.device.create_sampler(&info, None) }
             .map_err(vkerr("vkCreateSampler"))?;
         Ok(Sampler {

@@ -271,6 +271,7 @@ pub fn cases() -> Vec<Case> {
             mirror: Some(MIRROR),
             ..case("mirrored-uv", "assets/scenes/mirrored_uv.glb", "the same green twill twice, the right one with mirrored UVs (tangent w = -1): mirror images, diagonals included")
         },
+        case("shadows", "assets/scenes/shadows.glb", "a sand plain weave with a red ball, a floating box and a small steel ball; the sun (40°) and a spot cast soft PCF shadows of the ball and box, the steel ball asks not to cast and casts none; no acne"),
         case("spheres", "assets/scenes/spheres.glb", "back row metallic gold, front row red plastic, roughness 0.05 to 1 left to right"),
     ];
     // The accuracy levels and weave precisions other than the default (model page §4).
