@@ -40,9 +40,19 @@ layout(set = 0, binding = 9, std430) readonly buffer Fabrics { GpuFabric fabrics
 // The shadow atlas (D32, one square tile per shadow-casting light) and its tiles.
 layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;
 layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };
+// Per 16 x 16-pixel tile (row-major): (offset, count) of its light list, then the lists' light
+// indices (src/render/tiles.rs): the lights whose range can reach the tile.
+layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
+
+// The pixel's tile's light list: (offset into tile_lights, count).
+uvec2 tile_list() {
+    uvec2 t = uvec2(gl_FragCoord.xy) / 16u;
+    uint index = t.y * frame.tile_columns + t.x;
+    return uvec2(tile_lights[2u * index], tile_lights[2u * index + 1u]);
+}
 
 #include "lights.glsl"
 
@@ -108,7 +118,9 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, Gpu
     vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
     // Ambient: the threads' diffuse albedo under the hemispherical ambient.
     vec3 radiance = ambient * rd;
-    for (uint i = 0u; i < frame.light_count; ++i) {
+    uvec2 list = tile_list();
+    for (uint j = 0u; j < list.y; ++j) {
+        uint i = tile_lights[list.x + j];
         vec3 l;
         vec3 e = light_incoming(lights[i], p, l);
         vec3 k1 = fabric_local(l, tbn);
@@ -123,7 +135,9 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, Gpu
 // Ambient plus every light reflected by one of the comparison models (Phong or plain A–S).
 vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f, float receives) {
     vec3 radiance = ambient * fabric_mean_rd(f);
-    for (uint i = 0u; i < frame.light_count; ++i) {
+    uvec2 list = tile_list();
+    for (uint j = 0u; j < list.y; ++j) {
+        uint i = tile_lights[list.x + j];
         vec3 l;
         vec3 e = light_incoming(lights[i], p, l);
         vec3 k1 = fabric_local(l, tbn);
@@ -228,7 +242,9 @@ void main() {
     } else {
         // Hemispherical ambient, so surfaces facing away from every light are not pure black.
         radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
-        for (uint i = 0u; i < frame.light_count; ++i) {
+        uvec2 list = tile_list();
+    for (uint j = 0u; j < list.y; ++j) {
+        uint i = tile_lights[list.x + j];
             vec3 l;
             vec3 e = light_incoming(lights[i], p, l);
             if (all(equal(e, vec3(0.0)))) {

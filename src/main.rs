@@ -129,6 +129,13 @@ struct BenchArgs {
     /// A short run (about 15 s on lavapipe): smaller images, fewer levels.
     #[arg(long)]
     quick: bool,
+    /// Instead: what the plan's skipping saves (each skippable effect forced on against the
+    /// plan, same run) and 4 against 256 point lights of limited range.
+    #[arg(long)]
+    plan: bool,
+    /// Image size of the --plan bench.
+    #[arg(long, default_value = "960x540")]
+    size: String,
     /// Where bench.csv and bench.png go.
     #[arg(long, default_value = "target/bench")]
     out: PathBuf,
@@ -333,6 +340,20 @@ fn run_compare(args: CompareArgs) -> anyhow::Result<()> {
 }
 
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
+    if args.plan {
+        let size = render::parse_size(&args.size)?;
+        RenderOptions {
+            width: size.0,
+            height: size.1,
+            ..Default::default()
+        }
+        .validate()?;
+        let ctx = open_device(args.device.as_deref(), false)?;
+        let mut renderer = Renderer::new(ctx)?;
+        let report = weft::bench::plan_bench::run(&mut renderer, size, args.frames.unwrap_or(7))?;
+        println!("{}", report.table());
+        return Ok(());
+    }
     let mut config = if args.quick {
         weft::bench::BenchConfig::quick()
     } else {

@@ -218,6 +218,12 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         11,
         "shadow records (`Shadow[]`, include/frame.glsl), indexed by `Light.spot.z - 1`",
     ),
+    (
+        "lighting.frag",
+        0,
+        12,
+        "per-tile light lists (uint[]): for each 16 x 16-pixel tile, row-major over `frame.tile_columns` tiles per row, (offset, count) of its list, then the lists of light indices; one tile listing every light works",
+    ),
     ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
     (
         "weave.comp",

@@ -36,7 +36,7 @@ struct FrameData {
     uint light_count;
     uint debug_view;
     uint material_count;
-    uint pad0;
+    uint tile_columns;   // 16 x 16-pixel tiles across (lighting.frag's light lists)
 };
 
 const uint LIGHT_DIRECTIONAL = 0u;

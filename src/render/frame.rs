@@ -257,6 +257,11 @@ impl Renderer {
             kind: BindingKind::StorageBuffer,
             stages: Stages::FRAGMENT,
         });
+        lighting_bindings.push(Binding {
+            binding: 12,
+            kind: BindingKind::StorageBuffer,
+            stages: Stages::FRAGMENT,
+        });
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
         let weave_layout = ctx.create_set_layout(&[Binding {
@@ -660,6 +665,16 @@ impl Renderer {
             BufferUsageFlags::UNIFORM_BUFFER,
             &[frame_data],
         )?;
+        let tile_lights = super::tiles::tile_lights(
+            &frame_data,
+            &gpu.light_records[..gpu.light_count as usize],
+            plan.range_culling,
+        );
+        let tile_buffer = self.ctx.create_buffer_with(
+            "tile light lists",
+            BufferUsageFlags::STORAGE_BUFFER,
+            &tile_lights,
+        )?;
 
         // Shadow maps: the atlas, one record per map, and the lights with their map's index.
         let bounds = scene.bounds();
@@ -850,6 +865,7 @@ impl Renderer {
                             (9, Resource::Storage(&gpu.fabrics)),
                             (10, Resource::Sampled(atlas, &self.shadow_sampler)),
                             (11, Resource::Storage(&shadow_buffer)),
+                            (12, Resource::Storage(&tile_buffer)),
                         ],
                     )?;
                     timed("lighting", &mut |cmd| {

@@ -21,7 +21,8 @@ pub struct FrameData {
     pub light_count: u32,
     pub debug_view: u32,
     pub material_count: u32,
-    pub pad0: u32,
+    /// Tiles across the image (the light lists of render::tiles).
+    pub tile_columns: u32,
 }
 const _: () = assert!(std::mem::size_of::<FrameData>() == 4 * 64 + 5 * 16 + 16);
 
@@ -56,7 +57,7 @@ impl FrameData {
             light_count: 0,
             debug_view: 0,
             material_count: 0,
-            pad0: 0,
+            tile_columns: super::tiles::tile_grid(width, height).0,
         }
     }
 }

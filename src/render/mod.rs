@@ -5,6 +5,7 @@ pub mod gpu;
 mod output;
 pub mod plan;
 pub mod shadow;
+pub mod tiles;
 
 pub use frame::{f16_to_f32, Frame, FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer};
 pub use output::{write_exr, write_png};
