@@ -299,6 +299,10 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             "weave      {} texture(s), {} dispatch(es) at upload",
             frame.stats.weave_textures, frame.stats.weave_dispatches
         );
+        println!(
+            "shadows    {} map(s), {} caster draw(s)",
+            frame.stats.shadow_maps, frame.stats.shadow_draws
+        );
     }
     Ok(())
 }
@@ -422,6 +426,13 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "far_field_mixture": plan.features.far_field_mixture,
             },
             "light_types_mask": plan.light_types_mask(),
+            "shadows": plan.shadows.iter().map(|s| serde_json::json!({
+                "light": s.name, "resolution": s.resolution, "filter_radius": s.filter_radius, "bias": s.bias,
+            })).collect::<Vec<_>>(),
+            "shadow_casters": plan.shadow_casters,
+            "shadow_receivers": plan.shadow_receivers,
+            "shadow_sampling": plan.shadow_sampling,
+            "range_culling": plan.range_culling,
             "textures": plan.textures,
             "debug_view": plan.debug_view.name(),
         });
