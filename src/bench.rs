@@ -654,7 +654,7 @@ fn mark_pareto_front(rows: &mut [AccuracyRow]) {
 }
 
 /// The GPU time of a pass (its wall time where the device has no timestamps), 0 if it did not run.
-fn pass_ms(frame: &Frame, name: &str) -> f64 {
+pub(crate) fn pass_ms(frame: &Frame, name: &str) -> f64 {
     frame
         .timings
         .iter()

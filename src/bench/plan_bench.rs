@@ -44,15 +44,6 @@ fn frame_ms(frame: &Frame) -> f64 {
         .sum()
 }
 
-fn pass_ms(frame: &Frame, name: &str) -> f64 {
-    frame
-        .timings
-        .iter()
-        .find(|t| t.name == name)
-        .map(|t| t.gpu_ms.unwrap_or(t.wall_ms))
-        .unwrap_or(0.0)
-}
-
 /// Medians of `frames` interleaved rounds over the option sets (after one warm-up round each);
 /// per set: (frame ms, lighting ms).
 fn interleaved(
@@ -70,7 +61,7 @@ fn interleaved(
         for (i, o) in sets.iter().enumerate() {
             let f = renderer.render_frame(scene, &gpu, o)?;
             t[i].0.push(frame_ms(&f));
-            t[i].1.push(pass_ms(&f, "lighting"));
+            t[i].1.push(super::pass_ms(&f, "lighting"));
         }
     }
     Ok(t.into_iter()
