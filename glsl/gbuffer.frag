@@ -26,6 +26,8 @@ layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
 // The material's weave texture (fabric only): one pattern repeat, full mip chain, each texel the
 // exact coverage (c_warp, c_weft, shadow-weighted thread area) of its footprint.
 layout(set = 1, binding = 4) uniform sampler2D weave_tex;
+// Ambient occlusion (glTF occlusionTexture, red channel; white when the material has none).
+layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -47,7 +49,7 @@ layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metal
 layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
 layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1 if it receives shadows
 layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, shadow-weighted thread area, 1 if fabric
-layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance
+layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
 
 void main() {
     Material m = materials[draw.material];
@@ -131,5 +133,8 @@ void main() {
     if (SHADING == SHADING_GOURAUD) {
         emissive += in_gouraud;
     }
-    gb_emissive = vec4(max(emissive, vec3(0.0)), 0.0);
+    // Occlusion = 1 + strength·(texel - 1) (glTF 2.0, occlusionTexture); the strength is in
+    // metallic_roughness.w.
+    float ao = clamp(1.0 + m.metallic_roughness.w * (texture(occlusion_tex, in_uv).r - 1.0), 0.0, 1.0);
+    gb_emissive = vec4(max(emissive, vec3(0.0)), ao);
 }

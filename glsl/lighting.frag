@@ -5,6 +5,7 @@
 #include "pbr.glsl"
 #include "fabric.glsl"
 #include "weave.glsl"
+#include "ibl.glsl"
 
 // Accuracy level (model page §4): 0 nearest, 1 filtered-params, 2 mixture, 3 supersampled.
 layout(constant_id = 0) const uint ACCURACY = 2u;
@@ -25,6 +26,11 @@ layout(constant_id = 5) const uint SHADOWS = 0u;
 // 1: a point or spot light whose range cannot reach the pixel is skipped before its falloff and
 // BRDF (the default); 0: every light is evaluated everywhere (to show the culling changes nothing).
 layout(constant_id = 6) const uint RANGE_CULLING = 1u;
+// Environment lighting (weft::env::IblLevel): 0 none (the fixed hemispherical ambient), 1 approx,
+// 2 filtered importance sampling, 3 brute-force Monte Carlo (the ground truth).
+layout(constant_id = 7) const uint IBL = 0u;
+// N of fis:N and mc:N.
+layout(constant_id = 8) const uint IBL_SAMPLES = 16u;
 
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
@@ -43,6 +49,11 @@ layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]
 // Per 16 x 16-pixel tile (row-major): (offset, count) of its light list, then the lists' light
 // indices (src/render/tiles.rs): the lights whose range can reach the tile.
 layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };
+// The environment (env space; 1 x 1 black cubes when there is none): radiance with box-filtered
+// mips, the GGX-prefiltered specular levels of the split sum, and the DFG table (n·v, roughness).
+layout(set = 0, binding = 13) uniform samplerCube env_radiance;
+layout(set = 0, binding = 14) uniform samplerCube env_specular;
+layout(set = 0, binding = 15) uniform sampler2D env_dfg;
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
@@ -79,9 +90,12 @@ float shadow_factor(Light light, vec3 p, vec3 n, float receives) {
         return 1.0;
     }
     vec3 ndc = clip.xyz / clip.w;
-    if (any(greaterThan(abs(ndc.xy), vec2(1.0))) || ndc.z > 1.0 || ndc.z < 0.0) {
+    if (any(greaterThan(abs(ndc.xy), vec2(1.0))) || ndc.z > 1.0) {
         return 1.0;
     }
+    // Beyond the map's far plane (a receiver behind every caster, such as a ground that casts
+    // nothing): in shadow wherever the map holds any caster, so compare with depth 0.
+    ndc.z = max(ndc.z, 0.0);
     vec2 uv = s.tile.xy + (ndc.xy * 0.5 + 0.5) * s.tile.zw;
     float texel = s.params.w;
     // Keep every bilinear footprint inside the tile.
@@ -150,6 +164,147 @@ vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f, floa
     return radiance;
 }
 
+
+// ---- Environment lighting (docs/fabric-model.md §6) ----
+
+vec3 env_radiance_at(vec3 world_dir, float lod) {
+    vec3 d = env_dir(world_dir, frame.env_rot0, frame.env_rot1, frame.env_rot2);
+    return textureLod(env_radiance, d, lod).rgb * frame.env_params.x;
+}
+
+// A per-pixel offset in [0, 1)² for the Monte Carlo level (Cranley–Patterson rotation): makes its
+// error noise, not structured bias.
+vec2 pixel_random() {
+    uvec2 p = uvec2(gl_FragCoord.xy);
+    uint h = p.x * 1973u + p.y * 9277u + 26699u;
+    h = (h ^ (h >> 16)) * 0x7feb352du;
+    h = (h ^ (h >> 15)) * 0x846ca68bu;
+    h = h ^ (h >> 16);
+    uint g = h * 0x9e3779b9u;
+    g = (g ^ (g >> 16)) * 0x7feb352du;
+    return vec2(float(h >> 8), float(g >> 8)) / 16777216.0;
+}
+
+vec2 ibl_sample(uint i, uint n, vec2 rotation) {
+    return fract(hammersley(i, n) + rotation);
+}
+
+// The glTF metallic-roughness BRDF under the environment: SH irradiance for the diffuse, the
+// split sum for the specular (approx and fis), or Monte Carlo (mc). ao: the occlusion texture.
+vec3 pbr_env(vec3 n, vec3 v, vec3 base, float metallic, float roughness, float ao) {
+    float nv = clamp(dot(n, v), 1e-4, 1.0);
+    vec3 f0 = mix(vec3(0.04), base, metallic);
+    if (IBL == 3u) {
+        // Ground truth: GGX-sampled specular and cosine-sampled diffuse, unfiltered environment.
+        mat3 tbn = fabric_frame(n, any_perpendicular(n), 1.0);
+        float alpha = max(roughness * roughness, 1e-3);
+        vec2 rot = pixel_random();
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < IBL_SAMPLES; ++i) {
+            vec2 xi = ibl_sample(i, IBL_SAMPLES, rot);
+            vec3 h = tbn * ggx_sample_h(xi, alpha);
+            float vh = dot(v, h);
+            vec3 l = 2.0 * vh * h - v;
+            float nl = dot(n, l);
+            if (nl > 0.0 && vh > 0.0) {
+                float nh = clamp(dot(n, h), 0.0, 1.0);
+                vec3 f = f0 + (1.0 - f0) * pow(1.0 - vh, 5.0);
+                float w = 4.0 * smith_v(nl, nv, alpha) * nl * vh / max(nh, 1e-8);
+                sum += env_radiance_at(l, 0.0) * f * w;
+            }
+            vec3 ld = tbn * cosine_sample(xi);
+            vec3 hd = normalize(ld + v);
+            vec3 fd = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(v, hd), 0.0, 1.0), 5.0);
+            sum += env_radiance_at(ld, 0.0) * (1.0 - fd) * (1.0 - metallic) * base;
+        }
+        return sum / float(IBL_SAMPLES) * ao;
+    }
+    vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
+    vec3 spec_albedo = f0 * ab.x + ab.y;
+    vec3 r = reflect(-v, n);
+    vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
+    vec3 prefiltered = textureLod(env_specular, d, roughness * frame.env_params.y).rgb * frame.env_params.x;
+    vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
+    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - spec_albedo);
+    return diffuse * ao + prefiltered * spec_albedo * specular_occlusion(nv, ao, roughness);
+}
+
+// The fabric's two specular lobes under the environment, each without its coverage:
+// (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
+// lobe's width times Fresnel; fis / mc: importance sampling of the coverage-weighted mixture of
+// the two lobes' A–S samplers (one-sample MIS, so both estimates use every sample).
+void fabric_env_lobes(mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, out vec3 weft, out vec3 warp) {
+    weft = vec3(0.0);
+    warp = vec3(0.0);
+    if (!(k2.z > 0.0) || f.rs <= 0.0) {
+        return;
+    }
+    if (IBL == 1u) {
+        vec3 r = tbn * vec3(-k2.x, -k2.y, k2.z);
+        float peak = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (8.0 * FABRIC_PI);
+        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, frame.env_params.z)) * schlick(f.rs, k2.z);
+        weft = l;
+        warp = l;
+        return;
+    }
+    float c_thread = coverage.x + coverage.y;
+    float w_weft = c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
+    vec2 rot = IBL == 3u ? pixel_random() : vec2(0.0);
+    for (uint i = 0u; i < IBL_SAMPLES; ++i) {
+        vec2 xi = ibl_sample(i, IBL_SAMPLES, rot);
+        bool pick_weft = xi.x < w_weft;
+        xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
+        xi.x = min(xi.x, 0.99999994);
+        vec3 h = pick_weft ? as_sample_h(xi, f.e_along, f.e_across) : as_sample_h(xi, f.e_across, f.e_along);
+        float kh = dot(k2, h);
+        if (!(kh > 0.0)) {
+            continue;
+        }
+        vec3 k1 = 2.0 * kh * h - k2;
+        if (!(k1.z > 0.0)) {
+            continue;
+        }
+        float pdf = (w_weft * as_d(h, f.e_along, f.e_across) + (1.0 - w_weft) * as_d(h, f.e_across, f.e_along)) / (4.0 * kh);
+        if (!(pdf > 0.0)) {
+            continue;
+        }
+        float lod = IBL == 3u ? 0.0 : fis_lod(pdf, IBL_SAMPLES, frame.env_params.z);
+        vec3 l = env_radiance_at(tbn * k1, lod) * (k1.z / pdf);
+        weft += l * as_lobe(k1, k2, f.e_along, f.e_across, f.rs);
+        warp += l * as_lobe(k1, k2, f.e_across, f.e_along, f.rs);
+    }
+    weft /= float(IBL_SAMPLES);
+    warp /= float(IBL_SAMPLES);
+}
+
+// The fabric's diffuse under the environment, without its coverage: irradiance/π times the
+// diffuse factor (SH; mc: cosine-sampled, unfiltered).
+vec3 fabric_env_diffuse(mat3 tbn, vec3 k2, GpuFabric f) {
+    if (IBL == 3u) {
+        vec2 rot = pixel_random();
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < IBL_SAMPLES; ++i) {
+            vec3 k1 = cosine_sample(ibl_sample(i, IBL_SAMPLES, rot));
+            float factor = (f.flags & FABRIC_FLAG_COUPLED_DIFFUSE) != 0u ? coupled_diffuse(f.rs, k1.z, k2.z) * FABRIC_PI : 1.0;
+            sum += env_radiance_at(tbn * k1, 0.0) * factor;
+        }
+        return sum / float(IBL_SAMPLES);
+    }
+    vec3 n = tbn[2];
+    return sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x
+        * fabric_diffuse_albedo(f, k2.z);
+}
+
+// The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
+// thread shadowing (as for lamps), and each lobe weighted by its thread's coverage.
+vec3 fabric_env_combine(vec3 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, float ao, float nv) {
+    float c_thread = coverage.x + coverage.y;
+    vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
+    // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
+    // averaged exponents would need a sampler of its own.)
+    return rd * diffuse * ao + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
+}
+
 vec3 debug_color(uint view, ivec2 px, float depth) {
     vec4 albedo = texelFetch(gb_albedo, px, 0);
     vec4 fr = texelFetch(gb_frame, px, 0);
@@ -184,8 +339,20 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gb_depth, px, 0).r;
     if (depth <= 0.0) {
-        // Empty pixel: no surface, no lighting.
-        out_color = vec4(frame.debug_view == DEBUG_NONE ? frame.background.rgb : vec3(0.0), 1.0);
+        // Empty pixel: the background (the environment seen along the view ray, a colour, or
+        // transparent); debug views show black.
+        if (frame.debug_view != DEBUG_NONE) {
+            out_color = vec4(0.0, 0.0, 0.0, 1.0);
+        } else if (IBL != 0u && frame.env_background.x == 0.0) {
+            vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+            vec4 far = frame.inv_view_proj * vec4(ndc, 1e-7, 1.0);
+            vec3 ray = normalize(far.xyz / far.w - frame.eye.xyz);
+            out_color = vec4(env_radiance_at(ray, frame.env_background.y), 1.0);
+        } else if (frame.env_background.x == 2.0) {
+            out_color = vec4(0.0);
+        } else {
+            out_color = vec4(frame.background.rgb, 1.0);
+        }
         return;
     }
     if (frame.debug_view != DEBUG_NONE) {
@@ -207,8 +374,12 @@ void main() {
     float roughness = surface.x;
     float receives = surface.w;
 
-    vec3 radiance = texelFetch(gb_emissive, px, 0).rgb;
-    vec3 ambient = mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
+    vec4 emissive_ao = texelFetch(gb_emissive, px, 0);
+    vec3 radiance = emissive_ao.rgb;
+    float ao = emissive_ao.a;
+    // Without an environment: a fixed hemispherical ambient, so surfaces facing away from every
+    // light are not pure black. With one, the environment replaces it.
+    vec3 ambient = IBL != 0u ? vec3(0.0) : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
     uint material = uint(surface.y + 0.5);
     uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
 
@@ -220,10 +391,25 @@ void main() {
         mat3 tbn = fabric_frame(n, oct_decode(fr.zw), surface.z);
         vec3 k2 = fabric_local(v, tbn);
         vec4 g = texelFetch(gb_fabric, px, 0);
+        // Environment light: the lobes are integrated once per pixel (with the pixel's mean
+        // coverage as the mixture's sampling weights) and combined with each coverage below.
+        vec3 env_diffuse = vec3(0.0);
+        vec3 env_weft = vec3(0.0);
+        vec3 env_warp = vec3(0.0);
+        if (IBL != 0u && SHADING == SHADING_FABRIC) {
+            vec3 mean_cov = ACCURACY == 3u ? vec3(0.5, 0.5, 1.0) : g.rgb;
+            env_diffuse = fabric_env_diffuse(tbn, k2, f);
+            fabric_env_lobes(tbn, k2, mean_cov, f, env_weft, env_warp);
+        }
+        float nv = clamp(k2.z, 0.0, 1.0);
         if (SHADING == SHADING_GOURAUD) {
             // Lit per vertex by gbuffer.vert: the emissive target already holds it.
         } else if (SHADING != SHADING_FABRIC) {
             radiance += classic_radiance(p, ambient, tbn, k2, f, receives);
+            if (IBL != 0u) {
+                // The comparison models take only the environment's diffuse light.
+                radiance += fabric_mean_rd(f) * fabric_env_diffuse(tbn, k2, f) * ao;
+            }
         } else if (ACCURACY == 3u) {
             Weave w = weave_from_fabric(f);
             vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
@@ -232,16 +418,27 @@ void main() {
                 for (uint i = 0u; i < SAMPLES; ++i) {
                     vec2 o = (vec2(float(i), float(j)) + 0.5) / float(SAMPLES) * 2.0 - 1.0;
                     vec2 s = (g.xy + o * g.zw) * cells;
-                    sum += fabric_radiance(p, ambient, tbn, k2, weave_point(w, s.x, s.y), f, receives);
+                    vec3 c = weave_point(w, s.x, s.y);
+                    sum += fabric_radiance(p, ambient, tbn, k2, c, f, receives);
+                    if (IBL != 0u) {
+                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, ao, nv);
+                    }
                 }
             }
             radiance += sum / float(SAMPLES * SAMPLES);
         } else {
             radiance += fabric_radiance(p, ambient, tbn, k2, g.rgb, f, receives);
+            if (IBL != 0u) {
+                radiance += fabric_env_combine(g.rgb, f, env_diffuse, env_weft, env_warp, ao, nv);
+            }
         }
     } else {
-        // Hemispherical ambient, so surfaces facing away from every light are not pure black.
-        radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+        if (IBL != 0u) {
+            radiance += pbr_env(n, v, base, metallic, roughness, ao);
+        } else {
+            // Hemispherical ambient, so surfaces facing away from every light are not pure black.
+            radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+        }
         uvec2 list = tile_list();
     for (uint j = 0u; j < list.y; ++j) {
         uint i = tile_lights[list.x + j];
@@ -257,5 +454,6 @@ void main() {
             radiance += e * c * shadow_factor(lights[i], p, n, receives);
         }
     }
-    out_color = vec4(radiance, 1.0);
+    // Never NaN or Inf into the image.
+    out_color = vec4(all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0), 1.0);
 }

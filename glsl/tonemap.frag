@@ -29,7 +29,8 @@ vec3 pbr_neutral(vec3 color) {
 }
 
 void main() {
-    vec3 c = texelFetch(hdr, ivec2(gl_FragCoord.xy), 0).rgb;
+    vec4 texel = texelFetch(hdr, ivec2(gl_FragCoord.xy), 0);
+    vec3 c = texel.rgb;
     // A NaN or Inf here is a bug upstream (the frame reports it); never let it reach the image.
     if (any(isnan(c)) || any(isinf(c))) {
         c = vec3(0.0);
@@ -38,5 +39,6 @@ void main() {
     if (tm.passthrough == 0u) {
         c = pbr_neutral(c * tm.exposure);
     }
-    out_color = vec4(clamp(c, 0.0, 1.0), 1.0);
+    // Alpha 0 only where the background is transparent (--background none).
+    out_color = vec4(clamp(c, 0.0, 1.0), texel.a > 0.5 ? 1.0 : 0.0);
 }

@@ -6,6 +6,7 @@
 
 pub mod bench;
 pub mod compare;
+pub mod env;
 pub mod fabric;
 pub mod package;
 pub mod reference;

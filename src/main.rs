@@ -73,6 +73,28 @@ struct SceneArgs {
     /// ashikhmin-shirley (one lobe, no weave).
     #[arg(long, default_value = "fabric")]
     shading: String,
+    /// Environment lighting: an equirectangular .hdr or .exr file, `studio` (the built-in
+    /// procedural studio, the default) or `none` (lamps and a fixed ambient only).
+    #[arg(long, default_value = "studio")]
+    env: String,
+    /// Turn the environment about the vertical axis, in degrees.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    env_rotation: f32,
+    /// Scale the environment's radiance.
+    #[arg(long, default_value_t = 1.0)]
+    env_intensity: f32,
+    /// What empty pixels show: env, env:BLUR (0..1), color, color:R,G,B (linear), none
+    /// (transparent).
+    #[arg(long, default_value = "env")]
+    background: String,
+    /// How environment light is integrated: approx, fis:N (filtered importance sampling, default
+    /// fis:16), mc:N (brute-force Monte Carlo, the ground truth).
+    #[arg(long, default_value = "fis:16")]
+    ibl: String,
+    /// Punctual lights: auto (the file's; a default key light with a shadow and a ground when it
+    /// has none and no --env FILE is given), none, file, default.
+    #[arg(long, default_value = "auto")]
+    lights: String,
 }
 
 #[derive(Args)]
@@ -182,10 +204,31 @@ fn load_scene_sized(
     args: &SceneArgs,
     default_size: &str,
 ) -> anyhow::Result<(Scene, RenderOptions)> {
-    let scene = match &args.scene {
+    // Flags first: a typo fails before any loading.
+    let lights = weft::env::LightsMode::parse(&args.lights)?;
+    let background = weft::env::Background::parse(&args.background)?;
+    let level = weft::env::IblLevel::parse(&args.ibl)?;
+    let mut scene = match &args.scene {
         Some(path) => scene::load(path)?,
         None => scene::default_scene(),
     };
+    let (env, own_env) = match args.env.as_str() {
+        "none" => (None, false),
+        "studio" => (Some(weft::env::Environment::studio()), false),
+        path => (Some(weft::env::Environment::load(std::path::Path::new(path))?), true),
+    };
+    let environment = env.map(|e| {
+        let mut l = weft::env::EnvLighting::new(std::sync::Arc::new(e));
+        l.rotation = args.env_rotation;
+        l.intensity = args.env_intensity;
+        l.background = background;
+        l.level = level;
+        l
+    });
+    if let Some(e) = &environment {
+        e.validate()?;
+    }
+    weft::env::stage(&mut scene, lights, args.env_rotation, own_env);
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -198,6 +241,7 @@ fn load_scene_sized(
         accuracy: render::Accuracy::parse(&args.accuracy)?,
         weave_precision: render::WeavePrecision::parse(&args.weave_precision)?,
         shading: render::Shading::parse(&args.shading)?,
+        environment,
         ..Default::default()
     };
     options.validate()?;

@@ -37,6 +37,15 @@ struct FrameData {
     uint debug_view;
     uint material_count;
     uint tile_columns;   // 16 x 16-pixel tiles across (lighting.frag's light lists)
+    // Environment lighting (weft::env; zeros when the scene has none).
+    vec4 env_rot0;       // rows of env_from_world (--env-rotation about +y); w unused
+    vec4 env_rot1;
+    vec4 env_rot2;
+    vec4 env_params;     // x: intensity, y: the specular cube's last level (roughness 1),
+                         // z: the radiance cube's face size, w: its last level
+    vec4 env_background; // x: 0 environment, 1 colour (background.rgb), 2 transparent;
+                         // y: the environment background's blur, in radiance-cube levels
+    vec4 sh[9];          // irradiance/π as order-2 SH in env space (weft::env::Environment::sh9)
 };
 
 const uint LIGHT_DIRECTIONAL = 0u;
@@ -63,7 +72,8 @@ struct Shadow {
 struct Material {
     vec4 base_color;          // linear rgba factor
     vec4 emissive_normal;     // rgb emissive factor, a: normal scale
-    vec4 metallic_roughness;  // x metallic, y roughness, z: fabric record index + 1 (0 = none), w: unused
+    vec4 metallic_roughness;  // x metallic, y roughness, z: fabric record index + 1 (0 = none),
+                              // w: occlusion strength
 };
 
 // Octahedral encoding of unit vectors (Cigolle et al. 2014): two values in [-1, 1].

@@ -155,9 +155,9 @@ pub struct GpuScene {
     light_records: Vec<GpuLight>,
     light_count: u32,
     material_count: u32,
-    /// Per material: base colour, metallic-roughness, normal and emissive textures (indices into
-    /// `textures`, None = a default).
-    material_textures: Vec<[Option<usize>; 4]>,
+    /// Per material: base colour, metallic-roughness, normal, emissive and occlusion textures
+    /// (indices into `textures`, None = a default).
+    material_textures: Vec<[Option<usize>; 5]>,
     textures: Vec<Image>,
     draws: Vec<DrawRange>,
     triangles: usize,
@@ -187,7 +187,14 @@ pub struct Renderer {
     /// The shadow atlas of the last frame that had shadows (kept while the size stays).
     shadow_atlas: Option<Image>,
     targets: Option<Targets>,
+    /// Environment preprocessing and its fixed resources.
+    env: super::environment::EnvPasses,
+    /// Preprocessed environments, newest last (a few are kept, found by content hash).
+    env_cache: Vec<super::environment::GpuEnvironment>,
 }
+
+/// Preprocessed environments a renderer keeps.
+const ENV_CACHE: usize = 2;
 
 fn sampled(binding: u32, stages: Stages) -> Binding {
     Binding {
@@ -224,7 +231,7 @@ impl Renderer {
             },
         ])?;
         let material_layout = ctx.create_set_layout(
-            &(0..5)
+            &(0..6)
                 .map(|b| sampled(b, Stages::FRAGMENT))
                 .collect::<Vec<_>>(),
         )?;
@@ -262,6 +269,7 @@ impl Renderer {
             kind: BindingKind::StorageBuffer,
             stages: Stages::FRAGMENT,
         });
+        lighting_bindings.extend((13..16).map(|b| sampled(b, Stages::FRAGMENT)));
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
         let weave_layout = ctx.create_set_layout(&[Binding {
@@ -336,7 +344,10 @@ impl Renderer {
             &ctx,
             &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear),
         )?;
+        let env = super::environment::EnvPasses::new(&ctx)?;
         Ok(Renderer {
+            env,
+            env_cache: Vec::new(),
             ctx,
             frame_layout,
             material_layout,
@@ -373,6 +384,7 @@ impl Renderer {
             &self.tonemap_pipeline,
             &self.shadow_pipeline,
         ];
+        all.extend(self.env.pipelines());
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
         Ok(all)
@@ -414,6 +426,15 @@ impl Renderer {
             (4, shading),
             (5, plan.shadow_sampling as u32),
             (6, plan.range_culling as u32),
+            (7, plan.ibl_code(options)),
+            (
+                8,
+                options
+                    .environment
+                    .as_ref()
+                    .map(|e| e.level.samples())
+                    .unwrap_or(1),
+            ),
         ];
         if !self.gbuffer_variants.contains_key(&gbuffer_key) {
             let vertex_layout = VertexLayout {
@@ -453,12 +474,14 @@ impl Renderer {
         if !self.lighting_variants.contains_key(&lighting_key) {
             let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}]",
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}, ibl={}, ibl_samples={}]",
                     options.accuracy.code(),
                     options.accuracy.samples(),
                     options.fabric_as_pbr as u32,
                     plan.shadow_sampling as u32,
-                    plan.range_culling as u32
+                    plan.range_culling as u32,
+                    lighting_key[7].1,
+                    lighting_key[8].1
                 ),
                 vertex: &shaders::FULLSCREEN_VERT,
                 fragment: &shaders::LIGHTING_FRAG,
@@ -594,6 +617,7 @@ impl Renderer {
                     m.metallic_roughness_texture,
                     m.normal_texture,
                     m.emissive_texture,
+                    m.occlusion_texture,
                 ]
             })
             .collect();
@@ -656,7 +680,38 @@ impl Renderer {
             Some(c) => c.clone(),
             None => scene.camera(options.camera)?,
         };
+        let mut timings = Vec::new();
+        // The environment: preprocessed on first use (Pass::Environment), then from the cache.
+        let env_index = match (&plan.environment, &options.environment) {
+            (Some(_), Some(e)) => Some(self.environment(&e.env, &mut timings)?),
+            _ => None,
+        };
         let mut frame_data = FrameData::new(&camera, width, height);
+        if let (Some(i), Some(e)) = (env_index, &options.environment) {
+            let g = &self.env_cache[i];
+            let rot = crate::env::env_from_world(e.rotation);
+            for r in 0..3 {
+                frame_data.env_rot[r] = [rot[r][0], rot[r][1], rot[r][2], 0.0];
+            }
+            let radiance_last = (g.radiance_levels() - 1) as f32;
+            frame_data.env_params = [
+                e.intensity,
+                (super::environment::SPECULAR_LEVELS - 1) as f32,
+                g.radiance_size() as f32,
+                radiance_last,
+            ];
+            for k in 0..9 {
+                frame_data.sh[k] = [g.sh[k][0], g.sh[k][1], g.sh[k][2], 0.0];
+            }
+            frame_data.env_background = match e.background {
+                crate::env::Background::Env { blur } => [0.0, blur * radiance_last, 0.0, 0.0],
+                crate::env::Background::Color(c) => {
+                    frame_data.background = [c[0], c[1], c[2], 0.0];
+                    [1.0, 0.0, 0.0, 0.0]
+                }
+                crate::env::Background::None => [2.0, 0.0, 0.0, 0.0],
+            };
+        }
         frame_data.light_count = gpu.light_count;
         frame_data.material_count = gpu.material_count;
         frame_data.debug_view = options.debug_view as u32;
@@ -677,7 +732,8 @@ impl Renderer {
         )?;
 
         // Shadow maps: the atlas, one record per map, and the lights with their map's index.
-        let bounds = scene.bounds();
+        // The maps cover what casts (a ground that only receives does not thin them out).
+        let bounds = scene.caster_bounds().or_else(|| scene.bounds());
         let shadow_maps = match &bounds {
             Some(b) if !plan.shadows.is_empty() => {
                 let layout = super::shadow::AtlasLayout::new(&plan.shadows);
@@ -737,7 +793,10 @@ impl Renderer {
         let lighting_pipeline = &self.lighting_variants[&lighting_key];
         let pool = ctx.create_descriptor_pool(4 + gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
-        let mut timings = Vec::new();
+        let (env_radiance, env_specular) = match env_index {
+            Some(i) => (&self.env_cache[i].radiance, &self.env_cache[i].specular),
+            None => (&self.env.black, &self.env.black),
+        };
         let mut stats = FrameStats {
             draws: gpu.draws.len(),
             triangles: gpu.triangles,
@@ -775,6 +834,9 @@ impl Renderer {
 
         for pass in &plan.passes {
             match pass {
+                Pass::Environment => {
+                    // Preprocessed before the frame (above), or found in the cache.
+                }
                 Pass::Weave => {
                     // The weave pass ran when the scene was uploaded (once per distinct weave,
                     // one dispatch per mip level); a frame reuses its textures.
@@ -793,7 +855,7 @@ impl Renderer {
                     )?;
                     let material_sets = (0..gpu.material_count as usize)
                         .map(|m| {
-                            let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 4]);
+                            let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 5]);
                             let pick = |slot: usize, fallback: &'static str| -> &Image {
                                 match tex[slot].and_then(|i| gpu.textures.get(i)) {
                                     Some(t) => t,
@@ -818,6 +880,7 @@ impl Renderer {
                                     (2, Resource::Sampled(pick(2, "normal"), &self.linear)),
                                     (3, Resource::Sampled(pick(3, "white"), &self.linear)),
                                     (4, Resource::Sampled(weave, &self.linear)),
+                                    (5, Resource::Sampled(pick(4, "white"), &self.linear)),
                                 ],
                             )
                         })
@@ -866,6 +929,9 @@ impl Renderer {
                             (10, Resource::Sampled(atlas, &self.shadow_sampler)),
                             (11, Resource::Storage(&shadow_buffer)),
                             (12, Resource::Storage(&tile_buffer)),
+                            (13, Resource::Sampled(env_radiance, &self.env.sampler)),
+                            (14, Resource::Sampled(env_specular, &self.env.sampler)),
+                            (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
                         ],
                     )?;
                     timed("lighting", &mut |cmd| {
@@ -914,6 +980,30 @@ impl Renderer {
             stats,
             plan,
         })
+    }
+
+    /// The cache index of `env`'s preprocessed form, built (and timed as "environment") if it is
+    /// not cached.
+    fn environment(
+        &mut self,
+        env: &crate::env::Environment,
+        timings: &mut Vec<PassTiming>,
+    ) -> crate::Result<usize> {
+        let hash = env.hash();
+        if let Some(i) = self.env_cache.iter().position(|g| g.hash == hash) {
+            return Ok(i);
+        }
+        let built = self.env.build(&self.ctx, env)?;
+        timings.push(PassTiming {
+            name: "environment",
+            gpu_ms: None,
+            wall_ms: built.build_ms,
+        });
+        if self.env_cache.len() >= ENV_CACHE {
+            self.env_cache.remove(0);
+        }
+        self.env_cache.push(built);
+        Ok(self.env_cache.len() - 1)
     }
 
     /// Builds a weave texture: every mip level computed by weave.comp as the exact coverage of its

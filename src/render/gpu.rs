@@ -23,8 +23,17 @@ pub struct FrameData {
     pub material_count: u32,
     /// Tiles across the image (the light lists of render::tiles).
     pub tile_columns: u32,
+    /// Rows of the environment-from-world rotation (w unused).
+    pub env_rot: [[f32; 4]; 3],
+    /// x: intensity, y: the specular cube's last level, z: the radiance cube's face size, w: its
+    /// last level.
+    pub env_params: [f32; 4],
+    /// x: 0 environment, 1 colour, 2 transparent; y: the environment background's blur (levels).
+    pub env_background: [f32; 4],
+    /// Irradiance/π, order-2 SH in env space (rgb, a unused).
+    pub sh: [[f32; 4]; 9],
 }
-const _: () = assert!(std::mem::size_of::<FrameData>() == 4 * 64 + 5 * 16 + 16);
+const _: () = assert!(std::mem::size_of::<FrameData>() == 4 * 64 + 5 * 16 + 16 + 14 * 16);
 
 impl FrameData {
     /// The frame uniform for `camera` at `width` x `height`, with no lights, materials or debug
@@ -58,6 +67,10 @@ impl FrameData {
             debug_view: 0,
             material_count: 0,
             tile_columns: super::tiles::tile_grid(width, height).0,
+            env_rot: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]],
+            env_params: [0.0; 4],
+            env_background: [1.0, 0.0, 0.0, 0.0],
+            sh: [[0.0; 4]; 9],
         }
     }
 }
@@ -146,7 +159,11 @@ impl GpuMaterial {
                 m.metallic,
                 m.roughness,
                 fabric_index.map(|i| i as f32 + 1.0).unwrap_or(0.0),
-                0.0,
+                if m.occlusion_texture.is_some() {
+                    m.occlusion_strength
+                } else {
+                    0.0
+                },
             ],
         }
     }

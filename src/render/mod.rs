@@ -1,5 +1,6 @@
 //! Rendering: the plan, the passes of a frame, and writing images.
 
+pub mod environment;
 mod frame;
 pub mod gpu;
 mod output;
@@ -9,7 +10,7 @@ pub mod tiles;
 
 pub use frame::{f16_to_f32, Frame, FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer};
 pub use output::{write_exr, write_png};
-pub use plan::{FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
+pub use plan::{EnvPlan, FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
 
 use crate::Error;
 
@@ -292,6 +293,10 @@ pub struct RenderOptions {
     /// Effects to force on whatever the scene needs (to check, and to measure, that what the plan
     /// skips changes nothing).
     pub force: Force,
+    /// Environment lighting (None: lamps and the fixed hemispherical ambient only). The CLI
+    /// lights every scene with one (the built-in studio unless `--env`); the library's default is
+    /// none, so lamp-only tests mean what they say.
+    pub environment: Option<crate::env::EnvLighting>,
 }
 
 impl Default for RenderOptions {
@@ -308,6 +313,7 @@ impl Default for RenderOptions {
             fabric_as_pbr: false,
             shading: Shading::Fabric,
             force: Force::NONE,
+            environment: None,
         }
     }
 }
@@ -327,6 +333,9 @@ impl RenderOptions {
                     Accuracy::MAX_SAMPLES
                 )));
             }
+        }
+        if let Some(e) = &self.environment {
+            e.validate()?;
         }
         if !self.exposure.is_finite() || self.exposure.abs() > 64.0 {
             return Err(Error::input(format!(

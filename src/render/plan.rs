@@ -20,6 +20,9 @@ pub enum Pass {
     Lighting,
     /// Exposure, tone curve and sRGB encoding into the 8-bit target.
     Tonemap,
+    /// Compute passes, once per environment (cached by content hash): the radiance cube and its
+    /// mips, the GGX-prefiltered specular cube; the SH irradiance on the CPU.
+    Environment,
 }
 
 impl Pass {
@@ -30,6 +33,7 @@ impl Pass {
             Pass::Shadow => "shadow",
             Pass::Lighting => "lighting",
             Pass::Tonemap => "tonemap",
+            Pass::Environment => "environment",
         }
     }
 }
@@ -124,6 +128,26 @@ pub struct Plan {
     pub range_culling: bool,
     pub textures: usize,
     pub debug_view: DebugView,
+    /// The environment that lights the scene, if any.
+    pub environment: Option<EnvPlan>,
+}
+
+/// Environment lighting of a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvPlan {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Face size of the radiance cube (and its levels), of the specular cube (and its levels).
+    pub radiance_size: u32,
+    pub radiance_levels: u32,
+    pub specular_size: u32,
+    pub specular_levels: u32,
+    /// The IBL level (approx, fis:N, mc:N).
+    pub level: String,
+    pub rotation: f32,
+    pub intensity: f32,
+    pub background: String,
 }
 
 impl Plan {
@@ -216,6 +240,38 @@ impl Plan {
         if !weaves.is_empty() {
             passes.insert(0, Pass::Weave);
         }
+        // Environment preprocessing only when an environment lights the scene (debug views show
+        // no lighting, so they need none either).
+        let environment = options
+            .environment
+            .as_ref()
+            .filter(|_| options.debug_view == DebugView::None)
+            .map(|e| {
+                let radiance_size = super::environment::radiance_size(e.env.width);
+                EnvPlan {
+                    name: e.env.name.clone(),
+                    width: e.env.width,
+                    height: e.env.height,
+                    radiance_size,
+                    radiance_levels: 32 - radiance_size.leading_zeros(),
+                    specular_size: super::environment::SPECULAR_SIZE,
+                    specular_levels: super::environment::SPECULAR_LEVELS,
+                    level: e.level.name(),
+                    rotation: e.rotation,
+                    intensity: e.intensity,
+                    background: match e.background {
+                        crate::env::Background::Env { blur } if blur > 0.0 => {
+                            format!("environment, blurred {blur}")
+                        }
+                        crate::env::Background::Env { .. } => "environment".into(),
+                        crate::env::Background::Color(c) => format!("colour {c:?}"),
+                        crate::env::Background::None => "transparent".into(),
+                    },
+                }
+            });
+        if environment.is_some() {
+            passes.insert(0, Pass::Environment);
+        }
         Plan {
             width: options.width,
             height: options.height,
@@ -237,6 +293,15 @@ impl Plan {
             range_culling: !options.force.no_range_culling,
             textures: scene.textures.len(),
             debug_view: options.debug_view,
+            environment,
+        }
+    }
+
+    /// lighting.frag's IBL constant: 0 without an environment.
+    pub fn ibl_code(&self, options: &RenderOptions) -> u32 {
+        match (&self.environment, &options.environment) {
+            (Some(_), Some(e)) => e.level.code(),
+            _ => 0,
         }
     }
 
@@ -309,6 +374,24 @@ impl fmt::Display for Plan {
             "lighting    shadow sampling {}, range culling {}",
             self.shadow_sampling, self.range_culling
         )?;
+        match &self.environment {
+            None => writeln!(f, "environment none (fixed hemispherical ambient)")?,
+            Some(e) => writeln!(
+                f,
+                "environment {} {}x{}: radiance cube {}² ({} levels), specular cube {}² ({} levels), SH irradiance; IBL {}, rotation {}°, intensity {}, background {}",
+                e.name,
+                e.width,
+                e.height,
+                e.radiance_size,
+                e.radiance_levels,
+                e.specular_size,
+                e.specular_levels,
+                e.level,
+                e.rotation,
+                e.intensity,
+                e.background
+            )?,
+        }
         writeln!(f, "textures    {}", self.textures)?;
         write!(f, "debug view  {}", self.debug_view.name())
     }

@@ -555,11 +555,32 @@ impl<'a> Loader<'a> {
             )?),
             None => None,
         };
-        if m.occlusion_texture().is_some() {
-            self.warn(format_args!(
-                "{who} has an occlusion texture, which weft does not use"
-            ));
-        }
+        let (occlusion_texture, occlusion_strength) = match m.occlusion_texture() {
+            Some(occ) => {
+                let transform = match occ.extension_value("KHR_texture_transform") {
+                    Some(v) => Some(self.parse_texture_transform(v, &who)?),
+                    None => None,
+                };
+                let strength = occ.strength();
+                finite("occlusionTexture.strength", &[strength])?;
+                if !(0.0..=1.0).contains(&strength) {
+                    self.warn(format_args!(
+                        "{who} has occlusionTexture.strength {strength}, outside [0, 1]; clamped"
+                    ));
+                }
+                let t = slot(
+                    self,
+                    occ.texture(),
+                    occ.tex_coord(),
+                    transform,
+                    "occlusion texture",
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?;
+                (Some(t), strength.clamp(0.0, 1.0))
+            }
+            None => (None, 1.0),
+        };
         if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
             self.warn(format_args!(
                 "{who} has alphaMode {:?}; weft draws every material opaque",
@@ -604,6 +625,8 @@ impl<'a> Loader<'a> {
             metallic_roughness_texture,
             normal_texture,
             emissive_texture,
+            occlusion_texture,
+            occlusion_strength,
             double_sided: m.double_sided(),
             fabric,
         };

@@ -91,6 +91,10 @@ pub struct Material {
     pub metallic_roughness_texture: Option<usize>,
     pub normal_texture: Option<usize>,
     pub emissive_texture: Option<usize>,
+    /// glTF occlusionTexture (red channel; TEXCOORD_0 with the material's transform) and its
+    /// strength: it darkens environment light only (lamps are not occluded by it).
+    pub occlusion_texture: Option<usize>,
+    pub occlusion_strength: f32,
     pub double_sided: bool,
     pub fabric: Option<crate::fabric::FabricParams>,
 }
@@ -109,6 +113,8 @@ impl Default for Material {
             metallic_roughness_texture: None,
             normal_texture: None,
             emissive_texture: None,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
             double_sided: false,
             fabric: None,
         }
@@ -215,6 +221,22 @@ impl Scene {
         let mut min = Vec3::splat(f32::INFINITY);
         let mut max = Vec3::splat(f32::NEG_INFINITY);
         for d in &self.draws {
+            for v in &self.meshes[d.mesh].vertices {
+                let p = d.world.transform_point3(Vec3::from(v.position));
+                if p.is_finite() {
+                    min = min.min(p);
+                    max = max.max(p);
+                }
+            }
+        }
+        (min.x <= max.x).then_some(Bounds { min, max })
+    }
+
+    /// World-space bounds of the draws that cast shadows (what a shadow map must cover).
+    pub fn caster_bounds(&self) -> Option<Bounds> {
+        let mut min = Vec3::splat(f32::INFINITY);
+        let mut max = Vec3::splat(f32::NEG_INFINITY);
+        for d in self.draws.iter().filter(|d| d.cast_shadows) {
             for v in &self.meshes[d.mesh].vertices {
                 let p = d.world.transform_point3(Vec3::from(v.position));
                 if p.is_finite() {

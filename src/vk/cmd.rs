@@ -108,7 +108,7 @@ impl Cmd<'_> {
                 base_mip_level: base,
                 level_count: count,
                 base_array_layer: 0,
-                layer_count: 1,
+                layer_count: image.desc.layers(),
             });
         let barriers = [barrier];
         let dep = vk::DependencyInfo::default().image_memory_barriers(&barriers);
@@ -302,7 +302,7 @@ impl Cmd<'_> {
                 aspect_mask: image.aspect(),
                 mip_level: 0,
                 base_array_layer: 0,
-                layer_count: 1,
+                layer_count: image.desc.layers(),
             })
             .image_extent(vk::Extent3D {
                 width: image.desc.width,
@@ -329,7 +329,7 @@ impl Cmd<'_> {
                 aspect_mask: image.aspect(),
                 mip_level: level,
                 base_array_layer: 0,
-                layer_count: 1,
+                layer_count: image.desc.layers(),
             })
             .image_extent(vk::Extent3D {
                 width: w,
@@ -370,7 +370,7 @@ impl Cmd<'_> {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
                 mip_level,
                 base_array_layer: 0,
-                layer_count: 1,
+                layer_count: image.desc.layers(),
             };
             let blit = vk::ImageBlit::default()
                 .src_subresource(layers(level - 1))
@@ -403,7 +403,7 @@ impl Cmd<'_> {
             aspect_mask: vk::ImageAspectFlags::COLOR,
             mip_level: level,
             base_array_layer: 0,
-            layer_count: 1,
+            layer_count: src.desc.layers().min(dst.desc.layers()),
         };
         let region = vk::ImageBlit::default()
             .src_subresource(layers)

@@ -84,6 +84,9 @@ pub struct ImageDesc {
     pub height: u32,
     pub mip_levels: u32,
     pub usage: vk::ImageUsageFlags,
+    /// A cube map: six square layers (+x, -x, +y, -y, +z, -z), sampled as `samplerCube`, each
+    /// mip level written as an `image2DArray` (layer = face).
+    pub cube: bool,
 }
 
 impl ImageDesc {
@@ -95,6 +98,22 @@ impl ImageDesc {
             height,
             mip_levels: 1,
             usage: vk::ImageUsageFlags::empty(),
+            cube: false,
+        }
+    }
+    /// A cube map of `size` x `size` faces.
+    pub fn new_cube(name: impl Into<String>, format: vk::Format, size: u32) -> Self {
+        ImageDesc {
+            cube: true,
+            ..ImageDesc::new_2d(name, format, size, size)
+        }
+    }
+    /// Array layers: 6 for a cube, else 1.
+    pub fn layers(&self) -> u32 {
+        if self.cube {
+            6
+        } else {
+            1
         }
     }
     pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
@@ -175,6 +194,9 @@ pub enum Filter {
     NearestRepeat,
     /// Nearest, clamped: for reading render targets.
     NearestClamp,
+    /// Trilinear, clamped, no anisotropy: cube maps (seamless across faces in Vulkan) and
+    /// look-up tables.
+    LinearClamp,
     /// Depth comparison for shadow maps (`sampler2DShadow`): bilinear over the 2 x 2 compare
     /// results, clamped; a texel passes where the reference depth is greater than or equal to it
     /// (reversed-Z: nearer to the light, or level with the nearest occluder).
@@ -292,8 +314,19 @@ impl Context {
                 desc.name, desc.width, desc.height, self.shared.info.name
             )));
         }
+        if desc.cube && desc.width != desc.height {
+            return Err(Error::device(format!(
+                "cube image '{}' must have square faces, not {}x{}",
+                desc.name, desc.width, desc.height
+            )));
+        }
         let device = &self.shared.device;
         let info = vk::ImageCreateInfo::default()
+            .flags(if desc.cube {
+                vk::ImageCreateFlags::CUBE_COMPATIBLE
+            } else {
+                vk::ImageCreateFlags::empty()
+            })
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
             .extent(vk::Extent3D {
@@ -302,7 +335,7 @@ impl Context {
                 depth: 1,
             })
             .mip_levels(desc.mip_levels)
-            .array_layers(1)
+            .array_layers(desc.layers())
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
@@ -354,24 +387,31 @@ impl Context {
         unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }
             .map_err(vkerr("vkBindImageMemory"))?;
         let aspect = image.aspect();
-        let make_view = |base: u32, count: u32| {
+        let layers = desc.layers();
+        let make_view = |base: u32, count: u32, view_type: vk::ImageViewType| {
             let info = vk::ImageViewCreateInfo::default()
                 .image(raw)
-                .view_type(vk::ImageViewType::TYPE_2D)
+                .view_type(view_type)
                 .format(desc.format)
                 .subresource_range(vk::ImageSubresourceRange {
                     aspect_mask: aspect,
                     base_mip_level: base,
                     level_count: count,
                     base_array_layer: 0,
-                    layer_count: 1,
+                    layer_count: layers,
                 });
             unsafe { device.create_image_view(&info, None) }.map_err(vkerr("vkCreateImageView"))
         };
-        image.view = make_view(0, desc.mip_levels)?;
-        if desc.mip_levels > 1 && desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
+        let (sampled_type, storage_type) = if desc.cube {
+            (vk::ImageViewType::CUBE, vk::ImageViewType::TYPE_2D_ARRAY)
+        } else {
+            (vk::ImageViewType::TYPE_2D, vk::ImageViewType::TYPE_2D)
+        };
+        image.view = make_view(0, desc.mip_levels, sampled_type)?;
+        if (desc.mip_levels > 1 || desc.cube) && desc.usage.contains(vk::ImageUsageFlags::STORAGE)
+        {
             for level in 0..desc.mip_levels {
-                let v = make_view(level, 1)?;
+                let v = make_view(level, 1, storage_type)?;
                 image.mip_views.push(v);
             }
         }
@@ -390,6 +430,12 @@ impl Context {
                 vk::Filter::NEAREST,
                 vk::SamplerMipmapMode::NEAREST,
                 vk::SamplerAddressMode::REPEAT,
+                false,
+            ),
+            Filter::LinearClamp => (
+                vk::Filter::LINEAR,
+                vk::SamplerMipmapMode::LINEAR,
+                vk::SamplerAddressMode::CLAMP_TO_EDGE,
                 false,
             ),
             Filter::NearestClamp | Filter::ShadowCompare => (

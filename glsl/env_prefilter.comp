@@ -1,0 +1,54 @@
+#version 460
+// Environment preprocessing, step 2: one level of the GGX-prefiltered specular cube of the split
+// sum (Karis 2013): for each texel direction R (with n = v = R), the radiance cube convolved with
+// the GGX distribution of `roughness`, weighted by n·l, by filtered importance sampling
+// (Křivánek & Colbert 2008: each sample reads the radiance cube at the mip level of its pdf).
+//
+// Dispatch ceil(size/8) x ceil(size/8) x 6.
+#extension GL_GOOGLE_include_directive : require
+#include "cube.glsl"
+#include "ibl.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+layout(set = 0, binding = 0, rgba32f) uniform writeonly image2DArray cube_level;
+layout(set = 0, binding = 1) uniform samplerCube radiance;
+
+layout(push_constant) uniform CubePush {
+    uint size;          // this level's face size in texels
+    float roughness;    // of this level
+    float source_size;  // the radiance cube's level-0 face size
+    uint samples;
+} pc;
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (id.x >= pc.size || id.y >= pc.size || id.z >= 6u) {
+        return;
+    }
+    vec3 n = cube_texel_dir(id.z, id.xy, pc.size);
+    if (pc.roughness <= 0.0) {
+        imageStore(cube_level, ivec3(id), vec4(textureLod(radiance, n, 0.0).rgb, 1.0));
+        return;
+    }
+    mat3 frame = fabric_frame(n, any_perpendicular(n), 1.0);
+    float alpha = max(pc.roughness * pc.roughness, 1e-3);
+    vec3 sum = vec3(0.0);
+    float weight = 0.0;
+    for (uint i = 0u; i < pc.samples; ++i) {
+        vec3 h = ggx_sample_h(hammersley(i, pc.samples), alpha);
+        // v = n = z: l = 2 (n·h) h - n.
+        vec3 l = vec3(2.0 * h.z * h.x, 2.0 * h.z * h.y, 2.0 * h.z * h.z - 1.0);
+        if (l.z <= 0.0) {
+            continue;
+        }
+        // pdf of l: D(h)·(n·h)/(4 v·h) = D/4 with v = n.
+        float a2 = alpha * alpha;
+        float dd = h.z * h.z * (a2 - 1.0) + 1.0;
+        float pdf = a2 / (IBL_PI * dd * dd) * 0.25;
+        vec3 w = frame * l;
+        sum += textureLod(radiance, w, fis_lod(pdf, pc.samples, pc.source_size)).rgb * l.z;
+        weight += l.z;
+    }
+    imageStore(cube_level, ivec3(id), vec4(weight > 0.0 ? sum / weight : vec3(0.0), 1.0));
+}

@@ -1,0 +1,100 @@
+// Image-based lighting (docs/fabric-model.md §6): environment look-ups, the spherical-harmonic
+// irradiance, low-discrepancy samples, the GGX and Ashikhmin–Shirley half-vector samplers, and
+// the filtered-importance-sampling mip level (Křivánek & Colbert 2008).
+//
+// Rust twins: weft::env (sh_eval, hammersley, env_from_world, the equirect convention) and
+// weft::reference::ibl (the samplers, fis_lod and the estimators, f32). Cube faces are in env
+// space: a world direction w is looked up at env_dir(w).
+#ifndef WEFT_IBL_GLSL
+#define WEFT_IBL_GLSL
+
+#include "fabric.glsl"
+
+#define IBL_PI 3.14159265358979323846
+
+// The environment direction of world direction w: rows of env_from_world (--env-rotation).
+vec3 env_dir(vec3 w, vec4 r0, vec4 r1, vec4 r2) {
+    return vec3(dot(r0.xyz, w), dot(r1.xyz, w), dot(r2.xyz, w));
+}
+
+// Irradiance/π at env-space normal n from the SH9 coefficients (weft::env::sh_eval), >= 0.
+vec3 sh_irradiance(vec4 sh[9], vec3 n) {
+    float x = n.x;
+    float y = n.y;
+    float z = n.z;
+    vec3 e = sh[0].rgb * 0.2820948
+        + sh[1].rgb * (0.4886025 * y)
+        + sh[2].rgb * (0.4886025 * z)
+        + sh[3].rgb * (0.4886025 * x)
+        + sh[4].rgb * (1.0925484 * x * y)
+        + sh[5].rgb * (1.0925484 * y * z)
+        + sh[6].rgb * (0.3153916 * (3.0 * z * z - 1.0))
+        + sh[7].rgb * (1.0925484 * x * z)
+        + sh[8].rgb * (0.5462742 * (x * x - y * y));
+    return max(e, vec3(0.0));
+}
+
+// The Hammersley point i of n: (i/n, radical inverse of i).
+vec2 hammersley(uint i, uint n) {
+    return vec2(float(i) / float(n), float(bitfieldReverse(i)) * 2.3283064365386963e-10);
+}
+
+// A GGX half vector in the local frame (z = n) with pdf D(h)·h.z, alpha = roughness².
+vec3 ggx_sample_h(vec2 xi, float alpha) {
+    float a2 = alpha * alpha;
+    float phi = 2.0 * IBL_PI * xi.x;
+    float cos_t = sqrt((1.0 - xi.y) / (1.0 + (a2 - 1.0) * xi.y));
+    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
+// An A–S half vector in the local frame with pdf as_d(h, eu, ev) (weft::reference::brdf::sampling
+// ::sample_h): φ in the quadrant floor(4·xi.x), cos θ = xi.y^(1/(eu cos²φ + ev sin²φ + 1)).
+vec3 as_sample_h(vec2 xi, float eu, float ev) {
+    float q = clamp(floor(4.0 * xi.x), 0.0, 3.0);
+    float r = 4.0 * xi.x - q;
+    // r < 1, so tan(πr/2) is finite; clamp keeps it finite in f32 too.
+    float phi0 = atan(sqrt((eu + 1.0) / (ev + 1.0)) * tan(0.5 * IBL_PI * min(r, 0.9999999)));
+    float phi = q == 0.0 ? phi0 : (q == 1.0 ? IBL_PI - phi0 : (q == 2.0 ? IBL_PI + phi0 : 2.0 * IBL_PI - phi0));
+    float cp = cos(phi);
+    float sp = sin(phi);
+    float cos_t = pow(max(xi.y, 1e-30), 1.0 / (eu * cp * cp + ev * sp * sp + 1.0));
+    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    return vec3(sin_t * cp, sin_t * sp, cos_t);
+}
+
+// A cosine-distributed direction in the local frame (pdf z/π).
+vec3 cosine_sample(vec2 xi) {
+    float r = sqrt(xi.x);
+    float phi = 2.0 * IBL_PI * xi.y;
+    return vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - xi.x, 0.0)));
+}
+
+// The mip level of filtered importance sampling: half the log2 ratio of the solid angle a sample
+// stands for, 1/(n·pdf), to a texel's of the level-0 cube face of `size` (4π/(6 size²)), plus one
+// (Křivánek & Colbert's bias: the box mips blur less than the lobe). pdf per unit solid angle.
+float fis_lod(float pdf, uint n, float size) {
+    float omega_s = 1.0 / (float(n) * max(pdf, 1e-30));
+    float omega_p = 4.0 * IBL_PI / (6.0 * size * size);
+    return max(0.5 * log2(omega_s / omega_p) + 1.0, 0.0);
+}
+
+// Lagarde & de Rousiers 2014 (Moving Frostbite to PBR, eq. 46): the specular occlusion of a
+// surface with ambient occlusion ao, seen at n·v, with roughness r.
+float specular_occlusion(float nv, float ao, float roughness) {
+    return clamp(pow(max(nv + ao, 0.0), exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
+}
+
+// The diffuse factor of the fabric's diffuse term under a uniform-in-cosine environment: 1 for
+// Lambert, (1 - rs)(1 - (1 - n·k2/2)^5) for the A–S coupled diffuse (its hemispherical
+// integral, which its 28/(23π) normalises to exactly that).
+float fabric_diffuse_albedo(GpuFabric f, float nk2) {
+    if ((f.flags & FABRIC_FLAG_COUPLED_DIFFUSE) == 0u) {
+        return 1.0;
+    }
+    float b = 1.0 - 0.5 * clamp(nk2, 0.0, 1.0);
+    float b2 = b * b;
+    return (1.0 - f.rs) * (1.0 - b2 * b2 * b);
+}
+
+#endif

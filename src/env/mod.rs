@@ -1,0 +1,728 @@
+//! Environment lighting on the CPU: equirectangular HDR images (loaded from Radiance `.hdr` or
+//! OpenEXR through `image`, or the built-in procedural studio), their direction mapping, the
+//! spherical-harmonic irradiance projection, and the split-sum DFG table of the GGX lobe.
+//!
+//! Convention (shared with `glsl/include/ibl.glsl`): row 0 of the image looks straight up (+y);
+//! the centre column looks along -z (where a default glTF camera looks); u grows towards +x.
+//! `dir = (sin θ sin φ, cos θ, -sin θ cos φ)` with `θ = π v`, `φ = 2π (u - 1/2)`.
+//! A rotation of the environment by `r` degrees turns it about +y (counter-clockwise seen from
+//! above); shaders look it up with `env_from_world`.
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::sync::Arc;
+
+use sha2::{Digest, Sha256};
+
+use crate::Error;
+
+/// The largest environment image side weft loads (larger maps: downscale them first).
+pub const MAX_ENV_SIDE: u32 = 16384;
+
+/// Linear radiance values are clamped to this, the largest half float: the GPU keeps the
+/// environment in RGBA16F (linear filtering of it is guaranteed by Vulkan; of 32-bit floats it is
+/// not). Of the maps in `../shared/environments`, only the Mondello sun (peak 7.1e4) is clipped.
+pub const MAX_RADIANCE: f32 = 65504.0;
+
+/// An equirectangular environment: linear RGB radiance, rows top (up) to bottom.
+#[derive(Clone)]
+pub struct Environment {
+    /// Where it came from (a path, or "built-in studio").
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<f32>,
+    hash: [u8; 32],
+}
+
+impl std::fmt::Debug for Environment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Environment({}, {}x{})", self.name, self.width, self.height)
+    }
+}
+
+impl Environment {
+    /// An environment from linear RGB pixels; non-finite or negative values become 0 and values
+    /// above [`MAX_RADIANCE`] are clamped.
+    pub fn from_rgb(
+        name: impl Into<String>,
+        width: u32,
+        height: u32,
+        mut rgb: Vec<f32>,
+    ) -> crate::Result<Environment> {
+        let name = name.into();
+        if width == 0 || height == 0 || width > MAX_ENV_SIDE || height > MAX_ENV_SIDE {
+            return Err(Error::input(format!(
+                "environment '{name}' is {width}x{height}: each side must be 1 to {MAX_ENV_SIDE} pixels (downscale the map)"
+            )));
+        }
+        if rgb.len() != width as usize * height as usize * 3 {
+            return Err(Error::input(format!(
+                "environment '{name}' has {} values, expected {} for {width}x{height} RGB",
+                rgb.len(),
+                width as usize * height as usize * 3
+            )));
+        }
+        for v in &mut rgb {
+            if !(*v >= 0.0) {
+                *v = 0.0; // NaN and negatives
+            } else if *v > MAX_RADIANCE {
+                *v = MAX_RADIANCE;
+            }
+        }
+        let mut h = Sha256::new();
+        h.update(width.to_le_bytes());
+        h.update(height.to_le_bytes());
+        h.update(bytemuck::cast_slice::<f32, u8>(&rgb));
+        Ok(Environment {
+            name,
+            width,
+            height,
+            rgb,
+            hash: h.finalize().into(),
+        })
+    }
+
+    /// Loads an equirectangular (2:1) Radiance `.hdr` or OpenEXR file.
+    pub fn load(path: &Path) -> crate::Result<Environment> {
+        let shown = path.display();
+        if !path.exists() {
+            return Err(Error::input(format!(
+                "environment map '{shown}' does not exist: give the path of an equirectangular .hdr or .exr file (a relative path starts at the current directory)"
+            )));
+        }
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .unwrap_or_default();
+        if ext != "hdr" && ext != "exr" {
+            return Err(Error::input(format!(
+                "environment map '{shown}' is not a .hdr or .exr file: weft reads equirectangular Radiance HDR and OpenEXR maps"
+            )));
+        }
+        let reader = image::ImageReader::open(path)
+            .map_err(|e| Error::input(format!("cannot open environment map '{shown}': {e}")))?
+            .with_guessed_format()
+            .map_err(|e| Error::input(format!("cannot read environment map '{shown}': {e}")))?;
+        let mut reader = reader;
+        // The environment is at most MAX_ENV_SIDE square in f32 RGB(A).
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_ENV_SIDE);
+        limits.max_image_height = Some(MAX_ENV_SIDE);
+        limits.max_alloc = Some(4 << 30);
+        reader.limits(limits);
+        let img = reader.decode().map_err(|e| {
+            Error::input(format!(
+                "cannot decode environment map '{shown}': {e} (weft reads Radiance .hdr and OpenEXR without DWA compression; re-save the map, e.g. as .hdr)"
+            ))
+        })?;
+        let rgb = img.into_rgb32f();
+        let (w, h) = rgb.dimensions();
+        Environment::from_rgb(shown.to_string(), w, h, rgb.into_raw())
+    }
+
+    /// A uniform environment of radiance `value` (the white furnace).
+    pub fn uniform(value: [f32; 3]) -> Environment {
+        let (w, h) = (64, 32);
+        let rgb = (0..w * h).flat_map(|_| value).collect();
+        Environment::from_rgb(format!("uniform {value:?}"), w, h, rgb).expect("valid size")
+    }
+
+    /// The built-in neutral studio, generated procedurally (no image file, so no licence):
+    /// a grey floor and walls brightening towards the ceiling, one large overhead soft box, a
+    /// key soft box in front above the left (where the default key light comes from, see
+    /// [`STUDIO_KEY_DIRECTION`]), and two tall strip lights at the sides. Achromatic, peak 12.
+    pub fn studio() -> Environment {
+        let (w, h) = (1024u32, 512u32);
+        let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+        let key = glam::Vec3::from(STUDIO_KEY_DIRECTION).normalize();
+        for j in 0..h {
+            for i in 0..w {
+                let d = pixel_dir(i, j, w, h);
+                let y = d[1] as f32;
+                // Floor (below the horizon), walls, ceiling.
+                let smooth = |e0: f32, e1: f32, x: f32| {
+                    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
+                    t * t * (3.0 - 2.0 * t)
+                };
+                let mut l = 0.16 + 0.14 * smooth(-0.15, 0.05, y) + 0.35 * smooth(0.1, 0.9, y);
+                // A soft-edged box: radiance `r` within angular half-sizes around a direction.
+                let dv = glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
+                let mut panel = |centre: glam::Vec3, half: f32, r: f32| {
+                    let c = dv.dot(centre);
+                    let a = c.clamp(-1.0, 1.0).acos();
+                    l += r * (1.0 - smooth(half * 0.7, half, a));
+                };
+                panel(glam::Vec3::Y, 0.45, 2.2);
+                panel(key, 0.22, 12.0);
+                // Strip lights: narrow in azimuth, tall in elevation, at the sides.
+                for side in [-1.0f32, 1.0] {
+                    let az = dv.x.atan2(-dv.z);
+                    let target = side * 1.75;
+                    let da = (az - target).abs();
+                    if y > -0.05 && y < 0.75 {
+                        l += 4.0
+                            * (1.0 - smooth(0.06, 0.1, da))
+                            * smooth(-0.05, 0.05, y)
+                            * (1.0 - smooth(0.65, 0.75, y));
+                    }
+                }
+                rgb.extend_from_slice(&[l, l, l]);
+            }
+        }
+        Environment::from_rgb("built-in studio", w, h, rgb).expect("valid size")
+    }
+
+    /// A content hash (dimensions and pixels): preprocessing is cached by it.
+    pub fn hash(&self) -> [u8; 32] {
+        self.hash
+    }
+
+    /// The radiance of pixel (i, j).
+    pub fn pixel(&self, i: u32, j: u32) -> [f32; 3] {
+        let k = (j as usize * self.width as usize + i as usize) * 3;
+        [self.rgb[k], self.rgb[k + 1], self.rgb[k + 2]]
+    }
+
+    /// Bilinear look-up in env space (u wraps, v clamps), f64.
+    pub fn lookup(&self, dir: [f64; 3]) -> [f64; 3] {
+        let (u, v) = dir_to_uv(dir);
+        let x = u * self.width as f64 - 0.5;
+        let y = (v * self.height as f64 - 0.5).clamp(0.0, self.height as f64 - 1.0);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let w = self.width as i64;
+        let xi = |x: f64| (x as i64).rem_euclid(w) as u32;
+        let yi = |y: f64| (y as i64).clamp(0, self.height as i64 - 1) as u32;
+        let mut out = [0.0; 3];
+        for (dx, dy, wt) in [
+            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+            (1.0, 0.0, fx * (1.0 - fy)),
+            (0.0, 1.0, (1.0 - fx) * fy),
+            (1.0, 1.0, fx * fy),
+        ] {
+            let p = self.pixel(xi(x0 + dx), yi(y0 + dy));
+            for c in 0..3 {
+                out[c] += wt * p[c] as f64;
+            }
+        }
+        out
+    }
+
+    /// The order-2 spherical-harmonic projection of the radiance (f64 sums over every pixel,
+    /// weighted by its solid angle), pre-multiplied by the clamped-cosine convolution and 1/π:
+    /// evaluating it at n ([`sh_eval`]) gives irradiance/π, the radiance of a white Lambertian
+    /// surface (Ramamoorthi & Hanrahan 2001). Pixels are in env space.
+    pub fn sh9(&self) -> [[f32; 3]; 9] {
+        let mut c = [[0f64; 3]; 9];
+        let (w, h) = (self.width, self.height);
+        let d_phi = 2.0 * PI / w as f64;
+        let d_theta = PI / h as f64;
+        for j in 0..h {
+            let theta = (j as f64 + 0.5) * d_theta;
+            let d_omega = d_phi * d_theta * theta.sin();
+            for i in 0..w {
+                let d = pixel_dir(i, j, w, h);
+                let y = sh_basis(d);
+                let p = self.pixel(i, j);
+                for (k, yk) in y.iter().enumerate() {
+                    for ch in 0..3 {
+                        c[k][ch] += p[ch] as f64 * yk * d_omega;
+                    }
+                }
+            }
+        }
+        let band = [PI, 2.0 * PI / 3.0, PI / 4.0];
+        let mut out = [[0f32; 3]; 9];
+        for k in 0..9 {
+            let l = if k == 0 {
+                0
+            } else if k < 4 {
+                1
+            } else {
+                2
+            };
+            for ch in 0..3 {
+                out[k][ch] = (c[k][ch] * band[l] / PI) as f32;
+            }
+        }
+        out
+    }
+}
+
+/// The direction the built-in studio's key soft box is in, and the default key light comes from
+/// (world space, before `--env-rotation`): above, in front (towards +z, the default camera side)
+/// and to the left.
+pub const STUDIO_KEY_DIRECTION: [f32; 3] = [-0.55, 0.95, 0.75];
+
+/// The centre direction of pixel (i, j) of a `w` x `h` equirectangular image.
+pub fn pixel_dir(i: u32, j: u32, w: u32, h: u32) -> [f64; 3] {
+    uv_to_dir((i as f64 + 0.5) / w as f64, (j as f64 + 0.5) / h as f64)
+}
+
+/// Equirectangular (u, v) to a unit direction.
+pub fn uv_to_dir(u: f64, v: f64) -> [f64; 3] {
+    let theta = PI * v;
+    let phi = 2.0 * PI * (u - 0.5);
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = phi.sin_cos();
+    [st * sp, ct, -st * cp]
+}
+
+/// A unit direction to equirectangular (u, v), u in [0, 1).
+pub fn dir_to_uv(d: [f64; 3]) -> (f64, f64) {
+    let u = 0.5 + d[0].atan2(-d[2]) / (2.0 * PI);
+    let v = d[1].clamp(-1.0, 1.0).acos() / PI;
+    (u.rem_euclid(1.0), v)
+}
+
+/// The nine real SH basis functions at unit direction d (bands 0..2).
+pub fn sh_basis(d: [f64; 3]) -> [f64; 9] {
+    let [x, y, z] = d;
+    [
+        0.282_094_791_773_878_1,
+        0.488_602_511_902_919_9 * y,
+        0.488_602_511_902_919_9 * z,
+        0.488_602_511_902_919_9 * x,
+        1.092_548_430_592_079_2 * x * y,
+        1.092_548_430_592_079_2 * y * z,
+        0.315_391_565_252_520_0 * (3.0 * z * z - 1.0),
+        1.092_548_430_592_079_2 * x * z,
+        0.546_274_215_296_039_6 * (x * x - y * y),
+    ]
+}
+
+/// `sh_irradiance` of glsl/include/ibl.glsl: irradiance/π at env-space normal n from
+/// [`Environment::sh9`], clamped at 0 (order-2 SH ring below zero opposite a sun).
+pub fn sh_eval(sh: &[[f32; 3]; 9], n: [f32; 3]) -> [f32; 3] {
+    let [x, y, z] = n;
+    let b = [
+        0.282_094_8f32,
+        0.488_602_5 * y,
+        0.488_602_5 * z,
+        0.488_602_5 * x,
+        1.092_548_4 * x * y,
+        1.092_548_4 * y * z,
+        0.315_391_6 * (3.0 * z * z - 1.0),
+        1.092_548_4 * x * z,
+        0.546_274_2 * (x * x - y * y),
+    ];
+    let mut e = [0f32; 3];
+    for k in 0..9 {
+        for c in 0..3 {
+            e[c] += sh[k][c] * b[k];
+        }
+    }
+    e.map(|v| v.max(0.0))
+}
+
+/// The environment-from-world rotation for `--env-rotation degrees` (about +y), as rows.
+pub fn env_from_world(rotation_degrees: f32) -> [[f32; 3]; 3] {
+    // World direction w is env direction R(θ) e; so e = R(-θ) w.
+    let (s, c) = (-rotation_degrees.to_radians()).sin_cos();
+    [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]
+}
+
+/// What is shown where no surface is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Background {
+    /// The environment, blurred by `blur` (0 sharp, 1 the coarsest level).
+    Env { blur: f32 },
+    /// A constant linear colour.
+    Color([f32; 3]),
+    /// Transparent (alpha 0 in the PNG).
+    None,
+}
+
+impl Background {
+    /// `env`, `env:BLUR`, `color`, `color:R,G,B` (linear), `none`.
+    pub fn parse(text: &str) -> crate::Result<Background> {
+        let bad = || {
+            Error::input(format!(
+                "unknown background '{text}': choose env, env:BLUR (0..1), color, color:R,G,B (linear) or none"
+            ))
+        };
+        match text {
+            "env" => Ok(Background::Env { blur: 0.0 }),
+            "color" => Ok(Background::Color(DEFAULT_BACKGROUND)),
+            "none" => Ok(Background::None),
+            _ => {
+                if let Some(b) = text.strip_prefix("env:") {
+                    let blur: f32 = b.parse().map_err(|_| bad())?;
+                    if (0.0..=1.0).contains(&blur) {
+                        return Ok(Background::Env { blur });
+                    }
+                    return Err(bad());
+                }
+                if let Some(c) = text.strip_prefix("color:") {
+                    let v = crate::render::parse_vec3("background colour", c)?;
+                    if v.min_element() < 0.0 || v.max_element() > 1e4 {
+                        return Err(bad());
+                    }
+                    return Ok(Background::Color(v.into()));
+                }
+                Err(bad())
+            }
+        }
+    }
+}
+
+/// The colour background's default (linear): the dark blue-grey weft has always used.
+pub const DEFAULT_BACKGROUND: [f32; 3] = [0.010, 0.012, 0.016];
+
+/// How the environment's light is integrated (the IBL accuracy levels, model page §6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IblLevel {
+    /// Fabric lobes: the radiance at the mirror direction, blurred to the lobe's width, times
+    /// Fresnel; glTF materials: the split sum.
+    Approx,
+    /// Fabric lobes: filtered importance sampling with N samples (Křivánek & Colbert 2008) from
+    /// the lobes' own A–S sampler; glTF materials: the split sum.
+    Fis(u32),
+    /// Ground truth: brute-force Monte Carlo with N samples per pixel (BRDF sampling of every lobe
+    /// and cosine sampling of the diffuse, the unfiltered environment, per-pixel random rotation).
+    MonteCarlo(u32),
+}
+
+impl IblLevel {
+    pub const MAX_SAMPLES: u32 = 4096;
+
+    pub fn name(self) -> String {
+        match self {
+            IblLevel::Approx => "approx".into(),
+            IblLevel::Fis(n) => format!("fis:{n}"),
+            IblLevel::MonteCarlo(n) => format!("mc:{n}"),
+        }
+    }
+
+    pub fn parse(text: &str) -> crate::Result<IblLevel> {
+        let bad = || {
+            Error::input(format!(
+                "unknown IBL level '{text}': choose approx, fis:N or mc:N (N from 1 to {})",
+                IblLevel::MAX_SAMPLES
+            ))
+        };
+        if text == "approx" {
+            return Ok(IblLevel::Approx);
+        }
+        let (kind, n) = text.split_once(':').ok_or_else(bad)?;
+        let n: u32 = n.parse().map_err(|_| bad())?;
+        if !(1..=IblLevel::MAX_SAMPLES).contains(&n) {
+            return Err(bad());
+        }
+        match kind {
+            "fis" => Ok(IblLevel::Fis(n)),
+            "mc" => Ok(IblLevel::MonteCarlo(n)),
+            _ => Err(bad()),
+        }
+    }
+
+    /// The IBL specialization constant of lighting.frag (0 is "no environment").
+    pub fn code(self) -> u32 {
+        match self {
+            IblLevel::Approx => 1,
+            IblLevel::Fis(_) => 2,
+            IblLevel::MonteCarlo(_) => 3,
+        }
+    }
+
+    pub fn samples(self) -> u32 {
+        match self {
+            IblLevel::Approx => 1,
+            IblLevel::Fis(n) | IblLevel::MonteCarlo(n) => n,
+        }
+    }
+}
+
+/// The default IBL level.
+pub const DEFAULT_IBL: IblLevel = IblLevel::Fis(16);
+
+/// A scene lit by an environment: which, turned how far, how bright, and what the background
+/// shows.
+#[derive(Clone, Debug)]
+pub struct EnvLighting {
+    pub env: Arc<Environment>,
+    /// Degrees about +y.
+    pub rotation: f32,
+    /// Radiance scale.
+    pub intensity: f32,
+    pub background: Background,
+    pub level: IblLevel,
+}
+
+impl EnvLighting {
+    pub fn new(env: Arc<Environment>) -> EnvLighting {
+        EnvLighting {
+            env,
+            rotation: 0.0,
+            intensity: 1.0,
+            background: Background::Env { blur: 0.0 },
+            level: DEFAULT_IBL,
+        }
+    }
+
+    pub fn validate(&self) -> crate::Result<()> {
+        if !self.rotation.is_finite() || self.rotation.abs() > 1e6 {
+            return Err(Error::input(format!(
+                "--env-rotation {} is out of range: give degrees, a finite number",
+                self.rotation
+            )));
+        }
+        if !(self.intensity >= 0.0 && self.intensity <= 1e6) {
+            return Err(Error::input(format!(
+                "--env-intensity {} is out of range: give a number from 0 to 1e6",
+                self.intensity
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The split-sum DFG table of the GGX lobe with the height-correlated Smith visibility of
+/// `glsl/include/pbr.glsl`: for n·v = (i + 1/2)/size and roughness = (j + 1/2)/size,
+/// `(A, B)` with `∫ f·cos = F0·A + B` (Karis 2013), by 1024-sample Hammersley quadrature of the
+/// GGX half-vector distribution in f64. Row-major, j (roughness) major.
+pub fn dfg_table(size: u32) -> Vec<[f32; 2]> {
+    let mut out = Vec::with_capacity((size * size) as usize);
+    for j in 0..size {
+        let roughness = (j as f64 + 0.5) / size as f64;
+        for i in 0..size {
+            let nv = (i as f64 + 0.5) / size as f64;
+            out.push(dfg(nv, roughness, 1024).map(|x| x as f32));
+        }
+    }
+    out
+}
+
+/// The DFG integral at one (n·v, roughness): see [`dfg_table`].
+pub fn dfg(nv: f64, roughness: f64, samples: u32) -> [f64; 2] {
+    let alpha = (roughness * roughness).max(1e-3);
+    let a2 = alpha * alpha;
+    let v = [(1.0 - nv * nv).max(0.0).sqrt(), 0.0, nv];
+    let (mut a, mut b) = (0.0, 0.0);
+    for s in 0..samples {
+        let (x1, x2) = hammersley(s, samples);
+        // GGX half vector: pdf D(h)·(n·h).
+        let phi = 2.0 * PI * x1;
+        let cos_t = ((1.0 - x2) / (1.0 + (a2 - 1.0) * x2)).sqrt();
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        let h = [sin_t * phi.cos(), sin_t * phi.sin(), cos_t];
+        let vh = v[0] * h[0] + v[2] * h[2];
+        let l = [
+            2.0 * vh * h[0] - v[0],
+            2.0 * vh * h[1] - v[1],
+            2.0 * vh * h[2] - v[2],
+        ];
+        let nl = l[2];
+        if nl <= 0.0 || vh <= 0.0 {
+            continue;
+        }
+        // f·cos/pdf with pdf = D·nh/(4 vh): 4·V·nl·vh/nh.
+        let gv = nl * (nv * nv * (1.0 - a2) + a2).sqrt();
+        let gl = nv * (nl * nl * (1.0 - a2) + a2).sqrt();
+        let vis = 0.5 / (gv + gl);
+        let w = 4.0 * vis * nl * vh / cos_t;
+        let fc = (1.0 - vh).powi(5);
+        a += (1.0 - fc) * w;
+        b += fc * w;
+    }
+    [a / samples as f64, b / samples as f64]
+}
+
+/// The Hammersley point i of n in [0, 1)²: (i/n, radical inverse of i in base 2).
+pub fn hammersley(i: u32, n: u32) -> (f64, f64) {
+    (
+        i as f64 / n as f64,
+        i.reverse_bits() as f64 / 4_294_967_296.0,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uv_round_trip_and_convention() {
+        let (u, v) = dir_to_uv([0.0, 0.0, -1.0]);
+        assert!((u - 0.5).abs() < 1e-12 && (v - 0.5).abs() < 1e-12);
+        let (u, _) = dir_to_uv([1.0, 0.0, 0.0]);
+        assert!((u - 0.75).abs() < 1e-12);
+        let (_, v) = dir_to_uv([0.0, 1.0, 0.0]);
+        assert!(v.abs() < 1e-12);
+        for (u, v) in [(0.1, 0.2), (0.7, 0.9), (0.5, 0.5)] {
+            let (u2, v2) = dir_to_uv(uv_to_dir(u, v));
+            assert!((u - u2).abs() < 1e-9 && (v - v2).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn sh_of_a_uniform_environment_is_its_radiance() {
+        // A white Lambertian surface under uniform radiance L reflects L in every direction.
+        let env = Environment::uniform([1.0, 0.5, 2.0]);
+        let sh = env.sh9();
+        for n in [[0.0, 1.0, 0.0], [0.6, 0.0, 0.8], [0.0, -1.0, 0.0]] {
+            let e = sh_eval(&sh, n);
+            for (c, want) in e.iter().zip([1.0, 0.5, 2.0]) {
+                assert!((c - want).abs() < 2e-3 * want, "{e:?} at {n:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn dfg_of_a_white_metal_is_about_one_when_smooth() {
+        // F0 = 1: A + B is the single-scattering albedo, 1 for a smooth mirror, less when rough
+        // (energy lost to multiple scattering).
+        let [a, b] = dfg(0.9, 0.05, 1024);
+        assert!((a + b - 1.0).abs() < 0.01, "{}", a + b);
+        let [a, b] = dfg(0.5, 1.0, 4096);
+        assert!(a + b > 0.4 && a + b < 0.9, "{}", a + b);
+    }
+
+    #[test]
+    fn backgrounds_and_levels_parse() {
+        assert_eq!(
+            Background::parse("env:0.5").unwrap(),
+            Background::Env { blur: 0.5 }
+        );
+        assert_eq!(Background::parse("none").unwrap(), Background::None);
+        assert!(Background::parse("env:2").is_err());
+        assert!(Background::parse("colour").is_err());
+        for l in [IblLevel::Approx, IblLevel::Fis(16), IblLevel::MonteCarlo(256)] {
+            assert_eq!(IblLevel::parse(&l.name()).unwrap(), l);
+        }
+        for bad in ["fis:0", "mc:x", "fis", "exact", "fis:5000"] {
+            assert!(IblLevel::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn bad_values_are_cleaned() {
+        let e = Environment::from_rgb("t", 2, 1, vec![f32::NAN, -1.0, f32::INFINITY, 1.0, 2.0, 3.0])
+            .unwrap();
+        assert_eq!(&e.rgb[..3], &[0.0, 0.0, MAX_RADIANCE]);
+        assert!(Environment::from_rgb("t", 0, 1, vec![]).is_err());
+    }
+}
+
+/// Which punctual lights light the scene (`--lights`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightsMode {
+    /// The file's lights when it has any; otherwise the default key light and ground, unless an
+    /// environment of the user's own (`--env FILE`) lights the scene.
+    Auto,
+    /// No punctual lights at all (the environment only).
+    None,
+    /// The file's lights only (none if it has none).
+    File,
+    /// The default key light (with a shadow map) and a shadow-catching ground, instead of the
+    /// file's lights.
+    Default,
+}
+
+impl LightsMode {
+    pub fn parse(text: &str) -> crate::Result<LightsMode> {
+        match text {
+            "auto" => Ok(LightsMode::Auto),
+            "none" => Ok(LightsMode::None),
+            "file" => Ok(LightsMode::File),
+            "default" => Ok(LightsMode::Default),
+            _ => Err(Error::input(format!(
+                "unknown --lights '{text}': choose auto, none, file or default"
+            ))),
+        }
+    }
+}
+
+/// Illuminance of the default key light (lux, KHR_lights_punctual units).
+pub const KEY_LIGHT_LUX: f32 = 2.5;
+
+/// Lights `scene` as `mode` says: removes the file's lights (`none`, `default`), or adds the
+/// default key light, a directional light from the studio's key soft box (turned with the
+/// environment by `rotation` degrees) that casts a shadow map, and a ground under the scene that
+/// receives shadows but casts none, so objects sit on something. `own_env`: the user gave an
+/// environment map (then `auto` adds nothing to a file without lights). Returns whether the
+/// default key light was added.
+///
+/// A scene without cameras gets its automatic framing as a camera first, so the ground does not
+/// change what the camera frames.
+pub fn stage(scene: &mut crate::scene::Scene, mode: LightsMode, rotation: f32, own_env: bool) -> bool {
+    use crate::scene::{Draw, Light, LightKind, Material, Mesh, Shadow, Vertex};
+    let add_default = match mode {
+        LightsMode::Auto => scene.lights.is_empty() && !own_env,
+        LightsMode::Default => true,
+        LightsMode::None | LightsMode::File => false,
+    };
+    if matches!(mode, LightsMode::None | LightsMode::Default) {
+        scene.lights.clear();
+    }
+    if !add_default {
+        return false;
+    }
+    let Some(bounds) = scene.bounds() else {
+        return false;
+    };
+    if scene.cameras.is_empty() {
+        let camera = scene.auto_camera();
+        scene.cameras.push(camera);
+    }
+    let rot = env_from_world(rotation);
+    // World = transpose(env_from_world) · env.
+    let k = glam::Vec3::from(STUDIO_KEY_DIRECTION).normalize();
+    let to_light = glam::Vec3::new(
+        rot[0][0] * k.x + rot[1][0] * k.y + rot[2][0] * k.z,
+        rot[0][1] * k.x + rot[1][1] * k.y + rot[2][1] * k.z,
+        rot[0][2] * k.x + rot[1][2] * k.y + rot[2][2] * k.z,
+    );
+    scene.lights.push(Light {
+        name: "default key light".into(),
+        kind: LightKind::Directional,
+        color: [1.0, 0.98, 0.95],
+        intensity: KEY_LIGHT_LUX,
+        range: None,
+        position: glam::Vec3::ZERO,
+        direction: -to_light,
+        shadow: Some(Shadow {
+            resolution: 2048,
+            filter_radius: 2.0,
+            bias: 1.5,
+        }),
+    });
+    // The ground: a square 12 scene radii across, just under the lowest point.
+    let center = (bounds.min + bounds.max) * 0.5;
+    let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-3);
+    let half = radius * 6.0;
+    let y = bounds.min.y - radius * 1e-3;
+    let corner = |x: f32, z: f32, u: f32, v: f32| Vertex {
+        position: [center.x + x * half, y, center.z + z * half],
+        normal: [0.0, 1.0, 0.0],
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [u, v],
+    };
+    let material = scene.materials.len();
+    scene.materials.push(Material {
+        name: "default ground".into(),
+        base_color: [0.45, 0.45, 0.45, 1.0],
+        metallic: 0.0,
+        roughness: 0.85,
+        ..Material::default()
+    });
+    scene.meshes.push(Mesh {
+        name: "default ground".into(),
+        vertices: vec![
+            corner(-1.0, -1.0, 0.0, 0.0),
+            corner(-1.0, 1.0, 0.0, 1.0),
+            corner(1.0, 1.0, 1.0, 1.0),
+            corner(1.0, -1.0, 1.0, 0.0),
+        ],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material,
+    });
+    scene.draws.push(Draw {
+        mesh: scene.meshes.len() - 1,
+        world: glam::Mat4::IDENTITY,
+        cast_shadows: false,
+        receive_shadows: true,
+    });
+    true
+}

@@ -1,0 +1,286 @@
+//! The environment on the GPU: preprocessing once per environment (cached by content hash), and
+//! the records the lighting pass reads.
+//!
+//! Preprocessing (one submission, `Pass::Environment` in the plan):
+//! 1. the equirectangular map is uploaded (RGBA16F) and resampled into level 0 of the radiance
+//!    cube by `env_cube.comp`; the cube's other levels are box-filtered by blits;
+//! 2. `env_prefilter.comp` fills each level of the specular cube with the radiance convolved with
+//!    GGX of that level's roughness (the split sum's first factor), by filtered importance
+//!    sampling;
+//! 3. the order-2 SH irradiance is projected on the CPU in f64 ([`crate::env::Environment::sh9`]:
+//!    a few milliseconds, and exact where a GPU reduction would need a second pass).
+//!
+//! The DFG table of the split sum does not depend on the environment: it is computed once per
+//! renderer on the CPU ([`crate::env::dfg_table`]) and uploaded.
+
+use crate::env::Environment;
+use crate::vk::{
+    shaders, Binding, BindingKind, BufferUsageFlags, ComputeDesc, Context, Format, Image,
+    ImageDesc, ImageUsageFlags, Pipeline, Resource, Sampler, SetLayout, Stages, Usage,
+};
+
+pub const ENV_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// Face size of the GGX-prefiltered specular cube, and its levels (roughness level/(levels-1)).
+pub const SPECULAR_SIZE: u32 = 128;
+pub const SPECULAR_LEVELS: u32 = 6;
+/// Samples per texel of the prefiltering (filtered importance sampling needs few).
+pub const PREFILTER_SAMPLES: u32 = 64;
+/// Side of the DFG table.
+pub const DFG_SIZE: u32 = 32;
+
+/// Push constants of env_cube.comp and env_prefilter.comp (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct CubePush {
+    pub size: u32,
+    pub roughness: f32,
+    pub source_size: f32,
+    pub samples: u32,
+}
+
+/// Face size of the radiance cube for a map `width` pixels wide: about one cube texel per map
+/// texel (a face spans a quarter of the width), a power of two from 16 to 512.
+pub fn radiance_size(width: u32) -> u32 {
+    let quarter = (width / 4).max(16);
+    (1u32 << (31 - quarter.leading_zeros())).clamp(16, 512)
+}
+
+/// `cube_texel_dir` of glsl/include/cube.glsl: the unit direction through the centre of texel
+/// (x, y) of face `face` (+x, -x, +y, -y, +z, -z) of a `size` cube.
+pub fn cube_texel_dir(face: u32, x: u32, y: u32, size: u32) -> [f32; 3] {
+    let s = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+    let t = (y as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+    let d = match face {
+        0 => [1.0, -t, -s],
+        1 => [-1.0, -t, s],
+        2 => [s, 1.0, t],
+        3 => [s, -1.0, -t],
+        4 => [s, -t, 1.0],
+        _ => [-s, -t, -1.0],
+    };
+    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    [d[0] / l, d[1] / l, d[2] / l]
+}
+
+/// A preprocessed environment.
+pub struct GpuEnvironment {
+    pub hash: [u8; 32],
+    pub radiance: Image,
+    pub specular: Image,
+    pub sh: [[f32; 3]; 9],
+    /// Wall time of the preprocessing, ms.
+    pub build_ms: f64,
+}
+
+impl GpuEnvironment {
+    pub fn radiance_size(&self) -> u32 {
+        self.radiance.desc.width
+    }
+    pub fn radiance_levels(&self) -> u32 {
+        self.radiance.desc.mip_levels
+    }
+}
+
+/// The pipelines and fixed resources of environment lighting.
+pub struct EnvPasses {
+    layout: SetLayout,
+    cube: Pipeline,
+    prefilter: Pipeline,
+    /// 1 x 1 black cubes bound when a frame has no environment.
+    pub black: Image,
+    pub dfg: Image,
+    pub sampler: Sampler,
+    equirect_sampler: Sampler,
+}
+
+impl EnvPasses {
+    pub fn new(ctx: &Context) -> crate::Result<EnvPasses> {
+        let layout = ctx.create_set_layout(&[
+            Binding {
+                binding: 0,
+                kind: BindingKind::StorageImage,
+                stages: Stages::COMPUTE,
+            },
+            Binding {
+                binding: 1,
+                kind: BindingKind::SampledImage,
+                stages: Stages::COMPUTE,
+            },
+        ])?;
+        let make = |name: &'static str, shader| {
+            ctx.create_compute_pipeline(&ComputeDesc {
+                name,
+                shader,
+                set_layouts: &[&layout],
+                push_constant_size: std::mem::size_of::<CubePush>() as u32,
+                constants: &[],
+            })
+        };
+        let cube = make("env_cube", &shaders::ENV_CUBE_COMP)?;
+        let prefilter = make("env_prefilter", &shaders::ENV_PREFILTER_COMP)?;
+        let black = ctx.create_image(
+            &ImageDesc::new_cube("no environment", ENV_FORMAT, 1)
+                .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST),
+        )?;
+        let zeros = ctx.create_buffer_with(
+            "no environment staging",
+            BufferUsageFlags::TRANSFER_SRC,
+            &[0u16; 4 * 6],
+        )?;
+        let table = crate::env::dfg_table(DFG_SIZE);
+        let texels: Vec<u16> = table
+            .iter()
+            .flat_map(|[a, b]| [*a, *b, 0.0, 1.0].map(|x| half::f16::from_f32(x).to_bits()))
+            .collect();
+        let dfg = ctx.create_image(
+            &ImageDesc::new_2d("DFG table", ENV_FORMAT, DFG_SIZE, DFG_SIZE)
+                .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST),
+        )?;
+        let dfg_staging =
+            ctx.create_buffer_with("DFG staging", BufferUsageFlags::TRANSFER_SRC, &texels)?;
+        ctx.submit(|cmd| {
+            cmd.transition(&black, Usage::Undefined, Usage::TransferDst, None);
+            cmd.copy_buffer_to_image(&zeros, &black);
+            cmd.transition(&black, Usage::TransferDst, Usage::FragmentRead, None);
+            cmd.transition(&dfg, Usage::Undefined, Usage::TransferDst, None);
+            cmd.copy_buffer_to_image(&dfg_staging, &dfg);
+            cmd.transition(&dfg, Usage::TransferDst, Usage::FragmentRead, None);
+        })?;
+        Ok(EnvPasses {
+            layout,
+            cube,
+            prefilter,
+            black,
+            dfg,
+            sampler: ctx.create_sampler(crate::vk::Filter::LinearClamp)?,
+            equirect_sampler: ctx.create_sampler(crate::vk::Filter::LinearRepeat)?,
+        })
+    }
+
+    pub fn pipelines(&self) -> [&Pipeline; 2] {
+        [&self.cube, &self.prefilter]
+    }
+
+    /// Preprocesses `env`: the radiance cube with its mips, the specular cube, the SH.
+    pub fn build(&self, ctx: &Context, env: &Environment) -> crate::Result<GpuEnvironment> {
+        let start = std::time::Instant::now();
+        let texels: Vec<u16> = env
+            .rgb
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 1.0].map(|x| half::f16::from_f32(x).to_bits()))
+            .collect();
+        let equirect = ctx.create_image(
+            &ImageDesc::new_2d(
+                format!("environment {}", env.name),
+                ENV_FORMAT,
+                env.width,
+                env.height,
+            )
+            .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST),
+        )?;
+        let staging =
+            ctx.create_buffer_with("environment staging", BufferUsageFlags::TRANSFER_SRC, &texels)?;
+        let size = radiance_size(env.width);
+        let radiance = ctx.create_image(
+            &ImageDesc::new_cube("environment radiance cube", ENV_FORMAT, size)
+                .usage(
+                    ImageUsageFlags::STORAGE
+                        | ImageUsageFlags::SAMPLED
+                        | ImageUsageFlags::TRANSFER_SRC
+                        | ImageUsageFlags::TRANSFER_DST,
+                )
+                .full_mips(),
+        )?;
+        let mut desc = ImageDesc::new_cube("environment specular cube", ENV_FORMAT, SPECULAR_SIZE)
+            .usage(
+                ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_SRC,
+            );
+        desc.mip_levels = SPECULAR_LEVELS;
+        let specular = ctx.create_image(&desc)?;
+        let pool = ctx.create_descriptor_pool(1 + SPECULAR_LEVELS)?;
+        let cube_set = pool.set(
+            &self.layout,
+            &[
+                (0, Resource::StorageImage(&radiance, 0)),
+                (1, Resource::Sampled(&equirect, &self.equirect_sampler)),
+            ],
+        )?;
+        let prefilter_sets = (0..SPECULAR_LEVELS)
+            .map(|level| {
+                pool.set(
+                    &self.layout,
+                    &[
+                        (0, Resource::StorageImage(&specular, level)),
+                        (1, Resource::Sampled(&radiance, &self.sampler)),
+                    ],
+                )
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
+        ctx.submit(|cmd| {
+            cmd.transition(&equirect, Usage::Undefined, Usage::TransferDst, None);
+            cmd.copy_buffer_to_image(&staging, &equirect);
+            cmd.transition(&equirect, Usage::TransferDst, Usage::ComputeRead, None);
+            cmd.transition(&radiance, Usage::Undefined, Usage::ComputeWrite, Some((0, 1)));
+            cmd.bind_pipeline(&self.cube);
+            cmd.bind_sets(&self.cube, 0, &[cube_set]);
+            cmd.push_constants(
+                &self.cube,
+                &CubePush {
+                    size,
+                    roughness: 0.0,
+                    source_size: env.width as f32,
+                    samples: 1,
+                },
+            );
+            cmd.dispatch(size.div_ceil(8), size.div_ceil(8), 6);
+            cmd.transition(&radiance, Usage::ComputeWrite, Usage::TransferDst, Some((0, 1)));
+            cmd.generate_mips(&radiance, Usage::ComputeRead);
+            cmd.transition(&specular, Usage::Undefined, Usage::ComputeWrite, None);
+            cmd.bind_pipeline(&self.prefilter);
+            for (level, set) in prefilter_sets.iter().enumerate() {
+                let s = (SPECULAR_SIZE >> level).max(1);
+                cmd.bind_sets(&self.prefilter, 0, &[*set]);
+                cmd.push_constants(
+                    &self.prefilter,
+                    &CubePush {
+                        size: s,
+                        roughness: level as f32 / (SPECULAR_LEVELS - 1) as f32,
+                        source_size: size as f32,
+                        samples: PREFILTER_SAMPLES,
+                    },
+                );
+                cmd.dispatch(s.div_ceil(8), s.div_ceil(8), 6);
+            }
+            cmd.transition(&specular, Usage::ComputeWrite, Usage::FragmentRead, None);
+            cmd.transition(&radiance, Usage::ComputeRead, Usage::FragmentRead, None);
+        })?;
+        let sh = env.sh9();
+        Ok(GpuEnvironment {
+            hash: env.hash(),
+            radiance,
+            specular,
+            sh,
+            build_ms: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_point_where_vulkan_says() {
+        let c = |f| cube_texel_dir(f, 0, 0, 1);
+        assert_eq!(c(0), [1.0, 0.0, 0.0]);
+        assert_eq!(c(1), [-1.0, 0.0, 0.0]);
+        assert_eq!(c(2), [0.0, 1.0, 0.0]);
+        assert_eq!(c(3), [0.0, -1.0, 0.0]);
+        assert_eq!(c(4), [0.0, 0.0, 1.0]);
+        assert_eq!(c(5), [0.0, 0.0, -1.0]);
+        assert_eq!(radiance_size(1024), 256);
+        assert_eq!(radiance_size(1440), 256);
+        assert_eq!(radiance_size(64), 16);
+        assert_eq!(radiance_size(100_000), 512);
+    }
+}
