@@ -221,7 +221,11 @@ vec3 pbr_env(vec3 n, vec3 v, vec3 base, float metallic, float roughness, float a
     }
     vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
     vec3 spec_albedo = f0 * ab.x + ab.y;
+    // The split sum's look-up direction: the mirror direction bent towards the normal as the lobe
+    // widens (Lagarde & de Rousiers 2014, "dominant direction"): a rough lobe's mass is nearer n.
     vec3 r = reflect(-v, n);
+    float a = roughness * roughness;
+    r = normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
     vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
     vec3 prefiltered = textureLod(env_specular, d, roughness * frame.env_params.y).rgb * frame.env_params.x;
     vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;

@@ -215,7 +215,10 @@ fn load_scene_sized(
     let (env, own_env) = match args.env.as_str() {
         "none" => (None, false),
         "studio" => (Some(weft::env::Environment::studio()), false),
-        path => (Some(weft::env::Environment::load(std::path::Path::new(path))?), true),
+        path => (
+            Some(weft::env::Environment::load(std::path::Path::new(path))?),
+            true,
+        ),
     };
     let environment = env.map(|e| {
         let mut l = weft::env::EnvLighting::new(std::sync::Arc::new(e));
@@ -479,6 +482,13 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "range_culling": plan.range_culling,
             "textures": plan.textures,
             "debug_view": plan.debug_view.name(),
+            "environment": plan.environment.as_ref().map(|e| serde_json::json!({
+                "name": e.name, "width": e.width, "height": e.height,
+                "radiance_cube": e.radiance_size, "radiance_levels": e.radiance_levels,
+                "specular_cube": e.specular_size, "specular_levels": e.specular_levels,
+                "ibl": e.level, "rotation": e.rotation, "intensity": e.intensity,
+                "background": e.background,
+            })),
         });
         println!("{}", serde_json::to_string_pretty(&json)?);
     } else {

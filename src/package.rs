@@ -36,8 +36,10 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 /// The shared GLSL, as shipped under `include/`: what an engine's own shaders can `#include` to
 /// read weft's G-buffer or evaluate the fabric BRDF.
 pub const INCLUDES: &[(&str, &str)] = &[
+    ("cube.glsl", include_str!("../glsl/include/cube.glsl")),
     ("fabric.glsl", include_str!("../glsl/include/fabric.glsl")),
     ("frame.glsl", include_str!("../glsl/include/frame.glsl")),
+    ("ibl.glsl", include_str!("../glsl/include/ibl.glsl")),
     ("lights.glsl", include_str!("../glsl/include/lights.glsl")),
     ("pbr.glsl", include_str!("../glsl/include/pbr.glsl")),
     ("weave.glsl", include_str!("../glsl/include/weave.glsl")),
@@ -45,6 +47,25 @@ pub const INCLUDES: &[(&str, &str)] = &[
 
 /// What each module is for and how to call it (Markdown, for README.md), by module name.
 pub const MODULE_NOTES: &[(&str, &str)] = &[
+    (
+        "env_cube.comp",
+        "Environment preprocessing, step 1: resamples an equirectangular RGBA16F map (row 0 up, \
+         centre column -z; `include/cube.glsl`) into level 0 of an RGBA16F cube. Bind the cube's \
+         level 0 as a storage `image2DArray` (layer = face) and the map with a linear sampler \
+         (REPEAT); push the 16-byte `CubePush` (`uint size`, `float roughness` unused, \
+         `float source_size`, `uint samples`); dispatch `ceil(size/8)` x `ceil(size/8)` x 6. \
+         Then box-filter the other levels (blits). Rust side: \
+         `weft::render::environment::EnvPasses::build`.",
+    ),
+    (
+        "env_prefilter.comp",
+        "Environment preprocessing, step 2: one level of the GGX-prefiltered specular cube of \
+         the split sum, by filtered importance sampling of the radiance cube (Krivanek & Colbert \
+         2008). Bind the level as a storage `image2DArray` and the radiance cube (with mips) as a \
+         `samplerCube`; push `CubePush` with this level's `size`, its `roughness` \
+         (level/(levels-1)), the radiance cube's level-0 `source_size` and `samples` (64); \
+         dispatch `ceil(size/8)` x `ceil(size/8)` x 6 per level.",
+    ),
     (
         "fabric_probe.comp",
         "Evaluates every function of the fabric BRDF (`include/fabric.glsl`) and of the weave \
@@ -224,6 +245,29 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         12,
         "per-tile light lists (uint[]): for each 16 x 16-pixel tile, row-major over `frame.tile_columns` tiles per row, (offset, count) of its list, then the lists of light indices; one tile listing every light works",
     ),
+    (
+        "lighting.frag",
+        0,
+        13,
+        "the environment's radiance cube (RGBA16F, env space, box-filtered mips: env_cube.comp); any cube when IBL = 0",
+    ),
+    (
+        "lighting.frag",
+        0,
+        14,
+        "the GGX-prefiltered specular cube (level i: roughness i/(levels-1); env_prefilter.comp); any cube when IBL = 0",
+    ),
+    (
+        "lighting.frag",
+        0,
+        15,
+        "the split-sum DFG table (x: n·v, y: roughness; rg = A, B; weft::env::dfg_table), linear, clamp",
+    ),
+    ("gbuffer.frag", 1, 5, "ambient-occlusion texture (glTF occlusionTexture, R; white when none)"),
+    ("env_cube.comp", 0, 0, "level 0 of the radiance cube, as a storage image2DArray (layer = face)"),
+    ("env_cube.comp", 0, 1, "the equirectangular environment map (RGBA16F), linear, REPEAT"),
+    ("env_prefilter.comp", 0, 0, "the specular cube's level being written, as a storage image2DArray"),
+    ("env_prefilter.comp", 0, 1, "the radiance cube with its mips, linear, clamp"),
     ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
     (
         "weave.comp",
@@ -254,6 +298,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 3, "LIGHT_TYPES: bit mask of the light types whose code is compiled in: 1 directional, 2 point, 4 spot (default 7, all)"),
     ("lighting.frag", 5, "SHADOWS: 1 samples the shadow atlas for lights with a shadow record (Light.spot.z > 0) on pixels that receive (G-buffer surface.w = 1); 0 (default) compiles the shadow code out"),
     ("lighting.frag", 6, "RANGE_CULLING: 1 (default) skips point and spot lights whose range cannot reach the pixel before their falloff and BRDF; 0 evaluates every light everywhere (same image)"),
+    ("lighting.frag", 7, "IBL: environment lighting: 0 none (default; a fixed hemispherical ambient), 1 approx, 2 filtered importance sampling (fis:N), 3 brute-force Monte Carlo (mc:N, the ground truth)"),
+    ("lighting.frag", 8, "IBL_SAMPLES: N of fis:N and mc:N (default 16)"),
     ("lighting.frag", 4, "SHADING: how fabric pixels are shaded: 0 the fabric model (default), 1 Gouraud (the G-buffer's emissive already holds the per-vertex lighting), 2 the Phong reflection model, 3 one Ashikhmin-Shirley lobe without the weave (the models of `weft compare`)"),
 ];
 

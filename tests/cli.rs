@@ -118,11 +118,26 @@ fn plan_prints_the_default_scene() {
     let out = weft().args(["plan", "--json"]).output().unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // Lit by the built-in studio by default: its preprocessing comes first.
+    assert_eq!(
+        v["passes"],
+        serde_json::json!(["environment", "weave", "gbuffer", "lighting", "tonemap"])
+    );
+    assert_eq!(v["environment"]["name"], "built-in studio");
+    assert_eq!(v["environment"]["ibl"], "fis:16");
+    assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
+    // Without an environment there is nothing to preprocess.
+    let out = weft()
+        .args(["plan", "--json", "--env", "none"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         v["passes"],
         serde_json::json!(["weave", "gbuffer", "lighting", "tonemap"])
     );
-    assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
+    assert!(v["environment"].is_null());
 }
 
 #[test]

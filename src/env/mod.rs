@@ -37,7 +37,11 @@ pub struct Environment {
 
 impl std::fmt::Debug for Environment {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Environment({}, {}x{})", self.name, self.width, self.height)
+        write!(
+            f,
+            "Environment({}, {}x{})",
+            self.name, self.width, self.height
+        )
     }
 }
 
@@ -132,7 +136,7 @@ impl Environment {
     /// The built-in neutral studio, generated procedurally (no image file, so no licence):
     /// a grey floor and walls brightening towards the ceiling, one large overhead soft box, a
     /// key soft box in front above the left (where the default key light comes from, see
-    /// [`STUDIO_KEY_DIRECTION`]), and two tall strip lights at the sides. Achromatic, peak 12.
+    /// [`STUDIO_KEY_DIRECTION`]), and two tall strip lights at the sides. Achromatic, peak about 8.
     pub fn studio() -> Environment {
         let (w, h) = (1024u32, 512u32);
         let mut rgb = Vec::with_capacity((w * h * 3) as usize);
@@ -146,7 +150,7 @@ impl Environment {
                     let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
                     t * t * (3.0 - 2.0 * t)
                 };
-                let mut l = 0.16 + 0.14 * smooth(-0.15, 0.05, y) + 0.35 * smooth(0.1, 0.9, y);
+                let mut l = 0.12 + 0.10 * smooth(-0.15, 0.05, y) + 0.25 * smooth(0.1, 0.9, y);
                 // A soft-edged box: radiance `r` within angular half-sizes around a direction.
                 let dv = glam::Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32);
                 let mut panel = |centre: glam::Vec3, half: f32, r: f32| {
@@ -154,15 +158,15 @@ impl Environment {
                     let a = c.clamp(-1.0, 1.0).acos();
                     l += r * (1.0 - smooth(half * 0.7, half, a));
                 };
-                panel(glam::Vec3::Y, 0.45, 2.2);
-                panel(key, 0.22, 12.0);
+                panel(glam::Vec3::Y, 0.45, 1.8);
+                panel(key, 0.22, 8.0);
                 // Strip lights: narrow in azimuth, tall in elevation, at the sides.
                 for side in [-1.0f32, 1.0] {
                     let az = dv.x.atan2(-dv.z);
                     let target = side * 1.75;
                     let da = (az - target).abs();
                     if y > -0.05 && y < 0.75 {
-                        l += 4.0
+                        l += 3.0
                             * (1.0 - smooth(0.06, 0.1, da))
                             * smooth(-0.05, 0.05, y)
                             * (1.0 - smooth(0.65, 0.75, y));
@@ -588,7 +592,11 @@ mod tests {
         assert_eq!(Background::parse("none").unwrap(), Background::None);
         assert!(Background::parse("env:2").is_err());
         assert!(Background::parse("colour").is_err());
-        for l in [IblLevel::Approx, IblLevel::Fis(16), IblLevel::MonteCarlo(256)] {
+        for l in [
+            IblLevel::Approx,
+            IblLevel::Fis(16),
+            IblLevel::MonteCarlo(256),
+        ] {
             assert_eq!(IblLevel::parse(&l.name()).unwrap(), l);
         }
         for bad in ["fis:0", "mc:x", "fis", "exact", "fis:5000"] {
@@ -598,8 +606,13 @@ mod tests {
 
     #[test]
     fn bad_values_are_cleaned() {
-        let e = Environment::from_rgb("t", 2, 1, vec![f32::NAN, -1.0, f32::INFINITY, 1.0, 2.0, 3.0])
-            .unwrap();
+        let e = Environment::from_rgb(
+            "t",
+            2,
+            1,
+            vec![f32::NAN, -1.0, f32::INFINITY, 1.0, 2.0, 3.0],
+        )
+        .unwrap();
         assert_eq!(&e.rgb[..3], &[0.0, 0.0, MAX_RADIANCE]);
         assert!(Environment::from_rgb("t", 0, 1, vec![]).is_err());
     }
@@ -635,7 +648,7 @@ impl LightsMode {
 }
 
 /// Illuminance of the default key light (lux, KHR_lights_punctual units).
-pub const KEY_LIGHT_LUX: f32 = 2.5;
+pub const KEY_LIGHT_LUX: f32 = 2.0;
 
 /// Lights `scene` as `mode` says: removes the file's lights (`none`, `default`), or adds the
 /// default key light, a directional light from the studio's key soft box (turned with the
@@ -646,7 +659,12 @@ pub const KEY_LIGHT_LUX: f32 = 2.5;
 ///
 /// A scene without cameras gets its automatic framing as a camera first, so the ground does not
 /// change what the camera frames.
-pub fn stage(scene: &mut crate::scene::Scene, mode: LightsMode, rotation: f32, own_env: bool) -> bool {
+pub fn stage(
+    scene: &mut crate::scene::Scene,
+    mode: LightsMode,
+    rotation: f32,
+    own_env: bool,
+) -> bool {
     use crate::scene::{Draw, Light, LightKind, Material, Mesh, Shadow, Vertex};
     let add_default = match mode {
         LightsMode::Auto => scene.lights.is_empty() && !own_env,
@@ -702,7 +720,7 @@ pub fn stage(scene: &mut crate::scene::Scene, mode: LightsMode, rotation: f32, o
     let material = scene.materials.len();
     scene.materials.push(Material {
         name: "default ground".into(),
-        base_color: [0.45, 0.45, 0.45, 1.0],
+        base_color: [0.3, 0.3, 0.3, 1.0],
         metallic: 0.0,
         roughness: 0.85,
         ..Material::default()

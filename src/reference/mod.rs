@@ -16,6 +16,7 @@
 
 pub mod brdf;
 pub mod furnace;
+pub mod ibl;
 pub mod probe;
 pub mod raster;
 pub mod shading;

@@ -178,8 +178,11 @@ impl EnvPasses {
             )
             .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST),
         )?;
-        let staging =
-            ctx.create_buffer_with("environment staging", BufferUsageFlags::TRANSFER_SRC, &texels)?;
+        let staging = ctx.create_buffer_with(
+            "environment staging",
+            BufferUsageFlags::TRANSFER_SRC,
+            &texels,
+        )?;
         let size = radiance_size(env.width);
         let radiance = ctx.create_image(
             &ImageDesc::new_cube("environment radiance cube", ENV_FORMAT, size)
@@ -220,7 +223,12 @@ impl EnvPasses {
             cmd.transition(&equirect, Usage::Undefined, Usage::TransferDst, None);
             cmd.copy_buffer_to_image(&staging, &equirect);
             cmd.transition(&equirect, Usage::TransferDst, Usage::ComputeRead, None);
-            cmd.transition(&radiance, Usage::Undefined, Usage::ComputeWrite, Some((0, 1)));
+            cmd.transition(
+                &radiance,
+                Usage::Undefined,
+                Usage::ComputeWrite,
+                Some((0, 1)),
+            );
             cmd.bind_pipeline(&self.cube);
             cmd.bind_sets(&self.cube, 0, &[cube_set]);
             cmd.push_constants(
@@ -233,7 +241,12 @@ impl EnvPasses {
                 },
             );
             cmd.dispatch(size.div_ceil(8), size.div_ceil(8), 6);
-            cmd.transition(&radiance, Usage::ComputeWrite, Usage::TransferDst, Some((0, 1)));
+            cmd.transition(
+                &radiance,
+                Usage::ComputeWrite,
+                Usage::TransferDst,
+                Some((0, 1)),
+            );
             cmd.generate_mips(&radiance, Usage::ComputeRead);
             cmd.transition(&specular, Usage::Undefined, Usage::ComputeWrite, None);
             cmd.bind_pipeline(&self.prefilter);

@@ -67,7 +67,11 @@ impl FrameData {
             debug_view: 0,
             material_count: 0,
             tile_columns: super::tiles::tile_grid(width, height).0,
-            env_rot: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]],
+            env_rot: [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
             env_params: [0.0; 4],
             env_background: [1.0, 0.0, 0.0, 0.0],
             sh: [[0.0; 4]; 9],

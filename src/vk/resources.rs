@@ -408,8 +408,7 @@ impl Context {
             (vk::ImageViewType::TYPE_2D, vk::ImageViewType::TYPE_2D)
         };
         image.view = make_view(0, desc.mip_levels, sampled_type)?;
-        if (desc.mip_levels > 1 || desc.cube) && desc.usage.contains(vk::ImageUsageFlags::STORAGE)
-        {
+        if (desc.mip_levels > 1 || desc.cube) && desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
             for level in 0..desc.mip_levels {
                 let v = make_view(level, 1, storage_type)?;
                 image.mip_views.push(v);

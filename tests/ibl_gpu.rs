@@ -1,0 +1,366 @@
+//! Environment lighting on lavapipe (validation on), against the CPU ground truth of
+//! `weft::reference::ibl` (quadrature over every pixel of the map, f64, none of the GPU's
+//! approximations):
+//! - white furnace: a uniform environment of radiance 1 on white dielectrics, white metals and
+//!   the fabric, at every IBL level;
+//! - a real HDR (Poly Haven "Lebombo", CC0, tests/data/env/) on the glTF spheres and the default
+//!   cloth: relative error per IBL level;
+//! - the environment's rotation turns the lighting (and nothing else).
+
+mod common;
+
+use std::sync::Arc;
+
+use glam::Mat4;
+use weft::env::{EnvLighting, Environment, IblLevel};
+use weft::reference::ibl::EnvQuadrature;
+use weft::reference::shading::{oct_decode, Surface};
+use weft::render::gpu::FrameData;
+use weft::render::{GBufferReadback, RenderOptions, Renderer};
+use weft::scene::{self, Scene};
+
+const W: u32 = 96;
+const H: u32 = 54;
+
+fn srgb_to_linear(b: u8) -> f32 {
+    let s = b as f32 / 255.0;
+    if s <= 0.04045 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn lebombo() -> Environment {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr");
+    Environment::load(&path).expect("tests/data/env/lebombo_1k.hdr")
+}
+
+fn spheres() -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/spheres.glb");
+    let mut s = scene::load(&path).expect("spheres scene");
+    s.lights.clear();
+    s
+}
+
+fn cloth() -> Scene {
+    let mut s = scene::default_scene();
+    s.lights.clear();
+    s
+}
+
+fn options(env: &Arc<Environment>, level: IblLevel, rotation: f32) -> RenderOptions {
+    let mut e = EnvLighting::new(env.clone());
+    e.level = level;
+    e.rotation = rotation;
+    RenderOptions {
+        width: W,
+        height: H,
+        environment: Some(e),
+        ..Default::default()
+    }
+}
+
+/// The surface at each covered pixel of the G-buffer (index, surface), and the eye.
+fn surfaces(
+    g: &GBufferReadback,
+    scene: &Scene,
+    o: &RenderOptions,
+) -> (Vec<(usize, Surface)>, [f32; 3]) {
+    let camera = scene.camera(o.camera).unwrap();
+    let frame = FrameData::new(&camera, o.width, o.height);
+    let inv = Mat4::from_cols_array_2d(&frame.inv_view_proj);
+    let mut out = Vec::new();
+    for y in 0..H as usize {
+        for x in 0..W as usize {
+            let i = y * W as usize + x;
+            let depth = g.depth[i];
+            if depth <= 0.0 {
+                continue;
+            }
+            let ndc = [
+                (x as f32 + 0.5) / W as f32 * 2.0 - 1.0,
+                (y as f32 + 0.5) / H as f32 * 2.0 - 1.0,
+            ];
+            let hp = inv * glam::Vec4::new(ndc[0], ndc[1], depth, 1.0);
+            let p = hp.truncate() / hp.w;
+            let px = |v: &[f32], c: usize| v[i * 4 + c];
+            let material = px(&g.surface, 1).round() as usize;
+            out.push((
+                i,
+                Surface {
+                    position: p.into(),
+                    normal: oct_decode([px(&g.frame, 0), px(&g.frame, 1)]),
+                    tangent: oct_decode([px(&g.frame, 2), px(&g.frame, 3)]),
+                    sign: px(&g.surface, 2),
+                    base_color: [0, 1, 2].map(|c| srgb_to_linear(g.albedo[i * 4 + c])),
+                    metallic: g.albedo[i * 4 + 3] as f32 / 255.0,
+                    roughness: px(&g.surface, 0),
+                    emissive: [0.0; 3],
+                    coverage: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
+                    fabric: scene.materials[material]
+                        .fabric
+                        .as_ref()
+                        .map(|f| f.to_gpu()),
+                },
+            ));
+        }
+    }
+    (out, [frame.eye[0], frame.eye[1], frame.eye[2]])
+}
+
+fn luminance(c: [f64; 3]) -> f64 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+#[test]
+fn white_furnace() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let env = Arc::new(Environment::uniform([1.0; 3]));
+    let q = EnvQuadrature::new(&env, 0.0, 1.0, 1);
+    // Spheres with every material white: dielectric (front row) and metal with F0 = 1 (back).
+    let mut scene = spheres();
+    for m in scene.materials.iter_mut().skip(1) {
+        m.base_color = [1.0; 4];
+    }
+    let cloth = cloth();
+    for level in [
+        IblLevel::Approx,
+        IblLevel::Fis(16),
+        IblLevel::MonteCarlo(64),
+    ] {
+        let o = options(&env, level, 0.0);
+        let frame = renderer.render(&scene, &o).expect("render");
+        let g = renderer.read_gbuffer().unwrap();
+        let (surf, eye) = surfaces(&g, &scene, &o);
+        let (mut worst_dielectric, mut metal_lo, mut metal_hi) = (0f64, f64::MAX, 0f64);
+        let (mut metal_sum, mut metal_ref, mut metal_err, mut metal_n) = (0f64, 0f64, 0f64, 0);
+        let (mut dielectric_err, mut dielectric_n) = (0f64, 0usize);
+        for (i, s) in &surf {
+            let material = g.surface[i * 4 + 1].round() as usize;
+            if material == 0 {
+                continue; // the floor
+            }
+            let out = frame.hdr[i * 4 + 1] as f64;
+            if s.metallic < 0.5 {
+                worst_dielectric = worst_dielectric.max((out - 1.0).abs());
+                dielectric_err += (out - 1.0).abs();
+                dielectric_n += 1;
+            } else {
+                metal_lo = metal_lo.min(out);
+                metal_hi = metal_hi.max(out);
+                if s.roughness > 0.2 {
+                    let want = q.reflected(s, eye)[1];
+                    metal_sum += out;
+                    metal_ref += want;
+                    metal_err += (out - want).abs();
+                    metal_n += 1;
+                }
+            }
+        }
+        let metal_rel = metal_err / metal_ref;
+        println!(
+            "{}: white dielectric max |L - 1| = {worst_dielectric:.4}, mean {:.4}; white metal L in [{metal_lo:.3}, {metal_hi:.3}], mean {:.3} (CPU {:.3}, mean |GPU - CPU|/CPU {metal_rel:.4}, roughness > 0.2)",
+            level.name(),
+            dielectric_err / dielectric_n as f64,
+            metal_sum / metal_n as f64,
+            metal_ref / metal_n as f64
+        );
+        // Dielectric: the split sum gives diffuse·(1 - F0·A - B) + F0·A + B with white diffuse
+        // and a uniform environment, exactly 1, up to f16 storage of the cubes, the DFG table and
+        // the HDR target (2^-11 each). Monte Carlo with 64 samples is noisy per pixel (GGX
+        // samples of a rough lobe weigh up to several times 1): its mean error over the spheres
+        // is bounded instead (measured in the note; 0.03 is about 3x it).
+        if level == IblLevel::MonteCarlo(64) {
+            let mean = dielectric_err / dielectric_n as f64;
+            assert!(mean <= 0.03, "{}: mean {mean}", level.name());
+        } else {
+            assert!(
+                worst_dielectric <= 0.01,
+                "{}: {worst_dielectric}",
+                level.name()
+            );
+        }
+        // Metal F0 = 1: A + B, the single-scattering albedo of GGX: 1 when smooth, lower when
+        // rough and at grazing view (multiple scattering is missing from every
+        // single-scattering model, glTF's included), so "about 1" means: equal to the CPU
+        // quadrature of the same BRDF, and never above 1. The split sum is exact under a uniform
+        // environment but for the 32² DFG table's bilinear interpolation (~1 %) and f16 storage;
+        // Monte Carlo with 64 GGX samples is noisy where the lobe is wide (a few %).
+        if level != IblLevel::MonteCarlo(64) {
+            assert!(
+                metal_hi < 1.005,
+                "{}: [{metal_lo}, {metal_hi}]",
+                level.name()
+            );
+        }
+        let metal_bound = if level == IblLevel::MonteCarlo(64) {
+            0.05
+        } else {
+            0.02
+        };
+        assert!(
+            metal_rel < metal_bound,
+            "{}: metal {metal_rel}",
+            level.name()
+        );
+
+        // Fabric: the CPU quadrature of the same BRDF under the same environment is its
+        // directional albedo at each pixel.
+        let o = options(&env, level, 0.0);
+        let frame = renderer.render(&cloth, &o).expect("render");
+        let g = renderer.read_gbuffer().unwrap();
+        let (surf, eye) = surfaces(&g, &cloth, &o);
+        let (mut sum_err, mut sum_ref, mut n) = (0f64, 0f64, 0usize);
+        for (i, s) in surf.iter().filter(|(_, s)| s.fabric.is_some()).step_by(7) {
+            let want = luminance(q.reflected(s, eye));
+            let got = luminance([0, 1, 2].map(|c| frame.hdr[i * 4 + c] as f64));
+            sum_err += (got - want).abs();
+            sum_ref += want;
+            n += 1;
+        }
+        let rel = sum_err / sum_ref;
+        println!(
+            "{}: fabric furnace, {n} pixels, mean |GPU - CPU| / mean CPU = {rel:.4}",
+            level.name()
+        );
+        // Diffuse: SH of a uniform environment is exact. Specular: approx takes the lobes'
+        // albedo as Schlick's Fresnel at n·v (measured 12 % off the true albedo); fis:16 and
+        // mc:64 estimate it by sampling (the uniform map has no detail for FIS's blur to lose).
+        // Bounds ~1.3x the measured.
+        let bound = if level == IblLevel::Approx {
+            0.16
+        } else {
+            0.03
+        };
+        assert!(n > 50 && rel < bound, "{}: {rel}", level.name());
+    }
+}
+
+#[test]
+fn real_hdr_matches_the_cpu_ground_truth() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let env = Arc::new(lebombo());
+    let rotation: f32 = std::env::var("WEFT_ROT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(60.0);
+    let q = EnvQuadrature::new(&env, rotation, 1.0, 1);
+    let mut failures = Vec::new();
+    let mut errors = Vec::new();
+    for (name, scene) in [("spheres", spheres()), ("cloth", cloth())] {
+        let levels = [
+            IblLevel::Approx,
+            IblLevel::Fis(4),
+            IblLevel::Fis(16),
+            IblLevel::Fis(64),
+            IblLevel::MonteCarlo(512),
+        ];
+        let mut reference: Option<Vec<(usize, [f64; 3])>> = None;
+        for level in levels {
+            let o = options(&env, level, rotation);
+            let frame = renderer.render(&scene, &o).expect("render");
+            let refs = reference.get_or_insert_with(|| {
+                let g = renderer.read_gbuffer().unwrap();
+                let (surf, eye) = surfaces(&g, &scene, &o);
+                surf.iter()
+                    .filter(|(_, s)| name != "cloth" || s.fabric.is_some())
+                    // Very smooth spheres are sharper than the map's pixels can resolve.
+                    .filter(|(_, s)| s.fabric.is_some() || s.roughness > 0.2)
+                    .step_by(5)
+                    .map(|(i, s)| (*i, q.reflected(s, eye)))
+                    .collect()
+            });
+            let (mut sum_err, mut sum_ref) = (0f64, 0f64);
+            let mut by_material = std::collections::BTreeMap::<usize, (f64, f64, f64)>::new();
+            let g = renderer.read_gbuffer().unwrap();
+            for (i, want) in refs.iter() {
+                let got = [0, 1, 2].map(|c| frame.hdr[i * 4 + c] as f64);
+                sum_err += (luminance(got) - luminance(*want)).abs();
+                sum_ref += luminance(*want);
+                let m = g.surface[i * 4 + 1].round() as usize;
+                let e = by_material.entry(m).or_default();
+                e.0 += luminance(got);
+                e.1 += luminance(*want);
+                e.2 += 1.0;
+            }
+            if std::env::var("WEFT_IBL_DEBUG").is_ok() {
+                for (m, (g, w, n)) in &by_material {
+                    println!(
+                        "  material {m}: GPU mean {:.4}, CPU mean {:.4} ({n} px)",
+                        g / n,
+                        w / n
+                    );
+                }
+            }
+            let rel = sum_err / sum_ref;
+            println!(
+                "{name} {}: {} pixels, mean relative error {rel:.4}",
+                level.name(),
+                refs.len()
+            );
+            // Bounds, each about 1.3x the worst of the two scenes as measured on lavapipe (the
+            // table is in docs/fabric-model.md §6). What they bound: the SH diffuse (2 % on this
+            // map, tested in reference::ibl), the split sum of the glTF spheres (4 % with the
+            // dominant direction), and for the cloth the estimator of each level: approx takes a
+            // lobe's albedo as Fresnel at n·v and ignores its anisotropy (23 %); FIS is biased by
+            // the blur of its mip look-ups, which shrinks as N grows (16 %, 8.6 %, 3.2 % at 4, 16,
+            // 64); Monte Carlo with 512 samples is unbiased, its noise averages to ~1 %. The
+            // convergence itself is asserted below.
+            let bound = match level {
+                IblLevel::Approx => 0.30,
+                IblLevel::Fis(4) => 0.21,
+                IblLevel::Fis(16) => 0.11,
+                IblLevel::Fis(_) => 0.045,
+                IblLevel::MonteCarlo(_) => 0.016,
+            };
+            errors.push(rel);
+            if rel >= bound {
+                failures.push(format!("{name} {}: {rel} >= {bound}", level.name()));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+    // On the cloth, every level closer than the last (FIS converges to the Monte Carlo answer).
+    let cloth = &errors[errors.len() - 5..];
+    assert!(
+        cloth.windows(2).all(|w| w[1] < w[0]),
+        "cloth errors do not shrink: {cloth:?}"
+    );
+}
+
+#[test]
+fn rotating_the_environment_turns_the_light() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let env = Arc::new(lebombo());
+    let scene = spheres();
+    let a = renderer
+        .render(&scene, &options(&env, IblLevel::Fis(16), 0.0))
+        .unwrap();
+    let b = renderer
+        .render(&scene, &options(&env, IblLevel::Fis(16), 90.0))
+        .unwrap();
+    let c = renderer
+        .render(&scene, &options(&env, IblLevel::Fis(16), 360.0))
+        .unwrap();
+    let diff = |x: &[f32], y: &[f32]| -> f64 {
+        x.iter()
+            .zip(y)
+            .map(|(p, q)| (p - q).abs() as f64)
+            .sum::<f64>()
+            / x.len() as f64
+    };
+    assert!(
+        diff(&a.hdr, &b.hdr) > 1e-3,
+        "a quarter turn changes the image"
+    );
+    assert!(
+        diff(&a.hdr, &c.hdr) < 1e-4,
+        "a full turn does not: {}",
+        diff(&a.hdr, &c.hdr)
+    );
+    for f in [&a, &b, &c] {
+        assert!(f.hdr.iter().all(|v| v.is_finite()));
+    }
+}
