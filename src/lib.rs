@@ -12,6 +12,7 @@ pub mod package;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod sheet;
 pub mod vk;
 
 mod error;

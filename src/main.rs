@@ -32,6 +32,10 @@ enum Command {
     /// The paper's figure: the scene's fabric under Gouraud, Phong, plain Ashikhmin-Shirley and
     /// the fabric model, side by side and labelled, in one PNG.
     Compare(CompareArgs),
+    /// A contact sheet: every .gltf/.glb under the given files or folders rendered with the same
+    /// options (the defaults unless told), labelled with name and mean sRGB, in one PNG; prints a
+    /// table of what each scene gave.
+    Sheet(SheetArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
     Shaders {
         /// Directory to write the package into (created if missing).
@@ -129,6 +133,31 @@ struct RenderArgs {
 }
 
 #[derive(Args)]
+struct SheetArgs {
+    /// .gltf/.glb files, or folders to search recursively.
+    #[arg(required = true)]
+    paths: Vec<PathBuf>,
+    /// Output PNG.
+    #[arg(short, long, default_value = "sheet.png")]
+    output: PathBuf,
+    /// Size of each cell, WIDTHxHEIGHT.
+    #[arg(long, default_value = "256x192")]
+    size: String,
+    /// Cells per row.
+    #[arg(long, default_value_t = 6)]
+    columns: u32,
+    /// Environment, as for render: a .hdr/.exr file, studio or none.
+    #[arg(long, default_value = "studio")]
+    env: String,
+    /// Turn on the Vulkan validation layer; any message it reports fails that scene's cell.
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device, as for render.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+#[derive(Args)]
 struct CompareArgs {
     #[command(flatten)]
     scene: SceneArgs,
@@ -186,6 +215,7 @@ fn main() -> ExitCode {
         Command::Shaders { out } => run_shaders(&out),
         Command::Bench(args) => run_bench(args),
         Command::Compare(args) => run_compare(args),
+        Command::Sheet(args) => run_sheet(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -200,9 +230,23 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
     load_scene_sized(args, "1280x720")
 }
 
+/// As [`load_scene_sized`] at 1280x720, without printing the loader's warnings (they stay in
+/// `scene.warnings`).
+fn load_scene_quiet(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
+    load_scene_impl(args, "1280x720", false)
+}
+
 fn load_scene_sized(
     args: &SceneArgs,
     default_size: &str,
+) -> anyhow::Result<(Scene, RenderOptions)> {
+    load_scene_impl(args, default_size, true)
+}
+
+fn load_scene_impl(
+    args: &SceneArgs,
+    default_size: &str,
+    print_warnings: bool,
 ) -> anyhow::Result<(Scene, RenderOptions)> {
     // Flags first: a typo fails before any loading.
     let lights = weft::env::LightsMode::parse(&args.lights)?;
@@ -232,8 +276,10 @@ fn load_scene_sized(
         e.validate()?;
     }
     weft::env::stage(&mut scene, lights, args.env_rotation, own_env);
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
+    if print_warnings {
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
     }
     let (width, height) = render::parse_size(args.size.as_deref().unwrap_or(default_size))?;
     let mut options = RenderOptions {
@@ -351,6 +397,85 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             frame.stats.shadow_maps, frame.stats.shadow_draws
         );
     }
+    Ok(())
+}
+
+fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
+    let (w, h) = render::parse_size(&args.size)?;
+    let files = weft::sheet::find_scenes(&args.paths);
+    if files.is_empty() {
+        anyhow::bail!(
+            "no .gltf or .glb files under {}: give scene files or folders that hold some",
+            args.paths
+                .iter()
+                .map(|p| format!("'{}'", p.display()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    let ctx = open_device(args.device.as_deref(), args.validate)?;
+    let mut renderer = Renderer::new(ctx)?;
+    let mut cells = Vec::new();
+    println!("| scene | triangles | mean sRGB | ms | warnings | result |");
+    println!("|---|---|---|---|---|---|");
+    for file in &files {
+        let name = file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let start = std::time::Instant::now();
+        let scene_args = SceneArgs {
+            scene: Some(file.clone()),
+            size: Some(args.size.clone()),
+            camera: None,
+            eye: None,
+            target: None,
+            fov: 40.0,
+            accuracy: "mixture".into(),
+            weave_precision: "rgba16f".into(),
+            debug_view: "none".into(),
+            shading: "fabric".into(),
+            env: args.env.clone(),
+            env_rotation: 0.0,
+            env_intensity: 1.0,
+            background: "env".into(),
+            ibl: "fis:16".into(),
+            lights: "auto".into(),
+        };
+        let result = load_scene_quiet(&scene_args).and_then(|(scene, options)| {
+            let frame = renderer.render(&scene, &options)?;
+            Ok((scene, frame))
+        });
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        match result {
+            Ok((scene, frame)) => {
+                let mean = weft::sheet::mean_srgb(&frame.ldr);
+                println!(
+                    "| {name} | {} | {mean:.0} | {ms:.0} | {} | ok |",
+                    frame.stats.triangles,
+                    scene.warnings.len()
+                );
+                cells.push(weft::sheet::Cell {
+                    name,
+                    image: Ok(frame.ldr),
+                });
+            }
+            Err(e) => {
+                let msg = format!("{e:#}");
+                println!(
+                    "| {name} | - | - | {ms:.0} | - | {} |",
+                    msg.replace('|', "/")
+                );
+                cells.push(weft::sheet::Cell {
+                    name,
+                    image: Err(msg),
+                });
+            }
+        }
+    }
+    let (sw, sh, rgba) = weft::sheet::compose(&cells, w, h, args.columns);
+    render::write_png(&args.output, sw, sh, &rgba)?;
+    eprintln!("wrote {} ({} scenes)", args.output.display(), cells.len());
     Ok(())
 }
 

@@ -252,8 +252,21 @@ fn run_case(
     bless: bool,
     dir: &Path,
 ) -> Row {
-    let scene = load_scene(scenes, case.scene);
+    let mut scene = load_scene(scenes, case.scene);
+    let environment = case.env.map(|e| {
+        let env = if e.map == "studio" {
+            weft::env::Environment::studio()
+        } else {
+            weft::env::Environment::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(e.map))
+                .unwrap_or_else(|err| panic!("case {}: {err}", case.name))
+        };
+        weft::env::stage(&mut scene, e.lights, e.rotation, e.map != "studio");
+        let mut l = weft::env::EnvLighting::new(std::sync::Arc::new(env));
+        l.rotation = e.rotation;
+        l
+    });
     let options = RenderOptions {
+        environment,
         width: WIDTH,
         height: HEIGHT,
         camera: case.camera,

@@ -52,8 +52,21 @@ pub struct Case {
     /// Also compare with its own left-right mirror image within this bound (a scene symmetric
     /// about the camera's vertical plane).
     pub mirror: Option<Tolerance>,
+    /// Environment lighting: None (lamps and the fixed ambient, the library default), or an
+    /// environment with what happens to the file's lights.
+    pub env: Option<EnvCase>,
     /// What a person should see in the golden.
     pub shows: &'static str,
+}
+
+/// The environment of a case.
+#[derive(Clone, Copy, Debug)]
+pub struct EnvCase {
+    /// `studio` (built in) or a path relative to the crate root.
+    pub map: &'static str,
+    pub rotation: f32,
+    /// What `weft::env::stage` does with the file's lights.
+    pub lights: weft::env::LightsMode,
 }
 
 const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> Case {
@@ -69,6 +82,7 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         golden: GOLDEN,
         cpu: None,
         mirror: None,
+        env: None,
         shows,
     }
 }
@@ -274,6 +288,28 @@ pub fn cases() -> Vec<Case> {
         case("shadows", "assets/scenes/shadows.glb", "a sand plain weave with a red ball, a floating box and a small steel ball; the sun (40°) and a spot cast soft PCF shadows of the ball and box, the steel ball asks not to cast and casts none; no acne"),
         case("spheres", "assets/scenes/spheres.glb", "back row metallic gold, front row red plastic, roughness 0.05 to 1 left to right"),
     ];
+    // Environment lighting (docs/fabric-model.md §6): what `weft render` shows by default, and a
+    // real HDR on fabric, metal and dielectric with no lamps.
+    use weft::env::LightsMode;
+    const LEBOMBO: &str = "tests/data/env/lebombo_1k.hdr";
+    cases.extend([
+        Case {
+            env: Some(EnvCase { map: "studio", rotation: 0.0, lights: LightsMode::Auto }),
+            ..case("env-default", DEFAULT_SCENE, "the default scene as weft render shows it: the file's three lights plus the built-in studio; the steel ball reflects the studio's soft boxes, the cloth keeps its weave and sheen, the background is the studio's grey walls")
+        },
+        Case {
+            env: Some(EnvCase { map: LEBOMBO, rotation: 60.0, lights: LightsMode::None }),
+            ..case("env-spheres", "assets/scenes/spheres.glb", "the spheres lit only by the Lebombo interior (rotated 60°): the window reflected sharp in the smooth gold balls at the left and blurred to the right, red plastic lit softly from one side, the dark floor filling the view")
+        },
+        Case {
+            env: Some(EnvCase { map: LEBOMBO, rotation: 60.0, lights: LightsMode::None }),
+            ..case("env-cloth", DEFAULT_SCENE, "the default cloth lit only by the Lebombo interior: soft window light from one side, the weave's sheen along the folds, no lamp highlights")
+        },
+        Case {
+            env: Some(EnvCase { map: "studio", rotation: 0.0, lights: LightsMode::Default }),
+            ..case("env-staged", "assets/scenes/shadows.glb", "the shadows scene with its lights replaced by the default lighting: the studio, the key light from the front left casting the ball's and the floating box's shadows to the back right onto the weave, a grey ground beyond it")
+        },
+    ]);
     // The accuracy levels and weave precisions other than the default (model page §4).
     cases.extend([
         Case {
