@@ -246,7 +246,9 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, out vec3 we
     if (IBL == 1u) {
         vec3 r = tbn * vec3(-k2.x, -k2.y, k2.z);
         float peak = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (8.0 * FABRIC_PI);
-        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, frame.env_params.z)) * schlick(f.rs, k2.z);
+        // One sample at the mirror direction, blurred to the lobe's peak solid angle (+1 level:
+        // the box mips blur less than the lobe's tails reach).
+        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, frame.env_params.z) + 1.0) * schlick(f.rs, k2.z);
         weft = l;
         warp = l;
         return;
@@ -268,14 +270,29 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, out vec3 we
         if (!(k1.z > 0.0)) {
             continue;
         }
-        float pdf = (w_weft * as_d(h, f.e_along, f.e_across) + (1.0 - w_weft) * as_d(h, f.e_across, f.e_along)) / (4.0 * kh);
-        if (!(pdf > 0.0)) {
+        // The estimator of each lobe, f·cos/pdf, with pdf the mixture of the two samplers:
+        // as_d and as_lobe share the normalisation sqrt((eu+1)(ev+1)) and differ only in hn^E,
+        // so with P = as_power of each orientation, pdf = norm/(2π)·(w P_weft + (1-w) P_warp)/(4 kh)
+        // and as_lobe = norm/(8π)·P·F/denom: f·cos/pdf = P·F·k1.z·kh/(denom·mix). (The same
+        // numbers as as_d and as_lobe, two exp instead of four; the CPU ground truth evaluates the
+        // BRDF itself.)
+        float p_weft = as_power(h.x, h.y, h.z, f.e_along, f.e_across);
+        float p_warp = as_power(h.x, h.y, h.z, f.e_across, f.e_along);
+        float mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
+        if (!(mixed > 0.0)) {
             continue;
         }
-        float lod = IBL == 3u ? 0.0 : fis_lod(pdf, IBL_SAMPLES, frame.env_params.z);
-        vec3 l = env_radiance_at(tbn * k1, lod) * (k1.z / pdf);
-        weft += l * as_lobe(k1, k2, f.e_along, f.e_across, f.rs);
-        warp += l * as_lobe(k1, k2, f.e_across, f.e_along, f.rs);
+        float fresnel = schlick(f.rs, min(kh, 1.0));
+        float denom = max(min(kh, 1.0) * max(k1.z, k2.z), FABRIC_DENOM_MIN);
+        float common_w = fresnel * k1.z * kh / (denom * mixed);
+        float lod = 0.0;
+        if (IBL != 3u) {
+            float pdf = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
+            lod = fis_lod(pdf, IBL_SAMPLES, frame.env_params.z);
+        }
+        vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
+        weft += l * p_weft;
+        warp += l * p_warp;
     }
     weft /= float(IBL_SAMPLES);
     warp /= float(IBL_SAMPLES);

@@ -16,6 +16,7 @@
 //! falls on all of them alike. Everything rendered is deterministic (fixed cameras, lights placed
 //! on a fixed spiral); only the times vary from run to run.
 
+pub mod ibl_bench;
 pub mod plan_bench;
 pub mod plot;
 

@@ -85,15 +85,16 @@ struct SceneArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     env_rotation: f32,
     /// Scale the environment's radiance.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     env_intensity: f32,
     /// What empty pixels show: env, env:BLUR (0..1), color, color:R,G,B (linear), none
     /// (transparent).
     #[arg(long, default_value = "env")]
     background: String,
     /// How environment light is integrated: approx, fis:N (filtered importance sampling, default
-    /// fis:16), mc:N (brute-force Monte Carlo, the ground truth).
-    #[arg(long, default_value = "fis:16")]
+    /// fis:8), mc:N (brute-force Monte Carlo, the ground truth). weft bench --ibl shows the cost
+    /// and error of each.
+    #[arg(long, default_value = "fis:8")]
     ibl: String,
     /// Punctual lights: auto (the file's; a default key light with a shadow and a ground when it
     /// has none and no --env FILE is given), none, file, default.
@@ -184,7 +185,17 @@ struct BenchArgs {
     /// plan, same run) and 4 against 256 point lights of limited range.
     #[arg(long)]
     plan: bool,
-    /// Image size of the --plan bench.
+    /// Instead: the IBL levels (approx, fis:4/16/64) against a Monte Carlo ground truth, and the
+    /// lighting pass with environment light against lamps only.
+    #[arg(long)]
+    ibl: bool,
+    /// The environment of the --ibl bench (default: the repository's tests/data/env/lebombo_1k.hdr).
+    #[arg(long)]
+    ibl_env: Option<PathBuf>,
+    /// Monte Carlo samples per pixel of the --ibl ground truth.
+    #[arg(long, default_value_t = 2048)]
+    ibl_truth: u32,
+    /// Image size of the --plan and --ibl benches.
     #[arg(long, default_value = "960x540")]
     size: String,
     /// Where bench.csv and bench.png go.
@@ -439,7 +450,7 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
             env_rotation: 0.0,
             env_intensity: 1.0,
             background: "env".into(),
-            ibl: "fis:16".into(),
+            ibl: weft::env::DEFAULT_IBL.name(),
             lights: "auto".into(),
         };
         let result = load_scene_quiet(&scene_args).and_then(|(scene, options)| {
@@ -516,6 +527,36 @@ fn run_compare(args: CompareArgs) -> anyhow::Result<()> {
 }
 
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
+    if args.ibl {
+        let size = render::parse_size(&args.size)?;
+        RenderOptions {
+            width: size.0,
+            height: size.1,
+            ..Default::default()
+        }
+        .validate()?;
+        weft::env::IblLevel::parse(&format!("mc:{}", args.ibl_truth))?;
+        let env = args.ibl_env.clone().unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr")
+        });
+        let ctx = open_device(args.device.as_deref(), false)?;
+        let mut renderer = Renderer::new(ctx)?;
+        let report = weft::bench::ibl_bench::run(
+            &mut renderer,
+            &env,
+            size,
+            args.frames.unwrap_or(5),
+            args.ibl_truth,
+        )?;
+        println!("{}", report.table());
+        std::fs::create_dir_all(&args.out)
+            .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", args.out.display()))?;
+        let (w, h, rgba) = report.plot();
+        let png = args.out.join("bench-ibl.png");
+        render::write_png(&png, w, h, &rgba)?;
+        eprintln!("wrote {}", png.display());
+        return Ok(());
+    }
     if args.plan {
         let size = render::parse_size(&args.size)?;
         RenderOptions {

@@ -124,7 +124,7 @@ fn plan_prints_the_default_scene() {
         serde_json::json!(["environment", "weave", "gbuffer", "lighting", "tonemap"])
     );
     assert_eq!(v["environment"]["name"], "built-in studio");
-    assert_eq!(v["environment"]["ibl"], "fis:16");
+    assert_eq!(v["environment"]["ibl"], "fis:8");
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
     // Without an environment there is nothing to preprocess.
     let out = weft()
@@ -176,4 +176,90 @@ fn compare_writes_the_labelled_figure_and_rejects_unknown_shading() {
         "{err}"
     );
     let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn relative_paths_start_where_the_user_is() {
+    // A user's own folder: the scene, the environment and the output named relative to it.
+    let dir = temp("relative");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    std::fs::copy(root.join("assets/scenes/spheres.glb"), dir.join("mine.glb")).unwrap();
+    std::fs::copy(
+        root.join("tests/data/env/lebombo_1k.hdr"),
+        dir.join("room.hdr"),
+    )
+    .unwrap();
+    let out = weft()
+        .current_dir(&dir)
+        .args([
+            "render", "mine.glb", "--env", "room.hdr", "--size", "64x36", "-o", "out.png",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("out.png").exists());
+    // A missing environment map is named, with what to do.
+    let out = weft()
+        .current_dir(&dir)
+        .args(["render", "mine.glb", "--env", "missing.hdr", "-o", "x.png"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("missing.hdr") && err.contains("does not exist"),
+        "{err}"
+    );
+    assert!(!dir.join("x.png").exists());
+    // The scripts never change directory before the binary sees its arguments.
+    for script in ["tools/weft", "tools/test"] {
+        let text = std::fs::read_to_string(root.join(script)).unwrap();
+        assert!(
+            text.contains("--manifest-path") || script == "tools/test",
+            "{script}"
+        );
+    }
+    let weft_script = std::fs::read_to_string(root.join("tools/weft")).unwrap();
+    assert!(
+        !weft_script
+            .lines()
+            .any(|l| l.trim_start().starts_with("cd ")),
+        "tools/weft must not cd"
+    );
+}
+
+#[test]
+fn bad_environment_flags_are_refused_clearly() {
+    for (flag, value, expect) in [
+        ("--background", "sky", "unknown background"),
+        ("--ibl", "fis:0", "unknown IBL level"),
+        ("--lights", "some", "unknown --lights"),
+        ("--env-intensity", "-1", "out of range"),
+    ] {
+        let out = weft()
+            .args(["render", flag, value, "--size", "32x18", "-o"])
+            .arg(temp("badenv").join("never.png"))
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{flag} {value}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect), "{flag} {value}: {err}");
+    }
+    // A broken HDR (a PNG renamed) is named.
+    let dir = temp("brokenhdr");
+    std::fs::write(dir.join("bad.hdr"), b"#?RADIANCE\nnot really").unwrap();
+    let out = weft()
+        .args(["render", "--size", "32x18", "--env"])
+        .arg(dir.join("bad.hdr"))
+        .arg("-o")
+        .arg(dir.join("o.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.hdr") && err.contains("cannot"), "{err}");
 }

@@ -311,7 +311,7 @@ fn glyph(c: char) -> [u8; 7] {
 
 /// A log-10 axis mapped onto pixels [p0, p1].
 #[derive(Clone, Copy)]
-struct LogAxis {
+pub(crate) struct LogAxis {
     lo: f64,
     hi: f64,
     p0: f32,
@@ -320,7 +320,7 @@ struct LogAxis {
 
 impl LogAxis {
     /// Fits [min, max] with some margin, widened to at least one decade.
-    fn fit(min: f64, max: f64, p0: f32, p1: f32) -> LogAxis {
+    pub(crate) fn fit(min: f64, max: f64, p0: f32, p1: f32) -> LogAxis {
         let (mut lo, mut hi) = (min.log10() - 0.08, max.log10() + 0.08);
         if hi - lo < 1.0 {
             let mid = 0.5 * (lo + hi);
@@ -330,14 +330,14 @@ impl LogAxis {
         LogAxis { lo, hi, p0, p1 }
     }
 
-    fn map(&self, v: f64) -> f32 {
+    pub(crate) fn map(&self, v: f64) -> f32 {
         let t = (v.max(1e-30).log10() - self.lo) / (self.hi - self.lo);
         self.p0 + (self.p1 - self.p0) * t as f32
     }
 
     /// Tick values: 1, 2, 5 x 10^k inside the range (only decades when the range is wide);
     /// (value, is_decade).
-    fn ticks(&self) -> Vec<(f64, bool)> {
+    pub(crate) fn ticks(&self) -> Vec<(f64, bool)> {
         let steps: &[f64] = if self.hi - self.lo > 3.5 {
             &[1.0]
         } else {
@@ -357,7 +357,7 @@ impl LogAxis {
     }
 }
 
-fn tick_label(v: f64) -> String {
+pub(crate) fn tick_label(v: f64) -> String {
     if v >= 1.0 {
         format!("{v:.0}")
     } else {

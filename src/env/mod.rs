@@ -440,7 +440,7 @@ impl IblLevel {
 }
 
 /// The default IBL level.
-pub const DEFAULT_IBL: IblLevel = IblLevel::Fis(16);
+pub const DEFAULT_IBL: IblLevel = IblLevel::Fis(8);
 
 /// A scene lit by an environment: which, turned how far, how bright, and what the background
 /// shows.

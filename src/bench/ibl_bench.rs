@@ -1,0 +1,406 @@
+//! `weft bench --ibl`: what environment-lighting accuracy costs in time. Each view is rendered at
+//! every IBL level (approx, fis:4, fis:16, fis:64) and against a ground truth (mc:N, brute-force
+//! Monte Carlo over the unfiltered environment with per-pixel random rotation), frames of all
+//! levels interleaved; error is FLIP mean of the sRGB images and the mean relative error of the
+//! linear HDR over the covered pixels. Then the lighting pass with environment light at the
+//! default level next to the same pass with lamps only, on the same G-buffer, same run.
+//!
+//! The scenes: the default cloth under the Lebombo interior (tests/data/env, CC0) with no lamps,
+//! at the bench's close-up and mid cameras, and the glTF spheres under it.
+
+use std::fmt::Write;
+use std::path::Path;
+use std::sync::Arc;
+
+use crate::env::{EnvLighting, Environment, IblLevel};
+use crate::render::{Frame, RenderOptions, Renderer};
+use crate::scene::Scene;
+
+use super::plot::{text_width, tick_label, Canvas, LogAxis};
+use super::View;
+
+/// One (view, level).
+#[derive(Clone, Debug)]
+pub struct IblRow {
+    pub view: String,
+    pub level: IblLevel,
+    /// Median GPU ms of the lighting pass.
+    pub lighting_ms: f64,
+    pub flip_mean: f64,
+    /// Mean |HDR - truth| / mean truth over covered pixels (luminance).
+    pub rel_error: f64,
+    pub pareto: bool,
+}
+
+/// The lighting pass with the environment against lamps only.
+#[derive(Clone, Debug)]
+pub struct EnvCostRow {
+    pub view: String,
+    pub lamps_ms: f64,
+    pub env_ms: f64,
+}
+
+pub struct IblReport {
+    pub size: (u32, u32),
+    pub frames: u32,
+    pub truth: IblLevel,
+    pub truth_ms: Vec<(String, f64)>,
+    pub rows: Vec<IblRow>,
+    pub cost: Vec<EnvCostRow>,
+}
+
+/// The levels measured, fastest first.
+pub const LEVELS: [IblLevel; 5] = [
+    IblLevel::Approx,
+    IblLevel::Fis(4),
+    IblLevel::Fis(8),
+    IblLevel::Fis(16),
+    IblLevel::Fis(64),
+];
+
+fn luminance(p: &[f32]) -> f64 {
+    0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
+}
+
+/// Mean relative luminance error of `test` against `truth` over pixels whose truth is not the
+/// background (alpha of both is 1 everywhere but a transparent background, so covered pixels
+/// are told by `covered`).
+fn rel_error(truth: &Frame, test: &Frame, covered: &[bool]) -> f64 {
+    let (mut e, mut r) = (0.0, 0.0);
+    for (i, c) in covered.iter().enumerate() {
+        if *c {
+            let t = luminance(&truth.hdr[i * 4..i * 4 + 3]);
+            e += (luminance(&test.hdr[i * 4..i * 4 + 3]) - t).abs();
+            r += t;
+        }
+    }
+    e / r.max(1e-30)
+}
+
+/// Runs the IBL bench at `size` with `frames` timed frames per configuration; the ground truth
+/// takes `truth_samples` Monte Carlo samples per pixel.
+pub fn run(
+    renderer: &mut Renderer,
+    env_path: &Path,
+    size: (u32, u32),
+    frames: u32,
+    truth_samples: u32,
+) -> crate::Result<IblReport> {
+    let env = Arc::new(Environment::load(env_path)?);
+    let mut cloth = crate::scene::default_scene();
+    let lamps = cloth.clone();
+    cloth.lights.clear();
+    let spheres_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/spheres.glb");
+    let mut spheres = crate::scene::load(&spheres_path)?;
+    spheres.lights.clear();
+    let options = |scene: &Scene, camera: Option<crate::scene::Camera>, level: Option<IblLevel>| {
+        let _ = scene;
+        RenderOptions {
+            width: size.0,
+            height: size.1,
+            camera_override: camera,
+            environment: level.map(|l| {
+                let mut e = EnvLighting::new(env.clone());
+                e.rotation = 60.0;
+                e.level = l;
+                // Transparent background: the background is not what is measured.
+                e.background = crate::env::Background::None;
+                e
+            }),
+            ..Default::default()
+        }
+    };
+    let truth = IblLevel::MonteCarlo(truth_samples);
+    let mut rows = Vec::new();
+    let mut truth_ms = Vec::new();
+    let views: Vec<(String, &Scene, Option<crate::scene::Camera>)> = vec![
+        (
+            "cloth close-up".into(),
+            &cloth,
+            Some(View::CloseUp.camera(&cloth)?),
+        ),
+        ("cloth mid".into(), &cloth, Some(View::Mid.camera(&cloth)?)),
+        ("spheres".into(), &spheres, None),
+    ];
+    for (name, scene, camera) in &views {
+        let gpu = renderer.upload(scene)?;
+        let truth_frame =
+            renderer.render_frame(scene, &gpu, &options(scene, camera.clone(), Some(truth)))?;
+        let t = renderer.render_frame(scene, &gpu, &options(scene, camera.clone(), Some(truth)))?;
+        truth_ms.push((name.clone(), super::pass_ms(&t, "lighting")));
+        let covered: Vec<bool> = truth_frame.ldr.chunks_exact(4).map(|p| p[3] > 0).collect();
+        let sets: Vec<RenderOptions> = LEVELS
+            .iter()
+            .map(|l| options(scene, camera.clone(), Some(*l)))
+            .collect();
+        let mut last: Vec<Option<Frame>> = sets.iter().map(|_| None).collect();
+        for o in &sets {
+            renderer.render_frame(scene, &gpu, o)?; // warm-up (JIT)
+        }
+        let mut times: Vec<Vec<f64>> = sets.iter().map(|_| Vec::new()).collect();
+        for _ in 0..frames.max(1) {
+            for (i, o) in sets.iter().enumerate() {
+                let f = renderer.render_frame(scene, &gpu, o)?;
+                times[i].push(super::pass_ms(&f, "lighting"));
+                last[i] = Some(f);
+            }
+        }
+        for (i, level) in LEVELS.iter().enumerate() {
+            let f = last[i].as_ref().expect("rendered");
+            rows.push(IblRow {
+                view: name.clone(),
+                level: *level,
+                lighting_ms: super::median(times[i].clone()),
+                flip_mean: super::flip_mean(&truth_frame, f),
+                rel_error: rel_error(&truth_frame, f, &covered),
+                pareto: false,
+            });
+        }
+    }
+    // Pareto front per view: nothing faster is also closer.
+    for i in 0..rows.len() {
+        let r = rows[i].clone();
+        rows[i].pareto = !rows.iter().any(|o| {
+            o.view == r.view && o.lighting_ms < r.lighting_ms && o.rel_error < r.rel_error
+        });
+    }
+    // The environment's cost: the default scene with its lamps, with and without the studio.
+    let mut cost = Vec::new();
+    let studio = Arc::new(Environment::studio());
+    for view in [View::Mid, View::CloseUp] {
+        let camera = Some(view.camera(&lamps)?);
+        let gpu = renderer.upload(&lamps)?;
+        let plain = RenderOptions {
+            width: size.0,
+            height: size.1,
+            camera_override: camera,
+            ..Default::default()
+        };
+        let lit = RenderOptions {
+            environment: Some(EnvLighting::new(studio.clone())),
+            ..plain.clone()
+        };
+        renderer.render_frame(&lamps, &gpu, &plain)?;
+        renderer.render_frame(&lamps, &gpu, &lit)?;
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for _ in 0..frames.max(1) {
+            a.push(super::pass_ms(
+                &renderer.render_frame(&lamps, &gpu, &plain)?,
+                "lighting",
+            ));
+            b.push(super::pass_ms(
+                &renderer.render_frame(&lamps, &gpu, &lit)?,
+                "lighting",
+            ));
+        }
+        cost.push(EnvCostRow {
+            view: format!("default scene {}", view.name()),
+            lamps_ms: super::median(a),
+            env_ms: super::median(b),
+        });
+    }
+    Ok(IblReport {
+        size,
+        frames,
+        truth,
+        truth_ms,
+        rows,
+        cost,
+    })
+}
+
+impl IblReport {
+    pub fn table(&self) -> String {
+        let mut s = String::new();
+        let (w, h) = self.size;
+        let _ = writeln!(
+            s,
+            "IBL accuracy against time, {w}x{h}, lighting-pass GPU ms (median of {} warm frames, levels interleaved); ground truth {}",
+            self.frames,
+            self.truth.name()
+        );
+        let _ = writeln!(
+            s,
+            "{:<16} {:<8} {:>10} {:>10} {:>10} {:>7}",
+            "view", "level", "light ms", "FLIP mean", "rel error", "pareto"
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "{:<16} {:<8} {:>10.2} {:>10.4} {:>10.4} {:>7}",
+                r.view,
+                r.level.name(),
+                r.lighting_ms,
+                r.flip_mean,
+                r.rel_error,
+                if r.pareto { "*" } else { "" }
+            );
+        }
+        for (v, ms) in &self.truth_ms {
+            let _ = writeln!(
+                s,
+                "{:<16} {:<8} {:>10.2}   (ground truth)",
+                v,
+                self.truth.name(),
+                ms
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\nLighting pass with the environment (studio, {}) against lamps only, same G-buffer, same run",
+            crate::env::DEFAULT_IBL.name()
+        );
+        let _ = writeln!(
+            s,
+            "{:<24} {:>10} {:>10} {:>7}",
+            "scene", "lamps ms", "env ms", "ratio"
+        );
+        for c in &self.cost {
+            let _ = writeln!(
+                s,
+                "{:<24} {:>10.2} {:>10.2} {:>7.2}",
+                c.view,
+                c.lamps_ms,
+                c.env_ms,
+                c.env_ms / c.lamps_ms
+            );
+        }
+        s
+    }
+
+    /// Error (relative, log) against lighting-pass time (log), one colour per view, labelled by
+    /// level. Returns (width, height, RGBA8).
+    pub fn plot(&self) -> (u32, u32, Vec<u8>) {
+        const W: u32 = 1200;
+        const H: u32 = 760;
+        let (left, right, top, bottom) = (120.0f32, 1000.0f32, 70.0f32, 680.0f32);
+        let mut c = Canvas::new(W, H, [1.0; 3]);
+        let black = [0.1, 0.1, 0.12];
+        let muted = [0.35, 0.35, 0.4];
+        let grid = [0.88, 0.88, 0.9];
+        c.text(
+            left as i32,
+            20,
+            "WEFT BENCH --IBL: ERROR AGAINST TIME",
+            2,
+            black,
+        );
+        c.text(
+            left as i32,
+            44,
+            &format!(
+                "mean relative error vs {} (brute-force Monte Carlo); time = lighting pass GPU ms",
+                self.truth.name()
+            ),
+            1,
+            muted,
+        );
+        let pts: Vec<_> = self
+            .rows
+            .iter()
+            .filter(|r| r.lighting_ms > 0.0)
+            .map(|r| (r, r.lighting_ms, r.rel_error.max(1e-4)))
+            .collect();
+        if pts.is_empty() {
+            return (W, H, c.to_rgba8());
+        }
+        let fold = |f: fn(f64, f64) -> f64, init: f64, k: usize| {
+            pts.iter()
+                .map(|p| if k == 1 { p.1 } else { p.2 })
+                .fold(init, f)
+        };
+        let x = LogAxis::fit(
+            fold(f64::min, f64::INFINITY, 1),
+            fold(f64::max, 0.0, 1),
+            left,
+            right,
+        );
+        let y = LogAxis::fit(
+            fold(f64::min, f64::INFINITY, 2),
+            fold(f64::max, 0.0, 2),
+            bottom,
+            top,
+        );
+        for (v, decade) in x.ticks() {
+            let px = x.map(v);
+            c.line(
+                (px, top),
+                (px, bottom),
+                if decade { 1.2 } else { 0.8 },
+                grid,
+            );
+            let l = tick_label(v);
+            c.text(
+                px as i32 - text_width(&l, 2) / 2,
+                bottom as i32 + 12,
+                &l,
+                2,
+                black,
+            );
+        }
+        for (v, decade) in y.ticks() {
+            let py = y.map(v);
+            c.line(
+                (left, py),
+                (right, py),
+                if decade { 1.2 } else { 0.8 },
+                grid,
+            );
+            let l = tick_label(v);
+            c.text(
+                left as i32 - 10 - text_width(&l, 2),
+                py as i32 - 7,
+                &l,
+                2,
+                black,
+            );
+        }
+        c.text(
+            (left + right) as i32 / 2 - 120,
+            bottom as i32 + 40,
+            "LIGHTING PASS GPU MS",
+            2,
+            black,
+        );
+        c.text_up(
+            30,
+            (top + bottom) as i32 / 2 + 100,
+            "MEAN RELATIVE ERROR",
+            2,
+            black,
+        );
+        let palette = [
+            [0.12, 0.47, 0.71],
+            [1.0, 0.5, 0.05],
+            [0.17, 0.63, 0.17],
+            [0.84, 0.15, 0.16],
+        ];
+        let mut views: Vec<&str> = Vec::new();
+        for (r, _, _) in &pts {
+            if !views.contains(&r.view.as_str()) {
+                views.push(&r.view);
+            }
+        }
+        for (vi, view) in views.iter().enumerate() {
+            let col = palette[vi % palette.len()];
+            let mine: Vec<_> = pts.iter().filter(|p| p.0.view == *view).collect();
+            for pair in mine.windows(2) {
+                c.line(
+                    (x.map(pair[0].1), y.map(pair[0].2)),
+                    (x.map(pair[1].1), y.map(pair[1].2)),
+                    2.0,
+                    col,
+                );
+            }
+            for p in &mine {
+                let (px, py) = (x.map(p.1) as i32, y.map(p.2) as i32);
+                c.fill_rect(px - 5, py - 5, px + 5, py + 5, col);
+                c.text(px + 9, py - 7, &p.0.level.name(), 2, black);
+            }
+            let ly = top as i32 + 10 + vi as i32 * 26;
+            c.fill_rect(right as i32 + 20, ly, right as i32 + 34, ly + 14, col);
+            c.text(right as i32 + 42, ly, view, 1, black);
+        }
+        (W, H, c.to_rgba8())
+    }
+}
