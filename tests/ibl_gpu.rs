@@ -253,6 +253,7 @@ fn real_hdr_matches_the_cpu_ground_truth() {
         let levels = [
             IblLevel::Approx,
             IblLevel::Fis(4),
+            IblLevel::Fis(8),
             IblLevel::Fis(16),
             IblLevel::Fis(64),
             IblLevel::MonteCarlo(512),
@@ -303,16 +304,17 @@ fn real_hdr_matches_the_cpu_ground_truth() {
             // Bounds, each about 1.3x the worst of the two scenes as measured on lavapipe (the
             // table is in docs/fabric-model.md §6). What they bound: the SH diffuse (2 % on this
             // map, tested in reference::ibl), the split sum of the glTF spheres (4 % with the
-            // dominant direction), and for the cloth the estimator of each level: approx takes a
-            // lobe's albedo as Fresnel at n·v and ignores its anisotropy (23 %); FIS is biased by
-            // the blur of its mip look-ups, which shrinks as N grows (16 %, 8.6 %, 3.2 % at 4, 16,
-            // 64); Monte Carlo with 512 samples is unbiased, its noise averages to ~1 %. The
-            // convergence itself is asserted below.
+            // dominant direction: 3.7 %), and for the cloth the estimator of each level: approx
+            // takes a lobe's albedo as Fresnel at n·v and ignores its anisotropy (22.6 %); FIS is
+            // biased by the blur of its mip look-ups, which shrinks as N grows (16.4 %, 7.6 %,
+            // 5.7 %, 2.3 % at 4, 8, 16, 64); Monte Carlo with 512 samples is unbiased, its noise
+            // averages to ~1 %. The convergence itself is asserted below.
             let bound = match level {
                 IblLevel::Approx => 0.30,
-                IblLevel::Fis(4) => 0.21,
-                IblLevel::Fis(16) => 0.11,
-                IblLevel::Fis(_) => 0.045,
+                IblLevel::Fis(4) => 0.215,
+                IblLevel::Fis(8) => 0.10,
+                IblLevel::Fis(16) => 0.075,
+                IblLevel::Fis(_) => 0.05,
                 IblLevel::MonteCarlo(_) => 0.016,
             };
             errors.push(rel);
@@ -323,7 +325,7 @@ fn real_hdr_matches_the_cpu_ground_truth() {
     }
     assert!(failures.is_empty(), "{failures:?}");
     // On the cloth, every level closer than the last (FIS converges to the Monte Carlo answer).
-    let cloth = &errors[errors.len() - 5..];
+    let cloth = &errors[errors.len() - 6..];
     assert!(
         cloth.windows(2).all(|w| w[1] < w[0]),
         "cloth errors do not shrink: {cloth:?}"
