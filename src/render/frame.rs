@@ -14,17 +14,14 @@ use crate::fabric::{weave_level0_size, weave_level_size, weave_mip_count, Fabric
 use crate::scene::{ColorSpace, Scene, Texture};
 use crate::vk::{
     shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd,
-    ComputeDesc, Context, Cull, DescriptorSet, Filter, Format, GraphicsDesc, Image, ImageDesc,
-    ImageUsageFlags, Pipeline, Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
+    ComputeDesc, Context, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags,
+    Pipeline, Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
 };
 use crate::Error;
 
-use super::gpu::{
-    DrawPush, FrameData, GpuLight, GpuMaterial, GpuShadow, ShadowPush, TonemapPush,
-    DRAW_RECEIVES_SHADOWS,
-};
+use super::gpu::{DrawPush, FrameData, GpuLight, GpuMaterial, GpuShadow, ShadowPush, TonemapPush};
 use super::plan::{weave_key, Pass, Plan};
-use super::RenderOptions;
+use super::{passes, RenderOptions};
 
 pub const ALBEDO_FORMAT: Format = Format::R8G8B8A8_SRGB;
 pub const FRAME_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
@@ -80,15 +77,15 @@ pub struct Frame {
 }
 
 /// The G-buffer and output targets of one resolution.
-struct Targets {
-    albedo: Image,
-    frame: Image,
-    surface: Image,
-    fabric: Image,
-    emissive: Image,
-    depth: Image,
-    hdr: Image,
-    ldr: Image,
+pub(crate) struct Targets {
+    pub(crate) albedo: Image,
+    pub(crate) frame: Image,
+    pub(crate) surface: Image,
+    pub(crate) fabric: Image,
+    pub(crate) emissive: Image,
+    pub(crate) depth: Image,
+    pub(crate) hdr: Image,
+    pub(crate) ldr: Image,
 }
 
 impl Targets {
@@ -114,7 +111,7 @@ impl Targets {
         })
     }
 
-    fn gbuffer_colors(&self) -> [&Image; 5] {
+    pub(crate) fn gbuffer_colors(&self) -> [&Image; 5] {
         [
             &self.albedo,
             &self.frame,
@@ -126,41 +123,41 @@ impl Targets {
 }
 
 /// One draw: a mesh range in the shared buffers.
-struct DrawRange {
-    first_index: u32,
-    index_count: u32,
-    vertex_offset: i32,
-    material: u32,
-    world: Mat4,
-    double_sided: bool,
-    cast_shadows: bool,
-    receive_shadows: bool,
+pub(crate) struct DrawRange {
+    pub(crate) first_index: u32,
+    pub(crate) index_count: u32,
+    pub(crate) vertex_offset: i32,
+    pub(crate) material: u32,
+    pub(crate) world: Mat4,
+    pub(crate) double_sided: bool,
+    pub(crate) cast_shadows: bool,
+    pub(crate) receive_shadows: bool,
 }
 
 /// A scene's data on the GPU.
 pub struct GpuScene {
-    vertices: Buffer,
-    indices: Buffer,
-    materials: Buffer,
+    pub(crate) vertices: Buffer,
+    pub(crate) indices: Buffer,
+    pub(crate) materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
-    fabrics: Buffer,
+    pub(crate) fabrics: Buffer,
     /// One weave texture per distinct weave (RGBA16F, and an RGBA8 copy), and per material the
     /// weave it uses.
-    weaves: Vec<Image>,
-    weaves8: Vec<Image>,
-    material_weave: Vec<Option<usize>>,
-    lights: Buffer,
+    pub(crate) weaves: Vec<Image>,
+    pub(crate) weaves8: Vec<Image>,
+    pub(crate) material_weave: Vec<Option<usize>>,
+    pub(crate) lights: Buffer,
     /// The light records as uploaded (no shadow maps): a frame with shadows uploads a copy with
     /// each caster's shadow index.
-    light_records: Vec<GpuLight>,
-    light_count: u32,
-    material_count: u32,
+    pub(crate) light_records: Vec<GpuLight>,
+    pub(crate) light_count: u32,
+    pub(crate) material_count: u32,
     /// Per material: base colour, metallic-roughness, normal, emissive and occlusion textures
     /// (indices into `textures`, None = a default).
-    material_textures: Vec<[Option<usize>; 5]>,
-    textures: Vec<Image>,
-    draws: Vec<DrawRange>,
-    triangles: usize,
+    pub(crate) material_textures: Vec<[Option<usize>; 5]>,
+    pub(crate) textures: Vec<Image>,
+    pub(crate) draws: Vec<DrawRange>,
+    pub(crate) triangles: usize,
 }
 
 pub struct Renderer {
@@ -886,7 +883,7 @@ impl Renderer {
                         })
                         .collect::<crate::Result<Vec<_>>>()?;
                     timed("gbuffer", &mut |cmd| {
-                        gbuffer_pass(
+                        passes::gbuffer::gbuffer_pass(
                             cmd,
                             gbuffer_pipeline,
                             gpu,
@@ -904,7 +901,13 @@ impl Renderer {
                         .collect();
                     if !tiles.is_empty() {
                         timed("shadow", &mut |cmd| {
-                            shadow_pass(cmd, &self.shadow_pipeline, gpu, atlas, &tiles)
+                            passes::shadow::shadow_pass(
+                                cmd,
+                                &self.shadow_pipeline,
+                                gpu,
+                                atlas,
+                                &tiles,
+                            )
                         })?;
                         stats.pipelines.push(self.shadow_pipeline.name.clone());
                         stats.shadow_maps = tiles.len();
@@ -935,7 +938,7 @@ impl Renderer {
                         ],
                     )?;
                     timed("lighting", &mut |cmd| {
-                        lighting_pass(cmd, lighting_pipeline, set, targets)
+                        passes::lighting::lighting_pass(cmd, lighting_pipeline, set, targets)
                     })?;
                     stats.pipelines.push(lighting_pipeline.name.clone());
                 }
@@ -949,7 +952,13 @@ impl Renderer {
                         passthrough: (options.debug_view != super::DebugView::None) as u32,
                     };
                     timed("tonemap", &mut |cmd| {
-                        tonemap_pass(cmd, &self.tonemap_pipeline, set, &push, targets)
+                        passes::tonemap::tonemap_pass(
+                            cmd,
+                            &self.tonemap_pipeline,
+                            set,
+                            &push,
+                            targets,
+                        )
                     })?;
                     stats.pipelines.push(self.tonemap_pipeline.name.clone());
                 }
@@ -1108,148 +1117,6 @@ pub struct GBufferReadback {
     pub fabric: Vec<f32>,
     pub emissive: Vec<f32>,
     pub depth: Vec<f32>,
-}
-
-/// Writes every G-buffer target and depth. Reads: scene geometry, materials, frame uniform.
-fn gbuffer_pass(
-    cmd: &mut Cmd,
-    pipeline: &Pipeline,
-    scene: &GpuScene,
-    frame_set: DescriptorSet,
-    material_sets: &[DescriptorSet],
-    targets: &Targets,
-) {
-    for img in targets.gbuffer_colors() {
-        cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
-    }
-    cmd.transition(
-        &targets.depth,
-        Usage::Undefined,
-        Usage::DepthAttachment,
-        None,
-    );
-    let colors: Vec<Attachment> = targets
-        .gbuffer_colors()
-        .into_iter()
-        .map(|image| Attachment {
-            image,
-            clear: Some([0.0; 4]),
-        })
-        .collect();
-    cmd.begin_rendering(
-        &colors,
-        Some(Attachment {
-            image: &targets.depth,
-            clear: Some([0.0; 4]),
-        }),
-    );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_vertex_buffer(&scene.vertices);
-    cmd.bind_index_buffer(&scene.indices);
-    cmd.bind_sets(pipeline, 0, &[frame_set]);
-    for draw in &scene.draws {
-        let material = draw.material.min(scene.material_count - 1);
-        cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
-        cmd.set_cull(if draw.double_sided {
-            Cull::None
-        } else {
-            Cull::Back
-        });
-        let mut push = DrawPush::new(draw.world, material);
-        if !draw.receive_shadows {
-            push.flags &= !DRAW_RECEIVES_SHADOWS;
-        }
-        cmd.push_constants(pipeline, &push);
-        cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
-    }
-    cmd.end_rendering();
-    for img in targets.gbuffer_colors() {
-        cmd.transition(img, Usage::ColorAttachment, Usage::FragmentRead, None);
-    }
-    cmd.transition(
-        &targets.depth,
-        Usage::DepthAttachment,
-        Usage::FragmentRead,
-        None,
-    );
-}
-
-/// Renders every caster into each light's tile of the shadow atlas (depth only, both faces).
-fn shadow_pass(
-    cmd: &mut Cmd,
-    pipeline: &Pipeline,
-    scene: &GpuScene,
-    atlas: &Image,
-    tiles: &[(u32, u32, u32, Mat4)],
-) {
-    cmd.transition(atlas, Usage::Undefined, Usage::DepthAttachment, None);
-    cmd.begin_rendering(
-        &[],
-        Some(Attachment {
-            image: atlas,
-            clear: Some([0.0; 4]),
-        }),
-    );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_vertex_buffer(&scene.vertices);
-    cmd.bind_index_buffer(&scene.indices);
-    for &(x, y, resolution, clip_from_world) in tiles {
-        cmd.set_viewport(x, y, resolution, resolution);
-        for draw in scene.draws.iter().filter(|d| d.cast_shadows) {
-            let push = ShadowPush {
-                clip_from_object: (clip_from_world * draw.world).to_cols_array_2d(),
-            };
-            cmd.push_constants(pipeline, &push);
-            cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
-        }
-    }
-    cmd.end_rendering();
-    cmd.transition(atlas, Usage::DepthAttachment, Usage::FragmentRead, None);
-}
-
-/// Reads the G-buffer, writes HDR radiance.
-fn lighting_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, targets: &Targets) {
-    cmd.transition(&targets.hdr, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(
-        &[Attachment {
-            image: &targets.hdr,
-            clear: None,
-        }],
-        None,
-    );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_sets(pipeline, 0, &[set]);
-    cmd.draw(3);
-    cmd.end_rendering();
-    cmd.transition(
-        &targets.hdr,
-        Usage::ColorAttachment,
-        Usage::FragmentRead,
-        None,
-    );
-}
-
-/// Reads HDR, writes the display-referred 8-bit image.
-fn tonemap_pass(
-    cmd: &mut Cmd,
-    pipeline: &Pipeline,
-    set: DescriptorSet,
-    push: &TonemapPush,
-    targets: &Targets,
-) {
-    cmd.transition(&targets.ldr, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(
-        &[Attachment {
-            image: &targets.ldr,
-            clear: None,
-        }],
-        None,
-    );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_sets(pipeline, 0, &[set]);
-    cmd.push_constants(pipeline, push);
-    cmd.draw(3);
-    cmd.end_rendering();
 }
 
 fn solid(name: &str, rgba: [u8; 4], color_space: ColorSpace) -> Texture {

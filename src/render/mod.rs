@@ -1,7 +1,8 @@
 //! Rendering: the plan, the passes of a frame, and writing images.
 
-pub mod environment;
 mod frame;
+mod passes;
+pub use passes::environment;
 pub mod gpu;
 mod output;
 pub mod plan;

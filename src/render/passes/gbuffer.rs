@@ -1,0 +1,69 @@
+//! The G-buffer pass: every draw into the five colour targets and depth.
+
+use crate::render::frame::{GpuScene, Targets};
+use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
+use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Pipeline, Usage};
+
+/// Writes every G-buffer target and depth. Reads: scene geometry, materials, frame uniform.
+pub fn gbuffer_pass(
+    cmd: &mut Cmd,
+    pipeline: &Pipeline,
+    scene: &GpuScene,
+    frame_set: DescriptorSet,
+    material_sets: &[DescriptorSet],
+    targets: &Targets,
+) {
+    for img in targets.gbuffer_colors() {
+        cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
+    }
+    cmd.transition(
+        &targets.depth,
+        Usage::Undefined,
+        Usage::DepthAttachment,
+        None,
+    );
+    let colors: Vec<Attachment> = targets
+        .gbuffer_colors()
+        .into_iter()
+        .map(|image| Attachment {
+            image,
+            clear: Some([0.0; 4]),
+        })
+        .collect();
+    cmd.begin_rendering(
+        &colors,
+        Some(Attachment {
+            image: &targets.depth,
+            clear: Some([0.0; 4]),
+        }),
+    );
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_vertex_buffer(&scene.vertices);
+    cmd.bind_index_buffer(&scene.indices);
+    cmd.bind_sets(pipeline, 0, &[frame_set]);
+    for draw in &scene.draws {
+        let material = draw.material.min(scene.material_count - 1);
+        cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
+        cmd.set_cull(if draw.double_sided {
+            Cull::None
+        } else {
+            Cull::Back
+        });
+        let mut push = DrawPush::new(draw.world, material);
+        if !draw.receive_shadows {
+            push.flags &= !DRAW_RECEIVES_SHADOWS;
+        }
+        cmd.push_constants(pipeline, &push);
+        cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+    }
+    cmd.end_rendering();
+    for img in targets.gbuffer_colors() {
+        cmd.transition(img, Usage::ColorAttachment, Usage::FragmentRead, None);
+    }
+    cmd.transition(
+        &targets.depth,
+        Usage::DepthAttachment,
+        Usage::FragmentRead,
+        None,
+    );
+}

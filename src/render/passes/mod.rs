@@ -1,0 +1,17 @@
+//! The passes of a frame, one file each, in the order a frame runs them (the plan's
+//! [`crate::render::Pass`] list; `Renderer::render_frame` in frame.rs records them in this order):
+//!
+//! 1. [`environment`]: once per environment, cached: radiance cube, GGX-prefiltered cube, SH;
+//! 2. weave (at upload, `Renderer::build_weave`): the coverage textures of each distinct weave;
+//! 3. [`gbuffer`]: every draw into the G-buffer;
+//! 4. [`shadow`]: casters into the shadow atlas;
+//! 5. [`lighting`]: lamps and the environment from the G-buffer into HDR;
+//! 6. [`tonemap`]: exposure and tone curve into the 8-bit target.
+//!
+//! Each function's signature says what it reads and writes.
+
+pub mod environment;
+pub mod gbuffer;
+pub mod lighting;
+pub mod shadow;
+pub mod tonemap;
