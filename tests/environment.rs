@@ -1,0 +1,241 @@
+//! Environment lighting in the plan and the frame (lavapipe, validation on): the environment
+//! passes run only when an environment lights the scene, once per environment (cached by content),
+//! not for debug views; ambient occlusion darkens environment light and nothing else; the default
+//! lighting (`weft::env::stage`) adds a shadow-casting key light and a ground only where it should.
+
+mod common;
+
+use std::sync::Arc;
+
+use glam::Mat4;
+use weft::env::{stage, EnvLighting, Environment, LightsMode};
+use weft::render::{DebugView, Pass, Plan, RenderOptions, Renderer};
+use weft::scene::{self, ColorSpace, Draw, Material, Mesh, Scene, Texture, Vertex};
+
+fn options(env: Option<Arc<Environment>>) -> RenderOptions {
+    RenderOptions {
+        width: 64,
+        height: 36,
+        environment: env.map(EnvLighting::new),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn environment_passes_run_only_when_an_environment_lights_the_scene() {
+    let scene = scene::default_scene();
+    let plan = Plan::new(&scene, &options(None));
+    assert!(!plan.runs(Pass::Environment) && plan.environment.is_none());
+    let studio = Arc::new(Environment::studio());
+    let plan = Plan::new(&scene, &options(Some(studio.clone())));
+    assert_eq!(plan.passes.first(), Some(&Pass::Environment));
+    assert_eq!(plan.environment.as_ref().unwrap().name, "built-in studio");
+    // Debug views show no lighting: no environment work.
+    let debug = RenderOptions {
+        debug_view: DebugView::Normals,
+        ..options(Some(studio.clone()))
+    };
+    assert!(!Plan::new(&scene, &debug).runs(Pass::Environment));
+
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let plain = renderer.render(&scene, &options(None)).unwrap();
+    assert!(plain.timings.iter().all(|t| t.name != "environment"));
+    assert!(plain.stats.pipelines.iter().any(|p| p.contains("ibl=0")));
+    // The first frame with an environment preprocesses it; the next reuses it.
+    let first = renderer
+        .render(&scene, &options(Some(studio.clone())))
+        .unwrap();
+    assert_eq!(
+        first
+            .timings
+            .iter()
+            .filter(|t| t.name == "environment")
+            .count(),
+        1
+    );
+    assert!(first.stats.pipelines.iter().any(|p| p.contains("ibl=2")));
+    let second = renderer
+        .render(&scene, &options(Some(studio.clone())))
+        .unwrap();
+    assert!(second.timings.iter().all(|t| t.name != "environment"));
+    assert_eq!(
+        first.hdr, second.hdr,
+        "the cached environment gives the same image"
+    );
+    // A different environment (different content) is preprocessed again.
+    let other = Arc::new(Environment::uniform([0.5; 3]));
+    let third = renderer.render(&scene, &options(Some(other))).unwrap();
+    assert_eq!(
+        third
+            .timings
+            .iter()
+            .filter(|t| t.name == "environment")
+            .count(),
+        1
+    );
+    // An environment of zero intensity adds nothing to the lamps: every pixel at most what the
+    // lamps alone give with the fixed ambient removed, and the lamps' highlights stay.
+    let mut dark = EnvLighting::new(studio);
+    dark.intensity = 0.0;
+    dark.background = weft::env::Background::Color([0.0; 3]);
+    let zero = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                environment: Some(dark),
+                ..options(None)
+            },
+        )
+        .unwrap();
+    assert!(zero.hdr.iter().all(|v| v.is_finite()));
+    assert!(
+        zero.hdr
+            .iter()
+            .zip(&plain.hdr)
+            .all(|(z, p)| *z <= *p + 1e-3),
+        "zero environment brighter than the ambient-lit frame somewhere"
+    );
+}
+
+/// A 1 m quad facing +z with one material, seen from the front.
+fn quad_scene(material: Material, textures: Vec<Texture>) -> Scene {
+    let v = |x: f32, y: f32, u: f32, w: f32| Vertex {
+        position: [x, y, 0.0],
+        normal: [0.0, 0.0, 1.0],
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [u, w],
+    };
+    let mut s = Scene {
+        source: "test quad".into(),
+        meshes: vec![Mesh {
+            name: "quad".into(),
+            vertices: vec![
+                v(-1.0, -1.0, 0.0, 1.0),
+                v(1.0, -1.0, 1.0, 1.0),
+                v(1.0, 1.0, 1.0, 0.0),
+                v(-1.0, 1.0, 0.0, 0.0),
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: 0,
+        }],
+        draws: vec![Draw::new(0, Mat4::IDENTITY)],
+        materials: vec![material],
+        textures,
+        ..Default::default()
+    };
+    s.cameras.push(
+        s.look_at_camera(
+            glam::Vec3::new(0.0, 0.0, 2.5),
+            glam::Vec3::ZERO,
+            50f32.to_radians(),
+        )
+        .unwrap(),
+    );
+    s
+}
+
+#[test]
+fn ambient_occlusion_darkens_environment_light_only() {
+    let grey = Material {
+        base_color: [0.6, 0.6, 0.6, 1.0],
+        metallic: 0.0,
+        roughness: 0.5,
+        ..Material::default()
+    };
+    // Occlusion 0 on the left half, 1 on the right (8 texels, so bilinear filtering at the
+    // quarters reads only one side).
+    let occ = Texture {
+        name: "occlusion".into(),
+        width: 8,
+        height: 1,
+        color_space: ColorSpace::Linear,
+        rgba8: (0..8)
+            .flat_map(|i| if i < 4 { [0, 0, 0, 255] } else { [255; 4] })
+            .collect(),
+    };
+    let occluded = Material {
+        occlusion_texture: Some(0),
+        occlusion_strength: 1.0,
+        ..grey.clone()
+    };
+    let plain = quad_scene(grey, vec![]);
+    let with_ao = quad_scene(occluded, vec![occ]);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let env = Arc::new(Environment::uniform([1.0; 3]));
+    let mut o = options(Some(env));
+    o.width = 64;
+    o.height = 64;
+    let a = renderer.render(&plain, &o).unwrap();
+    let b = renderer.render(&with_ao, &o).unwrap();
+    let px = |f: &weft::render::Frame, x: usize, y: usize| f.hdr[(y * 64 + x) * 4 + 1];
+    // Left quarter of the quad: occluded, dark; right quarter: unoccluded, as without the
+    // texture.
+    let (left, right) = ((20, 32), (44, 32));
+    assert!(px(&a, left.0, left.1) > 0.3, "{}", px(&a, left.0, left.1));
+    assert!(
+        px(&b, left.0, left.1) < 0.15 * px(&a, left.0, left.1),
+        "occluded: {} vs {}",
+        px(&b, left.0, left.1),
+        px(&a, left.0, left.1)
+    );
+    assert!((px(&b, right.0, right.1) - px(&a, right.0, right.1)).abs() < 1e-3);
+    // Lamps (and the fixed ambient of a frame without an environment) are not occluded by it:
+    // with one light and no environment the two scenes give the same image.
+    let light = weft::scene::Light {
+        name: "key".into(),
+        kind: weft::scene::LightKind::Directional,
+        color: [1.0; 3],
+        intensity: 2.0,
+        range: None,
+        position: glam::Vec3::ZERO,
+        direction: glam::Vec3::new(0.0, 0.0, -1.0),
+        shadow: None,
+    };
+    let (mut plain, mut with_ao) = (plain, with_ao);
+    plain.lights.push(light.clone());
+    with_ao.lights.push(light);
+    let lamps = RenderOptions {
+        environment: None,
+        ..o
+    };
+    let a = renderer.render(&plain, &lamps).unwrap();
+    let b = renderer.render(&with_ao, &lamps).unwrap();
+    assert_eq!(a.hdr, b.hdr, "occlusion changed lamp light");
+}
+
+#[test]
+fn default_lighting_adds_a_key_light_and_ground_only_where_asked() {
+    // A file with lights keeps them and gets nothing added.
+    let mut s = scene::default_scene();
+    let lights = s.lights.len();
+    let draws = s.draws.len();
+    assert!(!stage(&mut s, LightsMode::Auto, 0.0, false));
+    assert_eq!((s.lights.len(), s.draws.len()), (lights, draws));
+    // Without lights: the key light (which casts a shadow map) and a ground that casts none.
+    s.lights.clear();
+    assert!(stage(&mut s, LightsMode::Auto, 0.0, false));
+    assert_eq!(s.lights.len(), 1);
+    assert!(s.lights[0].shadow.is_some());
+    let ground = s.draws.last().unwrap();
+    assert!(!ground.cast_shadows && ground.receive_shadows);
+    let plan = Plan::new(&s, &options(Some(Arc::new(Environment::studio()))));
+    assert_eq!(
+        plan.shadows.len(),
+        1,
+        "the key light's shadow map is planned"
+    );
+    // With the user's own environment, no key light is added; `none` removes the file's.
+    let mut s = scene::default_scene();
+    s.lights.clear();
+    assert!(!stage(&mut s, LightsMode::Auto, 0.0, true));
+    assert!(s.lights.is_empty());
+    let mut s = scene::default_scene();
+    stage(&mut s, LightsMode::None, 0.0, false);
+    assert!(s.lights.is_empty());
+    // The ground does not change what the automatic camera frames.
+    let mut s = quad_scene(Material::default(), vec![]);
+    s.cameras.clear();
+    let before = s.camera(None).unwrap().view;
+    stage(&mut s, LightsMode::Default, 0.0, false);
+    assert_eq!(s.camera(None).unwrap().view, before);
+}
