@@ -189,6 +189,11 @@ struct BenchArgs {
     /// lighting pass with environment light against lamps only.
     #[arg(long)]
     ibl: bool,
+    /// Instead: time to the first picture: the whole `weft render` process at --size (default
+    /// scene, 5 runs, median) against the warm frame of the same render (same run), and their
+    /// ratio.
+    #[arg(long)]
+    startup: bool,
     /// The environment of the --ibl bench (default: the repository's tests/data/env/lebombo_1k.hdr).
     #[arg(long)]
     ibl_env: Option<PathBuf>,
@@ -318,6 +323,7 @@ fn load_scene_impl(
 fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     let (scene, mut options) = load_scene(&args.scene)?;
     options.exposure = args.exposure;
+    options.read_hdr = args.exr.is_some();
     options.validate()?;
     let device = args
         .device
@@ -490,6 +496,60 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `weft bench --startup`: the whole process against its warm frame.
+fn run_startup_bench(args: &BenchArgs) -> anyhow::Result<()> {
+    let size = if args.size == "960x540" {
+        "1920x1080".to_string()
+    } else {
+        args.size.clone()
+    };
+    let runs = args.frames.unwrap_or(5).max(1);
+    let exe = std::env::current_exe()?;
+    let dir = std::env::temp_dir().join(format!("weft-startup-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let out = dir.join("startup.png");
+    let mut device = Vec::new();
+    if let Some(d) = &args.device {
+        device = vec!["--device".to_string(), d.clone()];
+    }
+    let run = |extra: &[&str]| -> anyhow::Result<(f64, String)> {
+        let t = std::time::Instant::now();
+        let o = std::process::Command::new(&exe)
+            .args(["render", "--size", &size, "-o"])
+            .arg(&out)
+            .args(&device)
+            .args(extra)
+            .output()?;
+        if !o.status.success() {
+            anyhow::bail!("weft render failed: {}", String::from_utf8_lossy(&o.stderr));
+        }
+        Ok((
+            t.elapsed().as_secs_f64() * 1e3,
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+        ))
+    };
+    run(&[])?; // the driver's on-disk caches warm, as for any second run
+    let mut whole = Vec::new();
+    for _ in 0..runs {
+        whole.push(run(&[])?.0);
+    }
+    // The warm frame: `--frames 6 --timings` prints the median of the 5 frames after the first.
+    let (_, text) = run(&["--frames", "6", "--timings"])?;
+    let warm = text
+        .lines()
+        .find_map(|l| l.strip_prefix("frame").map(|r| r.trim().rsplit(' ').next().unwrap_or("").to_string()))
+        .and_then(|v| v.parse::<f64>().ok())
+        .ok_or_else(|| anyhow::anyhow!("no frame time in weft render --timings output:\n{text}"))?;
+    let _ = std::fs::remove_dir_all(&dir);
+    let whole = median(whole);
+    println!("time to the first picture: weft render --size {size} (default scene), {runs} runs");
+    println!("{:<32} {:>10}", "", "ms");
+    println!("{:<32} {:>10.1}", "whole process (median)", whole);
+    println!("{:<32} {:>10.1}", "warm frame (median of 5)", warm);
+    println!("{:<32} {:>10.2}", "ratio", whole / warm);
+    Ok(())
+}
+
 fn open_device(device: Option<&str>, validate: bool) -> anyhow::Result<Context> {
     let device = device
         .map(DeviceChoice::parse)
@@ -527,6 +587,9 @@ fn run_compare(args: CompareArgs) -> anyhow::Result<()> {
 }
 
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
+    if args.startup {
+        return run_startup_bench(&args);
+    }
     if args.ibl {
         let size = render::parse_size(&args.size)?;
         RenderOptions {

@@ -138,7 +138,7 @@ impl Environment {
     /// key soft box in front above the left (where the default key light comes from, see
     /// [`STUDIO_KEY_DIRECTION`]), and two tall strip lights at the sides. Achromatic, peak about 8.
     pub fn studio() -> Environment {
-        let (w, h) = (1024u32, 512u32);
+        let (w, h) = (512u32, 256u32);
         let mut rgb = Vec::with_capacity((w * h * 3) as usize);
         let key = glam::Vec3::from(STUDIO_KEY_DIRECTION).normalize();
         for j in 0..h {

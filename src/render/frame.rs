@@ -968,11 +968,17 @@ impl Renderer {
 
         let start = Instant::now();
         let ldr = read_image(&ctx, &targets.ldr, Usage::ColorAttachment, 4)?;
-        let hdr_half = read_image(&ctx, &targets.hdr, Usage::FragmentRead, 8)?;
-        let hdr: Vec<f32> = hdr_half
-            .chunks_exact(2)
-            .map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]])))
-            .collect();
+        // The HDR target only when asked for (EXR output, tests, the bench): the PNG needs only
+        // the 8-bit target.
+        let hdr: Vec<f32> = if options.read_hdr {
+            let hdr_half = read_image(&ctx, &targets.hdr, Usage::FragmentRead, 8)?;
+            hdr_half
+                .chunks_exact(2)
+                .map(|b| f16_to_f32(u16::from_le_bytes([b[0], b[1]])))
+                .collect()
+        } else {
+            Vec::new()
+        };
         timings.push(PassTiming {
             name: "readback",
             gpu_ms: None,
@@ -1217,23 +1223,9 @@ fn read_image_level(
     Ok(buffer.read()?.to_vec())
 }
 
-/// IEEE 754 half to single precision.
+/// IEEE 754 half to single precision (the `half` crate's conversion).
 pub fn f16_to_f32(h: u16) -> f32 {
-    let sign = ((h >> 15) as u32) << 31;
-    let exp = ((h >> 10) & 0x1f) as u32;
-    let mant = (h & 0x3ff) as u32;
-    let bits = match (exp, mant) {
-        (0, 0) => sign,
-        (0, m) => {
-            // Subnormal: renormalise.
-            let shift = m.leading_zeros() - 21;
-            let m = (m << shift) & 0x3ff;
-            sign | ((127 - 15 + 1 - shift) << 23) | (m << 13)
-        }
-        (0x1f, m) => sign | 0x7f80_0000 | (m << 13),
-        (e, m) => sign | ((e + 127 - 15) << 23) | (m << 13),
-    };
-    f32::from_bits(bits)
+    half::f16::from_bits(h).to_f32()
 }
 
 #[cfg(test)]

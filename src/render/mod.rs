@@ -298,6 +298,9 @@ pub struct RenderOptions {
     /// lights every scene with one (the built-in studio unless `--env`); the library's default is
     /// none, so lamp-only tests mean what they say.
     pub environment: Option<crate::env::EnvLighting>,
+    /// Read the linear HDR target back into `Frame::hdr` (on by default; `weft render` turns it
+    /// off unless `--exr` is given, since the PNG needs only the 8-bit target).
+    pub read_hdr: bool,
 }
 
 impl Default for RenderOptions {
@@ -315,6 +318,7 @@ impl Default for RenderOptions {
             shading: Shading::Fabric,
             force: Force::NONE,
             environment: None,
+            read_hdr: true,
         }
     }
 }

@@ -142,7 +142,17 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba8: &[u8]) -> crate::R
             "image buffer does not hold {width}x{height} RGBA8 pixels"
         ))
     })?;
-    write_atomically(path, |out| img.write_to(out, image::ImageFormat::Png))
+    // Fast compression with adaptive filtering: a 1920x1080 frame encodes in a fraction of the
+    // default level's time, for files ~10 % larger.
+    write_atomically(path, |out| {
+        use image::ImageEncoder;
+        image::codecs::png::PngEncoder::new_with_quality(
+            out,
+            image::codecs::png::CompressionType::Fast,
+            image::codecs::png::FilterType::Adaptive,
+        )
+        .write_image(img.as_raw(), width, height, image::ExtendedColorType::Rgba8)
+    })
 }
 
 /// Writes linear RGBA f32 pixels as an OpenEXR file. Refuses (with an error) to write NaN or Inf.

@@ -24,7 +24,7 @@ pub const ENV_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const SPECULAR_SIZE: u32 = 128;
 pub const SPECULAR_LEVELS: u32 = 6;
 /// Samples per texel of the prefiltering (filtered importance sampling needs few).
-pub const PREFILTER_SAMPLES: u32 = 64;
+pub const PREFILTER_SAMPLES: u32 = 32;
 /// Side of the DFG table.
 pub const DFG_SIZE: u32 = 32;
 
