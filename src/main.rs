@@ -537,7 +537,10 @@ fn run_startup_bench(args: &BenchArgs) -> anyhow::Result<()> {
     let (_, text) = run(&["--frames", "6", "--timings"])?;
     let warm = text
         .lines()
-        .find_map(|l| l.strip_prefix("frame").map(|r| r.trim().rsplit(' ').next().unwrap_or("").to_string()))
+        .find_map(|l| {
+            l.strip_prefix("frame")
+                .map(|r| r.trim().rsplit(' ').next().unwrap_or("").to_string())
+        })
         .and_then(|v| v.parse::<f64>().ok())
         .ok_or_else(|| anyhow::anyhow!("no frame time in weft render --timings output:\n{text}"))?;
     let _ = std::fs::remove_dir_all(&dir);
@@ -586,18 +589,24 @@ fn run_compare(args: CompareArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `WIDTHxHEIGHT`, parsed and within what the renderer accepts.
+fn checked_size(text: &str) -> anyhow::Result<(u32, u32)> {
+    let size = render::parse_size(text)?;
+    RenderOptions {
+        width: size.0,
+        height: size.1,
+        ..Default::default()
+    }
+    .validate()?;
+    Ok(size)
+}
+
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
     if args.startup {
         return run_startup_bench(&args);
     }
     if args.ibl {
-        let size = render::parse_size(&args.size)?;
-        RenderOptions {
-            width: size.0,
-            height: size.1,
-            ..Default::default()
-        }
-        .validate()?;
+        let size = checked_size(&args.size)?;
         weft::env::IblLevel::parse(&format!("mc:{}", args.ibl_truth))?;
         let env = args.ibl_env.clone().unwrap_or_else(|| {
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr")
@@ -621,13 +630,7 @@ fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     if args.plan {
-        let size = render::parse_size(&args.size)?;
-        RenderOptions {
-            width: size.0,
-            height: size.1,
-            ..Default::default()
-        }
-        .validate()?;
+        let size = checked_size(&args.size)?;
         let ctx = open_device(args.device.as_deref(), false)?;
         let mut renderer = Renderer::new(ctx)?;
         let report = weft::bench::plan_bench::run(&mut renderer, size, args.frames.unwrap_or(7))?;

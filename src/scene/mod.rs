@@ -218,25 +218,18 @@ pub struct Bounds {
 impl Scene {
     /// World-space bounds of every drawn vertex; None for a scene with nothing to draw.
     pub fn bounds(&self) -> Option<Bounds> {
-        let mut min = Vec3::splat(f32::INFINITY);
-        let mut max = Vec3::splat(f32::NEG_INFINITY);
-        for d in &self.draws {
-            for v in &self.meshes[d.mesh].vertices {
-                let p = d.world.transform_point3(Vec3::from(v.position));
-                if p.is_finite() {
-                    min = min.min(p);
-                    max = max.max(p);
-                }
-            }
-        }
-        (min.x <= max.x).then_some(Bounds { min, max })
+        self.bounds_of(|_| true)
     }
 
     /// World-space bounds of the draws that cast shadows (what a shadow map must cover).
     pub fn caster_bounds(&self) -> Option<Bounds> {
+        self.bounds_of(|d| d.cast_shadows)
+    }
+
+    fn bounds_of(&self, keep: impl Fn(&Draw) -> bool) -> Option<Bounds> {
         let mut min = Vec3::splat(f32::INFINITY);
         let mut max = Vec3::splat(f32::NEG_INFINITY);
-        for d in self.draws.iter().filter(|d| d.cast_shadows) {
+        for d in self.draws.iter().filter(|d| keep(d)) {
             for v in &self.meshes[d.mesh].vertices {
                 let p = d.world.transform_point3(Vec3::from(v.position));
                 if p.is_finite() {
