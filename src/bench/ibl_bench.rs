@@ -16,7 +16,7 @@ use crate::env::{EnvLighting, Environment, IblLevel};
 use crate::render::{Frame, RenderOptions, Renderer};
 use crate::scene::Scene;
 
-use super::plot::{text_width, tick_label, Canvas, LogAxis};
+use super::plot::{log_frame, Canvas, LogAxis};
 use super::View;
 
 /// One (view, level).
@@ -277,7 +277,6 @@ impl IblReport {
         let mut c = Canvas::new(W, H, [1.0; 3]);
         let black = [0.1, 0.1, 0.12];
         let muted = [0.35, 0.35, 0.4];
-        let grid = [0.88, 0.88, 0.9];
         c.text(
             left as i32,
             20,
@@ -321,40 +320,7 @@ impl IblReport {
             bottom,
             top,
         );
-        for (v, decade) in x.ticks() {
-            let px = x.map(v);
-            c.line(
-                (px, top),
-                (px, bottom),
-                if decade { 1.2 } else { 0.8 },
-                grid,
-            );
-            let l = tick_label(v);
-            c.text(
-                px as i32 - text_width(&l, 2) / 2,
-                bottom as i32 + 12,
-                &l,
-                2,
-                black,
-            );
-        }
-        for (v, decade) in y.ticks() {
-            let py = y.map(v);
-            c.line(
-                (left, py),
-                (right, py),
-                if decade { 1.2 } else { 0.8 },
-                grid,
-            );
-            let l = tick_label(v);
-            c.text(
-                left as i32 - 10 - text_width(&l, 2),
-                py as i32 - 7,
-                &l,
-                2,
-                black,
-            );
-        }
+        log_frame(&mut c, &x, &y, (left, right, top, bottom));
         c.text(
             (left + right) as i32 / 2 - 120,
             bottom as i32 + 40,

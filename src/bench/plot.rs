@@ -357,13 +357,63 @@ impl LogAxis {
     }
 }
 
-pub(crate) fn tick_label(v: f64) -> String {
+fn tick_label(v: f64) -> String {
     if v >= 1.0 {
         format!("{v:.0}")
     } else {
         let digits = (-v.log10()).ceil().max(1.0) as usize;
         format!("{v:.digits$}")
     }
+}
+
+/// The grid, ticks and tick labels of a log-log plot, and its frame, in the box
+/// (left, right, top, bottom).
+pub(crate) fn log_frame(
+    c: &mut Canvas,
+    x: &LogAxis,
+    y: &LogAxis,
+    (left, right, top, bottom): (f32, f32, f32, f32),
+) {
+    for (v, decade) in x.ticks() {
+        let px = x.map(v);
+        c.line(
+            (px, top),
+            (px, bottom),
+            if decade { 1.2 } else { 0.8 },
+            GRID,
+        );
+        c.line((px, bottom), (px, bottom + 6.0), 1.0, BLACK);
+        let label = tick_label(v);
+        c.text(
+            px as i32 - text_width(&label, 2) / 2,
+            bottom as i32 + 12,
+            &label,
+            2,
+            BLACK,
+        );
+    }
+    for (v, decade) in y.ticks() {
+        let py = y.map(v);
+        c.line(
+            (left, py),
+            (right, py),
+            if decade { 1.2 } else { 0.8 },
+            GRID,
+        );
+        c.line((left - 6.0, py), (left, py), 1.0, BLACK);
+        let label = tick_label(v);
+        c.text(
+            left as i32 - 10 - text_width(&label, 2),
+            py as i32 - 7,
+            &label,
+            2,
+            BLACK,
+        );
+    }
+    c.line((left, top), (left, bottom), 1.5, BLACK);
+    c.line((left, bottom), (right, bottom), 1.5, BLACK);
+    c.line((left, top), (right, top), 1.0, MUTED);
+    c.line((right, top), (right, bottom), 1.0, MUTED);
 }
 
 /// Draws the plot of a report; returns (width, height, RGBA8 pixels).
@@ -405,47 +455,7 @@ pub fn plot(report: &BenchReport) -> (u32, u32, Vec<u8>) {
     let x = LogAxis::fit(tmin, tmax, left, right);
     let y = LogAxis::fit(emin, emax, bottom, top);
 
-    // Grid, ticks and their labels.
-    for (v, decade) in x.ticks() {
-        let px = x.map(v);
-        c.line(
-            (px, top),
-            (px, bottom),
-            if decade { 1.2 } else { 0.8 },
-            GRID,
-        );
-        c.line((px, bottom), (px, bottom + 6.0), 1.0, BLACK);
-        let label = tick_label(v);
-        c.text(
-            px as i32 - text_width(&label, 2) / 2,
-            bottom as i32 + 12,
-            &label,
-            2,
-            BLACK,
-        );
-    }
-    for (v, decade) in y.ticks() {
-        let py = y.map(v);
-        c.line(
-            (left, py),
-            (right, py),
-            if decade { 1.2 } else { 0.8 },
-            GRID,
-        );
-        c.line((left - 6.0, py), (left, py), 1.0, BLACK);
-        let label = tick_label(v);
-        c.text(
-            left as i32 - 10 - text_width(&label, 2),
-            py as i32 - 7,
-            &label,
-            2,
-            BLACK,
-        );
-    }
-    c.line((left, top), (left, bottom), 1.5, BLACK);
-    c.line((left, bottom), (right, bottom), 1.5, BLACK);
-    c.line((left, top), (right, top), 1.0, MUTED);
-    c.line((right, top), (right, bottom), 1.0, MUTED);
+    log_frame(&mut c, &x, &y, (left, right, top, bottom));
     let xlabel = "G-BUFFER + LIGHTING TIME (MS, LOG SCALE)";
     c.text(
         ((left + right) as i32 - text_width(xlabel, 2)) / 2,
