@@ -105,6 +105,21 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          front faces; the projection flips y.",
     ),
     (
+        "ibl_probe.comp",
+        "Evaluates every function of image-based lighting (`include/ibl.glsl`: `env_dir`, \
+         `sh_irradiance`, `hammersley`, `ggx_sample_h`, `as_sample_h`, `cosine_sample`, `fis_lod`, \
+         `specular_occlusion`, `fabric_diffuse_albedo`) and of `include/cube.glsl` \
+         (`cube_texel_dir`, `equirect_uv`) on a batch of inputs, one invocation per input: the way \
+         to check that a driver computes them as weft's Rust twins do. Bind a buffer of `count` \
+         416-byte `IblProbeInput` records (std430: `vec4 world, rot[3], normal, sh[9], xi, lobe, \
+         lod, misc`, `uvec4 counts, cube`, `vec4 dir`, then the 80-byte `GpuFabric` of \
+         `include/fabric.glsl`) and a buffer for `count` 128-byte `IblProbeOutput` records (eight \
+         `vec4`: `env_dir`, `irradiance`, `ggx`, `as_h`, `cosine`, `cube`, `uv` (hammersley xy, \
+         equirect uv), `scalars` (fis_lod, specular_occlusion, fabric_diffuse_albedo)). Push the \
+         `uint count`; dispatch `ceil(count / 64)` groups. weft's Rust twins and the interval \
+         bound of each output under the Vulkan precision rules: `weft::reference::ibl_twin`.",
+    ),
+    (
         "lighting.frag",
         "Deferred lighting, one fullscreen triangle (`fullscreen.vert`): reads the G-buffer \
          targets and depth written by the G-buffer pass, sums every light with the glTF \
@@ -206,6 +221,18 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         0,
         3,
         "lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)",
+    ),
+    (
+        "ibl_probe.comp",
+        0,
+        0,
+        "the inputs: `IblProbeInput[count]`",
+    ),
+    (
+        "ibl_probe.comp",
+        0,
+        1,
+        "the outputs: `IblProbeOutput[count]`, written by the shader",
     ),
     (
         "lighting.frag",

@@ -8,6 +8,9 @@
 //! - [`furnace`]: white-furnace albedo.
 //! - [`shading`]: the CPU twin of the lighting and tonemap passes (lights, glTF PBR, ambient,
 //!   the fabric branch).
+//! - [`ibl_twin`]: the f32 twins of `glsl/include/ibl.glsl` and `glsl/include/cube.glsl`, the
+//!   records of `glsl/ibl_probe.comp`, and the interval bound of every output under the Vulkan
+//!   precision rules.
 //! - [`probe`]: the std430 buffers of `glsl/fabric_probe.comp`, their CPU evaluation, the inputs
 //!   (hard cases and random) and the GPU-vs-CPU error bound.
 //!
@@ -17,6 +20,7 @@
 pub mod brdf;
 pub mod furnace;
 pub mod ibl;
+pub mod ibl_twin;
 pub mod probe;
 pub mod raster;
 pub mod shading;

@@ -1,0 +1,1294 @@
+//! The Rust twins of `glsl/include/ibl.glsl` and `glsl/include/cube.glsl`, the std430 records of
+//! their probe `glsl/ibl_probe.comp`, and the error each output may have.
+//!
+//! # The twins
+//! Each GLSL function is written once here, generic over [`Real`], line for line as the GLSL
+//! writes it (same operations in the same order, same clamps, the same f32 literals), and used
+//! three ways:
+//! - at `f32` it is the twin ([`ggx_sample_h`], [`as_sample_h`], [`cosine_sample`], [`fis_lod`],
+//!   [`specular_occlusion`], [`fabric_diffuse_albedo`], [`equirect_uv`], [`env_dir`]);
+//! - at `f64` (with the ideal constants: π, not its f32 rounding) it is the exact formula;
+//! - at [`Iv`] (interval arithmetic) it is the error analysis: an enclosure of every value a
+//!   conforming implementation may return for that input (see below).
+//!
+//! The functions that already had a Rust twin keep it: [`crate::env::sh_eval`],
+//! [`crate::env::hammersley`], [`crate::render::environment::cube_texel_dir`] (and
+//! [`crate::env::env_from_world`] makes `env_dir`'s rows). Their generic copies in [`formula`]
+//! exist only for the error analysis; `tests/ibl_probe_gpu.rs` checks that at f32 they compute
+//! exactly what the existing twins compute, bit for bit.
+//!
+//! # Error bounds
+//! For each input and output, [`ibl_probe_bounds`] evaluates the formula in interval arithmetic
+//! under a [`Model`] of the arithmetic. Every operation's result interval is the exact range of
+//! the operation over its argument intervals, widened by the model's error for that operation
+//! and rounded outwards to f32 values, and then widened to 0 where a denormal could be flushed.
+//! The final interval therefore contains the exact real-valued formula (with each literal taken
+//! anywhere between its f32 value and its ideal value, so it contains the f64 reference too) and
+//! every result an implementation meeting the model can produce, whatever rounding direction
+//! (nearest or towards zero), fused multiply-adds and summation order of `dot` (and of the SH sum)
+//! it chooses; chains of products are taken in the order the SPIR-V has them.
+//! The condition number of each output is therefore not estimated: it is what the intervals do.
+//!
+//! - [`Vulkan`]: the precision the Vulkan specification requires of a GPU ("Precision and
+//!   Operation of SPIR-V Instructions"): `+ - *` and conversions correctly rounded (either
+//!   direction), `/` 2.5 ulp, `inversesqrt` 2 ulp and `sqrt` inherited from `1/inversesqrt`,
+//!   `exp2` 3 + 2|x| ulp, `log2` 3 ulp outside [0.5, 2] and 2^-21 absolute inside, `pow` inherited
+//!   from `exp2(y·log2 x)`, `sin`/`cos` 2^-11 absolute, `tan` inherited from `sin/cos`, `atan` 4096
+//!   ulp, `acos` inherited from `atan(sqrt(1 - x²), x)`, `dot` and `normalize` inherited from
+//!   their products, sums, `sqrt` and `/`. Denormals may be flushed to zero.
+//!   Two readings the spec leaves open are taken generously for the GPU: the `sin`/`cos` bound is
+//!   stated for [-π, π] and is applied on [-2π, 2π] (the samplers' φ reaches 2π); `sqrt(0)` is
+//!   taken to be 0 (the spec's `1/inversesqrt(0)` is a division by +∞, outside its stated range).
+//! - [`CpuF32`]: what the f32 twin does on the CPU: correctly rounded (to nearest) `+ - * / sqrt`
+//!   and the platform's `libm` within 2 ulp for `sin cos tan atan atan2 acos exp2 log2 powf`.
+//!   It is the tight bound: the twin must lie in it, and so must the f64 reference.
+//!
+//! What bounds each output, in words (the intervals do the arithmetic):
+//! - `env_dir`: three 3-term dot products of unit vectors: a few ulp of 1 (any summation order).
+//! - `sh_irradiance`: a 9-term sum of SH coefficient × basis (the basis from at most three
+//!   products): a few ulp of the sum of the terms' magnitudes, not of the result (cancellation
+//!   is allowed for, which is what makes the bound absolute).
+//! - `hammersley`: `i/n` to the division's 2.5 ulp; the radical inverse to one rounding of the
+//!   uint-to-float conversion (exact below 2^24).
+//! - `ggx_sample_h`, `cosine_sample`: the `sin`/`cos` of φ dominate on a GPU (2^-11 absolute in
+//!   the tangential components); `cos θ` is a few ulp; `sin θ = sqrt(1 - cos²θ)` loses half the
+//!   digits near the pole (the interval's `sqrt` of a few ulp of 1 shows it).
+//! - `as_sample_h`: φ₀ = atan(√((eu+1)/(ev+1))·tan(πr/2)): `atan`'s 4096 ulp, and `tan` inherits
+//!   `sin/cos`'s absolute 2^-11, so near r → 1 (cos(πr/2) < 2^-11) the GPU may return a tan of
+//!   either sign and φ₀ is only known to [-π/2, π/2] (see the probe test's report); the exponent
+//!   `eu cos²φ + ev sin²φ + 1` carries the error of `cos φ`, `sin φ` times `eu`, `ev`, and
+//!   `cos θ = pow(xi, 1/E)` that of `log2` (2^-21 absolute near xi = 1, so cos θ may exceed 1).
+//! - `fis_lod`: half `log2`'s error (2^-21 absolute when the ratio is in [0.5, 2]) plus the
+//!   divisions' 2.5 ulp each, as `0.5·log2(1 + δ)`.
+//! - `specular_occlusion`: `pow` as `exp2(y·log2 x)` with x = n·v + ao in [0, 2] (2^-21 absolute
+//!   in log2) and `exp2(-16r-1)`'s 3 + 2|x| ulp, then the cancellation in `pow - 1 + ao`.
+//! - `fabric_diffuse_albedo`: a handful of roundings of numbers ≤ 1.
+//! - `cube_texel_dir`: the division in `(t + ½)/size`, then `normalize` (2 + 2.5 + 2.5 ulp).
+//! - `equirect_uv`: `atan`'s and `acos`'s (inherited from `atan`) 4096 ulp; u is compared modulo
+//!   1 (the map wraps; at the seam u = 0 and u = 1 are the same column, and whether `atan(±0, x<0)`
+//!   is +π or -π is not specified). At the poles `atan(0, 0)` is undefined in GLSL: u is then
+//!   unconstrained, which the interval of `atan` over a box containing the origin says.
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::marker::PhantomData;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use crate::fabric::GpuFabric;
+
+// ---------------------------------------------------------------------------------------------
+// The probe's records.
+// ---------------------------------------------------------------------------------------------
+
+/// One input of `glsl/ibl_probe.comp` (std430, 416 bytes; `IblProbeInput` there).
+///
+/// | offset | field | meaning |
+/// |---|---|---|
+/// | 0   | `world: vec4` | `env_dir`: world direction (xyz) |
+/// | 16  | `rot: vec4[3]` | `env_dir`: rows of `env_from_world` (xyz) |
+/// | 64  | `normal: vec4` | `sh_irradiance`: env-space normal (xyz) |
+/// | 80  | `sh: vec4[9]` | `sh_irradiance`: SH9 coefficients (rgb) |
+/// | 224 | `xi: vec4` | xy: the xi of `ggx_sample_h`, `as_sample_h`, `cosine_sample` |
+/// | 240 | `lobe: vec4` | x: GGX alpha, y: A–S eu, z: A–S ev |
+/// | 256 | `lod: vec4` | x: pdf, y: face size (`fis_lod`); z: n·v, w: ao (`specular_occlusion`) |
+/// | 272 | `misc: vec4` | x: roughness (`specular_occlusion`), y: n·k2 (`fabric_diffuse_albedo`) |
+/// | 288 | `counts: uvec4` | x: `hammersley` i, y: `hammersley` n, z: `fis_lod` n |
+/// | 304 | `cube: uvec4` | `cube_texel_dir`: face, texel x, texel y, size |
+/// | 320 | `dir: vec4` | `equirect_uv`: direction (xyz) |
+/// | 336 | `fabric: GpuFabric` | `fabric_diffuse_albedo`: the material (80 bytes) |
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct IblProbeInput {
+    pub world: [f32; 4],
+    pub rot: [[f32; 4]; 3],
+    pub normal: [f32; 4],
+    pub sh: [[f32; 4]; 9],
+    pub xi: [f32; 4],
+    pub lobe: [f32; 4],
+    pub lod: [f32; 4],
+    pub misc: [f32; 4],
+    pub counts: [u32; 4],
+    pub cube: [u32; 4],
+    pub dir: [f32; 4],
+    pub fabric: GpuFabric,
+}
+
+/// One output of `glsl/ibl_probe.comp` (std430, 128 bytes; `IblProbeOutput` there).
+///
+/// | offset | field | x | y | z | w |
+/// |---|---|---|---|---|---|
+/// | 0   | `env_dir` | `env_dir` x | y | z | 0 |
+/// | 16  | `irradiance` | `sh_irradiance` r | g | b | 0 |
+/// | 32  | `ggx` | `ggx_sample_h` x | y | z | 0 |
+/// | 48  | `as_h` | `as_sample_h` x | y | z | 0 |
+/// | 64  | `cosine` | `cosine_sample` x | y | z | 0 |
+/// | 80  | `cube` | `cube_texel_dir` x | y | z | 0 |
+/// | 96  | `uv` | `hammersley` x | y | `equirect_uv` u | v |
+/// | 112 | `scalars` | `fis_lod` | `specular_occlusion` | `fabric_diffuse_albedo` | 0 |
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct IblProbeOutput {
+    pub env_dir: [f32; 4],
+    pub irradiance: [f32; 4],
+    pub ggx: [f32; 4],
+    pub as_h: [f32; 4],
+    pub cosine: [f32; 4],
+    pub cube: [f32; 4],
+    pub uv: [f32; 4],
+    pub scalars: [f32; 4],
+}
+
+const _: () = {
+    assert!(std::mem::size_of::<IblProbeInput>() == 416);
+    assert!(std::mem::offset_of!(IblProbeInput, sh) == 80);
+    assert!(std::mem::offset_of!(IblProbeInput, counts) == 288);
+    assert!(std::mem::offset_of!(IblProbeInput, fabric) == 336);
+    assert!(std::mem::size_of::<IblProbeOutput>() == 128);
+    assert!(std::mem::offset_of!(IblProbeOutput, uv) == 96);
+};
+
+/// Number of f32 components of an [`IblProbeOutput`].
+pub const IBL_PROBE_OUTPUTS: usize = 32;
+
+/// Names of the output components, in memory order.
+#[rustfmt::skip]
+pub const IBL_PROBE_OUTPUT_NAMES: [&str; IBL_PROBE_OUTPUTS] = [
+    "env_dir.x", "env_dir.y", "env_dir.z", "env_dir.w",
+    "sh_irradiance.r", "sh_irradiance.g", "sh_irradiance.b", "sh_irradiance.w",
+    "ggx_sample_h.x", "ggx_sample_h.y", "ggx_sample_h.z", "ggx_sample_h.w",
+    "as_sample_h.x", "as_sample_h.y", "as_sample_h.z", "as_sample_h.w",
+    "cosine_sample.x", "cosine_sample.y", "cosine_sample.z", "cosine_sample.w",
+    "cube_texel_dir.x", "cube_texel_dir.y", "cube_texel_dir.z", "cube_texel_dir.w",
+    "hammersley.x", "hammersley.y", "equirect_uv.u", "equirect_uv.v",
+    "fis_lod", "specular_occlusion", "fabric_diffuse_albedo", "scalars.w",
+];
+
+/// The component compared modulo 1 (`equirect_uv`'s u: the map wraps).
+pub const IBL_PROBE_CIRCULAR: usize = 26;
+
+impl IblProbeOutput {
+    pub fn to_array(&self) -> [f32; IBL_PROBE_OUTPUTS] {
+        let mut a = [0.0; IBL_PROBE_OUTPUTS];
+        a.copy_from_slice(bytemuck::cast_slice::<[f32; 4], f32>(&[
+            self.env_dir,
+            self.irradiance,
+            self.ggx,
+            self.as_h,
+            self.cosine,
+            self.cube,
+            self.uv,
+            self.scalars,
+        ]));
+        a
+    }
+
+    /// Reads one output from the shader's buffer bytes (little-endian, 128 bytes).
+    pub fn from_bytes(b: &[u8]) -> Self {
+        let v = |k: usize| {
+            let mut out = [0f32; 4];
+            for (c, x) in out.iter_mut().enumerate() {
+                let o = 16 * k + 4 * c;
+                *x = f32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
+            }
+            out
+        };
+        IblProbeOutput {
+            env_dir: v(0),
+            irradiance: v(1),
+            ggx: v(2),
+            as_h: v(3),
+            cosine: v(4),
+            cube: v(5),
+            uv: v(6),
+            scalars: v(7),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The number types.
+// ---------------------------------------------------------------------------------------------
+
+/// What the formulas need of a number: f32 (the twin), f64 (the exact formula) or [`Iv`] (the
+/// error analysis). Method names are the GLSL built-ins'.
+pub trait Real:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// A GLSL float literal meant as written (its f32 value).
+    fn lit(x: f32) -> Self;
+    /// A GLSL float literal (or constant expression) that stands for an ideal constant: its f32
+    /// value `glsl` in the twin, `ideal` in the exact formula, anything between in the analysis.
+    fn ideal(glsl: f32, ideal: f64) -> Self;
+    /// `float(u)`.
+    fn from_u32(u: u32) -> Self;
+    fn sqrt(self) -> Self;
+    fn sin(self) -> Self;
+    fn cos(self) -> Self;
+    fn tan(self) -> Self;
+    /// One-argument `atan`.
+    fn atan(self) -> Self;
+    /// GLSL `atan(self, x)` (self is y).
+    fn atan2(self, x: Self) -> Self;
+    fn acos(self) -> Self;
+    fn exp2(self) -> Self;
+    fn log2(self) -> Self;
+    fn pow(self, y: Self) -> Self;
+    fn floor(self) -> Self;
+    fn min(self, o: Self) -> Self;
+    fn max(self, o: Self) -> Self;
+    fn clamp(self, lo: Self, hi: Self) -> Self {
+        self.max(lo).min(hi)
+    }
+    /// `self * x * x` as GLSL writes it (`(self·x)·x`); the analysis knows the result has the
+    /// sign of `self`.
+    fn mul_square(self, x: Self) -> Self;
+    /// GLSL `dot` of three components (the twin sums x, y, z in order; a GPU may sum in any).
+    fn dot3(a: [Self; 3], b: [Self; 3]) -> Self;
+    /// A sum written `t0 + t1 + ...` (in order for the twin; the analysis allows any order).
+    fn sum(terms: &[Self]) -> Self;
+    /// The value of a quantity that every evaluation knows exactly (a branch condition).
+    fn exact(self) -> f64;
+}
+
+impl Real for f32 {
+    fn lit(x: f32) -> f32 {
+        x
+    }
+    fn ideal(glsl: f32, _: f64) -> f32 {
+        glsl
+    }
+    fn from_u32(u: u32) -> f32 {
+        u as f32
+    }
+    fn sqrt(self) -> f32 {
+        f32::sqrt(self)
+    }
+    fn sin(self) -> f32 {
+        f32::sin(self)
+    }
+    fn cos(self) -> f32 {
+        f32::cos(self)
+    }
+    fn tan(self) -> f32 {
+        f32::tan(self)
+    }
+    fn atan(self) -> f32 {
+        f32::atan(self)
+    }
+    fn atan2(self, x: f32) -> f32 {
+        f32::atan2(self, x)
+    }
+    fn acos(self) -> f32 {
+        f32::acos(self)
+    }
+    fn exp2(self) -> f32 {
+        f32::exp2(self)
+    }
+    fn log2(self) -> f32 {
+        f32::log2(self)
+    }
+    fn pow(self, y: f32) -> f32 {
+        f32::powf(self, y)
+    }
+    fn floor(self) -> f32 {
+        f32::floor(self)
+    }
+    fn min(self, o: f32) -> f32 {
+        f32::min(self, o)
+    }
+    fn max(self, o: f32) -> f32 {
+        f32::max(self, o)
+    }
+    fn mul_square(self, x: f32) -> f32 {
+        self * x * x
+    }
+    fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+    fn sum(terms: &[f32]) -> f32 {
+        terms.iter().fold(0.0, |s, t| s + t)
+    }
+    fn exact(self) -> f64 {
+        self as f64
+    }
+}
+
+impl Real for f64 {
+    fn lit(x: f32) -> f64 {
+        x as f64
+    }
+    fn ideal(_: f32, ideal: f64) -> f64 {
+        ideal
+    }
+    fn from_u32(u: u32) -> f64 {
+        u as f64
+    }
+    fn sqrt(self) -> f64 {
+        f64::sqrt(self)
+    }
+    fn sin(self) -> f64 {
+        f64::sin(self)
+    }
+    fn cos(self) -> f64 {
+        f64::cos(self)
+    }
+    fn tan(self) -> f64 {
+        f64::tan(self)
+    }
+    fn atan(self) -> f64 {
+        f64::atan(self)
+    }
+    fn atan2(self, x: f64) -> f64 {
+        f64::atan2(self, x)
+    }
+    fn acos(self) -> f64 {
+        f64::acos(self)
+    }
+    fn exp2(self) -> f64 {
+        f64::exp2(self)
+    }
+    fn log2(self) -> f64 {
+        f64::log2(self)
+    }
+    fn pow(self, y: f64) -> f64 {
+        f64::powf(self, y)
+    }
+    fn floor(self) -> f64 {
+        f64::floor(self)
+    }
+    fn min(self, o: f64) -> f64 {
+        f64::min(self, o)
+    }
+    fn max(self, o: f64) -> f64 {
+        f64::max(self, o)
+    }
+    fn mul_square(self, x: f64) -> f64 {
+        self * x * x
+    }
+    fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+    fn sum(terms: &[f64]) -> f64 {
+        terms.iter().sum()
+    }
+    fn exact(self) -> f64 {
+        self
+    }
+}
+
+/// The arithmetic an [`Iv`] models (see the module docs).
+pub trait Model: Copy + Default + PartialEq + std::fmt::Debug + 'static {
+    /// The Vulkan precision rules (true) or the CPU's f32 (false).
+    const VULKAN: bool;
+}
+
+/// The Vulkan specification's precision rules for a GPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vulkan;
+impl Model for Vulkan {
+    const VULKAN: bool = true;
+}
+
+/// The CPU's f32: IEEE operations rounded to nearest, libm within 2 ulp.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CpuF32;
+impl Model for CpuF32 {
+    const VULKAN: bool = false;
+}
+
+/// Ulps of a CPU libm function.
+const LIBM_ULP: f64 = 2.0;
+/// Vulkan: division, inversesqrt, atan (ulp); sin/cos (absolute); log2 near 1 (absolute).
+const VK_DIV_ULP: f64 = 2.5;
+const VK_INVERSESQRT_ULP: f64 = 2.0;
+const VK_ATAN_ULP: f64 = 4096.0;
+const VK_SIN_COS_ABS: f64 = 1.0 / 2048.0;
+const VK_LOG2_ULP: f64 = 3.0;
+const VK_LOG2_ABS: f64 = 1.0 / 2_097_152.0;
+/// The smallest normal f32: results below it may be flushed to 0.
+const MIN_NORMAL: f64 = f32::MIN_POSITIVE as f64;
+
+/// A closed interval `[lo, hi]` that contains the exact value and every value the model `M`
+/// allows (see the module docs). Endpoints may be infinite; NaN never appears.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Iv<M: Model> {
+    pub lo: f64,
+    pub hi: f64,
+    model: PhantomData<M>,
+}
+
+fn next32(x: f32) -> f32 {
+    if x.is_nan() || x == f32::INFINITY {
+        return x;
+    }
+    if x == 0.0 {
+        return f32::from_bits(1);
+    }
+    let b = x.to_bits();
+    if x > 0.0 {
+        f32::from_bits(b + 1)
+    } else {
+        f32::from_bits(b - 1)
+    }
+}
+
+fn prev32(x: f32) -> f32 {
+    -next32(-x)
+}
+
+/// The largest f32 ≤ `x + err`, where `x` is an f64 value and `err` the sign of the (tiny)
+/// error of `x` (the true value is `x + err`, |err| below an f64 ulp of x; 0 if x is exact).
+fn down32(x: f64, err: f64) -> f64 {
+    if x.is_infinite() {
+        return x;
+    }
+    let mut f = x as f32;
+    if f as f64 > x || (f as f64 == x && err < 0.0) {
+        f = prev32(f);
+    }
+    f as f64
+}
+
+/// The smallest f32 ≥ `x + err` (see [`down32`]).
+fn up32(x: f64, err: f64) -> f64 {
+    -down32(-x, -err)
+}
+
+/// One ulp of f32 at magnitude `m` (the spacing of f32 values in m's binade).
+fn ulp32(m: f64) -> f64 {
+    if !m.is_finite() {
+        return f64::INFINITY;
+    }
+    if m < MIN_NORMAL {
+        return 2f64.powi(-149);
+    }
+    let e = ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    2f64.powi(e - 23)
+}
+
+/// The exact error of `a + b` rounded in f64 (TwoSum).
+fn add_err(a: f64, b: f64, s: f64) -> f64 {
+    if !s.is_finite() {
+        return 0.0;
+    }
+    let bb = s - a;
+    (a - (s - bb)) + (b - bb)
+}
+
+/// The exact error of `a · b` rounded in f64.
+fn mul_err(a: f64, b: f64, p: f64) -> f64 {
+    if !p.is_finite() || p == 0.0 {
+        return 0.0;
+    }
+    a.mul_add(b, -p)
+}
+
+impl<M: Model> Iv<M> {
+    pub fn new(lo: f64, hi: f64) -> Self {
+        debug_assert!(!(lo > hi), "interval [{lo}, {hi}]");
+        Iv {
+            lo,
+            hi,
+            model: PhantomData,
+        }
+    }
+
+    pub fn point(x: f64) -> Self {
+        Self::new(x, x)
+    }
+
+    /// The interval `[lo, hi]` of exact f64 results widened by `abs` and by 4 f64 ulps (f64
+    /// libm's own error), rounded outwards to f32 values, flushed.
+    fn out(lo: f64, hi: f64, abs: f64) -> Self {
+        let m = 4.0 * f64::EPSILON;
+        let lo = if lo.is_finite() {
+            lo - abs - m * lo.abs()
+        } else {
+            lo
+        };
+        let hi = if hi.is_finite() {
+            hi + abs + m * hi.abs()
+        } else {
+            hi
+        };
+        Self::flushed(down32(lo, 0.0), up32(hi, 0.0))
+    }
+
+    /// `[lo, hi]` (already f32 values) with 0 added where a denormal result could be flushed.
+    fn flushed(lo: f64, hi: f64) -> Self {
+        let (lo, hi) = if lo.is_nan() || hi.is_nan() {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else {
+            (lo, hi)
+        };
+        if lo < MIN_NORMAL && hi > -MIN_NORMAL {
+            Self::new(lo.min(0.0), hi.max(0.0))
+        } else {
+            Self::new(lo, hi)
+        }
+    }
+
+    /// Magnitude of the largest endpoint.
+    pub fn mag(self) -> f64 {
+        self.lo.abs().max(self.hi.abs())
+    }
+
+    pub fn contains(self, x: f64) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+
+    pub fn width(self) -> f64 {
+        self.hi - self.lo
+    }
+
+    /// Widened by `ulps` ulp of its magnitude (and rounded outwards).
+    fn widen_ulps(self, ulps: f64) -> Self {
+        let m = [self.lo, self.hi]
+            .iter()
+            .filter(|x| x.is_finite())
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        Self::out(self.lo, self.hi, ulps * ulp32(m))
+    }
+
+    /// The hull of `self` and `o`.
+    pub fn hull(self, o: Self) -> Self {
+        Self::new(self.lo.min(o.lo), self.hi.max(o.hi))
+    }
+
+    /// A correctly rounded binary operation from the exact f64 candidates at the corners (each
+    /// with the sign of its f64 rounding error).
+    fn rounded(candidates: &[(f64, f64)]) -> Self {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for &(x, e) in candidates {
+            let (x, e) = if x.is_nan() { (0.0, 0.0) } else { (x, e) };
+            lo = lo.min(down32(x, e));
+            hi = hi.max(up32(x, e));
+        }
+        Self::flushed(lo, hi)
+    }
+
+    fn sin_range(lo: f64, hi: f64) -> (f64, f64) {
+        use std::f64::consts::{FRAC_PI_2, TAU};
+        if !(lo.is_finite() && hi.is_finite()) || hi - lo >= TAU {
+            return (-1.0, 1.0);
+        }
+        // Is c + 2kπ in [lo, hi] for some integer k?
+        let hits = |c: f64| ((lo - c) / TAU).ceil() <= ((hi - c) / TAU).floor();
+        let (a, b) = (lo.sin(), hi.sin());
+        let mut r = (a.min(b), a.max(b));
+        if hits(FRAC_PI_2) {
+            r.1 = 1.0;
+        }
+        if hits(-FRAC_PI_2) {
+            r.0 = -1.0;
+        }
+        r
+    }
+
+    fn cos_range(lo: f64, hi: f64) -> (f64, f64) {
+        use std::f64::consts::{PI, TAU};
+        if !(lo.is_finite() && hi.is_finite()) || hi - lo >= TAU {
+            return (-1.0, 1.0);
+        }
+        let hits = |c: f64| ((lo - c) / TAU).ceil() <= ((hi - c) / TAU).floor();
+        let (a, b) = (lo.cos(), hi.cos());
+        let mut r = (a.min(b), a.max(b));
+        if hits(0.0) {
+            r.1 = 1.0;
+        }
+        if hits(PI) {
+            r.0 = -1.0;
+        }
+        r
+    }
+
+    /// The exact range of atan2 over the box y × x, the angle taken continuously: a box that
+    /// meets the negative x axis gets angles around π (in (0, 2π)), which callers compare
+    /// modulo 2π; a box containing the origin gets [-π, π].
+    fn atan2_range(y: Self, x: Self) -> (f64, f64) {
+        use std::f64::consts::PI;
+        if x.lo <= 0.0 && x.hi >= 0.0 && y.lo <= 0.0 && y.hi >= 0.0 {
+            return (-PI, PI);
+        }
+        let corners = [(y.lo, x.lo), (y.lo, x.hi), (y.hi, x.lo), (y.hi, x.hi)];
+        let cut = x.hi < 0.0 && y.lo <= 0.0 && y.hi >= 0.0;
+        let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+        for (yy, xx) in corners {
+            let a = if cut {
+                PI + (-yy).atan2(-xx)
+            } else {
+                yy.atan2(xx)
+            };
+            r = (r.0.min(a), r.1.max(a));
+        }
+        r
+    }
+}
+
+impl<M: Model> Add for Iv<M> {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        let (a, b) = (self.lo + o.lo, self.hi + o.hi);
+        Self::rounded(&[
+            (a, add_err(self.lo, o.lo, a)),
+            (b, add_err(self.hi, o.hi, b)),
+        ])
+    }
+}
+
+impl<M: Model> Neg for Iv<M> {
+    type Output = Self;
+    fn neg(self) -> Self {
+        Self::new(-self.hi, -self.lo)
+    }
+}
+
+impl<M: Model> Sub for Iv<M> {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        self + -o
+    }
+}
+
+impl<M: Model> Mul for Iv<M> {
+    type Output = Self;
+    fn mul(self, o: Self) -> Self {
+        let c = |a: f64, b: f64| {
+            let p = a * b;
+            (p, mul_err(a, b, p))
+        };
+        Self::rounded(&[
+            c(self.lo, o.lo),
+            c(self.lo, o.hi),
+            c(self.hi, o.lo),
+            c(self.hi, o.hi),
+        ])
+    }
+}
+
+impl<M: Model> Div for Iv<M> {
+    type Output = Self;
+    fn div(self, o: Self) -> Self {
+        if o.lo <= 0.0 && o.hi >= 0.0 {
+            return Self::new(f64::NEG_INFINITY, f64::INFINITY);
+        }
+        // Corner quotients with the sign of their f64 error (from the exact remainder).
+        let c = |a: f64, b: f64| {
+            let q = a / b;
+            if !q.is_finite() || !a.is_finite() || !b.is_finite() || q == 0.0 {
+                return (q, 0.0);
+            }
+            let r = (-q).mul_add(b, a);
+            (q, r * b.signum())
+        };
+        let exact = Self::rounded(&[
+            c(self.lo, o.lo),
+            c(self.lo, o.hi),
+            c(self.hi, o.lo),
+            c(self.hi, o.hi),
+        ]);
+        if M::VULKAN {
+            exact.widen_ulps(VK_DIV_ULP)
+        } else {
+            exact
+        }
+    }
+}
+
+impl<M: Model> Real for Iv<M> {
+    fn lit(x: f32) -> Self {
+        Self::point(x as f64)
+    }
+    fn ideal(glsl: f32, ideal: f64) -> Self {
+        let g = glsl as f64;
+        Self::new(g.min(ideal), g.max(ideal))
+    }
+    fn from_u32(u: u32) -> Self {
+        let x = u as f64;
+        Self::rounded(&[(x, 0.0)])
+    }
+    fn sqrt(self) -> Self {
+        let lo = self.lo.max(0.0);
+        let hi = self.hi.max(0.0);
+        if hi == 0.0 {
+            return Self::point(0.0);
+        }
+        if M::VULKAN {
+            // Inherited from 1/inversesqrt(x); sqrt(0) = 0 (module docs).
+            let inv = Self::out(
+                1.0 / hi.sqrt(),
+                if lo > 0.0 {
+                    1.0 / lo.sqrt()
+                } else {
+                    f64::INFINITY
+                },
+                0.0,
+            )
+            .widen_ulps(VK_INVERSESQRT_ULP);
+            let inv = Self::new(inv.lo.max(0.0), inv.hi);
+            let r = Self::lit(1.0) / inv;
+            Self::new(r.lo.max(0.0), r.hi)
+        } else {
+            let c = |x: f64| {
+                let q = x.sqrt();
+                if q == 0.0 || !q.is_finite() {
+                    return (q, 0.0);
+                }
+                (q, (-q).mul_add(q, x))
+            };
+            Self::rounded(&[c(lo), c(hi)])
+        }
+    }
+    fn sin(self) -> Self {
+        let (a, b) = Self::sin_range(self.lo, self.hi);
+        if M::VULKAN {
+            Self::out(a, b, VK_SIN_COS_ABS)
+        } else {
+            Self::out(a, b, LIBM_ULP * ulp32(a.abs().max(b.abs())))
+        }
+    }
+    fn cos(self) -> Self {
+        let (a, b) = Self::cos_range(self.lo, self.hi);
+        if M::VULKAN {
+            Self::out(a, b, VK_SIN_COS_ABS)
+        } else {
+            Self::out(a, b, LIBM_ULP * ulp32(a.abs().max(b.abs())))
+        }
+    }
+    fn tan(self) -> Self {
+        if M::VULKAN {
+            // Inherited from sin/cos.
+            return self.sin() / self.cos();
+        }
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let pole = self.lo.is_infinite()
+            || self.hi.is_infinite()
+            || ((self.lo - FRAC_PI_2) / PI).ceil() <= ((self.hi - FRAC_PI_2) / PI).floor();
+        if pole {
+            return Self::new(f64::NEG_INFINITY, f64::INFINITY);
+        }
+        let (a, b) = (self.lo.tan(), self.hi.tan());
+        Self::out(a, b, LIBM_ULP * ulp32(a.abs().max(b.abs())))
+    }
+    fn atan(self) -> Self {
+        let (a, b) = (self.lo.atan(), self.hi.atan());
+        let ulps = if M::VULKAN { VK_ATAN_ULP } else { LIBM_ULP };
+        Self::out(a, b, ulps * ulp32(a.abs().max(b.abs())))
+    }
+    fn atan2(self, x: Self) -> Self {
+        let (a, b) = Self::atan2_range(self, x);
+        let ulps = if M::VULKAN { VK_ATAN_ULP } else { LIBM_ULP };
+        Self::out(a, b, ulps * ulp32(a.abs().max(b.abs())))
+    }
+    fn acos(self) -> Self {
+        if M::VULKAN {
+            // Inherited from atan(sqrt(1 - x·x), x).
+            let one = Self::lit(1.0);
+            return (one - self * self).sqrt().atan2(self);
+        }
+        let (a, b) = (
+            self.hi.clamp(-1.0, 1.0).acos(),
+            self.lo.clamp(-1.0, 1.0).acos(),
+        );
+        Self::out(a, b, LIBM_ULP * ulp32(b.abs()))
+    }
+    fn exp2(self) -> Self {
+        let (a, b) = (self.lo.exp2(), self.hi.exp2());
+        let ulps = if M::VULKAN {
+            3.0 + 2.0 * self.mag()
+        } else {
+            LIBM_ULP
+        };
+        let r = Self::out(a, b, ulps * ulp32(a.abs().max(b.abs())));
+        Self::new(r.lo.max(0.0), r.hi)
+    }
+    fn log2(self) -> Self {
+        if self.hi < 0.0 {
+            return Self::new(f64::NEG_INFINITY, f64::INFINITY); // undefined
+        }
+        let a = if self.lo > 0.0 {
+            self.lo.log2()
+        } else {
+            f64::NEG_INFINITY
+        };
+        let b = self.hi.log2();
+        let m = a.abs().max(b.abs());
+        let abs = if M::VULKAN {
+            let near_one = self.lo <= 2.0 && self.hi >= 0.5;
+            VK_LOG2_ULP * ulp32(m) + if near_one { VK_LOG2_ABS } else { 0.0 }
+        } else {
+            LIBM_ULP * ulp32(m)
+        };
+        Self::out(a, b, abs)
+    }
+    fn pow(self, y: Self) -> Self {
+        // For x ≥ 0 and y > 0 (the only uses): pow(0, y) = 0.
+        debug_assert!(y.lo > 0.0);
+        if self.hi <= 0.0 {
+            return Self::point(0.0);
+        }
+        let with_zero = self.lo <= 0.0;
+        let x = Self::new(self.lo.max(2f64.powi(-149)), self.hi);
+        let r = if M::VULKAN {
+            // Inherited from exp2(y·log2(x)).
+            (y * x.log2()).exp2()
+        } else {
+            let c = [
+                x.lo.powf(y.lo),
+                x.lo.powf(y.hi),
+                x.hi.powf(y.lo),
+                x.hi.powf(y.hi),
+            ];
+            let (a, b) = c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, &v| {
+                (r.0.min(v), r.1.max(v))
+            });
+            Self::out(a, b, LIBM_ULP * ulp32(a.abs().max(b.abs())))
+        };
+        if with_zero {
+            r.hull(Self::point(0.0))
+        } else {
+            r
+        }
+    }
+    fn floor(self) -> Self {
+        Self::new(self.lo.floor(), self.hi.floor())
+    }
+    fn min(self, o: Self) -> Self {
+        Self::new(self.lo.min(o.lo), self.hi.min(o.hi))
+    }
+    fn max(self, o: Self) -> Self {
+        Self::new(self.lo.max(o.lo), self.hi.max(o.hi))
+    }
+    fn mul_square(self, x: Self) -> Self {
+        // (self·x)·x = self·x²·(1+δ1)(1+δ2): the exact self·x² widened by two roundings.
+        let sq = if x.lo <= 0.0 && x.hi >= 0.0 {
+            (0.0, x.mag() * x.mag())
+        } else {
+            let (a, b) = (x.lo * x.lo, x.hi * x.hi);
+            (a.min(b), a.max(b))
+        };
+        let c = [
+            self.lo * sq.0,
+            self.lo * sq.1,
+            self.hi * sq.0,
+            self.hi * sq.1,
+        ];
+        let (a, b) = c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, &v| {
+            let v = if v.is_nan() { 0.0 } else { v };
+            (r.0.min(v), r.1.max(v))
+        });
+        Self::out(a, b, 0.0).widen_ulps(2.0)
+    }
+    fn dot3(a: [Self; 3], b: [Self; 3]) -> Self {
+        Self::sum(&[a[0] * b[0], a[1] * b[1], a[2] * b[2]])
+    }
+    fn sum(terms: &[Self]) -> Self {
+        // Any order: each of the n-1 additions rounds a partial sum no larger than the sum of the
+        // terms' magnitudes.
+        let (mut lo, mut hi, mut mag) = (0.0f64, 0.0f64, 0.0f64);
+        for t in terms {
+            lo += t.lo;
+            hi += t.hi;
+            mag += t.mag();
+        }
+        let n = terms.len().saturating_sub(1) as f64;
+        Self::out(lo, hi, n * ulp32(mag))
+    }
+    fn exact(self) -> f64 {
+        debug_assert!(self.lo == self.hi, "a branch on an inexact value");
+        self.lo
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The formulas, generic: line for line the GLSL.
+// ---------------------------------------------------------------------------------------------
+
+/// The functions of `glsl/include/ibl.glsl` and `glsl/include/cube.glsl`, line for line, over any
+/// [`Real`]. At f32 they are the twins.
+pub mod formula {
+    use super::Real;
+    use std::f64::consts::PI;
+
+    /// `IBL_PI` (the GLSL literal rounds π to f32).
+    pub fn pi<T: Real>() -> T {
+        T::ideal(std::f32::consts::PI, PI)
+    }
+
+    /// `env_dir` (ibl.glsl).
+    pub fn env_dir<T: Real>(w: [T; 3], r0: [T; 3], r1: [T; 3], r2: [T; 3]) -> [T; 3] {
+        [T::dot3(r0, w), T::dot3(r1, w), T::dot3(r2, w)]
+    }
+
+    /// `sh_irradiance` (ibl.glsl); its twin is [`crate::env::sh_eval`].
+    pub fn sh_irradiance<T: Real>(sh: &[[T; 3]; 9], n: [T; 3]) -> [T; 3] {
+        let [x, y, z] = n;
+        let c = |glsl: f32, ideal: f64| T::ideal(glsl, ideal);
+        let b = [
+            c(0.282_094_8, 0.282_094_791_773_878_1),
+            c(0.488_602_5, 0.488_602_511_902_919_9) * y,
+            c(0.488_602_5, 0.488_602_511_902_919_9) * z,
+            c(0.488_602_5, 0.488_602_511_902_919_9) * x,
+            c(1.092_548_4, 1.092_548_430_592_079_2) * x * y,
+            c(1.092_548_4, 1.092_548_430_592_079_2) * y * z,
+            c(0.315_391_6, 0.315_391_565_252_52) * (T::lit(3.0) * z * z - T::lit(1.0)),
+            c(1.092_548_4, 1.092_548_430_592_079_2) * x * z,
+            c(0.546_274_2, 0.546_274_215_296_039_6) * (x * x - y * y),
+        ];
+        let mut e = [T::lit(0.0); 3];
+        for (ch, out) in e.iter_mut().enumerate() {
+            let terms: Vec<T> = (0..9).map(|k| sh[k][ch] * b[k]).collect();
+            *out = T::sum(&terms).max(T::lit(0.0));
+        }
+        e
+    }
+
+    /// `hammersley` (ibl.glsl); its twin is [`crate::env::hammersley`] (f64).
+    pub fn hammersley<T: Real>(i: u32, n: u32) -> [T; 2] {
+        [
+            T::from_u32(i) / T::from_u32(n),
+            T::from_u32(i.reverse_bits()) * T::lit(2.328_306_4e-10),
+        ]
+    }
+
+    /// `ggx_sample_h` (ibl.glsl).
+    pub fn ggx_sample_h<T: Real>(xi: [T; 2], alpha: T) -> [T; 3] {
+        let one = T::lit(1.0);
+        let a2 = alpha * alpha;
+        let phi = T::lit(2.0) * pi::<T>() * xi[0];
+        let cos_t = ((one - xi[1]) / (one + (a2 - one) * xi[1])).sqrt();
+        let sin_t = (one - cos_t * cos_t).max(T::lit(0.0)).sqrt();
+        [sin_t * phi.cos(), sin_t * phi.sin(), cos_t]
+    }
+
+    /// `as_sample_h` (ibl.glsl).
+    pub fn as_sample_h<T: Real>(xi: [T; 2], eu: T, ev: T) -> [T; 3] {
+        let one = T::lit(1.0);
+        let q = (T::lit(4.0) * xi[0])
+            .floor()
+            .clamp(T::lit(0.0), T::lit(3.0));
+        let r = T::lit(4.0) * xi[0] - q;
+        let phi0 = (((eu + one) / (ev + one)).sqrt()
+            * (T::lit(0.5) * pi::<T>() * r.min(T::lit(0.999_999_9))).tan())
+        .atan();
+        let qv = q.exact();
+        let phi = if qv == 0.0 {
+            phi0
+        } else if qv == 1.0 {
+            pi::<T>() - phi0
+        } else if qv == 2.0 {
+            pi::<T>() + phi0
+        } else {
+            T::lit(2.0) * pi::<T>() - phi0
+        };
+        let cp = phi.cos();
+        let sp = phi.sin();
+        let cos_t = xi[1]
+            .max(T::lit(1e-30))
+            .pow(one / (eu.mul_square(cp) + ev.mul_square(sp) + one));
+        let sin_t = (one - cos_t * cos_t).max(T::lit(0.0)).sqrt();
+        [sin_t * cp, sin_t * sp, cos_t]
+    }
+
+    /// `cosine_sample` (ibl.glsl).
+    pub fn cosine_sample<T: Real>(xi: [T; 2]) -> [T; 3] {
+        let r = xi[0].sqrt();
+        let phi = T::lit(2.0) * pi::<T>() * xi[1];
+        [
+            r * phi.cos(),
+            r * phi.sin(),
+            (T::lit(1.0) - xi[0]).max(T::lit(0.0)).sqrt(),
+        ]
+    }
+
+    /// `fis_lod` (ibl.glsl).
+    pub fn fis_lod<T: Real>(pdf: T, n: u32, size: T) -> T {
+        let omega_s = T::lit(1.0) / (T::from_u32(n) * pdf.max(T::lit(1e-30)));
+        let omega_p = T::lit(4.0) * pi::<T>() / (T::lit(6.0) * size * size);
+        (T::lit(0.5) * (omega_s / omega_p).log2()).max(T::lit(0.0))
+    }
+
+    /// `specular_occlusion` (ibl.glsl).
+    pub fn specular_occlusion<T: Real>(nv: T, ao: T, roughness: T) -> T {
+        let e = (T::lit(-16.0) * roughness - T::lit(1.0)).exp2();
+        ((nv + ao).max(T::lit(0.0)).pow(e) - T::lit(1.0) + ao).clamp(T::lit(0.0), T::lit(1.0))
+    }
+
+    /// `fabric_diffuse_albedo` (ibl.glsl), from the material's `rs` and `flags`.
+    pub fn fabric_diffuse_albedo<T: Real>(rs: T, flags: u32, nk2: T) -> T {
+        let one = T::lit(1.0);
+        if flags & crate::fabric::FLAG_COUPLED_DIFFUSE == 0 {
+            return one;
+        }
+        let b = one - T::lit(0.5) * nk2.clamp(T::lit(0.0), one);
+        let b2 = b * b;
+        (one - rs) * (one - b2 * b2 * b)
+    }
+
+    /// `cube_texel_dir` (cube.glsl); its twin is
+    /// [`crate::render::environment::cube_texel_dir`].
+    pub fn cube_texel_dir<T: Real>(face: u32, x: u32, y: u32, size: u32) -> [T; 3] {
+        let st =
+            |t: u32| (T::from_u32(t) + T::lit(0.5)) / T::from_u32(size) * T::lit(2.0) - T::lit(1.0);
+        let (s, t) = (st(x), st(y));
+        let one = T::lit(1.0);
+        let d = match face {
+            0 => [one, -t, -s],
+            1 => [-one, -t, s],
+            2 => [s, one, t],
+            3 => [s, -one, -t],
+            4 => [s, -t, one],
+            _ => [-s, -t, -one],
+        };
+        // normalize(d): inherited from d / sqrt(dot(d, d)).
+        let l = T::dot3(d, d).sqrt();
+        [d[0] / l, d[1] / l, d[2] / l]
+    }
+
+    /// `equirect_uv` (cube.glsl): u in [0, 1] (not wrapped, unlike [`crate::env::dir_to_uv`]).
+    pub fn equirect_uv<T: Real>(d: [T; 3]) -> [T; 2] {
+        let two_pi = T::ideal(2.0 * std::f32::consts::PI, 2.0 * PI);
+        let u = T::lit(0.5) + d[0].atan2(-d[2]) / two_pi;
+        let v = d[1].clamp(T::lit(-1.0), T::lit(1.0)).acos() / pi::<T>();
+        [u, v]
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The f32 twins.
+// ---------------------------------------------------------------------------------------------
+
+/// `env_dir` of ibl.glsl: the environment direction of world direction `w`, from the rows of
+/// [`crate::env::env_from_world`].
+pub fn env_dir(w: [f32; 3], rows: &[[f32; 3]; 3]) -> [f32; 3] {
+    formula::env_dir(w, rows[0], rows[1], rows[2])
+}
+
+/// `ggx_sample_h` of ibl.glsl: a GGX half vector in the local frame, pdf D(h)·h.z.
+pub fn ggx_sample_h(xi: [f32; 2], alpha: f32) -> [f32; 3] {
+    formula::ggx_sample_h(xi, alpha)
+}
+
+/// `as_sample_h` of ibl.glsl: an A–S half vector in the local frame (the f32 twin of
+/// [`super::brdf::sampling::sample_h`], with the GLSL's clamps: `r ≤ 0.9999999`, `xi.y ≥ 1e-30`).
+pub fn as_sample_h(xi: [f32; 2], eu: f32, ev: f32) -> [f32; 3] {
+    formula::as_sample_h(xi, eu, ev)
+}
+
+/// `cosine_sample` of ibl.glsl: a cosine-distributed direction in the local frame.
+pub fn cosine_sample(xi: [f32; 2]) -> [f32; 3] {
+    formula::cosine_sample(xi)
+}
+
+/// `fis_lod` of ibl.glsl: the filtered-importance-sampling mip level.
+pub fn fis_lod(pdf: f32, n: u32, size: f32) -> f32 {
+    formula::fis_lod(pdf, n, size)
+}
+
+/// `specular_occlusion` of ibl.glsl (Lagarde & de Rousiers 2014).
+pub fn specular_occlusion(nv: f32, ao: f32, roughness: f32) -> f32 {
+    formula::specular_occlusion(nv, ao, roughness)
+}
+
+/// `fabric_diffuse_albedo` of ibl.glsl.
+pub fn fabric_diffuse_albedo(f: &GpuFabric, nk2: f32) -> f32 {
+    formula::fabric_diffuse_albedo(f.rs, f.flags, nk2)
+}
+
+/// `equirect_uv` of cube.glsl.
+pub fn equirect_uv(d: [f32; 3]) -> [f32; 2] {
+    formula::equirect_uv(d)
+}
+
+// ---------------------------------------------------------------------------------------------
+// The probe on the CPU, and its bounds.
+// ---------------------------------------------------------------------------------------------
+
+fn xyz(v: [f32; 4]) -> [f32; 3] {
+    [v[0], v[1], v[2]]
+}
+
+/// What `glsl/ibl_probe.comp` computes, by the twins (the existing ones where they exist:
+/// `sh_eval`, `hammersley` (f64, rounded to f32 here), `cube_texel_dir`).
+pub fn ibl_probe_cpu(inp: &IblProbeInput) -> IblProbeOutput {
+    let v4 = |v: [f32; 3], w: f32| [v[0], v[1], v[2], w];
+    let rows = [xyz(inp.rot[0]), xyz(inp.rot[1]), xyz(inp.rot[2])];
+    let sh: [[f32; 3]; 9] = std::array::from_fn(|k| xyz(inp.sh[k]));
+    let xi = [inp.xi[0], inp.xi[1]];
+    let (hx, hy) = crate::env::hammersley(inp.counts[0], inp.counts[1]);
+    let uv = equirect_uv(xyz(inp.dir));
+    let c = inp.cube;
+    IblProbeOutput {
+        env_dir: v4(env_dir(xyz(inp.world), &rows), 0.0),
+        irradiance: v4(crate::env::sh_eval(&sh, xyz(inp.normal)), 0.0),
+        ggx: v4(ggx_sample_h(xi, inp.lobe[0]), 0.0),
+        as_h: v4(as_sample_h(xi, inp.lobe[1], inp.lobe[2]), 0.0),
+        cosine: v4(cosine_sample(xi), 0.0),
+        cube: v4(
+            crate::render::environment::cube_texel_dir(c[0], c[1], c[2], c[3]),
+            0.0,
+        ),
+        uv: [hx as f32, hy as f32, uv[0], uv[1]],
+        scalars: [
+            fis_lod(inp.lod[0], inp.counts[2], inp.lod[1]),
+            specular_occlusion(inp.lod[2], inp.lod[3], inp.misc[0]),
+            fabric_diffuse_albedo(&inp.fabric, inp.misc[1]),
+            0.0,
+        ],
+    }
+}
+
+/// The probe's formulas at any [`Real`], from the input's f32 values (in memory order of
+/// [`IblProbeOutput`]): at f64 the exact formulas, at [`Iv`] the bounds.
+pub fn ibl_probe_eval<T: Real>(inp: &IblProbeInput) -> [T; IBL_PROBE_OUTPUTS] {
+    let l = |x: f32| T::lit(x);
+    let v3 = |v: [f32; 4]| [l(v[0]), l(v[1]), l(v[2])];
+    let zero = l(0.0);
+    let xi = [l(inp.xi[0]), l(inp.xi[1])];
+    let sh: [[T; 3]; 9] = std::array::from_fn(|k| v3(inp.sh[k]));
+    let e = formula::env_dir(
+        v3(inp.world),
+        v3(inp.rot[0]),
+        v3(inp.rot[1]),
+        v3(inp.rot[2]),
+    );
+    let irr = formula::sh_irradiance(&sh, v3(inp.normal));
+    let g = formula::ggx_sample_h(xi, l(inp.lobe[0]));
+    let a = formula::as_sample_h(xi, l(inp.lobe[1]), l(inp.lobe[2]));
+    let cs = formula::cosine_sample(xi);
+    let c = inp.cube;
+    let cube = formula::cube_texel_dir::<T>(c[0], c[1], c[2], c[3]);
+    let h = formula::hammersley::<T>(inp.counts[0], inp.counts[1]);
+    let uv = formula::equirect_uv(v3(inp.dir));
+    [
+        e[0],
+        e[1],
+        e[2],
+        zero,
+        irr[0],
+        irr[1],
+        irr[2],
+        zero,
+        g[0],
+        g[1],
+        g[2],
+        zero,
+        a[0],
+        a[1],
+        a[2],
+        zero,
+        cs[0],
+        cs[1],
+        cs[2],
+        zero,
+        cube[0],
+        cube[1],
+        cube[2],
+        zero,
+        h[0],
+        h[1],
+        uv[0],
+        uv[1],
+        formula::fis_lod(l(inp.lod[0]), inp.counts[2], l(inp.lod[1])),
+        formula::specular_occlusion(l(inp.lod[2]), l(inp.lod[3]), l(inp.misc[0])),
+        formula::fabric_diffuse_albedo(l(inp.fabric.rs), inp.fabric.flags, l(inp.misc[1])),
+        zero,
+    ]
+}
+
+/// The enclosure of each output of `inp` under model `M` (see the module docs).
+pub fn ibl_probe_bounds<M: Model>(inp: &IblProbeInput) -> [Iv<M>; IBL_PROBE_OUTPUTS] {
+    ibl_probe_eval::<Iv<M>>(inp)
+}
+
+/// `x` moved by a whole number of periods (1: u of the equirect map) next to `near`.
+pub fn unwrap_near(x: f64, near: f64) -> f64 {
+    x + (near - x).round()
+}
+
+/// `|got - twin|` as a fraction of the bound's width `hi - lo` (the largest difference two
+/// values inside it can have), modulo 1 for `circular`: 0 when equal, infinite when `got` is not
+/// finite or the bound is a single value that `got` misses. Whether `got` lies inside is
+/// [`in_bound`]'s question.
+pub fn bound_fraction<M: Model>(bound: Iv<M>, twin: f64, got: f64, circular: bool) -> f64 {
+    if !got.is_finite() {
+        return f64::INFINITY;
+    }
+    let d = if circular {
+        let d = (got - twin).rem_euclid(1.0);
+        d.min(1.0 - d)
+    } else {
+        (got - twin).abs()
+    };
+    if d == 0.0 {
+        0.0
+    } else if bound.width() > 0.0 {
+        d / bound.width()
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Whether `x` lies in `bound`, modulo 1 for `circular`, with a relative slack `slack` (for f64
+/// values, whose own rounding the f32 enclosure need not contain).
+pub fn in_bound<M: Model>(bound: Iv<M>, x: f64, circular: bool, slack: f64) -> bool {
+    if !x.is_finite() {
+        return false;
+    }
+    let x = if circular && bound.lo.is_finite() && bound.hi.is_finite() {
+        unwrap_near(x, 0.5 * (bound.lo + bound.hi))
+    } else {
+        x
+    };
+    let s = slack * x.abs().max(1e-300);
+    bound.lo - s <= x && x <= bound.hi + s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn outward_rounding_is_exact_on_f32_values() {
+        let one = Iv::<CpuF32>::lit(1.0);
+        let y = Iv::<CpuF32>::lit(0.75);
+        // 1 - 0.75 is exact in f32.
+        assert_eq!(one - y, Iv::point(0.25));
+        // 1 + 2^-30 is not: the enclosure is the two f32 neighbours.
+        let r = one + Iv::lit(2f32.powi(-30));
+        assert_eq!((r.lo, r.hi), (1.0, 1.0 + f32::EPSILON as f64));
+        let third = Iv::<CpuF32>::lit(1.0) / Iv::lit(3.0);
+        assert!(third.contains((1.0f32 / 3.0) as f64) && third.width() <= 6e-8);
+        assert!(Iv::<Vulkan>::lit(2.0).sqrt().contains(2f64.sqrt()));
+    }
+
+    #[test]
+    fn twins_lie_in_their_tight_bounds() {
+        for (xi, e) in [
+            ([0.1f32, 0.7f32], (10.0f32, 1000.0f32)),
+            ([0.2499999, 0.999_999_9], (1.0, 1.0)),
+            ([0.75, 0.0], (1e4, 1.0)),
+        ] {
+            let t = as_sample_h(xi, e.0, e.1);
+            let b = formula::as_sample_h(
+                [Iv::<CpuF32>::lit(xi[0]), Iv::lit(xi[1])],
+                Iv::lit(e.0),
+                Iv::lit(e.1),
+            );
+            for k in 0..3 {
+                assert!(
+                    b[k].contains(t[k] as f64),
+                    "{xi:?} {e:?} {k}: {} {:?}",
+                    t[k],
+                    b[k]
+                );
+            }
+        }
+    }
+}
