@@ -3,8 +3,9 @@
 // the filtered-importance-sampling mip level (Křivánek & Colbert 2008).
 //
 // Rust twins: weft::env (sh_eval, hammersley, env_from_world, the equirect convention) and
-// weft::reference::ibl (the samplers, fis_lod and the estimators, f32). Cube faces are in env
-// space: a world direction w is looked up at env_dir(w).
+// weft::reference::ibl_twin (the samplers, fis_lod, specular_occlusion, f32; compared on the GPU
+// by tests/ibl_probe_gpu.rs). Cube faces are in env space: a world direction w is looked up at
+// env_dir(w).
 #ifndef WEFT_IBL_GLSL
 #define WEFT_IBL_GLSL
 
@@ -40,24 +41,31 @@ vec2 hammersley(uint i, uint n) {
 }
 
 // A GGX half vector in the local frame (z = n) with pdf D(h)·h.z, alpha = roughness².
+// cos²θ = (1 - y)/((1 - y) + a²y) and sin²θ = a²y/((1 - y) + a²y), each without cancellation
+// (1 - cos²θ loses half its digits when the lobe is narrow).
 vec3 ggx_sample_h(vec2 xi, float alpha) {
     float a2 = alpha * alpha;
     float phi = 2.0 * IBL_PI * xi.x;
-    float cos_t = sqrt((1.0 - xi.y) / (1.0 + (a2 - 1.0) * xi.y));
-    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    float den = (1.0 - xi.y) + a2 * xi.y;
+    float cos_t = sqrt((1.0 - xi.y) / den);
+    float sin_t = sqrt(a2 * xi.y / den);
     return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }
 
 // An A–S half vector in the local frame with pdf as_d(h, eu, ev) (weft::reference::brdf::sampling
-// ::sample_h): φ in the quadrant floor(4·xi.x), cos θ = xi.y^(1/(eu cos²φ + ev sin²φ + 1)).
+// ::sample_h): φ0 = atan(k·tan(πr/2)), k = sqrt((eu+1)/(ev+1)), mirrored to the quadrant
+// floor(4·xi.x); cos θ = xi.y^(1/(eu cos²φ + ev sin²φ + 1)). (cos φ0, sin φ0) is taken as the
+// direction of (cos x, k·sin x), x = πr/2: no tan (unbounded error near π/2 under Vulkan's
+// precision rules), no atan, no trigonometry of φ afterwards.
 vec3 as_sample_h(vec2 xi, float eu, float ev) {
     float q = clamp(floor(4.0 * xi.x), 0.0, 3.0);
     float r = 4.0 * xi.x - q;
-    // r < 1, so tan(πr/2) is finite; clamp keeps it finite in f32 too.
-    float phi0 = atan(sqrt((eu + 1.0) / (ev + 1.0)) * tan(0.5 * IBL_PI * min(r, 0.9999999)));
-    float phi = q == 0.0 ? phi0 : (q == 1.0 ? IBL_PI - phi0 : (q == 2.0 ? IBL_PI + phi0 : 2.0 * IBL_PI - phi0));
-    float cp = cos(phi);
-    float sp = sin(phi);
+    float x = 0.5 * IBL_PI * min(r, 0.9999999);
+    float k = sqrt((eu + 1.0) / (ev + 1.0));
+    vec2 d = vec2(max(cos(x), 0.0), k * sin(x));
+    d = d / sqrt(max(dot(d, d), 1e-30));
+    float cp = (q == 1.0 || q == 2.0) ? -d.x : d.x;
+    float sp = q >= 2.0 ? -d.y : d.y;
     float cos_t = pow(max(xi.y, 1e-30), 1.0 / (eu * cp * cp + ev * sp * sp + 1.0));
     float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
     return vec3(sin_t * cp, sin_t * sp, cos_t);

@@ -962,37 +962,35 @@ pub mod formula {
         let one = T::lit(1.0);
         let a2 = alpha * alpha;
         let phi = T::lit(2.0) * pi::<T>() * xi[0];
-        let cos_t = ((one - xi[1]) / (one + (a2 - one) * xi[1])).sqrt();
-        let sin_t = (one - cos_t * cos_t).max(T::lit(0.0)).sqrt();
+        let den = (one - xi[1]) + a2 * xi[1];
+        let cos_t = ((one - xi[1]) / den).sqrt();
+        let sin_t = (a2 * xi[1] / den).sqrt();
         [sin_t * phi.cos(), sin_t * phi.sin(), cos_t]
     }
 
     /// `as_sample_h` (ibl.glsl).
     pub fn as_sample_h<T: Real>(xi: [T; 2], eu: T, ev: T) -> [T; 3] {
         let one = T::lit(1.0);
-        let q = (T::lit(4.0) * xi[0])
-            .floor()
-            .clamp(T::lit(0.0), T::lit(3.0));
+        let zero = T::lit(0.0);
+        let q = (T::lit(4.0) * xi[0]).floor().clamp(zero, T::lit(3.0));
         let r = T::lit(4.0) * xi[0] - q;
-        let phi0 = (((eu + one) / (ev + one)).sqrt()
-            * (T::lit(0.5) * pi::<T>() * r.min(T::lit(0.999_999_9))).tan())
-        .atan();
+        let x = T::lit(0.5) * pi::<T>() * r.min(T::lit(0.999_999_9));
+        let k = ((eu + one) / (ev + one)).sqrt();
+        let dx = x.cos().max(zero);
+        let dy = k * x.sin();
+        let len = (dx * dx + dy * dy).max(T::lit(1e-30)).sqrt();
+        let (dx, dy) = (dx / len, dy / len);
         let qv = q.exact();
-        let phi = if qv == 0.0 {
-            phi0
-        } else if qv == 1.0 {
-            pi::<T>() - phi0
-        } else if qv == 2.0 {
-            pi::<T>() + phi0
+        let cp = if qv == 1.0 || qv == 2.0 {
+            zero - dx
         } else {
-            T::lit(2.0) * pi::<T>() - phi0
+            dx
         };
-        let cp = phi.cos();
-        let sp = phi.sin();
+        let sp = if qv >= 2.0 { zero - dy } else { dy };
         let cos_t = xi[1]
             .max(T::lit(1e-30))
             .pow(one / (eu.mul_square(cp) + ev.mul_square(sp) + one));
-        let sin_t = (one - cos_t * cos_t).max(T::lit(0.0)).sqrt();
+        let sin_t = (one - cos_t * cos_t).max(zero).sqrt();
         [sin_t * cp, sin_t * sp, cos_t]
     }
 
