@@ -1,21 +1,39 @@
-//! Compiles every shader under `glsl/` (`*.vert`, `*.frag`, `*.comp`) to SPIR-V with shaderc
-//! (glslang, built from source and pinned by Cargo.lock), and writes `shaders.rs` into OUT_DIR:
-//! one `Shader` constant per module, with its SPIR-V words embedded in the binary.
+//! Embeds the SPIR-V of every shader under `glsl/` (`*.vert`, `*.frag`, `*.comp`) and writes
+//! `shaders.rs` into OUT_DIR: one `Shader` constant per module.
 //!
-//! Includes resolve from `glsl/include/`. Warnings are errors. A GLSL error fails the build with
-//! the file and line as glslang reports them.
+//! The SPIR-V is compiled by shaderc (glslang and SPIRV-Tools, pinned by Cargo.lock), the compiler
+//! of record, and kept in the repository under `glsl/spirv/` with a SHA-256 of the sources it was
+//! compiled from (`glsl/spirv/SOURCES`), so a plain build needs no shader compiler (the first
+//! build of weft takes minutes, not the quarter of an hour shaderc's from-source build takes):
+//!
+//! - default: the kept SPIR-V is embedded; if `glsl/` no longer matches `SOURCES`, the build fails
+//!   and says to run `tools/compile-shaders`;
+//! - `--features compile-shaders`: every module is compiled with shaderc (warnings are errors,
+//!   includes from `glsl/include/`, Vulkan 1.3 / SPIR-V 1.6, performance optimisation) and
+//!   compared byte for byte with the kept SPIR-V: any difference fails the build (tools/test runs
+//!   this check, as wgpu checks its naga snapshots); with `WEFT_WRITE_SPIRV=1` the fresh SPIR-V
+//!   is written to `glsl/spirv/` instead (`tools/compile-shaders`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+
+/// Everything about the compilation that changes the output besides the sources and the
+/// compiler version.
+const SETTINGS: &str = "target vulkan1.3 spirv1.6, optimization performance, warnings as errors, entry main";
 
 fn main() {
     let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     let glsl = root.join("glsl");
     let include_dir = glsl.join("include");
+    let kept = glsl.join("spirv");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed={}", glsl.display());
     println!("cargo:rerun-if-changed={}", include_dir.display());
+    println!("cargo:rerun-if-changed={}", kept.display());
     println!("cargo:rerun-if-changed=Cargo.lock");
+    println!("cargo:rerun-if-env-changed=WEFT_WRITE_SPIRV");
 
     let mut sources: Vec<PathBuf> = std::fs::read_dir(&glsl)
         .expect("glsl/ must exist")
@@ -23,17 +41,125 @@ fn main() {
         .filter(|p| matches!(ext(p), "vert" | "frag" | "comp"))
         .collect();
     sources.sort();
-    for entry in std::fs::read_dir(&include_dir).expect("glsl/include/ must exist") {
-        println!("cargo:rerun-if-changed={}", entry.unwrap().path().display());
+    let mut includes: Vec<PathBuf> = std::fs::read_dir(&include_dir)
+        .expect("glsl/include/ must exist")
+        .map(|e| e.expect("readable glsl/include/ entry").path())
+        .collect();
+    includes.sort();
+    for p in sources.iter().chain(&includes) {
+        println!("cargo:rerun-if-changed={}", p.display());
+    }
+    let compiler = compiler_version(&root);
+    let digest = sources_digest(&sources, &includes, &compiler);
+    let names: Vec<String> = sources
+        .iter()
+        .map(|s| s.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+
+    #[cfg(feature = "compile-shaders")]
+    {
+        let fresh = compile_all(&sources, &include_dir);
+        if std::env::var("WEFT_WRITE_SPIRV").is_ok_and(|v| v == "1") {
+            let _ = std::fs::remove_dir_all(&kept);
+            std::fs::create_dir_all(&kept).expect("create glsl/spirv/");
+            for (name, bytes) in names.iter().zip(&fresh) {
+                std::fs::write(kept.join(format!("{name}.spv")), bytes).expect("write kept SPIR-V");
+            }
+            std::fs::write(kept.join("SOURCES"), format!("{digest}\n{compiler}\n"))
+                .expect("write glsl/spirv/SOURCES");
+        } else {
+            for (name, bytes) in names.iter().zip(&fresh) {
+                let kept_bytes = std::fs::read(kept.join(format!("{name}.spv"))).unwrap_or_default();
+                if &kept_bytes != bytes {
+                    panic!(
+                        "the kept SPIR-V of glsl/{name} (glsl/spirv/{name}.spv) differs from a fresh shaderc compile: run tools/compile-shaders and commit glsl/spirv/"
+                    );
+                }
+            }
+        }
     }
 
-    let compiler = shaderc::Compiler::new().expect("shaderc compiler");
+    let recorded = std::fs::read_to_string(kept.join("SOURCES")).unwrap_or_default();
+    if recorded.lines().next() != Some(digest.as_str()) {
+        panic!(
+            "glsl/ has changed since its SPIR-V was compiled (glsl/spirv/SOURCES records {}, the sources hash to {digest}): run tools/compile-shaders (it compiles every shader with shaderc) and commit glsl/spirv/",
+            recorded.lines().next().unwrap_or("nothing")
+        );
+    }
     let mut table = String::new();
-    writeln!(table, "// Generated by build.rs from glsl/. Do not edit.").unwrap();
-    let mut names = Vec::new();
+    writeln!(table, "// Generated by build.rs from glsl/spirv/. Do not edit.").unwrap();
+    let mut idents = Vec::new();
+    for (src, name) in sources.iter().zip(&names) {
+        let spv = kept.join(format!("{name}.spv"));
+        if !spv.exists() {
+            panic!("glsl/spirv/{name}.spv is missing: run tools/compile-shaders and commit glsl/spirv/");
+        }
+        // A copy in OUT_DIR, so the binary does not depend on the checkout's path at run time.
+        let copy = out.join(format!("{name}.spv"));
+        std::fs::copy(&spv, &copy).expect("copy SPIR-V into OUT_DIR");
+        let ident = name.replace('.', "_").to_uppercase();
+        writeln!(
+            table,
+            "pub const {ident}: Shader = Shader {{ name: \"{name}\", stage: Stage::{stage}, spirv: include_bytes!({copy:?}) }};",
+            stage = match ext(src) { "vert" => "Vertex", "frag" => "Fragment", _ => "Compute" },
+        )
+        .unwrap();
+        idents.push(ident);
+    }
+    writeln!(table, "pub const ALL: &[Shader] = &[{}];", idents.join(", ")).unwrap();
+    writeln!(
+        table,
+        "/// The compiler that made these modules (versions pinned by Cargo.lock)."
+    )
+    .unwrap();
+    writeln!(table, "pub const COMPILER: &str = {compiler:?};").unwrap();
+    std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
+
+    // `weft --version`: the commit and the compilers.
+    let commit = std::process::Command::new("git")
+        .args(["rev-parse", "--short=12", "HEAD"])
+        .current_dir(&root)
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown commit".into());
+    let rustc = std::process::Command::new(std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into()))
+        .arg("--version")
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "rustc unknown".into());
+    println!(
+        "cargo:rustc-env=WEFT_LONG_VERSION={} (commit {commit}; {rustc}; shaders: {compiler})",
+        std::env::var("CARGO_PKG_VERSION").unwrap()
+    );
+    println!("cargo:rerun-if-changed=.git/HEAD");
+}
+
+/// SHA-256 over every source and include (name and bytes), the settings and the compiler.
+fn sources_digest(sources: &[PathBuf], includes: &[PathBuf], compiler: &str) -> String {
+    let mut h = Sha256::new();
+    for p in sources.iter().chain(includes) {
+        let rel = p
+            .strip_prefix(p.parent().and_then(|d| d.parent()).unwrap_or(Path::new("")))
+            .unwrap_or(p);
+        h.update(rel.to_string_lossy().as_bytes());
+        h.update([0]);
+        h.update(std::fs::read(p).expect("readable shader source"));
+        h.update([0]);
+    }
+    h.update(SETTINGS.as_bytes());
+    h.update(compiler.as_bytes());
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[cfg(feature = "compile-shaders")]
+fn compile_all(sources: &[PathBuf], include_dir: &Path) -> Vec<Vec<u8>> {
+    let compiler = shaderc::Compiler::new().expect("shaderc compiler");
+    let mut out = Vec::new();
     let mut failures = Vec::new();
-    for src in &sources {
-        println!("cargo:rerun-if-changed={}", src.display());
+    for src in sources {
         let text = std::fs::read_to_string(src).expect("readable shader source");
         let kind = match ext(src) {
             "vert" => shaderc::ShaderKind::Vertex,
@@ -50,7 +176,7 @@ fn main() {
         options.set_source_language(shaderc::SourceLanguage::GLSL);
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_warnings_as_errors();
-        let inc = include_dir.clone();
+        let inc = include_dir.to_path_buf();
         options.set_include_callback(move |name, _ty, from, _depth| {
             let path = inc.join(name);
             std::fs::read_to_string(&path)
@@ -67,18 +193,7 @@ fn main() {
             "main",
             Some(&options),
         ) {
-            Ok(artifact) => {
-                let ident = file_name.replace('.', "_").to_uppercase();
-                let spv = out.join(format!("{file_name}.spv"));
-                std::fs::write(&spv, artifact.as_binary_u8()).expect("write spv");
-                writeln!(
-                    table,
-                    "pub const {ident}: Shader = Shader {{ name: \"{file_name}\", stage: Stage::{stage}, spirv: include_bytes!({spv:?}) }};",
-                    stage = match ext(src) { "vert" => "Vertex", "frag" => "Fragment", _ => "Compute" },
-                )
-                .unwrap();
-                names.push(ident);
-            }
+            Ok(artifact) => out.push(artifact.as_binary_u8().to_vec()),
             Err(e) => failures.push(format!("{e}")),
         }
     }
@@ -87,19 +202,7 @@ fn main() {
         eprintln!("GLSL compilation failed:\n{}", failures.join("\n"));
         panic!("GLSL compilation failed:\n{}", failures.join("\n"));
     }
-    writeln!(table, "pub const ALL: &[Shader] = &[{}];", names.join(", ")).unwrap();
-    writeln!(
-        table,
-        "/// The compiler that made these modules (versions pinned by Cargo.lock)."
-    )
-    .unwrap();
-    writeln!(
-        table,
-        "pub const COMPILER: &str = {:?};",
-        compiler_version(&root)
-    )
-    .unwrap();
-    std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
+    out
 }
 
 /// "shaderc-sys X (glslang, SPIRV-Tools built from source)", read from Cargo.lock.

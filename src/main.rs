@@ -12,7 +12,7 @@ use weft::vk::{Context, ContextOptions, DeviceChoice};
 #[derive(Parser)]
 #[command(
     name = "weft",
-    version,
+    version = env!("WEFT_LONG_VERSION"),
     about = "A deferred Vulkan renderer for woven fabric"
 )]
 struct Cli {
