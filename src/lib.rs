@@ -3,6 +3,9 @@
 //! Layers, bottom up: `vk` (every `unsafe` Vulkan call), `scene` (glTF into plain data),
 //! `fabric` (the cloth material's parameters and weave patterns), `reference` (the CPU twin of
 //! every shader function), `render` (the plan and the passes of a frame).
+//!
+//! `unsafe` is denied everywhere but in `vk`.
+#![deny(unsafe_code)]
 
 pub mod bench;
 pub mod compare;
@@ -13,6 +16,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod sheet;
+#[allow(unsafe_code)]
 pub mod vk;
 
 mod error;

@@ -1,5 +1,7 @@
 //! The `weft` command line: parses arguments, calls the library, prints.
 
+#![deny(unsafe_code)]
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 

@@ -77,7 +77,9 @@ fn validation_messages_fail_the_frame() {
     // The mechanism every GPU test relies on: a deliberate invalid call must be caught.
     let ctx = common::context();
     assert!(ctx.validating());
-    ctx.provoke_validation_error();
+    // SAFETY: the context was made with validation on (common::context), which catches the
+    // invalid call; nothing else uses the device meanwhile.
+    unsafe { ctx.provoke_validation_error() };
     let err = ctx
         .check_validation()
         .expect_err("the validation layer must report the invalid call");

@@ -115,13 +115,14 @@ impl Cmd<'_> {
         unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
     }
 
-    /// Makes transfer or shader writes to buffers visible to everything after.
+    /// Makes transfer writes to buffers (a readback copy) visible to host reads after the
+    /// submission's fence.
     pub fn buffer_barrier(&mut self) {
         let barrier = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)];
         let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
         unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
     }

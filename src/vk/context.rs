@@ -381,9 +381,13 @@ impl Context {
     }
 
     /// Makes one deliberately invalid call (a buffer with no usage flags, destroyed at once), so a
-    /// test can prove that validation messages are caught. Harmless to the driver.
+    /// test can prove that validation messages are caught.
+    ///
+    /// # Safety
+    /// It breaks a valid-usage rule of `vkCreateBuffer` on purpose: call it only with the
+    /// validation layer on (which reports it instead of letting it reach the driver), in tests.
     #[doc(hidden)]
-    pub fn provoke_validation_error(&self) {
+    pub unsafe fn provoke_validation_error(&self) {
         let info = vk::BufferCreateInfo::default()
             .size(16)
             .usage(vk::BufferUsageFlags::empty());
