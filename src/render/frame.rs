@@ -274,74 +274,108 @@ impl Renderer {
             kind: BindingKind::StorageImage,
             stages: Stages::COMPUTE,
         }])?;
-        let weave_pipeline = ctx.create_compute_pipeline(&ComputeDesc {
-            name: "weave",
-            shader: &shaders::WEAVE_COMP,
-            set_layouts: &[&weave_layout],
-            push_constant_size: std::mem::size_of::<crate::fabric::WeavePush>() as u32,
-            constants: &[],
-        })?;
+        // The environment's pipelines and DFG table on a thread of their own while the others
+        // compile here (drivers compile pipelines on the CPU).
+        let (env, rest) = std::thread::scope(|scope| {
+            let env = scope.spawn(|| super::environment::EnvPasses::new(&ctx));
+            let rest = (|| -> crate::Result<_> {
+                let weave_pipeline = ctx.create_compute_pipeline(&ComputeDesc {
+                    name: "weave",
+                    shader: &shaders::WEAVE_COMP,
+                    set_layouts: &[&weave_layout],
+                    push_constant_size: std::mem::size_of::<crate::fabric::WeavePush>() as u32,
+                    constants: &[],
+                })?;
 
-        let tonemap_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
-            name: "tonemap",
-            vertex: &shaders::FULLSCREEN_VERT,
-            fragment: &shaders::TONEMAP_FRAG,
-            vertex_layout: None,
-            color_formats: &[LDR_FORMAT],
-            depth_format: None,
-            set_layouts: &[&tonemap_layout],
-            push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
-            push_stages: Stages::FRAGMENT,
-            constants: &[],
-        })?;
-        let shadow_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
-            name: "shadow",
-            vertex: &shaders::SHADOW_VERT,
-            fragment: &shaders::SHADOW_FRAG,
-            vertex_layout: Some(VertexLayout {
-                stride: (VERTEX_FLOATS * 4) as u32,
-                attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
-            }),
-            color_formats: &[],
-            depth_format: Some(SHADOW_FORMAT),
-            set_layouts: &[],
-            push_constant_size: std::mem::size_of::<ShadowPush>() as u32,
-            push_stages: Stages::VERTEX,
-            constants: &[],
-        })?;
-        let shadow_sampler = ctx.create_sampler(Filter::ShadowCompare)?;
-        let no_shadows = ctx.create_image(
-            &ImageDesc::new_2d("no shadows", SHADOW_FORMAT, 1, 1)
-                .usage(ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED),
-        )?;
-        ctx.submit(|cmd| {
-            cmd.transition(&no_shadows, Usage::Undefined, Usage::DepthAttachment, None);
-            cmd.begin_rendering(
-                &[],
-                Some(Attachment {
-                    image: &no_shadows,
-                    clear: Some([0.0; 4]),
-                }),
-            );
-            cmd.end_rendering();
-            cmd.transition(
-                &no_shadows,
-                Usage::DepthAttachment,
-                Usage::FragmentRead,
-                None,
-            );
-        })?;
-        let linear = ctx.create_sampler(Filter::LinearRepeat)?;
-        let nearest = ctx.create_sampler(Filter::NearestClamp)?;
-        let white = upload_texture(
-            &ctx,
-            &solid("default white", [255, 255, 255, 255], ColorSpace::Srgb),
-        )?;
-        let flat_normal = upload_texture(
-            &ctx,
-            &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear),
-        )?;
-        let env = super::environment::EnvPasses::new(&ctx)?;
+                let tonemap_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+                    name: "tonemap",
+                    vertex: &shaders::FULLSCREEN_VERT,
+                    fragment: &shaders::TONEMAP_FRAG,
+                    vertex_layout: None,
+                    color_formats: &[LDR_FORMAT],
+                    depth_format: None,
+                    set_layouts: &[&tonemap_layout],
+                    push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
+                    push_stages: Stages::FRAGMENT,
+                    constants: &[],
+                })?;
+                let shadow_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+                    name: "shadow",
+                    vertex: &shaders::SHADOW_VERT,
+                    fragment: &shaders::SHADOW_FRAG,
+                    vertex_layout: Some(VertexLayout {
+                        stride: (VERTEX_FLOATS * 4) as u32,
+                        attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
+                    }),
+                    color_formats: &[],
+                    depth_format: Some(SHADOW_FORMAT),
+                    set_layouts: &[],
+                    push_constant_size: std::mem::size_of::<ShadowPush>() as u32,
+                    push_stages: Stages::VERTEX,
+                    constants: &[],
+                })?;
+                let shadow_sampler = ctx.create_sampler(Filter::ShadowCompare)?;
+                let no_shadows =
+                    ctx.create_image(&ImageDesc::new_2d("no shadows", SHADOW_FORMAT, 1, 1).usage(
+                        ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED,
+                    ))?;
+                ctx.submit(|cmd| {
+                    cmd.transition(&no_shadows, Usage::Undefined, Usage::DepthAttachment, None);
+                    cmd.begin_rendering(
+                        &[],
+                        Some(Attachment {
+                            image: &no_shadows,
+                            clear: Some([0.0; 4]),
+                        }),
+                    );
+                    cmd.end_rendering();
+                    cmd.transition(
+                        &no_shadows,
+                        Usage::DepthAttachment,
+                        Usage::FragmentRead,
+                        None,
+                    );
+                })?;
+                let linear = ctx.create_sampler(Filter::LinearRepeat)?;
+                let nearest = ctx.create_sampler(Filter::NearestClamp)?;
+                let white = upload_texture(
+                    &ctx,
+                    &solid("default white", [255, 255, 255, 255], ColorSpace::Srgb),
+                )?;
+                let flat_normal = upload_texture(
+                    &ctx,
+                    &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear),
+                )?;
+                Ok((
+                    weave_pipeline,
+                    tonemap_pipeline,
+                    shadow_pipeline,
+                    shadow_sampler,
+                    no_shadows,
+                    linear,
+                    nearest,
+                    white,
+                    flat_normal,
+                ))
+            })();
+            (
+                env.join()
+                    .expect("the environment set-up thread does not panic"),
+                rest,
+            )
+        });
+        let env = env?;
+        let (
+            weave_pipeline,
+            tonemap_pipeline,
+            shadow_pipeline,
+            shadow_sampler,
+            no_shadows,
+            linear,
+            nearest,
+            white,
+            flat_normal,
+        ) = rest?;
         Ok(Renderer {
             env,
             env_cache: Vec::new(),
@@ -394,6 +428,21 @@ impl Renderer {
         options: &RenderOptions,
         plan: &Plan,
     ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
+        let (g, l, _) = self.prepare(options, plan, None)?;
+        Ok((g, l))
+    }
+
+    /// The G-buffer and lighting pipeline variants `options` needs, and the environment `env`
+    /// preprocessed if it is not cached: what is missing is made concurrently (the lighting
+    /// pipeline on a thread of its own, the G-buffer pipeline and then the environment on this
+    /// one), since a driver compiles pipelines on the CPU and lavapipe runs the compute passes
+    /// there too. Returns the variants' keys and the environment's index in the cache.
+    fn prepare(
+        &mut self,
+        options: &RenderOptions,
+        plan: &Plan,
+        env: Option<(&crate::env::Environment, &mut Vec<PassTiming>)>,
+    ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>, Option<usize>)> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
         let light_types = if options.force.light_types {
             7
@@ -433,7 +482,15 @@ impl Renderer {
                     .unwrap_or(1),
             ),
         ];
-        if !self.gbuffer_variants.contains_key(&gbuffer_key) {
+        let need_gbuffer = !self.gbuffer_variants.contains_key(&gbuffer_key);
+        let need_lighting = !self.lighting_variants.contains_key(&lighting_key);
+        let (env, timings) = match env {
+            Some((e, t)) => (Some(e), Some(t)),
+            None => (None, None),
+        };
+        let cached_env = env.and_then(|e| self.env_cache.iter().position(|g| g.hash == e.hash()));
+        let need_env = env.filter(|_| cached_env.is_none());
+        let make_gbuffer = || -> crate::Result<Pipeline> {
             let vertex_layout = VertexLayout {
                 stride: (VERTEX_FLOATS * 4) as u32,
                 attributes: vec![
@@ -444,7 +501,7 @@ impl Renderer {
                     (4, Format::R32G32_SFLOAT, 48),
                 ],
             };
-            let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
+            self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
                     "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}]",
                     options.accuracy.code(),
@@ -465,11 +522,10 @@ impl Renderer {
                 push_constant_size: std::mem::size_of::<DrawPush>() as u32,
                 push_stages: Stages::GRAPHICS,
                 constants: &gbuffer_key,
-            })?;
-            self.gbuffer_variants.insert(gbuffer_key.clone(), pipeline);
-        }
-        if !self.lighting_variants.contains_key(&lighting_key) {
-            let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
+            })
+        };
+        let make_lighting = || -> crate::Result<Pipeline> {
+            self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
                     "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}, ibl={}, ibl_samples={}]",
                     options.accuracy.code(),
@@ -489,11 +545,44 @@ impl Renderer {
                 push_constant_size: 0,
                 push_stages: Stages::FRAGMENT,
                 constants: &lighting_key,
-            })?;
-            self.lighting_variants
-                .insert(lighting_key.clone(), pipeline);
+            })
+        };
+        let (gbuffer, lighting, built_env) = std::thread::scope(|scope| {
+            let lighting = need_lighting.then(|| scope.spawn(make_lighting));
+            let gbuffer = need_gbuffer.then(make_gbuffer).transpose();
+            let built_env = need_env.map(|e| self.env.build(&self.ctx, e)).transpose();
+            let lighting = lighting
+                .map(|h| {
+                    h.join()
+                        .expect("the lighting pipeline's thread does not panic")
+                })
+                .transpose();
+            (gbuffer, lighting, built_env)
+        });
+        if let Some(p) = gbuffer? {
+            self.gbuffer_variants.insert(gbuffer_key.clone(), p);
         }
-        Ok((gbuffer_key, lighting_key))
+        if let Some(p) = lighting? {
+            self.lighting_variants.insert(lighting_key.clone(), p);
+        }
+        let env_index = match built_env? {
+            Some(built) => {
+                if let Some(t) = timings {
+                    t.push(PassTiming {
+                        name: "environment",
+                        gpu_ms: None,
+                        wall_ms: built.build_ms,
+                    });
+                }
+                if self.env_cache.len() >= ENV_CACHE {
+                    self.env_cache.remove(0);
+                }
+                self.env_cache.push(built);
+                Some(self.env_cache.len() - 1)
+            }
+            None => cached_env,
+        };
+        Ok((gbuffer_key, lighting_key, env_index))
     }
 
     /// Uploads a scene: geometry, materials, lights and textures (with mip chains).
@@ -667,7 +756,14 @@ impl Renderer {
     ) -> crate::Result<Frame> {
         options.validate()?;
         let plan = Plan::new(scene, options);
-        let (gbuffer_key, lighting_key) = self.variants(options, &plan)?;
+        let mut timings = Vec::new();
+        // Pipelines and the environment (Pass::Environment, preprocessed on first use, then from
+        // the cache), made concurrently.
+        let env = match (&plan.environment, &options.environment) {
+            (Some(_), Some(e)) => Some((e.env.as_ref(), &mut timings)),
+            _ => None,
+        };
+        let (gbuffer_key, lighting_key, env_index) = self.prepare(options, &plan, env)?;
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
             self.targets = None;
@@ -676,12 +772,6 @@ impl Renderer {
         let camera = match &options.camera_override {
             Some(c) => c.clone(),
             None => scene.camera(options.camera)?,
-        };
-        let mut timings = Vec::new();
-        // The environment: preprocessed on first use (Pass::Environment), then from the cache.
-        let env_index = match (&plan.environment, &options.environment) {
-            (Some(_), Some(e)) => Some(self.environment(&e.env, &mut timings)?),
-            _ => None,
         };
         let mut frame_data = FrameData::new(&camera, width, height);
         if let (Some(i), Some(e)) = (env_index, &options.environment) {
@@ -995,30 +1085,6 @@ impl Renderer {
             stats,
             plan,
         })
-    }
-
-    /// The cache index of `env`'s preprocessed form, built (and timed as "environment") if it is
-    /// not cached.
-    fn environment(
-        &mut self,
-        env: &crate::env::Environment,
-        timings: &mut Vec<PassTiming>,
-    ) -> crate::Result<usize> {
-        let hash = env.hash();
-        if let Some(i) = self.env_cache.iter().position(|g| g.hash == hash) {
-            return Ok(i);
-        }
-        let built = self.env.build(&self.ctx, env)?;
-        timings.push(PassTiming {
-            name: "environment",
-            gpu_ms: None,
-            wall_ms: built.build_ms,
-        });
-        if self.env_cache.len() >= ENV_CACHE {
-            self.env_cache.remove(0);
-        }
-        self.env_cache.push(built);
-        Ok(self.env_cache.len() - 1)
     }
 
     /// Builds a weave texture: every mip level computed by weave.comp as the exact coverage of its
