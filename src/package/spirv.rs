@@ -292,6 +292,10 @@ struct Module {
 }
 
 /// Reflects a module given as little-endian bytes.
+/// How deeply types may nest (arrays of structs of arrays ...): far beyond any shader's, and a
+/// bound on the recursion a hostile module's cyclic type ids could cause.
+const MAX_TYPE_DEPTH: u32 = 64;
+
 pub fn reflect(bytes: &[u8]) -> Result<Reflection, String> {
     if bytes.len() % 4 != 0 || bytes.len() < 20 {
         return Err(format!(
@@ -772,6 +776,10 @@ impl Module {
 
     /// (lowest member offset, end of the last byte) of an explicitly laid out struct.
     fn struct_extent(&self, id: u32) -> Result<(u32, u32), String> {
+        self.struct_extent_at(id, 0)
+    }
+
+    fn struct_extent_at(&self, id: u32, depth: u32) -> Result<(u32, u32), String> {
         let Type::Struct { members } = self.ty(id)? else {
             return Err(format!("%{id} is not a struct"));
         };
@@ -782,32 +790,54 @@ impl Module {
                 .decorations
                 .member(id, k, DEC_OFFSET)
                 .ok_or(format!("member {k} of %{id} has no Offset"))?;
-            let size = self.size_of(member, self.decorations.member(id, k, DEC_MATRIX_STRIDE))?;
+            let size = self.size_of_at(
+                member,
+                self.decorations.member(id, k, DEC_MATRIX_STRIDE),
+                depth + 1,
+            )?;
             lo = lo.min(offset);
-            hi = hi.max(offset + size);
+            hi = hi.max(
+                offset
+                    .checked_add(size)
+                    .ok_or(format!("member {k} of %{id} ends beyond 4 GiB"))?,
+            );
         }
         Ok((if members.is_empty() { 0 } else { lo }, hi))
     }
 
-    /// Size in bytes of a type in an explicit layout; `matrix_stride` from the enclosing member.
-    fn size_of(&self, id: u32, matrix_stride: Option<u32>) -> Result<u32, String> {
+    /// Size in bytes of a type in an explicit layout at nesting `depth`; `matrix_stride` from the
+    /// enclosing member: types nested deeper than [`MAX_TYPE_DEPTH`] (a
+    /// cyclic type, which valid SPIR-V cannot have) and sizes beyond 4 GiB are errors, not a stack
+    /// overflow or a wrapped size.
+    fn size_of_at(&self, id: u32, matrix_stride: Option<u32>, depth: u32) -> Result<u32, String> {
+        if depth > MAX_TYPE_DEPTH {
+            return Err(format!(
+                "type %{id} nests deeper than {MAX_TYPE_DEPTH} levels (a cyclic type?)"
+            ));
+        }
+        let times = |n: u32, size: u32| {
+            n.checked_mul(size)
+                .ok_or(format!("type %{id} is larger than 4 GiB"))
+        };
         Ok(match self.ty(id)? {
             Type::Bool => 4,
             Type::Int { width, .. } | Type::Float { width } => width / 8,
-            Type::Vector { component, count } => count * self.size_of(*component, None)?,
+            Type::Vector { component, count } => {
+                times(*count, self.size_of_at(*component, None, depth + 1)?)?
+            }
             Type::Matrix { column, count } => match matrix_stride {
-                Some(stride) => count * stride,
-                None => count * self.size_of(*column, None)?,
+                Some(stride) => times(*count, stride)?,
+                None => times(*count, self.size_of_at(*column, None, depth + 1)?)?,
             },
             Type::Array { element, length } => {
                 let n = self.constant_u32(*length)?;
                 match self.decorations.get(id, DEC_ARRAY_STRIDE) {
-                    Some(stride) => n * stride,
-                    None => n * self.size_of(*element, matrix_stride)?,
+                    Some(stride) => times(n, stride)?,
+                    None => times(n, self.size_of_at(*element, matrix_stride, depth + 1)?)?,
                 }
             }
             Type::RuntimeArray { .. } => 0,
-            Type::Struct { .. } => self.struct_extent(id)?.1,
+            Type::Struct { .. } => self.struct_extent_at(id, depth + 1)?.1,
             other => {
                 return Err(format!(
                     "%{id} ({other:?}) has no size in an explicit layout"
@@ -897,6 +927,15 @@ impl Module {
 
     /// A GLSL spelling of an interface variable's type.
     fn glsl_type(&self, id: u32) -> Result<String, String> {
+        self.glsl_type_at(id, 0)
+    }
+
+    fn glsl_type_at(&self, id: u32, depth: u32) -> Result<String, String> {
+        if depth > MAX_TYPE_DEPTH {
+            return Err(format!(
+                "type %{id} nests deeper than {MAX_TYPE_DEPTH} levels (a cyclic type?)"
+            ));
+        }
         let scalar = |id: u32| -> Result<(&'static str, &'static str), String> {
             Ok(match self.ty(id)? {
                 Type::Float { width: 64 } => ("double", "d"),
@@ -931,7 +970,7 @@ impl Module {
             Type::Array { element, length } => {
                 format!(
                     "{}[{}]",
-                    self.glsl_type(*element)?,
+                    self.glsl_type_at(*element, depth + 1)?,
                     self.constant_u32(*length)?
                 )
             }
@@ -1092,6 +1131,44 @@ mod tests {
                 default: SpecValue::UInt(16)
             }
         );
+    }
+
+    /// A uniform block whose member type is an array of the block itself (ids %20 and %21 refer
+    /// to each other: invalid SPIR-V, hostile input), or whose size passes 4 GiB.
+    fn block_module(array_element: u32, length: u32, stride: Option<u32>) -> Vec<u8> {
+        let mut entry = vec![5, 10];
+        entry.extend(name("main"));
+        entry.push(30);
+        let mut ops = vec![
+            (OP_CAPABILITY, vec![1]),
+            (OP_ENTRY_POINT, entry),
+            (OP_DECORATE, vec![20, DEC_BLOCK]),
+            (OP_MEMBER_DECORATE, vec![20, 0, DEC_OFFSET, 0]),
+            (OP_DECORATE, vec![30, DEC_DESCRIPTOR_SET, 0]),
+            (OP_DECORATE, vec![30, DEC_BINDING, 0]),
+            (OP_TYPE_INT, vec![1, 32, 0]),
+            (OP_CONSTANT, vec![1, 3, length]),
+            (OP_TYPE_STRUCT, vec![20, 21]),
+            (OP_TYPE_ARRAY, vec![21, array_element, 3]),
+            (OP_TYPE_POINTER, vec![22, SC_UNIFORM, 20]),
+            (OP_VARIABLE, vec![22, 30, SC_UNIFORM]),
+        ];
+        if let Some(st) = stride {
+            ops.insert(4, (OP_DECORATE, vec![21, DEC_ARRAY_STRIDE, st]));
+        }
+        module(&ops)
+    }
+
+    #[test]
+    fn cyclic_and_huge_types_are_errors_not_crashes() {
+        let e = reflect(&block_module(20, 4, None)).unwrap_err();
+        assert!(e.contains("nests deeper") && e.contains("cyclic"), "{e}");
+        // uint[2^30] with stride 16: 16 GiB, beyond u32.
+        let e = reflect(&block_module(1, 1 << 30, Some(16))).unwrap_err();
+        assert!(e.contains("larger than 4 GiB"), "{e}");
+        // The same array of 4 is fine: 64 bytes.
+        let r = reflect(&block_module(1, 4, Some(16))).unwrap();
+        assert_eq!(r.bindings[0].block_size, Some(64));
     }
 
     #[test]

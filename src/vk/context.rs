@@ -172,7 +172,7 @@ impl Context {
                 .map_err(|e| no_driver(&format!("listing instance layers failed: {e}")))?;
             let found = available
                 .iter()
-                .any(|l| unsafe { CStr::from_ptr(l.layer_name.as_ptr()) } == VALIDATION_LAYER);
+                .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
             if !found {
                 return Err(Error::NoVulkan(
                     "Vulkan validation was asked for but the Khronos validation layer is not installed: run `sudo apt-get install vulkan-validationlayers` (or tools/setup).".into(),
@@ -427,15 +427,14 @@ fn choose_device(
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
         unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
         let props = props2.properties;
-        let name = unsafe { CStr::from_ptr(props.device_name.as_ptr()) }
-            .to_string_lossy()
-            .into_owned();
-        let driver_name = unsafe { CStr::from_ptr(driver.driver_name.as_ptr()) }
-            .to_string_lossy()
-            .into_owned();
-        let driver_info = unsafe { CStr::from_ptr(driver.driver_info.as_ptr()) }
-            .to_string_lossy()
-            .into_owned();
+        // ash's bounded accessors: a name without its NUL within the array reads as "?".
+        let text = |r: Result<&CStr, std::ffi::FromBytesUntilNulError>| {
+            r.map(|c| c.to_string_lossy().into_owned())
+                .unwrap_or_else(|_| "?".into())
+        };
+        let name = text(props.device_name_as_c_str());
+        let driver_name = text(driver.driver_name_as_c_str());
+        let driver_info = text(driver.driver_info_as_c_str());
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let family = families.iter().position(|f| {
             f.queue_flags
