@@ -137,3 +137,33 @@ fn image_too_large_for_the_device_is_a_clear_error() {
         "{msg}"
     );
 }
+
+/// `Context` is `Sync`: submissions from several threads at once must be serialized inside
+/// (Vulkan requires the command pool and the queue to be externally synchronized; the validation
+/// layer's thread-safety checks report any overlap, and any message fails the test).
+#[test]
+fn submissions_from_two_threads_are_safe() {
+    use weft::vk::{Format, ImageDesc, ImageUsageFlags, Usage};
+    let ctx = common::context();
+    std::thread::scope(|scope| {
+        for t in 0..2 {
+            let ctx = &ctx;
+            scope.spawn(move || {
+                for i in 0..25 {
+                    let image = ctx
+                        .create_image(
+                            &ImageDesc::new_2d(format!("t{t} i{i}"), Format::R8G8B8A8_UNORM, 4, 4)
+                                .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST),
+                        )
+                        .unwrap();
+                    ctx.submit(|cmd| {
+                        cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
+                        cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
+                    })
+                    .unwrap();
+                }
+            });
+        }
+    });
+    ctx.check_validation().expect("no validation message");
+}

@@ -448,6 +448,13 @@ impl Context {
     /// Records commands with `record`, submits them, and waits for the GPU to finish.
     pub fn submit<R>(&self, record: impl FnOnce(&mut Cmd) -> R) -> crate::Result<R> {
         let device = &self.shared.device;
+        // The pool and the queue are shared by every thread holding this context: one submission
+        // at a time (declared before `guard`, so it is released after the buffer is freed).
+        let _queue = self
+            .shared
+            .queue_lock
+            .lock()
+            .map_err(|_| crate::Error::device("queue lock poisoned"))?;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.shared.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)

@@ -78,6 +78,9 @@ pub(crate) struct Shared {
     pub(crate) device: ash::Device,
     pub(crate) queue: vk::Queue,
     pub(crate) command_pool: vk::CommandPool,
+    /// Held while the command pool or the queue is used (Vulkan requires both to be externally
+    /// synchronized): `Context` is `Sync`, so two threads may submit at once.
+    pub(crate) queue_lock: Mutex<()>,
     pub(crate) allocator: Mutex<Option<Allocator>>,
     pub(crate) info: DeviceInfo,
     pub(crate) limits: vk::PhysicalDeviceLimits,
@@ -344,6 +347,7 @@ impl Context {
                 device,
                 queue,
                 command_pool,
+                queue_lock: Mutex::new(()),
                 allocator: Mutex::new(Some(allocator)),
                 info,
                 limits,
@@ -397,6 +401,11 @@ impl Context {
     }
 
     pub fn wait_idle(&self) -> crate::Result<()> {
+        let _queue = self
+            .shared
+            .queue_lock
+            .lock()
+            .map_err(|_| Error::device("queue lock poisoned"))?;
         unsafe { self.shared.device.device_wait_idle() }.map_err(vkerr("vkDeviceWaitIdle"))
     }
 }
