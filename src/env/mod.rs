@@ -118,7 +118,7 @@ impl Environment {
         reader.limits(limits);
         let img = reader.decode().map_err(|e| {
             Error::input(format!(
-                "cannot decode environment map '{shown}': {e} (weft reads Radiance .hdr and OpenEXR without DWA compression; re-save the map, e.g. as .hdr)"
+                "cannot decode environment map '{shown}': {e} (weft reads equirectangular Radiance .hdr and OpenEXR through the image crate; re-save the map, e.g. as .hdr)"
             ))
         })?;
         let rgb = img.into_rgb32f();
