@@ -8,6 +8,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "cube.glsl"
 #include "ibl.glsl"
+#include "pbr.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -43,9 +44,7 @@ void main() {
             continue;
         }
         // pdf of l: D(h)·(n·h)/(4 v·h) = D/4 with v = n.
-        float a2 = alpha * alpha;
-        float dd = h.z * h.z * (a2 - 1.0) + 1.0;
-        float pdf = a2 / (IBL_PI * dd * dd) * 0.25;
+        float pdf = ggx_d(h.z, alpha) * 0.25;
         vec3 w = frame * l;
         sum += textureLod(radiance, w, fis_lod(pdf, pc.samples, pc.source_size)).rgb * l.z;
         weight += l.z;

@@ -195,7 +195,9 @@ vec3 pbr_env(vec3 n, vec3 v, vec3 base, float metallic, float roughness, float a
     float nv = clamp(dot(n, v), 1e-4, 1.0);
     vec3 f0 = mix(vec3(0.04), base, metallic);
     if (IBL == 3u) {
-        // Ground truth: GGX-sampled specular and cosine-sampled diffuse, unfiltered environment.
+        // Ground truth: the glTF BRDF itself (pbr_brdf_cos) over the unfiltered environment, each
+        // sample pair one GGX-sampled and one cosine-sampled direction, weighted by the balance
+        // heuristic (the mixture pdf of the two samplers).
         mat3 tbn = fabric_frame(n, any_perpendicular(n), 1.0);
         float alpha = max(roughness * roughness, 1e-3);
         vec2 rot = pixel_random();
@@ -203,21 +205,21 @@ vec3 pbr_env(vec3 n, vec3 v, vec3 base, float metallic, float roughness, float a
         for (uint i = 0u; i < IBL_SAMPLES; ++i) {
             vec2 xi = ibl_sample(i, IBL_SAMPLES, rot);
             vec3 h = tbn * ggx_sample_h(xi, alpha);
-            float vh = dot(v, h);
-            vec3 l = 2.0 * vh * h - v;
-            float nl = dot(n, l);
-            if (nl > 0.0 && vh > 0.0) {
-                float nh = clamp(dot(n, h), 0.0, 1.0);
-                vec3 f = f0 + (1.0 - f0) * pow(1.0 - vh, 5.0);
-                float w = 4.0 * smith_v(nl, nv, alpha) * nl * vh / max(nh, 1e-8);
-                sum += env_radiance_at(l, 0.0) * f * w;
+            vec3 dirs[2] = vec3[2](2.0 * dot(v, h) * h - v, tbn * cosine_sample(xi));
+            for (uint k = 0u; k < 2u; ++k) {
+                vec3 l = dirs[k];
+                float nl = dot(n, l);
+                if (!(nl > 0.0)) {
+                    continue;
+                }
+                vec3 hl = normalize(l + v);
+                float vh = dot(v, hl);
+                float p_ggx = vh > 0.0 ? ggx_d(clamp(dot(n, hl), 0.0, 1.0), alpha) * clamp(dot(n, hl), 0.0, 1.0) / (4.0 * vh) : 0.0;
+                float pdf = 0.5 * p_ggx + 0.5 * nl / PI;
+                sum += env_radiance_at(l, 0.0) * pbr_brdf_cos(n, v, l, base, metallic, roughness) / pdf;
             }
-            vec3 ld = tbn * cosine_sample(xi);
-            vec3 hd = normalize(ld + v);
-            vec3 fd = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(v, hd), 0.0, 1.0), 5.0);
-            sum += env_radiance_at(ld, 0.0) * (1.0 - fd) * (1.0 - metallic) * base;
         }
-        return sum / float(IBL_SAMPLES) * ao;
+        return sum / float(2u * IBL_SAMPLES) * ao;
     }
     vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
     vec3 spec_albedo = f0 * ab.x + ab.y;
@@ -270,26 +272,19 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, out vec3 we
         if (!(k1.z > 0.0)) {
             continue;
         }
-        // The estimator of each lobe, f·cos/pdf, with pdf the mixture of the two samplers:
-        // as_d and as_lobe share the normalisation sqrt((eu+1)(ev+1)) and differ only in hn^E,
-        // so with P = as_power of each orientation, pdf = norm/(2π)·(w P_weft + (1-w) P_warp)/(4 kh)
-        // and as_lobe = norm/(8π)·P·F/denom: f·cos/pdf = P·F·k1.z·kh/(denom·mix). (The same
-        // numbers as as_d and as_lobe, two exp instead of four; the CPU ground truth evaluates the
-        // BRDF itself.)
+        // Each lobe's estimate f·cos/pdf with pdf the mixture of the two samplers: a lobe is
+        // as_lobe_factor·hn^E and its sampler's pdf as_norm/(2π)·hn^E/(4 kh) (fabric.glsl), so
+        // hn^E of each orientation (as_power) is computed once and shared by both.
         float p_weft = as_power(h.x, h.y, h.z, f.e_along, f.e_across);
         float p_warp = as_power(h.x, h.y, h.z, f.e_across, f.e_along);
         float mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
         if (!(mixed > 0.0)) {
             continue;
         }
-        float fresnel = schlick(f.rs, min(kh, 1.0));
-        float denom = max(min(kh, 1.0) * max(k1.z, k2.z), FABRIC_DENOM_MIN);
-        float common_w = fresnel * k1.z * kh / (denom * mixed);
-        float lod = 0.0;
-        if (IBL != 3u) {
-            float pdf = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
-            lod = fis_lod(pdf, IBL_SAMPLES, frame.env_params.z);
-        }
+        float pdf = as_norm(f.e_along, f.e_across) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
+        float factor = as_lobe_factor(k1.z, k2.z, min(kh, 1.0), f.e_along, f.e_across, f.rs);
+        float common_w = factor * k1.z / pdf;
+        float lod = IBL == 3u ? 0.0 : fis_lod(pdf, IBL_SAMPLES, frame.env_params.z);
         vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
         weft += l * p_weft;
         warp += l * p_warp;

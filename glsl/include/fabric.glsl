@@ -119,9 +119,14 @@ float as_power(float hu, float hv, float hn, float eu, float ev) {
     }
 }
 
+// The A–S normalisation sqrt((eu+1)(ev+1)), shared by D and the lobe.
+float as_norm(float eu, float ev) {
+    return sqrt((eu + 1.0) * (ev + 1.0));
+}
+
 // The microfacet density (model page eq. 1): sqrt((eu+1)(ev+1))/(2π) · hn^E.
 float as_d(vec3 h, float eu, float ev) {
-    return sqrt((eu + 1.0) * (ev + 1.0)) / (2.0 * FABRIC_PI) * as_power(h.x, h.y, h.z, eu, ev);
+    return as_norm(eu, ev) / (2.0 * FABRIC_PI) * as_power(h.x, h.y, h.z, eu, ev);
 }
 
 // Schlick's Fresnel rs + (1 - rs)(1 - c)^5, c clamped to [0, 1].
@@ -129,6 +134,14 @@ float schlick(float rs, float c) {
     float x = 1.0 - clamp(c, 0.0, 1.0);
     float x2 = x * x;
     return rs + (1.0 - rs) * x2 * x2 * x;
+}
+
+// The Ashikhmin–Shirley lobe without its hn^E: norm/(8π)·F(kh)/max(kh·max(n·k1, n·k2), min),
+// for directions above the surface with kh = h·k1. The same for both thread orientations (norm is
+// symmetric in eu, ev), so the environment's sampler (lighting.frag) evaluates it once for both.
+float as_lobe_factor(float nk1, float nk2, float kh, float eu, float ev, float rs) {
+    float denom = max(kh * max(nk1, nk2), FABRIC_DENOM_MIN);
+    return as_norm(eu, ev) / (8.0 * FABRIC_PI) * schlick(rs, kh) / denom;
 }
 
 // The Ashikhmin–Shirley lobe with exponent eu along t and ev along b; exactly 0 when either
@@ -141,9 +154,7 @@ float as_lobe(vec3 k1, vec3 k2, float eu, float ev, float rs) {
     }
     float kh;
     vec3 h = fabric_half(k1, k2, kh);
-    float norm = sqrt((eu + 1.0) * (ev + 1.0)) / (8.0 * FABRIC_PI);
-    float denom = max(kh * max(nk1, nk2), FABRIC_DENOM_MIN);
-    return norm * as_power(h.x, h.y, h.z, eu, ev) * schlick(rs, kh) / denom;
+    return as_lobe_factor(nk1, nk2, kh, eu, ev, rs) * as_power(h.x, h.y, h.z, eu, ev);
 }
 
 // Lambert's 1/π (times Rd).

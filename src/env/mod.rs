@@ -189,31 +189,6 @@ impl Environment {
         [self.rgb[k], self.rgb[k + 1], self.rgb[k + 2]]
     }
 
-    /// Bilinear look-up in env space (u wraps, v clamps), f64.
-    pub fn lookup(&self, dir: [f64; 3]) -> [f64; 3] {
-        let (u, v) = dir_to_uv(dir);
-        let x = u * self.width as f64 - 0.5;
-        let y = (v * self.height as f64 - 0.5).clamp(0.0, self.height as f64 - 1.0);
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let w = self.width as i64;
-        let xi = |x: f64| (x as i64).rem_euclid(w) as u32;
-        let yi = |y: f64| (y as i64).clamp(0, self.height as i64 - 1) as u32;
-        let mut out = [0.0; 3];
-        for (dx, dy, wt) in [
-            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
-            (1.0, 0.0, fx * (1.0 - fy)),
-            (0.0, 1.0, (1.0 - fx) * fy),
-            (1.0, 1.0, fx * fy),
-        ] {
-            let p = self.pixel(xi(x0 + dx), yi(y0 + dy));
-            for c in 0..3 {
-                out[c] += wt * p[c] as f64;
-            }
-        }
-        out
-    }
-
     /// The order-2 spherical-harmonic projection of the radiance (f64 sums over every pixel,
     /// weighted by its solid angle), pre-multiplied by the clamped-cosine convolution and 1/π:
     /// evaluating it at n ([`sh_eval`]) gives irradiance/π, the radiance of a white Lambertian
@@ -319,6 +294,17 @@ pub fn sh_eval(sh: &[[f32; 3]; 9], n: [f32; 3]) -> [f32; 3] {
         }
     }
     e.map(|v| v.max(0.0))
+}
+
+/// The world direction of env-space direction `e` under `--env-rotation degrees` (the transpose
+/// of [`env_from_world`]).
+pub fn world_from_env(rotation_degrees: f32, e: [f64; 3]) -> [f64; 3] {
+    let r = env_from_world(rotation_degrees).map(|row| row.map(|x| x as f64));
+    [
+        r[0][0] * e[0] + r[1][0] * e[1] + r[2][0] * e[2],
+        r[0][1] * e[0] + r[1][1] * e[1] + r[2][1] * e[2],
+        r[0][2] * e[0] + r[1][2] * e[1] + r[2][2] * e[2],
+    ]
 }
 
 /// The environment-from-world rotation for `--env-rotation degrees` (about +y), as rows.
@@ -499,12 +485,17 @@ pub fn dfg_table(size: u32) -> Vec<[f32; 2]> {
     out
 }
 
-/// The DFG integral at one (n·v, roughness): see [`dfg_table`].
+/// The DFG integral at one (n·v, roughness): see [`dfg_table`]. The BRDF is the project's one
+/// Rust copy of the glTF BRDF ([`crate::reference::shading::pbr_brdf_cos`], f32, accumulated in
+/// f64): with metallic 1, F0 = base, so B = ∫ f·cos at base 0 and A + B at base 1.
 pub fn dfg(nv: f64, roughness: f64, samples: u32) -> [f64; 2] {
+    use crate::reference::shading::{ggx_d, pbr_brdf_cos};
+    let r = roughness as f32;
     let alpha = (roughness * roughness).max(1e-3);
     let a2 = alpha * alpha;
     let v = [(1.0 - nv * nv).max(0.0).sqrt(), 0.0, nv];
-    let (mut a, mut b) = (0.0, 0.0);
+    let vf = v.map(|x| x as f32);
+    let (mut ab, mut b) = (0.0, 0.0);
     for s in 0..samples {
         let (x1, x2) = hammersley(s, samples);
         // GGX half vector: pdf D(h)·(n·h).
@@ -518,20 +509,18 @@ pub fn dfg(nv: f64, roughness: f64, samples: u32) -> [f64; 2] {
             2.0 * vh * h[1] - v[1],
             2.0 * vh * h[2] - v[2],
         ];
-        let nl = l[2];
-        if nl <= 0.0 || vh <= 0.0 {
+        if l[2] <= 0.0 || vh <= 0.0 {
             continue;
         }
-        // f·cos/pdf with pdf = D·nh/(4 vh): 4·V·nl·vh/nh.
-        let gv = nl * (nv * nv * (1.0 - a2) + a2).sqrt();
-        let gl = nv * (nl * nl * (1.0 - a2) + a2).sqrt();
-        let vis = 0.5 / (gv + gl);
-        let w = 4.0 * vis * nl * vh / cos_t;
-        let fc = (1.0 - vh).powi(5);
-        a += (1.0 - fc) * w;
-        b += fc * w;
+        // pdf of l: D·(n·h)/(4 v·h).
+        let pdf = ggx_d(cos_t as f32, alpha as f32) as f64 * cos_t / (4.0 * vh);
+        let lf = l.map(|x| x as f32);
+        let n = [0.0, 0.0, 1.0];
+        ab += pbr_brdf_cos(n, vf, lf, [1.0; 3], 1.0, r)[0] as f64 / pdf;
+        b += pbr_brdf_cos(n, vf, lf, [0.0; 3], 1.0, r)[0] as f64 / pdf;
     }
-    [a / samples as f64, b / samples as f64]
+    let n = samples as f64;
+    [(ab - b) / n, b / n]
 }
 
 /// The Hammersley point i of n in [0, 1)²: (i/n, radical inverse of i in base 2).
@@ -684,14 +673,10 @@ pub fn stage(
         let camera = scene.auto_camera();
         scene.cameras.push(camera);
     }
-    let rot = env_from_world(rotation);
-    // World = transpose(env_from_world) · env.
-    let k = glam::Vec3::from(STUDIO_KEY_DIRECTION).normalize();
-    let to_light = glam::Vec3::new(
-        rot[0][0] * k.x + rot[1][0] * k.y + rot[2][0] * k.z,
-        rot[0][1] * k.x + rot[1][1] * k.y + rot[2][1] * k.z,
-        rot[0][2] * k.x + rot[1][2] * k.y + rot[2][2] * k.z,
-    );
+    let k = glam::Vec3::from(STUDIO_KEY_DIRECTION)
+        .normalize()
+        .as_dvec3();
+    let to_light = glam::DVec3::from(world_from_env(rotation, k.into())).as_vec3();
     scene.lights.push(Light {
         name: "default key light".into(),
         kind: LightKind::Directional,

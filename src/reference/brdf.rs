@@ -182,7 +182,18 @@ macro_rules! fabric_brdf_precision {
             /// The microfacet density of the model page, eq. 1: `sqrt((eu+1)(ev+1))/(2π) · hn^E`
             /// (the pdf of `h` per unit solid angle).
             pub fn as_d(h: Vec3, eu: $t, ev: $t) -> $t {
-                ((eu + 1.0) * (ev + 1.0)).sqrt() / (2.0 * PI) * as_power(h[0], h[1], h[2], eu, ev)
+                as_norm(eu, ev) / (2.0 * PI) * as_power(h[0], h[1], h[2], eu, ev)
+            }
+
+            /// The A–S normalisation `sqrt((eu+1)(ev+1))`, shared by D and the lobe.
+            pub fn as_norm(eu: $t, ev: $t) -> $t {
+                ((eu + 1.0) * (ev + 1.0)).sqrt()
+            }
+
+            /// The lobe without its `hn^E`: `norm/(8π)·F(kh)/max(kh·max(n·k1, n·k2), min)`.
+            pub fn as_lobe_factor(nk1: $t, nk2: $t, kh: $t, eu: $t, ev: $t, rs: $t) -> $t {
+                let denom = (kh * nk1.max(nk2)).max(DENOM_MIN);
+                as_norm(eu, ev) / (8.0 * PI) * schlick(rs, kh) / denom
             }
 
             /// Schlick's Fresnel `rs + (1 - rs)(1 - c)^5`, `c` clamped to [0, 1].
@@ -201,9 +212,7 @@ macro_rules! fabric_brdf_precision {
                     return 0.0;
                 }
                 let (h, kh) = fabric_half(k1, k2);
-                let norm = ((eu + 1.0) * (ev + 1.0)).sqrt() / (8.0 * PI);
-                let denom = (kh * nk1.max(nk2)).max(DENOM_MIN);
-                norm * as_power(h[0], h[1], h[2], eu, ev) * schlick(rs, kh) / denom
+                as_lobe_factor(nk1, nk2, kh, eu, ev, rs) * as_power(h[0], h[1], h[2], eu, ev)
             }
 
             /// Lambert's `1/π` (times Rd).

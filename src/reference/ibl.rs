@@ -11,7 +11,7 @@
 
 use super::brdf::double as fd;
 use super::shading::{pbr_brdf_cos, Surface};
-use crate::env::{env_from_world, pixel_dir, Environment};
+use crate::env::{pixel_dir, world_from_env, Environment};
 
 /// The environment as a list of world-space directions with radiance × solid angle.
 pub struct EnvQuadrature {
@@ -23,7 +23,6 @@ impl EnvQuadrature {
     /// Every pixel of `env`, turned by `rotation` degrees, scaled by `intensity`; pixels `step`
     /// apart are merged into one point (1 = every pixel) with their summed weight.
     pub fn new(env: &Environment, rotation: f32, intensity: f32, step: u32) -> EnvQuadrature {
-        let rot = env_from_world(rotation).map(|r| r.map(|x| x as f64));
         let (w, h) = (env.width, env.height);
         let step = step.max(1);
         let d_phi = 2.0 * std::f64::consts::PI / w as f64;
@@ -51,13 +50,7 @@ impl EnvQuadrature {
                 if !(len > 0.0) {
                     continue;
                 }
-                let e = dir.map(|x| x / len);
-                // World = transpose(env_from_world) · env.
-                let world = [
-                    rot[0][0] * e[0] + rot[1][0] * e[1] + rot[2][0] * e[2],
-                    rot[0][1] * e[0] + rot[1][1] * e[1] + rot[2][1] * e[2],
-                    rot[0][2] * e[0] + rot[1][2] * e[1] + rot[2][2] * e[2],
-                ];
+                let world = world_from_env(rotation, dir.map(|x| x / len));
                 points.push((world, sum));
             }
         }

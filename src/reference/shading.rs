@@ -87,7 +87,8 @@ pub fn light_incoming(light: &GpuLight, p: Vec3) -> (Vec3, Vec3) {
     (l, scale(color, atten))
 }
 
-fn ggx_d(n_h: f32, alpha: f32) -> f32 {
+/// `ggx_d` of pbr.glsl: the GGX (Trowbridge–Reitz) normal distribution.
+pub fn ggx_d(n_h: f32, alpha: f32) -> f32 {
     let a2 = alpha * alpha;
     let d = n_h * n_h * (a2 - 1.0) + 1.0;
     a2 / (PI * d * d)
