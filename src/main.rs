@@ -248,6 +248,15 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
     load_scene_sized(args, "1280x720")
 }
 
+/// The built-in studio, generated once per process (`weft sheet` lights every file with it).
+fn studio() -> std::sync::Arc<weft::env::Environment> {
+    static STUDIO: std::sync::OnceLock<std::sync::Arc<weft::env::Environment>> =
+        std::sync::OnceLock::new();
+    STUDIO
+        .get_or_init(|| std::sync::Arc::new(weft::env::Environment::studio()))
+        .clone()
+}
+
 /// As [`load_scene_sized`] at 1280x720, without printing the loader's warnings (they stay in
 /// `scene.warnings`).
 fn load_scene_quiet(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
@@ -294,14 +303,16 @@ fn load_scene_impl(
     };
     let (env, own_env) = match args.env.as_str() {
         "none" => (None, false),
-        "studio" => (Some(weft::env::Environment::studio()), false),
+        "studio" => (Some(studio()), false),
         path => (
-            Some(weft::env::Environment::load(std::path::Path::new(path))?),
+            Some(std::sync::Arc::new(weft::env::Environment::load(
+                std::path::Path::new(path),
+            )?)),
             true,
         ),
     };
     let environment = env.map(|e| {
-        let mut l = weft::env::EnvLighting::new(std::sync::Arc::new(e));
+        let mut l = weft::env::EnvLighting::new(e);
         l.rotation = args.env_rotation;
         l.intensity = args.env_intensity;
         l.background = background;

@@ -13,73 +13,15 @@ use weft::reference::probe::{
     probe_check, probe_cpu_f64, probe_inputs, probe_worst_ratio, ProbeBound, ProbeInput,
     ProbeOutput,
 };
-use weft::vk::{
-    shaders, Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Resource, Stages,
-};
+use weft::vk::shaders;
 
 /// Runs fabric_probe.comp on `inputs`.
 fn run_probe(ctx: &weft::vk::Context, inputs: &[ProbeInput]) -> Vec<ProbeOutput> {
-    let count = inputs.len() as u32;
-    let input = ctx
-        .create_buffer_with("probe inputs", BufferUsageFlags::STORAGE_BUFFER, inputs)
-        .unwrap();
-    let output = ctx
-        .create_buffer(
-            "probe outputs",
-            (inputs.len() * std::mem::size_of::<ProbeOutput>()) as u64,
-            BufferUsageFlags::STORAGE_BUFFER,
-            BufferLocation::Readback,
-        )
-        .unwrap();
-    let layout = ctx
-        .create_set_layout(&[
-            Binding {
-                binding: 0,
-                kind: BindingKind::StorageBuffer,
-                stages: Stages::COMPUTE,
-            },
-            Binding {
-                binding: 1,
-                kind: BindingKind::StorageBuffer,
-                stages: Stages::COMPUTE,
-            },
-        ])
-        .unwrap();
-    let pipeline = ctx
-        .create_compute_pipeline(&ComputeDesc {
-            name: "fabric probe",
-            shader: &shaders::FABRIC_PROBE_COMP,
-            set_layouts: &[&layout],
-            push_constant_size: 4,
-            constants: &[],
-        })
-        .unwrap();
-    let pool = ctx.create_descriptor_pool(1).unwrap();
-    let set = pool
-        .set(
-            &layout,
-            &[
-                (0, Resource::Storage(&input)),
-                (1, Resource::Storage(&output)),
-            ],
-        )
-        .unwrap();
-    ctx.submit(|cmd| {
-        cmd.bind_pipeline(&pipeline);
-        cmd.bind_sets(&pipeline, 0, &[set]);
-        cmd.push_constants(&pipeline, &count);
-        cmd.dispatch(count.div_ceil(64), 1, 1);
-        cmd.buffer_barrier();
-    })
-    .unwrap();
-    ctx.wait_idle().unwrap();
-    let bytes = output.read().unwrap();
     let size = std::mem::size_of::<ProbeOutput>();
-    let out = (0..inputs.len())
+    let bytes = common::run_probe_shader(ctx, &shaders::FABRIC_PROBE_COMP, inputs, size);
+    (0..inputs.len())
         .map(|i| ProbeOutput::from_bytes(&bytes[i * size..(i + 1) * size]))
-        .collect();
-    ctx.check_validation().unwrap();
-    out
+        .collect()
 }
 
 #[test]

@@ -9,19 +9,10 @@ mod common;
 
 use glam::{Mat4, Vec3};
 use weft::fabric::{FabricParams, WeavePattern};
-use weft::reference::shading::{oct_decode, shade, Surface};
+use weft::reference::shading::shade;
 use weft::render::gpu::{FrameData, GpuLight};
 use weft::render::{DebugView, RenderOptions, Renderer};
 use weft::scene::{self, Draw, Light, LightKind, Material, Mesh, Scene, Vertex};
-
-fn srgb_to_linear(b: u8) -> f32 {
-    let s = b as f32 / 255.0;
-    if s <= 0.04045 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 /// Shades every covered pixel of the last frame's G-buffer on the CPU and compares with the HDR
 /// output. Returns (pixels compared, fabric pixels, worst error relative to the bound).
@@ -46,39 +37,13 @@ fn compare_lighting(
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
-            let depth = g.depth[i];
-            if depth <= 0.0 {
+            let Some(s) =
+                common::gbuffer_surface(&g, scene, inv_view_proj, (w as u32, h as u32), i)
+            else {
                 continue;
-            }
-            let ndc = [
-                (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
-                (y as f32 + 0.5) / h as f32 * 2.0 - 1.0,
-            ];
-            let hp = inv_view_proj * glam::Vec4::new(ndc[0], ndc[1], depth, 1.0);
-            let p = hp.truncate() / hp.w;
-            let px = |v: &[f32], c: usize| v[i * 4 + c];
-            let material = px(&g.surface, 1).round() as usize;
-            let fabric = scene.materials[material]
-                .fabric
-                .as_ref()
-                .map(|f| f.to_gpu());
-            fabric_pixels += fabric.is_some() as usize;
-            let s = Surface {
-                position: p.into(),
-                normal: oct_decode([px(&g.frame, 0), px(&g.frame, 1)]),
-                tangent: oct_decode([px(&g.frame, 2), px(&g.frame, 3)]),
-                sign: px(&g.surface, 2),
-                base_color: [
-                    srgb_to_linear(g.albedo[i * 4]),
-                    srgb_to_linear(g.albedo[i * 4 + 1]),
-                    srgb_to_linear(g.albedo[i * 4 + 2]),
-                ],
-                metallic: g.albedo[i * 4 + 3] as f32 / 255.0,
-                roughness: px(&g.surface, 0),
-                emissive: [px(&g.emissive, 0), px(&g.emissive, 1), px(&g.emissive, 2)],
-                coverage: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
-                fabric,
             };
+            fabric_pixels += s.fabric.is_some() as usize;
+            let material = g.surface[i * 4 + 1].round() as usize;
             let cpu = shade(&frame, &lights, &s);
             for c in 0..3 {
                 // Bound: the HDR target is f16 (relative rounding 2^-11); both sides read the same

@@ -14,22 +14,13 @@ use std::sync::Arc;
 use glam::Mat4;
 use weft::env::{EnvLighting, Environment, IblLevel};
 use weft::reference::ibl::EnvQuadrature;
-use weft::reference::shading::{oct_decode, Surface};
+use weft::reference::shading::Surface;
 use weft::render::gpu::FrameData;
 use weft::render::{GBufferReadback, RenderOptions, Renderer};
 use weft::scene::{self, Scene};
 
 const W: u32 = 96;
 const H: u32 = 54;
-
-fn srgb_to_linear(b: u8) -> f32 {
-    let s = b as f32 / 255.0;
-    if s <= 0.04045 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
-}
 
 fn lebombo() -> Environment {
     let path =
@@ -72,39 +63,11 @@ fn surfaces(
     let frame = FrameData::new(&camera, o.width, o.height);
     let inv = Mat4::from_cols_array_2d(&frame.inv_view_proj);
     let mut out = Vec::new();
-    for y in 0..H as usize {
-        for x in 0..W as usize {
-            let i = y * W as usize + x;
-            let depth = g.depth[i];
-            if depth <= 0.0 {
-                continue;
-            }
-            let ndc = [
-                (x as f32 + 0.5) / W as f32 * 2.0 - 1.0,
-                (y as f32 + 0.5) / H as f32 * 2.0 - 1.0,
-            ];
-            let hp = inv * glam::Vec4::new(ndc[0], ndc[1], depth, 1.0);
-            let p = hp.truncate() / hp.w;
-            let px = |v: &[f32], c: usize| v[i * 4 + c];
-            let material = px(&g.surface, 1).round() as usize;
-            out.push((
-                i,
-                Surface {
-                    position: p.into(),
-                    normal: oct_decode([px(&g.frame, 0), px(&g.frame, 1)]),
-                    tangent: oct_decode([px(&g.frame, 2), px(&g.frame, 3)]),
-                    sign: px(&g.surface, 2),
-                    base_color: [0, 1, 2].map(|c| srgb_to_linear(g.albedo[i * 4 + c])),
-                    metallic: g.albedo[i * 4 + 3] as f32 / 255.0,
-                    roughness: px(&g.surface, 0),
-                    emissive: [0.0; 3],
-                    coverage: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
-                    fabric: scene.materials[material]
-                        .fabric
-                        .as_ref()
-                        .map(|f| f.to_gpu()),
-                },
-            ));
+    for i in 0..(W * H) as usize {
+        if let Some(mut s) = common::gbuffer_surface(g, scene, inv, (W, H), i) {
+            // Environment light only: the reference adds no emission.
+            s.emissive = [0.0; 3];
+            out.push((i, s));
         }
     }
     (out, [frame.eye[0], frame.eye[1], frame.eye[2]])

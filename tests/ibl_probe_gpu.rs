@@ -36,9 +36,7 @@ use weft::reference::ibl_twin::{
 };
 use weft::reference::probe::XorShift;
 use weft::render::environment::cube_texel_dir;
-use weft::vk::{
-    shaders, Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Resource, Stages,
-};
+use weft::vk::shaders;
 
 /// A named input.
 struct Case {
@@ -594,67 +592,11 @@ fn twins_reuse_the_existing_functions_and_meet_the_f64_references() {
 
 /// Runs ibl_probe.comp on `inputs`.
 fn run_probe(ctx: &weft::vk::Context, inputs: &[IblProbeInput]) -> Vec<IblProbeOutput> {
-    let count = inputs.len() as u32;
-    let input = ctx
-        .create_buffer_with("ibl probe inputs", BufferUsageFlags::STORAGE_BUFFER, inputs)
-        .unwrap();
-    let output = ctx
-        .create_buffer(
-            "ibl probe outputs",
-            (inputs.len() * std::mem::size_of::<IblProbeOutput>()) as u64,
-            BufferUsageFlags::STORAGE_BUFFER,
-            BufferLocation::Readback,
-        )
-        .unwrap();
-    let layout = ctx
-        .create_set_layout(&[
-            Binding {
-                binding: 0,
-                kind: BindingKind::StorageBuffer,
-                stages: Stages::COMPUTE,
-            },
-            Binding {
-                binding: 1,
-                kind: BindingKind::StorageBuffer,
-                stages: Stages::COMPUTE,
-            },
-        ])
-        .unwrap();
-    let pipeline = ctx
-        .create_compute_pipeline(&ComputeDesc {
-            name: "ibl probe",
-            shader: &shaders::IBL_PROBE_COMP,
-            set_layouts: &[&layout],
-            push_constant_size: 4,
-            constants: &[],
-        })
-        .unwrap();
-    let pool = ctx.create_descriptor_pool(1).unwrap();
-    let set = pool
-        .set(
-            &layout,
-            &[
-                (0, Resource::Storage(&input)),
-                (1, Resource::Storage(&output)),
-            ],
-        )
-        .unwrap();
-    ctx.submit(|cmd| {
-        cmd.bind_pipeline(&pipeline);
-        cmd.bind_sets(&pipeline, 0, &[set]);
-        cmd.push_constants(&pipeline, &count);
-        cmd.dispatch(count.div_ceil(64), 1, 1);
-        cmd.buffer_barrier();
-    })
-    .unwrap();
-    ctx.wait_idle().unwrap();
-    let bytes = output.read().unwrap();
     let size = std::mem::size_of::<IblProbeOutput>();
-    let out = (0..inputs.len())
+    let bytes = common::run_probe_shader(ctx, &shaders::IBL_PROBE_COMP, inputs, size);
+    (0..inputs.len())
         .map(|i| IblProbeOutput::from_bytes(&bytes[i * size..(i + 1) * size]))
-        .collect();
-    ctx.check_validation().unwrap();
-    out
+        .collect()
 }
 
 #[test]

@@ -17,9 +17,120 @@ pub fn context() -> Context {
 
 /// Mean of the RGB channels of an RGBA8 image, in [0, 255].
 pub fn mean_rgb(rgba: &[u8]) -> f64 {
-    let sum: u64 = rgba
-        .chunks_exact(4)
-        .map(|p| p[0] as u64 + p[1] as u64 + p[2] as u64)
-        .sum();
-    sum as f64 / (rgba.len() / 4 * 3) as f64
+    weft::sheet::mean_srgb(rgba)
+}
+
+/// sRGB byte to linear (the albedo target's decode).
+pub fn srgb_to_linear(b: u8) -> f32 {
+    let s = b as f32 / 255.0;
+    if s <= 0.04045 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The surface the lighting pass sees at pixel `i` of a read-back G-buffer of a `width` x
+/// `height` frame (`inv_view_proj` of its FrameData), with the emitted radiance; None where no
+/// surface was drawn.
+pub fn gbuffer_surface(
+    g: &weft::render::GBufferReadback,
+    scene: &weft::scene::Scene,
+    inv_view_proj: glam::Mat4,
+    (width, height): (u32, u32),
+    i: usize,
+) -> Option<weft::reference::shading::Surface> {
+    use weft::reference::shading::oct_decode;
+    let depth = g.depth[i];
+    if depth <= 0.0 {
+        return None;
+    }
+    let (x, y) = (i % width as usize, i / width as usize);
+    let ndc = [
+        (x as f32 + 0.5) / width as f32 * 2.0 - 1.0,
+        (y as f32 + 0.5) / height as f32 * 2.0 - 1.0,
+    ];
+    let hp = inv_view_proj * glam::Vec4::new(ndc[0], ndc[1], depth, 1.0);
+    let p = hp.truncate() / hp.w;
+    let px = |v: &[f32], c: usize| v[i * 4 + c];
+    let material = px(&g.surface, 1).round() as usize;
+    Some(weft::reference::shading::Surface {
+        position: p.into(),
+        normal: oct_decode([px(&g.frame, 0), px(&g.frame, 1)]),
+        tangent: oct_decode([px(&g.frame, 2), px(&g.frame, 3)]),
+        sign: px(&g.surface, 2),
+        base_color: [0, 1, 2].map(|c| srgb_to_linear(g.albedo[i * 4 + c])),
+        metallic: g.albedo[i * 4 + 3] as f32 / 255.0,
+        roughness: px(&g.surface, 0),
+        emissive: [px(&g.emissive, 0), px(&g.emissive, 1), px(&g.emissive, 2)],
+        coverage: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
+        fabric: scene
+            .materials
+            .get(material)
+            .and_then(|m| m.fabric.as_ref())
+            .map(|f| f.to_gpu()),
+    })
+}
+
+/// Runs a probe compute shader (binding 0: the inputs, binding 1: the outputs, push constant: the
+/// count, 64 invocations per group) on `inputs` and returns the output buffer's bytes
+/// (`out_size` bytes per input); validation is checked after.
+pub fn run_probe_shader<T: bytemuck::Pod>(
+    ctx: &Context,
+    shader: &weft::vk::Shader,
+    inputs: &[T],
+    out_size: usize,
+) -> Vec<u8> {
+    use weft::vk::{
+        Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Resource, Stages,
+    };
+    let count = inputs.len() as u32;
+    let input = ctx
+        .create_buffer_with("probe inputs", BufferUsageFlags::STORAGE_BUFFER, inputs)
+        .unwrap();
+    let output = ctx
+        .create_buffer(
+            "probe outputs",
+            (inputs.len() * out_size) as u64,
+            BufferUsageFlags::STORAGE_BUFFER,
+            BufferLocation::Readback,
+        )
+        .unwrap();
+    let storage = |binding| Binding {
+        binding,
+        kind: BindingKind::StorageBuffer,
+        stages: Stages::COMPUTE,
+    };
+    let layout = ctx.create_set_layout(&[storage(0), storage(1)]).unwrap();
+    let pipeline = ctx
+        .create_compute_pipeline(&ComputeDesc {
+            name: shader.name,
+            shader,
+            set_layouts: &[&layout],
+            push_constant_size: 4,
+            constants: &[],
+        })
+        .unwrap();
+    let pool = ctx.create_descriptor_pool(1).unwrap();
+    let set = pool
+        .set(
+            &layout,
+            &[
+                (0, Resource::Storage(&input)),
+                (1, Resource::Storage(&output)),
+            ],
+        )
+        .unwrap();
+    ctx.submit(|cmd| {
+        cmd.bind_pipeline(&pipeline);
+        cmd.bind_sets(&pipeline, 0, &[set]);
+        cmd.push_constants(&pipeline, &count);
+        cmd.dispatch(count.div_ceil(64), 1, 1);
+        cmd.buffer_barrier();
+    })
+    .unwrap();
+    ctx.wait_idle().unwrap();
+    let bytes = output.read().unwrap().to_vec();
+    ctx.check_validation().unwrap();
+    bytes
 }
