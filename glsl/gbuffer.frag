@@ -28,6 +28,12 @@ layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
 layout(set = 1, binding = 4) uniform sampler2D weave_tex;
 // Ambient occlusion (glTF occlusionTexture, red channel; white when the material has none).
 layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;
+// KHR_materials_sheen, _specular and _anisotropy textures (white when the material has none).
+layout(set = 1, binding = 6) uniform sampler2D sheen_color_tex;
+layout(set = 1, binding = 7) uniform sampler2D sheen_roughness_tex;
+layout(set = 1, binding = 8) uniform sampler2D specular_tex;
+layout(set = 1, binding = 9) uniform sampler2D specular_color_tex;
+layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -44,14 +50,35 @@ layout(location = 2) in vec4 in_tangent;
 layout(location = 3) in vec2 in_uv;
 layout(location = 4) in vec2 in_weave_uv;
 layout(location = 5) in vec3 in_gouraud;
+layout(location = 6) in vec2 in_uv1;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
 layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1 if it receives shadows
 layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, shadow-weighted thread area, 1 if fabric
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
+layout(location = 5) out vec4 gb_specular;  // RGBA16F: the dielectric's F0 (rgb), specular weight
+// Non-fabric materials reuse two fabric channels: gb_fabric holds the sheen colour (rgb) and
+// roughness (a), gb_surface.z the anisotropy strength (and gb_frame.zw its direction).
+
+// The UVs of both sets and their screen derivatives, taken once in uniform control flow from the
+// interpolants alone (see the weave's derivatives below for why not from anything loaded).
+vec2 uv_d[6];
+
+// Samples texture slot `slot` of material m through its own UV set and transform, with the
+// derivatives carried through the transform's linear part.
+vec4 sample_slot(sampler2D tex, Material m, uint slot) {
+    vec4 r0 = m.uv[2u * slot];
+    vec4 r1 = m.uv[2u * slot + 1u];
+    uint set = r0.w > 0.5 ? 1u : 0u;
+    vec2 uv = uv_d[3u * set];
+    mat2 lin = mat2(r0.x, r1.x, r0.y, r1.y);
+    vec2 st = lin * uv + vec2(r0.z, r1.z);
+    return textureGrad(tex, st, lin * uv_d[3u * set + 1u], lin * uv_d[3u * set + 2u]);
+}
 
 void main() {
+    uv_d = vec2[6](in_uv, dFdx(in_uv), dFdy(in_uv), in_uv1, dFdx(in_uv1), dFdy(in_uv1));
     Material m = materials[draw.material];
 
     // Shading frame. Interpolated normals can cancel out (or be NaN from a broken file that got
@@ -70,7 +97,7 @@ void main() {
     float sign = in_tangent.w < 0.0 ? -1.0 : 1.0;
     vec3 b = sign * cross(n, t);
 
-    vec3 tn = texture(normal_tex, in_uv).xyz * 2.0 - 1.0;
+    vec3 tn = sample_slot(normal_tex, m, SLOT_NORMAL).xyz * 2.0 - 1.0;
     tn.xy *= m.emissive_normal.a;
     vec3 mapped = t * tn.x + b * tn.y + n * tn.z;
     if (dot(mapped, mapped) > 1e-20) {
@@ -79,21 +106,50 @@ void main() {
         t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
     }
 
-    vec4 base = m.base_color * texture(base_color_tex, in_uv);
-    vec4 mr = texture(metallic_roughness_tex, in_uv);
+    vec4 base = m.base_color * sample_slot(base_color_tex, m, SLOT_BASE_COLOR);
+    vec4 mr = sample_slot(metallic_roughness_tex, m, SLOT_METALLIC_ROUGHNESS);
     float metallic = clamp(m.metallic_roughness.x * mr.b, 0.0, 1.0);
     float roughness = clamp(m.metallic_roughness.y * mr.g, 0.0, 1.0);
-    vec3 emissive = m.emissive_normal.rgb * texture(emissive_tex, in_uv).rgb;
+    vec3 emissive = m.emissive_normal.rgb * sample_slot(emissive_tex, m, SLOT_EMISSIVE).rgb;
+    uint fabric = uint(m.metallic_roughness.z + 0.5);
+
+    // KHR_materials_anisotropy: the direction in the (normal-mapped) tangent frame, rotated, and
+    // the strength; stored in place of the tangent and its sign (non-fabric only).
+    float anisotropy = 0.0;
+    vec3 frame_t = t;
+    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_ANISOTROPY) != 0u) {
+        vec2 dir = vec2(1.0, 0.0);
+        anisotropy = m.extra.y;
+        if ((uint(m.extra.w + 0.5) & MATERIAL_ANISOTROPY_TEXTURE) != 0u) {
+            vec3 a = sample_slot(anisotropy_tex, m, SLOT_ANISOTROPY).rgb;
+            dir = a.rg * 2.0 - 1.0;
+            anisotropy *= a.b;
+        }
+        float c = cos(m.extra.z);
+        float s = sin(m.extra.z);
+        dir = vec2(c * dir.x - s * dir.y, s * dir.x + c * dir.y);
+        vec3 bt = sign * cross(n, t);
+        vec3 a = t * dir.x + bt * dir.y;
+        a -= n * dot(n, a);
+        frame_t = dot(a, a) > 1e-20 ? normalize(a) : t;
+        if (!(dot(a, a) > 1e-20)) {
+            anisotropy = 0.0;
+        }
+    }
 
     gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
-    gb_frame = vec4(oct_encode(n), oct_encode(t));
-    gb_surface = vec4(roughness, float(draw.material), sign, (draw.flags & 1u) != 0u ? 1.0 : 0.0);
+    gb_frame = vec4(oct_encode(n), oct_encode(frame_t));
+    gb_surface = vec4(roughness, float(draw.material), fabric > 0u ? sign : clamp(anisotropy, 0.0, 1.0),
+                      (draw.flags & 1u) != 0u ? 1.0 : 0.0);
+    // KHR_materials_specular with KHR_materials_ior: F0 = min(F0(ior) · colour, 1), weight.
+    vec3 spec_color = m.specular.rgb * sample_slot(specular_color_tex, m, SLOT_SPECULAR_COLOR).rgb;
+    float spec_weight = clamp(m.specular.a * sample_slot(specular_tex, m, SLOT_SPECULAR).a, 0.0, 1.0);
+    gb_specular = vec4(min(vec3(m.extra.x) * spec_color, vec3(1.0)), spec_weight);
     // The weave is sampled here, with the UV derivatives, because only this pass has them:
     // trilinear filtering of exact coverages gives the footprint's area fractions. Derivatives are
     // taken of the interpolated UV alone, before any branch: derivatives in non-uniform control
     // flow are undefined, and on lavapipe buffer loads read 0 in helper invocations, so the
     // derivative of anything loaded from a buffer is garbage in quads cut by a triangle edge.
-    uint fabric = uint(m.metallic_roughness.z + 0.5);
     GpuFabric f = fabrics[max(fabric, 1u) - 1u];
     vec2 uv_dx = dFdx(in_weave_uv);
     vec2 uv_dy = dFdy(in_weave_uv);
@@ -101,7 +157,13 @@ void main() {
     vec2 st = in_weave_uv * st_scale;
     vec2 st_dx = uv_dx * st_scale;
     vec2 st_dy = uv_dy * st_scale;
+    // KHR_materials_sheen (non-fabric): colour and roughness.
     gb_fabric = vec4(0.0);
+    if (fabric == 0u && max(m.sheen.r, max(m.sheen.g, m.sheen.b)) > 0.0) {
+        vec3 sheen = m.sheen.rgb * sample_slot(sheen_color_tex, m, SLOT_SHEEN_COLOR).rgb;
+        float sheen_roughness = m.sheen.a * sample_slot(sheen_roughness_tex, m, SLOT_SHEEN_ROUGHNESS).a;
+        gb_fabric = vec4(clamp(sheen, 0.0, 1.0), clamp(sheen_roughness, 0.0, 1.0));
+    }
     if (fabric > 0u) {
         // The footprint as an axis-aligned box in st, half-extent `ext` (a repeat is 1 unit).
         vec2 ext = 0.5 * (abs(st_dx) + abs(st_dy));
@@ -135,6 +197,6 @@ void main() {
     }
     // Occlusion = 1 + strength·(texel - 1) (glTF 2.0, occlusionTexture); the strength is in
     // metallic_roughness.w.
-    float ao = clamp(1.0 + m.metallic_roughness.w * (texture(occlusion_tex, in_uv).r - 1.0), 0.0, 1.0);
+    float ao = clamp(1.0 + m.metallic_roughness.w * (sample_slot(occlusion_tex, m, SLOT_OCCLUSION).r - 1.0), 0.0, 1.0);
     gb_emissive = vec4(max(emissive, vec3(0.0)), ao);
 }

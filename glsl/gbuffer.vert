@@ -35,6 +35,7 @@ layout(location = 3) in vec2 in_uv;
 // The UV with a whole number of weave repeats removed per mesh (in f64, at upload), so that huge
 // coordinates keep the weave pattern (model page, hard case 8). Equal to in_uv for non-fabric.
 layout(location = 4) in vec2 in_weave_uv;
+layout(location = 5) in vec2 in_uv1;
 
 layout(location = 0) out vec3 out_world_pos;
 layout(location = 1) out vec3 out_normal;
@@ -42,6 +43,7 @@ layout(location = 2) out vec4 out_tangent;
 layout(location = 3) out vec2 out_uv;
 layout(location = 4) out vec2 out_weave_uv;
 layout(location = 5) out vec3 out_gouraud;
+layout(location = 6) out vec2 out_uv1;
 
 // The Phong reflection model at a fabric vertex: hemispherical ambient and every light, with the
 // normal turned towards the viewer (the vertex stage cannot know which face will be drawn).
@@ -75,6 +77,7 @@ void main() {
     out_tangent = vec4(mat3(draw.world) * in_tangent.xyz, in_tangent.w * draw.tangent_sign);
     out_uv = in_uv;
     out_weave_uv = in_weave_uv;
+    out_uv1 = in_uv1;
     out_gouraud = vec3(0.0);
     if (SHADING == SHADING_GOURAUD) {
         uint fabric = uint(materials[draw.material].metallic_roughness.z + 0.5);

@@ -54,6 +54,8 @@ layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lig
 layout(set = 0, binding = 13) uniform samplerCube env_radiance;
 layout(set = 0, binding = 14) uniform samplerCube env_specular;
 layout(set = 0, binding = 15) uniform sampler2D env_dfg;
+// The dielectric specular layer (KHR_materials_specular): rgb F0, a: its weight.
+layout(set = 0, binding = 16) uniform sampler2D gb_specular;
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
@@ -189,11 +191,32 @@ vec2 ibl_sample(uint i, uint n, vec2 rotation) {
     return fract(hammersley(i, n) + rotation);
 }
 
-// The glTF metallic-roughness BRDF under the environment: SH irradiance for the diffuse, the
-// split sum for the specular (approx and fis), or Monte Carlo (mc). ao: the occlusion texture.
-vec3 pbr_env(vec3 n, vec3 v, vec3 base, float metallic, float roughness, float ao) {
+// The directional albedo E(cos θ) of the sheen BRDF with colour 1 at sheen roughness r: the DFG
+// table's third channel (weft::env::dfg_table).
+float sheen_albedo(float cos_theta, float r) {
+    return textureLod(env_dfg, vec2(clamp(cos_theta, 0.0, 1.0), r), 0.0).b;
+}
+
+// The split sum's look-up direction for roughness r about normal n: the mirror direction bent
+// towards the normal as the lobe widens (Lagarde & de Rousiers 2014, "dominant direction"): a
+// rough lobe's mass is nearer n.
+vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
+    float a = roughness * roughness;
+    return normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
+}
+
+// The glTF BRDF (with its extensions) under the environment: SH irradiance for the diffuse, the
+// split sum for the specular and the sheen (approx and fis), or Monte Carlo (mc). ao: the
+// occlusion texture. Anisotropy bends the look-up normal (McAuley's bent reflection vector, as
+// Filament and the glTF Sample Viewer do); the sheen takes the GGX-prefiltered radiance at its own
+// roughness times its albedo, and scales the layers below by 1 - max(sheen)·E(n·v).
+vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao) {
+    vec3 base = s.base;
+    float metallic = s.metallic;
+    float roughness = s.roughness;
     float nv = clamp(dot(n, v), 1e-4, 1.0);
-    vec3 f0 = mix(vec3(0.04), base, metallic);
+    bool has_sheen = max3(s.sheen) > 0.0;
+    float e_v = has_sheen ? sheen_albedo(nv, s.sheen_roughness) : 0.0;
     if (IBL == 3u) {
         // Ground truth: the glTF BRDF itself (pbr_brdf_cos) over the unfiltered environment, each
         // sample pair one GGX-sampled and one cosine-sampled direction, weighted by the balance
@@ -216,23 +239,38 @@ vec3 pbr_env(vec3 n, vec3 v, vec3 base, float metallic, float roughness, float a
                 float vh = dot(v, hl);
                 float p_ggx = vh > 0.0 ? ggx_d(clamp(dot(n, hl), 0.0, 1.0), alpha) * clamp(dot(n, hl), 0.0, 1.0) / (4.0 * vh) : 0.0;
                 float pdf = 0.5 * p_ggx + 0.5 * nl / PI;
-                sum += env_radiance_at(l, 0.0) * pbr_brdf_cos(n, v, l, base, metallic, roughness) / pdf;
+                float e_l = has_sheen ? sheen_albedo(nl, s.sheen_roughness) : 0.0;
+                sum += env_radiance_at(l, 0.0) * gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l)) / pdf;
             }
         }
         return sum / float(2u * IBL_SAMPLES) * ao;
     }
     vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
-    vec3 spec_albedo = f0 * ab.x + ab.y;
-    // The split sum's look-up direction: the mirror direction bent towards the normal as the lobe
-    // widens (Lagarde & de Rousiers 2014, "dominant direction"): a rough lobe's mass is nearer n.
-    vec3 r = reflect(-v, n);
-    float a = roughness * roughness;
-    r = normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
+    vec3 dielectric = s.f0 * ab.x + ab.y;
+    vec3 spec_albedo = mix(s.specular * dielectric, base * ab.x + ab.y, metallic);
+    vec3 bent = n;
+    if (s.anisotropy > 0.0) {
+        vec3 b = cross(n, s.t);
+        vec3 across = cross(b, v);
+        vec3 an = cross(across, b);
+        float bend = 1.0 - s.anisotropy * (1.0 - roughness);
+        bend *= bend;
+        vec3 m = mix(an, n, bend * bend);
+        bent = dot(m, m) > 1e-12 ? normalize(m) : n;
+    }
+    vec3 r = dominant_dir(n, reflect(-v, bent), roughness);
     vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
     vec3 prefiltered = textureLod(env_specular, d, roughness * frame.env_params.y).rgb * frame.env_params.x;
     vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
-    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - spec_albedo);
-    return diffuse * ao + prefiltered * spec_albedo * specular_occlusion(nv, ao, roughness);
+    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric));
+    vec3 result = diffuse * ao + prefiltered * spec_albedo * specular_occlusion(nv, ao, roughness);
+    if (has_sheen) {
+        vec3 rs = dominant_dir(n, reflect(-v, n), s.sheen_roughness);
+        vec3 ds = env_dir(rs, frame.env_rot0, frame.env_rot1, frame.env_rot2);
+        vec3 sheen_light = textureLod(env_specular, ds, s.sheen_roughness * frame.env_params.y).rgb * frame.env_params.x;
+        result = result * max(1.0 - max3(s.sheen) * e_v, 0.0) + s.sheen * e_v * sheen_light * ao;
+    }
+    return result;
 }
 
 // The fabric's two specular lobes under the environment, each without its coverage:
@@ -325,12 +363,13 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
     vec4 albedo = texelFetch(gb_albedo, px, 0);
     vec4 fr = texelFetch(gb_frame, px, 0);
     vec4 surface = texelFetch(gb_surface, px, 0);
-    vec4 fabric = texelFetch(gb_fabric, px, 0);
+    bool is_fabric = materials[min(uint(surface.y + 0.5), frame.material_count - 1u)].metallic_roughness.z > 0.5;
+    vec4 fabric = is_fabric ? texelFetch(gb_fabric, px, 0) : vec4(0.0);
     if (view == DEBUG_ALBEDO) return albedo.rgb;
     if (view == DEBUG_NORMALS) return oct_decode(fr.xy) * 0.5 + 0.5;
     if (view == DEBUG_TANGENTS) return oct_decode(fr.zw) * 0.5 + 0.5;
     if (view == DEBUG_ROUGHNESS_METALLIC) return vec3(surface.x, albedo.a, 0.0);
-    // Non-fabric surfaces (fabric.w = 0) show dark grey in the two fabric views.
+    // Non-fabric surfaces show dark grey in the two fabric views.
     if (view == DEBUG_COVERAGE) return fabric.w > 0.0 ? vec3(fabric.x, fabric.y, 1.0 - fabric.x - fabric.y) : vec3(0.1);
     if (view == DEBUG_THREAD_DIR) {
         if (fabric.w == 0.0) return vec3(0.1);
@@ -449,8 +488,18 @@ void main() {
             }
         }
     } else {
+        // The glTF material with its extensions (gb_fabric: sheen; gb_specular: the dielectric
+        // layer; the tangent: the anisotropy direction, surface.z its strength).
+        vec4 sp = texelFetch(gb_specular, px, 0);
+        vec4 sh = texelFetch(gb_fabric, px, 0);
+        vec3 ta = oct_decode(fr.zw);
+        ta -= n * dot(n, ta);
+        ta = dot(ta, ta) > 1e-12 ? normalize(ta) : any_tangent(n);
+        GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z);
+        bool has_sheen = max3(s.sheen) > 0.0;
+        float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;
         if (IBL != 0u) {
-            radiance += pbr_env(n, v, base, metallic, roughness, ao);
+            radiance += pbr_env(n, v, s, ao);
         } else {
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
             radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
@@ -463,7 +512,8 @@ void main() {
             if (all(equal(e, vec3(0.0)))) {
                 continue;
             }
-            vec3 c = pbr_brdf_cos(n, v, l, base, metallic, roughness);
+            float e_l = has_sheen ? sheen_albedo(dot(n, l), s.sheen_roughness) : 0.0;
+            vec3 c = gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l));
             if (all(equal(c, vec3(0.0)))) {
                 continue;
             }

@@ -102,6 +102,9 @@ struct SceneArgs {
     /// has none and no --env FILE is given), none, file, default.
     #[arg(long, default_value = "auto")]
     lights: String,
+    /// KHR_materials_variants: load the materials of this variant (`weft plan` lists them).
+    #[arg(long)]
+    variant: Option<String>,
 }
 
 #[derive(Args)]
@@ -289,7 +292,12 @@ fn load_scene_impl(
             if big {
                 eprintln!("loading {} ({} MiB)...", path.display(), bytes >> 20);
             }
-            let scene = scene::load(path)?;
+            let scene = scene::load_with(
+                path,
+                &scene::LoadOptions {
+                    variant: args.variant.clone(),
+                },
+            )?;
             if big {
                 eprintln!(
                     "loaded {} in {:.1} s",
@@ -299,6 +307,14 @@ fn load_scene_impl(
             }
             scene
         }
+        None if args.variant.is_some() => scene::load_slice_with(
+            scene::DEFAULT_SCENE_GLB,
+            "built-in default scene",
+            None,
+            &scene::LoadOptions {
+                variant: args.variant.clone(),
+            },
+        )?,
         None => scene::default_scene(),
     };
     let (env, own_env) = match args.env.as_str() {
@@ -504,6 +520,7 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
             background: "env".into(),
             ibl: weft::env::DEFAULT_IBL.name(),
             lights: "auto".into(),
+            variant: None,
         };
         let result = load_scene_quiet(&scene_args).and_then(|(scene, options)| {
             let frame = renderer.render(&scene, &options)?;
@@ -740,6 +757,11 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "triangles": plan.triangles,
             "lights": {"directional": plan.lights.directional, "point": plan.lights.point, "spot": plan.lights.spot},
             "fabric_materials": plan.fabric_materials,
+            "sheen_materials": plan.sheen_materials,
+            "specular_materials": plan.specular_materials,
+            "anisotropic_materials": plan.anisotropic_materials,
+            "variants": plan.variants,
+            "variant": plan.variant,
             "weaves": plan.weaves.iter().map(|w| serde_json::json!({
                 "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "materials": w.materials,
             })).collect::<Vec<_>>(),

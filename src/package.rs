@@ -89,17 +89,20 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "gbuffer.frag",
         "G-buffer pass, fragment stage: samples the material's textures (and, for fabric, the \
          weave texture built by `weave.comp`, with derivatives, so the mip level follows the \
-         pixel footprint) and writes five colour targets: albedo (RGBA8 sRGB), normal+tangent \
-         (RGBA16F, octahedral), surface (RGBA16F), fabric coverage (RGBA16F), emissive (RGBA16F). \
-         Render with a D32 depth target. The record layouts are in `include/frame.glsl` and \
+         pixel footprint) and writes six colour targets: albedo (RGBA8 sRGB), normal+tangent \
+         (RGBA16F, octahedral), surface (RGBA16F), fabric coverage (RGBA16F; for other materials \
+         the KHR_materials_sheen colour and roughness), emissive (RGBA16F), specular (RGBA16F: \
+         KHR_materials_specular's dielectric F0 and weight). Each texture slot has its own UV set \
+         (TEXCOORD_0 or _1) and affine transform (`Material.uv`). Render with a D32 depth target. The record layouts are in `include/frame.glsl` and \
          `include/fabric.glsl`.",
     ),
     (
         "gbuffer.vert",
         "G-buffer pass, vertex stage: one interleaved vertex buffer with position (location 0, \
          vec3), normal (1, vec3), tangent (2, vec4, w = handedness), uv (3, vec2) and weave uv (4, \
-         vec2: the uv with whole weave repeats removed per mesh), and, for SHADING = 1 (Gouraud), \
-         per-vertex lighting of fabric at location 5 for gbuffer.frag. Push constants per draw: `mat4 \
+         vec2: the uv with whole weave repeats removed per mesh) and uv1 (5, vec2: TEXCOORD_1), and, \
+         for SHADING = 1 (Gouraud), per-vertex lighting of fabric at output location 5 for \
+         gbuffer.frag. Push constants per draw: `mat4 \
          world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
          (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
          front faces; the projection flips y.",
@@ -120,10 +123,22 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          bound of each output under the Vulkan precision rules: `weft::reference::ibl_twin`.",
     ),
     (
+        "pbr_probe.comp",
+        "Evaluates the glTF BRDF of `include/pbr.glsl` (`gltf_brdf_cos` with \
+         KHR_materials_specular, _sheen and _anisotropy, and its terms `charlie_d`, \
+         `sheen_brdf_cos`, `ggx_aniso_d`, `sheen_lambda`) on a batch of inputs, one invocation per \
+         input. Bind a buffer of `count` 144-byte `PbrProbeInput` records (nine `vec4`: `n`, `v`, \
+         `l`, `base_metallic`, `f0_specular`, `sheen`, `t_anisotropy`, `params` (roughness, \
+         E(n·v), E(n·l)), `terms_in` (n·h, n·l, n·v, sheen roughness)) and a buffer for `count` \
+         32-byte outputs (`vec4 brdf`, `vec4 terms`). Push the `uint count`; dispatch \
+         `ceil(count / 64)` groups. The Rust twin: `weft::reference::shading::gltf_brdf_cos`.",
+    ),
+    (
         "lighting.frag",
         "Deferred lighting, one fullscreen triangle (`fullscreen.vert`): reads the G-buffer \
          targets and depth written by the G-buffer pass, sums every light with the glTF \
-         metallic-roughness BRDF or the fabric BRDF per material, and writes linear HDR radiance \
+         metallic-roughness BRDF (with KHR_materials_specular, _sheen and _anisotropy) or the \
+         fabric BRDF per material, and writes linear HDR radiance \
          to one RGBA16F target. No push constants.",
     ),
     (
@@ -288,9 +303,17 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         "lighting.frag",
         0,
         15,
-        "the split-sum DFG table (x: n·v, y: roughness; rg = A, B; weft::env::dfg_table), linear, clamp",
+        "the split-sum DFG table (x: n·v, y: roughness; rg = A, B, b = the sheen albedo E; weft::env::dfg_table), linear, clamp",
     ),
     ("gbuffer.frag", 1, 5, "ambient-occlusion texture (glTF occlusionTexture, R; white when none)"),
+    ("gbuffer.frag", 1, 6, "KHR_materials_sheen colour texture (sRGB; white when none)"),
+    ("gbuffer.frag", 1, 7, "KHR_materials_sheen roughness texture (A; white when none)"),
+    ("gbuffer.frag", 1, 8, "KHR_materials_specular texture (A; white when none)"),
+    ("gbuffer.frag", 1, 9, "KHR_materials_specular colour texture (sRGB; white when none)"),
+    ("gbuffer.frag", 1, 10, "KHR_materials_anisotropy texture (RG direction, B strength; any when the material has none)"),
+    ("lighting.frag", 0, 16, "G-buffer specular (KHR_materials_specular: rgb F0, a weight)"),
+    ("pbr_probe.comp", 0, 0, "the inputs: `PbrProbeInput[count]`"),
+    ("pbr_probe.comp", 0, 1, "the outputs: `PbrProbeOutput[count]`, written by the shader"),
     ("env_cube.comp", 0, 0, "level 0 of the radiance cube, as a storage image2DArray (layer = face)"),
     ("env_cube.comp", 0, 1, "the equirectangular environment map (RGBA16F), linear, REPEAT"),
     ("env_prefilter.comp", 0, 0, "the specular cube's level being written, as a storage image2DArray"),

@@ -104,6 +104,7 @@ fn quad_scene(material: Material, textures: Vec<Texture>) -> Scene {
         normal: [0.0, 0.0, 1.0],
         tangent: [1.0, 0.0, 0.0, 1.0],
         uv: [u, w],
+        uv1: [0.0; 2],
     };
     let mut s = Scene {
         source: "test quad".into(),

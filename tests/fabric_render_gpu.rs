@@ -108,6 +108,7 @@ fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
             normal: [0.0, 1.0, 0.0],
             tangent: [1.0, 0.0, 0.0, 1.0],
             uv: [uv_origin[0] + x, uv_origin[1] - z],
+            uv1: [0.0; 2],
         });
     }
     Scene {

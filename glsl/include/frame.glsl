@@ -69,11 +69,33 @@ struct Shadow {
                            // z: PCF radius in tile texels, w: one tile texel in atlas uv
 };
 
+// Texture slots (weft::scene::TextureSlot): the index of a slot's UV map in Material.uv.
+const uint SLOT_BASE_COLOR = 0u;
+const uint SLOT_METALLIC_ROUGHNESS = 1u;
+const uint SLOT_NORMAL = 2u;
+const uint SLOT_EMISSIVE = 3u;
+const uint SLOT_OCCLUSION = 4u;
+const uint SLOT_SHEEN_COLOR = 5u;
+const uint SLOT_SHEEN_ROUGHNESS = 6u;
+const uint SLOT_SPECULAR = 7u;
+const uint SLOT_SPECULAR_COLOR = 8u;
+const uint SLOT_ANISOTROPY = 9u;
+
+// Material.extra.w flags.
+const uint MATERIAL_ANISOTROPY = 1u;
+const uint MATERIAL_ANISOTROPY_TEXTURE = 2u;
+
 struct Material {
     vec4 base_color;          // linear rgba factor
     vec4 emissive_normal;     // rgb emissive factor, a: normal scale
     vec4 metallic_roughness;  // x metallic, y roughness, z: fabric record index + 1 (0 = none),
                               // w: occlusion strength
+    vec4 sheen;               // KHR_materials_sheen: rgb colour factor (0: no sheen), a: roughness
+    vec4 specular;            // KHR_materials_specular: rgb colour factor, a: specular factor
+    vec4 extra;               // x: the dielectric's F0 from KHR_materials_ior, y: anisotropy
+                              // strength, z: anisotropy rotation (radians), w: MATERIAL_* flags (a whole number)
+    vec4 uv[20];              // per texture slot s: rows uv[2s], uv[2s+1] of its affine UV map
+                              // (xyz), uv[2s].w: the UV set (0 or 1)
 };
 
 // Octahedral encoding of unit vectors (Cigolle et al. 2014): two values in [-1, 1].

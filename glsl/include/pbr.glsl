@@ -19,8 +19,85 @@ float smith_v(float n_l, float n_v, float alpha) {
     return s > 0.0 ? 0.5 / s : 0.0;
 }
 
-// BRDF times n.l for light direction l and view direction v (both unit, away from the surface).
-vec3 pbr_brdf_cos(vec3 n, vec3 v, vec3 l, vec3 base, float metallic, float roughness) {
+// A surface point of the glTF material with its extensions, as the lighting pass decodes it
+// from the G-buffer (Rust twin: weft::reference::shading::GltfSurface).
+struct GltfSurface {
+    vec3 base;
+    float metallic;
+    float roughness;
+    float specular;        // KHR_materials_specular: the dielectric layer's weight
+    vec3 f0;               // the dielectric's F0: min(F0(ior) · specular colour, 1)
+    vec3 sheen;            // KHR_materials_sheen colour (0: no sheen)
+    float sheen_roughness;
+    vec3 t;                // KHR_materials_anisotropy: the direction (unit, in the tangent plane)
+    float anisotropy;      // and its strength (0: isotropic GGX)
+};
+
+GltfSurface gltf_surface(vec3 base, float metallic, float roughness) {
+    return GltfSurface(base, metallic, roughness, 1.0, vec3(0.04), vec3(0.0), 0.0, vec3(1.0, 0.0, 0.0), 0.0);
+}
+
+// The Charlie sheen distribution (Estevez & Kulla 2017; KHR_materials_sheen), alpha = r².
+float charlie_d(float n_h, float roughness) {
+    float alpha = max(roughness * roughness, 1e-3);
+    float sin2 = max(1.0 - n_h * n_h, 0.0);
+    return (2.0 + 1.0 / alpha) * pow(sin2, 0.5 / alpha) / (2.0 * PI);
+}
+
+// The fit of the Charlie shadowing exponent (KHR_materials_sheen, "Sheen visibility").
+float sheen_l(float x, float alpha) {
+    float t = (1.0 - alpha) * (1.0 - alpha);
+    float a = mix(21.5473, 25.3245, t);
+    float b = mix(3.82987, 3.32435, t);
+    float c = mix(0.19823, 0.16801, t);
+    float d = mix(-1.97760, -1.27393, t);
+    float e = mix(-4.32054, -4.85967, t);
+    return a / (1.0 + b * pow(max(x, 0.0), c)) + d * x + e;
+}
+
+float sheen_lambda(float cos_theta, float alpha) {
+    return cos_theta < 0.5 ? exp(sheen_l(cos_theta, alpha))
+                           : exp(2.0 * sheen_l(0.5, alpha) - sheen_l(1.0 - cos_theta, alpha));
+}
+
+// The sheen BRDF with colour 1 times n·l: D·V·n·l with the Charlie visibility
+// V = 1 / ((1 + Λ(n·v) + Λ(n·l)) · 4 n·v n·l), the n·l cancelled (finite at grazing light).
+float sheen_brdf_cos(float n_l, float n_v, float n_h, float roughness) {
+    if (n_l <= 0.0 || n_v <= 0.0) {
+        return 0.0;
+    }
+    float alpha = max(roughness * roughness, 1e-3);
+    float lambda = sheen_lambda(n_v, alpha) + sheen_lambda(n_l, alpha);
+    return charlie_d(n_h, roughness) / ((1.0 + lambda) * 4.0 * n_v);
+}
+
+// Anisotropic GGX (KHR_materials_anisotropy) with roughness at along t and ab along b = n × t:
+// D with the product written so that neither a small alpha nor a grazing half vector overflows.
+float ggx_aniso_d(float t_h, float b_h, float n_h, float at, float ab) {
+    float a2 = at * ab;
+    vec3 f = vec3(ab * t_h, at * b_h, a2 * n_h);
+    float w2 = a2 / dot(f, f);
+    return a2 * w2 * w2 / PI;
+}
+
+float ggx_aniso_v(float t_v, float b_v, float n_v, float t_l, float b_l, float n_l, float at, float ab) {
+    float gv = n_l * length(vec3(at * t_v, ab * b_v, n_v));
+    float gl = n_v * length(vec3(at * t_l, ab * b_l, n_l));
+    float s = gv + gl;
+    return s > 0.0 ? 0.5 / s : 0.0;
+}
+
+float max3(vec3 c) {
+    return max(c.r, max(c.g, c.b));
+}
+
+// The glTF BRDF with KHR_materials_specular, _sheen and _anisotropy, times n·l, for light
+// direction l and view direction v (both unit, away from the surface): the metal and the
+// dielectric (Fresnel-mixed diffuse and specular, weighted by the specular factor) mixed by
+// metallic, under the sheen layer, which scales them by its albedo:
+// min(1 - max(sheen)·E(n·v), 1 - max(sheen)·E(n·l)). sheen_e = (E(n·v), E(n·l)) for the sheen
+// roughness (the directional albedo of the sheen BRDF with colour 1; env_dfg.b on the GPU).
+vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e) {
     float n_l = dot(n, l);
     float n_v = dot(n, v);
     if (n_l <= 0.0 || n_v <= 0.0) {
@@ -29,12 +106,33 @@ vec3 pbr_brdf_cos(vec3 n, vec3 v, vec3 l, vec3 base, float metallic, float rough
     vec3 h = normalize(l + v);
     float n_h = clamp(dot(n, h), 0.0, 1.0);
     float v_h = clamp(dot(v, h), 0.0, 1.0);
-    float alpha = max(roughness * roughness, 1e-3);
-    vec3 f0 = mix(vec3(0.04), base, metallic);
-    vec3 f = f0 + (1.0 - f0) * pow(1.0 - v_h, 5.0);
-    vec3 diffuse = (1.0 - f) * (1.0 - metallic) * base / PI;
-    vec3 specular = f * ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha);
-    return (diffuse + specular) * n_l;
+    float alpha = max(s.roughness * s.roughness, 1e-3);
+    float dv;
+    if (s.anisotropy > 0.0) {
+        vec3 b = cross(n, s.t);
+        float at = mix(alpha, 1.0, s.anisotropy * s.anisotropy);
+        dv = ggx_aniso_d(dot(s.t, h), dot(b, h), n_h, at, alpha)
+           * ggx_aniso_v(dot(s.t, v), dot(b, v), n_v, dot(s.t, l), dot(b, l), n_l, at, alpha);
+    } else {
+        dv = ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha);
+    }
+    float w = pow(1.0 - v_h, 5.0);
+    vec3 fr = s.f0 + (1.0 - s.f0) * w;
+    vec3 dielectric = (1.0 - s.specular * max3(fr)) * s.base / PI + s.specular * fr * dv;
+    vec3 metal = (s.base + (1.0 - s.base) * w) * dv;
+    vec3 f = mix(dielectric, metal, s.metallic) * n_l;
+    if (max3(s.sheen) > 0.0) {
+        // Clamped at 0: the Charlie lobe's albedo exceeds 1 at grazing angles and low roughness,
+        // where the specification's scaling would go negative.
+        float scale = max(min(1.0 - max3(s.sheen) * sheen_e.x, 1.0 - max3(s.sheen) * sheen_e.y), 0.0);
+        f = f * scale + s.sheen * sheen_brdf_cos(n_l, n_v, n_h, s.sheen_roughness);
+    }
+    return f;
+}
+
+// The core glTF metallic-roughness BRDF (no extensions) times n·l.
+vec3 pbr_brdf_cos(vec3 n, vec3 v, vec3 l, vec3 base, float metallic, float roughness) {
+    return gltf_brdf_cos(n, v, l, gltf_surface(base, metallic, roughness), vec2(0.0));
 }
 
 #endif

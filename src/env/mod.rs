@@ -472,14 +472,18 @@ impl EnvLighting {
 /// The split-sum DFG table of the GGX lobe with the height-correlated Smith visibility of
 /// `glsl/include/pbr.glsl`: for n·v = (i + 1/2)/size and roughness = (j + 1/2)/size,
 /// `(A, B)` with `∫ f·cos = F0·A + B` (Karis 2013), by 1024-sample Hammersley quadrature of the
-/// GGX half-vector distribution in f64. Row-major, j (roughness) major.
-pub fn dfg_table(size: u32) -> Vec<[f32; 2]> {
+/// GGX half-vector distribution in f64, and third the sheen's directional albedo E at sheen
+/// roughness = (j + 1/2)/size ([`crate::reference::shading::sheen_albedo`]). Row-major, j
+/// (roughness) major.
+pub fn dfg_table(size: u32) -> Vec<[f32; 3]> {
     let mut out = Vec::with_capacity((size * size) as usize);
     for j in 0..size {
         let roughness = (j as f64 + 0.5) / size as f64;
         for i in 0..size {
             let nv = (i as f64 + 0.5) / size as f64;
-            out.push(dfg(nv, roughness, 1024).map(|x| x as f32));
+            let [a, b] = dfg(nv, roughness, 1024).map(|x| x as f32);
+            let e = crate::reference::shading::sheen_albedo(nv, roughness as f32, 24) as f32;
+            out.push([a, b, e]);
         }
     }
     out
@@ -701,6 +705,7 @@ pub fn stage(
         normal: [0.0, 1.0, 0.0],
         tangent: [1.0, 0.0, 0.0, 1.0],
         uv: [u, v],
+        uv1: [0.0; 2],
     };
     let material = scene.materials.len();
     scene.materials.push(Material {

@@ -22,7 +22,7 @@
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
-use super::shading::{self, Surface};
+use super::shading::{self, GltfSurface, Surface};
 use super::weave::weave_box_uv;
 use crate::fabric::FabricParams;
 use crate::render::gpu::{FrameData, GpuLight};
@@ -120,8 +120,18 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
         .materials
         .iter()
         .map(|m| {
-            if [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture]
-                .iter()
+            if [
+                m.base_color_texture,
+                m.metallic_roughness_texture,
+                m.normal_texture,
+                m.emissive_texture,
+                m.sheen.as_ref().and_then(|s| s.color_texture),
+                m.sheen.as_ref().and_then(|s| s.roughness_texture),
+                m.specular.texture,
+                m.specular.color_texture,
+                m.anisotropy.as_ref().and_then(|a| a.texture),
+            ]
+            .iter()
                 .any(Option::is_some)
             {
                 return Err(Error::input(format!(
@@ -439,7 +449,38 @@ impl Raster {
             },
             coverage: [0.0; 3],
             fabric: None,
+            gltf: None,
         };
+        if dm.fabric.is_none() {
+            // The material's extensions, as gbuffer.frag writes them (factors only: the CPU
+            // rasterizer refuses textured materials).
+            let sign = if sign_in < 0.0 { -1.0 } else { 1.0 };
+            let (anisotropy, dir) = match &m.anisotropy {
+                Some(a) => {
+                    let b = n.cross(t) * sign;
+                    let d = t * a.rotation.cos() + b * a.rotation.sin();
+                    let d = (d - n * n.dot(d)).normalize_or_zero();
+                    if d == Vec3::ZERO {
+                        (0.0, t)
+                    } else {
+                        (a.strength, d)
+                    }
+                }
+                None => (0.0, t),
+            };
+            let f0 = m.specular.f0_from_ior();
+            surface.gltf = Some(GltfSurface {
+                base: surface.base_color,
+                metallic: surface.metallic,
+                roughness: surface.roughness,
+                specular: m.specular.factor.clamp(0.0, 1.0),
+                f0: m.specular.color.map(|c| (f0 * c).min(1.0)),
+                sheen: m.sheen.as_ref().map_or([0.0; 3], |s| s.color.map(|c| c.clamp(0.0, 1.0))),
+                sheen_roughness: m.sheen.as_ref().map_or(0.0, |s| s.roughness.clamp(0.0, 1.0)),
+                t: dir.to_array(),
+                anisotropy,
+            });
+        }
         if let Some((params, gpu)) = &dm.fabric {
             let uv_at = |q: Vec2| {
                 let (b, _) = tri.weights(q);

@@ -106,8 +106,119 @@ fn smith_v(n_l: f32, n_v: f32, alpha: f32) -> f32 {
     }
 }
 
-/// `pbr_brdf_cos` of pbr.glsl: the glTF BRDF times n·l.
-pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughness: f32) -> Vec3 {
+fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn length(a: Vec3) -> f32 {
+    dot(a, a).sqrt()
+}
+fn max3(c: Vec3) -> f32 {
+    c[0].max(c[1]).max(c[2])
+}
+fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    a * (1.0 - t) + b * t
+}
+
+/// `GltfSurface` of pbr.glsl: the glTF material with KHR_materials_specular, _sheen and
+/// _anisotropy at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfSurface {
+    pub base: Vec3,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// The dielectric layer's weight (specularFactor · texture).
+    pub specular: f32,
+    /// The dielectric's F0: min(F0(ior) · specular colour, 1).
+    pub f0: Vec3,
+    /// Sheen colour (0: no sheen) and roughness.
+    pub sheen: Vec3,
+    pub sheen_roughness: f32,
+    /// The anisotropy direction (unit, in the tangent plane) and strength (0: isotropic).
+    pub t: Vec3,
+    pub anisotropy: f32,
+}
+
+impl GltfSurface {
+    /// `gltf_surface` of pbr.glsl: the core material (no extensions).
+    pub fn core(base: Vec3, metallic: f32, roughness: f32) -> GltfSurface {
+        GltfSurface {
+            base,
+            metallic,
+            roughness,
+            specular: 1.0,
+            f0: [0.04; 3],
+            sheen: [0.0; 3],
+            sheen_roughness: 0.0,
+            t: [1.0, 0.0, 0.0],
+            anisotropy: 0.0,
+        }
+    }
+}
+
+/// `charlie_d` of pbr.glsl.
+pub fn charlie_d(n_h: f32, roughness: f32) -> f32 {
+    let alpha = (roughness * roughness).max(1e-3);
+    let sin2 = (1.0 - n_h * n_h).max(0.0);
+    (2.0 + 1.0 / alpha) * sin2.powf(0.5 / alpha) / (2.0 * PI)
+}
+
+fn sheen_l(x: f32, alpha: f32) -> f32 {
+    let t = (1.0 - alpha) * (1.0 - alpha);
+    let a = lerp(21.5473, 25.3245, t);
+    let b = lerp(3.82987, 3.32435, t);
+    let c = lerp(0.19823, 0.16801, t);
+    let d = lerp(-1.97760, -1.27393, t);
+    let e = lerp(-4.32054, -4.85967, t);
+    a / (1.0 + b * x.max(0.0).powf(c)) + d * x + e
+}
+
+/// `sheen_lambda` of pbr.glsl: the Charlie shadowing term Λ(cos θ) at alpha = r².
+pub fn sheen_lambda(cos_theta: f32, alpha: f32) -> f32 {
+    if cos_theta < 0.5 {
+        sheen_l(cos_theta, alpha).exp()
+    } else {
+        (2.0 * sheen_l(0.5, alpha) - sheen_l(1.0 - cos_theta, alpha)).exp()
+    }
+}
+
+/// `sheen_brdf_cos` of pbr.glsl: the sheen BRDF with colour 1 times n·l.
+pub fn sheen_brdf_cos(n_l: f32, n_v: f32, n_h: f32, roughness: f32) -> f32 {
+    if n_l <= 0.0 || n_v <= 0.0 {
+        return 0.0;
+    }
+    let alpha = (roughness * roughness).max(1e-3);
+    let lambda = sheen_lambda(n_v, alpha) + sheen_lambda(n_l, alpha);
+    charlie_d(n_h, roughness) / ((1.0 + lambda) * 4.0 * n_v)
+}
+
+/// `ggx_aniso_d` of pbr.glsl.
+pub fn ggx_aniso_d(t_h: f32, b_h: f32, n_h: f32, at: f32, ab: f32) -> f32 {
+    let a2 = at * ab;
+    let f = [ab * t_h, at * b_h, a2 * n_h];
+    let w2 = a2 / dot(f, f);
+    a2 * w2 * w2 / PI
+}
+
+/// `ggx_aniso_v` of pbr.glsl.
+#[allow(clippy::too_many_arguments)]
+pub fn ggx_aniso_v(t_v: f32, b_v: f32, n_v: f32, t_l: f32, b_l: f32, n_l: f32, at: f32, ab: f32) -> f32 {
+    let gv = n_l * length([at * t_v, ab * b_v, n_v]);
+    let gl = n_v * length([at * t_l, ab * b_l, n_l]);
+    let s = gv + gl;
+    if s > 0.0 {
+        0.5 / s
+    } else {
+        0.0
+    }
+}
+
+/// `gltf_brdf_cos` of pbr.glsl: the glTF BRDF with its extensions times n·l; `sheen_e` =
+/// (E(n·v), E(n·l)) at the sheen roughness.
+pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 2]) -> Vec3 {
     let n_l = dot(n, l);
     let n_v = dot(n, v);
     if n_l <= 0.0 || n_v <= 0.0 {
@@ -116,13 +227,66 @@ pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughn
     let h = normalize(add(l, v));
     let n_h = dot(n, h).clamp(0.0, 1.0);
     let v_h = dot(v, h).clamp(0.0, 1.0);
-    let alpha = (roughness * roughness).max(1e-3);
-    let f0 = mix([0.04; 3], base, metallic);
-    let fw = (1.0 - v_h).powf(5.0);
-    let f = add(f0, scale(sub([1.0; 3], f0), fw));
-    let diffuse = scale(mul(sub([1.0; 3], f), base), (1.0 - metallic) / PI);
-    let specular = scale(f, ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha));
-    scale(add(diffuse, specular), n_l)
+    let alpha = (s.roughness * s.roughness).max(1e-3);
+    let dv = if s.anisotropy > 0.0 {
+        let b = cross(n, s.t);
+        let at = lerp(alpha, 1.0, s.anisotropy * s.anisotropy);
+        ggx_aniso_d(dot(s.t, h), dot(b, h), n_h, at, alpha)
+            * ggx_aniso_v(dot(s.t, v), dot(b, v), n_v, dot(s.t, l), dot(b, l), n_l, at, alpha)
+    } else {
+        ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha)
+    };
+    let w = (1.0 - v_h).powf(5.0);
+    let fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
+    let dielectric = add(
+        scale(s.base, (1.0 - s.specular * max3(fr)) / PI),
+        scale(fr, s.specular * dv),
+    );
+    let metal = scale(add(s.base, scale(sub([1.0; 3], s.base), w)), dv);
+    let mut f = scale(mix(dielectric, metal, s.metallic), n_l);
+    if max3(s.sheen) > 0.0 {
+        let k = max3(s.sheen);
+        // Clamped at 0: the Charlie lobe's albedo exceeds 1 at grazing angles and low roughness
+        // (1.6 at n·v = 0.02, roughness 0.1), where the specification's scaling would go negative.
+        let sc = (1.0 - k * sheen_e[0]).min(1.0 - k * sheen_e[1]).max(0.0);
+        f = add(scale(f, sc), scale(s.sheen, sheen_brdf_cos(n_l, n_v, n_h, s.sheen_roughness)));
+    }
+    f
+}
+
+/// `pbr_brdf_cos` of pbr.glsl: the core glTF BRDF times n·l.
+pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughness: f32) -> Vec3 {
+    gltf_brdf_cos(n, v, l, &GltfSurface::core(base, metallic, roughness), [0.0; 2])
+}
+
+/// The directional albedo E(cos θ) = ∫ sheen_brdf_cos dω of the sheen BRDF with colour 1 at sheen
+/// roughness `roughness`, by a midpoint quadrature in (cos θ_l, φ) with `n` × 4n cells, in f64
+/// (what the DFG table's third channel holds; the sheen layer's albedo scaling uses it).
+pub fn sheen_albedo(cos_theta: f64, roughness: f32, n: u32) -> f64 {
+    let nv = cos_theta.clamp(1e-4, 1.0);
+    let v = [(1.0 - nv * nv).max(0.0).sqrt(), 0.0, nv];
+    let mut sum = 0.0;
+    let (nt, np) = (n, 4 * n);
+    for i in 0..nt {
+        // Cells in cos θ_l = u², denser towards the horizon where the lobe of a low roughness or
+        // a grazing view lives (24 cells: within 3e-4 of a 200-cell quadrature).
+        let u0 = i as f64 / nt as f64;
+        let u1 = (i + 1) as f64 / nt as f64;
+        let um = (u0 + u1) * 0.5;
+        let cl = um * um;
+        let dcos = u1 * u1 - u0 * u0;
+        let sl = (1.0 - cl * cl).max(0.0).sqrt();
+        for j in 0..np {
+            let phi = (j as f64 + 0.5) / np as f64 * 2.0 * std::f64::consts::PI;
+            let l = [sl * phi.cos(), sl * phi.sin(), cl];
+            let h = [v[0] + l[0], v[1] + l[1], v[2] + l[2]];
+            let hl = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+            let n_h = (h[2] / hl) as f32;
+            let f = sheen_brdf_cos(cl as f32, nv as f32, n_h, roughness) as f64;
+            sum += f * dcos * (2.0 * std::f64::consts::PI / np as f64);
+        }
+    }
+    sum
 }
 
 /// A surface point as the lighting pass sees it (decoded from the G-buffer, or made by the CPU
@@ -141,6 +305,9 @@ pub struct Surface {
     /// (c_warp, c_weft, shadow-weighted thread area), for fabric.
     pub coverage: Vec3,
     pub fabric: Option<GpuFabric>,
+    /// The glTF material's extensions (non-fabric; None: the core material of `base_color`,
+    /// `metallic`, `roughness`). Its `t` is the anisotropy direction.
+    pub gltf: Option<GltfSurface>,
 }
 
 /// `gouraud` of gbuffer.vert: the Phong reflection model at a fabric vertex (world position `p`,
@@ -245,6 +412,17 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
         }
         None => {
             let base = s.base_color;
+            let gs = s
+                .gltf
+                .unwrap_or_else(|| GltfSurface::core(base, s.metallic, s.roughness));
+            let albedo = |c: f32| {
+                if max3(gs.sheen) > 0.0 {
+                    sheen_albedo(c as f64, gs.sheen_roughness, 24) as f32
+                } else {
+                    0.0
+                }
+            };
+            let e_v = albedo(dot(n, v));
             let spec_ambient = scale(mix([0.04; 3], base, s.metallic), (1.0 - s.roughness) * 0.5);
             radiance = add(
                 radiance,
@@ -260,7 +438,7 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
                 }
                 radiance = add(
                     radiance,
-                    mul(e, pbr_brdf_cos(n, v, l, base, s.metallic, s.roughness)),
+                    mul(e, gltf_brdf_cos(n, v, l, &gs, [e_v, albedo(dot(n, l))])),
                 );
             }
         }

@@ -28,6 +28,8 @@ pub const FRAME_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const SURFACE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const FABRIC_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const EMISSIVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// The dielectric specular layer (KHR_materials_specular): rgb F0, a: specular weight.
+pub const SPECULAR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
 pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
@@ -36,7 +38,7 @@ pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
 pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
 
 /// Floats per vertex in the G-buffer pass's vertex buffer: position, normal, tangent, uv, weave uv.
-const VERTEX_FLOATS: usize = 14;
+const VERTEX_FLOATS: usize = 16;
 
 /// Wall-clock and GPU time of one pass.
 #[derive(Clone, Debug)]
@@ -83,6 +85,7 @@ pub(crate) struct Targets {
     pub(crate) surface: Image,
     pub(crate) fabric: Image,
     pub(crate) emissive: Image,
+    pub(crate) specular: Image,
     pub(crate) depth: Image,
     pub(crate) hdr: Image,
     pub(crate) ldr: Image,
@@ -101,6 +104,7 @@ impl Targets {
             surface: t("gbuffer surface", SURFACE_FORMAT, color | read)?,
             fabric: t("gbuffer fabric coverage", FABRIC_FORMAT, color | read)?,
             emissive: t("gbuffer emissive", EMISSIVE_FORMAT, color | read)?,
+            specular: t("gbuffer specular", SPECULAR_FORMAT, color | read)?,
             depth: t(
                 "gbuffer depth",
                 DEPTH_FORMAT,
@@ -111,13 +115,14 @@ impl Targets {
         })
     }
 
-    pub(crate) fn gbuffer_colors(&self) -> [&Image; 5] {
+    pub(crate) fn gbuffer_colors(&self) -> [&Image; 6] {
         [
             &self.albedo,
             &self.frame,
             &self.surface,
             &self.fabric,
             &self.emissive,
+            &self.specular,
         ]
     }
 }
@@ -154,7 +159,7 @@ pub struct GpuScene {
     pub(crate) material_count: u32,
     /// Per material: base colour, metallic-roughness, normal, emissive and occlusion textures
     /// (indices into `textures`, None = a default).
-    pub(crate) material_textures: Vec<[Option<usize>; 5]>,
+    pub(crate) material_textures: Vec<[Option<usize>; 10]>,
     pub(crate) textures: Vec<Image>,
     pub(crate) draws: Vec<DrawRange>,
     pub(crate) triangles: usize,
@@ -228,7 +233,7 @@ impl Renderer {
             },
         ])?;
         let material_layout = ctx.create_set_layout(
-            &(0..6)
+            &(0..11)
                 .map(|b| sampled(b, Stages::FRAGMENT))
                 .collect::<Vec<_>>(),
         )?;
@@ -266,7 +271,7 @@ impl Renderer {
             kind: BindingKind::StorageBuffer,
             stages: Stages::FRAGMENT,
         });
-        lighting_bindings.extend((13..16).map(|b| sampled(b, Stages::FRAGMENT)));
+        lighting_bindings.extend((13..17).map(|b| sampled(b, Stages::FRAGMENT)));
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
         let weave_layout = ctx.create_set_layout(&[Binding {
@@ -499,6 +504,7 @@ impl Renderer {
                     (2, Format::R32G32B32A32_SFLOAT, 24),
                     (3, Format::R32G32_SFLOAT, 40),
                     (4, Format::R32G32_SFLOAT, 48),
+                    (5, Format::R32G32_SFLOAT, 56),
                 ],
             };
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
@@ -516,6 +522,7 @@ impl Renderer {
                     SURFACE_FORMAT,
                     FABRIC_FORMAT,
                     EMISSIVE_FORMAT,
+                    SPECULAR_FORMAT,
                 ],
                 depth_format: Some(DEPTH_FORMAT),
                 set_layouts: &[&self.frame_layout, &self.material_layout],
@@ -610,6 +617,7 @@ impl Renderer {
                 w[10..12].copy_from_slice(&v.uv);
                 w[12] = (v.uv[0] as f64 - weave_offset[0]) as f32;
                 w[13] = (v.uv[1] as f64 - weave_offset[1]) as f32;
+                w[14..16].copy_from_slice(&v.uv1);
                 w
             }));
             indices.extend_from_slice(&mesh.indices);
@@ -704,6 +712,11 @@ impl Renderer {
                     m.normal_texture,
                     m.emissive_texture,
                     m.occlusion_texture,
+                    m.sheen.as_ref().and_then(|s| s.color_texture),
+                    m.sheen.as_ref().and_then(|s| s.roughness_texture),
+                    m.specular.texture,
+                    m.specular.color_texture,
+                    m.anisotropy.as_ref().and_then(|a| a.texture),
                 ]
             })
             .collect();
@@ -942,7 +955,7 @@ impl Renderer {
                     )?;
                     let material_sets = (0..gpu.material_count as usize)
                         .map(|m| {
-                            let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 5]);
+                            let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 10]);
                             let pick = |slot: usize, fallback: &'static str| -> &Image {
                                 match tex[slot].and_then(|i| gpu.textures.get(i)) {
                                     Some(t) => t,
@@ -968,6 +981,11 @@ impl Renderer {
                                     (3, Resource::Sampled(pick(3, "white"), &self.linear)),
                                     (4, Resource::Sampled(weave, &self.linear)),
                                     (5, Resource::Sampled(pick(4, "white"), &self.linear)),
+                                    (6, Resource::Sampled(pick(5, "white"), &self.linear)),
+                                    (7, Resource::Sampled(pick(6, "white"), &self.linear)),
+                                    (8, Resource::Sampled(pick(7, "white"), &self.linear)),
+                                    (9, Resource::Sampled(pick(8, "white"), &self.linear)),
+                                    (10, Resource::Sampled(pick(9, "white"), &self.linear)),
                                 ],
                             )
                         })
@@ -1025,6 +1043,7 @@ impl Renderer {
                             (13, Resource::Sampled(env_radiance, &self.env.sampler)),
                             (14, Resource::Sampled(env_specular, &self.env.sampler)),
                             (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
+                            (16, Resource::Sampled(&targets.specular, &self.nearest)),
                         ],
                     )?;
                     timed("lighting", &mut |cmd| {
@@ -1152,7 +1171,7 @@ impl Renderer {
     }
 
     /// Reads back the G-buffer of the last frame (for tests and debugging): albedo RGBA8,
-    /// then the four RGBA16F targets as f32, then depth.
+    /// then the five RGBA16F targets as f32, then depth.
     pub fn read_gbuffer(&self) -> crate::Result<GBufferReadback> {
         let t = self
             .targets
@@ -1173,6 +1192,7 @@ impl Renderer {
             surface: half(&t.surface)?,
             fabric: half(&t.fabric)?,
             emissive: half(&t.emissive)?,
+            specular: half(&t.specular)?,
             depth: depth_raw
                 .chunks_exact(4)
                 .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -1188,6 +1208,7 @@ pub struct GBufferReadback {
     pub surface: Vec<f32>,
     pub fabric: Vec<f32>,
     pub emissive: Vec<f32>,
+    pub specular: Vec<f32>,
     pub depth: Vec<f32>,
 }
 

@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use crate::scene::{Light, LightKind, Material};
+use crate::scene::{Light, LightKind, Material, TextureSlot};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -140,8 +140,20 @@ pub struct GpuMaterial {
     pub base_color: [f32; 4],
     pub emissive_normal: [f32; 4],
     pub metallic_roughness: [f32; 4],
+    /// KHR_materials_sheen: rgb colour (0: none), a: roughness.
+    pub sheen: [f32; 4],
+    /// KHR_materials_specular: rgb colour factor, a: specular factor.
+    pub specular: [f32; 4],
+    /// x: F0 from the ior, y: anisotropy strength, z: rotation, w: flags (a whole number).
+    pub extra: [f32; 4],
+    /// Per texture slot: the two rows of its affine UV map, row 0's w the UV set.
+    pub uv: [[f32; 4]; 2 * TextureSlot::COUNT],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96 + 32 * TextureSlot::COUNT);
+
+/// Material flags (frame.glsl's MATERIAL_*).
+const MATERIAL_ANISOTROPY: u32 = 1;
+const MATERIAL_ANISOTROPY_TEXTURE: u32 = 2;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -169,6 +181,40 @@ impl GpuMaterial {
                     0.0
                 },
             ],
+            sheen: match &m.sheen {
+                Some(s) => [s.color[0], s.color[1], s.color[2], s.roughness],
+                None => [0.0; 4],
+            },
+            specular: [
+                m.specular.color[0],
+                m.specular.color[1],
+                m.specular.color[2],
+                m.specular.factor,
+            ],
+            extra: {
+                let (strength, rotation, flags) = match &m.anisotropy {
+                    Some(a) => (
+                        a.strength,
+                        a.rotation,
+                        MATERIAL_ANISOTROPY
+                            | if a.texture.is_some() {
+                                MATERIAL_ANISOTROPY_TEXTURE
+                            } else {
+                                0
+                            },
+                    ),
+                    None => (0.0, 0.0, 0),
+                };
+                [m.specular.f0_from_ior(), strength, rotation, flags as f32]
+            },
+            uv: {
+                let mut uv = [[0.0; 4]; 2 * TextureSlot::COUNT];
+                for (k, s) in m.uv.iter().enumerate() {
+                    uv[2 * k] = [s.m[0][0], s.m[0][1], s.m[0][2], s.set as f32];
+                    uv[2 * k + 1] = [s.m[1][0], s.m[1][1], s.m[1][2], 0.0];
+                }
+                uv
+            },
         }
     }
 }

@@ -114,6 +114,14 @@ pub struct Plan {
     pub lights: LightCounts,
     /// Materials that use the fabric model (the rest use glTF metallic-roughness).
     pub fabric_materials: usize,
+    /// Materials with KHR_materials_sheen, non-default KHR_materials_specular / _ior, and
+    /// KHR_materials_anisotropy.
+    pub sheen_materials: usize,
+    pub specular_materials: usize,
+    pub anisotropic_materials: usize,
+    /// KHR_materials_variants: the file's variants and the one loaded (None: the defaults).
+    pub variants: Vec<String>,
+    pub variant: Option<String>,
     /// One per distinct weave (materials differing only in colour or exponents share one).
     pub weaves: Vec<WeavePlan>,
     pub features: FabricFeatures,
@@ -279,6 +287,19 @@ impl Plan {
             draws: scene.draws.len(),
             triangles,
             lights,
+            sheen_materials: scene.materials.iter().filter(|m| m.fabric.is_none() && m.sheen.is_some()).count(),
+            specular_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.fabric.is_none() && m.specular != crate::scene::Specular::default())
+                .count(),
+            anisotropic_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.fabric.is_none() && m.anisotropy.is_some())
+                .count(),
+            variants: scene.variants.clone(),
+            variant: scene.variant.clone(),
             fabric_materials: scene
                 .materials
                 .iter()
@@ -332,7 +353,19 @@ impl fmt::Display for Plan {
             "lights      {} directional, {} point, {} spot",
             self.lights.directional, self.lights.point, self.lights.spot
         )?;
-        writeln!(f, "materials   {} fabric", self.fabric_materials)?;
+        writeln!(
+            f,
+            "materials   {} fabric, {} sheen, {} specular, {} anisotropic",
+            self.fabric_materials, self.sheen_materials, self.specular_materials, self.anisotropic_materials
+        )?;
+        if !self.variants.is_empty() {
+            writeln!(
+                f,
+                "variants    {} (loaded: {})",
+                self.variants.join(", "),
+                self.variant.as_deref().unwrap_or("the file's defaults")
+            )?;
+        }
         for w in &self.weaves {
             let materials = w.materials.join(", ");
             writeln!(

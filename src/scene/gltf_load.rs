@@ -21,11 +21,12 @@ use gltf::json::validation::{Checked, Validate};
 use gltf::mesh::{Mode, Semantic};
 
 use super::accessor::{self, Use};
+use super::material_ext::{self, TexRef};
 use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
-    Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Texture, Vertex,
-    Warning,
+    Anisotropy, Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Sheen,
+    SlotUv, Specular, Texture, TextureSlot, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -57,8 +58,21 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
+    material_ext::SHEEN,
+    material_ext::SPECULAR,
+    material_ext::IOR,
+    material_ext::ANISOTROPY,
+    material_ext::VARIANTS,
     FABRIC_EXTENSION,
 ];
+
+/// What a load may choose beyond the file itself.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// KHR_materials_variants: the variant to load (by name); None loads the file's default
+    /// materials.
+    pub variant: Option<String>,
+}
 
 /// The scene embedded in the binary: a draped cloth over a ball on a floor, a metal ball, three
 /// lights and a camera.
@@ -69,6 +83,11 @@ pub fn default_scene() -> Scene {
 
 /// Loads a `.gltf` (with its external or embedded buffers and images) or a `.glb` file.
 pub fn load(path: &Path) -> Result<Scene> {
+    load_with(path, &LoadOptions::default())
+}
+
+/// [`load`] with options (a material variant).
+pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let source = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
@@ -85,15 +104,25 @@ pub fn load(path: &Path) -> Result<Scene> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    load_slice(&bytes, &source, Some(base_dir))
+    load_slice_with(&bytes, &source, Some(base_dir), options)
 }
 
 /// Loads a scene from the bytes of a `.gltf` or `.glb` file. `source` names it in messages;
 /// `base_dir` is where relative URIs (external buffers and images) are resolved: None refuses them.
 pub fn load_slice(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<Scene> {
+    load_slice_with(bytes, source, base_dir, &LoadOptions::default())
+}
+
+/// [`load_slice`] with options (a material variant).
+pub fn load_slice_with(
+    bytes: &[u8],
+    source: &str,
+    base_dir: Option<&Path>,
+    options: &LoadOptions,
+) -> Result<Scene> {
     // Everything below checks the file before use, but the gltf crate's accessors unwrap on
     // documents that slip past its validator; a panic there must still reach the user as an error.
-    match catch_unwind(AssertUnwindSafe(|| load_checked(bytes, source, base_dir))) {
+    match catch_unwind(AssertUnwindSafe(|| load_checked(bytes, source, base_dir, options))) {
         Ok(result) => result,
         Err(panic) => {
             let detail = panic
@@ -108,7 +137,12 @@ pub fn load_slice(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result
     }
 }
 
-fn load_checked(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<Scene> {
+fn load_checked(
+    bytes: &[u8],
+    source: &str,
+    base_dir: Option<&Path>,
+    options: &LoadOptions,
+) -> Result<Scene> {
     let label = format!("'{source}'");
     let (mut root, glb_bin) = parse(bytes, source)?;
     let mut warnings = Vec::new();
@@ -116,6 +150,26 @@ fn load_checked(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<S
     validate(&root, &label)?;
     let buffers = resources::load_buffers(&root, glb_bin, base_dir, &label)?;
     let doc = gltf::Document::from_json_without_validation(root);
+
+    let variants = material_ext::variant_names(doc.extension_value(material_ext::VARIANTS))
+        .map_err(|e| Error::input(format!("{label}: {e}")))?;
+    let variant = match &options.variant {
+        None => None,
+        Some(name) => match variants.iter().position(|v| v == name) {
+            Some(i) => Some(i),
+            None if variants.is_empty() => {
+                return Err(Error::input(format!(
+                    "{label} has no material variants (KHR_materials_variants), so --variant '{name}' cannot be applied; leave --variant out"
+                )))
+            }
+            None => {
+                return Err(Error::input(format!(
+                    "{label} has no material variant '{name}'; its variants are: {} (`weft plan` lists them)",
+                    variants.iter().map(|v| format!("'{v}'")).collect::<Vec<_>>().join(", ")
+                )))
+            }
+        },
+    };
 
     let mut loader = Loader {
         label,
@@ -125,8 +179,11 @@ fn load_checked(bytes: &[u8], source: &str, base_dir: Option<&Path>) -> Result<S
         scene: Scene {
             source: source.to_owned(),
             warnings,
+            variant: options.variant.clone(),
+            variants: variants.clone(),
             ..Scene::default()
         },
+        variant: variant.map(|i| (i, variants.len())),
         textures: HashMap::new(),
         material_uv: Vec::new(),
         default_material: None,
@@ -364,6 +421,8 @@ struct Loader<'a> {
     textures: HashMap<(usize, bool), usize>,
     /// Per glTF material: the texture transform baked into the texture coordinates of its meshes.
     material_uv: Vec<UvTransform>,
+    /// The KHR_materials_variants variant chosen, and how many the file has.
+    variant: Option<(usize, usize)>,
     /// Index of `Material::default()` in `scene.materials`, once a primitive needed it.
     default_material: Option<usize>,
     /// Per glTF mesh: the scene meshes made from its primitives, once a node used it.
@@ -448,27 +507,29 @@ impl<'a> Loader<'a> {
         let metallic = clamp01("metallicFactor", pbr.metallic_factor(), self);
         let roughness = clamp01("roughnessFactor", pbr.roughness_factor(), self);
 
-        // Texture coordinate transforms of the textures, in slot order (base colour first, so it
-        // wins when they disagree).
-        let mut uv_transforms: Vec<(&str, UvTransform)> = Vec::new();
+        // Each texture slot's UV set and transform, in slot order (the first on TEXCOORD_0
+        // becomes the frame transform baked into the vertices).
+        let mut uv_transforms: Vec<(TextureSlot, UvTransform, u32)> = Vec::new();
         let slot = |loader: &mut Self,
                     info_tex: gltf::Texture<'a>,
                     tex_coord: u32,
                     transform: Option<(UvTransform, Option<u32>)>,
-                    slot_name: &'static str,
+                    kind: (TextureSlot, &'static str),
                     color_space: ColorSpace,
-                    uv_transforms: &mut Vec<(&'static str, UvTransform)>|
+                    uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32)>|
          -> Result<usize> {
-            let (uv, set) = match transform {
+            let (slot_kind, slot_name) = kind;
+            let (uv, mut set) = match transform {
                 Some((t, set)) => (t, set.unwrap_or(tex_coord)),
                 None => (UvTransform::IDENTITY, tex_coord),
             };
-            if set != 0 {
+            if set > 1 {
                 loader.warn(format_args!(
-                    "{who}'s {slot_name} uses TEXCOORD_{set}; weft reads only TEXCOORD_0, so it is sampled with those"
+                    "{who}'s {slot_name} uses TEXCOORD_{set}; weft reads TEXCOORD_0 and TEXCOORD_1, so it is sampled with TEXCOORD_0"
                 ));
+                set = 0;
             }
-            uv_transforms.push((slot_name, uv));
+            uv_transforms.push((slot_kind, uv, set));
             loader.texture(&info_tex, color_space, &who, slot_name)
         };
 
@@ -503,7 +564,7 @@ impl<'a> Loader<'a> {
                 info.texture(),
                 info.tex_coord(),
                 info_transform(&info)?,
-                "base colour texture",
+                (TextureSlot::BaseColor, "base colour texture"),
                 ColorSpace::Srgb,
                 &mut uv_transforms,
             )?),
@@ -515,7 +576,7 @@ impl<'a> Loader<'a> {
                 info.texture(),
                 info.tex_coord(),
                 info_transform(&info)?,
-                "metallic-roughness texture",
+                (TextureSlot::MetallicRoughness, "metallic-roughness texture"),
                 ColorSpace::Linear,
                 &mut uv_transforms,
             )?),
@@ -525,7 +586,7 @@ impl<'a> Loader<'a> {
             Some(normal) => {
                 // The gltf crate leaves KHR_texture_transform on normal textures as raw JSON.
                 let transform = match normal.extension_value("KHR_texture_transform") {
-                    Some(v) => Some(self.parse_texture_transform(v, &who)?),
+                    Some(v) => Some(self.parse_texture_transform(v, &who, "normal texture")?),
                     None => None,
                 };
                 let scale = normal.scale();
@@ -535,7 +596,7 @@ impl<'a> Loader<'a> {
                     normal.texture(),
                     normal.tex_coord(),
                     transform,
-                    "normal texture",
+                    (TextureSlot::Normal, "normal texture"),
                     ColorSpace::Linear,
                     &mut uv_transforms,
                 )?;
@@ -549,7 +610,7 @@ impl<'a> Loader<'a> {
                 info.texture(),
                 info.tex_coord(),
                 info_transform(&info)?,
-                "emissive texture",
+                (TextureSlot::Emissive, "emissive texture"),
                 ColorSpace::Srgb,
                 &mut uv_transforms,
             )?),
@@ -558,7 +619,7 @@ impl<'a> Loader<'a> {
         let (occlusion_texture, occlusion_strength) = match m.occlusion_texture() {
             Some(occ) => {
                 let transform = match occ.extension_value("KHR_texture_transform") {
-                    Some(v) => Some(self.parse_texture_transform(v, &who)?),
+                    Some(v) => Some(self.parse_texture_transform(v, &who, "occlusion texture")?),
                     None => None,
                 };
                 let strength = occ.strength();
@@ -573,7 +634,7 @@ impl<'a> Loader<'a> {
                     occ.texture(),
                     occ.tex_coord(),
                     transform,
-                    "occlusion texture",
+                    (TextureSlot::Occlusion, "occlusion texture"),
                     ColorSpace::Linear,
                     &mut uv_transforms,
                 )?;
@@ -588,19 +649,102 @@ impl<'a> Loader<'a> {
             ));
         }
 
-        // One set of texture coordinates per mesh: the transform is baked into them, which is
-        // exact when every texture of the material agrees.
-        let uv = match uv_transforms.split_first() {
-            None => UvTransform::IDENTITY,
-            Some(((first_slot, first), rest)) => {
-                if let Some((other_slot, _)) = rest.iter().find(|(_, t)| t != first) {
-                    self.warn(format_args!(
-                        "{who}'s {first_slot} and {other_slot} have different KHR_texture_transform settings; weft applies one transform per material, the {first_slot}'s"
-                    ));
-                }
-                *first
-            }
+        // The material extensions (sheen, specular, ior, anisotropy), with their textures.
+        let ext = |key: &str| m.extensions().and_then(|e| e.get(key));
+        let mut ctx = material_ext::Ctx {
+            material: &name,
+            extension: material_ext::SHEEN,
+            warnings: Vec::new(),
         };
+        let sheen_ext = ext(material_ext::SHEEN)
+            .map(|v| material_ext::sheen(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::SPECULAR;
+        let specular_ext = ext(material_ext::SPECULAR)
+            .map(|v| material_ext::specular(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::IOR;
+        let ior = ext(material_ext::IOR)
+            .map(|v| material_ext::ior(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::ANISOTROPY;
+        let anisotropy_ext = ext(material_ext::ANISOTROPY)
+            .map(|v| material_ext::anisotropy(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
+        for w in std::mem::take(&mut ctx.warnings) {
+            self.warn(w);
+        }
+        let ext_texture = |loader: &mut Self,
+                               r: &Option<TexRef>,
+                               kind: (TextureSlot, &'static str),
+                               color_space: ColorSpace,
+                               uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32)>|
+         -> Result<Option<usize>> {
+            let Some(r) = r else { return Ok(None) };
+            let Some(texture) = loader.doc.textures().nth(r.index) else {
+                return Err(loader.error(format_args!(
+                    "{who}'s {} refers to texture {}, but the file has {} textures; fix the index",
+                    kind.1,
+                    r.index,
+                    loader.doc.textures().len()
+                )));
+            };
+            let transform = match &r.transform {
+                Some(v) => Some(loader.parse_texture_transform(v, &who, kind.1)?),
+                None => None,
+            };
+            slot(loader, texture, r.tex_coord, transform, kind, color_space, uv_transforms).map(Some)
+        };
+        let sheen = match &sheen_ext {
+            None => None,
+            Some(e) => Some(Sheen {
+                color: e.color,
+                roughness: e.roughness,
+                color_texture: ext_texture(self, &e.color_texture, (TextureSlot::SheenColor, "sheen colour texture"), ColorSpace::Srgb, &mut uv_transforms)?,
+                roughness_texture: ext_texture(self, &e.roughness_texture, (TextureSlot::SheenRoughness, "sheen roughness texture"), ColorSpace::Linear, &mut uv_transforms)?,
+            }),
+        };
+        let mut specular = Specular::default();
+        if let Some(e) = &specular_ext {
+            specular.factor = e.factor;
+            specular.color = e.color;
+            specular.texture = ext_texture(self, &e.texture, (TextureSlot::Specular, "specular texture"), ColorSpace::Linear, &mut uv_transforms)?;
+            specular.color_texture = ext_texture(self, &e.color_texture, (TextureSlot::SpecularColor, "specular colour texture"), ColorSpace::Srgb, &mut uv_transforms)?;
+        }
+        if let Some(ior) = ior {
+            specular.ior = ior;
+        }
+        let anisotropy = match &anisotropy_ext {
+            None => None,
+            Some(e) => Some(Anisotropy {
+                strength: e.strength,
+                rotation: e.rotation,
+                texture: ext_texture(self, &e.texture, (TextureSlot::Anisotropy, "anisotropy texture"), ColorSpace::Linear, &mut uv_transforms)?,
+            }),
+        };
+
+        // TEXCOORD_0 carries one transform, baked into the vertices (so tangents and the weave
+        // follow it): the first TEXCOORD_0 slot's. Every slot then gets its own map from the
+        // baked coordinates (or from TEXCOORD_1) to its own.
+        let frame = uv_transforms
+            .iter()
+            .find(|(_, t, set)| *set == 0 && t.inverse().is_some())
+            .map_or(UvTransform::IDENTITY, |(_, t, _)| *t);
+        let frame_inverse = frame.inverse().unwrap_or(UvTransform::IDENTITY.affine());
+        let mut slot_uv = [SlotUv::IDENTITY; TextureSlot::COUNT];
+        for (kind, t, set) in &uv_transforms {
+            let m = if *set == 0 {
+                UvTransform::compose(t.affine(), frame_inverse)
+            } else {
+                t.affine()
+            };
+            slot_uv[*kind as usize] = SlotUv { set: *set, m };
+        }
+        let uv = frame;
 
         let fabric = match m.extensions().and_then(|e| e.get(FABRIC_EXTENSION)) {
             Some(value) => Some(
@@ -629,6 +773,10 @@ impl<'a> Loader<'a> {
             occlusion_strength,
             double_sided: m.double_sided(),
             fabric,
+            sheen,
+            specular,
+            anisotropy,
+            uv: slot_uv,
         };
         Ok((material, uv))
     }
@@ -638,10 +786,11 @@ impl<'a> Loader<'a> {
         &self,
         v: &serde_json::Value,
         who: &str,
+        slot_name: &str,
     ) -> Result<(UvTransform, Option<u32>)> {
         let bad = || {
             self.error(format_args!(
-                "{who}'s normal texture has a malformed KHR_texture_transform ({v}); offset and scale must be [x, y] numbers, rotation a number, texCoord an unsigned integer"
+                "{who}'s {slot_name} has a malformed KHR_texture_transform ({v}); offset and scale must be [x, y] numbers, rotation a number, texCoord an unsigned integer"
             ))
         };
         let pair = |key: &str, default: [f32; 2]| -> Result<[f32; 2]> {
@@ -765,14 +914,36 @@ impl<'a> Loader<'a> {
         Ok(ids)
     }
 
-    fn material_index(&mut self, prim: &gltf::Primitive<'a>) -> usize {
-        match prim.material().index() {
+    /// The glTF material of a primitive: its variant's mapping when a variant was chosen and the
+    /// primitive maps it, else its own.
+    fn gltf_material(&self, prim: &gltf::Primitive<'a>) -> Result<Option<usize>> {
+        if let (Some((variant, count)), Some(ext)) =
+            (self.variant, prim.extension_value(material_ext::VARIANTS))
+        {
+            if let Some(m) = material_ext::mapped_material(ext, variant, count)
+                .map_err(|e| self.error(e))?
+            {
+                if m >= self.scene.materials.len().max(self.material_uv.len()) {
+                    return Err(self.error(format_args!(
+                        "{}.mappings names material {m}, but the file has {} materials; fix the mapping",
+                        material_ext::VARIANTS,
+                        self.material_uv.len()
+                    )));
+                }
+                return Ok(Some(m));
+            }
+        }
+        Ok(prim.material().index())
+    }
+
+    fn material_index(&mut self, prim: &gltf::Primitive<'a>) -> Result<usize> {
+        Ok(match self.gltf_material(prim)? {
             Some(i) => i,
             None => *self.default_material.get_or_insert_with(|| {
                 self.scene.materials.push(Material::default());
                 self.scene.materials.len() - 1
             }),
-        }
+        })
     }
 
     fn primitive(
@@ -822,10 +993,27 @@ impl<'a> Loader<'a> {
         let normals = read(&Semantic::Normals, Dimensions::Vec3)?;
         let tangents = read(&Semantic::Tangents, Dimensions::Vec4)?;
         let uvs = read(&Semantic::TexCoords(0), Dimensions::Vec2)?;
+        // TEXCOORD_1 only when a texture of the primitive's material reads it.
+        let wants_uv1 = self
+            .gltf_material(prim)?
+            .and_then(|m| self.scene.materials.get(m))
+            .is_some_and(|m| m.uv.iter().any(|s| s.set == 1));
+        let uvs1 = if wants_uv1 {
+            let uvs1 = read(&Semantic::TexCoords(1), Dimensions::Vec2)?;
+            if uvs1.is_none() {
+                self.warn(format_args!(
+                    "{who}'s material samples a texture with TEXCOORD_1, but the primitive has no TEXCOORD_1; it is sampled at (0, 0): add the second UV set or point the texture at texCoord 0"
+                ));
+            }
+            uvs1
+        } else {
+            None
+        };
         for (semantic, attr, n) in [
             ("NORMAL", &normals, 3),
             ("TANGENT", &tangents, 4),
             ("TEXCOORD_0", &uvs, 2),
+            ("TEXCOORD_1", &uvs1, 2),
         ] {
             if let Some((acc, values)) = attr {
                 if values.len() / n != count {
@@ -920,13 +1108,17 @@ impl<'a> Loader<'a> {
                 uv: uvs
                     .as_ref()
                     .map_or([0.0; 2], |(_, t)| [t[2 * v], t[2 * v + 1]]),
+                uv1: uvs1
+                    .as_ref()
+                    .map(|(_, t)| [t[2 * v], t[2 * v + 1]])
+                    .filter(|uv| uv.iter().all(|c| c.is_finite()))
+                    .unwrap_or([0.0; 2]),
             })
             .collect();
 
-        let material = self.material_index(prim);
-        let uv_transform = prim
-            .material()
-            .index()
+        let material = self.material_index(prim)?;
+        let uv_transform = self
+            .gltf_material(prim)?
             .and_then(|m| self.material_uv.get(m))
             .copied()
             .unwrap_or(UvTransform::IDENTITY);

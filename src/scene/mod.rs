@@ -12,11 +12,14 @@ use glam::{Mat4, Vec3};
 
 mod accessor;
 mod gltf_load;
+mod material_ext;
 mod resources;
 mod tangents;
-pub use gltf_load::{default_scene, load, load_slice, DEFAULT_SCENE_GLB};
+pub use gltf_load::{
+    default_scene, load, load_slice, load_slice_with, load_with, LoadOptions, DEFAULT_SCENE_GLB,
+};
 
-/// One vertex as the G-buffer pass reads it (std430-compatible, 48 bytes).
+/// One vertex as the G-buffer pass reads it (std430-compatible, 56 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Vertex {
@@ -24,7 +27,10 @@ pub struct Vertex {
     pub normal: [f32; 3],
     /// xyz: tangent along +u; w: handedness sign (+1 or -1), bitangent = w * cross(n, t).
     pub tangent: [f32; 4],
+    /// TEXCOORD_0, with the material's frame transform baked in ([`Material::uv`]).
     pub uv: [f32; 2],
+    /// TEXCOORD_1 as the file has it ((0, 0) when it has none).
+    pub uv1: [f32; 2],
 }
 
 /// A triangle list with one material, in object space.
@@ -97,6 +103,115 @@ pub struct Material {
     pub occlusion_strength: f32,
     pub double_sided: bool,
     pub fabric: Option<crate::fabric::FabricParams>,
+    /// KHR_materials_sheen (None: no sheen layer).
+    pub sheen: Option<Sheen>,
+    /// KHR_materials_specular and KHR_materials_ior (the defaults are glTF's core material).
+    pub specular: Specular,
+    /// KHR_materials_anisotropy (None: isotropic).
+    pub anisotropy: Option<Anisotropy>,
+    /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
+    pub uv: [SlotUv; TextureSlot::COUNT],
+}
+
+/// The texture slots of a material, in the order of [`Material::uv`] (and of the GPU material's
+/// per-slot transforms, glsl/include/frame.glsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureSlot {
+    BaseColor = 0,
+    MetallicRoughness = 1,
+    Normal = 2,
+    Emissive = 3,
+    Occlusion = 4,
+    SheenColor = 5,
+    SheenRoughness = 6,
+    Specular = 7,
+    SpecularColor = 8,
+    Anisotropy = 9,
+}
+
+impl TextureSlot {
+    pub const COUNT: usize = 10;
+}
+
+/// The texture coordinates of one texture slot: UV set `set` (0 or 1) through the affine map
+/// `uv' = [m[0], m[1]] · (u, v, 1)`. For set 0 the map is relative to [`Vertex::uv`], which already
+/// carries the material's frame transform (so it is the identity for slots that share it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlotUv {
+    pub set: u32,
+    pub m: [[f32; 3]; 2],
+}
+
+impl SlotUv {
+    pub const IDENTITY: SlotUv = SlotUv {
+        set: 0,
+        m: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+    };
+}
+
+impl Default for SlotUv {
+    fn default() -> SlotUv {
+        SlotUv::IDENTITY
+    }
+}
+
+/// KHR_materials_sheen: a Charlie-distribution sheen layer over the base material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sheen {
+    /// Linear sheenColorFactor.
+    pub color: [f32; 3],
+    /// sheenRoughnessFactor, in [0, 1].
+    pub roughness: f32,
+    /// sRGB; rgb multiplies `color`.
+    pub color_texture: Option<usize>,
+    /// Linear; alpha multiplies `roughness`.
+    pub roughness_texture: Option<usize>,
+}
+
+/// KHR_materials_specular (with KHR_materials_ior's index of refraction).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Specular {
+    /// specularFactor: the strength of the dielectric specular layer.
+    pub factor: f32,
+    /// specularColorFactor (linear; may exceed 1).
+    pub color: [f32; 3],
+    /// Linear; alpha multiplies `factor`.
+    pub texture: Option<usize>,
+    /// sRGB; rgb multiplies `color`.
+    pub color_texture: Option<usize>,
+    /// KHR_materials_ior (1.5 by default: F0 = 0.04).
+    pub ior: f32,
+}
+
+impl Default for Specular {
+    fn default() -> Specular {
+        Specular {
+            factor: 1.0,
+            color: [1.0; 3],
+            texture: None,
+            color_texture: None,
+            ior: 1.5,
+        }
+    }
+}
+
+impl Specular {
+    /// F0 of the dielectric at normal incidence from the index of refraction, ((ior-1)/(ior+1))².
+    pub fn f0_from_ior(&self) -> f32 {
+        let r = (self.ior - 1.0) / (self.ior + 1.0);
+        r * r
+    }
+}
+
+/// KHR_materials_anisotropy: anisotropic GGX along a direction in the tangent frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Anisotropy {
+    /// anisotropyStrength, in [0, 1].
+    pub strength: f32,
+    /// anisotropyRotation: radians, counter-clockwise from the tangent in the tangent plane.
+    pub rotation: f32,
+    /// Linear; rg: direction in the tangent frame (in [-1, 1] as 2·texel - 1), b: strength.
+    pub texture: Option<usize>,
 }
 
 impl Default for Material {
@@ -117,6 +232,10 @@ impl Default for Material {
             occlusion_strength: 1.0,
             double_sided: false,
             fabric: None,
+            sheen: None,
+            specular: Specular::default(),
+            anisotropy: None,
+            uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
         }
     }
 }
@@ -206,6 +325,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub cameras: Vec<Camera>,
     pub warnings: Vec<Warning>,
+    /// KHR_materials_variants: the file's variant names, and the one the scene was loaded with.
+    pub variants: Vec<String>,
+    pub variant: Option<String>,
 }
 
 /// Axis-aligned bounds in world space.

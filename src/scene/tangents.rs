@@ -286,6 +286,38 @@ impl UvTransform {
         ]
     }
 
+    /// The transform as an affine map, rows `[a, b, c]`: u' = a·u + b·v + c (what [`apply`] does).
+    ///
+    /// [`apply`]: UvTransform::apply
+    pub fn affine(&self) -> [[f32; 3]; 2] {
+        let (s, c) = self.rotation.sin_cos();
+        [
+            [c * self.scale[0], s * self.scale[1], self.offset[0]],
+            [-s * self.scale[0], c * self.scale[1], self.offset[1]],
+        ]
+    }
+
+    /// The inverse affine map; None when the transform is singular (a zero scale).
+    pub fn inverse(&self) -> Option<[[f32; 3]; 2]> {
+        let [[a, b, c], [d, e, f]] = self.affine();
+        let det = a * e - b * d;
+        if !(det.abs() > 1e-12) || !det.is_finite() {
+            return None;
+        }
+        let (ia, ib, id, ie) = (e / det, -b / det, -d / det, a / det);
+        Some([[ia, ib, -(ia * c + ib * f)], [id, ie, -(id * c + ie * f)]])
+    }
+
+    /// `outer ∘ inner` of two affine maps.
+    pub fn compose(outer: [[f32; 3]; 2], inner: [[f32; 3]; 2]) -> [[f32; 3]; 2] {
+        let [[a, b, c], [d, e, f]] = outer;
+        let [[p, q, r], [s, t, u]] = inner;
+        [
+            [a * p + b * s, a * q + b * t, a * r + b * u + c],
+            [d * p + e * s, d * q + e * t, d * r + e * u + f],
+        ]
+    }
+
     /// Whether the transform changes the direction of +u or the handedness of the UV frame, which
     /// tangents stored in the file do not know about.
     pub fn turns_or_mirrors(&self) -> bool {

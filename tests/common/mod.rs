@@ -54,21 +54,46 @@ pub fn gbuffer_surface(
     let p = hp.truncate() / hp.w;
     let px = |v: &[f32], c: usize| v[i * 4 + c];
     let material = px(&g.surface, 1).round() as usize;
+    let fabric = scene
+        .materials
+        .get(material)
+        .and_then(|m| m.fabric.as_ref())
+        .map(|f| f.to_gpu());
+    let normal = oct_decode([px(&g.frame, 0), px(&g.frame, 1)]);
+    let tangent = oct_decode([px(&g.frame, 2), px(&g.frame, 3)]);
+    let base_color = [0, 1, 2].map(|c| srgb_to_linear(g.albedo[i * 4 + c]));
+    let metallic = g.albedo[i * 4 + 3] as f32 / 255.0;
+    let roughness = px(&g.surface, 0);
+    // Non-fabric: the extensions' channels (gbuffer.frag), the tangent orthogonalised as the
+    // lighting pass does.
+    let gltf = fabric.is_none().then(|| {
+        let t = glam::Vec3::from(tangent);
+        let nn = glam::Vec3::from(normal);
+        let t = (t - nn * nn.dot(t)).normalize_or(glam::Vec3::X);
+        weft::reference::shading::GltfSurface {
+            base: base_color,
+            metallic,
+            roughness,
+            specular: px(&g.specular, 3),
+            f0: [px(&g.specular, 0), px(&g.specular, 1), px(&g.specular, 2)],
+            sheen: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
+            sheen_roughness: px(&g.fabric, 3),
+            t: t.to_array(),
+            anisotropy: px(&g.surface, 2),
+        }
+    });
     Some(weft::reference::shading::Surface {
         position: p.into(),
-        normal: oct_decode([px(&g.frame, 0), px(&g.frame, 1)]),
-        tangent: oct_decode([px(&g.frame, 2), px(&g.frame, 3)]),
+        normal,
+        tangent,
         sign: px(&g.surface, 2),
-        base_color: [0, 1, 2].map(|c| srgb_to_linear(g.albedo[i * 4 + c])),
-        metallic: g.albedo[i * 4 + 3] as f32 / 255.0,
-        roughness: px(&g.surface, 0),
+        base_color,
+        metallic,
+        roughness,
         emissive: [px(&g.emissive, 0), px(&g.emissive, 1), px(&g.emissive, 2)],
         coverage: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
-        fabric: scene
-            .materials
-            .get(material)
-            .and_then(|m| m.fabric.as_ref())
-            .map(|f| f.to_gpu()),
+        fabric,
+        gltf,
     })
 }
 

@@ -130,7 +130,7 @@ impl EnvPasses {
         let table = crate::env::dfg_table(DFG_SIZE);
         let texels: Vec<u16> = table
             .iter()
-            .flat_map(|[a, b]| [*a, *b, 0.0, 1.0].map(|x| half::f16::from_f32(x).to_bits()))
+            .flat_map(|[a, b, e]| [*a, *b, *e, 1.0].map(|x| half::f16::from_f32(x).to_bits()))
             .collect();
         let dfg = ctx.create_image(
             &ImageDesc::new_2d("DFG table", ENV_FORMAT, DFG_SIZE, DFG_SIZE)

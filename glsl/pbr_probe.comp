@@ -1,0 +1,59 @@
+#version 460
+// Evaluates the glTF BRDF of include/pbr.glsl (the core material and KHR_materials_specular,
+// _sheen and _anisotropy) on a batch of inputs, so tests can compare the GPU with the Rust twin
+// (weft::reference::shading::gltf_brdf_cos and its terms). One invocation per input.
+#extension GL_GOOGLE_include_directive : require
+#include "pbr.glsl"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (144 bytes).
+struct PbrProbeInput {
+    vec4 n;              // xyz: normal (unit)
+    vec4 v;              // xyz: view direction (unit)
+    vec4 l;              // xyz: light direction (unit)
+    vec4 base_metallic;  // rgb base colour, a metallic
+    vec4 f0_specular;    // rgb dielectric F0, a specular weight
+    vec4 sheen;          // rgb sheen colour, a sheen roughness
+    vec4 t_anisotropy;   // xyz anisotropy direction (unit, ⟂ n), w strength
+    vec4 params;         // x roughness, y E(n·v), z E(n·l)
+    vec4 terms_in;       // x n·h, y n·l, z n·v (inputs of the scalar terms), w sheen roughness
+};
+
+// Rust twin: PbrProbeOutput (32 bytes).
+struct PbrProbeOutput {
+    vec4 brdf;   // gltf_brdf_cos (rgb), 0
+    vec4 terms;  // charlie_d, sheen_brdf_cos, ggx_aniso_d (t·h = b·h from n·h), sheen_lambda(n·v)
+};
+
+layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
+    PbrProbeInput inputs[];
+};
+
+layout(std430, set = 0, binding = 1) writeonly buffer PbrProbeOutputs {
+    PbrProbeOutput outputs[];
+};
+
+layout(push_constant) uniform PbrProbePush {
+    uint count;
+} pc;
+
+void main() {
+    uint id = gl_GlobalInvocationID.x;
+    if (id >= pc.count) {
+        return;
+    }
+    PbrProbeInput p = inputs[id];
+    GltfSurface s = GltfSurface(p.base_metallic.rgb, p.base_metallic.a, p.params.x, p.f0_specular.a,
+                                p.f0_specular.rgb, p.sheen.rgb, p.sheen.a, p.t_anisotropy.xyz,
+                                p.t_anisotropy.w);
+    vec3 brdf = gltf_brdf_cos(p.n.xyz, p.v.xyz, p.l.xyz, s, p.params.yz);
+    float nh = p.terms_in.x;
+    float sr = p.terms_in.w;
+    float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);
+    float alpha = max(p.params.x * p.params.x, 1e-3);
+    outputs[id].brdf = vec4(brdf, 0.0);
+    outputs[id].terms = vec4(charlie_d(nh, sr), sheen_brdf_cos(p.terms_in.y, p.terms_in.z, nh, sr),
+                             ggx_aniso_d(th, th, nh, mix(alpha, 1.0, 0.5), alpha),
+                             sheen_lambda(p.terms_in.z, max(sr * sr, 1e-3)));
+}

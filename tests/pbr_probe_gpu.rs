@@ -1,0 +1,380 @@
+//! The glTF BRDF of `glsl/include/pbr.glsl` (core, KHR_materials_specular, _sheen, _anisotropy)
+//! against its Rust twin (`weft::reference::shading`), through `glsl/pbr_probe.comp` on a Vulkan
+//! device (lavapipe by default, or WEFT_DEVICE) with validation on.
+//!
+//! The bound of each output is derived per input by first-order error propagation of the Vulkan
+//! precision rules (correctly rounded +, −, ×; division 2.5 ulp; inversesqrt 2 ulp; exp, exp2
+//! 3 + 2|x| ulp; log2 3 ulp, or 2^-21 absolute in [0.5, 2]; pow inherited from
+//! exp2(y·log2 x)) through the formulas' condition numbers: what a unit error of n·h does to GGX
+//! (4(1 − α²)n·h²/d, d = n·h²(α² − 1) + 1) and to Charlie (2y·n·h/sin²θ_h, y = 1/(2α)), what the
+//! rounding of sin²θ_h = 1 − n·h² does to pow(sin²θ_h, y), and what 1 − v·h does to the Schlick
+//! weight (5/(1 − v·h)). Each output's bound is |twin|·R + 1e-9 (the absolute floor covers
+//! denormals flushed to zero). The twin is f32 too, so the bound covers both sides' rounding:
+//! every contribution is counted twice. The worst ratio |gpu − twin| / bound is printed.
+
+mod common;
+
+use bytemuck::{Pod, Zeroable};
+use weft::reference::probe::XorShift;
+use weft::reference::shading::{
+    charlie_d, ggx_aniso_d, gltf_brdf_cos, sheen_brdf_cos, GltfSurface,
+};
+use weft::vk::shaders;
+
+const U: f64 = f32::EPSILON as f64 * 0.5;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct PbrProbeInput {
+    n: [f32; 4],
+    v: [f32; 4],
+    l: [f32; 4],
+    base_metallic: [f32; 4],
+    f0_specular: [f32; 4],
+    sheen: [f32; 4],
+    t_anisotropy: [f32; 4],
+    params: [f32; 4],
+    terms_in: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, Default)]
+struct PbrProbeOutput {
+    brdf: [f32; 4],
+    terms: [f32; 4],
+}
+
+fn unit(v: [f64; 3]) -> [f32; 3] {
+    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    [(v[0] / l) as f32, (v[1] / l) as f32, (v[2] / l) as f32]
+}
+
+fn v4(v: [f32; 3], w: f32) -> [f32; 4] {
+    [v[0], v[1], v[2], w]
+}
+
+fn dot(a: [f32; 3], b: [f32; 3]) -> f64 {
+    a[0] as f64 * b[0] as f64 + a[1] as f64 * b[1] as f64 + a[2] as f64 * b[2] as f64
+}
+
+/// A direction in the upper hemisphere of +z with the given cosine and azimuth.
+fn dir(cos: f64, phi: f64) -> [f32; 3] {
+    let s = (1.0 - cos * cos).max(0.0).sqrt();
+    unit([s * phi.cos(), s * phi.sin(), cos])
+}
+
+fn surface(inp: &PbrProbeInput) -> GltfSurface {
+    GltfSurface {
+        base: [inp.base_metallic[0], inp.base_metallic[1], inp.base_metallic[2]],
+        metallic: inp.base_metallic[3],
+        roughness: inp.params[0],
+        specular: inp.f0_specular[3],
+        f0: [inp.f0_specular[0], inp.f0_specular[1], inp.f0_specular[2]],
+        sheen: [inp.sheen[0], inp.sheen[1], inp.sheen[2]],
+        sheen_roughness: inp.sheen[3],
+        t: [inp.t_anisotropy[0], inp.t_anisotropy[1], inp.t_anisotropy[2]],
+        anisotropy: inp.t_anisotropy[3],
+    }
+}
+
+/// The Rust twin of pbr_probe.comp's main().
+fn twin(inp: &PbrProbeInput) -> [f32; 8] {
+    let s = surface(inp);
+    let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
+    let b = gltf_brdf_cos(xyz(inp.n), xyz(inp.v), xyz(inp.l), &s, [inp.params[1], inp.params[2]]);
+    let nh = inp.terms_in[0];
+    let sr = inp.terms_in[3];
+    let th = ((1.0 - nh * nh).max(0.0) * 0.5).sqrt();
+    let alpha = (inp.params[0] * inp.params[0]).max(1e-3);
+    let at = alpha * 0.5 + 0.5;
+    [
+        b[0],
+        b[1],
+        b[2],
+        0.0,
+        charlie_d(nh, sr),
+        sheen_brdf_cos(inp.terms_in[1], inp.terms_in[2], nh, sr),
+        ggx_aniso_d(th, th, nh, at, alpha),
+        weft::reference::shading::sheen_lambda(inp.terms_in[2], (sr * sr).max(1e-3)),
+    ]
+}
+
+/// Relative error bound of pow(x, y) evaluated as exp2(y·log2 x) with x carrying a relative
+/// error `rx` of its own.
+fn pow_rel(x: f64, y: f64, rx: f64) -> f64 {
+    let lg = x.log2();
+    let e_log = if (0.5..=2.0).contains(&x) { 2f64.powi(-21) } else { 3.0 * U * lg.abs() };
+    let t = y * lg;
+    std::f64::consts::LN_2 * (y.abs() * e_log + (3.0 + 2.0 * t.abs()) * U) + y.abs() * rx
+}
+
+/// Relative bound of Charlie's D at (n·h, roughness) with n·h off by `dnh` (absolute).
+fn charlie_rel(nh: f64, r: f64, dnh: f64) -> f64 {
+    let alpha = (r * r).max(1e-3);
+    let y = 0.5 / alpha;
+    let sin2 = (1.0 - nh * nh).max(1e-30);
+    // sin² = 1 − n·h²: the square rounds (u·n·h²), the subtraction is exact near 1 (Sterbenz).
+    let rx = (U * nh * nh + 2.0 * nh * dnh) / sin2;
+    pow_rel(sin2, y, rx) + 8.0 * U
+}
+
+/// Relative bound of the Charlie Λ fit and of 1 + Λ_v + Λ_l.
+fn lambda_rel(c: f64, alpha: f64) -> f64 {
+    // l(x) ≈ 25 at most; its absolute error is a few ulp of its terms; exp(l) gets (3 + 2|l|) ulp
+    // plus the absolute error of l; pow(x, c) with c ≈ 0.2 is well conditioned.
+    let l_abs = 30.0 * 8.0 * U + 25.0 * pow_rel(c.max(1e-30), 0.2, U);
+    let _ = alpha;
+    (3.0 + 2.0 * 25.0) * U + l_abs * 2.0
+}
+
+fn bounds(inp: &PbrProbeInput) -> [f64; 8] {
+    let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
+    let (n, v, l) = (xyz(inp.n), xyz(inp.v), xyz(inp.l));
+    let h = unit([
+        l[0] as f64 + v[0] as f64,
+        l[1] as f64 + v[1] as f64,
+        l[2] as f64 + v[2] as f64,
+    ]);
+    let nh = dot(n, h).clamp(0.0, 1.0);
+    let vh = dot(v, h).clamp(0.0, 1.0);
+    // n·h and v·h through normalize (inversesqrt 2 ulp, the sum and the dot products).
+    let dnh = 6.0 * U;
+    let r = inp.params[0] as f64;
+    let alpha = (r * r).max(1e-3);
+    let a2 = alpha * alpha;
+    let d = nh * nh * (a2 - 1.0) + 1.0;
+    let ggx = 4.0 * (1.0 - a2) * nh * nh / d * dnh + 4.0 * U * (nh * nh / d);
+    let aniso = if inp.t_anisotropy[3] > 0.0 {
+        // Anisotropic D: the same sensitivity with the smaller alpha, plus t·h and b·h.
+        ggx * 2.0 + 8.0 * dnh / alpha
+    } else {
+        0.0
+    };
+    let schlick = 5.0 * dnh / (1.0 - vh).max(1e-30) * (1.0 - vh).powi(5);
+    let sr = inp.sheen[3] as f64;
+    let sheen = if inp.sheen[..3].iter().any(|&c| c > 0.0) {
+        charlie_rel(nh, sr, dnh) + lambda_rel(0.5, sr) + 2.0 * 2.0 * nh * dnh / (1.0 - nh * nh).max(1e-30) / (2.0 * sr * sr).max(2e-3)
+    } else {
+        0.0
+    };
+    let r_brdf = 2.0 * (64.0 * U + ggx + aniso + schlick + sheen);
+    let tnh = inp.terms_in[0] as f64;
+    let tsr = inp.terms_in[3] as f64;
+    let r_charlie = 2.0 * charlie_rel(tnh, tsr, 0.0);
+    let r_sheen = r_charlie + 2.0 * (lambda_rel(inp.terms_in[1] as f64, tsr) + lambda_rel(inp.terms_in[2] as f64, tsr) + 8.0 * U);
+    // ggx_aniso_d at t·h = b·h = sqrt(sin²/2): sin² from n·h rounds as above.
+    let talpha = alpha;
+    let at = talpha * 0.5 + 0.5;
+    let f2 = (at * at + talpha * talpha) * (1.0 - tnh * tnh) * 0.5 + (at * talpha * tnh).powi(2);
+    let r_ad = 2.0 * (24.0 * U + 2.0 * U * (at * talpha * tnh).powi(2) / f2 * 4.0 + 2.0 * U / (1.0 - tnh * tnh).max(1e-30));
+    let r_lambda = 2.0 * lambda_rel(inp.terms_in[2] as f64, tsr);
+    [r_brdf, r_brdf, r_brdf, 0.0, r_charlie, r_sheen, r_ad, r_lambda]
+}
+
+struct Case {
+    name: String,
+    input: PbrProbeInput,
+}
+
+fn case(name: String, n: [f32; 3], v: [f32; 3], l: [f32; 3], s: &GltfSurface, e: [f32; 2], terms: [f32; 4]) -> Case {
+    Case {
+        name,
+        input: PbrProbeInput {
+            n: v4(n, 0.0),
+            v: v4(v, 0.0),
+            l: v4(l, 0.0),
+            base_metallic: v4(s.base, s.metallic),
+            f0_specular: v4(s.f0, s.specular),
+            sheen: v4(s.sheen, s.sheen_roughness),
+            t_anisotropy: v4(s.t, s.anisotropy),
+            params: [s.roughness, e[0], e[1], 0.0],
+            terms_in: terms,
+        },
+    }
+}
+
+fn cases() -> Vec<Case> {
+    let n = [0.0, 0.0, 1.0];
+    let mut out = Vec::new();
+    let mut rng = XorShift::new(0x5eed_bdf5);
+    let roughnesses = [0.0f32, 0.02, 0.1, 0.3, 0.6, 1.0];
+    let sheen_r = [0.0f32, 0.05, 0.3, 0.7, 1.0];
+    let cosines = [1e-4f64, 0.01, 0.2, 0.5, 0.9, 1.0];
+    // Hard cases: grazing view or light, the mirror direction (n·h = 1), retro-reflection.
+    for &r in &roughnesses {
+        for &sr in &sheen_r {
+            for &cv in &cosines {
+                for &cl in &cosines {
+                    for (azimuth, tag) in [(std::f64::consts::PI, "mirror"), (0.0, "retro"), (1.3, "side")] {
+                        let v = dir(cv, 0.0);
+                        let l = dir(cl, azimuth);
+                        let s = GltfSurface {
+                            base: [0.8, 0.4, 0.1],
+                            metallic: 0.3,
+                            roughness: r,
+                            specular: 0.7,
+                            f0: [0.04, 0.2, 1.0],
+                            sheen: [1.0, 0.5, 0.0],
+                            sheen_roughness: sr,
+                            t: unit([1.0, 0.0, 0.0]),
+                            anisotropy: if tag == "side" { 0.8 } else { 0.0 },
+                        };
+                        let e = [0.3, 0.6];
+                        let h = unit([(v[0] + l[0]) as f64, (v[1] + l[1]) as f64, (v[2] + l[2]) as f64]);
+                        let nh = dot(n, h) as f32;
+                        out.push(case(
+                            format!("{tag} r={r} sheen_r={sr} n·v={cv} n·l={cl}"),
+                            n, v, l, &s, e,
+                            [nh.clamp(0.0, 1.0), cl as f32, cv as f32, sr],
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    // Seeded random surfaces and directions.
+    for i in 0..3000 {
+        let mut u = || rng.next_f64();
+        let v = dir(u().max(1e-4), u() * 6.283);
+        let l = dir(u().max(1e-4), u() * 6.283);
+        let phi = u() * 6.283;
+        let s = GltfSurface {
+            base: [u() as f32, u() as f32, u() as f32],
+            metallic: if i % 3 == 0 { 0.0 } else { u() as f32 },
+            roughness: u() as f32,
+            specular: u() as f32,
+            f0: [u() as f32, u() as f32, u() as f32],
+            sheen: if i % 2 == 0 { [0.0; 3] } else { [u() as f32, u() as f32, u() as f32] },
+            sheen_roughness: u() as f32,
+            t: unit([phi.cos(), phi.sin(), 0.0]),
+            anisotropy: if i % 4 == 0 { u() as f32 } else { 0.0 },
+        };
+        let e = [u() as f32 * 0.8, u() as f32 * 0.8];
+        let nh = u() as f32;
+        let terms = [nh, u().max(1e-4) as f32, u().max(1e-4) as f32, u() as f32];
+        out.push(case(format!("random {i}"), n, v, l, &s, e, terms));
+    }
+    out
+}
+
+#[test]
+fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
+    let ctx = common::context();
+    let cases = cases();
+    let inputs: Vec<PbrProbeInput> = cases.iter().map(|c| c.input).collect();
+    let size = std::mem::size_of::<PbrProbeOutput>();
+    let bytes = common::run_probe_shader(&ctx, &shaders::PBR_PROBE_COMP, &inputs, size);
+    let names = ["brdf.r", "brdf.g", "brdf.b", "-", "charlie_d", "sheen_brdf_cos", "ggx_aniso_d", "sheen_lambda"];
+    let mut worst: [(f64, String); 8] = std::array::from_fn(|_| (0.0, String::new()));
+    let mut failures = Vec::new();
+    for (k, c) in cases.iter().enumerate() {
+        let g: PbrProbeOutput = bytemuck::pod_read_unaligned(&bytes[k * size..(k + 1) * size]);
+        let got = [g.brdf, g.terms].concat();
+        let want = twin(&c.input);
+        let rel = bounds(&c.input);
+        for j in 0..8 {
+            if j == 3 {
+                continue;
+            }
+            let (x, t) = (got[j] as f64, want[j] as f64);
+            assert!(x.is_finite(), "{}: {} is {x} on the GPU", c.name, names[j]);
+            assert!(t.is_finite(), "{}: {} is {t} in the twin", c.name, names[j]);
+            let bound = t.abs() * rel[j] + 1e-9;
+            let ratio = (x - t).abs() / bound;
+            if ratio > worst[j].0 {
+                worst[j] = (ratio, c.name.clone());
+            }
+            if ratio > 1.0 {
+                failures.push(format!("{}: {} GPU {x:e} twin {t:e} (bound {bound:e}, ratio {ratio:.2})", c.name, names[j]));
+            }
+        }
+    }
+    for j in 0..8 {
+        if j != 3 {
+            println!("{:>15}: worst {:.3} of its bound ({})", names[j], worst[j].0, worst[j].1);
+        }
+    }
+    ctx.check_validation().unwrap();
+    assert!(
+        failures.is_empty(),
+        "{} of {} outputs outside their bound, e.g.:\n{}",
+        failures.len(),
+        cases.len() * 7,
+        failures.iter().take(20).cloned().collect::<Vec<_>>().join("\n")
+    );
+}
+
+/// The sheen's directional albedo (the DFG table's third channel) against an independent
+/// estimate: Monte Carlo over the hemisphere in f64 of the same BRDF (uniform directions,
+/// 200,000 samples per point), within 4 standard errors plus the quadrature's own 1e-3.
+#[test]
+fn sheen_albedo_table_matches_monte_carlo() {
+    let mut rng = XorShift::new(7);
+    for &(cv, r) in &[(0.05f64, 0.3f32), (0.5, 0.3), (1.0, 0.3), (0.2, 1.0), (0.8, 0.7), (0.3, 0.1)] {
+        let q = weft::reference::shading::sheen_albedo(cv, r, 24);
+        let v = [(1.0 - cv * cv).sqrt(), 0.0, cv];
+        let n = 200_000;
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for _ in 0..n {
+            let z = rng.next_f64();
+            let phi = rng.next_f64() * std::f64::consts::TAU;
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            let l = [s * phi.cos(), s * phi.sin(), z];
+            let h = [v[0] + l[0], v[1] + l[1], v[2] + l[2]];
+            let hn = h[2] / (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+            let f = sheen_brdf_cos(z as f32, cv as f32, hn as f32, r) as f64 * std::f64::consts::TAU;
+            sum += f;
+            sum2 += f * f;
+        }
+        let mean = sum / n as f64;
+        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        println!("E(n·v={cv}, r={r}): quadrature {q:.5}, Monte Carlo {mean:.5} ± {se:.5}");
+        assert!((q - mean).abs() <= 4.0 * se + 1e-3, "E(n·v={cv}, r={r}): quadrature {q} against Monte Carlo {mean} ± {se}");
+    }
+}
+
+/// Energy: with the albedo scaling, a white sheen over a white diffuse base reflects at most
+/// what comes in (the specification's reason for the scaling), and without it more: checked by
+/// f64 quadrature of the twin over the hemisphere.
+#[test]
+fn sheen_albedo_scaling_conserves_energy() {
+    let n = [0.0f32, 0.0, 1.0];
+    for &(cv, sr) in &[(0.1f64, 0.5f32), (0.5, 1.0), (0.9, 0.3), (0.3, 1.0)] {
+        let v = dir(cv, 0.0);
+        let s = GltfSurface {
+            base: [1.0; 3],
+            metallic: 0.0,
+            roughness: 1.0,
+            specular: 0.0,
+            f0: [0.0; 3],
+            sheen: [1.0; 3],
+            sheen_roughness: sr,
+            t: [1.0, 0.0, 0.0],
+            anisotropy: 0.0,
+        };
+        let e = |c: f64| weft::reference::shading::sheen_albedo(c, sr, 24) as f32;
+        let e_v = e(cv);
+        let (mut scaled, mut unscaled) = (0.0f64, 0.0f64);
+        let (nt, np) = (96, 192);
+        for i in 0..nt {
+            let cl = (i as f64 + 0.5) / nt as f64;
+            for j in 0..np {
+                let phi = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+                let l = dir(cl, phi);
+                let w = (1.0 / nt as f64) * (std::f64::consts::TAU / np as f64);
+                scaled += gltf_brdf_cos(n, v, l, &s, [e_v, e(cl)])[0] as f64 * w;
+                let mut plain = s;
+                plain.sheen = [0.0; 3];
+                unscaled += (gltf_brdf_cos(n, v, l, &plain, [0.0; 2])[0]
+                    + sheen_brdf_cos(cl as f32, cv as f32, {
+                        let h = unit([(v[0] + l[0]) as f64, (v[1] + l[1]) as f64, (v[2] + l[2]) as f64]);
+                        h[2]
+                    }, sr)) as f64
+                    * w;
+            }
+        }
+        println!("n·v={cv} sheen r={sr}: albedo with scaling {scaled:.4}, without {unscaled:.4}");
+        assert!(scaled <= 1.0 + 5e-3, "with the albedo scaling the white sheen reflects {scaled} > 1");
+        assert!(unscaled > scaled, "the scaling must remove energy ({unscaled} <= {scaled})");
+    }
+}
