@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
 use serde_json::{json, Value};
-use weft::scene::{self, ColorSpace, LightKind, Scene, Shadow};
+use weft::scene::{self, ColorSpace, LightKind, Scene, Shadow, TextureSlot};
 
 // --- helpers --------------------------------------------------------------------------------------
 
@@ -1682,4 +1682,203 @@ fn corrupting_any_field_gives_a_scene_or_an_error_never_a_panic() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+// ---- KHR_materials_sheen, _specular, _ior, _anisotropy, _variants; per-slot UVs ----
+
+/// A quad whose material is `material`, with the tiny PNG as texture 0 and `extensions` used.
+fn material_doc(material: Value, extensions: &[&str]) -> Doc {
+    let mut d = Doc::new();
+    d.quad(true, true);
+    d.json["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64(&tiny_png()))}]);
+    d.json["textures"] = json!([{"source": 0}]);
+    d.json["materials"] = json!([material]);
+    d.json["extensionsUsed"] = json!(extensions);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    d
+}
+
+#[test]
+fn sheen_specular_ior_and_anisotropy_reach_the_material() {
+    let d = material_doc(
+        json!({"name": "velvet", "extensions": {
+            "KHR_materials_sheen": {"sheenColorFactor": [0.9, 0.2, 0.1], "sheenRoughnessFactor": 0.4,
+                                    "sheenColorTexture": {"index": 0}, "sheenRoughnessTexture": {"index": 0, "texCoord": 1}},
+            "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [2.0, 1.0, 0.5],
+                                       "specularTexture": {"index": 0}},
+            "KHR_materials_ior": {"ior": 1.33},
+            "KHR_materials_anisotropy": {"anisotropyStrength": 0.6, "anisotropyRotation": 1.0,
+                                         "anisotropyTexture": {"index": 0}},
+        }}),
+        &["KHR_materials_sheen", "KHR_materials_specular", "KHR_materials_ior", "KHR_materials_anisotropy"],
+    );
+    let s = d.load("extensions").unwrap();
+    let m = &s.materials[0];
+    let sheen = m.sheen.as_ref().expect("sheen");
+    assert_eq!(sheen.color, [0.9, 0.2, 0.1]);
+    assert_eq!(sheen.roughness, 0.4);
+    assert!(sheen.color_texture.is_some() && sheen.roughness_texture.is_some());
+    assert_eq!(m.specular.factor, 0.5);
+    assert_eq!(m.specular.color, [2.0, 1.0, 0.5]);
+    assert!(m.specular.texture.is_some() && m.specular.color_texture.is_none());
+    assert!((m.specular.f0_from_ior() - (0.33f32 / 2.33).powi(2)).abs() < 1e-6);
+    let a = m.anisotropy.as_ref().expect("anisotropy");
+    assert_eq!((a.strength, a.rotation), (0.6, 1.0));
+    assert!(a.texture.is_some());
+    // The sheen roughness texture reads TEXCOORD_1; the quad has none: said so.
+    assert_eq!(m.uv[TextureSlot::SheenRoughness as usize].set, 1);
+    assert!(
+        s.warnings.iter().any(|w| w.0.contains("TEXCOORD_1")),
+        "{:?}",
+        s.warnings
+    );
+    // Used extensions weft reads raise no "ignored" warning.
+    assert!(!s.warnings.iter().any(|w| w.0.contains("ignore")), "{:?}", s.warnings);
+}
+
+#[test]
+fn extension_values_of_the_wrong_type_are_errors_naming_material_and_key() {
+    for (ext, body, key) in [
+        ("KHR_materials_sheen", json!({"sheenRoughnessFactor": "rough"}), "sheenRoughnessFactor"),
+        ("KHR_materials_sheen", json!({"sheenColorFactor": [1.0, 0.0]}), "sheenColorFactor"),
+        ("KHR_materials_sheen", json!({"sheenColorTexture": {"texCoord": 0}}), "sheenColorTexture"),
+        ("KHR_materials_specular", json!({"specularColorFactor": 3}), "specularColorFactor"),
+        ("KHR_materials_anisotropy", json!({"anisotropyRotation": [0.5]}), "anisotropyRotation"),
+        ("KHR_materials_ior", json!({"ior": true}), "ior"),
+    ] {
+        let d = material_doc(json!({"name": "cloth", "extensions": {ext: body}}), &[ext]);
+        let msg = error_text(d.load("extension-types"));
+        assert!(
+            msg.contains("material 'cloth'") && msg.contains(&format!("{ext}.{key}")) && msg.contains("scene.gltf"),
+            "{ext}.{key}: {msg}"
+        );
+    }
+    // A texture index past the file's textures.
+    let d = material_doc(
+        json!({"name": "cloth", "extensions": {"KHR_materials_sheen": {"sheenColorTexture": {"index": 7}}}}),
+        &["KHR_materials_sheen"],
+    );
+    let msg = error_text(d.load("extension-texture-index"));
+    assert!(msg.contains("texture 7") && msg.contains("sheen colour texture"), "{msg}");
+}
+
+#[test]
+fn extension_values_out_of_range_are_clamped_with_a_warning_naming_material_and_key() {
+    let d = material_doc(
+        json!({"name": "cloth", "extensions": {
+            "KHR_materials_sheen": {"sheenRoughnessFactor": 1.5, "sheenColorFactor": [2.0, 0.5, -1.0]},
+            "KHR_materials_anisotropy": {"anisotropyStrength": -0.5},
+            "KHR_materials_specular": {"specularFactor": 7.0},
+        }}),
+        &["KHR_materials_sheen", "KHR_materials_anisotropy", "KHR_materials_specular"],
+    );
+    let s = d.load("extension-ranges").unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.sheen.as_ref().unwrap().roughness, 1.0);
+    assert_eq!(m.sheen.as_ref().unwrap().color, [1.0, 0.5, 0.0]);
+    assert_eq!(m.anisotropy.as_ref().unwrap().strength, 0.0);
+    assert_eq!(m.specular.factor, 1.0);
+    for key in [
+        "KHR_materials_sheen.sheenRoughnessFactor",
+        "KHR_materials_sheen.sheenColorFactor",
+        "KHR_materials_anisotropy.anisotropyStrength",
+        "KHR_materials_specular.specularFactor",
+    ] {
+        assert!(
+            s.warnings.iter().any(|w| w.0.contains(key) && w.0.contains("material 'cloth'") && w.0.contains("clamped")),
+            "no warning for {key}: {:?}",
+            s.warnings
+        );
+    }
+}
+
+#[test]
+fn a_file_that_requires_sheen_loads() {
+    let mut d = material_doc(
+        json!({"extensions": {"KHR_materials_sheen": {"sheenColorFactor": [1.0, 1.0, 1.0]}}}),
+        &["KHR_materials_sheen"],
+    );
+    d.json["extensionsRequired"] = json!(["KHR_materials_sheen"]);
+    let s = d.load("requires-sheen").unwrap();
+    assert!(s.materials[0].sheen.is_some());
+}
+
+#[test]
+fn each_texture_slot_keeps_its_own_transform_and_uv_set() {
+    // SheenChair's case: base colour scaled 7 with an offset, the normal map scaled 2, occlusion on
+    // TEXCOORD_1 with a rotation.
+    let mut d = material_doc(
+        json!({
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {
+                "KHR_texture_transform": {"offset": [0.25, 0.5], "scale": [7.0, 7.0]}}}},
+            "normalTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}},
+            "occlusionTexture": {"index": 0, "texCoord": 1, "extensions": {
+                "KHR_texture_transform": {"rotation": 1.5707964}}},
+        }),
+        &["KHR_texture_transform"],
+    );
+    // A second UV set: the first one mirrored in u.
+    let uv1 = d.floats(&[[1.0f32, 1.0], [0.0, 1.0], [0.0, 0.0], [1.0, 0.0]]);
+    d.json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(uv1);
+    let s = d.load("slot-transforms").unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.materials[0];
+    let mesh = &s.meshes[0];
+    // The base colour's transform is baked into TEXCOORD_0 ...
+    assert_eq!(mesh.vertices[1].uv, [7.25, 7.5]);
+    assert_eq!(m.uv[TextureSlot::BaseColor as usize], weft::scene::SlotUv::IDENTITY);
+    // ... TEXCOORD_1 is the file's ...
+    assert_eq!(mesh.vertices[1].uv1, [0.0, 1.0]);
+    // ... and every slot maps the stored coordinates to its own: the normal map's at the raw
+    // (1, 1) is (2, 2), the occlusion's reads TEXCOORD_1 rotated a quarter turn.
+    let apply = |s: &weft::scene::SlotUv, uv: [f32; 2]| {
+        [
+            s.m[0][0] * uv[0] + s.m[0][1] * uv[1] + s.m[0][2],
+            s.m[1][0] * uv[0] + s.m[1][1] * uv[1] + s.m[1][2],
+        ]
+    };
+    let normal = apply(&m.uv[TextureSlot::Normal as usize], mesh.vertices[2].uv);
+    assert!((normal[0] - 2.0).abs() < 1e-5 && (normal[1] - 0.0).abs() < 1e-5, "{normal:?}");
+    let occ = &m.uv[TextureSlot::Occlusion as usize];
+    assert_eq!(occ.set, 1);
+    let o = apply(occ, [1.0, 0.0]);
+    assert!((o[0] - 0.0).abs() < 1e-6 && (o[1] + 1.0).abs() < 1e-6, "{o:?}");
+}
+
+#[test]
+fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
+    let mut d = Doc::new();
+    d.quad(true, true);
+    d.json["materials"] = json!([
+        {"name": "default red", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.0, 0.0, 1.0]}},
+        {"name": "navy", "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.5, 1.0]}},
+    ]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_variants"]);
+    d.json["extensions"] = json!({"KHR_materials_variants": {"variants": [{"name": "red"}, {"name": "navy"}]}});
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    d.json["meshes"][0]["primitives"][0]["extensions"] =
+        json!({"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [1]}]}});
+    let dir = temp_dir("variants");
+    let path = dir.0.join("scene.gltf");
+    std::fs::write(&path, d.text()).unwrap();
+    let plain = scene::load(&path).unwrap();
+    assert_eq!(plain.variants, vec!["red".to_string(), "navy".to_string()]);
+    assert_eq!(plain.materials[plain.meshes[0].material].name, "default red");
+    let load = |v: &str| {
+        scene::load_with(&path, &scene::LoadOptions { variant: Some(v.into()) })
+    };
+    let navy = load("navy").unwrap();
+    assert_eq!(navy.materials[navy.meshes[0].material].name, "navy");
+    assert_eq!(navy.variant.as_deref(), Some("navy"));
+    // "red" maps nothing: the primitive keeps its own material.
+    let red = load("red").unwrap();
+    assert_eq!(red.materials[red.meshes[0].material].name, "default red");
+    let msg = error_text(load("teal"));
+    assert!(msg.contains("'teal'") && msg.contains("'red', 'navy'") && msg.contains("scene.gltf"), "{msg}");
+    // A mapping that names a variant the file does not have.
+    d.json["meshes"][0]["primitives"][0]["extensions"] =
+        json!({"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [5]}]}});
+    std::fs::write(&path, d.text()).unwrap();
+    let msg = error_text(load("navy"));
+    assert!(msg.contains("KHR_materials_variants") && msg.contains('5'), "{msg}");
 }

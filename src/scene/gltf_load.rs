@@ -296,7 +296,17 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
             )));
         }
     }
-    root.extensions_required.retain(|e| e != FABRIC_EXTENSION);
+    // The extensions weft reads from raw JSON itself are unknown to the gltf crate's validator,
+    // which refuses unknown required extensions: take them off before it runs.
+    const OWN: &[&str] = &[
+        FABRIC_EXTENSION,
+        material_ext::SHEEN,
+        material_ext::SPECULAR,
+        material_ext::IOR,
+        material_ext::ANISOTROPY,
+        material_ext::VARIANTS,
+    ];
+    root.extensions_required.retain(|e| !OWN.contains(&e.as_str()));
     Ok(())
 }
 
