@@ -79,12 +79,19 @@ fn read_png(path: &Path) -> Option<(u32, u32, Vec<u8>)> {
     Some((img.width(), img.height(), img.into_raw()))
 }
 
-fn load_scene(cache: &mut HashMap<&'static str, Scene>, path: &'static str) -> Scene {
+fn load_scene(
+    cache: &mut HashMap<(&'static str, Option<&'static str>), Scene>,
+    path: &'static str,
+    variant: Option<&'static str>,
+) -> Scene {
     cache
-        .entry(path)
+        .entry((path, variant))
         .or_insert_with(|| {
-            let scene =
-                weft::scene::load(&root().join(path)).unwrap_or_else(|e| panic!("{path}: {e}"));
+            let options = weft::scene::LoadOptions {
+                variant: variant.map(str::to_owned),
+            };
+            let scene = weft::scene::load_with(&root().join(path), &options)
+                .unwrap_or_else(|e| panic!("{path}: {e}"));
             assert!(
                 scene.warnings.is_empty(),
                 "{path} loads with warnings: {:?}",
@@ -248,11 +255,11 @@ fn block_means(hdr: &[f32], width: u32, height: u32, block: u32, exposure_ev: f3
 fn run_case(
     case: &Case,
     renderer: &mut Renderer,
-    scenes: &mut HashMap<&'static str, Scene>,
+    scenes: &mut HashMap<(&'static str, Option<&'static str>), Scene>,
     bless: bool,
     dir: &Path,
 ) -> Row {
-    let mut scene = load_scene(scenes, case.scene);
+    let mut scene = load_scene(scenes, case.scene, case.variant);
     let environment = case.env.map(|e| {
         let env = if e.map == "studio" {
             weft::env::Environment::studio()

@@ -259,6 +259,28 @@ pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughn
     gltf_brdf_cos(n, v, l, &GltfSurface::core(base, metallic, roughness), [0.0; 2])
 }
 
+/// `sheen_albedo` of lighting.frag: the DFG table's third channel as the GPU stores it (f16)
+/// and samples it (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
+pub fn sheen_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
+    use crate::render::environment::DFG_SIZE;
+    static TABLE: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    let table = TABLE.get_or_init(|| {
+        crate::env::dfg_table(DFG_SIZE)
+            .iter()
+            .map(|t| half::f16::from_f32(t[2]).to_f32())
+            .collect()
+    });
+    let n = DFG_SIZE as i32;
+    let at = |i: i32, j: i32| table[(j.clamp(0, n - 1) * n + i.clamp(0, n - 1)) as usize];
+    let x = cos_theta.clamp(0.0, 1.0) * n as f32 - 0.5;
+    let y = roughness.clamp(0.0, 1.0) * n as f32 - 0.5;
+    let (i, j) = (x.floor() as i32, y.floor() as i32);
+    let (fx, fy) = (x - x.floor(), y - y.floor());
+    let top = at(i, j) * (1.0 - fx) + at(i + 1, j) * fx;
+    let bottom = at(i, j + 1) * (1.0 - fx) + at(i + 1, j + 1) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
 /// The directional albedo E(cos θ) = ∫ sheen_brdf_cos dω of the sheen BRDF with colour 1 at sheen
 /// roughness `roughness`, by a midpoint quadrature in (cos θ_l, φ) with `n` × 4n cells, in f64
 /// (what the DFG table's third channel holds; the sheen layer's albedo scaling uses it).
@@ -417,7 +439,7 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
                 .unwrap_or_else(|| GltfSurface::core(base, s.metallic, s.roughness));
             let albedo = |c: f32| {
                 if max3(gs.sheen) > 0.0 {
-                    sheen_albedo(c as f64, gs.sheen_roughness, 24) as f32
+                    sheen_albedo_lookup(c, gs.sheen_roughness)
                 } else {
                     0.0
                 }

@@ -55,6 +55,8 @@ pub struct Case {
     /// Environment lighting: None (lamps and the fixed ambient, the library default), or an
     /// environment with what happens to the file's lights.
     pub env: Option<EnvCase>,
+    /// KHR_materials_variants: the variant to load (None: the file's default materials).
+    pub variant: Option<&'static str>,
     /// What a person should see in the golden.
     pub shows: &'static str,
 }
@@ -83,6 +85,7 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         cpu: None,
         mirror: None,
         env: None,
+        variant: None,
         shows,
     }
 }
@@ -308,6 +311,46 @@ pub fn cases() -> Vec<Case> {
         Case {
             env: Some(EnvCase { map: "studio", rotation: 0.0, lights: LightsMode::Default }),
             ..case("env-staged", "assets/scenes/shadows.glb", "the shadows scene with its lights replaced by the default lighting: the studio, the key light from the front left casting the ball's and the floating box's shadows to the back right onto the weave, a grey ground beyond it")
+        },
+    ]);
+    // Real cloth assets (tests/data/khronos, Khronos glTF sample assets, licences in their
+    // folders): the material extensions under the default lighting (studio, and the default key
+    // light where the file has no lights).
+    const STUDIO: Option<EnvCase> = Some(EnvCase { map: "studio", rotation: 0.0, lights: LightsMode::Auto });
+    cases.extend([
+        Case {
+            env: STUDIO,
+            ..case("khronos-compare-sheen", "tests/data/khronos/CompareSheen/glTF-Binary/CompareSheen.glb", "two logo spheres, the right one with a red sheen (roughness 0.3) over a darker base texture: a red glow along its rim that the plain left sphere lacks, the centre of both lit alike by the key light")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-sheen-chair", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the wooden chair with its mango velvet seat and back: soft brightening towards the silhouettes, the damask pattern at its own texture scale, tufting from the normal map, occlusion in the creases (TEXCOORD_1)")
+        },
+        Case {
+            env: STUDIO,
+            variant: Some("Peacock Velvet"),
+            ..case("khronos-sheen-chair-peacock", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the same chair in its Peacock Velvet variant: blue-green velvet, black wood")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-velvet-sofa", "tests/data/khronos/GlamVelvetSofa/glTF-Binary/GlamVelvetSofa.glb", "the curved sofa in its default navy velvet under the file's own light and the studio: deep blue, lighter where the cushions turn away from the camera (the sheen), black legs")
+        },
+        Case {
+            env: STUDIO,
+            variant: Some("Champagne"),
+            ..case("khronos-velvet-sofa-champagne", "tests/data/khronos/GlamVelvetSofa/glTF-Binary/GlamVelvetSofa.glb", "the same sofa in its Champagne variant: pale warm velvet with a brighter rim along the silhouettes")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-sheen-cloth", "tests/data/khronos/SheenCloth/glTF/SheenCloth.gltf", "the draped technical-fabric swatch, its 256² texture tiled 30 x 30 (mirrored by the negative scale): a fine regular weave texture, sheen along the folds")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-anisotropy-rotation", "tests/data/khronos/AnisotropyRotationTest/glTF-Binary/AnisotropyRotationTest.glb", "donuts whose tangents are tilted 30°, undone by the rotation, the texture, or both: the anisotropic highlights of the corrected rows run the same way")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-anisotropy-strength", "tests/data/khronos/AnisotropyStrengthTest/glTF-Binary/AnisotropyStrengthTest.glb", "the grid of spheres, anisotropy strength against roughness: highlights stretch more with strength, and blur with roughness")
         },
     ]);
     // The accuracy levels and weave precisions other than the default (model page §4).

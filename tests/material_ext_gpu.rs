@@ -1,0 +1,296 @@
+//! KHR_materials_sheen, _specular and _anisotropy on the GPU (lavapipe, or WEFT_DEVICE, with
+//! validation on): the lighting pass against the CPU twin shading the read-back G-buffer, and the
+//! anisotropy's orientation pinned on a plane.
+
+mod common;
+
+use glam::{Mat4, Vec3};
+use weft::reference::shading::shade;
+use weft::render::gpu::{FrameData, GpuLight};
+use weft::render::{RenderOptions, Renderer};
+use weft::scene::{
+    Anisotropy, Draw, Light, LightKind, Material, Mesh, Scene, Sheen, Specular, Vertex,
+};
+
+/// A UV sphere of radius r at the origin with tangents along +u (longitude).
+fn sphere(material: usize, r: f32) -> Mesh {
+    let (nu, nv) = (48u32, 24u32);
+    let mut vertices = Vec::new();
+    for j in 0..=nv {
+        let theta = std::f32::consts::PI * j as f32 / nv as f32;
+        for i in 0..=nu {
+            let phi = std::f32::consts::TAU * i as f32 / nu as f32;
+            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let t = Vec3::new(-phi.sin(), 0.0, -phi.cos());
+            vertices.push(Vertex {
+                position: (n * r).to_array(),
+                normal: n.to_array(),
+                tangent: [t.x, t.y, t.z, 1.0],
+                uv: [i as f32 / nu as f32, j as f32 / nv as f32],
+                uv1: [0.0; 2],
+            });
+        }
+    }
+    let mut indices = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            let a = j * (nu + 1) + i;
+            let b = a + nu + 1;
+            indices.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+        }
+    }
+    Mesh {
+        name: "sphere".into(),
+        vertices,
+        indices,
+        material,
+    }
+}
+
+fn light(kind: LightKind, position: [f32; 3], direction: [f32; 3], intensity: f32) -> Light {
+    Light {
+        name: "test light".into(),
+        kind,
+        color: [1.0, 0.95, 0.9],
+        intensity,
+        range: None,
+        position: Vec3::from(position),
+        direction: Vec3::from(direction).normalize(),
+        shadow: None,
+    }
+}
+
+fn materials() -> Vec<Material> {
+    let base = Material {
+        base_color: [0.6, 0.25, 0.1, 1.0],
+        metallic: 0.0,
+        roughness: 0.5,
+        ..Default::default()
+    };
+    vec![
+        Material {
+            name: "velvet".into(),
+            sheen: Some(Sheen {
+                color: [0.9, 0.5, 0.3],
+                roughness: 0.4,
+                color_texture: None,
+                roughness_texture: None,
+            }),
+            ..base.clone()
+        },
+        Material {
+            name: "tinted specular".into(),
+            specular: Specular {
+                factor: 0.6,
+                color: [2.0, 1.0, 0.4],
+                ior: 1.8,
+                ..Default::default()
+            },
+            ..base.clone()
+        },
+        Material {
+            name: "brushed".into(),
+            metallic: 1.0,
+            roughness: 0.25,
+            base_color: [0.9, 0.9, 0.9, 1.0],
+            anisotropy: Some(Anisotropy {
+                strength: 0.8,
+                rotation: 0.7,
+                texture: None,
+            }),
+            ..base.clone()
+        },
+        Material {
+            name: "everything".into(),
+            metallic: 0.4,
+            sheen: Some(Sheen {
+                color: [0.2, 0.6, 1.0],
+                roughness: 0.9,
+                color_texture: None,
+                roughness_texture: None,
+            }),
+            specular: Specular {
+                factor: 0.8,
+                color: [1.0, 0.5, 1.0],
+                ..Default::default()
+            },
+            anisotropy: Some(Anisotropy {
+                strength: 0.5,
+                rotation: -1.2,
+                texture: None,
+            }),
+            ..base
+        },
+    ]
+}
+
+fn spheres_scene() -> Scene {
+    let materials = materials();
+    let mut s = Scene {
+        source: "extension spheres".into(),
+        meshes: (0..materials.len()).map(|m| sphere(m, 0.45)).collect(),
+        draws: (0..materials.len())
+            .map(|m| Draw::new(m, Mat4::from_translation(Vec3::new(m as f32 - 1.5, 0.0, 0.0))))
+            .collect(),
+        materials,
+        lights: vec![
+            light(LightKind::Directional, [0.0; 3], [0.4, -0.5, -0.77], 3.0),
+            light(LightKind::Point, [0.5, 1.2, 1.5], [0.0, 0.0, -1.0], 6.0),
+        ],
+        ..Default::default()
+    };
+    s.cameras.push(
+        s.look_at_camera(Vec3::new(0.0, 0.4, 4.0), Vec3::ZERO, 45f32.to_radians())
+            .unwrap(),
+    );
+    s
+}
+
+#[test]
+fn lighting_pass_matches_cpu_shading_of_the_extensions() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let scene = spheres_scene();
+    let options = RenderOptions {
+        width: 256,
+        height: 96,
+        ..Default::default()
+    };
+    let frame = renderer.render(&scene, &options).expect("render");
+    let g = renderer.read_gbuffer().expect("gbuffer");
+    // The albedo as the device decodes it from the sRGB target: lavapipe's sRGB-to-linear is
+    // 0.7 % off the formula at byte 89 (0.1006 against 0.0999), so the CPU shades the device's
+    // decode, read through the albedo debug view (f16: 2^-11 relative), not its own.
+    let albedo = renderer
+        .render(&scene, &RenderOptions { debug_view: weft::render::DebugView::Albedo, ..options.clone() })
+        .expect("albedo view")
+        .hdr;
+    let camera = scene.camera(None).unwrap();
+    let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::new).collect();
+    let mut fd = FrameData::new(&camera, options.width, options.height);
+    fd.light_count = lights.len() as u32;
+    fd.material_count = scene.materials.len() as u32;
+    let inv = Mat4::from_cols_array_2d(&fd.inv_view_proj);
+    let (w, h) = (options.width, options.height);
+    let mut per_material = vec![0usize; scene.materials.len()];
+    let mut worst = 0f32;
+    let mut bad = Vec::new();
+    for i in 0..(w * h) as usize {
+        let Some(mut s) = common::gbuffer_surface(&g, &scene, inv, (w, h), i) else {
+            continue;
+        };
+        s.base_color = [albedo[i * 4], albedo[i * 4 + 1], albedo[i * 4 + 2]];
+        if let Some(gs) = s.gltf.as_mut() {
+            gs.base = s.base_color;
+        }
+        let material = g.surface[i * 4 + 1].round() as usize;
+        per_material[material] += 1;
+        let cpu = shade(&fd, &lights, &s);
+        for c in 0..3 {
+            // As tests/fabric_render_gpu.rs: the HDR target is f16 (2^-11 relative), both sides
+            // read the same G-buffer; the rest is evaluation order, the Vulkan precision of
+            // pow/exp (the Charlie terms), and the sampler's 8-bit
+            // bilinear weights on the sheen-albedo table (< 1e-3 of E, which enters the result
+            // scaled by at most the sheen colour).
+            let bound = 2e-3 * cpu[c].abs() + 2e-4;
+            let err = (frame.hdr[i * 4 + c] - cpu[c]).abs();
+            worst = worst.max(err / bound);
+            if err > bound {
+                bad.push(format!(
+                    "pixel ({}, {}) channel {c}: GPU {} vs CPU {} (material '{}', n·v {:.3})",
+                    i % w as usize,
+                    i / w as usize,
+                    frame.hdr[i * 4 + c],
+                    cpu[c],
+                    scene.materials[material].name,
+                    {
+                        let e = weft::reference::shading::oct_decode([g.frame[i * 4], g.frame[i * 4 + 1]]);
+                        let p = Vec3::from(s.position);
+                        Vec3::from(e).dot((camera.view.inverse().w_axis.truncate() - p).normalize())
+                    }
+                ));
+            }
+        }
+    }
+    println!("pixels per material {per_material:?}, worst {worst:.3} of the bound");
+    assert!(bad.is_empty(), "{} channels outside the bound:\n{}", bad.len(), bad.iter().step_by(40).take(25).cloned().collect::<Vec<_>>().join("\n"));
+    assert!(per_material.iter().all(|&n| n > 500), "{per_material:?}");
+    renderer.context().check_validation().unwrap();
+}
+
+/// The anisotropy direction follows the tangent frame: roughness grows along the direction
+/// (KHR_materials_anisotropy: alpha_t = mix(alpha, 1, strength²) along it), so on a plane under
+/// a light straight above and the camera straight above the highlight stretches along the
+/// tangent, and along the bitangent once anisotropyRotation turns it a quarter turn
+/// (counter-clockwise: +x to +y). Measured by the highlight's second moments in x and y.
+#[test]
+fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let plane = |rotation: Option<f32>| {
+        let v = |x: f32, y: f32| Vertex {
+            position: [x, y, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            tangent: [1.0, 0.0, 0.0, 1.0],
+            uv: [x, -y],
+            uv1: [0.0; 2],
+        };
+        let mut s = Scene {
+            source: "anisotropic plane".into(),
+            meshes: vec![Mesh {
+                name: "plane".into(),
+                vertices: vec![v(-2.0, -2.0), v(2.0, -2.0), v(2.0, 2.0), v(-2.0, 2.0)],
+                indices: vec![0, 1, 2, 0, 2, 3],
+                material: 0,
+            }],
+            draws: vec![Draw::new(0, Mat4::IDENTITY)],
+            materials: vec![Material {
+                base_color: [1.0; 4],
+                metallic: 1.0,
+                roughness: 0.15,
+                anisotropy: rotation.map(|r| Anisotropy {
+                    strength: 0.9,
+                    rotation: r,
+                    texture: None,
+                }),
+                ..Default::default()
+            }],
+            lights: vec![light(LightKind::Point, [0.0, 0.0, 1.5], [0.0, 0.0, -1.0], 4.0)],
+            ..Default::default()
+        };
+        s.cameras.push(
+            s.look_at_camera(Vec3::new(0.0, 0.0, 1.5), Vec3::ZERO, 90f32.to_radians())
+                .unwrap(),
+        );
+        s
+    };
+    let moments = |renderer: &mut Renderer, scene: &Scene| {
+        let n = 128u32;
+        let options = RenderOptions {
+            width: n,
+            height: n,
+            ..Default::default()
+        };
+        let frame = renderer.render(scene, &options).expect("render");
+        let (mut sx, mut sy, mut sum) = (0f64, 0f64, 0f64);
+        for y in 0..n {
+            for x in 0..n {
+                let i = (y * n + x) as usize;
+                let lum = frame.hdr[i * 4 + 1] as f64;
+                let dx = x as f64 + 0.5 - n as f64 / 2.0;
+                let dy = y as f64 + 0.5 - n as f64 / 2.0;
+                sx += lum * dx * dx;
+                sy += lum * dy * dy;
+                sum += lum;
+            }
+        }
+        ((sx / sum).sqrt(), (sy / sum).sqrt())
+    };
+    let (ix, iy) = moments(&mut renderer, &plane(None));
+    let (ax, ay) = moments(&mut renderer, &plane(Some(0.0)));
+    let (rx, ry) = moments(&mut renderer, &plane(Some(std::f32::consts::FRAC_PI_2)));
+    println!("isotropic {ix:.2} x {iy:.2} px, along the tangent {ax:.2} x {ay:.2}, rotated {rx:.2} x {ry:.2}");
+    assert!((ix / iy - 1.0).abs() < 0.05, "isotropic highlight not round: {ix} x {iy}");
+    assert!(ax > 1.3 * ay, "anisotropy along +x must stretch the highlight along x: {ax} x {ay}");
+    assert!(ry > 1.3 * rx, "rotated a quarter turn it must stretch along y: {rx} x {ry}");
+    renderer.context().check_validation().unwrap();
+}
+
