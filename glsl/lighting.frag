@@ -249,6 +249,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao) {
     vec3 dielectric = s.f0 * ab.x + ab.y;
     vec3 spec_albedo = mix(s.specular * dielectric, base * ab.x + ab.y, metallic);
     vec3 bent = n;
+    float lookup_roughness = roughness;
     if (s.anisotropy > 0.0) {
         vec3 b = cross(n, s.t);
         vec3 across = cross(b, v);
@@ -257,17 +258,22 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao) {
         bend *= bend;
         vec3 m = mix(an, n, bend * bend);
         bent = dot(m, m) > 1e-12 ? normalize(m) : n;
+        // The stretched lobe is wider than the isotropic one: look up the prefiltered radiance
+        // at the roughness of the mean of its two alphas.
+        float alpha = roughness * roughness;
+        float at = mix(alpha, 1.0, s.anisotropy * s.anisotropy);
+        lookup_roughness = sqrt(0.5 * (at + alpha));
     }
-    vec3 r = dominant_dir(n, reflect(-v, bent), roughness);
+    vec3 r = dominant_dir(n, reflect(-v, bent), lookup_roughness);
     vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
-    vec3 prefiltered = textureLod(env_specular, d, roughness * frame.env_params.y).rgb * frame.env_params.x;
+    vec3 prefiltered = textureLod(env_specular, d, lookup_roughness * frame.env_params.y).rgb * frame.env_params.x;
     vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
     vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric));
     vec3 result = diffuse * ao + prefiltered * spec_albedo * specular_occlusion(nv, ao, roughness);
     if (has_sheen) {
-        vec3 rs = dominant_dir(n, reflect(-v, n), s.sheen_roughness);
-        vec3 ds = env_dir(rs, frame.env_rot0, frame.env_rot1, frame.env_rot2);
-        vec3 sheen_light = textureLod(env_specular, ds, s.sheen_roughness * frame.env_params.y).rgb * frame.env_params.x;
+        // The Charlie lobe is broad and lives near the horizon: its light is closer to the
+        // cosine-weighted mean (the SH irradiance / π) than to any prefiltered GGX look-up.
+        vec3 sheen_light = irradiance;
         result = result * max(1.0 - max3(s.sheen) * e_v, 0.0) + s.sheen * e_v * sheen_light * ao;
     }
     return result;

@@ -10,7 +10,7 @@
 //! few pixels (A–S exponents above ~10⁴, GGX roughness below ~0.05) are under-resolved here.
 
 use super::brdf::double as fd;
-use super::shading::{pbr_brdf_cos, Surface};
+use super::shading::{gltf_brdf_cos, sheen_albedo, GltfSurface, Surface};
 use crate::env::{pixel_dir, world_from_env, Environment};
 
 /// The environment as a list of world-space directions with radiance × solid angle.
@@ -105,16 +105,57 @@ impl EnvQuadrature {
             None => {
                 let vf = v.map(|x| x as f32);
                 let n = s.normal;
+                // The material with its extensions; the sheen's albedo by its own quadrature
+                // (shading::sheen_albedo), not the GPU's table.
+                let gs = s
+                    .gltf
+                    .unwrap_or_else(|| GltfSurface::core(s.base_color, s.metallic, s.roughness));
+                let has_sheen = gs.sheen.iter().any(|&c| c > 0.0);
+                let table = if has_sheen {
+                    sheen_albedo_curve(gs.sheen_roughness)
+                } else {
+                    std::sync::Arc::new(Vec::new())
+                };
+                let albedo = |c: f32| {
+                    if table.is_empty() {
+                        return 0.0;
+                    }
+                    let x = (c.clamp(0.0, 1.0) as f64) * (table.len() - 1) as f64;
+                    let i = (x.floor() as usize).min(table.len() - 2);
+                    let f = x - i as f64;
+                    (table[i] * (1.0 - f) + table[i + 1] * f) as f32
+                };
+                let e_v = albedo(n[0] * vf[0] + n[1] * vf[1] + n[2] * vf[2]);
                 self.integrate(|l| {
                     let lf = l.map(|x| x as f32);
-                    if n[0] * lf[0] + n[1] * lf[1] + n[2] * lf[2] <= 0.0 {
+                    let nl = n[0] * lf[0] + n[1] * lf[1] + n[2] * lf[2];
+                    if nl <= 0.0 {
                         return [0.0; 3];
                     }
-                    pbr_brdf_cos(n, vf, lf, s.base_color, s.metallic, s.roughness).map(|x| x as f64)
+                    gltf_brdf_cos(n, vf, lf, &gs, [e_v, albedo(nl)]).map(|x| x as f64)
                 })
             }
         }
     }
+}
+
+/// The sheen's directional albedo at roughness `r` on 257 cosines in [0, 1] (each by
+/// [`sheen_albedo`]'s own quadrature, 48 cells), computed once per roughness and kept: the
+/// reference interpolates it linearly (8x finer than the GPU's 32-entry table).
+fn sheen_albedo_curve(r: f32) -> std::sync::Arc<Vec<f64>> {
+    use std::collections::HashMap;
+    use std::sync::{Arc, Mutex, OnceLock};
+    static CACHE: OnceLock<Mutex<HashMap<u32, Arc<Vec<f64>>>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(t) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&r.to_bits()) {
+        return t.clone();
+    }
+    let t = Arc::new((0..=256).map(|i| sheen_albedo(i as f64 / 256.0, r, 48)).collect::<Vec<_>>());
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(r.to_bits(), t.clone());
+    t
 }
 
 #[cfg(test)]
