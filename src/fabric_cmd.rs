@@ -107,7 +107,11 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
         }
     }
     Ok(Overrides {
-        pitch_m: args.pitch.as_deref().map(assets::parse_length).transpose()?,
+        pitch_m: args
+            .pitch
+            .as_deref()
+            .map(assets::parse_length)
+            .transpose()?,
         pattern,
         gap_fraction: args.gap,
         e_along: args.e_along,
@@ -189,7 +193,11 @@ pub fn run(args: FabricArgs) -> anyhow::Result<()> {
     };
     let bytes = std::fs::read(input)
         .map_err(|e| anyhow::anyhow!("cannot read '{}': {e}", input.display()))?;
-    let in_kind = if bytes.starts_with(b"glTF") { "glb" } else { "gltf" };
+    let in_kind = if bytes.starts_with(b"glTF") {
+        "glb"
+    } else {
+        "gltf"
+    };
     match kind(output) {
         Some(k) if k == in_kind => {}
         Some(k) => anyhow::bail!(
@@ -211,8 +219,12 @@ pub fn run(args: FabricArgs) -> anyhow::Result<()> {
         _ => PathBuf::from("."),
     };
     let source_name = input.display().to_string();
-    let (out_bytes, applied) =
-        assets::transform(&bytes, &source_name, Some(&in_dir), std::slice::from_ref(&request))?;
+    let (out_bytes, applied) = assets::transform(
+        &bytes,
+        &source_name,
+        Some(&in_dir),
+        std::slice::from_ref(&request),
+    )?;
     let out_dir = match output.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),

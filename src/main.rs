@@ -259,7 +259,10 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
 }
 
 /// As [`load_scene`], with `weft render --fabric` applied.
-fn load_scene_fabric(args: &SceneArgs, fabric: &[String]) -> anyhow::Result<(Scene, RenderOptions)> {
+fn load_scene_fabric(
+    args: &SceneArgs,
+    fabric: &[String],
+) -> anyhow::Result<(Scene, RenderOptions)> {
     load_scene_impl(args, "1280x720", true, fabric)
 }
 

@@ -176,10 +176,9 @@ impl Request {
 /// A length with its unit (`0.8mm`, `1 cm`, `0.01m`, `0.03in`), in metres.
 pub fn parse_length(text: &str) -> Result<f64> {
     let t = text.trim();
-    let split = t
-        .find(|c: char| c.is_ascii_alphabetic())
-        .unwrap_or(t.len());
-    let (number, unit) = (t[..split].trim(), t[split..].trim());
+    // The unit is the trailing letters, so that 1e-3m keeps its exponent.
+    let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
+    let (number, unit) = (number.trim(), &t[number.len()..]);
     let scale = match unit {
         "mm" => 1e-3,
         "cm" => 1e-2,
@@ -257,7 +256,10 @@ pub fn uv_density(scene: &Scene, material: usize, who: &str) -> Result<UvDensity
                 })
                 .collect();
             let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
-            let q: Vec<glam::DVec2> = v.iter().map(|v| glam::Vec2::from(v.uv).as_dvec2()).collect();
+            let q: Vec<glam::DVec2> = v
+                .iter()
+                .map(|v| glam::Vec2::from(v.uv).as_dvec2())
+                .collect();
             let b = 0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]).abs();
             if a.is_finite() && b.is_finite() {
                 w += a;
@@ -344,7 +346,11 @@ impl fmt::Display for Applied {
                 format_length(d.max / cells)
             )?;
         } else {
-            writeln!(f, "  world pitch {}", format_length(d.metres_per_uv / cells))?;
+            writeln!(
+                f,
+                "  world pitch {}",
+                format_length(d.metres_per_uv / cells)
+            )?;
         }
         if let Some((base, sheen, roughness)) = &self.fallback {
             writeln!(
@@ -391,7 +397,9 @@ impl Container {
                 glb: true,
             })
         } else {
-            let text = bytes.strip_prefix(b"\xEF\xBB\xBF".as_slice()).unwrap_or(bytes);
+            let text = bytes
+                .strip_prefix(b"\xEF\xBB\xBF".as_slice())
+                .unwrap_or(bytes);
             let json = serde_json::from_slice(text)
                 .map_err(|e| broken(format!("the JSON does not parse ({e})")))?;
             Ok(Container {
@@ -485,8 +493,18 @@ fn resolve(doc: &Value, r: &MaterialRef) -> Result<usize> {
 /// Whether some primitive using material `index` lacks TEXCOORD_0, and whether all do.
 fn uv_coverage(doc: &Value, index: usize) -> (usize, usize) {
     let (mut with, mut without) = (0, 0);
-    for mesh in doc.get("meshes").and_then(Value::as_array).into_iter().flatten() {
-        for prim in mesh.get("primitives").and_then(Value::as_array).into_iter().flatten() {
+    for mesh in doc
+        .get("meshes")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+    {
+        for prim in mesh
+            .get("primitives")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
             if prim.get("material").and_then(Value::as_u64) != Some(index as u64) {
                 continue;
             }
@@ -625,8 +643,17 @@ fn read_numbers<const N: usize>(
 
 /// The material's `baseColorFactor` (linear RGBA; glTF's default white).
 fn base_colour(material: &Value, who: &str) -> Result<[f64; 4]> {
-    let pbr = material.get("pbrMetallicRoughness").cloned().unwrap_or(json!({}));
-    read_numbers(&pbr, "baseColorFactor", [1.0; 4], who, "pbrMetallicRoughness")
+    let pbr = material
+        .get("pbrMetallicRoughness")
+        .cloned()
+        .unwrap_or(json!({}));
+    read_numbers(
+        &pbr,
+        "baseColorFactor",
+        [1.0; 4],
+        who,
+        "pbrMetallicRoughness",
+    )
 }
 
 /// The fabric for a material with `KHR_materials_sheen`, and what the mapping did:
@@ -663,6 +690,11 @@ pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Resul
     let alpha = rc * rc;
     let e = (2.0 / (alpha * alpha) - 2.0).max(0.0);
     let e_across = ((e + 1.0) / FROM_SHEEN_RATIO.sqrt() - 1.0).max(0.0);
+    if e_across == 0.0 {
+        notes.push(format!(
+            "from-sheen: sheenRoughnessFactor {r} is rougher than the broadest lobe of ratio {FROM_SHEEN_RATIO} (about 0.78): e_across is 0"
+        ));
+    }
     let e_along = FROM_SHEEN_RATIO * (e_across + 1.0) - 1.0;
     let cotton = presets::by_name("cotton-plain").expect("cotton-plain is a preset");
     let rd = [base[0], base[1], base[2]].map(|x| x.clamp(0.0, 1.0) as f32);
@@ -691,7 +723,10 @@ pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Resul
     for (obj, key) in [
         (sheen, "sheenColorTexture"),
         (sheen, "sheenRoughnessTexture"),
-        (material.get("pbrMetallicRoughness").unwrap_or(&Value::Null), "baseColorTexture"),
+        (
+            material.get("pbrMetallicRoughness").unwrap_or(&Value::Null),
+            "baseColorTexture",
+        ),
     ] {
         if obj.get(key).is_some() {
             notes.push(format!(
@@ -775,7 +810,9 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
             };
             let gap_default = match request.source {
                 Source::Preset(p) => p.gap_fraction,
-                Source::FromSheen => presets::by_name("cotton-plain").map_or(0.1, |p| p.gap_fraction),
+                Source::FromSheen => {
+                    presets::by_name("cotton-plain").map_or(0.1, |p| p.gap_fraction)
+                }
             };
             let o = &request.overrides;
             let pitch_m = o.pitch_m.unwrap_or(pitch_default);
@@ -836,7 +873,17 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
             if exts.contains_key(EXTENSION_NAME) {
                 notes.push(format!("replaced its existing {EXTENSION_NAME}"));
             }
-            exts.insert(EXTENSION_NAME.into(), extension_json(&params));
+            // What the file says, read back by the loader's parser: the params reported are the
+            // ones written (rounded to 6 digits), and they load without a warning.
+            let written = extension_json(&params);
+            let mut warnings = Vec::new();
+            params = FabricParams::from_gltf_extension(&written, &name, &mut warnings)?;
+            if let Some(w) = warnings.first() {
+                return Err(Error::input(format!(
+                    "{who}: the written extension would load with a warning: {w}"
+                )));
+            }
+            exts.insert(EXTENSION_NAME.into(), written);
             let mut fallback = None;
             if let Source::Preset(_) = request.source {
                 let (sheen_colour, sheen_roughness) = fallback_sheen(&params);
@@ -904,11 +951,17 @@ pub fn transform(
 /// `weft render --fabric`: the scene at `path` (the built-in default scene when None) with the
 /// fabric added in memory, by the same [`transform`] as `weft fabric`, then loaded.
 pub fn load_with_fabric(path: Option<&Path>, specs: &[String]) -> Result<(Scene, Vec<Applied>)> {
-    let requests: Vec<Request> = specs.iter().map(|s| Request::parse_spec(s)).collect::<Result<_>>()?;
+    let requests: Vec<Request> = specs
+        .iter()
+        .map(|s| Request::parse_spec(s))
+        .collect::<Result<_>>()?;
     let (bytes, source, base_dir) = match path {
         Some(p) => {
             let bytes = std::fs::read(p).map_err(|e| {
-                Error::input(format!("scene file '{}' could not be read: {e}", p.display()))
+                Error::input(format!(
+                    "scene file '{}' could not be read: {e}",
+                    p.display()
+                ))
             })?;
             let dir = match p.parent() {
                 Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -932,7 +985,12 @@ pub fn load_with_fabric(path: Option<&Path>, specs: &[String]) -> Result<(Scene,
 pub fn external_files(doc: &Value) -> Vec<String> {
     let mut out = Vec::new();
     for list in ["buffers", "images"] {
-        for item in doc.get(list).and_then(Value::as_array).into_iter().flatten() {
+        for item in doc
+            .get(list)
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
             if let Some(uri) = item.get("uri").and_then(Value::as_str) {
                 if uri.starts_with("data:") {
                     continue;
@@ -964,17 +1022,25 @@ pub fn copy_external_files(doc: &Value, from: &Path, to: &Path) -> Result<Vec<Pa
     for rel in external_files(doc) {
         let p = Path::new(&rel);
         let inside = !rel.contains(':')
-            && p.components().all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+            && p.components()
+                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
         if !inside {
             return Err(Error::input(format!(
                 "the file refers to '{rel}', outside its own folder; write the output into the input's folder (-o {}/NAME.gltf) so that the reference still resolves",
                 from.display()
             )));
         }
-        let src = from.join(p);
-        let dst = to.join(p);
+        let p: PathBuf = p
+            .components()
+            .filter(|c| !matches!(c, Component::CurDir))
+            .collect();
+        let src = from.join(&p);
+        let dst = to.join(&p);
         let bytes = std::fs::read(&src).map_err(|e| {
-            Error::input(format!("cannot read '{}' (referenced by the file): {e}", src.display()))
+            Error::input(format!(
+                "cannot read '{}' (referenced by the file): {e}",
+                src.display()
+            ))
         })?;
         if let Ok(existing) = std::fs::read(&dst) {
             if existing == bytes {
@@ -987,9 +1053,8 @@ pub fn copy_external_files(doc: &Value, from: &Path, to: &Path) -> Result<Vec<Pa
             )));
         }
         if let Some(parent) = dst.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| {
-                Error::input(format!("cannot create '{}': {e}", parent.display()))
-            })?;
+            std::fs::create_dir_all(parent)
+                .map_err(|e| Error::input(format!("cannot create '{}': {e}", parent.display())))?;
         }
         std::fs::write(&dst, &bytes)
             .map_err(|e| Error::input(format!("cannot write '{}': {e}", dst.display())))?;
@@ -1011,7 +1076,8 @@ mod tests {
         for (bad, needle) in [
             ("0.8", "no unit"),
             ("0.8ft", "'ft'"),
-            ("xmm", "not a number"),
+            ("mm", "not a number"),
+            ("xmm", "'xmm'"),
             ("-1mm", "positive"),
             ("0mm", "positive"),
         ] {
@@ -1028,7 +1094,10 @@ mod tests {
         assert_eq!(r.overrides.pitch_m, Some(0.8e-3));
         let r = Request::parse_spec("a=b=from-sheen").unwrap();
         assert_eq!(r.materials, vec![MaterialRef::Name("a=b".into())]);
-        assert_eq!(Request::parse_spec("3=silk-satin").unwrap().materials, vec![MaterialRef::Index(3)]);
+        assert_eq!(
+            Request::parse_spec("3=silk-satin").unwrap().materials,
+            vec![MaterialRef::Index(3)]
+        );
         let e = Request::parse_spec("seat=tweed").unwrap_err().to_string();
         assert!(e.contains("'tweed'") && e.contains("cotton-plain"), "{e}");
         assert!(Request::parse_spec("denim-twill").is_err());
@@ -1039,9 +1108,15 @@ mod tests {
     fn colours_parse() {
         assert_eq!(Colour::parse("--rd", "base").unwrap(), Colour::Base);
         assert_eq!(Colour::parse("--rd", "0.5").unwrap(), Colour::Rgb([0.5; 3]));
-        assert_eq!(Colour::parse("--rd", "0.1,0.2,0.3").unwrap(), Colour::Rgb([0.1, 0.2, 0.3]));
+        assert_eq!(
+            Colour::parse("--rd", "0.1,0.2,0.3").unwrap(),
+            Colour::Rgb([0.1, 0.2, 0.3])
+        );
         for bad in ["1,2", "0.1,0.2,1.5", "red"] {
-            assert!(Colour::parse("--rd", bad).unwrap_err().to_string().contains("--rd"));
+            assert!(Colour::parse("--rd", bad)
+                .unwrap_err()
+                .to_string()
+                .contains("--rd"));
         }
     }
 
@@ -1049,19 +1124,32 @@ mod tests {
     fn sheen_roughness_round_trips_through_from_sheen() {
         // from-sheen is the inverse of the fallback's roughness, so a fabric made from a sheen
         // asset writes back (nearly) the roughness it came from.
-        for r in [0.2, 0.3, 0.5, 0.8] {
+        for r in [0.2, 0.3, 0.5, 0.7] {
             let m = json!({"extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": r, "sheenColorFactor": [1, 0, 0]}}});
             let mut notes = Vec::new();
             let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
             let (_, back) = fallback_sheen(&p);
             assert!((back - r).abs() < 0.02, "{r} -> {back} ({p:?})");
-            assert!(notes.iter().any(|n| n.contains("sheenColorFactor")), "{notes:?}");
+            assert!(
+                notes.iter().any(|n| n.contains("sheenColorFactor")),
+                "{notes:?}"
+            );
         }
-        let e = from_sheen(&json!({}), "material 0 'x'", &mut Vec::new()).unwrap_err().to_string();
-        assert!(e.contains("material 0 'x'") && e.contains(SHEEN_EXTENSION), "{e}");
+        let e = from_sheen(&json!({}), "material 0 'x'", &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("material 0 'x'") && e.contains(SHEEN_EXTENSION),
+            "{e}"
+        );
         let bad = json!({"extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": "rough"}}});
-        let e = from_sheen(&bad, "material 0 'x'", &mut Vec::new()).unwrap_err().to_string();
-        assert!(e.contains("material 0 'x'") && e.contains("sheenRoughnessFactor"), "{e}");
+        let e = from_sheen(&bad, "material 0 'x'", &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("material 0 'x'") && e.contains("sheenRoughnessFactor"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -85,7 +85,8 @@ pub const PRESETS: &[Preset] = &[
         rs: 0.045,
         shadow_strength: 0.6,
         shadow_width: 0.3,
-        sources: "pattern: denim is a 3/1 warp-faced twill; pitch: ~60-70 ends x 40-50 picks/inch; \
+        sources:
+            "pattern: denim is a 3/1 warp-faced twill; pitch: ~60-70 ends x 40-50 picks/inch; \
                   rs: cellulose n~1.55; exponents, gap, shadow, colours: by eye",
     },
     Preset {
@@ -129,7 +130,11 @@ pub fn by_name(name: &str) -> Option<&'static Preset> {
 
 /// The names, comma-separated, for messages.
 pub fn names() -> String {
-    PRESETS.iter().map(|p| p.name).collect::<Vec<_>>().join(", ")
+    PRESETS
+        .iter()
+        .map(|p| p.name)
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 impl Preset {
