@@ -177,8 +177,8 @@ fn output_loads_back_with_the_fabric_on_the_chosen_materials_only() {
                 // The fallback: dielectric, the far-field albedo as base colour.
                 assert_eq!(m.metallic, 0.0);
                 let albedo = assets::far_field_albedo(&a.params);
-                for k in 0..3 {
-                    assert!((m.base_color[k] as f64 - albedo[k]).abs() < 1e-5);
+                for (got, want) in m.base_color.iter().zip(albedo) {
+                    assert!((*got as f64 - want).abs() < 1e-5, "{got} vs {want}");
                 }
             }
             // The cloth keeps its own fabric, the floor stays without.
@@ -353,6 +353,33 @@ fn pitch_follows_uv_density_and_node_scale() {
         b.density
     );
     assert!((b.cells_per_uv() / a.cells_per_uv() - 3.0).abs() < 1e-3);
+
+    // A material only a KHR_materials_variants variant puts on the floor is measured there.
+    let mut variants = doc.clone();
+    let mut velvet = variants["materials"][0].clone();
+    velvet["name"] = json!("velvet");
+    variants["materials"].as_array_mut().unwrap().push(velvet);
+    let velvet_index = variants["materials"].as_array().unwrap().len() - 1;
+    variants["extensions"]["KHR_materials_variants"] = json!({"variants": [{"name": "soft"}]});
+    variants["extensionsUsed"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!("KHR_materials_variants"));
+    variants["meshes"][0]["primitives"][0]["extensions"] = json!({"KHR_materials_variants":
+        {"mappings": [{"material": velvet_index, "variants": [0]}]}});
+    let bytes = serde_json::to_vec(&variants).unwrap();
+    let (_, applied) = assets::transform(
+        &bytes,
+        "variants.gltf",
+        Some(&base),
+        &[request(&["velvet"], "cotton-plain", Some("2mm"))],
+    )
+    .unwrap();
+    assert_eq!(applied[0].density, a.density);
+    assert!(applied[0]
+        .notes
+        .iter()
+        .any(|n| n.contains("KHR_materials_variants")));
 }
 
 #[test]

@@ -522,6 +522,28 @@ fn uv_coverage(doc: &Value, index: usize) -> (usize, usize) {
     (with, without)
 }
 
+/// The default material of the first primitive that a `KHR_materials_variants` mapping gives
+/// material `index`.
+fn variant_stand_in(doc: &Value, index: usize) -> Option<usize> {
+    let meshes = doc.get("meshes")?.as_array()?;
+    meshes
+        .iter()
+        .filter_map(|m| m.get("primitives")?.as_array())
+        .flatten()
+        .find_map(|prim| {
+            let mappings = prim
+                .get("extensions")?
+                .get("KHR_materials_variants")?
+                .get("mappings")?
+                .as_array()?;
+            mappings
+                .iter()
+                .any(|m| m.get("material").and_then(Value::as_u64) == Some(index as u64))
+                .then(|| prim.get("material")?.as_u64().map(|m| m as usize))
+                .flatten()
+        })
+}
+
 /// A number for the file, rounded to 6 significant digits (f32 values would otherwise be
 /// written as 0.6200000047683716).
 fn num(x: f64) -> Value {
@@ -711,9 +733,9 @@ pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Resul
         p.e_along, p.e_across
     ));
     if colour.iter().all(|&c| c == 0.0) {
-        notes.push(format!(
-            "from-sheen: sheenColorFactor is 0 (this material's sheen is off); only its base colour and roughness were used"
-        ));
+        notes.push(
+            "from-sheen: sheenColorFactor is 0 (this material's sheen is off); only its base colour and roughness were used".into(),
+        );
     } else {
         notes.push(format!(
             "from-sheen: sheenColorFactor [{:.3}, {:.3}, {:.3}] is not mapped (the woven highlight is untinted Fresnel)",
@@ -800,7 +822,21 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
                     with_uv + without_uv
                 ));
             }
-            let density = uv_density(scene, index, &who)?;
+            let density = match uv_density(scene, index, &who) {
+                Ok(d) => d,
+                // A material only a KHR_materials_variants variant uses: measure the primitives
+                // it is mapped onto, through the material they draw with by default.
+                Err(e) => match variant_stand_in(doc, index) {
+                    Some(stand_in) if stand_in != index => {
+                        let d = uv_density(scene, stand_in, &who).map_err(|_| e)?;
+                        notes.push(format!(
+                            "no node draws it by default (a KHR_materials_variants material): the pitch was converted on the primitives its variant maps it onto, which draw with material {stand_in} by default"
+                        ));
+                        d
+                    }
+                    _ => return Err(e),
+                },
+            };
             let (mut params, pitch_default) = match request.source {
                 Source::Preset(p) => (p.params(1.0), p.pitch_m),
                 Source::FromSheen => (

@@ -21,8 +21,15 @@ if (!file) {
   process.exit(2);
 }
 const full = path.resolve(file);
+let bytes;
+try {
+  bytes = fs.readFileSync(full);
+} catch (e) {
+  console.error(`cannot read ${file}: ${e.message}`);
+  process.exit(2);
+}
 validator
-  .validateBytes(new Uint8Array(fs.readFileSync(full)), {
+  .validateBytes(new Uint8Array(bytes), {
     uri: path.basename(full),
     maxIssues: 1000,
     externalResourceFunction: (uri) =>
