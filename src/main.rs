@@ -11,6 +11,8 @@ use weft::render::{self, DebugView, Plan, RenderOptions, Renderer};
 use weft::scene::{self, Scene};
 use weft::vk::{Context, ContextOptions, DeviceChoice};
 
+mod fabric_cmd;
+
 #[derive(Parser)]
 #[command(
     name = "weft",
@@ -38,6 +40,9 @@ enum Command {
     /// options (the defaults unless told), labelled with name and mean sRGB, in one PNG; prints a
     /// table of what each scene gave.
     Sheet(SheetArgs),
+    /// Write a copy of a .gltf/.glb with the woven fabric (WEFT_materials_fabric) on chosen
+    /// materials, a preset's parameters, the thread pitch in world units, and a sheen fallback.
+    Fabric(fabric_cmd::FabricArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
     Shaders {
         /// Directory to write the package into (created if missing).
@@ -136,6 +141,10 @@ struct RenderArgs {
     /// reports the median of the frames after the first (the first pays shader JIT compilation).
     #[arg(long, default_value_t = 1)]
     frames: u32,
+    /// Try the woven fabric on a material without writing a file: MATERIAL=PRESET[@PITCH]
+    /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), repeatable.
+    #[arg(long)]
+    fabric: Vec<String>,
 }
 
 #[derive(Args)]
@@ -237,6 +246,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => run_bench(args),
         Command::Compare(args) => run_compare(args),
         Command::Sheet(args) => run_sheet(args),
+        Command::Fabric(args) => fabric_cmd::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -251,6 +261,14 @@ fn load_scene(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
     load_scene_sized(args, "1280x720")
 }
 
+/// As [`load_scene`], with `weft render --fabric` applied.
+fn load_scene_fabric(
+    args: &SceneArgs,
+    fabric: &[String],
+) -> anyhow::Result<(Scene, RenderOptions)> {
+    load_scene_impl(args, "1280x720", true, fabric)
+}
+
 /// The built-in studio, generated once per process (`weft sheet` lights every file with it).
 fn studio() -> std::sync::Arc<weft::env::Environment> {
     static STUDIO: std::sync::OnceLock<std::sync::Arc<weft::env::Environment>> =
@@ -263,25 +281,29 @@ fn studio() -> std::sync::Arc<weft::env::Environment> {
 /// As [`load_scene_sized`] at 1280x720, without printing the loader's warnings (they stay in
 /// `scene.warnings`).
 fn load_scene_quiet(args: &SceneArgs) -> anyhow::Result<(Scene, RenderOptions)> {
-    load_scene_impl(args, "1280x720", false)
+    load_scene_impl(args, "1280x720", false, &[])
 }
 
 fn load_scene_sized(
     args: &SceneArgs,
     default_size: &str,
 ) -> anyhow::Result<(Scene, RenderOptions)> {
-    load_scene_impl(args, default_size, true)
+    load_scene_impl(args, default_size, true, &[])
 }
 
 fn load_scene_impl(
     args: &SceneArgs,
     default_size: &str,
     print_warnings: bool,
+    fabric: &[String],
 ) -> anyhow::Result<(Scene, RenderOptions)> {
     // Flags first: a typo fails before any loading.
     let lights = weft::env::LightsMode::parse(&args.lights)?;
     let background = weft::env::Background::parse(&args.background)?;
     let level = weft::env::IblLevel::parse(&args.ibl)?;
+    let load_options = scene::LoadOptions {
+        variant: args.variant.clone(),
+    };
     let mut scene = match &args.scene {
         Some(path) => {
             // A progress line for loads a user waits on (tangent generation and texture decoding
@@ -292,12 +314,11 @@ fn load_scene_impl(
             if big {
                 eprintln!("loading {} ({} MiB)...", path.display(), bytes >> 20);
             }
-            let scene = scene::load_with(
-                path,
-                &scene::LoadOptions {
-                    variant: args.variant.clone(),
-                },
-            )?;
+            let scene = if fabric.is_empty() {
+                scene::load_with(path, &load_options)?
+            } else {
+                fabric_cmd::load(Some(path), fabric, &load_options)?
+            };
             if big {
                 eprintln!(
                     "loaded {} in {:.1} s",
@@ -307,13 +328,12 @@ fn load_scene_impl(
             }
             scene
         }
+        None if !fabric.is_empty() => fabric_cmd::load(None, fabric, &load_options)?,
         None if args.variant.is_some() => scene::load_slice_with(
             scene::DEFAULT_SCENE_GLB,
             "built-in default scene",
             None,
-            &scene::LoadOptions {
-                variant: args.variant.clone(),
-            },
+            &load_options,
         )?,
         None => scene::default_scene(),
     };
@@ -386,7 +406,7 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         Ok((renderer, start.elapsed().as_secs_f64() * 1e3))
     });
     let load_start = std::time::Instant::now();
-    let loaded = load_scene(&args.scene);
+    let loaded = load_scene_fabric(&args.scene, &args.fabric);
     let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
     let gpu = gpu
         .join()

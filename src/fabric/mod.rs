@@ -11,7 +11,9 @@
 //! again, silently, by [`FabricParams::to_gpu`], so no NaN, infinity or out-of-range value can reach
 //! a shader whatever built the params.
 
+pub mod assets;
 mod pattern;
+pub mod presets;
 mod texture;
 
 pub use pattern::{WeavePattern, MAX_CELLS};

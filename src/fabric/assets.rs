@@ -1,0 +1,1208 @@
+//! The woven model on any asset: `WEFT_materials_fabric` added to chosen materials of an existing
+//! glTF document (`weft fabric`, and in memory for `weft render --fabric`), everything else left
+//! as it is, with a fallback other viewers show. The page is `docs/fabric-on-assets.md`.
+//!
+//! - **What changes** in a chosen material: `extensions.WEFT_materials_fabric` is added (replaced
+//!   if present), and, for presets, the fallback: `pbrMetallicRoughness.baseColorFactor` (the
+//!   weave's far-field diffuse albedo), `metallicFactor: 0`, and `extensions.KHR_materials_sheen`
+//!   (colour and roughness from the threads, see [`fallback_sheen`]). `extensionsUsed` gains the
+//!   two names; `extensionsRequired` is not touched, so every viewer still opens the file.
+//!   Nothing else in the JSON changes (key order and number spelling may: the document is
+//!   re-serialised), and a `.glb`'s BIN chunk is copied byte for byte.
+//! - **Pitch**: a world length (`0.8mm`, `1cm`, `0.01m`, `0.03in`; glTF units are metres),
+//!   converted with the material's UV density: `sqrt(world area / UV area)` summed over every
+//!   drawn triangle that uses the material, world positions through the node's full transform
+//!   (scale included), UVs as the loader gives them to the renderer (`TEXCOORD_0`, with the
+//!   material's texture transform when the loader bakes one). One cell is one thread pitch, so
+//!   `repeat = 2·pitch/density` and cells per UV unit = `density/pitch`.
+//! - **from-sheen**: [`from_sheen`] maps a material's `KHR_materials_sheen` and base colour to the
+//!   fabric's parameters, and says what it mapped and what it could not.
+
+use std::fmt;
+use std::path::{Component, Path, PathBuf};
+
+use serde_json::{json, Map, Value};
+
+use super::{presets, presets::Preset, FabricParams, WeavePattern, EXTENSION_NAME, REPEAT_RANGE};
+use crate::scene::Scene;
+use crate::{Error, Result};
+
+/// The sheen extension of the fallback.
+pub const SHEEN_EXTENSION: &str = "KHR_materials_sheen";
+
+/// The ratio `e_along/e_across` that `from-sheen` gives the two exponents (the project default
+/// 200/10 of `docs/fabric-model.md`).
+pub const FROM_SHEEN_RATIO: f64 = 20.0;
+
+/// A material by index or by name.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialRef {
+    Index(usize),
+    Name(String),
+}
+
+impl MaterialRef {
+    /// All digits: an index; anything else: a name.
+    pub fn parse(text: &str) -> MaterialRef {
+        match text.parse::<usize>() {
+            Ok(i) if text.chars().all(|c| c.is_ascii_digit()) => MaterialRef::Index(i),
+            _ => MaterialRef::Name(text.to_string()),
+        }
+    }
+}
+
+impl fmt::Display for MaterialRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MaterialRef::Index(i) => write!(f, "{i}"),
+            MaterialRef::Name(n) => write!(f, "'{n}'"),
+        }
+    }
+}
+
+/// Where the parameters come from.
+#[derive(Clone, Debug)]
+pub enum Source {
+    Preset(&'static Preset),
+    /// The material's own `KHR_materials_sheen` and base colour ([`from_sheen`]).
+    FromSheen,
+}
+
+impl Source {
+    pub fn parse(text: &str) -> Result<Source> {
+        if text.eq_ignore_ascii_case("from-sheen") {
+            return Ok(Source::FromSheen);
+        }
+        presets::by_name(text).map(Source::Preset).ok_or_else(|| {
+            Error::input(format!(
+                "unknown fabric preset '{text}'; use one of {}, or from-sheen (weft fabric --list-presets describes them)",
+                presets::names()
+            ))
+        })
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Source::Preset(p) => p.name,
+            Source::FromSheen => "from-sheen",
+        }
+    }
+}
+
+/// A thread colour given on the command line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Colour {
+    Rgb([f32; 3]),
+    /// The material's `baseColorFactor` (linear RGB).
+    Base,
+}
+
+impl Colour {
+    /// `R,G,B` (linear, each in [0, 1]), one number for grey, or `base`.
+    pub fn parse(flag: &str, text: &str) -> Result<Colour> {
+        if text.eq_ignore_ascii_case("base") {
+            return Ok(Colour::Base);
+        }
+        let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+        let bad = || {
+            Error::input(format!(
+                "{flag} '{text}' is not a colour; give R,G,B (linear, each 0..1, e.g. 0.6,0.1,0.1), one number for grey, or 'base' for the material's base colour"
+            ))
+        };
+        let values: Vec<f32> = parts
+            .iter()
+            .map(|p| p.parse::<f32>().ok().filter(|x| (0.0..=1.0).contains(x)))
+            .collect::<Option<_>>()
+            .ok_or_else(bad)?;
+        match values[..] {
+            [g] => Ok(Colour::Rgb([g; 3])),
+            [r, g, b] => Ok(Colour::Rgb([r, g, b])),
+            _ => Err(bad()),
+        }
+    }
+}
+
+/// Parameters given on the command line over the preset's.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// Thread pitch, metres.
+    pub pitch_m: Option<f64>,
+    pub pattern: Option<WeavePattern>,
+    /// Gap as a fraction of the pitch.
+    pub gap_fraction: Option<f64>,
+    pub e_along: Option<f32>,
+    pub e_across: Option<f32>,
+    pub rs: Option<f32>,
+    pub shadow_strength: Option<f32>,
+    pub shadow_width: Option<f32>,
+    pub rd: Option<Colour>,
+    pub rd_warp: Option<Colour>,
+    pub rd_weft: Option<Colour>,
+    pub coupled_diffuse: Option<bool>,
+}
+
+/// Materials and what to give them.
+#[derive(Clone, Debug)]
+pub struct Request {
+    pub materials: Vec<MaterialRef>,
+    pub source: Source,
+    pub overrides: Overrides,
+}
+
+impl Request {
+    /// `MATERIAL=PRESET` or `MATERIAL=PRESET@PITCH` (`weft render --fabric`); MATERIAL is a name
+    /// or an index, and may itself contain '='.
+    pub fn parse_spec(spec: &str) -> Result<Request> {
+        let (material, rest) = spec.rsplit_once('=').filter(|(m, _)| !m.is_empty()).ok_or_else(|| {
+            Error::input(format!(
+                "--fabric '{spec}' should be MATERIAL=PRESET or MATERIAL=PRESET@PITCH (e.g. seat=denim-twill@0.8mm, 0=from-sheen); MATERIAL is a name or an index"
+            ))
+        })?;
+        let (preset, pitch) = match rest.split_once('@') {
+            Some((p, pitch)) => (p, Some(parse_length(pitch)?)),
+            None => (rest, None),
+        };
+        Ok(Request {
+            materials: vec![MaterialRef::parse(material)],
+            source: Source::parse(preset)?,
+            overrides: Overrides {
+                pitch_m: pitch,
+                ..Default::default()
+            },
+        })
+    }
+}
+
+/// A length with its unit (`0.8mm`, `1 cm`, `0.01m`, `0.03in`), in metres.
+pub fn parse_length(text: &str) -> Result<f64> {
+    let t = text.trim();
+    // The unit is the trailing letters, so that 1e-3m keeps its exponent.
+    let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
+    let (number, unit) = (number.trim(), &t[number.len()..]);
+    let scale = match unit {
+        "mm" => 1e-3,
+        "cm" => 1e-2,
+        "m" => 1.0,
+        "in" => 0.0254,
+        "" => {
+            return Err(Error::input(format!(
+                "pitch '{text}' has no unit; write it with one of mm, cm, m, in (e.g. 0.8mm): glTF lengths are metres, and a bare number is too easy to get wrong"
+            )))
+        }
+        other => {
+            return Err(Error::input(format!(
+                "pitch '{text}' has the unit '{other}', which weft does not know; use mm, cm, m or in (e.g. 0.8mm)"
+            )))
+        }
+    };
+    let x: f64 = number.parse().map_err(|_| {
+        Error::input(format!(
+            "pitch '{text}': '{number}' is not a number; write e.g. 0.8mm"
+        ))
+    })?;
+    if !(x.is_finite() && x > 0.0) {
+        return Err(Error::input(format!(
+            "pitch '{text}' must be a positive length (e.g. 0.8mm)"
+        )));
+    }
+    Ok(x * scale)
+}
+
+/// A length in metres, in the unit that reads best.
+pub fn format_length(m: f64) -> String {
+    if m < 1e-2 {
+        format!("{:.3} mm", m * 1e3)
+    } else if m < 1.0 {
+        format!("{:.2} cm", m * 1e2)
+    } else {
+        format!("{m:.3} m")
+    }
+}
+
+/// How texture space maps to the world on a material's triangles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvDensity {
+    /// World length per UV unit (metres), `sqrt(world area / UV area)` over all its triangles.
+    pub metres_per_uv: f64,
+    /// The same per drawn primitive: the smallest and largest (they differ when parts of the
+    /// mesh are unwrapped at different scales).
+    pub min: f64,
+    pub max: f64,
+    /// Drawn primitives (mesh primitive × node) that use the material.
+    pub primitives: usize,
+}
+
+/// The UV density of material `material` in a loaded scene. `who` names it in messages.
+pub fn uv_density(scene: &Scene, material: usize, who: &str) -> Result<UvDensity> {
+    let (mut world, mut uv) = (0f64, 0f64);
+    let (mut min, mut max, mut primitives) = (f64::INFINITY, 0f64, 0usize);
+    for draw in &scene.draws {
+        let Some(mesh) = scene.meshes.get(draw.mesh) else {
+            continue;
+        };
+        if mesh.material != material {
+            continue;
+        }
+        let (mut w, mut t) = (0f64, 0f64);
+        for tri in mesh.indices.chunks_exact(3) {
+            let v: Option<Vec<_>> = tri.iter().map(|&i| mesh.vertices.get(i as usize)).collect();
+            let Some(v) = v else { continue };
+            let p: Vec<glam::DVec3> = v
+                .iter()
+                .map(|v| {
+                    draw.world
+                        .as_dmat4()
+                        .transform_point3(glam::Vec3::from(v.position).as_dvec3())
+                })
+                .collect();
+            let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+            let q: Vec<glam::DVec2> = v
+                .iter()
+                .map(|v| glam::Vec2::from(v.uv).as_dvec2())
+                .collect();
+            let b = 0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]).abs();
+            if a.is_finite() && b.is_finite() {
+                w += a;
+                t += b;
+            }
+        }
+        primitives += 1;
+        if t > 0.0 && w > 0.0 {
+            let d = (w / t).sqrt();
+            min = min.min(d);
+            max = max.max(d);
+        }
+        world += w;
+        uv += t;
+    }
+    if primitives == 0 {
+        return Err(Error::input(format!(
+            "{who} is not used by any triangle the scene draws, so there is no mesh to measure the thread pitch on; choose a material that a node's mesh uses"
+        )));
+    }
+    if !(uv > 0.0 && world > 0.0) {
+        return Err(Error::input(format!(
+            "{who}: its triangles have no usable texture coordinates (TEXCOORD_0 missing, or every UV triangle has zero area), and the weave is laid out in UV space; unwrap the mesh (add UVs) and export again"
+        )));
+    }
+    Ok(UvDensity {
+        metres_per_uv: (world / uv).sqrt(),
+        min,
+        max,
+        primitives,
+    })
+}
+
+/// What was done to one material.
+#[derive(Clone, Debug)]
+pub struct Applied {
+    pub index: usize,
+    pub name: String,
+    pub source: &'static str,
+    pub params: FabricParams,
+    pub pitch_m: f64,
+    pub density: UvDensity,
+    /// The fallback written, when it was: baseColorFactor and (sheen colour, sheen roughness).
+    pub fallback: Option<([f64; 4], [f64; 3], f64)>,
+    /// What the user should know: mappings, replaced values, unused textures.
+    pub notes: Vec<String>,
+}
+
+impl Applied {
+    /// Cells (one thread pitch each) per UV unit.
+    pub fn cells_per_uv(&self) -> f64 {
+        2.0 / self.params.repeat as f64
+    }
+}
+
+impl fmt::Display for Applied {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let d = &self.density;
+        let cells = self.cells_per_uv();
+        writeln!(
+            f,
+            "material {} '{}': {} ({} weave)",
+            self.index,
+            self.name,
+            self.source,
+            self.params.pattern.name()
+        )?;
+        writeln!(
+            f,
+            "  UV density {} per UV unit over {} drawn primitive(s); thread pitch {} -> {:.1} cells per UV unit (repeat {:.6} UV)",
+            format_length(d.metres_per_uv),
+            d.primitives,
+            format_length(self.pitch_m),
+            cells,
+            self.params.repeat
+        )?;
+        // What the renderer will show: the pitch each primitive gets.
+        if d.max > 0.0 && (d.max / d.min) > 1.05 {
+            writeln!(
+                f,
+                "  world pitch {} on average, {} to {} across its primitives (their UV scales differ)",
+                format_length(d.metres_per_uv / cells),
+                format_length(d.min / cells),
+                format_length(d.max / cells)
+            )?;
+        } else {
+            writeln!(
+                f,
+                "  world pitch {}",
+                format_length(d.metres_per_uv / cells)
+            )?;
+        }
+        if let Some((base, sheen, roughness)) = &self.fallback {
+            writeln!(
+                f,
+                "  fallback: baseColorFactor [{:.3}, {:.3}, {:.3}, {:.3}], metallicFactor 0, {SHEEN_EXTENSION} sheenColorFactor [{:.3}, {:.3}, {:.3}] sheenRoughnessFactor {:.3}",
+                base[0], base[1], base[2], base[3], sheen[0], sheen[1], sheen[2], roughness
+            )?;
+        }
+        for n in &self.notes {
+            writeln!(f, "  note: {n}")?;
+        }
+        Ok(())
+    }
+}
+
+/// A glTF file split into its JSON and, for `.glb`, its BIN chunk (kept as bytes).
+#[derive(Clone, Debug)]
+pub struct Container {
+    pub json: Value,
+    pub bin: Option<Vec<u8>>,
+    pub glb: bool,
+}
+
+impl Container {
+    /// Splits a `.gltf` or `.glb` file. The loader has accepted the bytes first
+    /// ([`transform`]), so only what it does not check is reported here.
+    pub fn split(bytes: &[u8], source: &str) -> Result<Container> {
+        let broken = |why: String| Error::input(format!("'{source}': {why}"));
+        if bytes.starts_with(b"glTF") {
+            // gltf::Glb subtracts the header size from the declared length unchecked.
+            let declared = bytes
+                .get(8..12)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+            if declared.is_none_or(|l| l < 12) {
+                return Err(broken("the .glb header is broken".into()));
+            }
+            let glb = gltf::Glb::from_slice(bytes)
+                .map_err(|e| broken(format!("the .glb container is broken ({e})")))?;
+            let json = serde_json::from_slice(&glb.json)
+                .map_err(|e| broken(format!("the JSON chunk does not parse ({e})")))?;
+            Ok(Container {
+                json,
+                bin: glb.bin.map(|b| b.into_owned()),
+                glb: true,
+            })
+        } else {
+            let text = bytes
+                .strip_prefix(b"\xEF\xBB\xBF".as_slice())
+                .unwrap_or(bytes);
+            let json = serde_json::from_slice(text)
+                .map_err(|e| broken(format!("the JSON does not parse ({e})")))?;
+            Ok(Container {
+                json,
+                bin: None,
+                glb: false,
+            })
+        }
+    }
+
+    /// The file's bytes: pretty JSON for `.gltf`; for `.glb` compact JSON and the BIN chunk as it
+    /// was (gltf::Glb pads the JSON chunk with spaces as the specification asks).
+    pub fn to_bytes(&self) -> Result<Vec<u8>> {
+        let internal = |e: &dyn fmt::Display| Error::input(format!("cannot write the glTF: {e}"));
+        if !self.glb {
+            let mut text = serde_json::to_vec_pretty(&self.json).map_err(|e| internal(&e))?;
+            text.push(b'\n');
+            return Ok(text);
+        }
+        let json = serde_json::to_vec(&self.json).map_err(|e| internal(&e))?;
+        gltf::Glb {
+            header: gltf::binary::Header {
+                magic: *b"glTF",
+                version: 2,
+                length: 0, // to_writer computes it
+            },
+            json: json.into(),
+            bin: self.bin.as_deref().map(Into::into),
+        }
+        .to_vec()
+        .map_err(|e| internal(&e))
+    }
+}
+
+/// Reads `doc.materials[index]` mutably as an object.
+fn material_mut(doc: &mut Value, index: usize) -> Option<&mut Map<String, Value>> {
+    doc.get_mut("materials")?.get_mut(index)?.as_object_mut()
+}
+
+/// The indices of the materials `r` names; a name several materials share is an error.
+fn resolve(doc: &Value, r: &MaterialRef) -> Result<usize> {
+    let materials = doc
+        .get("materials")
+        .and_then(Value::as_array)
+        .map(Vec::as_slice)
+        .unwrap_or(&[]);
+    let listing = || {
+        if materials.is_empty() {
+            "the file has no materials".to_string()
+        } else {
+            let names: Vec<String> = materials
+                .iter()
+                .enumerate()
+                .map(|(i, m)| match m.get("name").and_then(Value::as_str) {
+                    Some(n) => format!("{i} '{n}'"),
+                    None => format!("{i} (unnamed)"),
+                })
+                .collect();
+            format!("its materials are {}", names.join(", "))
+        }
+    };
+    match r {
+        MaterialRef::Index(i) if *i < materials.len() => Ok(*i),
+        MaterialRef::Index(i) => Err(Error::input(format!(
+            "there is no material {i}: {}",
+            listing()
+        ))),
+        MaterialRef::Name(n) => {
+            let found: Vec<usize> = materials
+                .iter()
+                .enumerate()
+                .filter(|(_, m)| m.get("name").and_then(Value::as_str) == Some(n.as_str()))
+                .map(|(i, _)| i)
+                .collect();
+            match found[..] {
+                [i] => Ok(i),
+                [] => Err(Error::input(format!(
+                    "there is no material named '{n}': {}; give a name or an index",
+                    listing()
+                ))),
+                _ => Err(Error::input(format!(
+                    "{} materials are named '{n}' (indices {:?}); choose by index",
+                    found.len(),
+                    found
+                ))),
+            }
+        }
+    }
+}
+
+/// Whether some primitive using material `index` lacks TEXCOORD_0, and whether all do.
+fn uv_coverage(doc: &Value, index: usize) -> (usize, usize) {
+    let (mut with, mut without) = (0, 0);
+    for mesh in doc
+        .get("meshes")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+    {
+        for prim in mesh
+            .get("primitives")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            if prim.get("material").and_then(Value::as_u64) != Some(index as u64) {
+                continue;
+            }
+            if prim
+                .get("attributes")
+                .and_then(|a| a.get("TEXCOORD_0"))
+                .is_some()
+            {
+                with += 1;
+            } else {
+                without += 1;
+            }
+        }
+    }
+    (with, without)
+}
+
+/// The default material of the first primitive that a `KHR_materials_variants` mapping gives
+/// material `index`.
+fn variant_stand_in(doc: &Value, index: usize) -> Option<usize> {
+    let meshes = doc.get("meshes")?.as_array()?;
+    meshes
+        .iter()
+        .filter_map(|m| m.get("primitives")?.as_array())
+        .flatten()
+        .find_map(|prim| {
+            let mappings = prim
+                .get("extensions")?
+                .get("KHR_materials_variants")?
+                .get("mappings")?
+                .as_array()?;
+            mappings
+                .iter()
+                .any(|m| m.get("material").and_then(Value::as_u64) == Some(index as u64))
+                .then(|| prim.get("material")?.as_u64().map(|m| m as usize))
+                .flatten()
+        })
+}
+
+/// A number for the file, rounded to 6 significant digits (f32 values would otherwise be
+/// written as 0.6200000047683716).
+fn num(x: f64) -> Value {
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    json!(rounded)
+}
+
+/// A colour for the file.
+fn rgb(c: [f64; 3]) -> Value {
+    Value::Array(c.iter().map(|&x| num(x)).collect())
+}
+
+/// The extension object for `p`, every field written out.
+pub fn extension_json(p: &FabricParams) -> Value {
+    let pattern = match WeavePattern::NAMES
+        .iter()
+        .find(|n| WeavePattern::by_name(n) == Some(p.pattern))
+    {
+        Some(n) => json!(n),
+        None => json!(p.pattern.to_rows()),
+    };
+    let c = |c: [f32; 3]| rgb(c.map(|x| x as f64));
+    let mut o = json!({
+        "pattern": pattern,
+        "repeat": num(p.repeat as f64),
+        "gap": num(p.gap as f64),
+        "e_along": num(p.e_along as f64),
+        "e_across": num(p.e_across as f64),
+        "rd_warp": c(p.rd_warp),
+        "rd_weft": c(p.rd_weft),
+        "rs": num(p.rs as f64),
+        "shadow_strength": num(p.shadow_strength as f64),
+        "shadow_width": num(p.shadow_width as f64),
+    });
+    if p.coupled_diffuse {
+        o["coupled_diffuse"] = json!(true);
+    }
+    o
+}
+
+/// The weave's far-field diffuse albedo: the coverage-weighted thread colour times the
+/// shadow-weighted thread area over one whole repeat (exact, `weave_box` over the repeat). This is
+/// what the fabric's Lambert term averages to where the weave is too small to see.
+pub fn far_field_albedo(p: &FabricParams) -> [f64; 3] {
+    let [ru, rv] = p.repeat_uv();
+    let [c_warp, c_weft, sh] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
+    let thread = c_warp + c_weft;
+    if thread <= 0.0 {
+        return [0.0; 3];
+    }
+    let mut out = [0.0; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = sh * (c_warp * p.rd_warp[k] as f64 + c_weft * p.rd_weft[k] as f64) / thread;
+    }
+    out
+}
+
+/// `KHR_materials_sheen` for viewers without the woven model:
+///
+/// - **sheenRoughnessFactor** from the lobe's width. The A–S lobe's peak is
+///   `sqrt((eu+1)(ev+1))/(2π)`, that of an isotropic Phong lobe of exponent E is `(E+1)/(2π)`, so
+///   the isotropic lobe of the same solid angle has `E = sqrt((eu+1)(ev+1)) − 1`; Walter et al.
+///   2007 (§5.2) relate Phong and Beckmann: `α = sqrt(2/(E+2))`; glTF's roughness is `sqrt(α)`.
+///   Charlie's shape is not Beckmann's, so this matches widths, not lobes.
+/// - **sheenColorFactor**: `sqrt(thread colour) × thread coverage` (the gaps reflect nothing):
+///   the threads' colour, paler, as a fibre's grazing sheen looks. Chosen by eye; not a fit.
+pub fn fallback_sheen(p: &FabricParams) -> ([f64; 3], f64) {
+    let [ru, rv] = p.repeat_uv();
+    let [c_warp, c_weft, _] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
+    let thread = c_warp + c_weft;
+    let mut colour = [0.0; 3];
+    if thread > 0.0 {
+        for (k, c) in colour.iter_mut().enumerate() {
+            let mean = (c_warp * p.rd_warp[k] as f64 + c_weft * p.rd_weft[k] as f64) / thread;
+            *c = (mean.max(0.0).sqrt() * thread).clamp(0.0, 1.0);
+        }
+    }
+    let e = (((p.e_along as f64 + 1.0) * (p.e_across as f64 + 1.0)).sqrt() - 1.0).max(0.0);
+    let alpha = (2.0 / (e + 2.0)).sqrt();
+    (colour, alpha.sqrt().clamp(0.0, 1.0))
+}
+
+/// A number at `key` of a JSON object, or `default` when absent; an error naming the material
+/// and the key when it is not a finite number.
+fn read_number(obj: &Value, key: &str, default: f64, who: &str, path: &str) -> Result<f64> {
+    match obj.get(key) {
+        None => Ok(default),
+        Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
+            Error::input(format!(
+                "{who}: {path}.{key} must be a number, got {v}; fix the material or choose a preset instead of from-sheen"
+            ))
+        }),
+    }
+}
+
+/// An array of `n` numbers at `key`, or `default`.
+fn read_numbers<const N: usize>(
+    obj: &Value,
+    key: &str,
+    default: [f64; N],
+    who: &str,
+    path: &str,
+) -> Result<[f64; N]> {
+    let Some(v) = obj.get(key) else {
+        return Ok(default);
+    };
+    let bad = || {
+        Error::input(format!(
+            "{who}: {path}.{key} must be an array of {N} numbers, got {v}; fix the material or choose a preset instead of from-sheen"
+        ))
+    };
+    let a = v.as_array().filter(|a| a.len() == N).ok_or_else(bad)?;
+    let mut out = default;
+    for (o, x) in out.iter_mut().zip(a) {
+        *o = x.as_f64().filter(|x| x.is_finite()).ok_or_else(bad)?;
+    }
+    Ok(out)
+}
+
+/// The material's `baseColorFactor` (linear RGBA; glTF's default white).
+fn base_colour(material: &Value, who: &str) -> Result<[f64; 4]> {
+    let pbr = material
+        .get("pbrMetallicRoughness")
+        .cloned()
+        .unwrap_or(json!({}));
+    read_numbers(
+        &pbr,
+        "baseColorFactor",
+        [1.0; 4],
+        who,
+        "pbrMetallicRoughness",
+    )
+}
+
+/// The fabric for a material with `KHR_materials_sheen`, and what the mapping did:
+///
+/// - `rd_warp = rd_weft = baseColorFactor.rgb` (clamped to [0, 1]);
+/// - the exponents from `sheenRoughnessFactor` r (clamped to [0.05, 1]), the inverse of
+///   [`fallback_sheen`]'s roughness: `α = r²`, `E = 2/α² − 2`, split with
+///   `e_along/e_across` = [`FROM_SHEEN_RATIO`] at the same peak, `sqrt((ea+1)(ex+1)) = E + 1`;
+/// - `rs = 0.04` (glTF's default dielectric F0, IOR 1.5);
+/// - plain weave, gap and shadows of cotton-plain: the sheen carries no weave;
+/// - `sheenColorFactor`, and every texture (sheen colour/roughness, base colour) have no
+///   counterpart: the woven highlight is untinted Fresnel and the fabric takes no textures. Said
+///   in the notes.
+pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Result<FabricParams> {
+    let sheen = material
+        .get("extensions")
+        .and_then(|e| e.get(SHEEN_EXTENSION))
+        .ok_or_else(|| {
+            Error::input(format!(
+                "{who} has no {SHEEN_EXTENSION} to map from; choose a preset ({}) instead of from-sheen",
+                presets::names()
+            ))
+        })?;
+    if !sheen.is_object() {
+        return Err(Error::input(format!(
+            "{who}: extensions.{SHEEN_EXTENSION} must be an object, got {sheen}"
+        )));
+    }
+    let path = format!("extensions.{SHEEN_EXTENSION}");
+    let colour = read_numbers(sheen, "sheenColorFactor", [0.0; 3], who, &path)?;
+    let r = read_number(sheen, "sheenRoughnessFactor", 0.0, who, &path)?;
+    let base = base_colour(material, who)?;
+    let rc = r.clamp(0.05, 1.0);
+    let alpha = rc * rc;
+    let e = (2.0 / (alpha * alpha) - 2.0).max(0.0);
+    let e_across = ((e + 1.0) / FROM_SHEEN_RATIO.sqrt() - 1.0).max(0.0);
+    if e_across == 0.0 {
+        notes.push(format!(
+            "from-sheen: sheenRoughnessFactor {r} is rougher than the broadest lobe of ratio {FROM_SHEEN_RATIO} (about 0.78): e_across is 0"
+        ));
+    }
+    let e_along = FROM_SHEEN_RATIO * (e_across + 1.0) - 1.0;
+    let cotton = presets::by_name("cotton-plain").expect("cotton-plain is a preset");
+    let rd = [base[0], base[1], base[2]].map(|x| x.clamp(0.0, 1.0) as f32);
+    let mut p = cotton.params(1.0);
+    p.rd_warp = rd;
+    p.rd_weft = rd;
+    p.rs = 0.04;
+    p.e_along = (e_along as f32).clamp(0.0, 1e6);
+    p.e_across = (e_across as f32).clamp(0.0, 1e6);
+    notes.push(format!(
+        "from-sheen: rd = baseColorFactor [{:.3}, {:.3}, {:.3}]; sheenRoughnessFactor {r}{} -> isotropic exponent {e:.1} -> e_along {:.1}, e_across {:.1} (ratio {FROM_SHEEN_RATIO}); rs 0.04 (glTF default F0); plain weave with cotton-plain's gap and shadow",
+        rd[0], rd[1], rd[2],
+        if rc != r { format!(" (clamped to {rc})") } else { String::new() },
+        p.e_along, p.e_across
+    ));
+    if colour.iter().all(|&c| c == 0.0) {
+        notes.push(
+            "from-sheen: sheenColorFactor is 0 (this material's sheen is off); only its base colour and roughness were used".into(),
+        );
+    } else {
+        notes.push(format!(
+            "from-sheen: sheenColorFactor [{:.3}, {:.3}, {:.3}] is not mapped (the woven highlight is untinted Fresnel)",
+            colour[0], colour[1], colour[2]
+        ));
+    }
+    for (obj, key) in [
+        (sheen, "sheenColorTexture"),
+        (sheen, "sheenRoughnessTexture"),
+        (
+            material.get("pbrMetallicRoughness").unwrap_or(&Value::Null),
+            "baseColorTexture",
+        ),
+    ] {
+        if obj.get(key).is_some() {
+            notes.push(format!(
+                "from-sheen: {key} is not used by the woven model (it takes no textures); the material keeps it for other viewers"
+            ));
+        }
+    }
+    Ok(p)
+}
+
+/// Adds `name` to the document's `extensionsUsed` when missing.
+fn use_extension(doc: &mut Value, name: &str) -> Result<()> {
+    let root = doc
+        .as_object_mut()
+        .ok_or_else(|| Error::input("the glTF JSON is not an object"))?;
+    let used = root
+        .entry("extensionsUsed")
+        .or_insert_with(|| Value::Array(Vec::new()));
+    let list = used
+        .as_array_mut()
+        .ok_or_else(|| Error::input("the glTF's extensionsUsed is not an array; fix the file"))?;
+    if !list.iter().any(|v| v.as_str() == Some(name)) {
+        list.push(json!(name));
+    }
+    Ok(())
+}
+
+/// `obj[key]` as an object, created when missing; an error naming `who` and `path` when it is
+/// something else.
+fn object_at<'a>(
+    obj: &'a mut Map<String, Value>,
+    key: &str,
+    who: &str,
+) -> Result<&'a mut Map<String, Value>> {
+    obj.entry(key)
+        .or_insert_with(|| json!({}))
+        .as_object_mut()
+        .ok_or_else(|| Error::input(format!("{who}: '{key}' is not a JSON object; fix the file")))
+}
+
+/// Adds the fabric (and for presets the fallback) to the chosen materials of `doc`. `scene` is
+/// the same document loaded (for the UV density). Returns what was done, per material, in the
+/// order asked.
+pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec<Applied>> {
+    let mut done: Vec<Applied> = Vec::new();
+    for request in requests {
+        for r in &request.materials {
+            let index = resolve(doc, r)?;
+            if done.iter().any(|a| a.index == index) {
+                return Err(Error::input(format!(
+                    "material {r} is chosen twice; give each material once"
+                )));
+            }
+            let original = doc["materials"][index].clone();
+            let name = original
+                .get("name")
+                .and_then(Value::as_str)
+                .unwrap_or("")
+                .to_string();
+            let who = format!("material {index} '{name}'");
+            let (with_uv, without_uv) = uv_coverage(doc, index);
+            if with_uv == 0 && without_uv > 0 {
+                return Err(Error::input(format!(
+                    "{who} is used by {without_uv} primitive(s), none with texture coordinates (TEXCOORD_0), and the weave is laid out in UV space; unwrap the mesh (add UVs) or choose another material"
+                )));
+            }
+            let mut notes = Vec::new();
+            if without_uv > 0 {
+                notes.push(format!(
+                    "{without_uv} of its {} primitive(s) have no TEXCOORD_0: the weave looks flat there",
+                    with_uv + without_uv
+                ));
+            }
+            let density = match uv_density(scene, index, &who) {
+                Ok(d) => d,
+                // A material only a KHR_materials_variants variant uses: measure the primitives
+                // it is mapped onto, through the material they draw with by default.
+                Err(e) => match variant_stand_in(doc, index) {
+                    Some(stand_in) if stand_in != index => {
+                        let d = uv_density(scene, stand_in, &who).map_err(|_| e)?;
+                        notes.push(format!(
+                            "no node draws it by default (a KHR_materials_variants material): the pitch was converted on the primitives its variant maps it onto, which draw with material {stand_in} by default"
+                        ));
+                        d
+                    }
+                    _ => return Err(e),
+                },
+            };
+            let (mut params, pitch_default) = match request.source {
+                Source::Preset(p) => (p.params(1.0), p.pitch_m),
+                Source::FromSheen => (
+                    from_sheen(&original, &who, &mut notes)?,
+                    presets::by_name("cotton-plain").map_or(0.37e-3, |p| p.pitch_m),
+                ),
+            };
+            let gap_default = match request.source {
+                Source::Preset(p) => p.gap_fraction,
+                Source::FromSheen => {
+                    presets::by_name("cotton-plain").map_or(0.1, |p| p.gap_fraction)
+                }
+            };
+            let o = &request.overrides;
+            let pitch_m = o.pitch_m.unwrap_or(pitch_default);
+            let repeat = 2.0 * pitch_m / density.metres_per_uv;
+            if !(repeat >= REPEAT_RANGE.0 as f64 && repeat <= REPEAT_RANGE.1 as f64) {
+                return Err(Error::input(format!(
+                    "{who}: a thread pitch of {} on a mesh of {} per UV unit is a repeat of {repeat:e} UV, outside the extension's range [{}, {}]; check the pitch's unit",
+                    format_length(pitch_m),
+                    format_length(density.metres_per_uv),
+                    REPEAT_RANGE.0,
+                    REPEAT_RANGE.1
+                )));
+            }
+            params.repeat = repeat as f32;
+            params.gap = (o.gap_fraction.unwrap_or(gap_default) * repeat / 2.0) as f32;
+            if let Some(x) = o.pattern {
+                params.pattern = x;
+            }
+            let base = base_colour(&original, &who)?;
+            let colour = |c: Colour| match c {
+                Colour::Rgb(c) => c,
+                Colour::Base => [base[0], base[1], base[2]].map(|x| x.clamp(0.0, 1.0) as f32),
+            };
+            if let Some(c) = o.rd {
+                params.rd_warp = colour(c);
+                params.rd_weft = colour(c);
+            }
+            if let Some(c) = o.rd_warp {
+                params.rd_warp = colour(c);
+            }
+            if let Some(c) = o.rd_weft {
+                params.rd_weft = colour(c);
+            }
+            for (field, value) in [
+                (&mut params.e_along, o.e_along),
+                (&mut params.e_across, o.e_across),
+                (&mut params.rs, o.rs),
+                (&mut params.shadow_strength, o.shadow_strength),
+                (&mut params.shadow_width, o.shadow_width),
+            ] {
+                if let Some(v) = value {
+                    *field = v;
+                }
+            }
+            if let Some(c) = o.coupled_diffuse {
+                params.coupled_diffuse = c;
+            }
+            let sane = params.sanitized();
+            if sane != params {
+                return Err(Error::input(format!(
+                    "{who}: a parameter is out of range ({params:?}); the ranges are in docs/fabric-model.md §4"
+                )));
+            }
+
+            let m = material_mut(doc, index)
+                .ok_or_else(|| Error::input(format!("{who} is not a JSON object")))?;
+            let exts = object_at(m, "extensions", &who)?;
+            if exts.contains_key(EXTENSION_NAME) {
+                notes.push(format!("replaced its existing {EXTENSION_NAME}"));
+            }
+            // What the file says, read back by the loader's parser: the params reported are the
+            // ones written (rounded to 6 digits), and they load without a warning.
+            let written = extension_json(&params);
+            let mut warnings = Vec::new();
+            params = FabricParams::from_gltf_extension(&written, &name, &mut warnings)?;
+            if let Some(w) = warnings.first() {
+                return Err(Error::input(format!(
+                    "{who}: the written extension would load with a warning: {w}"
+                )));
+            }
+            exts.insert(EXTENSION_NAME.into(), written);
+            let mut fallback = None;
+            if let Source::Preset(_) = request.source {
+                let (sheen_colour, sheen_roughness) = fallback_sheen(&params);
+                if let Some(old) = exts.get(SHEEN_EXTENSION) {
+                    notes.push(format!(
+                        "replaced its {SHEEN_EXTENSION} {old} with the fallback (use from-sheen to keep and map it)"
+                    ));
+                }
+                exts.insert(
+                    SHEEN_EXTENSION.into(),
+                    json!({
+                        "sheenColorFactor": rgb(sheen_colour),
+                        "sheenRoughnessFactor": num(sheen_roughness),
+                    }),
+                );
+                let albedo = far_field_albedo(&params);
+                let factor = [albedo[0], albedo[1], albedo[2], base[3]];
+                let pbr = object_at(m, "pbrMetallicRoughness", &who)?;
+                if pbr.contains_key("baseColorTexture") {
+                    notes.push(
+                        "its baseColorTexture stays: other viewers show it multiplied by the new baseColorFactor".into(),
+                    );
+                }
+                pbr.insert(
+                    "baseColorFactor".into(),
+                    Value::Array(factor.iter().map(|&x| num(x)).collect()),
+                );
+                pbr.insert("metallicFactor".into(), json!(0.0));
+                fallback = Some((factor, sheen_colour, sheen_roughness));
+            }
+            done.push(Applied {
+                index,
+                name,
+                source: request.source.name(),
+                params,
+                pitch_m,
+                density,
+                fallback,
+                notes,
+            });
+        }
+    }
+    use_extension(doc, EXTENSION_NAME)?;
+    if done.iter().any(|a| a.fallback.is_some()) {
+        use_extension(doc, SHEEN_EXTENSION)?;
+    }
+    Ok(done)
+}
+
+/// Loads `bytes` (to check them and measure UV density), adds the fabric and returns the new
+/// file's bytes. `base_dir` resolves external buffers and images, as for [`crate::scene::load_slice`].
+pub fn transform(
+    bytes: &[u8],
+    source: &str,
+    base_dir: Option<&Path>,
+    requests: &[Request],
+) -> Result<(Vec<u8>, Vec<Applied>)> {
+    let scene = crate::scene::load_slice(bytes, source, base_dir)?;
+    let mut container = Container::split(bytes, source)?;
+    let applied = apply(&mut container.json, &scene, requests)
+        .map_err(|e| Error::input(format!("'{source}': {e}")))?;
+    Ok((container.to_bytes()?, applied))
+}
+
+/// `weft render --fabric`: the scene at `path` (the built-in default scene when None) with the
+/// fabric added in memory, by the same [`transform`] as `weft fabric`, then loaded.
+pub fn load_with_fabric(
+    path: Option<&Path>,
+    specs: &[String],
+    options: &crate::scene::LoadOptions,
+) -> Result<(Scene, Vec<Applied>)> {
+    let requests: Vec<Request> = specs
+        .iter()
+        .map(|s| Request::parse_spec(s))
+        .collect::<Result<_>>()?;
+    let (bytes, source, base_dir) = match path {
+        Some(p) => {
+            let bytes = std::fs::read(p).map_err(|e| {
+                Error::input(format!(
+                    "scene file '{}' could not be read: {e}",
+                    p.display()
+                ))
+            })?;
+            let dir = match p.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            (bytes, p.display().to_string(), Some(dir))
+        }
+        None => (
+            crate::scene::DEFAULT_SCENE_GLB.to_vec(),
+            "built-in default scene".to_string(),
+            None,
+        ),
+    };
+    let (out, applied) = transform(&bytes, &source, base_dir.as_deref(), &requests)?;
+    let scene = crate::scene::load_slice_with(&out, &source, base_dir.as_deref(), options)?;
+    Ok((scene, applied))
+}
+
+/// The relative file URIs (buffers and images) of a `.gltf`, percent-decoded; data: URIs and
+/// the BIN chunk are not files.
+pub fn external_files(doc: &Value) -> Vec<String> {
+    let mut out = Vec::new();
+    for list in ["buffers", "images"] {
+        for item in doc
+            .get(list)
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            if let Some(uri) = item.get("uri").and_then(Value::as_str) {
+                if uri.starts_with("data:") {
+                    continue;
+                }
+                let decoded = urlencoding::decode_binary(uri.as_bytes());
+                let path = String::from_utf8_lossy(&decoded).into_owned();
+                if !out.contains(&path) {
+                    out.push(path);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Copies the external files of a `.gltf` from `from` to `to` (the output's folder), so that the
+/// copy's unchanged URIs resolve. Files already there with the same bytes are left; different
+/// ones are an error (nothing is overwritten). URIs that leave the folder (`..`, absolute) are
+/// an error unless `from` and `to` are the same folder. Returns the files copied.
+pub fn copy_external_files(doc: &Value, from: &Path, to: &Path) -> Result<Vec<PathBuf>> {
+    let same = match (from.canonicalize(), to.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    let mut copied = Vec::new();
+    if same {
+        return Ok(copied);
+    }
+    for rel in external_files(doc) {
+        let p = Path::new(&rel);
+        let inside = !rel.contains(':')
+            && p.components()
+                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+        if !inside {
+            return Err(Error::input(format!(
+                "the file refers to '{rel}', outside its own folder; write the output into the input's folder (-o {}/NAME.gltf) so that the reference still resolves",
+                from.display()
+            )));
+        }
+        let p: PathBuf = p
+            .components()
+            .filter(|c| !matches!(c, Component::CurDir))
+            .collect();
+        let src = from.join(&p);
+        let dst = to.join(&p);
+        let bytes = std::fs::read(&src).map_err(|e| {
+            Error::input(format!(
+                "cannot read '{}' (referenced by the file): {e}",
+                src.display()
+            ))
+        })?;
+        if let Ok(existing) = std::fs::read(&dst) {
+            if existing == bytes {
+                continue;
+            }
+            return Err(Error::input(format!(
+                "'{}' exists and differs from the input's '{}'; the copy's reference to '{rel}' would resolve to the wrong file: choose another output folder",
+                dst.display(),
+                src.display()
+            )));
+        }
+        if let Some(parent) = dst.parent() {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| Error::input(format!("cannot create '{}': {e}", parent.display())))?;
+        }
+        std::fs::write(&dst, &bytes)
+            .map_err(|e| Error::input(format!("cannot write '{}': {e}", dst.display())))?;
+        copied.push(dst);
+    }
+    Ok(copied)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_and_their_errors() {
+        assert_eq!(parse_length("0.8mm").unwrap(), 0.8e-3);
+        assert!((parse_length("1 cm").unwrap() - 0.01).abs() < 1e-15);
+        assert_eq!(parse_length("2m").unwrap(), 2.0);
+        assert!((parse_length("0.1in").unwrap() - 0.00254).abs() < 1e-15);
+        for (bad, needle) in [
+            ("0.8", "no unit"),
+            ("0.8ft", "'ft'"),
+            ("mm", "not a number"),
+            ("xmm", "'xmm'"),
+            ("-1mm", "positive"),
+            ("0mm", "positive"),
+        ] {
+            let e = parse_length(bad).unwrap_err().to_string();
+            assert!(e.contains(needle), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn specs_parse_and_fail_clearly() {
+        let r = Request::parse_spec("seat=denim-twill@0.8mm").unwrap();
+        assert_eq!(r.materials, vec![MaterialRef::Name("seat".into())]);
+        assert_eq!(r.source.name(), "denim-twill");
+        assert_eq!(r.overrides.pitch_m, Some(0.8e-3));
+        let r = Request::parse_spec("a=b=from-sheen").unwrap();
+        assert_eq!(r.materials, vec![MaterialRef::Name("a=b".into())]);
+        assert_eq!(
+            Request::parse_spec("3=silk-satin").unwrap().materials,
+            vec![MaterialRef::Index(3)]
+        );
+        let e = Request::parse_spec("seat=tweed").unwrap_err().to_string();
+        assert!(e.contains("'tweed'") && e.contains("cotton-plain"), "{e}");
+        assert!(Request::parse_spec("denim-twill").is_err());
+        assert!(Request::parse_spec("seat=denim-twill@3").is_err());
+    }
+
+    #[test]
+    fn colours_parse() {
+        assert_eq!(Colour::parse("--rd", "base").unwrap(), Colour::Base);
+        assert_eq!(Colour::parse("--rd", "0.5").unwrap(), Colour::Rgb([0.5; 3]));
+        assert_eq!(
+            Colour::parse("--rd", "0.1,0.2,0.3").unwrap(),
+            Colour::Rgb([0.1, 0.2, 0.3])
+        );
+        for bad in ["1,2", "0.1,0.2,1.5", "red"] {
+            assert!(Colour::parse("--rd", bad)
+                .unwrap_err()
+                .to_string()
+                .contains("--rd"));
+        }
+    }
+
+    #[test]
+    fn sheen_roughness_round_trips_through_from_sheen() {
+        // from-sheen is the inverse of the fallback's roughness, so a fabric made from a sheen
+        // asset writes back (nearly) the roughness it came from.
+        for r in [0.2, 0.3, 0.5, 0.7] {
+            let m = json!({"extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": r, "sheenColorFactor": [1, 0, 0]}}});
+            let mut notes = Vec::new();
+            let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
+            let (_, back) = fallback_sheen(&p);
+            assert!((back - r).abs() < 0.02, "{r} -> {back} ({p:?})");
+            assert!(
+                notes.iter().any(|n| n.contains("sheenColorFactor")),
+                "{notes:?}"
+            );
+        }
+        let e = from_sheen(&json!({}), "material 0 'x'", &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("material 0 'x'") && e.contains(SHEEN_EXTENSION),
+            "{e}"
+        );
+        let bad = json!({"extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": "rough"}}});
+        let e = from_sheen(&bad, "material 0 'x'", &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("material 0 'x'") && e.contains("sheenRoughnessFactor"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn far_field_albedo_is_the_plain_weave_formula() {
+        // docs/fabric-model.md §2: sh = 1 − 4g² − strength·width·(1 − 2g) for a plain weave.
+        let p = FabricParams {
+            rd_warp: [0.5; 3],
+            rd_weft: [0.5; 3],
+            ..Default::default()
+        };
+        let g = (p.gap / p.repeat) as f64;
+        let sh = 1.0 - 4.0 * g * g - 0.5 * 0.25 * (1.0 - 2.0 * g);
+        let a = far_field_albedo(&p);
+        assert!((a[0] - 0.5 * sh).abs() < 1e-5, "{a:?} vs {}", 0.5 * sh);
+    }
+}
