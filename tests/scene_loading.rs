@@ -1882,3 +1882,17 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
     let msg = error_text(load("navy"));
     assert!(msg.contains("KHR_materials_variants") && msg.contains('5'), "{msg}");
 }
+
+#[test]
+fn a_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
+    let mut d = Doc::new();
+    d.quad(true, true);
+    let mut ktx = b"\xABKTX 20\xBB\r\n\x1A\n".to_vec();
+    ktx.extend_from_slice(&[0u8; 64]);
+    d.json["images"] = json!([{"uri": format!("data:image/ktx2;base64,{}", base64(&ktx))}]);
+    d.json["textures"] = json!([{"source": 0}]);
+    d.json["materials"] = json!([{"name": "lamp metal", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let msg = error_text(d.load("ktx2"));
+    assert!(msg.contains("KTX2") && msg.contains("lamp metal") && msg.contains("PNG"), "{msg}");
+}

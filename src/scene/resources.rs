@@ -234,6 +234,14 @@ pub(super) fn load_image(
     let format = match format.or_else(|| image::guess_format(&bytes).ok()) {
         Some(f @ (image::ImageFormat::Png | image::ImageFormat::Jpeg)) => f,
         other => {
+            // KTX2 (KHR_texture_basisu, or core texture.source as AnisotropyBarnLamp has it):
+            // named as such, since no kept crate here decodes Basis Universal.
+            const KTX2: &[u8] = b"\xABKTX 20\xBB\r\n\x1A\n";
+            if bytes.starts_with(KTX2) || mime.as_deref() == Some("image/ktx2") {
+                return Err(Error::input(format!(
+                    "{label}: {who} comes from {origin} and is a KTX2 (Basis Universal) texture, which weft does not decode; convert the file's textures to PNG or JPEG (for example `gltf-transform png IN OUT`, or take the asset's glTF variant with PNG textures)"
+                )));
+            }
             let kind = match (other, mime.as_deref()) {
                 (Some(f), _) => format!("{f:?}"),
                 (None, Some(m)) => m.to_owned(),
