@@ -167,3 +167,71 @@ fn submissions_from_two_threads_are_safe() {
     });
     ctx.check_validation().expect("no validation message");
 }
+
+/// A readback copy into a buffer too small for the image would make the GPU write past the
+/// buffer's end: `Cmd::copy_image_to_buffer` refuses it (a panic, before anything is recorded),
+/// the context stays usable, and nothing invalid reaches the driver (no validation message).
+#[test]
+fn short_readback_buffer_is_refused_before_the_gpu_runs() {
+    use weft::vk::{BufferLocation, BufferUsageFlags, Format, ImageDesc, ImageUsageFlags, Usage};
+    let ctx = common::context();
+    // An image without a view-capable usage is refused (every image gets a view).
+    let err = ctx
+        .create_image(
+            &ImageDesc::new_2d("transfer only", Format::R8G8B8A8_UNORM, 8, 8)
+                .usage(ImageUsageFlags::TRANSFER_SRC),
+        )
+        .err()
+        .expect("must fail");
+    assert!(err.to_string().contains("needs one of SAMPLED"), "{err}");
+    let image = ctx
+        .create_image(
+            &ImageDesc::new_2d("8x8", Format::R8G8B8A8_UNORM, 8, 8)
+                .usage(ImageUsageFlags::TRANSFER_SRC | ImageUsageFlags::SAMPLED),
+        )
+        .unwrap();
+    // 8 x 8 x 4 = 256 bytes needed.
+    let short = ctx
+        .create_buffer(
+            "short",
+            255,
+            BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Readback,
+        )
+        .unwrap();
+    let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        ctx.submit(|cmd| {
+            cmd.transition(&image, Usage::Undefined, Usage::TransferSrc, None);
+            cmd.copy_image_to_buffer(&image, 0, &short);
+        })
+    }))
+    .expect_err("a short buffer must be refused");
+    let msg = panic.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(
+        msg.contains("'short' of 255 bytes is too small") && msg.contains("256"),
+        "{msg}"
+    );
+    // Level 3 of an image with one level: refused the same way.
+    let fits = ctx
+        .create_buffer(
+            "fits",
+            256,
+            BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Readback,
+        )
+        .unwrap();
+    let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        ctx.submit(|cmd| cmd.copy_image_to_buffer(&image, 3, &fits))
+    }))
+    .expect_err("a missing level must be refused");
+    let msg = panic.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(msg.contains("mip level 3"), "{msg}");
+    // The context is still usable: a correct copy goes through.
+    ctx.submit(|cmd| {
+        cmd.transition(&image, Usage::Undefined, Usage::TransferSrc, None);
+        cmd.copy_image_to_buffer(&image, 0, &fits);
+        cmd.buffer_barrier();
+    })
+    .unwrap();
+    ctx.check_validation().expect("no validation message");
+}

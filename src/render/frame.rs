@@ -890,34 +890,41 @@ impl Renderer {
             ..Default::default()
         };
 
-        // Times one pass: a submission of its own between two timestamps.
-        let mut timed =
-            |name: &'static str, record: &mut dyn FnMut(&mut Cmd)| -> crate::Result<()> {
-                let start = Instant::now();
-                ctx.submit(|cmd| {
-                    if let Some(q) = &queries {
-                        cmd.reset_queries(q);
-                        cmd.timestamp(q, 0);
-                    }
-                    record(cmd);
-                    if let Some(q) = &queries {
-                        cmd.timestamp(q, 1);
-                    }
-                })?;
-                let gpu_ms = match &queries {
-                    Some(q) => {
-                        let t = q.read_ns(2)?;
-                        Some((t[1] - t[0]) / 1e6)
-                    }
-                    None => None,
-                };
-                timings.push(PassTiming {
-                    name,
-                    gpu_ms,
-                    wall_ms: start.elapsed().as_secs_f64() * 1e3,
-                });
-                Ok(())
+        // Times one pass: a submission of its own between two timestamps. A function, not a
+        // closure, so that the submission's lifetime `'s` can be named: every resource the pass
+        // records is borrowed for it (see `Context::submit`).
+        fn timed_pass<'s>(
+            ctx: &'s crate::vk::Context,
+            queries: Option<&'s crate::vk::QueryPool>,
+            timings: &mut Vec<PassTiming>,
+            name: &'static str,
+            record: &mut dyn FnMut(&mut Cmd<'s>),
+        ) -> crate::Result<()> {
+            let start = Instant::now();
+            ctx.submit(|cmd| {
+                if let Some(q) = queries {
+                    cmd.reset_queries(q);
+                    cmd.timestamp(q, 0);
+                }
+                record(cmd);
+                if let Some(q) = queries {
+                    cmd.timestamp(q, 1);
+                }
+            })?;
+            let gpu_ms = match queries {
+                Some(q) => {
+                    let t = q.read_ns(2)?;
+                    Some((t[1] - t[0]) / 1e6)
+                }
+                None => None,
             };
+            timings.push(PassTiming {
+                name,
+                gpu_ms,
+                wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            });
+            Ok(())
+        }
 
         for pass in &plan.passes {
             match pass {
@@ -972,16 +979,22 @@ impl Renderer {
                             )
                         })
                         .collect::<crate::Result<Vec<_>>>()?;
-                    timed("gbuffer", &mut |cmd| {
-                        passes::gbuffer::gbuffer_pass(
-                            cmd,
-                            gbuffer_pipeline,
-                            gpu,
-                            frame_set,
-                            &material_sets,
-                            targets,
-                        )
-                    })?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "gbuffer",
+                        &mut |cmd| {
+                            passes::gbuffer::gbuffer_pass(
+                                cmd,
+                                gbuffer_pipeline,
+                                gpu,
+                                frame_set,
+                                &material_sets,
+                                targets,
+                            )
+                        },
+                    )?;
                     stats.pipelines.push(gbuffer_pipeline.name.clone());
                 }
                 Pass::Shadow => {
@@ -990,7 +1003,7 @@ impl Renderer {
                         .map(|(_, m, (x, y, r))| (*x, *y, *r, *m))
                         .collect();
                     if !tiles.is_empty() {
-                        timed("shadow", &mut |cmd| {
+                        timed_pass(&ctx, queries.as_ref(), &mut timings, "shadow", &mut |cmd| {
                             passes::shadow::shadow_pass(
                                 cmd,
                                 &self.shadow_pipeline,
@@ -1027,9 +1040,15 @@ impl Renderer {
                             (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
                         ],
                     )?;
-                    timed("lighting", &mut |cmd| {
-                        passes::lighting::lighting_pass(cmd, lighting_pipeline, set, targets)
-                    })?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "lighting",
+                        &mut |cmd| {
+                            passes::lighting::lighting_pass(cmd, lighting_pipeline, set, targets)
+                        },
+                    )?;
                     stats.pipelines.push(lighting_pipeline.name.clone());
                 }
                 Pass::Tonemap => {
@@ -1041,15 +1060,21 @@ impl Renderer {
                         exposure: 2f32.powf(options.exposure),
                         passthrough: (options.debug_view != super::DebugView::None) as u32,
                     };
-                    timed("tonemap", &mut |cmd| {
-                        passes::tonemap::tonemap_pass(
-                            cmd,
-                            &self.tonemap_pipeline,
-                            set,
-                            &push,
-                            targets,
-                        )
-                    })?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "tonemap",
+                        &mut |cmd| {
+                            passes::tonemap::tonemap_pass(
+                                cmd,
+                                &self.tonemap_pipeline,
+                                set,
+                                &push,
+                                targets,
+                            )
+                        },
+                    )?;
                     stats.pipelines.push(self.tonemap_pipeline.name.clone());
                 }
             }

@@ -405,7 +405,7 @@ impl Context {
             .shared
             .queue_lock
             .lock()
-            .map_err(|_| Error::device("queue lock poisoned"))?;
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         unsafe { self.shared.device.device_wait_idle() }.map_err(vkerr("vkDeviceWaitIdle"))
     }
 }
