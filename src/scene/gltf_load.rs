@@ -187,22 +187,28 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
         .strip_prefix(b"\xEF\xBB\xBF".as_slice())
         .unwrap_or(&text);
 
-    let value: serde_json::Value = match serde_json::from_slice(text) {
-        Ok(v) => v,
-        Err(e) => {
-            let first = text.iter().find(|b| !b.is_ascii_whitespace());
-            return Err(if first == Some(&b'{') {
-                not_gltf(&format!("it looks like JSON but does not parse ({e})"))
-            } else {
-                not_gltf("it is neither JSON nor a .glb container")
-            });
-        }
+    // Parsed once as glTF; only a file that does not parse is parsed again, as plain JSON, to
+    // say why (large embedded buffers make a second parse cost time and peak memory).
+    let parsed = serde_json::from_slice::<json::Root>(text);
+    let version: Option<String> = match &parsed {
+        Ok(root) => Some(root.asset.version.clone()),
+        Err(_) => match serde_json::from_slice::<serde_json::Value>(text) {
+            Ok(value) => value
+                .get("asset")
+                .and_then(|a| a.get("version"))
+                .and_then(|v| v.as_str())
+                .map(str::to_owned),
+            Err(e) => {
+                let first = text.iter().find(|b| !b.is_ascii_whitespace());
+                return Err(if first == Some(&b'{') {
+                    not_gltf(&format!("it looks like JSON but does not parse ({e})"))
+                } else {
+                    not_gltf("it is neither JSON nor a .glb container")
+                });
+            }
+        },
     };
-    let version = value
-        .get("asset")
-        .and_then(|a| a.get("version"))
-        .and_then(|v| v.as_str());
-    match version {
+    match version.as_deref() {
         None => return Err(not_gltf("its JSON has no \"asset\": {\"version\": \"2.0\"} object")),
         Some(v) if !v.starts_with("2.") => {
             return Err(Error::input(format!(
@@ -211,7 +217,7 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
         }
         Some(_) => {}
     }
-    let root: json::Root = serde_json::from_slice(text).map_err(|e| {
+    let root: json::Root = parsed.map_err(|e| {
         Error::input(format!(
             "'{source}' is not a valid glTF 2.0 file: {e}; fix the JSON or re-export the scene (the Khronos glTF Validator explains such problems)"
         ))

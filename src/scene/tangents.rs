@@ -315,7 +315,10 @@ mod tests {
         assert_eq!(v.len(), 4, "nothing to split");
         for v in v {
             let t = Vec4::from(v.tangent);
-            assert!((t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6, "{t}");
+            assert!(
+                (t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6,
+                "{t}"
+            );
         }
     }
 
