@@ -446,7 +446,7 @@ pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
             shader.name
         ))
     };
-    let r = spirv::reflect(shader.spirv).map_err(bad)?;
+    let r = spirv::reflect(shader.spirv).map_err(|e| bad(e.to_string()))?;
     if r.execution_model != execution_model(shader.stage) {
         return Err(bad(format!(
             "its entry point is a {} shader, the build table says {}",

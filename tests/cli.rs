@@ -326,3 +326,23 @@ fn help_lists_the_values_of_every_choice() {
         );
     }
 }
+
+/// An I/O error prints the OS's message once: `Error::Io` keeps it as its source only, and
+/// weft prints the chain (it used to be in the message and the source both).
+#[test]
+fn os_message_appears_once() {
+    let dir = temp("osmessage");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "in the way").unwrap();
+    let out = weft()
+        .args(["shaders", "--out"])
+        .arg(file.join("package"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let os = std::io::Error::from_raw_os_error(20).to_string(); // ENOTDIR
+    assert_eq!(err.matches(&os).count(), 1, "{err}");
+    assert!(err.contains("a-file"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -291,12 +291,17 @@ struct Module {
     variables: Vec<(u32, u32, u32)>,
 }
 
-/// Reflects a module given as little-endian bytes.
 /// How deeply types may nest (arrays of structs of arrays ...): far beyond any shader's, and a
 /// bound on the recursion a hostile module's cyclic type ids could cause.
 const MAX_TYPE_DEPTH: u32 = 64;
 
-pub fn reflect(bytes: &[u8]) -> Result<Reflection, String> {
+/// Reflects a SPIR-V module (little-endian words). Any malformed module is an
+/// [`Error::Input`](crate::Error::Input) saying what is wrong, never a panic.
+pub fn reflect(bytes: &[u8]) -> crate::Result<Reflection> {
+    reflect_words(bytes).map_err(crate::Error::Input)
+}
+
+fn reflect_words(bytes: &[u8]) -> Result<Reflection, String> {
     if bytes.len() % 4 != 0 || bytes.len() < 20 {
         return Err(format!(
             "{} bytes is not a SPIR-V module (a multiple of 4, at least 20)",
@@ -1161,10 +1166,12 @@ mod tests {
 
     #[test]
     fn cyclic_and_huge_types_are_errors_not_crashes() {
-        let e = reflect(&block_module(20, 4, None)).unwrap_err();
+        let e = reflect(&block_module(20, 4, None)).unwrap_err().to_string();
         assert!(e.contains("nests deeper") && e.contains("cyclic"), "{e}");
         // uint[2^30] with stride 16: 16 GiB, beyond u32.
-        let e = reflect(&block_module(1, 1 << 30, Some(16))).unwrap_err();
+        let e = reflect(&block_module(1, 1 << 30, Some(16)))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("larger than 4 GiB"), "{e}");
         // The same array of 4 is fine: 64 bytes.
         let r = reflect(&block_module(1, 4, Some(16))).unwrap();
