@@ -553,7 +553,7 @@ fn io(context: String) -> impl FnOnce(std::io::Error) -> Error {
 }
 
 fn write(path: &Path, bytes: &[u8]) -> crate::Result<()> {
-    std::fs::write(path, bytes).map_err(io(format!("writing {}", path.display())))
+    crate::render::write_file(path, bytes)
 }
 
 /// Removes the files that the manifest already in `dir` lists and `new` does not (a module

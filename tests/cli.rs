@@ -292,7 +292,10 @@ fn bad_flag_values_fail_before_any_gpu_work() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{args:?}: a usage error: {err}");
         assert!(err.contains(expect), "{args:?}: {err}");
-        assert!(!err.contains("Vulkan"), "{args:?}: refused before Vulkan: {err}");
+        assert!(
+            !err.contains("Vulkan"),
+            "{args:?}: refused before Vulkan: {err}"
+        );
     }
 }
 

@@ -10,7 +10,7 @@ pub mod shadow;
 pub mod tiles;
 
 pub use frame::{f16_to_f32, Frame, FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer};
-pub use output::{write_exr, write_png};
+pub use output::{temp_name, write_exr, write_file, write_png};
 pub use plan::{EnvPlan, FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
 
 use crate::Error;
