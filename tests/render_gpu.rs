@@ -235,3 +235,91 @@ fn short_readback_buffer_is_refused_before_the_gpu_runs() {
     .unwrap();
     ctx.check_validation().expect("no validation message");
 }
+
+/// A frame size the device cannot hold is refused before any target is created, with what is
+/// needed, what the device has and what to do (`--size 16384x16384` on lavapipe used to be
+/// ended by the kernel's OOM killer instead).
+#[test]
+fn oversize_targets_are_refused_before_allocation() {
+    use weft::render::check_target_memory;
+    let ctx = common::context();
+    let gib = 1u64 << 30;
+    // The device's own figures, with a small heap.
+    let mut small = ctx.info().clone();
+    small.device_local_heap_bytes = gib;
+    small.device_type = "discrete-gpu".into();
+    let err = check_target_memory(&small, None, 8192, 8192, false)
+        .expect_err("3.25 GiB of targets in 1 GiB")
+        .to_string();
+    assert!(
+        err.contains("--size 8192x8192")
+            && err.contains("3.2 GiB")
+            && err.contains("1.0 GiB")
+            && err.contains("choose a smaller --size"),
+        "{err}"
+    );
+    check_target_memory(&small, None, 1920, 1080, true).expect("100 MiB fits");
+    // A CPU device: targets and readback against the memory the host has available.
+    let mut cpu = small.clone();
+    cpu.device_type = "cpu".into();
+    cpu.device_local_heap_bytes = 64 * gib;
+    let err = check_target_memory(&cpu, Some(2 * gib), 8192, 8192, true)
+        .expect_err("5.2 GiB with readback in 2 GiB")
+        .to_string();
+    assert!(
+        err.contains("5.2 GiB") && err.contains("2.0 GiB available"),
+        "{err}"
+    );
+    check_target_memory(&cpu, Some(2 * gib), 8192, 8192, false)
+        .expect_err("3.8 GiB without the HDR readback still does not fit");
+    check_target_memory(&cpu, Some(8 * gib), 8192, 8192, true).expect("fits in 90 % of 8 GiB");
+    check_target_memory(&cpu, Some(5 * gib + gib / 2), 8192, 8192, true)
+        .expect_err("5.2 GiB is more than 90 % of 5.5 GiB");
+    // Beyond maxImageDimension2D.
+    let side = small.max_image_dimension_2d + 1;
+    let err = check_target_memory(&small, None, side, 16, false)
+        .expect_err("too wide")
+        .to_string();
+    assert!(err.contains("pixels a side"), "{err}");
+
+    // Through the renderer on this device: 16384x16384 (22.6 GiB with readback on lavapipe).
+    // Rendered only where the check refuses it, so the test never allocates that much.
+    let info = ctx.info().clone();
+    let refused = check_target_memory(
+        &info,
+        weft::render::host_available_bytes(),
+        16384,
+        16384,
+        true,
+    );
+    println!(
+        "device heap {} bytes: 16384x16384 {refused:?}",
+        info.device_local_heap_bytes
+    );
+    if refused.is_err() {
+        let mut renderer = Renderer::new(ctx).expect("renderer");
+        let options = RenderOptions {
+            width: 16384,
+            height: 16384,
+            ..Default::default()
+        };
+        let err = renderer
+            .render(&scene::default_scene(), &options)
+            .err()
+            .expect("must fail")
+            .to_string();
+        assert!(
+            err.contains("--size 16384x16384") && err.contains("GiB"),
+            "{err}"
+        );
+        // And the renderer is still usable at a size that fits.
+        let options = RenderOptions {
+            width: 64,
+            height: 36,
+            ..Default::default()
+        };
+        renderer
+            .render(&scene::default_scene(), &options)
+            .expect("a small frame after the refused one");
+    }
+}

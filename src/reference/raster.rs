@@ -318,7 +318,11 @@ fn owns_edge(a: Vec2, b: Vec2) -> bool {
 /// Whether pixel centre `q` is inside the triangle `p` (positive area), centres on an edge
 /// decided by the top-left rule.
 fn covers(p: &[Vec2; 3], owns: &[bool; 3], q: Vec2) -> bool {
-    let e = [edge(p[1], p[2], q), edge(p[2], p[0], q), edge(p[0], p[1], q)];
+    let e = [
+        edge(p[1], p[2], q),
+        edge(p[2], p[0], q),
+        edge(p[0], p[1], q),
+    ];
     (0..3).all(|i| e[i] > 0.0 || (e[i] == 0.0 && owns[i]))
 }
 
@@ -512,7 +516,11 @@ mod edge_rule_tests {
         if edge(p[0], p[1], p[2]) < 0.0 {
             p.swap(1, 2);
         }
-        let owns = [owns_edge(p[1], p[2]), owns_edge(p[2], p[0]), owns_edge(p[0], p[1])];
+        let owns = [
+            owns_edge(p[1], p[2]),
+            owns_edge(p[2], p[0]),
+            owns_edge(p[0], p[1]),
+        ];
         (0..w * h)
             .map(|i| {
                 let q = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
@@ -531,11 +539,20 @@ mod edge_rule_tests {
         let c = coverage([v(0.5, 0.5), v(4.5, 0.5), v(0.5, 4.5)], 6, 6);
         let at = |x: u32, y: u32| c[(y * 6 + x) as usize];
         assert!(at(2, 0), "a centre on the top edge belongs to the triangle");
-        assert!(at(0, 2), "a centre on the left edge belongs to the triangle");
+        assert!(
+            at(0, 2),
+            "a centre on the left edge belongs to the triangle"
+        );
         assert!(at(0, 0), "the top-left corner: on a top and a left edge");
         assert!(at(1, 1), "inside");
-        assert!(!at(2, 2) && !at(1, 3) && !at(3, 1), "centres on the bottom-right edge do not");
-        assert!(!at(4, 0) && !at(0, 4), "the corners of the bottom-right edge do not");
+        assert!(
+            !at(2, 2) && !at(1, 3) && !at(3, 1),
+            "centres on the bottom-right edge do not"
+        );
+        assert!(
+            !at(4, 0) && !at(0, 4),
+            "the corners of the bottom-right edge do not"
+        );
         // The same with the other winding.
         assert_eq!(c, coverage([v(0.5, 0.5), v(0.5, 4.5), v(4.5, 0.5)], 6, 6));
         // A triangle with a horizontal bottom edge through centres: not its own.
