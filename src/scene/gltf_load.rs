@@ -189,10 +189,14 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
 
     // Parsed once as glTF; only a file that does not parse is parsed again, as plain JSON, to
     // say why (large embedded buffers make a second parse cost time and peak memory).
+    // serde_json refuses nesting deeper than 128 when it builds values, but captures raw
+    // "extras" without that limit: the depth is checked here (a scan, no allocation), so a
+    // 20000-deep "extras" is refused as before (by the plain-JSON parse's error below).
     let parsed = serde_json::from_slice::<json::Root>(text);
+    let too_deep = parsed.is_ok() && json_depth(text) > 128;
     let version: Option<String> = match &parsed {
-        Ok(root) => Some(root.asset.version.clone()),
-        Err(_) => match serde_json::from_slice::<serde_json::Value>(text) {
+        Ok(root) if !too_deep => Some(root.asset.version.clone()),
+        _ => match serde_json::from_slice::<serde_json::Value>(text) {
             Ok(value) => value
                 .get("asset")
                 .and_then(|a| a.get("version"))
@@ -223,6 +227,33 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
         ))
     })?;
     Ok((root, bin))
+}
+
+/// The deepest nesting of arrays and objects in JSON text (brackets inside strings not counted).
+fn json_depth(text: &[u8]) -> usize {
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    let (mut in_string, mut escaped) = (false, false);
+    for &b in text {
+        if in_string {
+            match (escaped, b) {
+                (true, _) => escaped = false,
+                (false, b'\\') => escaped = true,
+                (false, b'"') => in_string = false,
+                _ => {}
+            }
+            continue;
+        }
+        match b {
+            b'"' => in_string = true,
+            b'[' | b'{' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    deepest
 }
 
 /// Refuses required extensions weft cannot honour and warns about used ones it ignores. Removes
