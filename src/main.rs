@@ -240,7 +240,22 @@ struct PlanArgs {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // A bad flag value is bad input like a bad scene: exit 1 with clap's one-line message (the
+    // library's own, naming the choices). Other usage errors, --help and --version as clap has
+    // them.
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::ValueValidation | clap::error::ErrorKind::InvalidValue
+            ) =>
+        {
+            let _ = e.print();
+            return ExitCode::FAILURE;
+        }
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Plan(args) => run_plan(args),

@@ -290,7 +290,11 @@ fn bad_flag_values_fail_before_any_gpu_work() {
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: a usage error: {err}");
+        assert_eq!(out.status.code(), Some(1), "{args:?}: bad input: {err}");
+        assert!(
+            err.starts_with("error: invalid value"),
+            "{args:?}: clap's message: {err}"
+        );
         assert!(err.contains(expect), "{args:?}: {err}");
         assert!(
             !err.contains("Vulkan"),
