@@ -810,10 +810,7 @@ pub fn with_local_point_lights(scene: &Scene, n: u32, range: f32) -> Scene {
 }
 
 fn write_text(path: &Path, text: &str) -> crate::Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::Io {
-        context: format!("writing '{}'", path.display()),
-        source: e,
-    })
+    crate::render::write_file(path, text.as_bytes())
 }
 
 /// A progress bar on stderr, drawn only when asked and stderr is a terminal.

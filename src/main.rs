@@ -56,34 +56,48 @@ struct SceneArgs {
     /// A .gltf or .glb file; the built-in default scene when left out.
     scene: Option<PathBuf>,
     /// Output size, WIDTHxHEIGHT (default 1280x720; for compare, each panel's, default 480x360).
-    #[arg(long)]
-    size: Option<String>,
+    #[arg(long, value_parser = checked_size)]
+    size: Option<(u32, u32)>,
     /// Index of the scene's camera to use (default: its first camera, or automatic framing).
     #[arg(long)]
     camera: Option<usize>,
     /// Place the camera here (X,Y,Z, world space) instead of the scene's camera; needs --target.
-    #[arg(long, allow_hyphen_values = true, requires = "target")]
-    eye: Option<String>,
+    #[arg(long, allow_hyphen_values = true, requires = "target",
+          value_parser = |s: &str| render::parse_vec3("--eye", s))]
+    eye: Option<glam::Vec3>,
     /// The point the --eye camera looks at (X,Y,Z).
-    #[arg(long, allow_hyphen_values = true, requires = "eye")]
-    target: Option<String>,
+    #[arg(long, allow_hyphen_values = true, requires = "eye",
+          value_parser = |s: &str| render::parse_vec3("--target", s))]
+    target: Option<glam::Vec3>,
     /// Vertical field of view of the --eye camera, in degrees.
     #[arg(long, default_value_t = 40.0)]
     fov: f32,
     /// How the weave becomes reflectance: nearest, filtered-params, mixture, supersampled:N.
-    #[arg(long, default_value = "mixture")]
-    accuracy: String,
+    #[arg(long, default_value = "mixture", value_parser = Choice::new(
+        render::Accuracy::parse,
+        &["nearest", "filtered-params", "mixture", "supersampled:N"],
+    ))]
+    accuracy: render::Accuracy,
     /// Where coverages come from: rgba8 or rgba16f weave texture, or analytic (no texture).
-    #[arg(long, default_value = "rgba16f")]
-    weave_precision: String,
+    #[arg(long, default_value = "rgba16f", value_parser = Choice::new(
+        render::WeavePrecision::parse,
+        &render::WeavePrecision::ALL.map(render::WeavePrecision::name),
+    ))]
+    weave_precision: render::WeavePrecision,
     /// Show a G-buffer target instead of the lit image: albedo, normals, tangents,
     /// roughness-metallic, coverage, thread-dir, depth.
-    #[arg(long, default_value = "none")]
-    debug_view: String,
+    #[arg(long, default_value = "none", value_parser = Choice::new(
+        DebugView::parse,
+        &DebugView::ALL.map(DebugView::name),
+    ))]
+    debug_view: DebugView,
     /// How fabric is shaded: fabric (the model), or for comparison gouraud, phong,
     /// ashikhmin-shirley (one lobe, no weave).
-    #[arg(long, default_value = "fabric")]
-    shading: String,
+    #[arg(long, default_value = "fabric", value_parser = Choice::new(
+        render::Shading::parse,
+        &render::Shading::ALL.map(render::Shading::name),
+    ))]
+    shading: render::Shading,
     /// Environment lighting: an equirectangular .hdr or .exr file, `studio` (the built-in
     /// procedural studio, the default) or `none` (lamps and a fixed ambient only).
     #[arg(long, default_value = "studio")]
@@ -139,7 +153,7 @@ struct RenderArgs {
     stats: bool,
     /// Render this many frames of the scene in one process (uploaded once); --timings then
     /// reports the median of the frames after the first (the first pays shader JIT compilation).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Try the woven fabric on a material without writing a file: MATERIAL=PRESET[@PITCH]
     /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), repeatable.
@@ -156,8 +170,8 @@ struct SheetArgs {
     #[arg(short, long, default_value = "sheet.png")]
     output: PathBuf,
     /// Size of each cell, WIDTHxHEIGHT.
-    #[arg(long, default_value = "256x192")]
-    size: String,
+    #[arg(long, default_value = "256x192", value_parser = checked_size)]
+    size: (u32, u32),
     /// Cells per row.
     #[arg(long, default_value_t = 6)]
     columns: u32,
@@ -238,7 +252,22 @@ struct PlanArgs {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // A bad flag value is bad input like a bad scene: exit 1 with clap's one-line message (the
+    // library's own, naming the choices). Other usage errors, --help and --version as clap has
+    // them.
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::ValueValidation | clap::error::ErrorKind::InvalidValue
+            ) =>
+        {
+            let _ = e.print();
+            return ExitCode::FAILURE;
+        }
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Plan(args) => run_plan(args),
@@ -364,22 +393,23 @@ fn load_scene_impl(
             eprintln!("warning: {w}");
         }
     }
-    let (width, height) = render::parse_size(args.size.as_deref().unwrap_or(default_size))?;
+    let (width, height) = match args.size {
+        Some(size) => size,
+        None => render::parse_size(default_size)?,
+    };
     let mut options = RenderOptions {
         width,
         height,
         camera: args.camera,
-        debug_view: DebugView::parse(&args.debug_view)?,
-        accuracy: render::Accuracy::parse(&args.accuracy)?,
-        weave_precision: render::WeavePrecision::parse(&args.weave_precision)?,
-        shading: render::Shading::parse(&args.shading)?,
+        debug_view: args.debug_view,
+        accuracy: args.accuracy,
+        weave_precision: args.weave_precision,
+        shading: args.shading,
         environment,
         ..Default::default()
     };
     options.validate()?;
-    if let (Some(eye), Some(target)) = (&args.eye, &args.target) {
-        let eye = render::parse_vec3("--eye", eye)?;
-        let target = render::parse_vec3("--target", target)?;
+    if let (Some(eye), Some(target)) = (args.eye, args.target) {
         options.camera_override = Some(scene.look_at_camera(eye, target, args.fov.to_radians())?);
     }
     // Fails early, before any GPU work, if --camera names no camera.
@@ -388,9 +418,6 @@ fn load_scene_impl(
 }
 
 fn run_render(args: RenderArgs) -> anyhow::Result<()> {
-    if args.frames == 0 {
-        anyhow::bail!("--frames must be at least 1");
-    }
     let device = args
         .device
         .as_deref()
@@ -500,7 +527,7 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
 }
 
 fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
-    let (w, h) = render::parse_size(&args.size)?;
+    let (w, h) = args.size;
     let files = weft::sheet::find_scenes(&args.paths);
     if files.is_empty() {
         anyhow::bail!(
@@ -525,15 +552,15 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
         let start = std::time::Instant::now();
         let scene_args = SceneArgs {
             scene: Some(file.clone()),
-            size: Some(args.size.clone()),
+            size: Some(args.size),
             camera: None,
             eye: None,
             target: None,
             fov: 40.0,
-            accuracy: "mixture".into(),
-            weave_precision: "rgba16f".into(),
-            debug_view: "none".into(),
-            shading: "fabric".into(),
+            accuracy: render::Accuracy::default(),
+            weave_precision: render::WeavePrecision::default(),
+            debug_view: DebugView::None,
+            shading: render::Shading::default(),
             env: args.env.clone(),
             env_rotation: 0.0,
             env_intensity: 1.0,
@@ -634,6 +661,46 @@ fn run_startup_bench(args: &BenchArgs) -> anyhow::Result<()> {
     println!("{:<32} {:>10.1}", "warm frame (median of 5)", warm);
     println!("{:<32} {:>10.2}", "ratio", whole / warm);
     Ok(())
+}
+
+/// A command-line value parsed by the library's own parser (its message, on a bad value, names
+/// the choices), whose choices `--help` lists.
+#[derive(Clone)]
+struct Choice<T> {
+    parse: fn(&str) -> weft::Result<T>,
+    names: Vec<&'static str>,
+}
+
+impl<T> Choice<T> {
+    fn new(parse: fn(&str) -> weft::Result<T>, names: &[&'static str]) -> Self {
+        Choice {
+            parse,
+            names: names.to_vec(),
+        }
+    }
+}
+
+impl<T: Clone + Send + Sync + 'static> clap::builder::TypedValueParser for Choice<T> {
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<T, clap::Error> {
+        self.parse.parse_ref(cmd, arg, value)
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(
+            self.names
+                .iter()
+                .map(|n| clap::builder::PossibleValue::new(*n)),
+        ))
+    }
 }
 
 fn open_device(device: Option<&str>, validate: bool) -> anyhow::Result<Context> {

@@ -469,7 +469,7 @@ pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
             shader.name
         ))
     };
-    let r = spirv::reflect(shader.spirv).map_err(bad)?;
+    let r = spirv::reflect(shader.spirv).map_err(|e| bad(e.to_string()))?;
     if r.execution_model != execution_model(shader.stage) {
         return Err(bad(format!(
             "its entry point is a {} shader, the build table says {}",
@@ -576,7 +576,7 @@ fn io(context: String) -> impl FnOnce(std::io::Error) -> Error {
 }
 
 fn write(path: &Path, bytes: &[u8]) -> crate::Result<()> {
-    std::fs::write(path, bytes).map_err(io(format!("writing {}", path.display())))
+    crate::render::write_file(path, bytes)
 }
 
 /// Removes the files that the manifest already in `dir` lists and `new` does not (a module

@@ -263,3 +263,93 @@ fn bad_environment_flags_are_refused_clearly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.hdr") && err.contains("cannot"), "{err}");
 }
+
+/// Bad values of the render flags are refused by the argument parser, before any Vulkan work:
+/// with no Vulkan driver at all, the error is still the flag's, not "No Vulkan driver found".
+#[test]
+fn bad_flag_values_fail_before_any_gpu_work() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["--frames", "0"], "--frames"),
+        (&["--size", "big"], "WIDTHxHEIGHT"),
+        (&["--size", "0x10"], "between 1 and"),
+        (&["--size", "100000x100000"], "between 1 and"),
+        (&["--accuracy", "supersampled:0"], "unknown accuracy"),
+        (&["--weave-precision", "rgba32"], "rgba16f"),
+        (&["--debug-view", "normal"], "roughness-metallic"),
+        (&["--shading", "flat"], "unknown shading 'flat'"),
+        (&["--eye", "1,2", "--target", "0,0,0"], "--eye '1,2'"),
+        (&["--eye", "0,0,5", "--target", "0,nan,0"], "--target"),
+    ];
+    for (args, expect) in cases {
+        let out = weft()
+            .arg("render")
+            .args(*args)
+            .args(["-o", "/nonexistent/never-written.png"])
+            .env("VK_ICD_FILENAMES", "/nonexistent")
+            .env("VK_DRIVER_FILES", "/nonexistent")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: bad input: {err}");
+        assert!(
+            err.starts_with("error: invalid value"),
+            "{args:?}: clap's message: {err}"
+        );
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(
+            !err.contains("Vulkan"),
+            "{args:?}: refused before Vulkan: {err}"
+        );
+    }
+}
+
+/// `--help` lists the values each choice flag takes, spelled as the flags accept them.
+#[test]
+fn help_lists_the_values_of_every_choice() {
+    let out = weft().args(["render", "--help"]).output().unwrap();
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for values in [
+        "[possible values: nearest, filtered-params, mixture, supersampled:N]",
+        "[possible values: rgba8, rgba16f, analytic]",
+        "[possible values: none, albedo, normals, tangents, roughness-metallic, coverage, thread-dir, depth]",
+        "[possible values: gouraud, phong, ashikhmin-shirley, fabric]",
+    ] {
+        assert!(help.contains(values), "{values} missing from:\n{help}");
+    }
+    // And every listed spelling is accepted (a plan needs no GPU).
+    for (flag, value) in [
+        ("--accuracy", "supersampled:4"),
+        ("--accuracy", "filtered-params"),
+        ("--weave-precision", "analytic"),
+        ("--debug-view", "thread-dir"),
+        ("--shading", "ashikhmin-shirley"),
+    ] {
+        let out = weft().args(["plan", flag, value]).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{flag} {value}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// An I/O error prints the OS's message once: `Error::Io` keeps it as its source only, and
+/// weft prints the chain (it used to be in the message and the source both).
+#[test]
+fn os_message_appears_once() {
+    let dir = temp("osmessage");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "in the way").unwrap();
+    let out = weft()
+        .args(["shaders", "--out"])
+        .arg(file.join("package"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let os = std::io::Error::from_raw_os_error(20).to_string(); // ENOTDIR
+    assert_eq!(err.matches(&os).count(), 1, "{err}");
+    assert!(err.contains("a-file"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -172,3 +172,159 @@ fn submissions_from_two_threads_are_safe() {
     });
     ctx.check_validation().expect("no validation message");
 }
+
+/// A readback copy into a buffer too small for the image would make the GPU write past the
+/// buffer's end: `Cmd::copy_image_to_buffer` refuses it (a panic, before anything is recorded),
+/// the context stays usable, and nothing invalid reaches the driver (no validation message).
+#[test]
+fn short_readback_buffer_is_refused_before_the_gpu_runs() {
+    use weft::vk::{BufferLocation, BufferUsageFlags, Format, ImageDesc, ImageUsageFlags, Usage};
+    let ctx = common::context();
+    // An image without a view-capable usage is refused (every image gets a view).
+    let err = ctx
+        .create_image(
+            &ImageDesc::new_2d("transfer only", Format::R8G8B8A8_UNORM, 8, 8)
+                .usage(ImageUsageFlags::TRANSFER_SRC),
+        )
+        .err()
+        .expect("must fail");
+    assert!(err.to_string().contains("needs one of SAMPLED"), "{err}");
+    let image = ctx
+        .create_image(
+            &ImageDesc::new_2d("8x8", Format::R8G8B8A8_UNORM, 8, 8)
+                .usage(ImageUsageFlags::TRANSFER_SRC | ImageUsageFlags::SAMPLED),
+        )
+        .unwrap();
+    // 8 x 8 x 4 = 256 bytes needed.
+    let short = ctx
+        .create_buffer(
+            "short",
+            255,
+            BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Readback,
+        )
+        .unwrap();
+    let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        ctx.submit(|cmd| {
+            cmd.transition(&image, Usage::Undefined, Usage::TransferSrc, None);
+            cmd.copy_image_to_buffer(&image, 0, &short);
+        })
+    }))
+    .expect_err("a short buffer must be refused");
+    let msg = panic.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(
+        msg.contains("'short' of 255 bytes is too small") && msg.contains("256"),
+        "{msg}"
+    );
+    // Level 3 of an image with one level: refused the same way.
+    let fits = ctx
+        .create_buffer(
+            "fits",
+            256,
+            BufferUsageFlags::TRANSFER_DST,
+            BufferLocation::Readback,
+        )
+        .unwrap();
+    let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        ctx.submit(|cmd| cmd.copy_image_to_buffer(&image, 3, &fits))
+    }))
+    .expect_err("a missing level must be refused");
+    let msg = panic.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(msg.contains("mip level 3"), "{msg}");
+    // The context is still usable: a correct copy goes through.
+    ctx.submit(|cmd| {
+        cmd.transition(&image, Usage::Undefined, Usage::TransferSrc, None);
+        cmd.copy_image_to_buffer(&image, 0, &fits);
+        cmd.buffer_barrier();
+    })
+    .unwrap();
+    ctx.check_validation().expect("no validation message");
+}
+
+/// A frame size the device cannot hold is refused before any target is created, with what is
+/// needed, what the device has and what to do (`--size 16384x16384` on lavapipe used to be
+/// ended by the kernel's OOM killer instead).
+#[test]
+fn oversize_targets_are_refused_before_allocation() {
+    use weft::render::check_target_memory;
+    let ctx = common::context();
+    let gib = 1u64 << 30;
+    // The device's own figures, with a small heap.
+    let mut small = ctx.info().clone();
+    small.device_local_heap_bytes = gib;
+    small.device_type = "discrete-gpu".into();
+    let err = check_target_memory(&small, None, 8192, 8192, false)
+        .expect_err("3.25 GiB of targets in 1 GiB")
+        .to_string();
+    assert!(
+        err.contains("--size 8192x8192")
+            && err.contains("3.2 GiB")
+            && err.contains("1.0 GiB")
+            && err.contains("choose a smaller --size"),
+        "{err}"
+    );
+    check_target_memory(&small, None, 1920, 1080, true).expect("100 MiB fits");
+    // A CPU device: targets and readback against the memory the host has available.
+    let mut cpu = small.clone();
+    cpu.device_type = "cpu".into();
+    cpu.device_local_heap_bytes = 64 * gib;
+    let err = check_target_memory(&cpu, Some(2 * gib), 8192, 8192, true)
+        .expect_err("5.2 GiB with readback in 2 GiB")
+        .to_string();
+    assert!(
+        err.contains("5.2 GiB") && err.contains("2.0 GiB available"),
+        "{err}"
+    );
+    check_target_memory(&cpu, Some(2 * gib), 8192, 8192, false)
+        .expect_err("3.8 GiB without the HDR readback still does not fit");
+    check_target_memory(&cpu, Some(8 * gib), 8192, 8192, true).expect("fits in 90 % of 8 GiB");
+    check_target_memory(&cpu, Some(5 * gib + gib / 2), 8192, 8192, true)
+        .expect_err("5.2 GiB is more than 90 % of 5.5 GiB");
+    // Beyond maxImageDimension2D.
+    let side = small.max_image_dimension_2d + 1;
+    let err = check_target_memory(&small, None, side, 16, false)
+        .expect_err("too wide")
+        .to_string();
+    assert!(err.contains("pixels a side"), "{err}");
+
+    // Through the renderer on this device: 16384x16384 (22.6 GiB with readback on lavapipe).
+    // Rendered only where the check refuses it, so the test never allocates that much.
+    let info = ctx.info().clone();
+    let refused = check_target_memory(
+        &info,
+        weft::render::host_available_bytes(),
+        16384,
+        16384,
+        true,
+    );
+    println!(
+        "device heap {} bytes: 16384x16384 {refused:?}",
+        info.device_local_heap_bytes
+    );
+    if refused.is_err() {
+        let mut renderer = Renderer::new(ctx).expect("renderer");
+        let options = RenderOptions {
+            width: 16384,
+            height: 16384,
+            ..Default::default()
+        };
+        let err = renderer
+            .render(&scene::default_scene(), &options)
+            .err()
+            .expect("must fail")
+            .to_string();
+        assert!(
+            err.contains("--size 16384x16384") && err.contains("GiB"),
+            "{err}"
+        );
+        // And the renderer is still usable at a size that fits.
+        let options = RenderOptions {
+            width: 64,
+            height: 36,
+            ..Default::default()
+        };
+        renderer
+            .render(&scene::default_scene(), &options)
+            .expect("a small frame after the refused one");
+    }
+}

@@ -721,7 +721,7 @@ fn a_write_that_fails_leaves_the_existing_file_byte_for_byte() {
     let existing = dir.join("out.png");
     render::write_png(&existing, 8, 8, &gradient(8, 8)).unwrap();
     // Something in the way of the temporary file (works whoever runs the test, root included).
-    let tmp = dir.join(format!(".out.png.{}.tmp", std::process::id()));
+    let tmp = dir.join(render::temp_name("out.png".as_ref()));
     std::fs::create_dir(&tmp).unwrap();
     std::fs::write(tmp.join("keep"), b"x").unwrap();
     assert_failed_write_keeps(&existing, "is in the way", |p| {
@@ -956,4 +956,46 @@ fn many_frames_keep_resident_memory_flat() {
         "resident memory grew by {} KiB over 90 frames",
         last - tenth
     );
+}
+
+/// Threads writing one target at once: each write goes through a temporary file of its own
+/// (the name has the thread's number as well as the process id), so every write succeeds, the
+/// target ends as one complete image and no temporary file is left. With the process id alone
+/// the threads removed and renamed each other's temporary files.
+#[test]
+fn threads_writing_one_target_do_not_collide() {
+    let dir = TempDir::new("threads");
+    let target = dir.join("shared.png");
+    let images: Vec<Vec<u8>> = (0..4u8)
+        .map(|t| {
+            gradient(32, 32)
+                .iter()
+                .map(|v| v.wrapping_add(t * 40))
+                .collect()
+        })
+        .collect();
+    std::thread::scope(|scope| {
+        for img in &images {
+            let target = &target;
+            scope.spawn(move || {
+                for _ in 0..20 {
+                    render::write_png(target, 32, 32, img).expect("every write succeeds");
+                }
+            });
+        }
+    });
+    let got = image::open(&target).unwrap().to_rgba8().into_raw();
+    assert!(
+        images.contains(&got),
+        "the target is one of the written images"
+    );
+    assert_eq!(
+        std::fs::read_dir(&*dir).unwrap().count(),
+        1,
+        "a temporary file was left behind"
+    );
+    // Text goes the same way (the shader package and the bench's CSV).
+    render::write_file(&dir.join("a.csv"), b"x,y\n").unwrap();
+    assert_eq!(std::fs::read(dir.join("a.csv")).unwrap(), b"x,y\n");
+    assert_eq!(std::fs::read_dir(&*dir).unwrap().count(), 2);
 }

@@ -404,7 +404,7 @@ impl Ctx<'_> {
                     format!("must be an array of strings, got {}", short(v)),
                 )
             })?;
-            return WeavePattern::from_rows(&strs).map_err(|e| self.err("pattern", e));
+            return WeavePattern::from_rows(&strs).map_err(|e| self.err("pattern", e.to_string()));
         }
         Err(self.err(
             "pattern",

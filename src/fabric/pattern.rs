@@ -90,12 +90,12 @@ impl WeavePattern {
     /// first string is the lowest v), character `i` is column `i` (u-index `i`). `'-'` or `'H'`
     /// (horizontal) = weft-up, `'|'` or `'V'` (vertical) = warp-up; letters in either case.
     /// 1 to 8 rows of 1 to 8 characters, all rows the same length. The error says what is wrong.
-    pub fn from_rows<S: AsRef<str>>(rows: &[S]) -> Result<Self, String> {
+    pub fn from_rows<S: AsRef<str>>(rows: &[S]) -> crate::Result<Self> {
         if rows.is_empty() || rows.len() > MAX_CELLS {
-            return Err(format!(
+            return Err(crate::Error::input(format!(
                 "a custom pattern needs 1 to {MAX_CELLS} rows, got {}",
                 rows.len()
-            ));
+            )));
         }
         let mut cells: Vec<Vec<bool>> = Vec::with_capacity(rows.len());
         for (j, row) in rows.iter().enumerate() {
@@ -106,26 +106,26 @@ impl WeavePattern {
                     '-' | 'H' | 'h' => line.push(true),
                     '|' | 'V' | 'v' => line.push(false),
                     other => {
-                        return Err(format!(
+                        return Err(crate::Error::input(format!(
                             "row {j} (\"{row}\") has '{other}'; use '-' or 'H' for weft-up \
                              (horizontal thread on top) and '|' or 'V' for warp-up"
-                        ))
+                        )))
                     }
                 }
             }
             if line.is_empty() || line.len() > MAX_CELLS {
-                return Err(format!(
+                return Err(crate::Error::input(format!(
                     "row {j} (\"{row}\") has {} cells; rows need 1 to {MAX_CELLS}",
                     line.len()
-                ));
+                )));
             }
             if let Some(first) = cells.first() {
                 if first.len() != line.len() {
-                    return Err(format!(
+                    return Err(crate::Error::input(format!(
                         "row {j} (\"{row}\") has {} cells but row 0 has {}; all rows must be equally long",
                         line.len(),
                         first.len()
-                    ));
+                    )));
                 }
             }
             cells.push(line);

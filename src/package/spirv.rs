@@ -3,75 +3,76 @@
 //! OpConstant*/OpSpecConstant*, OpVariable). It reads the logical-addressing modules glslang
 //! emits for Vulkan; it is no validator (`spirv-val` is, and the package tests run it).
 //!
-//! Numbers are from the SPIR-V specification (unified1 `spirv.h`).
+//! Opcode, decoration and enumerant numbers come from the `spirv` crate's enums (the SPIR-V
+//! grammar, generated), not a hand-written table.
 
 use std::collections::{BTreeSet, HashMap};
 
-const MAGIC: u32 = 0x0723_0203;
+const MAGIC: u32 = spirv::MAGIC_NUMBER;
 
 // Opcodes.
-const OP_EXTENSION: u32 = 10;
-const OP_ENTRY_POINT: u32 = 15;
-const OP_EXECUTION_MODE: u32 = 16;
-const OP_CAPABILITY: u32 = 17;
-const OP_TYPE_VOID: u32 = 19;
-const OP_TYPE_BOOL: u32 = 20;
-const OP_TYPE_INT: u32 = 21;
-const OP_TYPE_FLOAT: u32 = 22;
-const OP_TYPE_VECTOR: u32 = 23;
-const OP_TYPE_MATRIX: u32 = 24;
-const OP_TYPE_IMAGE: u32 = 25;
-const OP_TYPE_SAMPLER: u32 = 26;
-const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
-const OP_TYPE_ARRAY: u32 = 28;
-const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
-const OP_TYPE_STRUCT: u32 = 30;
-const OP_TYPE_POINTER: u32 = 32;
-const OP_CONSTANT_TRUE: u32 = 41;
-const OP_CONSTANT_FALSE: u32 = 42;
-const OP_CONSTANT: u32 = 43;
-const OP_CONSTANT_COMPOSITE: u32 = 44;
-const OP_SPEC_CONSTANT_TRUE: u32 = 48;
-const OP_SPEC_CONSTANT_FALSE: u32 = 49;
-const OP_SPEC_CONSTANT: u32 = 50;
-const OP_SPEC_CONSTANT_COMPOSITE: u32 = 51;
-const OP_FUNCTION: u32 = 54;
-const OP_VARIABLE: u32 = 59;
-const OP_DECORATE: u32 = 71;
-const OP_MEMBER_DECORATE: u32 = 72;
-const OP_EXECUTION_MODE_ID: u32 = 331;
-const OP_TYPE_ACCELERATION_STRUCTURE: u32 = 5341;
+const OP_EXTENSION: u32 = spirv::Op::Extension as u32;
+const OP_ENTRY_POINT: u32 = spirv::Op::EntryPoint as u32;
+const OP_EXECUTION_MODE: u32 = spirv::Op::ExecutionMode as u32;
+const OP_CAPABILITY: u32 = spirv::Op::Capability as u32;
+const OP_TYPE_VOID: u32 = spirv::Op::TypeVoid as u32;
+const OP_TYPE_BOOL: u32 = spirv::Op::TypeBool as u32;
+const OP_TYPE_INT: u32 = spirv::Op::TypeInt as u32;
+const OP_TYPE_FLOAT: u32 = spirv::Op::TypeFloat as u32;
+const OP_TYPE_VECTOR: u32 = spirv::Op::TypeVector as u32;
+const OP_TYPE_MATRIX: u32 = spirv::Op::TypeMatrix as u32;
+const OP_TYPE_IMAGE: u32 = spirv::Op::TypeImage as u32;
+const OP_TYPE_SAMPLER: u32 = spirv::Op::TypeSampler as u32;
+const OP_TYPE_SAMPLED_IMAGE: u32 = spirv::Op::TypeSampledImage as u32;
+const OP_TYPE_ARRAY: u32 = spirv::Op::TypeArray as u32;
+const OP_TYPE_RUNTIME_ARRAY: u32 = spirv::Op::TypeRuntimeArray as u32;
+const OP_TYPE_STRUCT: u32 = spirv::Op::TypeStruct as u32;
+const OP_TYPE_POINTER: u32 = spirv::Op::TypePointer as u32;
+const OP_CONSTANT_TRUE: u32 = spirv::Op::ConstantTrue as u32;
+const OP_CONSTANT_FALSE: u32 = spirv::Op::ConstantFalse as u32;
+const OP_CONSTANT: u32 = spirv::Op::Constant as u32;
+const OP_CONSTANT_COMPOSITE: u32 = spirv::Op::ConstantComposite as u32;
+const OP_SPEC_CONSTANT_TRUE: u32 = spirv::Op::SpecConstantTrue as u32;
+const OP_SPEC_CONSTANT_FALSE: u32 = spirv::Op::SpecConstantFalse as u32;
+const OP_SPEC_CONSTANT: u32 = spirv::Op::SpecConstant as u32;
+const OP_SPEC_CONSTANT_COMPOSITE: u32 = spirv::Op::SpecConstantComposite as u32;
+const OP_FUNCTION: u32 = spirv::Op::Function as u32;
+const OP_VARIABLE: u32 = spirv::Op::Variable as u32;
+const OP_DECORATE: u32 = spirv::Op::Decorate as u32;
+const OP_MEMBER_DECORATE: u32 = spirv::Op::MemberDecorate as u32;
+const OP_EXECUTION_MODE_ID: u32 = spirv::Op::ExecutionModeId as u32;
+const OP_TYPE_ACCELERATION_STRUCTURE: u32 = spirv::Op::TypeAccelerationStructureKHR as u32;
 
 // Decorations.
-const DEC_SPEC_ID: u32 = 1;
-const DEC_BLOCK: u32 = 2;
-const DEC_BUFFER_BLOCK: u32 = 3;
-const DEC_ARRAY_STRIDE: u32 = 6;
-const DEC_MATRIX_STRIDE: u32 = 7;
-const DEC_BUILT_IN: u32 = 11;
-const DEC_NON_WRITABLE: u32 = 24;
-const DEC_NON_READABLE: u32 = 25;
-const DEC_LOCATION: u32 = 30;
-const DEC_BINDING: u32 = 33;
-const DEC_DESCRIPTOR_SET: u32 = 34;
-const DEC_OFFSET: u32 = 35;
-const BUILT_IN_WORKGROUP_SIZE: u32 = 25;
+const DEC_SPEC_ID: u32 = spirv::Decoration::SpecId as u32;
+const DEC_BLOCK: u32 = spirv::Decoration::Block as u32;
+const DEC_BUFFER_BLOCK: u32 = spirv::Decoration::BufferBlock as u32;
+const DEC_ARRAY_STRIDE: u32 = spirv::Decoration::ArrayStride as u32;
+const DEC_MATRIX_STRIDE: u32 = spirv::Decoration::MatrixStride as u32;
+const DEC_BUILT_IN: u32 = spirv::Decoration::BuiltIn as u32;
+const DEC_NON_WRITABLE: u32 = spirv::Decoration::NonWritable as u32;
+const DEC_NON_READABLE: u32 = spirv::Decoration::NonReadable as u32;
+const DEC_LOCATION: u32 = spirv::Decoration::Location as u32;
+const DEC_BINDING: u32 = spirv::Decoration::Binding as u32;
+const DEC_DESCRIPTOR_SET: u32 = spirv::Decoration::DescriptorSet as u32;
+const DEC_OFFSET: u32 = spirv::Decoration::Offset as u32;
+const BUILT_IN_WORKGROUP_SIZE: u32 = spirv::BuiltIn::WorkgroupSize as u32;
 
 // Storage classes.
-const SC_UNIFORM_CONSTANT: u32 = 0;
-const SC_INPUT: u32 = 1;
-const SC_UNIFORM: u32 = 2;
-const SC_OUTPUT: u32 = 3;
-const SC_PUSH_CONSTANT: u32 = 9;
-const SC_STORAGE_BUFFER: u32 = 12;
+const SC_UNIFORM_CONSTANT: u32 = spirv::StorageClass::UniformConstant as u32;
+const SC_INPUT: u32 = spirv::StorageClass::Input as u32;
+const SC_UNIFORM: u32 = spirv::StorageClass::Uniform as u32;
+const SC_OUTPUT: u32 = spirv::StorageClass::Output as u32;
+const SC_PUSH_CONSTANT: u32 = spirv::StorageClass::PushConstant as u32;
+const SC_STORAGE_BUFFER: u32 = spirv::StorageClass::StorageBuffer as u32;
 
 // Execution modes.
-const MODE_LOCAL_SIZE: u32 = 17;
-const MODE_LOCAL_SIZE_ID: u32 = 38;
+const MODE_LOCAL_SIZE: u32 = spirv::ExecutionMode::LocalSize as u32;
+const MODE_LOCAL_SIZE_ID: u32 = spirv::ExecutionMode::LocalSizeId as u32;
 
 // Image dimensions.
-const DIM_BUFFER: u32 = 5;
-const DIM_SUBPASS_DATA: u32 = 6;
+const DIM_BUFFER: u32 = spirv::Dim::DimBuffer as u32;
+const DIM_SUBPASS_DATA: u32 = spirv::Dim::DimSubpassData as u32;
 
 /// What a module needs bound and how it is called, for its first entry point.
 #[derive(Clone, Debug, PartialEq)]
@@ -291,12 +292,17 @@ struct Module {
     variables: Vec<(u32, u32, u32)>,
 }
 
-/// Reflects a module given as little-endian bytes.
 /// How deeply types may nest (arrays of structs of arrays ...): far beyond any shader's, and a
 /// bound on the recursion a hostile module's cyclic type ids could cause.
 const MAX_TYPE_DEPTH: u32 = 64;
 
-pub fn reflect(bytes: &[u8]) -> Result<Reflection, String> {
+/// Reflects a SPIR-V module (little-endian words). Any malformed module is an
+/// [`Error::Input`](crate::Error::Input) saying what is wrong, never a panic.
+pub fn reflect(bytes: &[u8]) -> crate::Result<Reflection> {
+    reflect_words(bytes).map_err(crate::Error::Input)
+}
+
+fn reflect_words(bytes: &[u8]) -> Result<Reflection, String> {
     if bytes.len() % 4 != 0 || bytes.len() < 20 {
         return Err(format!(
             "{} bytes is not a SPIR-V module (a multiple of 4, at least 20)",
@@ -1161,14 +1167,77 @@ mod tests {
 
     #[test]
     fn cyclic_and_huge_types_are_errors_not_crashes() {
-        let e = reflect(&block_module(20, 4, None)).unwrap_err();
+        let e = reflect(&block_module(20, 4, None)).unwrap_err().to_string();
         assert!(e.contains("nests deeper") && e.contains("cyclic"), "{e}");
         // uint[2^30] with stride 16: 16 GiB, beyond u32.
-        let e = reflect(&block_module(1, 1 << 30, Some(16))).unwrap_err();
+        let e = reflect(&block_module(1, 1 << 30, Some(16)))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("larger than 4 GiB"), "{e}");
         // The same array of 4 is fine: 64 bytes.
         let r = reflect(&block_module(1, 4, Some(16))).unwrap();
         assert_eq!(r.bindings[0].block_size, Some(64));
+    }
+
+    /// The numbers taken from the `spirv` crate are those of the SPIR-V specification (the hand
+    /// table they replaced).
+    #[test]
+    fn numbers_are_the_specifications() {
+        assert_eq!(MAGIC, 119734787);
+        assert_eq!(OP_EXTENSION, 10);
+        assert_eq!(OP_ENTRY_POINT, 15);
+        assert_eq!(OP_EXECUTION_MODE, 16);
+        assert_eq!(OP_CAPABILITY, 17);
+        assert_eq!(OP_TYPE_VOID, 19);
+        assert_eq!(OP_TYPE_BOOL, 20);
+        assert_eq!(OP_TYPE_INT, 21);
+        assert_eq!(OP_TYPE_FLOAT, 22);
+        assert_eq!(OP_TYPE_VECTOR, 23);
+        assert_eq!(OP_TYPE_MATRIX, 24);
+        assert_eq!(OP_TYPE_IMAGE, 25);
+        assert_eq!(OP_TYPE_SAMPLER, 26);
+        assert_eq!(OP_TYPE_SAMPLED_IMAGE, 27);
+        assert_eq!(OP_TYPE_ARRAY, 28);
+        assert_eq!(OP_TYPE_RUNTIME_ARRAY, 29);
+        assert_eq!(OP_TYPE_STRUCT, 30);
+        assert_eq!(OP_TYPE_POINTER, 32);
+        assert_eq!(OP_CONSTANT_TRUE, 41);
+        assert_eq!(OP_CONSTANT_FALSE, 42);
+        assert_eq!(OP_CONSTANT, 43);
+        assert_eq!(OP_CONSTANT_COMPOSITE, 44);
+        assert_eq!(OP_SPEC_CONSTANT_TRUE, 48);
+        assert_eq!(OP_SPEC_CONSTANT_FALSE, 49);
+        assert_eq!(OP_SPEC_CONSTANT, 50);
+        assert_eq!(OP_SPEC_CONSTANT_COMPOSITE, 51);
+        assert_eq!(OP_FUNCTION, 54);
+        assert_eq!(OP_VARIABLE, 59);
+        assert_eq!(OP_DECORATE, 71);
+        assert_eq!(OP_MEMBER_DECORATE, 72);
+        assert_eq!(OP_EXECUTION_MODE_ID, 331);
+        assert_eq!(OP_TYPE_ACCELERATION_STRUCTURE, 5341);
+        assert_eq!(DEC_SPEC_ID, 1);
+        assert_eq!(DEC_BLOCK, 2);
+        assert_eq!(DEC_BUFFER_BLOCK, 3);
+        assert_eq!(DEC_ARRAY_STRIDE, 6);
+        assert_eq!(DEC_MATRIX_STRIDE, 7);
+        assert_eq!(DEC_BUILT_IN, 11);
+        assert_eq!(DEC_NON_WRITABLE, 24);
+        assert_eq!(DEC_NON_READABLE, 25);
+        assert_eq!(DEC_LOCATION, 30);
+        assert_eq!(DEC_BINDING, 33);
+        assert_eq!(DEC_DESCRIPTOR_SET, 34);
+        assert_eq!(DEC_OFFSET, 35);
+        assert_eq!(BUILT_IN_WORKGROUP_SIZE, 25);
+        assert_eq!(SC_UNIFORM_CONSTANT, 0);
+        assert_eq!(SC_INPUT, 1);
+        assert_eq!(SC_UNIFORM, 2);
+        assert_eq!(SC_OUTPUT, 3);
+        assert_eq!(SC_PUSH_CONSTANT, 9);
+        assert_eq!(SC_STORAGE_BUFFER, 12);
+        assert_eq!(MODE_LOCAL_SIZE, 17);
+        assert_eq!(MODE_LOCAL_SIZE_ID, 38);
+        assert_eq!(DIM_BUFFER, 5);
+        assert_eq!(DIM_SUBPASS_DATA, 6);
     }
 
     #[test]

@@ -313,12 +313,27 @@ fn edge(a: Vec2, b: Vec2, q: Vec2) -> f32 {
     (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x)
 }
 
-/// The top-left rule for a triangle of positive area in y-down pixel coordinates: a pixel centre
-/// exactly on an edge belongs to the triangle only if the edge is a top or a left edge, so a
-/// centre on an edge shared by two triangles is drawn once.
+/// The top-left rule (as Vulkan implementations and D3D use it) for the edge a -> b of a
+/// triangle of positive area (`edge(p0, p1, p2) > 0`, interior where every `edge` is positive:
+/// clockwise on screen) in y-down pixel coordinates: a pixel centre exactly on an edge belongs
+/// to the triangle only if the edge is a top edge (horizontal, the interior below it: it runs
+/// towards +x in this winding) or a left edge (the interior to its right: it runs towards -y),
+/// so a centre on an edge shared by two triangles is drawn once. (This used to be the
+/// bottom-right rule: `d.y > 0` and a horizontal edge towards -x.)
 fn owns_edge(a: Vec2, b: Vec2) -> bool {
     let d = b - a;
-    (d.y == 0.0 && d.x < 0.0) || d.y > 0.0
+    (d.y == 0.0 && d.x > 0.0) || d.y < 0.0
+}
+
+/// Whether pixel centre `q` is inside the triangle `p` (positive area), centres on an edge
+/// decided by the top-left rule.
+fn covers(p: &[Vec2; 3], owns: &[bool; 3], q: Vec2) -> bool {
+    let e = [
+        edge(p[1], p[2], q),
+        edge(p[2], p[0], q),
+        edge(p[0], p[1], q),
+    ];
+    (0..3).all(|i| e[i] > 0.0 || (e[i] == 0.0 && owns[i]))
 }
 
 impl Raster {
@@ -371,12 +386,7 @@ impl Raster {
         for y in y0 as i64..=y1 {
             for x in x0 as i64..=x1 {
                 let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                let e = [
-                    edge(p[1], p[2], q),
-                    edge(p[2], p[0], q),
-                    edge(p[0], p[1], q),
-                ];
-                if !(0..3).all(|i| e[i] > 0.0 || (e[i] == 0.0 && owns[i])) {
+                if !covers(&p, &owns, q) {
                     continue;
                 }
                 let (_, lin) = tri.weights(q);
@@ -535,4 +545,80 @@ pub fn footprint_coverage(params: &FabricParams, uv: Vec2, dx: Vec2, dy: Vec2, k
         (sum[1] / n) as f32,
         (sum[2] / n) as f32,
     ]
+}
+
+#[cfg(test)]
+mod edge_rule_tests {
+    use super::*;
+
+    /// The pixel centres of a `w` x `h` grid that triangle `p` (either winding) covers.
+    fn coverage(p: [Vec2; 3], w: u32, h: u32) -> Vec<bool> {
+        let mut p = p;
+        if edge(p[0], p[1], p[2]) < 0.0 {
+            p.swap(1, 2);
+        }
+        let owns = [
+            owns_edge(p[1], p[2]),
+            owns_edge(p[2], p[0]),
+            owns_edge(p[0], p[1]),
+        ];
+        (0..w * h)
+            .map(|i| {
+                let q = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                covers(&p, &owns, q)
+            })
+            .collect()
+    }
+
+    /// A right triangle whose top, left and hypotenuse edges run through pixel centres: the
+    /// centres on its top and left edges are its own, those on the bottom-right edge are not.
+    #[test]
+    fn a_pixel_centre_on_an_edge_follows_the_top_left_rule() {
+        let v = |x: f32, y: f32| Vec2::new(x, y);
+        // Corners (0.5, 0.5), (4.5, 0.5), (0.5, 4.5): top edge y = 0.5, left edge x = 0.5,
+        // hypotenuse x + y = 5 through the centres (1.5, 3.5), (2.5, 2.5), (3.5, 1.5).
+        let c = coverage([v(0.5, 0.5), v(4.5, 0.5), v(0.5, 4.5)], 6, 6);
+        let at = |x: u32, y: u32| c[(y * 6 + x) as usize];
+        assert!(at(2, 0), "a centre on the top edge belongs to the triangle");
+        assert!(
+            at(0, 2),
+            "a centre on the left edge belongs to the triangle"
+        );
+        assert!(at(0, 0), "the top-left corner: on a top and a left edge");
+        assert!(at(1, 1), "inside");
+        assert!(
+            !at(2, 2) && !at(1, 3) && !at(3, 1),
+            "centres on the bottom-right edge do not"
+        );
+        assert!(
+            !at(4, 0) && !at(0, 4),
+            "the corners of the bottom-right edge do not"
+        );
+        // The same with the other winding.
+        assert_eq!(c, coverage([v(0.5, 0.5), v(0.5, 4.5), v(4.5, 0.5)], 6, 6));
+        // A triangle with a horizontal bottom edge through centres: not its own.
+        let b = coverage([v(0.5, 0.0), v(4.5, 3.5), v(0.5, 3.5)], 6, 6);
+        assert!(!b[(3 * 6 + 1) as usize] && b[(2 * 6 + 1) as usize]);
+    }
+
+    /// Two triangles sharing an edge through pixel centres (a square cut along a diagonal, and
+    /// along a vertical line): every centre is drawn exactly once.
+    #[test]
+    fn a_shared_edge_is_drawn_once() {
+        let v = |x: f32, y: f32| Vec2::new(x, y);
+        for (a, b) in [
+            (
+                [v(0.5, 0.5), v(4.5, 0.5), v(0.5, 4.5)],
+                [v(4.5, 0.5), v(4.5, 4.5), v(0.5, 4.5)],
+            ),
+            (
+                [v(0.5, 0.5), v(2.5, 0.5), v(2.5, 4.5)],
+                [v(2.5, 0.5), v(4.5, 4.5), v(2.5, 4.5)],
+            ),
+        ] {
+            let (ca, cb) = (coverage(a, 6, 6), coverage(b, 6, 6));
+            let both = ca.iter().zip(&cb).filter(|(x, y)| **x && **y).count();
+            assert_eq!(both, 0, "no centre is drawn twice");
+        }
+    }
 }

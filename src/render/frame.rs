@@ -127,6 +127,74 @@ impl Targets {
     }
 }
 
+/// Bytes a pixel of the render targets takes on the device (five G-buffer targets, depth, HDR,
+/// LDR: 52).
+pub const TARGET_BYTES_PER_PIXEL: u64 = 4 + 8 + 8 + 8 + 8 + 4 + 8 + 4;
+
+/// Bytes a pixel of the readback takes in host memory: the LDR buffer and its copy (4 + 4), and
+/// with `read_hdr` the half-float buffer and the f32 image (8 + 16).
+pub fn readback_bytes_per_pixel(read_hdr: bool) -> u64 {
+    8 + if read_hdr { 24 } else { 0 }
+}
+
+/// The memory the host can still give (MemAvailable of /proc/meminfo), where known.
+pub fn host_available_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// Refuses, before any target is created, a frame size the device cannot hold: a side beyond
+/// maxImageDimension2D, render targets beyond the device's largest device-local heap, or, on a
+/// CPU device, targets and readback beyond 90 % of the memory the host has available. A CPU device's
+/// "device memory" is system memory: its heap size is nominal (lavapipe reports 2 GiB and
+/// allocates beyond it), and an allocation too large is met by the kernel's OOM killer rather
+/// than an error, so there the host's available memory is the bound.
+pub fn check_target_memory(
+    info: &crate::vk::DeviceInfo,
+    host_available: Option<u64>,
+    width: u32,
+    height: u32,
+    read_hdr: bool,
+) -> crate::Result<()> {
+    let max = info.max_image_dimension_2d;
+    if width > max || height > max {
+        return Err(Error::device(format!(
+            "--size {width}x{height} is larger than the device '{}' supports ({max} pixels a side): choose a smaller --size",
+            info.name
+        )));
+    }
+    let gib = |b: u64| b as f64 / f64::from(1u32 << 30);
+    let pixels = u64::from(width) * u64::from(height);
+    let targets = pixels * TARGET_BYTES_PER_PIXEL;
+    let heap = info.device_local_heap_bytes;
+    if !info.is_cpu() && heap > 0 && targets > heap {
+        return Err(Error::device(format!(
+            "--size {width}x{height} needs {:.1} GiB of device memory for its render targets ({TARGET_BYTES_PER_PIXEL} bytes a pixel); the device '{}' has {:.1} GiB: choose a smaller --size",
+            gib(targets),
+            info.name,
+            gib(heap)
+        )));
+    }
+    if info.is_cpu() {
+        if let Some(available) = host_available {
+            let total = targets + pixels * readback_bytes_per_pixel(read_hdr);
+            // A tenth kept back for what the estimate leaves out: the scene, its textures and
+            // buffers, pipelines, the allocator's slack, the rest of the process.
+            if total > available / 10 * 9 {
+                return Err(Error::device(format!(
+                    "--size {width}x{height} needs {:.1} GiB of memory for its render targets and readback on the CPU device '{}'; the system has {:.1} GiB available (weft plans for at most 90 % of it): choose a smaller --size, or close other programs",
+                    gib(total),
+                    info.name,
+                    gib(available)
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// One draw: a mesh range in the shared buffers.
 pub(crate) struct DrawRange {
     pub(crate) first_index: u32,
@@ -780,6 +848,13 @@ impl Renderer {
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
             self.targets = None;
+            check_target_memory(
+                self.ctx.info(),
+                host_available_bytes(),
+                width,
+                height,
+                options.read_hdr,
+            )?;
             self.targets = Some(Targets::new(&self.ctx, width, height)?);
         }
         let camera = match &options.camera_override {
@@ -903,34 +978,41 @@ impl Renderer {
             ..Default::default()
         };
 
-        // Times one pass: a submission of its own between two timestamps.
-        let mut timed =
-            |name: &'static str, record: &mut dyn FnMut(&mut Cmd)| -> crate::Result<()> {
-                let start = Instant::now();
-                ctx.submit(|cmd| {
-                    if let Some(q) = &queries {
-                        cmd.reset_queries(q);
-                        cmd.timestamp(q, 0);
-                    }
-                    record(cmd);
-                    if let Some(q) = &queries {
-                        cmd.timestamp(q, 1);
-                    }
-                })?;
-                let gpu_ms = match &queries {
-                    Some(q) => {
-                        let t = q.read_ns(2)?;
-                        Some((t[1] - t[0]) / 1e6)
-                    }
-                    None => None,
-                };
-                timings.push(PassTiming {
-                    name,
-                    gpu_ms,
-                    wall_ms: start.elapsed().as_secs_f64() * 1e3,
-                });
-                Ok(())
+        // Times one pass: a submission of its own between two timestamps. A function, not a
+        // closure, so that the submission's lifetime `'s` can be named: every resource the pass
+        // records is borrowed for it (see `Context::submit`).
+        fn timed_pass<'s>(
+            ctx: &'s crate::vk::Context,
+            queries: Option<&'s crate::vk::QueryPool>,
+            timings: &mut Vec<PassTiming>,
+            name: &'static str,
+            record: &mut dyn FnMut(&mut Cmd<'s>),
+        ) -> crate::Result<()> {
+            let start = Instant::now();
+            ctx.submit(|cmd| {
+                if let Some(q) = queries {
+                    cmd.reset_queries(q);
+                    cmd.timestamp(q, 0);
+                }
+                record(cmd);
+                if let Some(q) = queries {
+                    cmd.timestamp(q, 1);
+                }
+            })?;
+            let gpu_ms = match queries {
+                Some(q) => {
+                    let t = q.read_ns(2)?;
+                    Some((t[1] - t[0]) / 1e6)
+                }
+                None => None,
             };
+            timings.push(PassTiming {
+                name,
+                gpu_ms,
+                wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            });
+            Ok(())
+        }
 
         for pass in &plan.passes {
             match pass {
@@ -990,16 +1072,22 @@ impl Renderer {
                             )
                         })
                         .collect::<crate::Result<Vec<_>>>()?;
-                    timed("gbuffer", &mut |cmd| {
-                        passes::gbuffer::gbuffer_pass(
-                            cmd,
-                            gbuffer_pipeline,
-                            gpu,
-                            frame_set,
-                            &material_sets,
-                            targets,
-                        )
-                    })?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "gbuffer",
+                        &mut |cmd| {
+                            passes::gbuffer::gbuffer_pass(
+                                cmd,
+                                gbuffer_pipeline,
+                                gpu,
+                                frame_set,
+                                &material_sets,
+                                targets,
+                            )
+                        },
+                    )?;
                     stats.pipelines.push(gbuffer_pipeline.name.clone());
                 }
                 Pass::Shadow => {
@@ -1008,7 +1096,7 @@ impl Renderer {
                         .map(|(_, m, (x, y, r))| (*x, *y, *r, *m))
                         .collect();
                     if !tiles.is_empty() {
-                        timed("shadow", &mut |cmd| {
+                        timed_pass(&ctx, queries.as_ref(), &mut timings, "shadow", &mut |cmd| {
                             passes::shadow::shadow_pass(
                                 cmd,
                                 &self.shadow_pipeline,
@@ -1046,9 +1134,15 @@ impl Renderer {
                             (16, Resource::Sampled(&targets.specular, &self.nearest)),
                         ],
                     )?;
-                    timed("lighting", &mut |cmd| {
-                        passes::lighting::lighting_pass(cmd, lighting_pipeline, set, targets)
-                    })?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "lighting",
+                        &mut |cmd| {
+                            passes::lighting::lighting_pass(cmd, lighting_pipeline, set, targets)
+                        },
+                    )?;
                     stats.pipelines.push(lighting_pipeline.name.clone());
                 }
                 Pass::Tonemap => {
@@ -1060,15 +1154,21 @@ impl Renderer {
                         exposure: 2f32.powf(options.exposure),
                         passthrough: (options.debug_view != super::DebugView::None) as u32,
                     };
-                    timed("tonemap", &mut |cmd| {
-                        passes::tonemap::tonemap_pass(
-                            cmd,
-                            &self.tonemap_pipeline,
-                            set,
-                            &push,
-                            targets,
-                        )
-                    })?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "tonemap",
+                        &mut |cmd| {
+                            passes::tonemap::tonemap_pass(
+                                cmd,
+                                &self.tonemap_pipeline,
+                                set,
+                                &push,
+                                targets,
+                            )
+                        },
+                    )?;
                     stats.pipelines.push(self.tonemap_pipeline.name.clone());
                 }
             }

@@ -9,8 +9,11 @@ pub mod plan;
 pub mod shadow;
 pub mod tiles;
 
-pub use frame::{f16_to_f32, Frame, FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer};
-pub use output::{write_exr, write_png};
+pub use frame::{
+    check_target_memory, f16_to_f32, host_available_bytes, readback_bytes_per_pixel, Frame,
+    FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer, TARGET_BYTES_PER_PIXEL,
+};
+pub use output::{temp_name, write_exr, write_file, write_png};
 pub use plan::{EnvPlan, FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
 
 use crate::Error;

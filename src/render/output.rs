@@ -74,6 +74,31 @@ impl Seek for Sink {
     }
 }
 
+/// The temporary file's name for a write of `name`: `.NAME.PID.TID.tmp`, with the process id
+/// and the writing thread's number (the digits of its `ThreadId`), so that no two writers that
+/// can run at the same time - other processes, or other threads of this one - share it. (With
+/// the process id alone, two threads writing one target removed each other's temporary file.)
+#[doc(hidden)]
+pub fn temp_name(name: &std::ffi::OsStr) -> String {
+    let thread: String = format!("{:?}", std::thread::current().id())
+        .chars()
+        .filter(char::is_ascii_digit)
+        .collect();
+    format!(
+        ".{}.{}.{thread}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    )
+}
+
+/// Writes `bytes` to `path` the way images are written: through a temporary file beside it,
+/// flushed to disk and renamed over it, so `path` is either untouched or complete.
+pub fn write_file(path: &Path, bytes: &[u8]) -> crate::Result<()> {
+    write_atomically(path, |out| {
+        out.write_all(bytes).map_err(image::ImageError::IoError)
+    })
+}
+
 /// Writes the image `encode` produces to `path`, through a temporary file in the same directory
 /// (so the rename cannot cross file systems), flushed to disk before the rename. On any failure
 /// the temporary file is removed and `path` is left as it was.
@@ -88,13 +113,9 @@ fn write_atomically(
     let name = path.file_name().ok_or_else(|| {
         Error::input(format!("output path '{}' has no file name", path.display()))
     })?;
-    let tmp: PathBuf = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let tmp: PathBuf = dir.join(temp_name(name));
     // create_new: never write through a file (or a link) that is already there; one left over by
-    // a killed run of a process with the same id is removed first.
+    // a killed run of a process (and thread) with the same id is removed first.
     let open = || OpenOptions::new().write(true).create_new(true).open(&tmp);
     let file = match open() {
         Err(e) if e.kind() == ErrorKind::AlreadyExists && std::fs::remove_file(&tmp).is_ok() => {

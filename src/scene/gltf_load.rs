@@ -244,22 +244,32 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
         .strip_prefix(b"\xEF\xBB\xBF".as_slice())
         .unwrap_or(&text);
 
-    let value: serde_json::Value = match serde_json::from_slice(text) {
-        Ok(v) => v,
-        Err(e) => {
-            let first = text.iter().find(|b| !b.is_ascii_whitespace());
-            return Err(if first == Some(&b'{') {
-                not_gltf(&format!("it looks like JSON but does not parse ({e})"))
-            } else {
-                not_gltf("it is neither JSON nor a .glb container")
-            });
-        }
+    // Parsed once as glTF; only a file that does not parse is parsed again, as plain JSON, to
+    // say why (large embedded buffers make a second parse cost time and peak memory).
+    // serde_json refuses nesting deeper than 128 when it builds values, but captures raw
+    // "extras" without that limit: the depth is checked here (a scan, no allocation), so a
+    // 20000-deep "extras" is refused as before (by the plain-JSON parse's error below).
+    let parsed = serde_json::from_slice::<json::Root>(text);
+    let too_deep = parsed.is_ok() && json_depth(text) > 128;
+    let version: Option<String> = match &parsed {
+        Ok(root) if !too_deep => Some(root.asset.version.clone()),
+        _ => match serde_json::from_slice::<serde_json::Value>(text) {
+            Ok(value) => value
+                .get("asset")
+                .and_then(|a| a.get("version"))
+                .and_then(|v| v.as_str())
+                .map(str::to_owned),
+            Err(e) => {
+                let first = text.iter().find(|b| !b.is_ascii_whitespace());
+                return Err(if first == Some(&b'{') {
+                    not_gltf(&format!("it looks like JSON but does not parse ({e})"))
+                } else {
+                    not_gltf("it is neither JSON nor a .glb container")
+                });
+            }
+        },
     };
-    let version = value
-        .get("asset")
-        .and_then(|a| a.get("version"))
-        .and_then(|v| v.as_str());
-    match version {
+    match version.as_deref() {
         None => return Err(not_gltf("its JSON has no \"asset\": {\"version\": \"2.0\"} object")),
         Some(v) if !v.starts_with("2.") => {
             return Err(Error::input(format!(
@@ -268,12 +278,39 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
         }
         Some(_) => {}
     }
-    let root: json::Root = serde_json::from_slice(text).map_err(|e| {
+    let root: json::Root = parsed.map_err(|e| {
         Error::input(format!(
             "'{source}' is not a valid glTF 2.0 file: {e}; fix the JSON or re-export the scene (the Khronos glTF Validator explains such problems)"
         ))
     })?;
     Ok((root, bin))
+}
+
+/// The deepest nesting of arrays and objects in JSON text (brackets inside strings not counted).
+fn json_depth(text: &[u8]) -> usize {
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    let (mut in_string, mut escaped) = (false, false);
+    for &b in text {
+        if in_string {
+            match (escaped, b) {
+                (true, _) => escaped = false,
+                (false, b'\\') => escaped = true,
+                (false, b'"') => in_string = false,
+                _ => {}
+            }
+            continue;
+        }
+        match b {
+            b'"' => in_string = true,
+            b'[' | b'{' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    deepest
 }
 
 /// Refuses required extensions weft cannot honour and warns about used ones it ignores. Removes

@@ -327,18 +327,22 @@ pub(super) fn decode_base64(text: &str) -> Option<Vec<u8>> {
     (bits < 6).then_some(out)
 }
 
-/// Decodes %XX escapes (URIs in glTF are percent-encoded); malformed escapes are kept as they are.
+/// Decodes %XX escapes (URIs in glTF are percent-encoded: RFC 3986 section 2.1, exactly two hex
+/// digits); malformed escapes are kept as they are.
 pub(super) fn percent_decode(text: &str) -> Vec<u8> {
+    // The value of one hex digit. Not `u8::from_str_radix`, which accepts a sign: "%+1" would
+    // decode to 0x01.
+    let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
     let b = text.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
     while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            let hex = std::str::from_utf8(&b[i + 1..i + 3])
-                .ok()
-                .and_then(|h| u8::from_str_radix(h, 16).ok());
-            if let Some(v) = hex {
-                out.push(v);
+        if b[i] == b'%' {
+            if let (Some(hi), Some(lo)) = (
+                b.get(i + 1).copied().and_then(hex),
+                b.get(i + 2).copied().and_then(hex),
+            ) {
+                out.push(hi << 4 | lo);
                 i += 3;
                 continue;
             }
@@ -352,6 +356,23 @@ pub(super) fn percent_decode(text: &str) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn percent_escapes_need_exactly_two_hex_digits() {
+        // A sign is not a hex digit: kept as written (from_str_radix decoded "%+1" to 0x01).
+        assert_eq!(percent_decode("a%+1b"), b"a%+1b");
+        assert_eq!(percent_decode("%-1"), b"%-1");
+        assert_eq!(percent_decode("%+f%+F"), b"%+f%+F");
+        // Well-formed escapes, either case, at the very end too.
+        assert_eq!(percent_decode("my%20file%2Fx%2f.png"), b"my file/x/.png");
+        assert_eq!(percent_decode("%41"), b"A");
+        assert_eq!(percent_decode("%ff%00"), [0xff, 0x00]);
+        // Too short, not hex, or a multi-byte character after the %: kept.
+        assert_eq!(percent_decode("%4"), b"%4");
+        assert_eq!(percent_decode("%"), b"%");
+        assert_eq!(percent_decode("%g1"), b"%g1");
+        assert_eq!(percent_decode("%\u{e9}1"), "%\u{e9}1".as_bytes());
+    }
 
     #[test]
     fn decoded_textures_are_counted_against_the_budget_before_decoding() {

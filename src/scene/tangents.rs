@@ -119,12 +119,16 @@ pub(super) fn arbitrary_tangents(vertices: &mut [Vertex]) {
     }
 }
 
-/// MikkTSpace tangents (the convention normal maps are baked in). MikkTSpace works per triangle
-/// corner; where two corners sharing a vertex get different tangents (mirrored UVs, for example)
-/// the vertex is split. Returns false if MikkTSpace could not run (the caller then falls back to
-/// arbitrary tangents).
+/// MikkTSpace tangents (the convention normal maps are baked in), by `bevy_mikktspace` (safe
+/// Rust, output identical to the C reference). MikkTSpace works per triangle corner; where two
+/// corners sharing a vertex get different tangents (mirrored UVs, for example) the vertex is
+/// split. Degenerate triangles (coincident corners, zero UV area), collapsed meshes and
+/// positions whose extent overflows f32 are MikkTSpace's to handle: it gives a corner no tangent
+/// where it has none, and such corners keep whatever their vertex gets. Returns false if no
+/// triangle got a tangent (the caller then falls back to arbitrary tangents).
 pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32]) -> bool {
-    /// The triangles MikkTSpace sees: `faces` lists the mesh's triangles that have one.
+    /// The triangles MikkTSpace sees: `faces` lists the mesh's triangles whose indices are in
+    /// range (the loader has checked them; this keeps the function total on its own).
     struct Corners<'a> {
         vertices: &'a [Vertex],
         indices: &'a [u32],
@@ -137,7 +141,7 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
             &self.vertices[self.indices[self.faces[face] * 3 + vert] as usize]
         }
     }
-    impl mikktspace::Geometry for Corners<'_> {
+    impl bevy_mikktspace::Geometry for Corners<'_> {
         fn num_faces(&self) -> usize {
             self.faces.len()
         }
@@ -153,37 +157,37 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
         fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
             self.vertex(face, vert).uv
         }
-        fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+        fn set_tangent(
+            &mut self,
+            tangent: Option<bevy_mikktspace::TangentSpace>,
+            face: usize,
+            vert: usize,
+        ) {
             let corner = self.faces.get(face).map(|f| f * 3 + vert);
             if let Some(slot) = corner.and_then(|c| self.tangents.get_mut(c)) {
-                *slot = Some(tangent);
+                *slot = tangent.map(|t| t.tangent_encoded());
             }
         }
     }
 
-    // mikktspace 0.3 mishandles triangles with two corners at one position (its own test for
-    // "degenerate"): a mesh of only such triangles makes it read far out of bounds. They have no
-    // tangent frame anyway, so it is not shown them; their corners get what the vertex gets.
-    let position = |corner: usize| vertices.get(indices[corner] as usize).map(|v| v.position);
+    let in_range = |corner: usize| (indices[corner] as usize) < vertices.len();
     let faces: Vec<usize> = (0..indices.len() / 3)
-        .filter(|&t| {
-            let [a, b, c] = [position(3 * t), position(3 * t + 1), position(3 * t + 2)];
-            a.is_some() && b.is_some() && c.is_some() && a != b && a != c && b != c
-        })
+        .filter(|&t| (3 * t..3 * t + 3).all(in_range))
         .collect();
-    if faces.is_empty() || !mikktspace_can_weld(vertices, indices, &faces) {
-        return false;
-    }
     let mut corners = Corners {
         vertices: vertices.as_slice(),
         indices: &*indices,
         faces: &faces,
         tangents: vec![None; indices.len()],
     };
-    if !mikktspace::generate_tangents(&mut corners) {
+    // The error type has no variants yet (`non_exhaustive`): a future one means "no tangents".
+    if bevy_mikktspace::generate_tangents(&mut corners).is_err() {
         return false;
     }
     let tangents = corners.tangents;
+    if tangents.iter().all(Option::is_none) {
+        return false;
+    }
 
     let close = |a: [f32; 4], b: [f32; 4]| {
         a[3].signum() == b[3].signum() && (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-4)
@@ -192,8 +196,7 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
     // The extra copies made of each split vertex.
     let mut copies: HashMap<u32, Vec<u32>> = HashMap::new();
     for (corner, index) in indices.iter_mut().enumerate() {
-        // Degenerate triangles (not shown to MikkTSpace, or skipped by it): their corners keep
-        // whatever the vertex gets.
+        // Corners MikkTSpace gave no tangent keep whatever the vertex gets.
         let Some(t) = tangents[corner] else { continue };
         let v = *index as usize;
         match assigned[v] {
@@ -230,33 +233,6 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
         }
     }
     true
-}
-
-/// Whether MikkTSpace's vertex welding can run on these triangles without panicking.
-///
-/// mikktspace 0.3 sorts the corners into cells along the axis of largest extent and indexes one
-/// past its table (a panic) when the last cell is empty, which happens when that extent is zero
-/// (every corner at one point: a collapsed mesh) or overflows f32 (positions beyond +-1.7e38).
-/// Such meshes get arbitrary tangents instead; nobody can see their tangents anyway.
-fn mikktspace_can_weld(vertices: &[Vertex], indices: &[u32], faces: &[usize]) -> bool {
-    let mut min = Vec3::splat(f32::INFINITY);
-    let mut max = Vec3::splat(f32::NEG_INFINITY);
-    for i in faces
-        .iter()
-        .flat_map(|&f| indices.get(3 * f..3 * f + 3).unwrap_or(&[]))
-    {
-        let Some(v) = vertices.get(*i as usize) else {
-            return false;
-        };
-        let p = Vec3::from(v.position);
-        if !p.is_finite() {
-            return false;
-        }
-        min = min.min(p);
-        max = max.max(p);
-    }
-    let extent = max - min;
-    extent.is_finite() && extent.max_element() > 0.0
 }
 
 /// Applies a KHR_texture_transform (offset, rotation, scale) to texture coordinates.
@@ -322,5 +298,121 @@ impl UvTransform {
     /// tangents stored in the file do not know about.
     pub fn turns_or_mirrors(&self) -> bool {
         self.rotation != 0.0 || self.scale[0] < 0.0 || self.scale[1] < 0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vertex(position: [f32; 3], uv: [f32; 2]) -> Vertex {
+        Vertex {
+            position,
+            normal: [0.0, 0.0, 1.0],
+            tangent: [0.0; 4],
+            uv,
+        }
+    }
+
+    /// Runs MikkTSpace and then the loader's repair, as gltf_load does, and checks that every
+    /// vertex ends with a unit tangent orthogonal to its normal and indices still in range.
+    fn tangents_of(mut vertices: Vec<Vertex>, mut indices: Vec<u32>) -> (Vec<Vertex>, bool) {
+        let ran = mikktspace_tangents(&mut vertices, &mut indices);
+        if !ran {
+            arbitrary_tangents(&mut vertices);
+        }
+        repair_tangents(&mut vertices);
+        assert!(indices.iter().all(|&i| (i as usize) < vertices.len()));
+        for v in &vertices {
+            let t = Vec4::from(v.tangent);
+            assert!(t.is_finite(), "{t}");
+            assert!((t.truncate().length() - 1.0).abs() < 1e-4, "{t}");
+            assert!(t.truncate().dot(Vec3::from(v.normal)).abs() < 1e-4, "{t}");
+            assert!(t.w == 1.0 || t.w == -1.0, "{t}");
+        }
+        (vertices, ran)
+    }
+
+    /// A unit quad in the XY plane with u along +x: tangent +x, w = +1 (the MikkTSpace answer).
+    #[test]
+    fn a_plain_quad_gets_u_as_its_tangent() {
+        let quad = vec![
+            vertex([0.0, 0.0, 0.0], [0.0, 0.0]),
+            vertex([1.0, 0.0, 0.0], [1.0, 0.0]),
+            vertex([1.0, 1.0, 0.0], [1.0, 1.0]),
+            vertex([0.0, 1.0, 0.0], [0.0, 1.0]),
+        ];
+        let (v, ran) = tangents_of(quad, vec![0, 1, 2, 0, 2, 3]);
+        assert!(ran);
+        assert_eq!(v.len(), 4, "nothing to split");
+        for v in v {
+            let t = Vec4::from(v.tangent);
+            assert!(
+                (t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6,
+                "{t}"
+            );
+        }
+    }
+
+    /// The inputs mikktspace 0.3 could not take (it read out of bounds on a mesh of triangles
+    /// with coincident corners, and panicked welding a mesh whose extent is zero or overflows
+    /// f32), which the loader used to keep away from it, now go straight to bevy_mikktspace.
+    #[test]
+    fn hostile_meshes_get_finite_frames_without_a_workaround() {
+        // Only triangles with two corners at one position.
+        let coincident = vec![
+            vertex([0.0, 0.0, 0.0], [0.0, 0.0]),
+            vertex([0.0, 0.0, 0.0], [1.0, 0.0]),
+            vertex([1.0, 1.0, 0.0], [1.0, 1.0]),
+        ];
+        tangents_of(coincident, vec![0, 1, 2, 1, 0, 2, 2, 2, 0]);
+        // A collapsed mesh: every corner at one point.
+        let point = vec![vertex([2.0, 2.0, 2.0], [0.0, 0.0]); 6];
+        tangents_of(point, vec![0, 1, 2, 3, 4, 5]);
+        // An extent that overflows f32 (positions at +-3e38).
+        let huge = vec![
+            vertex([-3e38, -3e38, 0.0], [0.0, 0.0]),
+            vertex([3e38, -3e38, 0.0], [1.0, 0.0]),
+            vertex([3e38, 3e38, 0.0], [1.0, 1.0]),
+            vertex([-3e38, 3e38, 0.0], [0.0, 1.0]),
+        ];
+        tangents_of(huge, vec![0, 1, 2, 0, 2, 3]);
+        // Non-finite positions and zero UV area next to a good triangle.
+        let mixed = vec![
+            vertex([f32::NAN, 0.0, 0.0], [0.0, 0.0]),
+            vertex([f32::INFINITY, 1.0, 0.0], [1.0, 0.0]),
+            vertex([0.0, 1.0, 0.0], [1.0, 1.0]),
+            vertex([0.0, 0.0, 0.0], [0.0, 0.0]),
+            vertex([1.0, 0.0, 0.0], [0.0, 0.0]),
+            vertex([1.0, 1.0, 0.0], [0.0, 0.0]),
+        ];
+        tangents_of(mixed, vec![0, 1, 2, 3, 4, 5, 3, 4, 2]);
+        // An index out of range is skipped, not read.
+        let mut two = vec![
+            vertex([0.0, 0.0, 0.0], [0.0, 0.0]),
+            vertex([1.0, 0.0, 0.0], [1.0, 0.0]),
+        ];
+        assert!(!mikktspace_tangents(&mut two, &mut [0, 1, 7]));
+        // Nothing at all.
+        let (_, ran) = tangents_of(Vec::new(), Vec::new());
+        assert!(!ran);
+    }
+
+    /// Mirrored UVs on the two halves of a strip: the shared vertices get two tangents with
+    /// opposite w, so they are split.
+    #[test]
+    fn mirrored_uvs_split_the_shared_vertices() {
+        let strip = vec![
+            vertex([-1.0, 0.0, 0.0], [1.0, 0.0]),
+            vertex([0.0, 0.0, 0.0], [0.0, 0.0]),
+            vertex([0.0, 1.0, 0.0], [0.0, 1.0]),
+            vertex([-1.0, 1.0, 0.0], [1.0, 1.0]),
+            vertex([1.0, 0.0, 0.0], [1.0, 0.0]),
+            vertex([1.0, 1.0, 0.0], [1.0, 1.0]),
+        ];
+        let (v, _) = tangents_of(strip, vec![0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 2]);
+        assert_eq!(v.len(), 8, "vertices 1 and 2 split once each");
+        let ws: Vec<f32> = v.iter().map(|v| v.tangent[3]).collect();
+        assert!(ws.contains(&1.0) && ws.contains(&-1.0), "{ws:?}");
     }
 }

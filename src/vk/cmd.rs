@@ -3,11 +3,13 @@
 //! Image layouts are named by what the image is used for next ([`Usage`]); a transition is a
 //! synchronization2 barrier from one usage to another.
 
+use std::marker::PhantomData;
+
 use ash::vk;
 
 use super::context::{vkerr, Context, Shared};
 use super::pipeline::{DescriptorSet, Pipeline};
-use super::resources::{Buffer, Image, QueryPool};
+use super::resources::{texel_bytes, Buffer, Image, QueryPool};
 
 /// How an image is used, which fixes its layout, stages and access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,12 +76,15 @@ pub enum Cull {
 }
 
 /// A command buffer being recorded.
-pub struct Cmd<'a> {
-    shared: &'a Shared,
+pub struct Cmd<'s> {
+    shared: &'s Shared,
     raw: vk::CommandBuffer,
+    /// Invariant in `'s`: a `&mut Cmd<'s>` cannot be shortened to accept resources that live
+    /// less than the submission.
+    _submission: PhantomData<fn(&'s ()) -> &'s ()>,
 }
 
-impl Cmd<'_> {
+impl<'s> Cmd<'s> {
     fn device(&self) -> &ash::Device {
         &self.shared.device
     }
@@ -87,7 +92,7 @@ impl Cmd<'_> {
     /// Barrier: `image` (mips `levels`, or all when None) goes from `from` to `to`.
     pub fn transition(
         &mut self,
-        image: &Image,
+        image: &'s Image,
         from: Usage,
         to: Usage,
         levels: Option<(u32, u32)>,
@@ -129,7 +134,7 @@ impl Cmd<'_> {
 
     /// Begins dynamic rendering over the full extent of the first attachment, and sets the
     /// viewport and scissor to it.
-    pub fn begin_rendering(&mut self, colors: &[Attachment], depth: Option<Attachment>) {
+    pub fn begin_rendering(&mut self, colors: &[Attachment<'s>], depth: Option<Attachment<'s>>) {
         let extent = colors
             .first()
             .or(depth.as_ref())
@@ -233,14 +238,14 @@ impl Cmd<'_> {
         unsafe { self.device().cmd_set_cull_mode(self.raw, mode) };
     }
 
-    pub fn bind_pipeline(&mut self, pipeline: &Pipeline) {
+    pub fn bind_pipeline(&mut self, pipeline: &'s Pipeline) {
         unsafe {
             self.device()
                 .cmd_bind_pipeline(self.raw, pipeline.bind_point, pipeline.raw)
         };
     }
 
-    pub fn bind_sets(&mut self, pipeline: &Pipeline, first: u32, sets: &[DescriptorSet]) {
+    pub fn bind_sets(&mut self, pipeline: &'s Pipeline, first: u32, sets: &[DescriptorSet<'s>]) {
         let raw: Vec<_> = sets.iter().map(|s| s.raw).collect();
         unsafe {
             self.device().cmd_bind_descriptor_sets(
@@ -254,7 +259,7 @@ impl Cmd<'_> {
         };
     }
 
-    pub fn push_constants<T: bytemuck::Pod>(&mut self, pipeline: &Pipeline, value: &T) {
+    pub fn push_constants<T: bytemuck::Pod>(&mut self, pipeline: &'s Pipeline, value: &T) {
         let bytes = bytemuck::bytes_of(value);
         unsafe {
             self.device().cmd_push_constants(
@@ -267,14 +272,14 @@ impl Cmd<'_> {
         };
     }
 
-    pub fn bind_vertex_buffer(&mut self, buffer: &Buffer) {
+    pub fn bind_vertex_buffer(&mut self, buffer: &'s Buffer) {
         unsafe {
             self.device()
                 .cmd_bind_vertex_buffers(self.raw, 0, &[buffer.raw], &[0])
         };
     }
 
-    pub fn bind_index_buffer(&mut self, buffer: &Buffer) {
+    pub fn bind_index_buffer(&mut self, buffer: &'s Buffer) {
         unsafe {
             self.device()
                 .cmd_bind_index_buffer(self.raw, buffer.raw, 0, vk::IndexType::UINT32)
@@ -297,7 +302,12 @@ impl Cmd<'_> {
     }
 
     /// Copies a buffer into mip 0 of an image in `TransferDst` usage.
-    pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image) {
+    ///
+    /// # Panics
+    /// If the buffer is smaller than the image's level 0 (the GPU would read past its end), or
+    /// the format is not one [`texel_bytes`] knows.
+    pub fn copy_buffer_to_image(&mut self, buffer: &'s Buffer, image: &'s Image) {
+        check_copy_size(buffer, image, 0);
         let region = vk::BufferImageCopy::default()
             .image_subresource(vk::ImageSubresourceLayers {
                 aspect_mask: image.aspect(),
@@ -322,7 +332,12 @@ impl Cmd<'_> {
     }
 
     /// Copies mip `level` of an image in `TransferSrc` usage into a buffer, tightly packed.
-    pub fn copy_image_to_buffer(&mut self, image: &Image, level: u32, buffer: &Buffer) {
+    ///
+    /// # Panics
+    /// If `level` is not a level of the image, or the buffer is too small for it (the GPU would
+    /// write past its end).
+    pub fn copy_image_to_buffer(&mut self, image: &'s Image, level: u32, buffer: &'s Buffer) {
+        check_copy_size(buffer, image, level);
         let w = (image.desc.width >> level).max(1);
         let h = (image.desc.height >> level).max(1);
         let region = vk::BufferImageCopy::default()
@@ -350,7 +365,7 @@ impl Cmd<'_> {
 
     /// Fills mips 1.. of an image whose mip 0 is in `TransferDst` usage by successive linear blits;
     /// leaves the whole image in `to` usage.
-    pub fn generate_mips(&mut self, image: &Image, to: Usage) {
+    pub fn generate_mips(&mut self, image: &'s Image, to: Usage) {
         let levels = image.desc.mip_levels;
         let (mut w, mut h) = (image.desc.width as i32, image.desc.height as i32);
         for level in 1..levels {
@@ -397,7 +412,7 @@ impl Cmd<'_> {
 
     /// Copies mip `level` of `src` (in `TransferSrc` usage) into the same level of `dst` (in
     /// `TransferDst`), converting the format; both levels must have the same size.
-    pub fn blit_level(&mut self, src: &Image, dst: &Image, level: u32) {
+    pub fn blit_level(&mut self, src: &'s Image, dst: &'s Image, level: u32) {
         let w = (src.desc.width >> level).max(1) as i32;
         let h = (src.desc.height >> level).max(1) as i32;
         let layers = vk::ImageSubresourceLayers {
@@ -424,7 +439,7 @@ impl Cmd<'_> {
         };
     }
 
-    pub fn reset_queries(&mut self, pool: &QueryPool) {
+    pub fn reset_queries(&mut self, pool: &'s QueryPool) {
         unsafe {
             self.device()
                 .cmd_reset_query_pool(self.raw, pool.raw, 0, pool.count)
@@ -432,7 +447,15 @@ impl Cmd<'_> {
     }
 
     /// Writes a timestamp once all previously submitted work has finished.
-    pub fn timestamp(&mut self, pool: &QueryPool, index: u32) {
+    ///
+    /// # Panics
+    /// If `index` is not a query of the pool.
+    pub fn timestamp(&mut self, pool: &'s QueryPool, index: u32) {
+        assert!(
+            index < pool.count,
+            "timestamp {index} of a pool of {}",
+            pool.count
+        );
         unsafe {
             self.device().cmd_write_timestamp2(
                 self.raw,
@@ -444,17 +467,87 @@ impl Cmd<'_> {
     }
 }
 
+/// Panics unless `buffer` holds mip `level` of `image` (all layers), tightly packed.
+fn check_copy_size(buffer: &Buffer, image: &Image, level: u32) {
+    assert!(
+        level < image.desc.mip_levels,
+        "copy of mip level {level} of image '{}', which has {}",
+        image.desc.name,
+        image.desc.mip_levels
+    );
+    let texel = texel_bytes(image.desc.format).unwrap_or_else(|| {
+        panic!(
+            "buffer copies of format {:?} (image '{}') are not supported",
+            image.desc.format, image.desc.name
+        )
+    });
+    let w = u64::from((image.desc.width >> level).max(1));
+    let h = u64::from((image.desc.height >> level).max(1));
+    let need = w * h * texel * u64::from(image.desc.layers());
+    assert!(
+        buffer.size >= need,
+        "buffer '{}' of {} bytes is too small for level {level} of image '{}' ({need} bytes)",
+        buffer.name,
+        buffer.size,
+        image.desc.name
+    );
+}
+
 impl Context {
     /// Records commands with `record`, submits them, and waits for the GPU to finish.
-    pub fn submit<R>(&self, record: impl FnOnce(&mut Cmd) -> R) -> crate::Result<R> {
+    ///
+    /// Every resource a command names (buffers, images, pipelines, descriptor sets, query pools)
+    /// is borrowed for `'s`, a lifetime that outlives this call: the borrow checker keeps each one
+    /// alive until the GPU has finished with it. Dropping a recorded resource inside `record`
+    /// does not compile:
+    ///
+    /// ```compile_fail,E0505
+    /// # fn misuse(ctx: &weft::vk::Context) -> weft::Result<()> {
+    /// use weft::vk::{BufferLocation, BufferUsageFlags};
+    /// let vertices = ctx.create_buffer("v", 64, BufferUsageFlags::VERTEX_BUFFER, BufferLocation::Device)?;
+    /// ctx.submit(|cmd| {
+    ///     cmd.bind_vertex_buffer(&vertices);
+    ///     drop(vertices); // freed before the command buffer runs
+    /// })?;
+    /// # Ok(()) }
+    /// ```
+    ///
+    /// nor does recording a resource that is created (and so freed) inside `record`:
+    ///
+    /// ```compile_fail,E0597
+    /// # fn misuse(ctx: &weft::vk::Context) -> weft::Result<()> {
+    /// use weft::vk::{BufferLocation, BufferUsageFlags};
+    /// ctx.submit(|cmd| {
+    ///     let vertices = ctx
+    ///         .create_buffer("v", 64, BufferUsageFlags::VERTEX_BUFFER, BufferLocation::Device)
+    ///         .unwrap();
+    ///     cmd.bind_vertex_buffer(&vertices);
+    /// })?;
+    /// # Ok(()) }
+    /// ```
+    ///
+    /// The same code with the buffer alive for the whole submission compiles (the controls for
+    /// the two above: stable rustdoc does not check a `compile_fail` test's error code):
+    ///
+    /// ```no_run
+    /// # fn fine(ctx: &weft::vk::Context) -> weft::Result<()> {
+    /// use weft::vk::{BufferLocation, BufferUsageFlags};
+    /// let vertices = ctx.create_buffer("v", 64, BufferUsageFlags::VERTEX_BUFFER, BufferLocation::Device)?;
+    /// ctx.submit(|cmd| cmd.bind_vertex_buffer(&vertices))?;
+    /// drop(vertices); // after the fence: fine
+    /// # Ok(()) }
+    /// ```
+    pub fn submit<'s, R>(&'s self, record: impl FnOnce(&mut Cmd<'s>) -> R) -> crate::Result<R> {
         let device = &self.shared.device;
         // The pool and the queue are shared by every thread holding this context: one submission
-        // at a time (declared before `guard`, so it is released after the buffer is freed).
+        // at a time (declared before `guard`, so it is released after the buffer is freed). The
+        // lock guards no data: a panic in an earlier `record` (a [`Cmd`] check) poisons it but
+        // leaves nothing half-done, since `guard` freed that command buffer unsubmitted.
         let _queue = self
             .shared
             .queue_lock
             .lock()
-            .map_err(|_| crate::Error::device("queue lock poisoned"))?;
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.shared.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
@@ -482,6 +575,7 @@ impl Context {
         let mut cmd = Cmd {
             shared: &self.shared,
             raw,
+            _submission: PhantomData,
         };
         let result = record(&mut cmd);
         unsafe { device.end_command_buffer(raw) }.map_err(vkerr("vkEndCommandBuffer"))?;

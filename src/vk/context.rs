@@ -61,6 +61,9 @@ pub struct DeviceInfo {
     pub driver_info: String,
     pub api_version: String,
     pub max_image_dimension_2d: u32,
+    /// Size of the device's largest DEVICE_LOCAL memory heap, in bytes (on a CPU device such as
+    /// lavapipe this is system memory).
+    pub device_local_heap_bytes: u64,
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
 }
@@ -405,7 +408,7 @@ impl Context {
             .shared
             .queue_lock
             .lock()
-            .map_err(|_| Error::device("queue lock poisoned"))?;
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         unsafe { self.shared.device.device_wait_idle() }.map_err(vkerr("vkDeviceWaitIdle"))
     }
 }
@@ -462,6 +465,16 @@ fn choose_device(
                 vk::api_version_patch(v)
             ),
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            device_local_heap_bytes: {
+                let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+                memory
+                    .memory_heaps_as_slice()
+                    .iter()
+                    .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+                    .map(|h| h.size)
+                    .max()
+                    .unwrap_or(0)
+            },
             timestamp_period_ns: props.limits.timestamp_period,
             timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE
                 && family.is_some_and(|f| families[f].timestamp_valid_bits > 0),

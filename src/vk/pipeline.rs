@@ -131,6 +131,9 @@ pub struct ComputeDesc<'a> {
 pub struct DescriptorPool {
     shared: Arc<Shared>,
     raw: vk::DescriptorPool,
+    /// Vulkan requires allocation from one pool to be externally synchronized; the pool is
+    /// `Sync`, so [`DescriptorPool::set`] takes this lock.
+    lock: std::sync::Mutex<()>,
 }
 
 impl Drop for DescriptorPool {
@@ -139,9 +142,38 @@ impl Drop for DescriptorPool {
     }
 }
 
+/// A descriptor set, borrowing its pool and every resource written into it for `'r`: neither
+/// can be dropped while the set can still be bound, and [`Cmd::bind_sets`](super::Cmd::bind_sets)
+/// needs `'r` to outlive the submission. A set naming a dropped image does not compile:
+///
+/// ```compile_fail,E0505
+/// # fn misuse(ctx: &weft::vk::Context, layout: &weft::vk::SetLayout, pipeline: &weft::vk::Pipeline) -> weft::Result<()> {
+/// use weft::vk::{BufferLocation, BufferUsageFlags, Resource};
+/// let pool = ctx.create_descriptor_pool(1)?;
+/// let uniforms = ctx.create_buffer("u", 64, BufferUsageFlags::UNIFORM_BUFFER, BufferLocation::Upload)?;
+/// let set = pool.set(layout, &[(0, Resource::Uniform(&uniforms))])?;
+/// drop(uniforms);
+/// ctx.submit(|cmd| cmd.bind_sets(pipeline, 0, &[set]))?;
+/// # Ok(()) }
+/// ```
+///
+/// (stable rustdoc does not check the error code), while the same code that drops the buffer
+/// after the submission compiles:
+///
+/// ```no_run
+/// # fn fine(ctx: &weft::vk::Context, layout: &weft::vk::SetLayout, pipeline: &weft::vk::Pipeline) -> weft::Result<()> {
+/// use weft::vk::{BufferLocation, BufferUsageFlags, Resource};
+/// let pool = ctx.create_descriptor_pool(1)?;
+/// let uniforms = ctx.create_buffer("u", 64, BufferUsageFlags::UNIFORM_BUFFER, BufferLocation::Upload)?;
+/// let set = pool.set(layout, &[(0, Resource::Uniform(&uniforms))])?;
+/// ctx.submit(|cmd| cmd.bind_sets(pipeline, 0, &[set]))?;
+/// drop(uniforms);
+/// # Ok(()) }
+/// ```
 #[derive(Clone, Copy, Debug)]
-pub struct DescriptorSet {
+pub struct DescriptorSet<'r> {
     pub(crate) raw: vk::DescriptorSet,
+    _resources: std::marker::PhantomData<&'r ()>,
 }
 
 /// What to bind at one binding of a set.
@@ -450,17 +482,34 @@ impl Context {
         Ok(DescriptorPool {
             shared: self.shared.clone(),
             raw,
+            lock: std::sync::Mutex::new(()),
         })
     }
 }
 
 impl DescriptorPool {
     /// Allocates a set of `layout` and writes `resources` (binding, resource) into it.
-    pub fn set(
-        &self,
+    ///
+    /// The set borrows the pool and the resources for `'r` (see [`DescriptorSet`]).
+    pub fn set<'r>(
+        &'r self,
         layout: &SetLayout,
-        resources: &[(u32, Resource)],
-    ) -> crate::Result<DescriptorSet> {
+        resources: &[(u32, Resource<'r>)],
+    ) -> crate::Result<DescriptorSet<'r>> {
+        let _pool = self
+            .lock
+            .lock()
+            .map_err(|_| Error::device("descriptor pool lock poisoned"))?;
+        for (binding, r) in resources {
+            if let Resource::StorageImage(img, level) = r {
+                if *level >= img.desc.mip_levels {
+                    return Err(Error::device(format!(
+                        "binding {binding}: mip level {level} of image '{}', which has {}",
+                        img.desc.name, img.desc.mip_levels
+                    )));
+                }
+            }
+        }
         let layouts = [layout.raw];
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.raw)
@@ -525,6 +574,9 @@ impl DescriptorPool {
             writes.push(w);
         }
         unsafe { self.shared.device.update_descriptor_sets(&writes, &[]) };
-        Ok(DescriptorSet { raw })
+        Ok(DescriptorSet {
+            raw,
+            _resources: std::marker::PhantomData,
+        })
     }
 }

@@ -134,6 +134,19 @@ pub fn is_depth(format: vk::Format) -> bool {
     )
 }
 
+/// Bytes per texel of the formats weft's buffer-image copies use; None for any other format.
+pub(crate) fn texel_bytes(format: vk::Format) -> Option<u64> {
+    use vk::Format as F;
+    Some(match format {
+        F::R8G8B8A8_UNORM | F::R8G8B8A8_SRGB | F::D32_SFLOAT | F::R32_SFLOAT => 4,
+        F::D16_UNORM => 2,
+        F::R16G16B16A16_SFLOAT | F::R32G32_SFLOAT => 8,
+        F::R32G32B32_SFLOAT => 12,
+        F::R32G32B32A32_SFLOAT => 16,
+        _ => return None,
+    })
+}
+
 pub struct Image {
     shared: Arc<Shared>,
     pub(crate) raw: vk::Image,
@@ -213,6 +226,12 @@ pub struct QueryPool {
 impl QueryPool {
     /// Nanoseconds of each timestamp written so far (relative to an arbitrary origin).
     pub fn read_ns(&self, count: u32) -> crate::Result<Vec<f64>> {
+        if count > self.count {
+            return Err(Error::device(format!(
+                "reading {count} timestamps from a pool of {}",
+                self.count
+            )));
+        }
         let mut data = vec![0u64; count as usize];
         unsafe {
             self.shared.device.get_query_pool_results(
@@ -312,6 +331,19 @@ impl Context {
             return Err(Error::device(format!(
                 "image '{}' of {}x{} is outside what the device '{}' supports (1 to {max} per side): choose a smaller --size",
                 desc.name, desc.width, desc.height, self.shared.info.name
+            )));
+        }
+        // Every image gets views (below), and Vulkan allows a view only of an image with a
+        // view-capable usage.
+        let viewable = vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT;
+        if !desc.usage.intersects(viewable) {
+            return Err(Error::device(format!(
+                "image '{}' has usage {:?}: it needs one of SAMPLED, STORAGE, COLOR_ATTACHMENT \
+                 or DEPTH_STENCIL_ATTACHMENT",
+                desc.name, desc.usage
             )));
         }
         if desc.cube && desc.width != desc.height {

@@ -45,10 +45,13 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba_or_rgb: &[u8]) {
         .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
 }
 
+/// Text made safe for the page, in element content and in quoted attributes alike.
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&#39;")
 }
 
 /// Writes `index.html` into `dir`.
@@ -70,11 +73,12 @@ code {{ background: #eee; padding: 0 0.2em }}
 table {{ border-collapse: collapse }} td {{ padding: 0 0.8em 0 0 }}
 </style>
 <h1>weft image regression</h1>
-<p>{header}</p>
+<p>{}</p>
 <p><b>{} of {} cases failed.</b> Each comparison shows the reference, the image under test and
 their FLIP error map (magma: black = no visible difference, yellow-white = obvious). Bless new
 goldens with <code>tools/bless</code> after looking at them (docs/regression.md).</p>
 "#,
+        escape(header),
         failed,
         rows.len()
     );
@@ -84,11 +88,11 @@ goldens with <code>tools/bless</code> after looking at them (docs/regression.md)
             h,
             "<section class=\"{}\" id=\"{}\"><h2>{} — {}</h2><p>{}<br><small><code>{}</code>, camera {}, debug view {}, accuracy {}, weave {}, rendered in {:.0} ms</small></p>",
             if row.passed() { "pass" } else { "fail" },
-            c.name,
-            c.name,
+            escape(c.name),
+            escape(c.name),
             if row.passed() { "pass" } else { "<span class=\"fail-text\">FAIL</span>" },
             escape(c.shows),
-            c.scene,
+            escape(c.scene),
             c.camera.map(|i| i.to_string()).unwrap_or_else(|| "first".into()),
             c.debug_view.name(),
             c.accuracy.name(),
@@ -111,7 +115,7 @@ goldens with <code>tools/bless</code> after looking at them (docs/regression.md)
             let _ = write!(
                 h,
                 "<h3>{}</h3><table><tr><td>figures</td><td>{}</td></tr><tr><td>bound</td><td>{}</td></tr>",
-                s.title,
+                escape(s.title),
                 escape(&s.figures.summary(&s.tolerance)),
                 escape(&s.tolerance.describe())
             );
@@ -124,6 +128,7 @@ goldens with <code>tools/bless</code> after looking at them (docs/regression.md)
             }
             h.push_str("</table><div>");
             for (img, cap) in s.images.iter().zip(s.captions) {
+                let (img, cap) = (escape(img), escape(cap));
                 let _ = write!(h, "<div class=\"fig\"><a href=\"{img}\"><img src=\"{img}\" alt=\"{cap}\"></a>{cap}</div>");
             }
             h.push_str("</div>");
@@ -131,5 +136,25 @@ goldens with <code>tools/bless</code> after looking at them (docs/regression.md)
         h.push_str("</section>\n");
     }
     let path = dir.join("index.html");
-    std::fs::write(&path, h).unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+    weft::render::write_file(&path, h.as_bytes())
+        .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+}
+
+#[test]
+fn the_page_escapes_quotes_and_the_header() {
+    assert_eq!(
+        escape(r#"<a href="x">'&'</a>"#),
+        "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;"
+    );
+    // The header holds driver strings: a hostile one stays text.
+    let dir = std::env::temp_dir().join(format!("weft-report-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write_index(&dir, r#"llvmpipe "<script>alert(1)</script>" & co"#, &[]);
+    let page = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    assert!(!page.contains("<script>"), "{page}");
+    assert!(
+        page.contains("llvmpipe &quot;&lt;script&gt;alert(1)&lt;/script&gt;&quot; &amp; co"),
+        "{page}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
 }

@@ -5,13 +5,13 @@ use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
 use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Pipeline, Usage};
 
 /// Writes every G-buffer target and depth. Reads: scene geometry, materials, frame uniform.
-pub fn gbuffer_pass(
-    cmd: &mut Cmd,
-    pipeline: &Pipeline,
-    scene: &GpuScene,
-    frame_set: DescriptorSet,
-    material_sets: &[DescriptorSet],
-    targets: &Targets,
+pub fn gbuffer_pass<'s>(
+    cmd: &mut Cmd<'s>,
+    pipeline: &'s Pipeline,
+    scene: &'s GpuScene,
+    frame_set: DescriptorSet<'s>,
+    material_sets: &[DescriptorSet<'s>],
+    targets: &'s Targets,
 ) {
     for img in targets.gbuffer_colors() {
         cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);

@@ -4,7 +4,12 @@ use crate::render::frame::Targets;
 use crate::vk::{Attachment, Cmd, DescriptorSet, Pipeline, Usage};
 
 /// Reads the G-buffer, writes HDR radiance.
-pub fn lighting_pass(cmd: &mut Cmd, pipeline: &Pipeline, set: DescriptorSet, targets: &Targets) {
+pub fn lighting_pass<'s>(
+    cmd: &mut Cmd<'s>,
+    pipeline: &'s Pipeline,
+    set: DescriptorSet<'s>,
+    targets: &'s Targets,
+) {
     cmd.transition(&targets.hdr, Usage::Undefined, Usage::ColorAttachment, None);
     cmd.begin_rendering(
         &[Attachment {

@@ -7,11 +7,11 @@ use crate::render::gpu::ShadowPush;
 use crate::vk::{Attachment, Cmd, Image, Pipeline, Usage};
 
 /// Renders every caster into each light's tile of the shadow atlas (depth only, both faces).
-pub fn shadow_pass(
-    cmd: &mut Cmd,
-    pipeline: &Pipeline,
-    scene: &GpuScene,
-    atlas: &Image,
+pub fn shadow_pass<'s>(
+    cmd: &mut Cmd<'s>,
+    pipeline: &'s Pipeline,
+    scene: &'s GpuScene,
+    atlas: &'s Image,
     tiles: &[(u32, u32, u32, Mat4)],
 ) {
     cmd.transition(atlas, Usage::Undefined, Usage::DepthAttachment, None);

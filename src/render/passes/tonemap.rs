@@ -5,12 +5,12 @@ use crate::render::gpu::TonemapPush;
 use crate::vk::{Attachment, Cmd, DescriptorSet, Pipeline, Usage};
 
 /// Reads HDR, writes the display-referred 8-bit image.
-pub fn tonemap_pass(
-    cmd: &mut Cmd,
-    pipeline: &Pipeline,
-    set: DescriptorSet,
+pub fn tonemap_pass<'s>(
+    cmd: &mut Cmd<'s>,
+    pipeline: &'s Pipeline,
+    set: DescriptorSet<'s>,
     push: &TonemapPush,
-    targets: &Targets,
+    targets: &'s Targets,
 ) {
     cmd.transition(&targets.ldr, Usage::Undefined, Usage::ColorAttachment, None);
     cmd.begin_rendering(
