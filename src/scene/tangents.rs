@@ -311,6 +311,7 @@ mod tests {
             normal: [0.0, 0.0, 1.0],
             tangent: [0.0; 4],
             uv,
+            uv1: [0.0; 2],
         }
     }
 
