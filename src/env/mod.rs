@@ -489,6 +489,19 @@ pub fn dfg_table(size: u32) -> Vec<[f32; 3]> {
     out
 }
 
+/// [`dfg_table`] at `crate::render::environment::DFG_SIZE`, as f16 (A, B, E), kept in the
+/// repository (`src/env/dfg_table.f16`, 6 KiB) because computing it costs ~280 ms of the first
+/// picture's time. A test recomputes it and compares; `WEFT_WRITE_DFG=1 cargo test --release --lib
+/// kept_dfg_table` rewrites the file after a change of the BRDF.
+pub fn dfg_table_kept() -> Vec<[half::f16; 3]> {
+    const KEPT: &[u8] = include_bytes!("dfg_table.f16");
+    KEPT.chunks_exact(6)
+        .map(|c| {
+            [0, 1, 2].map(|k| half::f16::from_bits(u16::from_le_bytes([c[2 * k], c[2 * k + 1]])))
+        })
+        .collect()
+}
+
 /// The DFG integral at one (n·v, roughness): see [`dfg_table`]. The BRDF is the project's one
 /// Rust copy of the glTF BRDF ([`crate::reference::shading::pbr_brdf_cos`], f32, accumulated in
 /// f64): with metallic 1, F0 = base, so B = ∫ f·cos at base 0 and A + B at base 1.
@@ -533,6 +546,39 @@ pub fn hammersley(i: u32, n: u32) -> (f64, f64) {
         i as f64 / n as f64,
         i.reverse_bits() as f64 / 4_294_967_296.0,
     )
+}
+
+#[cfg(test)]
+mod kept_dfg {
+    use super::*;
+
+    #[test]
+    fn kept_dfg_table_matches_a_fresh_computation() {
+        let size = crate::render::environment::DFG_SIZE;
+        let fresh: Vec<[half::f16; 3]> = dfg_table(size)
+            .iter()
+            .map(|t| t.map(half::f16::from_f32))
+            .collect();
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/env/dfg_table.f16");
+        if std::env::var_os("WEFT_WRITE_DFG").is_some() {
+            let bytes: Vec<u8> = fresh
+                .iter()
+                .flat_map(|t| t.iter().flat_map(|h| h.to_bits().to_le_bytes()))
+                .collect();
+            std::fs::write(&path, bytes).unwrap();
+            return;
+        }
+        let kept = dfg_table_kept();
+        assert_eq!(kept.len(), fresh.len(), "src/env/dfg_table.f16 has the wrong size: rewrite it (WEFT_WRITE_DFG=1)");
+        // Within one f16 step: the computation is deterministic, but libm's last bit may differ
+        // between platforms.
+        for (i, (k, f)) in kept.iter().zip(&fresh).enumerate() {
+            for c in 0..3 {
+                let d = (k[c].to_bits() as i32 - f[c].to_bits() as i32).abs();
+                assert!(d <= 1, "entry {i} channel {c}: kept {} fresh {}: rewrite src/env/dfg_table.f16 with WEFT_WRITE_DFG=1", k[c], f[c]);
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -265,9 +265,9 @@ pub fn sheen_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
     use crate::render::environment::DFG_SIZE;
     static TABLE: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
-        crate::env::dfg_table(DFG_SIZE)
+        crate::env::dfg_table_kept()
             .iter()
-            .map(|t| half::f16::from_f32(t[2]).to_f32())
+            .map(|t| t[2].to_f32())
             .collect()
     });
     let n = DFG_SIZE as i32;

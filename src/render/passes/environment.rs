@@ -127,10 +127,11 @@ impl EnvPasses {
             BufferUsageFlags::TRANSFER_SRC,
             &[0u16; 4 * 6],
         )?;
-        let table = crate::env::dfg_table(DFG_SIZE);
+        let table = crate::env::dfg_table_kept();
+        let one = half::f16::ONE.to_bits();
         let texels: Vec<u16> = table
             .iter()
-            .flat_map(|[a, b, e]| [*a, *b, *e, 1.0].map(|x| half::f16::from_f32(x).to_bits()))
+            .flat_map(|[a, b, e]| [a.to_bits(), b.to_bits(), e.to_bits(), one])
             .collect();
         let dfg = ctx.create_image(
             &ImageDesc::new_2d("DFG table", ENV_FORMAT, DFG_SIZE, DFG_SIZE)
