@@ -53,7 +53,7 @@ layout(location = 5) in vec3 in_gouraud;
 layout(location = 6) in vec2 in_uv1;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
-layout(location = 1) out vec4 gb_frame;     // RGBA16F: octahedral normal (xy), tangent (zw)
+layout(location = 1) out uvec4 gb_frame;    // RGBA16_UINT: octahedral normal (xy), tangent (zw), frame_encode
 layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1 if it receives shadows
 layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, shadow-weighted thread area, 1 if fabric
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
@@ -138,7 +138,7 @@ void main() {
     }
 
     gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
-    gb_frame = vec4(oct_encode(n), oct_encode(frame_t));
+    gb_frame = frame_encode(oct_encode(n), oct_encode(frame_t));
     gb_surface = vec4(roughness, float(draw.material), fabric > 0u ? sign : clamp(anisotropy, 0.0, 1.0),
                       (draw.flags & 1u) != 0u ? 1.0 : 0.0);
     // KHR_materials_specular with KHR_materials_ior: F0 = min(F0(ior) · colour, 1), weight.

@@ -37,7 +37,7 @@ layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
 layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 3) uniform sampler2D gb_albedo;
-layout(set = 0, binding = 4) uniform sampler2D gb_frame;
+layout(set = 0, binding = 4) uniform usampler2D gb_frame;
 layout(set = 0, binding = 5) uniform sampler2D gb_surface;
 layout(set = 0, binding = 6) uniform sampler2D gb_fabric;
 layout(set = 0, binding = 7) uniform sampler2D gb_emissive;
@@ -367,7 +367,7 @@ vec3 fabric_env_combine(vec3 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec
 
 vec3 debug_color(uint view, ivec2 px, float depth) {
     vec4 albedo = texelFetch(gb_albedo, px, 0);
-    vec4 fr = texelFetch(gb_frame, px, 0);
+    vec4 fr = frame_decode(texelFetch(gb_frame, px, 0));
     vec4 surface = texelFetch(gb_surface, px, 0);
     bool is_fabric = materials[min(uint(surface.y + 0.5), frame.material_count - 1u)].metallic_roughness.z > 0.5;
     vec4 fabric = is_fabric ? texelFetch(gb_fabric, px, 0) : vec4(0.0);
@@ -427,7 +427,7 @@ void main() {
     vec3 v = normalize(frame.eye.xyz - p);
 
     vec4 albedo = texelFetch(gb_albedo, px, 0);
-    vec4 fr = texelFetch(gb_frame, px, 0);
+    vec4 fr = frame_decode(texelFetch(gb_frame, px, 0));
     vec4 surface = texelFetch(gb_surface, px, 0);
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;

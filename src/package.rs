@@ -90,7 +90,7 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "G-buffer pass, fragment stage: samples the material's textures (and, for fabric, the \
          weave texture built by `weave.comp`, with derivatives, so the mip level follows the \
          pixel footprint) and writes six colour targets: albedo (RGBA8 sRGB), normal+tangent \
-         (RGBA16F, octahedral), surface (RGBA16F), fabric coverage (RGBA16F; for other materials \
+         (RGBA16_UINT, octahedral, explicitly rounded: `frame_encode` in include/frame.glsl), surface (RGBA16F), fabric coverage (RGBA16F; for other materials \
          the KHR_materials_sheen colour and roughness), emissive (RGBA16F), specular (RGBA16F: \
          KHR_materials_specular's dielectric F0 and weight). Each texture slot has its own UV set \
          (TEXCOORD_0 or _1) and affine transform (`Material.uv`). Render with a D32 depth target. The record layouts are in `include/frame.glsl` and \

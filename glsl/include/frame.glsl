@@ -116,6 +116,19 @@ vec3 oct_decode(vec2 p) {
     return normalize(n);
 }
 
+// The G-buffer's normal + tangent target (RGBA16_UINT): each octahedral coordinate in [-1, 1]
+// rounded explicitly to the nearest of 2·32767 + 1 levels, so the stored frame carries no bias
+// from how a driver rounds floats into a narrower target (lavapipe's RGBA16F stores rounded
+// toward zero, which leaned normals ≈4e-4 rad towards +z). Step 1/32767 (3e-5), 0 exact.
+uvec4 frame_encode(vec2 n_oct, vec2 t_oct) {
+    vec4 p = clamp(vec4(n_oct, t_oct), -1.0, 1.0);
+    return uvec4(ivec4(round(p * 32767.0)) + 32768);
+}
+
+vec4 frame_decode(uvec4 stored) {
+    return (vec4(stored) - 32768.0) / 32767.0;
+}
+
 // A unit vector orthogonal to n, for when a tangent is missing or degenerate.
 vec3 any_tangent(vec3 n) {
     vec3 a = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);

@@ -24,7 +24,8 @@ use super::plan::{weave_key, Pass, Plan};
 use super::{passes, RenderOptions};
 
 pub const ALBEDO_FORMAT: Format = Format::R8G8B8A8_SRGB;
-pub const FRAME_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// Normal + tangent, octahedral, explicitly rounded 16-bit integers (frame.glsl's frame_encode).
+pub const FRAME_FORMAT: Format = Format::R16G16B16A16_UINT;
 pub const SURFACE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const FABRIC_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const EMISSIVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
@@ -127,9 +128,9 @@ impl Targets {
     }
 }
 
-/// Bytes a pixel of the render targets takes on the device (five G-buffer targets, depth, HDR,
-/// LDR: 52).
-pub const TARGET_BYTES_PER_PIXEL: u64 = 4 + 8 + 8 + 8 + 8 + 4 + 8 + 4;
+/// Bytes a pixel of the render targets takes on the device (six G-buffer targets, depth, HDR,
+/// LDR: 60).
+pub const TARGET_BYTES_PER_PIXEL: u64 = 4 + 8 + 8 + 8 + 8 + 8 + 4 + 8 + 4;
 
 /// Bytes a pixel of the readback takes in host memory: the LDR buffer and its copy (4 + 4), and
 /// with `read_hdr` the half-float buffer and the f32 image (8 + 16).
@@ -1288,7 +1289,10 @@ impl Renderer {
         let depth_raw = read_image(ctx, &t.depth, Usage::FragmentRead, 4)?;
         Ok(GBufferReadback {
             albedo: read_image(ctx, &t.albedo, Usage::FragmentRead, 4)?,
-            frame: half(&t.frame)?,
+            frame: read_image(ctx, &t.frame, Usage::FragmentRead, 8)?
+                .chunks_exact(2)
+                .map(|b| frame_decode(u16::from_le_bytes([b[0], b[1]])))
+                .collect(),
             surface: half(&t.surface)?,
             fabric: half(&t.fabric)?,
             emissive: half(&t.emissive)?,
@@ -1301,7 +1305,12 @@ impl Renderer {
     }
 }
 
-/// The G-buffer of a frame on the CPU.
+/// `frame_decode` of frame.glsl: one stored octahedral coordinate back to [-1, 1].
+pub fn frame_decode(stored: u16) -> f32 {
+    (stored as f32 - 32768.0) / 32767.0
+}
+
+/// The G-buffer of a frame on the CPU (the frame target decoded to its octahedral coordinates).
 pub struct GBufferReadback {
     pub albedo: Vec<u8>,
     pub frame: Vec<f32>,

@@ -140,7 +140,7 @@ pub(crate) fn texel_bytes(format: vk::Format) -> Option<u64> {
     Some(match format {
         F::R8G8B8A8_UNORM | F::R8G8B8A8_SRGB | F::D32_SFLOAT | F::R32_SFLOAT => 4,
         F::D16_UNORM => 2,
-        F::R16G16B16A16_SFLOAT | F::R32G32_SFLOAT => 8,
+        F::R16G16B16A16_SFLOAT | F::R16G16B16A16_UINT | F::R32G32_SFLOAT => 8,
         F::R32G32B32_SFLOAT => 12,
         F::R32G32B32A32_SFLOAT => 16,
         _ => return None,
