@@ -11,6 +11,8 @@
 //! `WEFT_FUZZ_ITERATIONS=500000 WEFT_FUZZ_SEED=7 cargo test --release --test fuzz_mutate -- --nocapture`.
 //! Crashing inputs are written to `target/tmp/fuzz-mutate-crashes/`.
 
+mod common;
+
 #[path = "../tools/fuzz/well_formed.rs"]
 mod well_formed;
 
@@ -21,27 +23,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-/// xorshift64*: small, deterministic, good enough to choose mutations.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        if n == 0 {
-            0
-        } else {
-            (self.next() % n as u64) as usize
-        }
-    }
-    fn chance(&mut self, one_in: usize) -> bool {
-        self.below(one_in) == 0
-    }
-}
+use common::Rng;
 
 fn seeds() -> Vec<(String, Vec<u8>)> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

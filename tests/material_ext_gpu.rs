@@ -408,34 +408,21 @@ fn the_terminator_is_not_biased_by_the_gbuffer() {
         ..Default::default()
     };
     let gpu = renderer.render(&scene, &options).expect("render");
-    let cpu = weft::reference::raster::render(
-        &scene,
-        &weft::reference::raster::RasterOptions {
-            width: w,
-            height: h,
-            camera: scene.camera(None).unwrap(),
-            exposure: 0.0,
-            subdivisions: 1,
-            shading: weft::render::Shading::Fabric,
-        },
-    )
-    .expect("reference");
+    let raster = weft::reference::raster::RasterOptions {
+        width: w,
+        height: h,
+        camera: scene.camera(None).unwrap(),
+        exposure: 0.0,
+        subdivisions: 1,
+        shading: weft::render::Shading::Fabric,
+    };
+    let cpu = weft::reference::raster::render(&scene, &raster).expect("reference");
     // n·l of the reference at each pixel, from its direct light alone: subtract the ambient
     // (the same fixed hemispherical ambient on both sides) by rendering without the light.
     let mut dark = scene.clone();
     dark.lights.clear();
-    let ambient = weft::reference::raster::render(
-        &dark,
-        &weft::reference::raster::RasterOptions {
-            width: w,
-            height: h,
-            camera: scene.camera(None).unwrap(),
-            exposure: 0.0,
-            subdivisions: 1,
-            shading: weft::render::Shading::Fabric,
-        },
-    )
-    .expect("reference without the light");
+    let ambient =
+        weft::reference::raster::render(&dark, &raster).expect("reference without the light");
     let e = 2.0 * 0.95; // the light's green illuminance (colour [1, 0.95, 0.9] x intensity 2)
     let (mut sum, mut n) = (0f64, 0usize);
     for i in 0..(w * h) as usize {

@@ -120,19 +120,11 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
         .materials
         .iter()
         .map(|m| {
-            if [
-                m.base_color_texture,
-                m.metallic_roughness_texture,
-                m.normal_texture,
-                m.emissive_texture,
-                m.sheen.as_ref().and_then(|s| s.color_texture),
-                m.sheen.as_ref().and_then(|s| s.roughness_texture),
-                m.specular.texture,
-                m.specular.color_texture,
-                m.anisotropy.as_ref().and_then(|a| a.texture),
-            ]
-            .iter()
-                .any(Option::is_some)
+            // Occlusion darkens only environment light, which the rasterizer does not compute.
+            if m.textures()
+                .iter()
+                .enumerate()
+                .any(|(k, t)| k != crate::scene::TextureSlot::Occlusion as usize && t.is_some())
             {
                 return Err(Error::input(format!(
                     "material '{}' of {} has textures: the CPU reference rasterizer does not sample textures",

@@ -774,20 +774,7 @@ impl Renderer {
         let material_textures = scene
             .materials
             .iter()
-            .map(|m| {
-                [
-                    m.base_color_texture,
-                    m.metallic_roughness_texture,
-                    m.normal_texture,
-                    m.emissive_texture,
-                    m.occlusion_texture,
-                    m.sheen.as_ref().and_then(|s| s.color_texture),
-                    m.sheen.as_ref().and_then(|s| s.roughness_texture),
-                    m.specular.texture,
-                    m.specular.color_texture,
-                    m.anisotropy.as_ref().and_then(|a| a.texture),
-                ]
-            })
+            .map(|m| m.textures())
             .collect();
         let material_count = materials.len() as u32;
         let materials =

@@ -113,6 +113,24 @@ pub struct Material {
     pub uv: [SlotUv; TextureSlot::COUNT],
 }
 
+impl Material {
+    /// The material's textures (indices into `Scene::textures`) in [`TextureSlot`] order.
+    pub fn textures(&self) -> [Option<usize>; TextureSlot::COUNT] {
+        [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.normal_texture,
+            self.emissive_texture,
+            self.occlusion_texture,
+            self.sheen.as_ref().and_then(|s| s.color_texture),
+            self.sheen.as_ref().and_then(|s| s.roughness_texture),
+            self.specular.texture,
+            self.specular.color_texture,
+            self.anisotropy.as_ref().and_then(|a| a.texture),
+        ]
+    }
+}
+
 /// The texture slots of a material, in the order of [`Material::uv`] (and of the GPU material's
 /// per-slot transforms, glsl/include/frame.glsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
