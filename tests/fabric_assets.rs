@@ -537,8 +537,12 @@ fn from_sheen_maps_and_says_what_it_mapped() {
 fn render_fabric_flag_renders_the_weave() {
     // The same transform in memory, then the GPU: the floor's G-buffer shows warp-up and weft-up
     // cells where it had no fabric before (lavapipe, validation on).
-    let (scene, applied) =
-        assets::load_with_fabric(None, &["floor=cotton-plain@5cm".to_string()], &Default::default()).unwrap();
+    let (scene, applied) = assets::load_with_fabric(
+        None,
+        &["floor=cotton-plain@5cm".to_string()],
+        &Default::default(),
+    )
+    .unwrap();
     assert_eq!(applied[0].name, "floor");
     let mut renderer = weft::render::Renderer::new(common::context()).expect("renderer");
     let options = weft::render::RenderOptions {

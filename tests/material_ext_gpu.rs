@@ -20,7 +20,11 @@ fn sphere(material: usize, r: f32) -> Mesh {
         let theta = std::f32::consts::PI * j as f32 / nv as f32;
         for i in 0..=nu {
             let phi = std::f32::consts::TAU * i as f32 / nu as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             let t = Vec3::new(-phi.sin(), 0.0, -phi.cos());
             vertices.push(Vertex {
                 position: (n * r).to_array(),
@@ -130,7 +134,12 @@ fn spheres_scene() -> Scene {
         source: "extension spheres".into(),
         meshes: (0..materials.len()).map(|m| sphere(m, 0.45)).collect(),
         draws: (0..materials.len())
-            .map(|m| Draw::new(m, Mat4::from_translation(Vec3::new(m as f32 - 1.5, 0.0, 0.0))))
+            .map(|m| {
+                Draw::new(
+                    m,
+                    Mat4::from_translation(Vec3::new(m as f32 - 1.5, 0.0, 0.0)),
+                )
+            })
             .collect(),
         materials,
         lights: vec![
@@ -161,7 +170,13 @@ fn lighting_pass_matches_cpu_shading_of_the_extensions() {
     // 0.7 % off the formula at byte 89 (0.1006 against 0.0999), so the CPU shades the device's
     // decode, read through the albedo debug view (f16: 2^-11 relative), not its own.
     let albedo = renderer
-        .render(&scene, &RenderOptions { debug_view: weft::render::DebugView::Albedo, ..options.clone() })
+        .render(
+            &scene,
+            &RenderOptions {
+                debug_view: weft::render::DebugView::Albedo,
+                ..options.clone()
+            },
+        )
         .expect("albedo view")
         .hdr;
     let camera = scene.camera(None).unwrap();
@@ -203,7 +218,10 @@ fn lighting_pass_matches_cpu_shading_of_the_extensions() {
                     cpu[c],
                     scene.materials[material].name,
                     {
-                        let e = weft::reference::shading::oct_decode([g.frame[i * 4], g.frame[i * 4 + 1]]);
+                        let e = weft::reference::shading::oct_decode([
+                            g.frame[i * 4],
+                            g.frame[i * 4 + 1],
+                        ]);
                         let p = Vec3::from(s.position);
                         Vec3::from(e).dot((camera.view.inverse().w_axis.truncate() - p).normalize())
                     }
@@ -212,7 +230,17 @@ fn lighting_pass_matches_cpu_shading_of_the_extensions() {
         }
     }
     println!("pixels per material {per_material:?}, worst {worst:.3} of the bound");
-    assert!(bad.is_empty(), "{} channels outside the bound:\n{}", bad.len(), bad.iter().step_by(40).take(25).cloned().collect::<Vec<_>>().join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} channels outside the bound:\n{}",
+        bad.len(),
+        bad.iter()
+            .step_by(40)
+            .take(25)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
     assert!(per_material.iter().all(|&n| n > 500), "{per_material:?}");
     renderer.context().check_validation().unwrap();
 }
@@ -253,7 +281,12 @@ fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
                 }),
                 ..Default::default()
             }],
-            lights: vec![light(LightKind::Point, [0.0, 0.0, 1.5], [0.0, 0.0, -1.0], 4.0)],
+            lights: vec![light(
+                LightKind::Point,
+                [0.0, 0.0, 1.5],
+                [0.0, 0.0, -1.0],
+                4.0,
+            )],
             ..Default::default()
         };
         s.cameras.push(
@@ -288,12 +321,20 @@ fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
     let (ax, ay) = moments(&mut renderer, &plane(Some(0.0)));
     let (rx, ry) = moments(&mut renderer, &plane(Some(std::f32::consts::FRAC_PI_2)));
     println!("isotropic {ix:.2} x {iy:.2} px, along the tangent {ax:.2} x {ay:.2}, rotated {rx:.2} x {ry:.2}");
-    assert!((ix / iy - 1.0).abs() < 0.05, "isotropic highlight not round: {ix} x {iy}");
-    assert!(ax > 1.3 * ay, "anisotropy along +x must stretch the highlight along x: {ax} x {ay}");
-    assert!(ry > 1.3 * rx, "rotated a quarter turn it must stretch along y: {rx} x {ry}");
+    assert!(
+        (ix / iy - 1.0).abs() < 0.05,
+        "isotropic highlight not round: {ix} x {iy}"
+    );
+    assert!(
+        ax > 1.3 * ay,
+        "anisotropy along +x must stretch the highlight along x: {ax} x {ay}"
+    );
+    assert!(
+        ry > 1.3 * rx,
+        "rotated a quarter turn it must stretch along y: {rx} x {ry}"
+    );
     renderer.context().check_validation().unwrap();
 }
-
 
 /// Environment light on the extension spheres (no lamps) against the CPU ground truth
 /// (`reference::ibl::EnvQuadrature`: f64 quadrature over every 2 x 2 block of map pixels of the
@@ -306,8 +347,10 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
     use weft::env::{EnvLighting, Environment, IblLevel};
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let env = Arc::new(
-        Environment::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr"))
-            .expect("lebombo"),
+        Environment::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr"),
+        )
+        .expect("lebombo"),
     );
     let rotation = 60.0;
     let q = weft::reference::ibl::EnvQuadrature::new(&env, rotation, 1.0, 2);
@@ -320,7 +363,12 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
         let mut e = EnvLighting::new(env.clone());
         e.level = level;
         e.rotation = rotation;
-        let options = RenderOptions { width: w, height: h, environment: Some(e), ..Default::default() };
+        let options = RenderOptions {
+            width: w,
+            height: h,
+            environment: Some(e),
+            ..Default::default()
+        };
         let frame = renderer.render(&scene, &options).expect("render");
         let refs = refs.get_or_insert_with(|| {
             let g = renderer.read_gbuffer().unwrap();
@@ -366,7 +414,10 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
             (_, "brushed") => 0.42,
             _ => 0.135,
         };
-        assert!(*rel < bound, "{level} {material}: mean relative error {rel} >= {bound}");
+        assert!(
+            *rel < bound,
+            "{level} {material}: mean relative error {rel} >= {bound}"
+        );
     }
     renderer.context().check_validation().unwrap();
 }
@@ -393,7 +444,12 @@ fn the_terminator_is_not_biased_by_the_gbuffer() {
             roughness: 1.0,
             ..Default::default()
         }],
-        lights: vec![light(LightKind::Directional, [0.0; 3], [-1.0, -0.15, -0.3], 2.0)],
+        lights: vec![light(
+            LightKind::Directional,
+            [0.0; 3],
+            [-1.0, -0.15, -0.3],
+            2.0,
+        )],
         ..Default::default()
     };
     scene.cameras.push(
@@ -440,6 +496,10 @@ fn the_terminator_is_not_biased_by_the_gbuffer() {
     let ratio = sum / n as f64;
     println!("terminator band: {n} pixels, mean GPU/CPU {ratio:.5}");
     assert!(n > 300, "only {n} pixels in the band");
-    assert!((ratio - 1.0).abs() < 1.5e-3, "the terminator band is {:.3} % off", (ratio - 1.0) * 100.0);
+    assert!(
+        (ratio - 1.0).abs() < 1.5e-3,
+        "the terminator band is {:.3} % off",
+        (ratio - 1.0) * 100.0
+    );
     renderer.context().check_validation().unwrap();
 }

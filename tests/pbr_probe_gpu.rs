@@ -65,14 +65,22 @@ fn dir(cos: f64, phi: f64) -> [f32; 3] {
 
 fn surface(inp: &PbrProbeInput) -> GltfSurface {
     GltfSurface {
-        base: [inp.base_metallic[0], inp.base_metallic[1], inp.base_metallic[2]],
+        base: [
+            inp.base_metallic[0],
+            inp.base_metallic[1],
+            inp.base_metallic[2],
+        ],
         metallic: inp.base_metallic[3],
         roughness: inp.params[0],
         specular: inp.f0_specular[3],
         f0: [inp.f0_specular[0], inp.f0_specular[1], inp.f0_specular[2]],
         sheen: [inp.sheen[0], inp.sheen[1], inp.sheen[2]],
         sheen_roughness: inp.sheen[3],
-        t: [inp.t_anisotropy[0], inp.t_anisotropy[1], inp.t_anisotropy[2]],
+        t: [
+            inp.t_anisotropy[0],
+            inp.t_anisotropy[1],
+            inp.t_anisotropy[2],
+        ],
         anisotropy: inp.t_anisotropy[3],
     }
 }
@@ -81,7 +89,13 @@ fn surface(inp: &PbrProbeInput) -> GltfSurface {
 fn twin(inp: &PbrProbeInput) -> [f32; 8] {
     let s = surface(inp);
     let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
-    let b = gltf_brdf_cos(xyz(inp.n), xyz(inp.v), xyz(inp.l), &s, [inp.params[1], inp.params[2]]);
+    let b = gltf_brdf_cos(
+        xyz(inp.n),
+        xyz(inp.v),
+        xyz(inp.l),
+        &s,
+        [inp.params[1], inp.params[2]],
+    );
     let nh = inp.terms_in[0];
     let sr = inp.terms_in[3];
     let th = ((1.0 - nh * nh).max(0.0) * 0.5).sqrt();
@@ -103,7 +117,11 @@ fn twin(inp: &PbrProbeInput) -> [f32; 8] {
 /// error `rx` of its own.
 fn pow_rel(x: f64, y: f64, rx: f64) -> f64 {
     let lg = x.log2();
-    let e_log = if (0.5..=2.0).contains(&x) { 2f64.powi(-21) } else { 3.0 * U * lg.abs() };
+    let e_log = if (0.5..=2.0).contains(&x) {
+        2f64.powi(-21)
+    } else {
+        3.0 * U * lg.abs()
+    };
     let t = y * lg;
     std::f64::consts::LN_2 * (y.abs() * e_log + (3.0 + 2.0 * t.abs()) * U) + y.abs() * rx
 }
@@ -153,7 +171,9 @@ fn bounds(inp: &PbrProbeInput) -> [f64; 8] {
     let schlick = 5.0 * dnh / (1.0 - vh).max(1e-30) * (1.0 - vh).powi(5);
     let sr = inp.sheen[3] as f64;
     let sheen = if inp.sheen[..3].iter().any(|&c| c > 0.0) {
-        charlie_rel(nh, sr, dnh) + lambda_rel(0.5, sr) + 2.0 * 2.0 * nh * dnh / (1.0 - nh * nh).max(1e-30) / (2.0 * sr * sr).max(2e-3)
+        charlie_rel(nh, sr, dnh)
+            + lambda_rel(0.5, sr)
+            + 2.0 * 2.0 * nh * dnh / (1.0 - nh * nh).max(1e-30) / (2.0 * sr * sr).max(2e-3)
     } else {
         0.0
     };
@@ -161,14 +181,23 @@ fn bounds(inp: &PbrProbeInput) -> [f64; 8] {
     let tnh = inp.terms_in[0] as f64;
     let tsr = inp.terms_in[3] as f64;
     let r_charlie = 2.0 * charlie_rel(tnh, tsr, 0.0);
-    let r_sheen = r_charlie + 2.0 * (lambda_rel(inp.terms_in[1] as f64, tsr) + lambda_rel(inp.terms_in[2] as f64, tsr) + 8.0 * U);
+    let r_sheen = r_charlie
+        + 2.0
+            * (lambda_rel(inp.terms_in[1] as f64, tsr)
+                + lambda_rel(inp.terms_in[2] as f64, tsr)
+                + 8.0 * U);
     // ggx_aniso_d at t·h = b·h = sqrt(sin²/2): sin² from n·h rounds as above.
     let talpha = alpha;
     let at = talpha * 0.5 + 0.5;
     let f2 = (at * at + talpha * talpha) * (1.0 - tnh * tnh) * 0.5 + (at * talpha * tnh).powi(2);
-    let r_ad = 2.0 * (24.0 * U + 2.0 * U * (at * talpha * tnh).powi(2) / f2 * 4.0 + 2.0 * U / (1.0 - tnh * tnh).max(1e-30));
+    let r_ad = 2.0
+        * (24.0 * U
+            + 2.0 * U * (at * talpha * tnh).powi(2) / f2 * 4.0
+            + 2.0 * U / (1.0 - tnh * tnh).max(1e-30));
     let r_lambda = 2.0 * lambda_rel(inp.terms_in[2] as f64, tsr);
-    [r_brdf, r_brdf, r_brdf, 0.0, r_charlie, r_sheen, r_ad, r_lambda]
+    [
+        r_brdf, r_brdf, r_brdf, 0.0, r_charlie, r_sheen, r_ad, r_lambda,
+    ]
 }
 
 struct Case {
@@ -176,7 +205,15 @@ struct Case {
     input: PbrProbeInput,
 }
 
-fn case(name: String, n: [f32; 3], v: [f32; 3], l: [f32; 3], s: &GltfSurface, e: [f32; 2], terms: [f32; 4]) -> Case {
+fn case(
+    name: String,
+    n: [f32; 3],
+    v: [f32; 3],
+    l: [f32; 3],
+    s: &GltfSurface,
+    e: [f32; 2],
+    terms: [f32; 4],
+) -> Case {
     Case {
         name,
         input: PbrProbeInput {
@@ -205,7 +242,11 @@ fn cases() -> Vec<Case> {
         for &sr in &sheen_r {
             for &cv in &cosines {
                 for &cl in &cosines {
-                    for (azimuth, tag) in [(std::f64::consts::PI, "mirror"), (0.0, "retro"), (1.3, "side")] {
+                    for (azimuth, tag) in [
+                        (std::f64::consts::PI, "mirror"),
+                        (0.0, "retro"),
+                        (1.3, "side"),
+                    ] {
                         let v = dir(cv, 0.0);
                         let l = dir(cl, azimuth);
                         let s = GltfSurface {
@@ -220,11 +261,19 @@ fn cases() -> Vec<Case> {
                             anisotropy: if tag == "side" { 0.8 } else { 0.0 },
                         };
                         let e = [0.3, 0.6];
-                        let h = unit([(v[0] + l[0]) as f64, (v[1] + l[1]) as f64, (v[2] + l[2]) as f64]);
+                        let h = unit([
+                            (v[0] + l[0]) as f64,
+                            (v[1] + l[1]) as f64,
+                            (v[2] + l[2]) as f64,
+                        ]);
                         let nh = dot(n, h) as f32;
                         out.push(case(
                             format!("{tag} r={r} sheen_r={sr} n·v={cv} n·l={cl}"),
-                            n, v, l, &s, e,
+                            n,
+                            v,
+                            l,
+                            &s,
+                            e,
                             [nh.clamp(0.0, 1.0), cl as f32, cv as f32, sr],
                         ));
                     }
@@ -244,7 +293,11 @@ fn cases() -> Vec<Case> {
             roughness: u() as f32,
             specular: u() as f32,
             f0: [u() as f32, u() as f32, u() as f32],
-            sheen: if i % 2 == 0 { [0.0; 3] } else { [u() as f32, u() as f32, u() as f32] },
+            sheen: if i % 2 == 0 {
+                [0.0; 3]
+            } else {
+                [u() as f32, u() as f32, u() as f32]
+            },
             sheen_roughness: u() as f32,
             t: unit([phi.cos(), phi.sin(), 0.0]),
             anisotropy: if i % 4 == 0 { u() as f32 } else { 0.0 },
@@ -264,7 +317,16 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
     let inputs: Vec<PbrProbeInput> = cases.iter().map(|c| c.input).collect();
     let size = std::mem::size_of::<PbrProbeOutput>();
     let bytes = common::run_probe_shader(&ctx, &shaders::PBR_PROBE_COMP, &inputs, size);
-    let names = ["brdf.r", "brdf.g", "brdf.b", "-", "charlie_d", "sheen_brdf_cos", "ggx_aniso_d", "sheen_lambda"];
+    let names = [
+        "brdf.r",
+        "brdf.g",
+        "brdf.b",
+        "-",
+        "charlie_d",
+        "sheen_brdf_cos",
+        "ggx_aniso_d",
+        "sheen_lambda",
+    ];
     let mut worst: [(f64, String); 8] = std::array::from_fn(|_| (0.0, String::new()));
     let mut failures = Vec::new();
     for (k, c) in cases.iter().enumerate() {
@@ -285,13 +347,19 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
                 worst[j] = (ratio, c.name.clone());
             }
             if ratio > 1.0 {
-                failures.push(format!("{}: {} GPU {x:e} twin {t:e} (bound {bound:e}, ratio {ratio:.2})", c.name, names[j]));
+                failures.push(format!(
+                    "{}: {} GPU {x:e} twin {t:e} (bound {bound:e}, ratio {ratio:.2})",
+                    c.name, names[j]
+                ));
             }
         }
     }
     for j in 0..8 {
         if j != 3 {
-            println!("{:>15}: worst {:.3} of its bound ({})", names[j], worst[j].0, worst[j].1);
+            println!(
+                "{:>15}: worst {:.3} of its bound ({})",
+                names[j], worst[j].0, worst[j].1
+            );
         }
     }
     ctx.check_validation().unwrap();
@@ -300,7 +368,12 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         "{} of {} outputs outside their bound, e.g.:\n{}",
         failures.len(),
         cases.len() * 7,
-        failures.iter().take(20).cloned().collect::<Vec<_>>().join("\n")
+        failures
+            .iter()
+            .take(20)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
     );
 }
 
@@ -310,7 +383,14 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
 #[test]
 fn sheen_albedo_table_matches_monte_carlo() {
     let mut rng = XorShift::new(7);
-    for &(cv, r) in &[(0.05f64, 0.3f32), (0.5, 0.3), (1.0, 0.3), (0.2, 1.0), (0.8, 0.7), (0.3, 0.1)] {
+    for &(cv, r) in &[
+        (0.05f64, 0.3f32),
+        (0.5, 0.3),
+        (1.0, 0.3),
+        (0.2, 1.0),
+        (0.8, 0.7),
+        (0.3, 0.1),
+    ] {
         let q = weft::reference::shading::sheen_albedo(cv, r, 24);
         let v = [(1.0 - cv * cv).sqrt(), 0.0, cv];
         let n = 200_000;
@@ -322,14 +402,18 @@ fn sheen_albedo_table_matches_monte_carlo() {
             let l = [s * phi.cos(), s * phi.sin(), z];
             let h = [v[0] + l[0], v[1] + l[1], v[2] + l[2]];
             let hn = h[2] / (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
-            let f = sheen_brdf_cos(z as f32, cv as f32, hn as f32, r) as f64 * std::f64::consts::TAU;
+            let f =
+                sheen_brdf_cos(z as f32, cv as f32, hn as f32, r) as f64 * std::f64::consts::TAU;
             sum += f;
             sum2 += f * f;
         }
         let mean = sum / n as f64;
         let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
         println!("E(n·v={cv}, r={r}): quadrature {q:.5}, Monte Carlo {mean:.5} ± {se:.5}");
-        assert!((q - mean).abs() <= 4.0 * se + 1e-3, "E(n·v={cv}, r={r}): quadrature {q} against Monte Carlo {mean} ± {se}");
+        assert!(
+            (q - mean).abs() <= 4.0 * se + 1e-3,
+            "E(n·v={cv}, r={r}): quadrature {q} against Monte Carlo {mean} ± {se}"
+        );
     }
 }
 
@@ -366,15 +450,30 @@ fn sheen_albedo_scaling_conserves_energy() {
                 let mut plain = s;
                 plain.sheen = [0.0; 3];
                 unscaled += (gltf_brdf_cos(n, v, l, &plain, [0.0; 2])[0]
-                    + sheen_brdf_cos(cl as f32, cv as f32, {
-                        let h = unit([(v[0] + l[0]) as f64, (v[1] + l[1]) as f64, (v[2] + l[2]) as f64]);
-                        h[2]
-                    }, sr)) as f64
+                    + sheen_brdf_cos(
+                        cl as f32,
+                        cv as f32,
+                        {
+                            let h = unit([
+                                (v[0] + l[0]) as f64,
+                                (v[1] + l[1]) as f64,
+                                (v[2] + l[2]) as f64,
+                            ]);
+                            h[2]
+                        },
+                        sr,
+                    )) as f64
                     * w;
             }
         }
         println!("n·v={cv} sheen r={sr}: albedo with scaling {scaled:.4}, without {unscaled:.4}");
-        assert!(scaled <= 1.0 + 5e-3, "with the albedo scaling the white sheen reflects {scaled} > 1");
-        assert!(unscaled > scaled, "the scaling must remove energy ({unscaled} <= {scaled})");
+        assert!(
+            scaled <= 1.0 + 5e-3,
+            "with the albedo scaling the white sheen reflects {scaled} > 1"
+        );
+        assert!(
+            unscaled > scaled,
+            "the scaling must remove energy ({unscaled} <= {scaled})"
+        );
     }
 }

@@ -118,7 +118,10 @@ fn gbuffer_holds_unit_normals_and_known_material() {
         if scene.materials[material as usize].fabric.is_some() {
             assert!(z == 1.0 || z == -1.0, "tangent sign {z}");
         } else {
-            assert_eq!(z, 0.0, "anisotropy strength of a material without anisotropy");
+            assert_eq!(
+                z, 0.0,
+                "anisotropy strength of a material without anisotropy"
+            );
         }
     }
     assert!(covered > 160 * 90 / 3, "only {covered} pixels covered");

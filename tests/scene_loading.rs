@@ -1710,7 +1710,12 @@ fn sheen_specular_ior_and_anisotropy_reach_the_material() {
             "KHR_materials_anisotropy": {"anisotropyStrength": 0.6, "anisotropyRotation": 1.0,
                                          "anisotropyTexture": {"index": 0}},
         }}),
-        &["KHR_materials_sheen", "KHR_materials_specular", "KHR_materials_ior", "KHR_materials_anisotropy"],
+        &[
+            "KHR_materials_sheen",
+            "KHR_materials_specular",
+            "KHR_materials_ior",
+            "KHR_materials_anisotropy",
+        ],
     );
     let s = d.load("extensions").unwrap();
     let m = &s.materials[0];
@@ -1733,23 +1738,49 @@ fn sheen_specular_ior_and_anisotropy_reach_the_material() {
         s.warnings
     );
     // Used extensions weft reads raise no "ignored" warning.
-    assert!(!s.warnings.iter().any(|w| w.0.contains("ignore")), "{:?}", s.warnings);
+    assert!(
+        !s.warnings.iter().any(|w| w.0.contains("ignore")),
+        "{:?}",
+        s.warnings
+    );
 }
 
 #[test]
 fn extension_values_of_the_wrong_type_are_errors_naming_material_and_key() {
     for (ext, body, key) in [
-        ("KHR_materials_sheen", json!({"sheenRoughnessFactor": "rough"}), "sheenRoughnessFactor"),
-        ("KHR_materials_sheen", json!({"sheenColorFactor": [1.0, 0.0]}), "sheenColorFactor"),
-        ("KHR_materials_sheen", json!({"sheenColorTexture": {"texCoord": 0}}), "sheenColorTexture"),
-        ("KHR_materials_specular", json!({"specularColorFactor": 3}), "specularColorFactor"),
-        ("KHR_materials_anisotropy", json!({"anisotropyRotation": [0.5]}), "anisotropyRotation"),
+        (
+            "KHR_materials_sheen",
+            json!({"sheenRoughnessFactor": "rough"}),
+            "sheenRoughnessFactor",
+        ),
+        (
+            "KHR_materials_sheen",
+            json!({"sheenColorFactor": [1.0, 0.0]}),
+            "sheenColorFactor",
+        ),
+        (
+            "KHR_materials_sheen",
+            json!({"sheenColorTexture": {"texCoord": 0}}),
+            "sheenColorTexture",
+        ),
+        (
+            "KHR_materials_specular",
+            json!({"specularColorFactor": 3}),
+            "specularColorFactor",
+        ),
+        (
+            "KHR_materials_anisotropy",
+            json!({"anisotropyRotation": [0.5]}),
+            "anisotropyRotation",
+        ),
         ("KHR_materials_ior", json!({"ior": true}), "ior"),
     ] {
         let d = material_doc(json!({"name": "cloth", "extensions": {ext: body}}), &[ext]);
         let msg = error_text(d.load("extension-types"));
         assert!(
-            msg.contains("material 'cloth'") && msg.contains(&format!("{ext}.{key}")) && msg.contains("scene.gltf"),
+            msg.contains("material 'cloth'")
+                && msg.contains(&format!("{ext}.{key}"))
+                && msg.contains("scene.gltf"),
             "{ext}.{key}: {msg}"
         );
     }
@@ -1759,7 +1790,10 @@ fn extension_values_of_the_wrong_type_are_errors_naming_material_and_key() {
         &["KHR_materials_sheen"],
     );
     let msg = error_text(d.load("extension-texture-index"));
-    assert!(msg.contains("texture 7") && msg.contains("sheen colour texture"), "{msg}");
+    assert!(
+        msg.contains("texture 7") && msg.contains("sheen colour texture"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -1770,7 +1804,11 @@ fn extension_values_out_of_range_are_clamped_with_a_warning_naming_material_and_
             "KHR_materials_anisotropy": {"anisotropyStrength": -0.5},
             "KHR_materials_specular": {"specularFactor": 7.0},
         }}),
-        &["KHR_materials_sheen", "KHR_materials_anisotropy", "KHR_materials_specular"],
+        &[
+            "KHR_materials_sheen",
+            "KHR_materials_anisotropy",
+            "KHR_materials_specular",
+        ],
     );
     let s = d.load("extension-ranges").unwrap();
     let m = &s.materials[0];
@@ -1785,7 +1823,9 @@ fn extension_values_out_of_range_are_clamped_with_a_warning_naming_material_and_
         "KHR_materials_specular.specularFactor",
     ] {
         assert!(
-            s.warnings.iter().any(|w| w.0.contains(key) && w.0.contains("material 'cloth'") && w.0.contains("clamped")),
+            s.warnings.iter().any(|w| w.0.contains(key)
+                && w.0.contains("material 'cloth'")
+                && w.0.contains("clamped")),
             "no warning for {key}: {:?}",
             s.warnings
         );
@@ -1826,7 +1866,10 @@ fn each_texture_slot_keeps_its_own_transform_and_uv_set() {
     let mesh = &s.meshes[0];
     // The base colour's transform is baked into TEXCOORD_0 ...
     assert_eq!(mesh.vertices[1].uv, [7.25, 7.5]);
-    assert_eq!(m.uv[TextureSlot::BaseColor as usize], weft::scene::SlotUv::IDENTITY);
+    assert_eq!(
+        m.uv[TextureSlot::BaseColor as usize],
+        weft::scene::SlotUv::IDENTITY
+    );
     // ... TEXCOORD_1 is the file's ...
     assert_eq!(mesh.vertices[1].uv1, [0.0, 1.0]);
     // ... and every slot maps the stored coordinates to its own: the normal map's at the raw
@@ -1838,11 +1881,17 @@ fn each_texture_slot_keeps_its_own_transform_and_uv_set() {
         ]
     };
     let normal = apply(&m.uv[TextureSlot::Normal as usize], mesh.vertices[2].uv);
-    assert!((normal[0] - 2.0).abs() < 1e-5 && (normal[1] - 0.0).abs() < 1e-5, "{normal:?}");
+    assert!(
+        (normal[0] - 2.0).abs() < 1e-5 && (normal[1] - 0.0).abs() < 1e-5,
+        "{normal:?}"
+    );
     let occ = &m.uv[TextureSlot::Occlusion as usize];
     assert_eq!(occ.set, 1);
     let o = apply(occ, [1.0, 0.0]);
-    assert!((o[0] - 0.0).abs() < 1e-6 && (o[1] + 1.0).abs() < 1e-6, "{o:?}");
+    assert!(
+        (o[0] - 0.0).abs() < 1e-6 && (o[1] + 1.0).abs() < 1e-6,
+        "{o:?}"
+    );
 }
 
 #[test]
@@ -1854,7 +1903,8 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
         {"name": "navy", "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.5, 1.0]}},
     ]);
     d.json["extensionsUsed"] = json!(["KHR_materials_variants"]);
-    d.json["extensions"] = json!({"KHR_materials_variants": {"variants": [{"name": "red"}, {"name": "navy"}]}});
+    d.json["extensions"] =
+        json!({"KHR_materials_variants": {"variants": [{"name": "red"}, {"name": "navy"}]}});
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     d.json["meshes"][0]["primitives"][0]["extensions"] =
         json!({"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [1]}]}});
@@ -1863,9 +1913,17 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
     std::fs::write(&path, d.text()).unwrap();
     let plain = scene::load(&path).unwrap();
     assert_eq!(plain.variants, vec!["red".to_string(), "navy".to_string()]);
-    assert_eq!(plain.materials[plain.meshes[0].material].name, "default red");
+    assert_eq!(
+        plain.materials[plain.meshes[0].material].name,
+        "default red"
+    );
     let load = |v: &str| {
-        scene::load_with(&path, &scene::LoadOptions { variant: Some(v.into()) })
+        scene::load_with(
+            &path,
+            &scene::LoadOptions {
+                variant: Some(v.into()),
+            },
+        )
     };
     let navy = load("navy").unwrap();
     assert_eq!(navy.materials[navy.meshes[0].material].name, "navy");
@@ -1874,13 +1932,19 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
     let red = load("red").unwrap();
     assert_eq!(red.materials[red.meshes[0].material].name, "default red");
     let msg = error_text(load("teal"));
-    assert!(msg.contains("'teal'") && msg.contains("'red', 'navy'") && msg.contains("scene.gltf"), "{msg}");
+    assert!(
+        msg.contains("'teal'") && msg.contains("'red', 'navy'") && msg.contains("scene.gltf"),
+        "{msg}"
+    );
     // A mapping that names a variant the file does not have.
     d.json["meshes"][0]["primitives"][0]["extensions"] =
         json!({"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [5]}]}});
     std::fs::write(&path, d.text()).unwrap();
     let msg = error_text(load("navy"));
-    assert!(msg.contains("KHR_materials_variants") && msg.contains('5'), "{msg}");
+    assert!(
+        msg.contains("KHR_materials_variants") && msg.contains('5'),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -1891,8 +1955,12 @@ fn a_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
     ktx.extend_from_slice(&[0u8; 64]);
     d.json["images"] = json!([{"uri": format!("data:image/ktx2;base64,{}", base64(&ktx))}]);
     d.json["textures"] = json!([{"source": 0}]);
-    d.json["materials"] = json!([{"name": "lamp metal", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    d.json["materials"] =
+        json!([{"name": "lamp metal", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let msg = error_text(d.load("ktx2"));
-    assert!(msg.contains("KTX2") && msg.contains("lamp metal") && msg.contains("PNG"), "{msg}");
+    assert!(
+        msg.contains("KTX2") && msg.contains("lamp metal") && msg.contains("PNG"),
+        "{msg}"
+    );
 }

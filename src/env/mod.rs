@@ -569,7 +569,11 @@ mod kept_dfg {
             return;
         }
         let kept = dfg_table_kept();
-        assert_eq!(kept.len(), fresh.len(), "src/env/dfg_table.f16 has the wrong size: rewrite it (WEFT_WRITE_DFG=1)");
+        assert_eq!(
+            kept.len(),
+            fresh.len(),
+            "src/env/dfg_table.f16 has the wrong size: rewrite it (WEFT_WRITE_DFG=1)"
+        );
         // Within one f16 step: the computation is deterministic, but libm's last bit may differ
         // between platforms.
         for (i, (k, f)) in kept.iter().zip(&fresh).enumerate() {

@@ -147,10 +147,18 @@ fn sheen_albedo_curve(r: f32) -> std::sync::Arc<Vec<f64>> {
     use std::sync::{Arc, Mutex, OnceLock};
     static CACHE: OnceLock<Mutex<HashMap<u32, Arc<Vec<f64>>>>> = OnceLock::new();
     let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
-    if let Some(t) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&r.to_bits()) {
+    if let Some(t) = cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .get(&r.to_bits())
+    {
         return t.clone();
     }
-    let t = Arc::new((0..=256).map(|i| sheen_albedo(i as f64 / 256.0, r, 48)).collect::<Vec<_>>());
+    let t = Arc::new(
+        (0..=256)
+            .map(|i| sheen_albedo(i as f64 / 256.0, r, 48))
+            .collect::<Vec<_>>(),
+    );
     cache
         .lock()
         .unwrap_or_else(|e| e.into_inner())

@@ -477,8 +477,14 @@ impl Raster {
                 roughness: surface.roughness,
                 specular: m.specular.factor.clamp(0.0, 1.0),
                 f0: m.specular.color.map(|c| (f0 * c).min(1.0)),
-                sheen: m.sheen.as_ref().map_or([0.0; 3], |s| s.color.map(|c| c.clamp(0.0, 1.0))),
-                sheen_roughness: m.sheen.as_ref().map_or(0.0, |s| s.roughness.clamp(0.0, 1.0)),
+                sheen: m
+                    .sheen
+                    .as_ref()
+                    .map_or([0.0; 3], |s| s.color.map(|c| c.clamp(0.0, 1.0))),
+                sheen_roughness: m
+                    .sheen
+                    .as_ref()
+                    .map_or(0.0, |s| s.roughness.clamp(0.0, 1.0)),
                 t: dir.to_array(),
                 anisotropy,
             });

@@ -205,7 +205,16 @@ pub fn ggx_aniso_d(t_h: f32, b_h: f32, n_h: f32, at: f32, ab: f32) -> f32 {
 
 /// `ggx_aniso_v` of pbr.glsl.
 #[allow(clippy::too_many_arguments)]
-pub fn ggx_aniso_v(t_v: f32, b_v: f32, n_v: f32, t_l: f32, b_l: f32, n_l: f32, at: f32, ab: f32) -> f32 {
+pub fn ggx_aniso_v(
+    t_v: f32,
+    b_v: f32,
+    n_v: f32,
+    t_l: f32,
+    b_l: f32,
+    n_l: f32,
+    at: f32,
+    ab: f32,
+) -> f32 {
     let gv = n_l * length([at * t_v, ab * b_v, n_v]);
     let gl = n_v * length([at * t_l, ab * b_l, n_l]);
     let s = gv + gl;
@@ -232,7 +241,16 @@ pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 
         let b = cross(n, s.t);
         let at = lerp(alpha, 1.0, s.anisotropy * s.anisotropy);
         ggx_aniso_d(dot(s.t, h), dot(b, h), n_h, at, alpha)
-            * ggx_aniso_v(dot(s.t, v), dot(b, v), n_v, dot(s.t, l), dot(b, l), n_l, at, alpha)
+            * ggx_aniso_v(
+                dot(s.t, v),
+                dot(b, v),
+                n_v,
+                dot(s.t, l),
+                dot(b, l),
+                n_l,
+                at,
+                alpha,
+            )
     } else {
         ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha)
     };
@@ -249,14 +267,23 @@ pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 
         // Clamped at 0: the Charlie lobe's albedo exceeds 1 at grazing angles and low roughness
         // (1.6 at n·v = 0.02, roughness 0.1), where the specification's scaling would go negative.
         let sc = (1.0 - k * sheen_e[0]).min(1.0 - k * sheen_e[1]).max(0.0);
-        f = add(scale(f, sc), scale(s.sheen, sheen_brdf_cos(n_l, n_v, n_h, s.sheen_roughness)));
+        f = add(
+            scale(f, sc),
+            scale(s.sheen, sheen_brdf_cos(n_l, n_v, n_h, s.sheen_roughness)),
+        );
     }
     f
 }
 
 /// `pbr_brdf_cos` of pbr.glsl: the core glTF BRDF times n·l.
 pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughness: f32) -> Vec3 {
-    gltf_brdf_cos(n, v, l, &GltfSurface::core(base, metallic, roughness), [0.0; 2])
+    gltf_brdf_cos(
+        n,
+        v,
+        l,
+        &GltfSurface::core(base, metallic, roughness),
+        [0.0; 2],
+    )
 }
 
 /// `sheen_albedo` of lighting.frag: the DFG table's third channel as the GPU stores it (f16)

@@ -771,11 +771,7 @@ impl Renderer {
                 .map(|(m, f)| GpuMaterial::new(m, *f))
                 .collect()
         };
-        let material_textures = scene
-            .materials
-            .iter()
-            .map(|m| m.textures())
-            .collect();
+        let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
         let material_count = materials.len() as u32;
         let materials =
             ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;

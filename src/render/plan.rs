@@ -287,7 +287,11 @@ impl Plan {
             draws: scene.draws.len(),
             triangles,
             lights,
-            sheen_materials: scene.materials.iter().filter(|m| m.fabric.is_none() && m.sheen.is_some()).count(),
+            sheen_materials: scene
+                .materials
+                .iter()
+                .filter(|m| m.fabric.is_none() && m.sheen.is_some())
+                .count(),
             specular_materials: scene
                 .materials
                 .iter()
@@ -356,7 +360,10 @@ impl fmt::Display for Plan {
         writeln!(
             f,
             "materials   {} fabric, {} sheen, {} specular, {} anisotropic",
-            self.fabric_materials, self.sheen_materials, self.specular_materials, self.anisotropic_materials
+            self.fabric_materials,
+            self.sheen_materials,
+            self.specular_materials,
+            self.anisotropic_materials
         )?;
         if !self.variants.is_empty() {
             writeln!(

@@ -122,7 +122,9 @@ pub fn load_slice_with(
 ) -> Result<Scene> {
     // Everything below checks the file before use, but the gltf crate's accessors unwrap on
     // documents that slip past its validator; a panic there must still reach the user as an error.
-    match catch_unwind(AssertUnwindSafe(|| load_checked(bytes, source, base_dir, options))) {
+    match catch_unwind(AssertUnwindSafe(|| {
+        load_checked(bytes, source, base_dir, options)
+    })) {
         Ok(result) => result,
         Err(panic) => {
             let detail = panic
@@ -343,7 +345,8 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::ANISOTROPY,
         material_ext::VARIANTS,
     ];
-    root.extensions_required.retain(|e| !OWN.contains(&e.as_str()));
+    root.extensions_required
+        .retain(|e| !OWN.contains(&e.as_str()));
     Ok(())
 }
 
@@ -726,10 +729,10 @@ impl<'a> Loader<'a> {
             self.warn(w);
         }
         let ext_texture = |loader: &mut Self,
-                               r: &Option<TexRef>,
-                               kind: (TextureSlot, &'static str),
-                               color_space: ColorSpace,
-                               uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32)>|
+                           r: &Option<TexRef>,
+                           kind: (TextureSlot, &'static str),
+                           color_space: ColorSpace,
+                           uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32)>|
          -> Result<Option<usize>> {
             let Some(r) = r else { return Ok(None) };
             let Some(texture) = loader.doc.textures().nth(r.index) else {
@@ -744,23 +747,56 @@ impl<'a> Loader<'a> {
                 Some(v) => Some(loader.parse_texture_transform(v, &who, kind.1)?),
                 None => None,
             };
-            slot(loader, texture, r.tex_coord, transform, kind, color_space, uv_transforms).map(Some)
+            slot(
+                loader,
+                texture,
+                r.tex_coord,
+                transform,
+                kind,
+                color_space,
+                uv_transforms,
+            )
+            .map(Some)
         };
         let sheen = match &sheen_ext {
             None => None,
             Some(e) => Some(Sheen {
                 color: e.color,
                 roughness: e.roughness,
-                color_texture: ext_texture(self, &e.color_texture, (TextureSlot::SheenColor, "sheen colour texture"), ColorSpace::Srgb, &mut uv_transforms)?,
-                roughness_texture: ext_texture(self, &e.roughness_texture, (TextureSlot::SheenRoughness, "sheen roughness texture"), ColorSpace::Linear, &mut uv_transforms)?,
+                color_texture: ext_texture(
+                    self,
+                    &e.color_texture,
+                    (TextureSlot::SheenColor, "sheen colour texture"),
+                    ColorSpace::Srgb,
+                    &mut uv_transforms,
+                )?,
+                roughness_texture: ext_texture(
+                    self,
+                    &e.roughness_texture,
+                    (TextureSlot::SheenRoughness, "sheen roughness texture"),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
             }),
         };
         let mut specular = Specular::default();
         if let Some(e) = &specular_ext {
             specular.factor = e.factor;
             specular.color = e.color;
-            specular.texture = ext_texture(self, &e.texture, (TextureSlot::Specular, "specular texture"), ColorSpace::Linear, &mut uv_transforms)?;
-            specular.color_texture = ext_texture(self, &e.color_texture, (TextureSlot::SpecularColor, "specular colour texture"), ColorSpace::Srgb, &mut uv_transforms)?;
+            specular.texture = ext_texture(
+                self,
+                &e.texture,
+                (TextureSlot::Specular, "specular texture"),
+                ColorSpace::Linear,
+                &mut uv_transforms,
+            )?;
+            specular.color_texture = ext_texture(
+                self,
+                &e.color_texture,
+                (TextureSlot::SpecularColor, "specular colour texture"),
+                ColorSpace::Srgb,
+                &mut uv_transforms,
+            )?;
         }
         if let Some(ior) = ior {
             specular.ior = ior;
@@ -770,7 +806,13 @@ impl<'a> Loader<'a> {
             Some(e) => Some(Anisotropy {
                 strength: e.strength,
                 rotation: e.rotation,
-                texture: ext_texture(self, &e.texture, (TextureSlot::Anisotropy, "anisotropy texture"), ColorSpace::Linear, &mut uv_transforms)?,
+                texture: ext_texture(
+                    self,
+                    &e.texture,
+                    (TextureSlot::Anisotropy, "anisotropy texture"),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
             }),
         };
 
@@ -967,8 +1009,8 @@ impl<'a> Loader<'a> {
         if let (Some((variant, count)), Some(ext)) =
             (self.variant, prim.extension_value(material_ext::VARIANTS))
         {
-            if let Some(m) = material_ext::mapped_material(ext, variant, count)
-                .map_err(|e| self.error(e))?
+            if let Some(m) =
+                material_ext::mapped_material(ext, variant, count).map_err(|e| self.error(e))?
             {
                 if m >= self.scene.materials.len().max(self.material_uv.len()) {
                     return Err(self.error(format_args!(

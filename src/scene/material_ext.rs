@@ -56,7 +56,10 @@ pub struct Ctx<'a> {
 fn short(v: &Value) -> String {
     let s = v.to_string();
     if s.len() > 60 {
-        format!("{}…", &s[..s.char_indices().nth(57).map_or(s.len(), |(i, _)| i)])
+        format!(
+            "{}…",
+            &s[..s.char_indices().nth(57).map_or(s.len(), |(i, _)| i)]
+        )
     } else {
         s
     }
@@ -109,17 +112,24 @@ impl Ctx<'_> {
 
     /// Three numbers, each clamped to [lo, hi] with a warning.
     fn colour(&mut self, key: &str, v: &Value, lo: f32, hi: f32) -> Result<[f32; 3], String> {
-        let a = v
-            .as_array()
-            .filter(|a| a.len() == 3)
-            .ok_or_else(|| self.err(key, format!("must be an array of 3 numbers, got {}", short(v))))?;
+        let a = v.as_array().filter(|a| a.len() == 3).ok_or_else(|| {
+            self.err(
+                key,
+                format!("must be an array of 3 numbers, got {}", short(v)),
+            )
+        })?;
         let mut out = [0.0; 3];
         for (o, x) in out.iter_mut().zip(a) {
             let n = x
                 .as_f64()
                 .map(|n| n as f32)
                 .filter(|n| n.is_finite())
-                .ok_or_else(|| self.err(key, format!("must be an array of 3 finite numbers, got {}", short(v))))?;
+                .ok_or_else(|| {
+                    self.err(
+                        key,
+                        format!("must be an array of 3 finite numbers, got {}", short(v)),
+                    )
+                })?;
             *o = n;
         }
         if out.iter().any(|x| !(lo..=hi).contains(x)) {
@@ -132,20 +142,39 @@ impl Ctx<'_> {
     }
 
     fn texture(&self, key: &str, v: &Value) -> Result<TexRef, String> {
-        let o = v
-            .as_object()
-            .ok_or_else(|| self.err(key, format!("must be a textureInfo object ({{\"index\": N}}), got {}", short(v))))?;
+        let o = v.as_object().ok_or_else(|| {
+            self.err(
+                key,
+                format!(
+                    "must be a textureInfo object ({{\"index\": N}}), got {}",
+                    short(v)
+                ),
+            )
+        })?;
         let index = o
             .get("index")
             .and_then(Value::as_u64)
             .and_then(|i| usize::try_from(i).ok())
-            .ok_or_else(|| self.err(key, format!("needs an unsigned integer \"index\", got {}", short(v))))?;
+            .ok_or_else(|| {
+                self.err(
+                    key,
+                    format!("needs an unsigned integer \"index\", got {}", short(v)),
+                )
+            })?;
         let tex_coord = match o.get("texCoord") {
             None => 0,
             Some(t) => t
                 .as_u64()
                 .and_then(|t| u32::try_from(t).ok())
-                .ok_or_else(|| self.err(key, format!("has texCoord {}, which must be an unsigned integer", short(t))))?,
+                .ok_or_else(|| {
+                    self.err(
+                        key,
+                        format!(
+                            "has texCoord {}, which must be an unsigned integer",
+                            short(t)
+                        ),
+                    )
+                })?,
         };
         let transform = o
             .get("extensions")
@@ -216,7 +245,11 @@ pub fn ior(ctx: &mut Ctx, v: &Value) -> Result<f32, String> {
         match key.as_str() {
             "ior" => {
                 let x = ctx.finite(key, v)?;
-                ior = if x == 0.0 { 0.0 } else { ctx.number(key, v, 1.0, 10.0)? };
+                ior = if x == 0.0 {
+                    0.0
+                } else {
+                    ctx.number(key, v, 1.0, 10.0)?
+                };
             }
             other => ctx.unknown(other),
         }
@@ -256,13 +289,22 @@ pub fn variant_names(root: Option<&Value>) -> Result<Vec<String>, String> {
             v.get("name")
                 .and_then(Value::as_str)
                 .map(str::to_owned)
-                .ok_or_else(|| format!("{VARIANTS}.variants[{i}] needs a string \"name\", got {}", short(v)))
+                .ok_or_else(|| {
+                    format!(
+                        "{VARIANTS}.variants[{i}] needs a string \"name\", got {}",
+                        short(v)
+                    )
+                })
         })
         .collect()
 }
 
 /// The material a primitive's `KHR_materials_variants.mappings` gives variant `variant`, if any.
-pub fn mapped_material(prim_ext: &Value, variant: usize, variants: usize) -> Result<Option<usize>, String> {
+pub fn mapped_material(
+    prim_ext: &Value,
+    variant: usize,
+    variants: usize,
+) -> Result<Option<usize>, String> {
     let mappings = prim_ext
         .get("mappings")
         .and_then(Value::as_array)
@@ -272,11 +314,12 @@ pub fn mapped_material(prim_ext: &Value, variant: usize, variants: usize) -> Res
             .get("material")
             .and_then(Value::as_u64)
             .and_then(|x| usize::try_from(x).ok())
-            .ok_or_else(|| format!("{VARIANTS}.mappings[{i}] needs an unsigned integer \"material\""))?;
-        let list = m
-            .get("variants")
-            .and_then(Value::as_array)
-            .ok_or_else(|| format!("{VARIANTS}.mappings[{i}] needs a \"variants\" array of indices"))?;
+            .ok_or_else(|| {
+                format!("{VARIANTS}.mappings[{i}] needs an unsigned integer \"material\"")
+            })?;
+        let list = m.get("variants").and_then(Value::as_array).ok_or_else(|| {
+            format!("{VARIANTS}.mappings[{i}] needs a \"variants\" array of indices")
+        })?;
         for x in list {
             let x = x
                 .as_u64()

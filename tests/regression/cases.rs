@@ -316,7 +316,11 @@ pub fn cases() -> Vec<Case> {
     // Real cloth assets (tests/data/khronos, Khronos glTF sample assets, licences in their
     // folders): the material extensions under the default lighting (studio, and the default key
     // light where the file has no lights).
-    const STUDIO: Option<EnvCase> = Some(EnvCase { map: "studio", rotation: 0.0, lights: LightsMode::Auto });
+    const STUDIO: Option<EnvCase> = Some(EnvCase {
+        map: "studio",
+        rotation: 0.0,
+        lights: LightsMode::Auto,
+    });
     cases.extend([
         Case {
             env: STUDIO,
