@@ -210,13 +210,13 @@ vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
 // occlusion texture. Anisotropy bends the look-up normal (McAuley's bent reflection vector, as
 // Filament and the glTF Sample Viewer do); the sheen takes the GGX-prefiltered radiance at its own
 // roughness times its albedo, and scales the layers below by 1 - max(sheen)·E(n·v).
-vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao) {
+// e_v: the sheen's albedo E(n·v) (0 without sheen), which the lamps' loop shares.
+vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
     vec3 base = s.base;
     float metallic = s.metallic;
     float roughness = s.roughness;
     float nv = clamp(dot(n, v), 1e-4, 1.0);
     bool has_sheen = max3(s.sheen) > 0.0;
-    float e_v = has_sheen ? sheen_albedo(nv, s.sheen_roughness) : 0.0;
     if (IBL == 3u) {
         // Ground truth: the glTF BRDF itself (pbr_brdf_cos) over the unfiltered environment, each
         // sample pair one GGX-sampled and one cosine-sampled direction, weighted by the balance
@@ -505,7 +505,7 @@ void main() {
         bool has_sheen = max3(s.sheen) > 0.0;
         float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;
         if (IBL != 0u) {
-            radiance += pbr_env(n, v, s, ao);
+            radiance += pbr_env(n, v, s, ao, e_v);
         } else {
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
             radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;

@@ -106,13 +106,6 @@ fn smith_v(n_l: f32, n_v: f32, alpha: f32) -> f32 {
     }
 }
 
-fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 fn length(a: Vec3) -> f32 {
     dot(a, a).sqrt()
 }
@@ -238,7 +231,7 @@ pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 
     let v_h = dot(v, h).clamp(0.0, 1.0);
     let alpha = (s.roughness * s.roughness).max(1e-3);
     let dv = if s.anisotropy > 0.0 {
-        let b = cross(n, s.t);
+        let b = fb::cross(n, s.t);
         let at = lerp(alpha, 1.0, s.anisotropy * s.anisotropy);
         ggx_aniso_d(dot(s.t, h), dot(b, h), n_h, at, alpha)
             * ggx_aniso_v(
