@@ -41,10 +41,23 @@ pub enum View {
     Far,
     /// A low eye looking across the cloth: long, thin footprints.
     Grazing,
+    /// The two-colour plain weave of `assets/scenes/closeup.glb` (red warp, gold weft), seen at
+    /// 50° from its normal with the camera rolled 30°, so footprints are oblique parallelograms:
+    /// a cell is about 10 pixels at 360 rows (magnified).
+    Cells10,
+    /// The same at a tenth of the pitch: a cell is about one pixel.
+    Cells1,
 }
 
 impl View {
-    pub const ALL: [View; 4] = [View::CloseUp, View::Mid, View::Far, View::Grazing];
+    pub const ALL: [View; 6] = [
+        View::CloseUp,
+        View::Mid,
+        View::Far,
+        View::Grazing,
+        View::Cells10,
+        View::Cells1,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -52,6 +65,8 @@ impl View {
             View::Mid => "mid",
             View::Far => "far",
             View::Grazing => "grazing",
+            View::Cells10 => "cells-10px",
+            View::Cells1 => "cells-1px",
         }
     }
 
@@ -62,13 +77,25 @@ impl View {
             .find(|v| v.name() == text)
             .ok_or_else(|| {
                 Error::input(format!(
-                    "unknown bench view '{text}': choose close-up, mid, far or grazing"
+                    "unknown bench view '{text}': choose close-up, mid, far, grazing, cells-10px or cells-1px"
                 ))
             })
     }
 
-    /// The camera of this view on `scene` (meant for the default scene: the cloth is draped over a
-    /// ball of radius 0.5 at the origin, top at y = 1.015, hem at |x|, |z| <= 1.2).
+    /// Which of the bench's scenes this view looks at.
+    pub fn scene(self) -> BenchScene {
+        match self {
+            View::Cells10 => BenchScene::Weave,
+            View::Cells1 => BenchScene::FineWeave,
+            _ => BenchScene::Default,
+        }
+    }
+
+    /// The camera of this view on its scene ([`View::scene`]). The default scene: the cloth is
+    /// draped over a ball of radius 0.5 at the origin, top at y = 1.015, hem at |x|, |z| <= 1.2.
+    /// The weave scenes: a 28 x 22 cm patch bent along x (radius 1 m) around the origin, a cell
+    /// 4 mm (0.4 mm in the fine one); the eye 20 cm from (0, 0, -0.05) at 50° from the normal,
+    /// 40° field of view: a cell spans 0.004 / (0.2 · 2 tan 20°) · 360 ≈ 10 rows.
     pub fn camera(self, scene: &Scene) -> crate::Result<Camera> {
         let at = |eye: [f32; 3], target: [f32; 3], fov_deg: f32| {
             scene.look_at_camera(Vec3::from(eye), Vec3::from(target), fov_deg.to_radians())
@@ -78,7 +105,45 @@ impl View {
             View::Mid => scene.camera(None),
             View::Far => at([0.0, 6.0, 14.0], [0.0, 0.4, 0.0], 20.0),
             View::Grazing => at([1.9, 0.16, 1.9], [-0.2, 0.25, -0.2], 32.0),
+            View::Cells10 | View::Cells1 => {
+                let elevation = 50f32.to_radians();
+                let target = Vec3::new(0.0, 0.0, -0.05);
+                let eye = target + 0.2 * Vec3::new(0.0, elevation.cos(), elevation.sin());
+                let mut c = scene.look_at_camera(eye, target, 40f32.to_radians())?;
+                c.view = glam::Mat4::from_rotation_z(30f32.to_radians()) * c.view;
+                Ok(c)
+            }
         }
+    }
+}
+
+/// The scenes the bench views look at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BenchScene {
+    /// The built-in default scene.
+    Default,
+    /// `assets/scenes/closeup.glb`: a two-colour plain weave (warp and weft of different colours).
+    Weave,
+    /// The same with the weave's repeat and gap a tenth as large.
+    FineWeave,
+}
+
+/// The close-up scene of the regression cases, built into the binary for the bench.
+const WEAVE_SCENE_GLB: &[u8] = include_bytes!("../assets/scenes/closeup.glb");
+
+impl BenchScene {
+    pub fn load(self) -> crate::Result<Scene> {
+        let mut scene = match self {
+            BenchScene::Default => return Ok(crate::scene::default_scene()),
+            _ => crate::scene::load_slice(WEAVE_SCENE_GLB, "assets/scenes/closeup.glb", None)?,
+        };
+        if self == BenchScene::FineWeave {
+            for f in scene.materials.iter_mut().filter_map(|m| m.fabric.as_mut()) {
+                f.repeat *= 0.1;
+                f.gap *= 0.1;
+            }
+        }
+        Ok(scene)
     }
 }
 
@@ -89,8 +154,10 @@ pub struct BenchConfig {
     pub views: Vec<View>,
     /// (level, precision) pairs of the accuracy sweep, in the order they are reported.
     pub variants: Vec<(Accuracy, WeavePrecision)>,
-    /// The reference every variant is compared with (always with the analytic weave).
-    pub ground_truth: Accuracy,
+    /// The ground truth every variant is compared with integrates each pixel: the mean of
+    /// `truth_samples`² frames at stratified jittered sub-pixel offsets, each with the weave
+    /// evaluated exactly at the sample point ([`pixel_truth`]).
+    pub truth_samples: u32,
     /// Image size of the accuracy sweep.
     pub size: (u32, u32),
     /// Frames timed per configuration (the median is reported).
@@ -153,9 +220,9 @@ impl Default for BenchConfig {
         BenchConfig {
             views: View::ALL.to_vec(),
             variants: default_variants(),
-            // 32 x 32 samples: supersampled:N's error against the exact footprint integral falls
-            // as 1/N, and at 16 it is still as large as mixture + analytic's (docs/performance.md).
-            ground_truth: Accuracy::Supersampled(32),
+            // 16 x 16 point samples per pixel: the estimate's own error is measured by the run
+            // against 8 x 8 (docs/performance.md).
+            truth_samples: 16,
             size: (640, 360),
             frames: 5,
             warmup: 1,
@@ -185,7 +252,7 @@ impl BenchConfig {
         BenchConfig {
             views: View::ALL.to_vec(),
             variants,
-            ground_truth: Accuracy::Supersampled(8),
+            truth_samples: 6,
             size: (320, 180),
             frames: 3,
             warmup: 1,
@@ -201,7 +268,7 @@ impl BenchConfig {
 
     /// How many renders the run makes (for the progress bar).
     fn jobs(&self) -> u64 {
-        let sweep = self.views.len() * (1 + self.variants.len());
+        let sweep = self.views.len() * (self.truth_samples.pow(2) as usize + self.variants.len());
         let pbr = if self.pbr_size.is_some() {
             self.pbr_views.len() * 2
         } else {
@@ -222,13 +289,18 @@ impl BenchConfig {
         if self.light_counts.contains(&0) {
             return Err(Error::input("bench: every light count must be at least 1"));
         }
-        let options = RenderOptions {
-            accuracy: self.ground_truth,
-            ..Default::default()
-        };
-        options.validate()
+        if !(1..=MAX_TRUTH_SAMPLES).contains(&self.truth_samples) {
+            return Err(Error::input(format!(
+                "bench: the ground truth's samples per pixel side must be between 1 and {MAX_TRUTH_SAMPLES}, not {}",
+                self.truth_samples
+            )));
+        }
+        Ok(())
     }
 }
+
+/// The most samples per pixel side of the ground truth (64² frames).
+pub const MAX_TRUTH_SAMPLES: u32 = 64;
 
 /// GPU times of the two passes the bench is about, medians over the timed frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -249,11 +321,11 @@ impl PassTimes {
 #[derive(Clone, Debug)]
 pub struct GroundTruthRow {
     pub view: View,
-    pub level: Accuracy,
-    /// From frames that were not warmed up when `warm` is false (then they include JIT compilation).
+    /// Samples per pixel side (`samples`² jittered frames).
+    pub samples: u32,
+    /// Summed over the frames (the first one cold: it includes JIT compilation).
     pub times: PassTimes,
-    pub warm: bool,
-    /// Share of the image covered by fabric.
+    /// Share of the image covered by fabric at every sample (the pixels the errors are over).
     pub fabric_fraction: f64,
 }
 
@@ -264,10 +336,13 @@ pub struct AccuracyRow {
     pub level: Accuracy,
     pub precision: WeavePrecision,
     pub times: PassTimes,
-    /// Mean FLIP error of the sRGB image against the ground truth's.
+    /// Mean FLIP error of the sRGB image against the ground truth's, over the fabric pixels.
     pub flip_mean: f64,
-    /// RMSE of the linear HDR RGB against the ground truth's.
+    /// RMSE of the linear HDR RGB against the ground truth's, over the fabric pixels.
     pub rmse: f64,
+    /// PSNR (dB) of the linear HDR RGB over the fabric pixels, the peak being the ground truth's
+    /// brightest fabric channel value.
+    pub psnr: f64,
     /// On the view's Pareto front: no other variant of the same view is both faster and closer to
     /// the ground truth.
     pub pareto: bool,
@@ -396,6 +471,99 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
     let progress = Progress::new(config.jobs(), config.progress);
     let gpu = renderer.upload(&scene)?;
     let (width, height) = config.size;
+
+    // The accuracy sweep, view by view: the ground truth, then every variant against it.
+    let mut scenes: Vec<(BenchScene, Scene, GpuScene)> = Vec::new();
+    for kind in config.views.iter().map(|v| v.scene()) {
+        if !scenes.iter().any(|s| s.0 == kind) {
+            let s = kind.load()?;
+            let g = renderer.upload(&s)?;
+            scenes.push((kind, s, g));
+        }
+    }
+    let mut ground_truth = Vec::new();
+    let mut accuracy = Vec::new();
+    for &view in &config.views {
+        let (_, vscene, vgpu) = scenes
+            .iter()
+            .find(|s| s.0 == view.scene())
+            .expect("every view's scene is loaded above");
+        let at = |accuracy: Accuracy, precision: WeavePrecision| {
+            Ok::<_, Error>(RenderOptions {
+                width,
+                height,
+                camera_override: Some(view.camera(vscene)?),
+                accuracy,
+                weave_precision: precision,
+                ..Default::default()
+            })
+        };
+        let n = config.truth_samples;
+        progress.start(format!(
+            "{} ground truth ({n}x{n} samples per pixel)",
+            view.name()
+        ));
+        let truth = pixel_truth(
+            &mut renderer,
+            vscene,
+            vgpu,
+            &at(Accuracy::Mixture, WeavePrecision::Rgba16f)?,
+            n,
+            || progress.done(),
+        )?;
+        let mask = truth.fabric_everywhere();
+        std::fs::create_dir_all(&config.out).map_err(|e| Error::Io {
+            context: format!(
+                "creating the bench output directory '{}'",
+                config.out.display()
+            ),
+            source: e,
+        })?;
+        let f = &truth.frame;
+        crate::render::write_png(
+            &config.out.join(format!("truth-{}.png", view.name())),
+            f.width,
+            f.height,
+            &f.ldr,
+        )?;
+        ground_truth.push(GroundTruthRow {
+            view,
+            samples: n,
+            times: truth.times,
+            fabric_fraction: mask.iter().filter(|m| **m).count() as f64 / mask.len().max(1) as f64,
+        });
+
+        let jobs = config
+            .variants
+            .iter()
+            .map(|&(level, precision)| Ok((vscene, vgpu, at(level, precision)?)))
+            .collect::<crate::Result<Vec<_>>>()?;
+        progress.start(format!("{}: {} variants", view.name(), jobs.len()));
+        let measured = measure(&mut renderer, &jobs, config.warmup, config.frames, |_| {
+            progress.done()
+        })?;
+        for (&(level, precision), (frame, times)) in config.variants.iter().zip(measured) {
+            if (level, precision) == (Accuracy::Mixture, WeavePrecision::Rgba16f) {
+                crate::render::write_png(
+                    &config.out.join(format!("default-{}.png", view.name())),
+                    frame.width,
+                    frame.height,
+                    &frame.ldr,
+                )?;
+            }
+            accuracy.push(AccuracyRow {
+                view,
+                level,
+                precision,
+                times,
+                flip_mean: flip_mean_masked(&truth.frame, &frame, &mask),
+                rmse: rmse_hdr_masked(&truth.frame, &frame, &mask),
+                psnr: psnr_hdr_masked(&truth.frame, &frame, &mask),
+                pareto: false,
+            });
+        }
+    }
+    drop(scenes);
     let at =
         |view: View, accuracy: Accuracy, precision: WeavePrecision, (width, height): (u32, u32)| {
             Ok::<_, Error>(RenderOptions {
@@ -407,56 +575,6 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
                 ..Default::default()
             })
         };
-
-    // The accuracy sweep, view by view: the ground truth, then every variant against it.
-    let mut ground_truth = Vec::new();
-    let mut accuracy = Vec::new();
-    for &view in &config.views {
-        progress.start(format!(
-            "{} ground truth ({})",
-            view.name(),
-            config.ground_truth.name()
-        ));
-        let options = at(
-            view,
-            config.ground_truth,
-            WeavePrecision::Analytic,
-            config.size,
-        )?;
-        // Rendered once, cold: it is the reference, not a contender.
-        let job = [(&scene, &gpu, options)];
-        let (truth, times) = measure(&mut renderer, &job, 0, 1, |_| {})?.remove(0);
-        let fabric_fraction = fabric_fraction(&renderer, &scene)?;
-        ground_truth.push(GroundTruthRow {
-            view,
-            level: config.ground_truth,
-            times,
-            warm: false,
-            fabric_fraction,
-        });
-        progress.done();
-
-        let jobs = config
-            .variants
-            .iter()
-            .map(|&(level, precision)| Ok((&scene, &gpu, at(view, level, precision, config.size)?)))
-            .collect::<crate::Result<Vec<_>>>()?;
-        progress.start(format!("{}: {} variants", view.name(), jobs.len()));
-        let measured = measure(&mut renderer, &jobs, config.warmup, config.frames, |_| {
-            progress.done()
-        })?;
-        for (&(level, precision), (frame, times)) in config.variants.iter().zip(measured) {
-            accuracy.push(AccuracyRow {
-                view,
-                level,
-                precision,
-                times,
-                flip_mean: flip_mean(&truth, &frame),
-                rmse: rmse_hdr(&truth, &frame),
-                pareto: false,
-            });
-        }
-    }
     mark_pareto_front(&mut accuracy);
 
     // Growth over resolution: the mid view at the default level and precision. Not interleaved:
@@ -589,6 +707,129 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
     crate::render::write_png(&report.png, pw, ph, &pixels)?;
     report.seconds = start.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// A pixel-integrating ground truth ([`pixel_truth`]).
+pub struct Truth {
+    /// The mean of the sample frames' linear HDR and its tone-mapped sRGB image.
+    pub frame: Frame,
+    /// Per pixel, how many of the samples hit a fabric material.
+    pub fabric_samples: Vec<u32>,
+    pub samples: u32,
+    /// Summed over the sample frames.
+    pub times: PassTimes,
+}
+
+impl Truth {
+    /// Pixels covered by fabric at every sample: away from silhouettes, which the ground truth
+    /// antialiases and no accuracy level does (the levels differ in the weave, not in the edges).
+    pub fn fabric_everywhere(&self) -> Vec<bool> {
+        let all = self.samples * self.samples;
+        self.fabric_samples.iter().map(|&c| c == all).collect()
+    }
+}
+
+/// The ground truth of the accuracy sweep: `n`² frames of `options` sampled at stratified,
+/// jittered sub-pixel offsets (one offset per frame, in its own cell of an n x n grid over the
+/// pixel), each with the weave evaluated exactly at the sample point (accuracy `nearest`, weave
+/// precision `analytic`: no footprint, no texture, at a point the one-lobe level is the two-lobe
+/// mixture), their linear HDR averaged: a box pixel filter over whatever the projection makes
+/// the footprint. It shares no footprint approximation with the levels it judges. The sRGB image
+/// is the mean tone-mapped on the CPU (`reference::shading::tonemap`, tonemap.frag's twin).
+/// `done` is called after each frame.
+pub fn pixel_truth(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    gpu: &GpuScene,
+    options: &RenderOptions,
+    n: u32,
+    mut done: impl FnMut(),
+) -> crate::Result<Truth> {
+    use crate::reference::shading::{srgb_encode, tonemap};
+    let n = n.max(1);
+    let (w, h) = (options.width as usize, options.height as usize);
+    let mut sum = vec![0.0f64; w * h * 3];
+    let mut fabric_samples = vec![0u32; w * h];
+    let (mut gbuffer, mut lighting) = (0.0, 0.0);
+    let mut last = None;
+    // A fixed sequence (splitmix64): the truth is deterministic.
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut unit = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for j in 0..n {
+        for i in 0..n {
+            let jitter = [
+                (i as f32 + unit()) / n as f32 - 0.5,
+                (j as f32 + unit()) / n as f32 - 0.5,
+            ];
+            let o = RenderOptions {
+                accuracy: Accuracy::Nearest,
+                weave_precision: WeavePrecision::Analytic,
+                read_hdr: true,
+                jitter,
+                ..options.clone()
+            };
+            let frame = renderer.render_frame(scene, gpu, &o)?;
+            gbuffer += pass_ms(&frame, "gbuffer");
+            lighting += pass_ms(&frame, "lighting");
+            for (acc, px) in sum.chunks_exact_mut(3).zip(frame.hdr.chunks_exact(4)) {
+                for c in 0..3 {
+                    acc[c] += px[c] as f64;
+                }
+            }
+            let g = renderer.read_gbuffer()?;
+            for ((count, d), surface) in fabric_samples
+                .iter_mut()
+                .zip(&g.depth)
+                .zip(g.surface.chunks_exact(4))
+            {
+                let fabric = *d > 0.0
+                    && scene
+                        .materials
+                        .get(surface[1].round().max(0.0) as usize)
+                        .is_some_and(|m| m.fabric.is_some());
+                *count += fabric as u32;
+            }
+            last = Some(frame);
+            done();
+        }
+    }
+    let mut frame = last.expect("n >= 1 frames");
+    let scale = 1.0 / (n * n) as f64;
+    frame.hdr = sum
+        .chunks_exact(3)
+        .flat_map(|c| {
+            [
+                (c[0] * scale) as f32,
+                (c[1] * scale) as f32,
+                (c[2] * scale) as f32,
+                1.0,
+            ]
+        })
+        .collect();
+    frame.ldr = frame
+        .hdr
+        .chunks_exact(4)
+        .flat_map(|c| {
+            let t = tonemap([c[0], c[1], c[2]], options.exposure.exp2());
+            [srgb_encode(t[0]), srgb_encode(t[1]), srgb_encode(t[2]), 255]
+        })
+        .collect();
+    Ok(Truth {
+        frame,
+        fabric_samples,
+        samples: n,
+        times: PassTimes {
+            gbuffer_ms: gbuffer,
+            lighting_ms: lighting,
+            frames: n * n,
+        },
+    })
 }
 
 /// Renders each job `warmup` times (thrown away: lavapipe compiles a pipeline at its first
@@ -726,10 +967,70 @@ pub fn rmse_hdr(reference: &Frame, test: &Frame) -> f64 {
     }
 }
 
-/// Share of the last frame's pixels that are covered by a fabric material (from the G-buffer's
-/// material index).
-fn fabric_fraction(renderer: &Renderer, scene: &Scene) -> crate::Result<f64> {
-    Ok(coverage_fractions(renderer, scene)?.0)
+/// Mean FLIP error of `test`'s sRGB image against `reference`'s over the pixels of `mask` (the
+/// error map is computed on the whole images: FLIP looks at neighbourhoods).
+pub fn flip_mean_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
+    let rgb = |f: &Frame| {
+        f.ldr
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect::<Vec<u8>>()
+    };
+    let a = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &rgb(reference));
+    let b = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &rgb(test));
+    let error = nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    let values = error.to_vec();
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for (v, _) in values.iter().zip(mask).filter(|(_, m)| **m) {
+        sum += *v as f64;
+        count += 1;
+    }
+    if count == 0 {
+        0.0
+    } else {
+        sum / count as f64
+    }
+}
+
+/// Sum of squared linear HDR RGB differences over `mask`, the channel count, and the reference's
+/// largest channel value there.
+fn masked_sse(reference: &Frame, test: &Frame, mask: &[bool]) -> (f64, usize, f64) {
+    let (mut sum, mut n, mut peak) = (0.0f64, 0usize, 0.0f64);
+    for ((a, b), _) in reference
+        .hdr
+        .chunks_exact(4)
+        .zip(test.hdr.chunks_exact(4))
+        .zip(mask)
+        .filter(|(_, m)| **m)
+    {
+        for c in 0..3 {
+            let d = a[c] as f64 - b[c] as f64;
+            sum += d * d;
+            peak = peak.max(a[c] as f64);
+        }
+        n += 3;
+    }
+    (sum, n, peak)
+}
+
+/// RMSE of the linear HDR RGB over the pixels of `mask`.
+pub fn rmse_hdr_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
+    let (sum, n, _) = masked_sse(reference, test, mask);
+    if n == 0 {
+        0.0
+    } else {
+        (sum / n as f64).sqrt()
+    }
+}
+
+/// PSNR (dB) of the linear HDR RGB over the pixels of `mask`: 10·log10(peak² / MSE), the peak
+/// being the reference's largest channel value over the mask; infinite for identical images.
+pub fn psnr_hdr_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
+    let (sum, n, peak) = masked_sse(reference, test, mask);
+    if n == 0 || sum == 0.0 {
+        return f64::INFINITY;
+    }
+    10.0 * (peak * peak / (sum / n as f64)).log10()
 }
 
 /// Shares of the last frame's pixels covered by fabric and by any surface.
@@ -907,23 +1208,23 @@ impl BenchReport {
         let (w, h) = self.size;
         let _ = writeln!(
             t,
-            "accuracy at {w}x{h} against the ground truth (analytic weave):"
+            "accuracy at {w}x{h} against the pixel-integrating ground truth, errors over the fabric pixels:"
         );
         for g in &self.ground_truth {
             let _ = writeln!(
                 t,
-                "  {:<8} ground truth {}: gbuffer {} ms + lighting {} ms ({}), fabric covers {:.0}% of the image",
+                "  {:<10} ground truth {n}x{n} jittered point samples per pixel: gbuffer {} ms + lighting {} ms (sum of {} frames), fabric fills {:.0}% of the image",
                 g.view.name(),
-                g.level.name(),
                 fmt_ms(g.times.gbuffer_ms),
                 fmt_ms(g.times.lighting_ms),
-                if g.warm { "warm" } else { "one cold frame" },
-                g.fabric_fraction * 100.0
+                g.times.frames,
+                g.fabric_fraction * 100.0,
+                n = g.samples,
             );
         }
         let _ = writeln!(
             t,
-            "{:<9} {:<16} {:<9} {:>10} {:>11} {:>9} {:>10} {:>10} {:>6}",
+            "{:<10} {:<16} {:<9} {:>10} {:>11} {:>9} {:>10} {:>10} {:>8} {:>6}",
             "view",
             "level",
             "precision",
@@ -932,12 +1233,13 @@ impl BenchReport {
             "total ms",
             "FLIP mean",
             "HDR RMSE",
+            "PSNR dB",
             "front"
         );
         for r in &self.accuracy {
             let _ = writeln!(
                 t,
-                "{:<9} {:<16} {:<9} {:>10} {:>11} {:>9} {:>10.5} {:>10.5} {:>6}",
+                "{:<10} {:<16} {:<9} {:>10} {:>11} {:>9} {:>10.5} {:>10.5} {:>8.2} {:>6}",
                 r.view.name(),
                 r.level.name(),
                 r.precision.name(),
@@ -946,6 +1248,7 @@ impl BenchReport {
                 fmt_ms(r.times.total_ms()),
                 r.flip_mean,
                 r.rmse,
+                r.psnr,
                 if r.pareto { "*" } else { "" }
             );
         }
@@ -1046,14 +1349,14 @@ impl BenchReport {
         let (w, h) = self.size;
         let base = |section: &str,
                     view: View,
-                    level: Accuracy,
+                    level: String,
                     precision: WeavePrecision,
                     size: (u32, u32),
                     lights: usize| {
             let mut r = CsvRow::default();
             r.set("section", section);
             r.set("view", view.name());
-            r.set("level", level.name());
+            r.set("level", level);
             r.set("precision", precision.name());
             r.set("width", size.0);
             r.set("height", size.1);
@@ -1071,22 +1374,20 @@ impl BenchReport {
             let mut r = base(
                 "ground-truth",
                 g.view,
-                g.level,
+                format!("pixel:{}", g.samples),
                 WeavePrecision::Analytic,
                 (w, h),
                 scene_lights,
             );
             times(&mut r, &g.times);
             r.set("fabric_fraction", format!("{:.4}", g.fabric_fraction));
-            r.set("flip_mean", 0);
-            r.set("rmse_hdr", 0);
             r.push(&mut t);
         }
         for a in &self.accuracy {
             let mut r = base(
                 "accuracy",
                 a.view,
-                a.level,
+                a.level.name(),
                 a.precision,
                 (w, h),
                 scene_lights,
@@ -1094,6 +1395,7 @@ impl BenchReport {
             times(&mut r, &a.times);
             r.set("flip_mean", format!("{:.6}", a.flip_mean));
             r.set("rmse_hdr", format!("{:.6}", a.rmse));
+            r.set("psnr_db", format!("{:.3}", a.psnr));
             r.set("pareto", a.pareto as u8);
             r.push(&mut t);
         }
@@ -1102,7 +1404,7 @@ impl BenchReport {
             let mut r = base(
                 "resolution",
                 View::Mid,
-                default.0,
+                default.0.name(),
                 default.1,
                 (g.width, g.height),
                 scene_lights,
@@ -1118,7 +1420,7 @@ impl BenchReport {
             let mut r = base(
                 "lights",
                 View::Mid,
-                default.0,
+                default.0.name(),
                 default.1,
                 (g.width, g.height),
                 g.lights as usize,
@@ -1138,7 +1440,7 @@ impl BenchReport {
                 let mut r = base(
                     section,
                     p.view,
-                    default.0,
+                    default.0.name(),
                     default.1,
                     (p.width, p.height),
                     scene_lights,
@@ -1157,7 +1459,7 @@ impl BenchReport {
             let mut r = base(
                 "fit-resolution",
                 View::Mid,
-                default.0,
+                default.0.name(),
                 default.1,
                 (0, 0),
                 scene_lights,
@@ -1174,7 +1476,14 @@ impl BenchReport {
                 .first()
                 .map(|l| (l.width, l.height))
                 .unwrap_or((0, 0));
-            let mut r = base("fit-lights", View::Mid, default.0, default.1, (lw, lh), 0);
+            let mut r = base(
+                "fit-lights",
+                View::Mid,
+                default.0.name(),
+                default.1,
+                (lw, lh),
+                0,
+            );
             r.set("lights", "");
             r.set("ms_per_light", format!("{slope:.4}"));
             r.set("lighting_ms", format!("{intercept:.4}"));
@@ -1186,7 +1495,7 @@ impl BenchReport {
 
 /// The columns of bench.csv. In the `fit-*` rows, `ms_per_mp` / `ms_per_light` is the fitted slope
 /// and `total_ms` / `lighting_ms` the intercept.
-pub const CSV_COLUMNS: [&str; 19] = [
+pub const CSV_COLUMNS: [&str; 20] = [
     "section",
     "view",
     "level",
@@ -1200,6 +1509,7 @@ pub const CSV_COLUMNS: [&str; 19] = [
     "total_ms",
     "flip_mean",
     "rmse_hdr",
+    "psnr_db",
     "ms_per_mp",
     "ms_per_light",
     "fabric_fraction",

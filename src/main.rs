@@ -240,6 +240,20 @@ struct BenchArgs {
     /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name. Also WEFT_DEVICE.
     #[arg(long)]
     device: Option<String>,
+    /// Only these views of the accuracy sweep (comma-separated: close-up, mid, far, grazing,
+    /// cells-10px, cells-1px).
+    #[arg(long, value_delimiter = ',', value_parser = parse_bench_view)]
+    views: Option<Vec<weft::bench::View>>,
+    /// Jittered point samples per pixel side of the ground truth (N x N frames per view).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=weft::bench::MAX_TRUTH_SAMPLES as i64))]
+    truth_samples: Option<u32>,
+    /// Only the accuracy sweep: skip the growth over resolution and lights and the PBR ratio.
+    #[arg(long)]
+    accuracy_only: bool,
+}
+
+fn parse_bench_view(text: &str) -> Result<weft::bench::View, String> {
+    weft::bench::View::parse(text).map_err(|e| e.to_string())
 }
 
 #[derive(Args)]
@@ -795,6 +809,17 @@ fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
     config.out = args.out;
     if let Some(f) = args.frames {
         config.frames = f;
+    }
+    if let Some(v) = args.views {
+        config.views = v;
+    }
+    if let Some(n) = args.truth_samples {
+        config.truth_samples = n;
+    }
+    if args.accuracy_only {
+        config.resolutions.clear();
+        config.light_counts.clear();
+        config.pbr_size = None;
     }
     let device = args
         .device

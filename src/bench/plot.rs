@@ -23,6 +23,8 @@ fn view_color(view: View) -> Rgb {
         View::Mid => [255, 127, 14],
         View::Far => [44, 160, 44],
         View::Grazing => [214, 39, 40],
+        View::Cells10 => [148, 103, 189],
+        View::Cells1 => [140, 86, 75],
     };
     [
         c[0] as f32 / 255.0,

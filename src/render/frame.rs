@@ -845,7 +845,7 @@ impl Renderer {
             Some(c) => c.clone(),
             None => scene.camera(options.camera)?,
         };
-        let mut frame_data = FrameData::new(&camera, width, height);
+        let mut frame_data = FrameData::new(&camera, width, height).jittered(options.jitter);
         if let (Some(i), Some(e)) = (env_index, &options.environment) {
             let g = &self.env_cache[i];
             let rot = crate::env::env_from_world(e.rotation);

@@ -79,6 +79,26 @@ impl FrameData {
     }
 }
 
+impl FrameData {
+    /// The same frame sampled at pixel centre + `jitter` (pixels, x right, y down): the projection
+    /// is translated in clip space by 2·jitter/size, so the lighting pass's reconstruction from
+    /// `inv_view_proj` follows the shifted sample.
+    pub fn jittered(mut self, jitter: [f32; 2]) -> FrameData {
+        if jitter == [0.0, 0.0] {
+            return self;
+        }
+        let (w, h) = (self.viewport[0], self.viewport[1]);
+        let shift =
+            Mat4::from_translation(Vec3::new(-2.0 * jitter[0] / w, -2.0 * jitter[1] / h, 0.0));
+        let proj = shift * Mat4::from_cols_array_2d(&self.proj);
+        let view_proj = proj * Mat4::from_cols_array_2d(&self.view);
+        self.proj = proj.to_cols_array_2d();
+        self.view_proj = view_proj.to_cols_array_2d();
+        self.inv_view_proj = view_proj.inverse().to_cols_array_2d();
+        self
+    }
+}
+
 /// Hemispherical ambient radiance from above and below, and the radiance of empty pixels.
 pub const AMBIENT_SKY: [f32; 4] = [0.040, 0.045, 0.055, 0.0];
 pub const AMBIENT_GROUND: [f32; 4] = [0.020, 0.018, 0.015, 0.0];

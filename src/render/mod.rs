@@ -304,6 +304,10 @@ pub struct RenderOptions {
     /// Read the linear HDR target back into `Frame::hdr` (on by default; `weft render` turns it
     /// off unless `--exr` is given, since the PNG needs only the 8-bit target).
     pub read_hdr: bool,
+    /// Sub-pixel offset of the projection in pixels (x right, y down), each within [-1/2, 1/2]:
+    /// the image is sampled at pixel centre + jitter. Frames at stratified jitters, averaged,
+    /// integrate the pixel (`weft::bench::pixel_truth`, the bench's ground truth).
+    pub jitter: [f32; 2],
 }
 
 impl Default for RenderOptions {
@@ -322,6 +326,7 @@ impl Default for RenderOptions {
             force: Force::NONE,
             environment: None,
             read_hdr: true,
+            jitter: [0.0, 0.0],
         }
     }
 }
@@ -344,6 +349,12 @@ impl RenderOptions {
         }
         if let Some(e) = &self.environment {
             e.validate()?;
+        }
+        if !self.jitter.iter().all(|j| j.is_finite() && j.abs() <= 0.5) {
+            return Err(Error::input(format!(
+                "sub-pixel jitter {:?} is out of range: each offset must be within [-0.5, 0.5] pixels",
+                self.jitter
+            )));
         }
         if !self.exposure.is_finite() || self.exposure.abs() > 64.0 {
             return Err(Error::input(format!(
