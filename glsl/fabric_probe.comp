@@ -16,7 +16,7 @@ struct ProbeInput {
     vec4 k2;         // world direction to the viewer (unit)
     vec4 point;      // xy: point for weave_point, in cells
     vec4 footprint;  // (x0, y0, x1, y1): box for weave_box, in cells
-    vec4 coverage;   // (c_warp, c_weft, sh) given to fabric_brdf
+    vec4 coverage;   // (c_warp, c_weft, s_warp, s_weft) given to fabric_brdf
     GpuFabric fabric;
 };
 
@@ -26,8 +26,8 @@ struct ProbeOutput {
     vec4 expo;       // E(h) weft, E(h) warp, h·n, h·k
     vec4 diffuse;    // coupled diffuse (no Rd), n·k1, n·k2, hn^E weft
     vec4 f;          // fabric_brdf with the input coverage (rgb), 0
-    vec4 point;      // weave_point (c_warp, c_weft, sh), class: 0 gap, 1 warp, 2 weft
-    vec4 footprint;  // weave_box (c_warp, c_weft, sh), 0
+    vec4 point;      // weave_point (c_warp, c_weft, s_warp, s_weft)
+    vec4 footprint;  // weave_box (c_warp, c_weft, s_warp, s_weft)
     vec4 f_point;    // fabric_brdf with the point's coverage (rgb), 0
     vec4 f_avg;      // fabric_brdf_averaged with the input coverage (rgb), 0
     vec4 phong;      // phong_brdf (rgb), phong_lobe with fabric_phong_exponent
@@ -61,11 +61,10 @@ void main() {
     vec3 k2 = fabric_local(inp.k2.xyz, frame);
     float kh;
     vec3 h = fabric_half(k1, k2, kh);
-    vec3 cov = inp.coverage.xyz;
-    vec3 p = weave_point(w, inp.point.x, inp.point.y);
-    float class_ = p.x > 0.5 ? 1.0 : (p.y > 0.5 ? 2.0 : 0.0);
+    vec4 cov = inp.coverage;
+    vec4 p = weave_point(w, inp.point.x, inp.point.y);
     vec4 fp = inp.footprint;
-    vec3 b = weave_box(w, fp.x, fp.y, fp.z, fp.w);
+    vec4 b = weave_box(w, fp.x, fp.y, fp.z, fp.w);
     vec3 f = fabric_brdf(k1, k2, cov, m);
     vec3 f_point = fabric_brdf(k1, k2, p, m);
     vec3 f_avg = fabric_brdf_averaged(k1, k2, cov, m);
@@ -89,8 +88,8 @@ void main() {
         k2.z,
         as_power(h.x, h.y, h.z, m.e_along, m.e_across));
     o.f = vec4(f, 0.0);
-    o.point = vec4(p, class_);
-    o.footprint = vec4(b, 0.0);
+    o.point = p;
+    o.footprint = b;
     o.f_point = vec4(f_point, 0.0);
     o.f_avg = vec4(f_avg, 0.0);
     o.phong = vec4(phong, phong_lobe(k1, k2, fabric_phong_exponent(m)));

@@ -24,7 +24,7 @@ layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;
 layout(set = 1, binding = 2) uniform sampler2D normal_tex;
 layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
 // The material's weave texture (fabric only): one pattern repeat, full mip chain, each texel the
-// exact coverage (c_warp, c_weft, shadow-weighted thread area) of its footprint.
+// exact coverage (c_warp, c_weft, s_warp, s_weft) of its footprint.
 layout(set = 1, binding = 4) uniform sampler2D weave_tex;
 // Ambient occlusion (glTF occlusionTexture, red channel; white when the material has none).
 layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;
@@ -55,7 +55,7 @@ layout(location = 6) in vec2 in_uv1;
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out uvec4 gb_frame;    // RGBA16_UINT: octahedral normal (xy), tangent (zw), frame_encode
 layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1 if it receives shadows
-layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft, shadow-weighted thread area, 1 if fabric
+layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft and each shadow-weighted (s_warp, s_weft)
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
 layout(location = 5) out vec4 gb_specular;  // RGBA16F: the dielectric's F0 (rgb), specular weight
 // Non-fabric materials reuse two fabric channels: gb_fabric holds the sheen colour (rgb) and
@@ -176,20 +176,20 @@ void main() {
             // Nearest: one texel of level 0, no filtering.
             ivec2 size = textureSize(weave_tex, 0);
             ivec2 texel = clamp(ivec2(fract(st) * vec2(size)), ivec2(0), size - 1);
-            vec3 coverage = WEAVE_SOURCE == 1u
+            vec4 coverage = WEAVE_SOURCE == 1u
                 ? weave_point(weave_from_fabric(f), fract(st.x) * repeat_cells.x, fract(st.y) * repeat_cells.y)
-                : texelFetch(weave_tex, texel, 0).rgb;
-            gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
+                : texelFetch(weave_tex, texel, 0);
+            gb_fabric = clamp(coverage, 0.0, 1.0);
         } else {
-            vec3 coverage;
+            vec4 coverage;
             if (WEAVE_SOURCE == 1u) {
                 vec2 lo = (fract(st) - ext) * repeat_cells;
                 vec2 hi = (fract(st) + ext) * repeat_cells;
                 coverage = weave_box(weave_from_fabric(f), lo.x, lo.y, hi.x, hi.y);
             } else {
-                coverage = textureGrad(weave_tex, st, st_dx, st_dy).rgb;
+                coverage = textureGrad(weave_tex, st, st_dx, st_dy);
             }
-            gb_fabric = vec4(clamp(coverage, 0.0, 1.0), 1.0);
+            gb_fabric = clamp(coverage, 0.0, 1.0);
         }
     }
     if (SHADING == SHADING_GOURAUD) {

@@ -121,7 +121,7 @@ float shadow_factor(Light light, vec3 p, vec3 n, float receives) {
 // One fabric BRDF evaluation at the chosen accuracy: nearest and filtered-params evaluate one lobe
 // with coverage-averaged exponents (at a point that is the thread on top's own lobe), mixture and
 // supersampled the two-lobe mixture.
-vec3 fabric_eval(vec3 k1, vec3 k2, vec3 coverage, GpuFabric f) {
+vec3 fabric_eval(vec3 k1, vec3 k2, vec4 coverage, GpuFabric f) {
     if (ACCURACY <= 1u) {
         return fabric_brdf_averaged(k1, k2, coverage, f);
     }
@@ -129,9 +129,8 @@ vec3 fabric_eval(vec3 k1, vec3 k2, vec3 coverage, GpuFabric f) {
 }
 
 // Ambient plus every light reflected by the fabric with the given coverage.
-vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, float receives) {
-    float c_thread = coverage.x + coverage.y;
-    vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
+vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, float receives) {
+    vec3 rd = fabric_albedo(coverage, f);
     // Ambient: the threads' diffuse albedo under the hemispherical ambient.
     vec3 radiance = ambient * rd;
     uvec2 list = tile_list();
@@ -283,7 +282,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
 // (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
 // lobe's width times Fresnel; fis / mc: importance sampling of the coverage-weighted mixture of
 // the two lobes' A–S samplers (one-sample MIS, so both estimates use every sample).
-void fabric_env_lobes(mat3 tbn, vec3 k2, vec3 coverage, GpuFabric f, out vec3 weft, out vec3 warp) {
+void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, out vec3 weft, out vec3 warp) {
     weft = vec3(0.0);
     warp = vec3(0.0);
     if (!(k2.z > 0.0) || f.rs <= 0.0) {
@@ -357,9 +356,8 @@ vec3 fabric_env_diffuse(mat3 tbn, vec3 k2, GpuFabric f) {
 
 // The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
 // thread shadowing (as for lamps), and each lobe weighted by its thread's coverage.
-vec3 fabric_env_combine(vec3 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, float ao, float nv) {
-    float c_thread = coverage.x + coverage.y;
-    vec3 rd = c_thread > 0.0 ? (coverage.x * f.rd_warp + coverage.y * f.rd_weft) * (coverage.z / c_thread) : vec3(0.0);
+vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, float ao, float nv) {
+    vec3 rd = fabric_albedo(coverage, f);
     // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
     // averaged exponents would need a sampler of its own.)
     return rd * diffuse * ao + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
@@ -376,9 +374,9 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
     if (view == DEBUG_TANGENTS) return oct_decode(fr.zw) * 0.5 + 0.5;
     if (view == DEBUG_ROUGHNESS_METALLIC) return vec3(surface.x, albedo.a, 0.0);
     // Non-fabric surfaces show dark grey in the two fabric views.
-    if (view == DEBUG_COVERAGE) return fabric.w > 0.0 ? vec3(fabric.x, fabric.y, 1.0 - fabric.x - fabric.y) : vec3(0.1);
+    if (view == DEBUG_COVERAGE) return is_fabric ? vec3(fabric.x, fabric.y, 1.0 - fabric.x - fabric.y) : vec3(0.1);
     if (view == DEBUG_THREAD_DIR) {
-        if (fabric.w == 0.0) return vec3(0.1);
+        if (!is_fabric) return vec3(0.1);
         // The dominant thread direction in screen colours: the tangent (weft) or bitangent (warp)
         // of the thread on top, weighted by coverage, encoded as 0.5 + 0.5 * direction.
         vec3 t = oct_decode(fr.zw);
@@ -458,7 +456,7 @@ void main() {
         vec3 env_weft = vec3(0.0);
         vec3 env_warp = vec3(0.0);
         if (IBL != 0u && SHADING == SHADING_FABRIC) {
-            vec3 mean_cov = ACCURACY == 3u ? vec3(0.5, 0.5, 1.0) : g.rgb;
+            vec4 mean_cov = ACCURACY == 3u ? vec4(0.5, 0.5, 0.5, 0.5) : g;
             env_diffuse = fabric_env_diffuse(tbn, k2, f);
             fabric_env_lobes(tbn, k2, mean_cov, f, env_weft, env_warp);
         }
@@ -479,7 +477,7 @@ void main() {
                 for (uint i = 0u; i < SAMPLES; ++i) {
                     vec2 o = (vec2(float(i), float(j)) + 0.5) / float(SAMPLES) * 2.0 - 1.0;
                     vec2 s = (g.xy + o * g.zw) * cells;
-                    vec3 c = weave_point(w, s.x, s.y);
+                    vec4 c = weave_point(w, s.x, s.y);
                     sum += fabric_radiance(p, ambient, tbn, k2, c, f, receives);
                     if (IBL != 0u) {
                         sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, ao, nv);
@@ -488,9 +486,9 @@ void main() {
             }
             radiance += sum / float(SAMPLES * SAMPLES);
         } else {
-            radiance += fabric_radiance(p, ambient, tbn, k2, g.rgb, f, receives);
+            radiance += fabric_radiance(p, ambient, tbn, k2, g, f, receives);
             if (IBL != 0u) {
-                radiance += fabric_env_combine(g.rgb, f, env_diffuse, env_weft, env_warp, ao, nv);
+                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, ao, nv);
             }
         }
     } else {

@@ -2,7 +2,7 @@
 // Builds one mip level of a weave texture: one full pattern repeat, so it tiles with REPEAT
 // addressing. Texel (x, y) of a W×H level covers [x/W, (x+1)/W] × [y/H, (y+1)/H] of the repeat
 // (row 0 is v = 0: sample at st = (u, v)·cell_per_uv / (cols, rows), no flip) and holds the
-// EXACT coverage of that footprint: (c_warp, c_weft, sh, 1), see weave.glsl. Every level is
+// EXACT coverage of that footprint: (c_warp, c_weft, s_warp, s_weft), see weave.glsl. Every level is
 // computed this way, not by downsampling the one above, so the values stay linear in area and
 // trilinear/anisotropic filtering of them is a correct footprint average.
 //
@@ -37,6 +37,6 @@ void main() {
     Weave w = Weave(pc.pattern_lo, pc.pattern_hi, pc.cols, pc.rows, pc.gap, pc.shadow_dist, pc.shadow_strength);
     float sx = float(pc.cols) / float(pc.width);
     float sy = float(pc.rows) / float(pc.height);
-    vec3 c = weave_box(w, float(p.x) * sx, float(p.y) * sy, float(p.x + 1u) * sx, float(p.y + 1u) * sy);
-    imageStore(weave_level, ivec2(p), vec4(c, 1.0));
+    vec4 c = weave_box(w, float(p.x) * sx, float(p.y) * sy, float(p.x + 1u) * sx, float(p.y + 1u) * sy);
+    imageStore(weave_level, ivec2(p), c);
 }

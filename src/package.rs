@@ -164,8 +164,9 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
     (
         "weave.comp",
         "Builds one mip level of a weave coverage texture: one full pattern repeat (so it tiles \
-         with REPEAT addressing), each texel `(c_warp, c_weft, sh, 1)`: the exact area fractions \
-         of warp and weft on top, and the shadow-weighted thread area, of the texel's footprint. \
+         with REPEAT addressing), each texel `(c_warp, c_weft, s_warp, s_weft)`: the exact area \
+         fractions of warp and weft on top, and each weighted by the diffuse shadow factor, of the \
+         texel's footprint. \
          Every level is computed directly (not downsampled), so filtering stays a correct \
          footprint average. Create an `R16G16B16A16_SFLOAT` image with STORAGE and SAMPLED usage \
          (32 texels per weave cell at level 0, full mip chain); per level, bind a one-level image \

@@ -560,7 +560,9 @@ fn render_fabric_flag_renders_the_weave() {
                 continue;
             }
             floor += 1;
-            if g.fabric[i * 4 + 3] > 0.5 {
+            // Threads on top (the fabric target is all zero for a material without fabric or
+            // sheen, as the default floor).
+            if g.fabric[i * 4] + g.fabric[i * 4 + 1] > 0.05 {
                 fabric += 1;
                 warp += (g.fabric[i * 4] > 0.8) as usize;
                 weft_up += (g.fabric[i * 4 + 1] > 0.8) as usize;

@@ -219,10 +219,10 @@ proptest! {
         }
         let m = double::FabricMaterial { rd_warp: [0.5; 3], rd_weft: [0.5; 3], rs, e_along: eu, e_across: ev, coupled: which == 1 };
         prop_assert_eq!(double::as_lobe(k1, k2, eu, ev, rs), 0.0);
-        prop_assert_eq!(double::fabric_brdf(k1, k2, [0.5, 0.5, 0.7], &m), [0.0; 3]);
+        prop_assert_eq!(double::fabric_brdf(k1, k2, [0.5, 0.5, 0.3, 0.4], &m), [0.0; 3]);
         prop_assert_eq!(single::as_lobe(to32(k1), to32(k2), eu as f32, ev as f32, rs as f32), 0.0);
         let m32 = single::FabricMaterial { rd_warp: [0.5; 3], rd_weft: [0.5; 3], rs: rs as f32, e_along: eu as f32, e_across: ev as f32, coupled: which == 1 };
-        prop_assert_eq!(single::fabric_brdf(to32(k1), to32(k2), [0.5, 0.5, 0.7], &m32), [0.0; 3]);
+        prop_assert_eq!(single::fabric_brdf(to32(k1), to32(k2), [0.5, 0.5, 0.3, 0.4], &m32), [0.0; 3]);
         // Grazing exactly: n·k = 0.
         let g = unit([a[0] + 1e-9, a[1], 0.0]);
         let g = [g[0], g[1], 0.0];
@@ -239,12 +239,12 @@ proptest! {
     fn reciprocity_swap_and_mirror(
         a in prop::array::uniform3(-1.0f64..1.0), b in prop::array::uniform3(-1.0f64..1.0),
         eu in 0.0f64..1e4, ev in 0.0f64..1e4, rs in 0.0f64..1.0, coupled in any::<bool>(),
-        cov in prop::array::uniform3(0.0f64..0.5),
+        cov in prop::array::uniform4(0.0f64..0.5),
     ) {
         let k1 = unit([a[0], a[1], a[2].abs() + 0.05]);
         let k2 = unit([b[0], b[1], b[2].abs() + 0.05]);
         let m = double::FabricMaterial { rd_warp: [0.2, 0.5, 0.9], rd_weft: [0.7, 0.1, 0.3], rs, e_along: eu, e_across: ev, coupled };
-        let cov = [cov[0], cov[1], cov[2]];
+        let cov = [cov[0], cov[1], cov[2].min(cov[0]), cov[3].min(cov[1])];
         // Reciprocity, exact in both precisions.
         prop_assert_eq!(double::as_lobe(k1, k2, eu, ev, rs), double::as_lobe(k2, k1, eu, ev, rs));
         prop_assert_eq!(double::fabric_brdf(k1, k2, cov, &m), double::fabric_brdf(k2, k1, cov, &m));
@@ -308,7 +308,7 @@ fn highlight_is_stretched_across_the_thread() {
         let warp_b = double::as_lobe(toward_b, toward_b, m.e_across, m.e_along, m.rs);
         assert!(warp_b < factor * warp_t, "warp at {deg}°");
         // And through the full model with the weave point's coverage.
-        let weft_point = [0.0, 1.0, 1.0];
+        let weft_point = [0.0, 1.0, 0.0, 1.0];
         let f_t = double::fabric_brdf(toward_t, toward_t, weft_point, &m)[0];
         let f_b = double::fabric_brdf(toward_b, toward_b, weft_point, &m)[0];
         assert!(f_t < f_b, "fabric weft at {deg}°");
@@ -338,7 +338,7 @@ fn plain(repeat: f32, gap: f32) -> FabricParams {
 }
 
 /// Class at a point: 0 gap, 1 warp, 2 weft.
-fn class(c: [f64; 3]) -> u8 {
+fn class(c: [f64; 4]) -> u8 {
     if c[0] > 0.5 {
         1
     } else if c[1] > 0.5 {
@@ -380,15 +380,15 @@ fn borders_are_gap() {
         (0.5, -3.0),
         (1e6, 0.25),
     ] {
-        assert_eq!(wd::weave_point(&w, x, y), [0.0; 3], "({x}, {y})");
+        assert_eq!(wd::weave_point(&w, x, y), [0.0; 4], "({x}, {y})");
         assert_eq!(
             ws::weave_point(&ws::Weave::from_gpu(&p.to_gpu()), x as f32, y as f32),
-            [0.0; 3]
+            [0.0; 4]
         );
     }
     // In texture units: ũ = 0 ⇔ u = s_p/2 (mod s_p).
-    assert_eq!(weave_ref::weave_point_uv(&p, 0.25, 0.1), [0.0; 3]);
-    assert_eq!(weave_ref::weave_point_uv(&p, 0.1, -0.25), [0.0; 3]);
+    assert_eq!(weave_ref::weave_point_uv(&p, 0.25, 0.1), [0.0; 4]);
+    assert_eq!(weave_ref::weave_point_uv(&p, 0.1, -0.25), [0.0; 4]);
 }
 
 #[test]
@@ -429,7 +429,7 @@ fn huge_and_negative_coordinates_keep_the_pattern() {
                 // point is within f32 rounding of a region border.
                 let [x, y] = weave_ref::reduce_to_repeat(&p, uu, vv);
                 let got = ws::weave_point(&w32, x, y);
-                let got = [got[0] as f64, got[1] as f64, got[2] as f64];
+                let got = got.map(|x| x as f64);
                 if class(got) != class(here) {
                     let [cx, cy] = weave_ref::uv_to_cells(&p, u, v);
                     let near = [cx.fract(), cy.fract()].iter().any(|a| {
@@ -470,13 +470,13 @@ fn huge_and_negative_coordinates_keep_the_pattern() {
 /// under test): per cell, the top thread covers (1 - 2g) and is darkened over `dive` at each end
 /// whose neighbour along the thread is of the other kind; the under thread shows in two strips of
 /// width g, darkened over (g - q) each.
-fn analytic_repeat(p: &FabricParams) -> [f64; 4] {
+fn analytic_repeat(p: &FabricParams) -> [f64; 5] {
     let pat = p.pattern;
     let g = (p.gap / p.repeat) as f64;
     let d = p.shadow_width as f64 / 2.0;
     let dive = (d - g).clamp(0.0, 0.5);
     let q = (g - d).max(0.0);
-    let (mut warp, mut weft, mut dark) = (0.0, 0.0, 0.0);
+    let (mut warp, mut weft, mut dark_warp, mut dark_weft) = (0.0, 0.0, 0.0, 0.0);
     for (i, j) in pat.cells() {
         let (i, j) = (i as isize, j as isize);
         let weft_up = pat.is_weft_up(i, j);
@@ -487,21 +487,27 @@ fn analytic_repeat(p: &FabricParams) -> [f64; 4] {
         };
         let top = 1.0 - 2.0 * g;
         let under = 2.0 * g * (1.0 - 2.0 * g);
+        let top_dark = opposite as f64 * dive * (1.0 - 2.0 * g);
+        let under_dark = 2.0 * (g - q) * (1.0 - 2.0 * g);
         if weft_up {
             weft += top;
             warp += under;
+            dark_weft += top_dark;
+            dark_warp += under_dark;
         } else {
             warp += top;
             weft += under;
+            dark_warp += top_dark;
+            dark_weft += under_dark;
         }
-        dark += opposite as f64 * dive * (1.0 - 2.0 * g) + 2.0 * (g - q) * (1.0 - 2.0 * g);
     }
     let cells = (pat.cols() * pat.rows()) as f64;
     let s = p.shadow_strength as f64;
     [
         warp / cells,
         weft / cells,
-        (warp + weft - s * dark) / cells,
+        (warp - s * dark_warp) / cells,
+        (weft - s * dark_weft) / cells,
         1.0 - (warp + weft) / cells,
     ]
 }
@@ -550,7 +556,7 @@ fn whole_repeat_coverage_is_analytic() {
                 (-3e5, 2e6, 1000.0, 700.0),
             ] {
                 let c = weave_ref::weave_box_uv(&p, u0, u0 + nu * ru, v0, v0 + nv * rv);
-                for k in 0..3 {
+                for k in 0..4 {
                     assert!(
                         (c[k] - want[k]).abs() < 1e-9,
                         "{} gap {gap} sw {sw}: {c:?} vs {want:?}",
@@ -564,13 +570,14 @@ fn whole_repeat_coverage_is_analytic() {
                 let sh = 1.0 - 4.0 * g * g - ss as f64 * sw as f64 * (1.0 - 2.0 * g);
                 assert!(
                     (want[0] - (1.0 - 4.0 * g * g) / 2.0).abs() < 1e-12
-                        && (want[2] - sh).abs() < 1e-6,
+                        && (want[2] + want[3] - sh).abs() < 1e-6
+                        && (want[2] - want[3]).abs() < 1e-12,
                     "{want:?}"
                 );
             }
             // The weave texture's last level is the same average.
             let t = weave_texels_cpu(&p.weave_push(1, 1));
-            for k in 0..3 {
+            for k in 0..4 {
                 assert!(
                     (t[0][k] as f64 - want[k]).abs() < 2e-6,
                     "texel {t:?} vs {want:?}"
@@ -608,13 +615,13 @@ fn box_coverage_is_the_mean_of_point_samples() {
         let wx = rng.log_range(0.05, 3.0);
         let wy = rng.log_range(0.05, 3.0);
         let exact = wd::weave_box(&w, x0, y0, x0 + wx, y0 + wy);
-        let mut mean = [0.0; 3];
+        let mut mean = [0.0; 4];
         for i in 0..n {
             for j in 0..n {
                 let x = x0 + wx * (i as f64 + 0.5) / n as f64;
                 let y = y0 + wy * (j as f64 + 0.5) / n as f64;
                 let c = wd::weave_point(&w, x, y);
-                for k in 0..3 {
+                for k in 0..4 {
                     mean[k] += c[k] / (n * n) as f64;
                 }
             }
@@ -622,7 +629,7 @@ fn box_coverage_is_the_mean_of_point_samples() {
         // Border lines: at most 8 per cell crossed (0, g, 1-g, q, 1-q, dive, 1-dive, and 1), per axis.
         let lines = 8.0 * ((wx.ceil() + 1.0) + (wy.ceil() + 1.0));
         let bound = lines / n as f64;
-        for k in 0..3 {
+        for k in 0..4 {
             let err = (exact[k] - mean[k]).abs();
             worst = worst.max(err / bound);
             assert!(
@@ -650,10 +657,10 @@ fn gap_limits() {
     for _ in 0..10_000 {
         assert_eq!(
             weave_ref::weave_point_uv(&p, rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)),
-            [0.0; 3]
+            [0.0; 4]
         );
     }
-    assert_eq!(weave_ref::weave_box_uv(&p, 0.0, 0.05, 0.0, 0.05), [0.0; 3]);
+    assert_eq!(weave_ref::weave_box_uv(&p, 0.0, 0.05, 0.0, 0.05), [0.0; 4]);
     for eps in [1e-2f32, 1e-4, 1e-6] {
         let p = plain(0.05, 0.025 * (1.0 - eps));
         let c = weave_ref::weave_box_uv(&p, 0.0, 0.05, 0.0, 0.05);
@@ -691,7 +698,7 @@ fn repeat_to_zero() {
     let p = FabricParams { gap: 1e-7, ..p };
     let want = analytic_repeat(&p);
     let c = weave_ref::weave_box_uv(&p, -0.3, 0.7, 0.2, 1.2);
-    for k in 0..3 {
+    for k in 0..4 {
         assert!((c[k] - want[k]).abs() < 1e-6, "{c:?} vs {want:?}");
     }
     let c = weave_ref::weave_point_uv(&p, 0.123456789, 0.987654321);
@@ -706,7 +713,7 @@ fn repeat_to_zero() {
         0.0301 - 0.05 * 3e7,
         0.0302 - 0.05 * 3e7,
     );
-    for k in 0..3 {
+    for k in 0..4 {
         assert!((a[k] - b[k]).abs() < 1e-4, "{a:?} vs {b:?}");
     }
 }
@@ -744,7 +751,7 @@ fn mirrored_uvs_mirror_the_pattern() {
             let (w, h) = (rng.range(0.01, 3.0), rng.range(0.01, 3.0));
             let a = wd::weave_box(&wp, -x - w, y, -x, y + h);
             let b = wd::weave_box(&wm, x, y, x + w, y + h);
-            for k in 0..3 {
+            for k in 0..4 {
                 assert!((a[k] - b[k]).abs() < 1e-12);
             }
         }
@@ -772,7 +779,7 @@ fn weave_texture_levels_are_exact() {
             let (w, h) = weave_level_size(level0, level);
             let texels = weave_texels_cpu(&p.weave_push(w, h));
             assert_eq!(texels.len(), (w * h) as usize);
-            let mut mean = [0.0; 3];
+            let mut mean = [0.0; 4];
             let (cols, rows) = (pattern.cols() as f64, pattern.rows() as f64);
             for y in 0..h {
                 for x in 0..w {
@@ -784,17 +791,16 @@ fn weave_texture_levels_are_exact() {
                         (x + 1) as f64 * cols / w as f64,
                         (y + 1) as f64 * rows / h as f64,
                     );
-                    for k in 0..3 {
+                    for k in 0..4 {
                         assert!(
                             (t[k] as f64 - e[k]).abs() < 1e-4,
                             "level {level} texel ({x},{y}): {t:?} vs {e:?}"
                         );
                         mean[k] += t[k] as f64 / (w * h) as f64;
                     }
-                    assert_eq!(t[3], 1.0);
                 }
             }
-            for k in 0..3 {
+            for k in 0..4 {
                 assert!(
                     (mean[k] - avg[k]).abs() < 1e-5,
                     "level {level} mean {mean:?} vs {avg:?}"
@@ -811,7 +817,7 @@ proptest! {
         a in prop::array::uniform3(-2.0f32..2.0), b in prop::array::uniform3(-2.0f32..2.0),
         scale in prop::sample::select(vec![0.0f32, 1e-30, 1e-7, 1.0, 1e7]),
         eu in prop::sample::select(vec![0.0f32, 0.1, 1.0, 1e4, 1e6]), ev in 0.0f32..1e6,
-        rs in 0.0f32..=1.0, cov in prop::array::uniform3(0.0f32..=1.0), coupled in any::<bool>(),
+        rs in 0.0f32..=1.0, cov in prop::array::uniform4(0.0f32..=1.0), coupled in any::<bool>(),
         x in -1e4f32..1e4, y in -1e4f32..1e4, wx in prop::sample::select(vec![0.0f32, 1e-6, 0.01, 1.0, 300.0]),
     ) {
         let k1 = [a[0] * scale, a[1] * scale, a[2]];
@@ -831,7 +837,7 @@ proptest! {
         let [rx, ry] = [ws::weave_wrap(x, 2.0), ws::weave_wrap(y, 2.0)];
         let c = ws::weave_box(&w, rx, ry, rx + wx, ry + wx * 0.5);
         prop_assert!(c.iter().all(|v| v.is_finite() && (0.0..=1.0).contains(v)), "{:?}", c);
-        prop_assert!(c[2] <= c[0] + c[1] + 1e-6);
+        prop_assert!(c[2] <= c[0] + 1e-6 && c[3] <= c[1] + 1e-6);
     }
 }
 
@@ -980,8 +986,9 @@ fn white_furnace() {
                 let k1 = [th.sin(), 0.0, th.cos()];
                 let lobe = lobe_albedo(k1, ea, ec, rs, n);
                 let dc = diffuse_albedo(k1[2], rs, true);
-                let lambert = fabric_albedo(k1, &mat(ea, ec, rs, false), [0.0, 1.0, 1.0], n)[0];
-                let coupled = fabric_albedo(k1, &mat(ea, ec, rs, true), [0.0, 1.0, 1.0], n)[0];
+                let lambert =
+                    fabric_albedo(k1, &mat(ea, ec, rs, false), [0.0, 1.0, 0.0, 1.0], n)[0];
+                let coupled = fabric_albedo(k1, &mat(ea, ec, rs, true), [0.0, 1.0, 0.0, 1.0], n)[0];
                 assert!(lobe <= 1.0 + 1e-9, "lobe albedo {lobe}");
                 assert!((lambert - (1.0 + lobe)).abs() < 1e-9);
                 assert!((coupled - (dc + lobe)).abs() < 1e-9);
@@ -1021,7 +1028,7 @@ fn furnace_integrators_agree() {
     ] {
         let k1 = [f64::sin(th), 0.0, f64::cos(th)];
         let m = mat(ea, ec, rs, coupled);
-        let cov = [0.3, 0.6, 0.8];
+        let cov = [0.3, 0.6, 0.25, 0.55];
         let is = fabric_albedo(k1, &m, cov, 400)[0];
         let q = fabric_albedo_quadrature(k1, &m, cov, 1000)[0];
         assert!(
@@ -1038,7 +1045,7 @@ fn averaged_exponents_only_agree_at_a_point() {
     let m = mat(200.0, 10.0, 0.04, false);
     let k1 = unit([0.3, 0.05, 0.9]);
     let k2 = unit([-0.25, 0.2, 0.9]);
-    for cov in [[1.0, 0.0, 1.0], [0.0, 1.0, 0.5], [0.0, 0.0, 0.0]] {
+    for cov in [[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.5], [0.0; 4]] {
         assert_eq!(
             double::fabric_brdf_averaged(k1, k2, cov, &m),
             double::fabric_brdf(k1, k2, cov, &m)
@@ -1050,7 +1057,7 @@ fn averaged_exponents_only_agree_at_a_point() {
         rd_weft: [0.0; 3],
         ..m
     };
-    let cov = [0.5, 0.5, 1.0];
+    let cov = [0.5, 0.5, 0.5, 0.5];
     let mut worst: f64 = 0.0;
     for deg in [5.0f64, 10.0, 20.0] {
         for phi in [0.0f64, 45.0, 90.0] {

@@ -171,10 +171,18 @@ float coupled_diffuse(float rs, float nk1, float nk2) {
     return 28.0 / (23.0 * FABRIC_PI) * (1.0 - rs) * ((1.0 - a2 * a2 * a) * (1.0 - b2 * b2 * b));
 }
 
-// The fabric model (§3) at one shading point. coverage = (c_warp, c_weft, sh): area fractions of
-// warp and weft on top, and sh = thread area weighted by the diffuse shadow factor
-// (sh = s·(c_warp + c_weft) at a point). Diffuse = sh·(c_warp·rd_warp + c_weft·rd_weft)/(c_warp + c_weft).
-vec3 fabric_brdf(vec3 k1, vec3 k2, vec3 coverage, GpuFabric m) {
+// The diffuse albedo of a coverage (c_warp, c_weft, s_warp, s_weft): each thread's albedo times
+// its shadow-weighted area, s_warp·rd_warp + s_weft·rd_weft (linear in the coverage, so the
+// footprint average of the weave gives the footprint average of the diffuse term exactly).
+vec3 fabric_albedo(vec4 coverage, GpuFabric m) {
+    return coverage.z * m.rd_warp + coverage.w * m.rd_weft;
+}
+
+// The fabric model (§3) at one shading point. coverage = (c_warp, c_weft, s_warp, s_weft): area
+// fractions of warp and weft on top, and the same weighted by the diffuse shadow factor (at a
+// point: s_warp = s·c_warp). Diffuse = fabric_albedo · the diffuse term; specular = the coverages
+// times each orientation's lobe.
+vec3 fabric_brdf(vec3 k1, vec3 k2, vec4 coverage, GpuFabric m) {
     float nk1 = k1.z;
     float nk2 = k2.z;
     if (!(nk1 > 0.0 && nk2 > 0.0)) {
@@ -182,25 +190,21 @@ vec3 fabric_brdf(vec3 k1, vec3 k2, vec3 coverage, GpuFabric m) {
     }
     float c_warp = coverage.x;
     float c_weft = coverage.y;
-    float sh = coverage.z;
     float rho_weft = as_lobe(k1, k2, m.e_along, m.e_across, m.rs);
     float rho_warp = as_lobe(k1, k2, m.e_across, m.e_along, m.rs);
     float diffuse = (m.flags & FABRIC_FLAG_COUPLED_DIFFUSE) != 0u ? coupled_diffuse(m.rs, nk1, nk2) : lambert();
-    float c_thread = c_warp + c_weft;
-    float w = c_thread > 0.0 ? sh * diffuse / c_thread : 0.0;
     float spec = c_weft * rho_weft + c_warp * rho_warp;
-    return w * (c_warp * m.rd_warp + c_weft * m.rd_weft) + spec;
+    return diffuse * fabric_albedo(coverage, m) + spec;
 }
 
 // The filtered-params accuracy level (model page §4): ONE lobe whose exponents are the
 // coverage-weighted means of the two orientations', times the thread coverage. Cheap and wrong at
 // a distance; kept so its error can be measured. Equal to fabric_brdf at a point.
-vec3 fabric_brdf_averaged(vec3 k1, vec3 k2, vec3 coverage, GpuFabric m) {
+vec3 fabric_brdf_averaged(vec3 k1, vec3 k2, vec4 coverage, GpuFabric m) {
     float nk1 = k1.z;
     float nk2 = k2.z;
     float c_warp = coverage.x;
     float c_weft = coverage.y;
-    float sh = coverage.z;
     float c_thread = c_warp + c_weft;
     if (!(nk1 > 0.0 && nk2 > 0.0 && c_thread > 0.0)) {
         return vec3(0.0);
@@ -209,9 +213,8 @@ vec3 fabric_brdf_averaged(vec3 k1, vec3 k2, vec3 coverage, GpuFabric m) {
     float eu = t * m.e_along + (1.0 - t) * m.e_across;
     float ev = t * m.e_across + (1.0 - t) * m.e_along;
     float diffuse = (m.flags & FABRIC_FLAG_COUPLED_DIFFUSE) != 0u ? coupled_diffuse(m.rs, nk1, nk2) : lambert();
-    float w = sh * diffuse / c_thread;
     float spec = c_thread * as_lobe(k1, k2, eu, ev, m.rs);
-    return w * (c_warp * m.rd_warp + c_weft * m.rd_weft) + spec;
+    return diffuse * fabric_albedo(coverage, m) + spec;
 }
 
 // ---- The comparison models of `weft compare` (paper figs. 1, 2): the same material without its

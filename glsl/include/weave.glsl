@@ -9,8 +9,9 @@
 // the weft of row j occupies g < b < 1-g, the warp of column i g < a < 1-g; where both cross, the
 // cell's top thread shows; where neither passes, and on cell borders, it is gap. A thread is
 // darkened (factor 1 - shadow_strength) within d, along its length, of the edge of a thread that
-// crosses over it. Results are (c_warp, c_weft, sh): area fractions and the shadow-weighted
-// thread area, as fabric_brdf takes them.
+// crosses over it. Results are (c_warp, c_weft, s_warp, s_weft): the area fractions of warp and
+// weft on top, and the same areas weighted by the diffuse shadow factor, as fabric_brdf takes
+// them. All four are areas, so they average exactly over any footprint.
 #ifndef WEFT_WEAVE_GLSL
 #define WEFT_WEAVE_GLSL
 
@@ -77,9 +78,9 @@ float weave_measure(float x0, float x1, float period, float lo, float hi) {
     return (n1 - n0) * len + clamp(r1 - lo, 0.0, len) - clamp(r0 - lo, 0.0, len);
 }
 
-// The weave at the point (x, y) (cells): (c_warp, c_weft, sh), one coverage 1 (or both 0: gap),
-// sh = the diffuse shadow factor on a thread, 0 on gap.
-vec3 weave_point(Weave w, float x, float y) {
+// The weave at the point (x, y) (cells): (c_warp, c_weft, s_warp, s_weft), one coverage 1 (or
+// both 0: gap), and that thread's diffuse shadow factor in its s (the other 0).
+vec4 weave_point(Weave w, float x, float y) {
     float xr = weave_wrap(x, float(w.cols));
     float yr = weave_wrap(y, float(w.rows));
     float fi = floor(xr);
@@ -87,7 +88,7 @@ vec3 weave_point(Weave w, float x, float y) {
     float a = xr - fi;
     float b = yr - fj;
     if (a == 0.0 || b == 0.0) {
-        return vec3(0.0, 0.0, 0.0);
+        return vec4(0.0);
     }
     uint i = uint(fi);
     uint j = uint(fj);
@@ -102,31 +103,31 @@ vec3 weave_point(Weave w, float x, float y) {
             bool left = !weave_weft_up(w, (i + w.cols - 1u) % w.cols, j);
             bool right = !weave_weft_up(w, (i + 1u) % w.cols, j);
             bool shadowed = (left && a < dive) || (right && a > 1.0 - dive);
-            return vec3(0.0, 1.0, shadowed ? dark : 1.0);
+            return vec4(0.0, 1.0, 0.0, shadowed ? dark : 1.0);
         }
         if (in_warp_band) {
             bool shadowed = b > q && b < 1.0 - q;
-            return vec3(1.0, 0.0, shadowed ? dark : 1.0);
+            return vec4(1.0, 0.0, shadowed ? dark : 1.0, 0.0);
         }
     } else {
         if (in_warp_band) {
             bool below = weave_weft_up(w, i, (j + w.rows - 1u) % w.rows);
             bool above = weave_weft_up(w, i, (j + 1u) % w.rows);
             bool shadowed = (below && b < dive) || (above && b > 1.0 - dive);
-            return vec3(1.0, 0.0, shadowed ? dark : 1.0);
+            return vec4(1.0, 0.0, shadowed ? dark : 1.0, 0.0);
         }
         if (in_weft_band) {
             bool shadowed = a > q && a < 1.0 - q;
-            return vec3(0.0, 1.0, shadowed ? dark : 1.0);
+            return vec4(0.0, 1.0, 0.0, shadowed ? dark : 1.0);
         }
     }
-    return vec3(0.0, 0.0, 0.0);
+    return vec4(0.0);
 }
 
 // The exact coverage of the box [x0, x1] × [y0, y1] (cells). Reduce x0, y0 to the repeat first;
 // any size of box works. A box narrower than WEAVE_MIN_BOX in either direction (or with NaN
 // corners) is its centre point.
-vec3 weave_box(Weave w, float x0, float y0, float x1, float y1) {
+vec4 weave_box(Weave w, float x0, float y0, float x1, float y1) {
     float wx = x1 - x0;
     float wy = y1 - y0;
     if (!(wx >= WEAVE_MIN_BOX && wy >= WEAVE_MIN_BOX)) {
@@ -158,7 +159,8 @@ vec3 weave_box(Weave w, float x0, float y0, float x1, float y1) {
     }
     float warp = 0.0;
     float weft = 0.0;
-    float dark = 0.0;
+    float dark_warp = 0.0;
+    float dark_weft = 0.0;
     for (uint j = 0u; j < w.rows; j++) {
         float r = float(j);
         float y_full = weave_measure(y0, y1, py, r, r + 1.0);
@@ -181,22 +183,25 @@ vec3 weave_box(Weave w, float x0, float y0, float x1, float y1) {
                 float dive_x = (left ? x_low[k] : 0.0) + (right ? x_high[k] : 0.0);
                 weft += x_full[k] * y_band;
                 warp += x_band[k] * y_strip;
-                dark += dive_x * y_band + x_band[k] * y_strip_dark;
+                dark_weft += dive_x * y_band;
+                dark_warp += x_band[k] * y_strip_dark;
             } else {
                 bool lo = weave_weft_up(w, i, below);
                 bool hi = weave_weft_up(w, i, above);
                 float dive_y = (lo ? y_low : 0.0) + (hi ? y_high : 0.0);
                 warp += x_band[k] * y_full;
                 weft += x_strip[k] * y_band;
-                dark += x_band[k] * dive_y + x_strip_dark[k] * y_band;
+                dark_warp += x_band[k] * dive_y;
+                dark_weft += x_strip_dark[k] * y_band;
             }
         }
     }
     float inv_area = 1.0 / (wx * wy);
     float c_warp = clamp(warp * inv_area, 0.0, 1.0);
     float c_weft = clamp(weft * inv_area, 0.0, 1.0);
-    float sh = clamp((warp + weft - w.shadow_strength * dark) * inv_area, 0.0, 1.0);
-    return vec3(c_warp, c_weft, sh);
+    float s_warp = clamp((warp - w.shadow_strength * dark_warp) * inv_area, 0.0, c_warp);
+    float s_weft = clamp((weft - w.shadow_strength * dark_weft) * inv_area, 0.0, c_weft);
+    return vec4(c_warp, c_weft, s_warp, s_weft);
 }
 
 #endif // WEFT_WEAVE_GLSL

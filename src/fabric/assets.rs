@@ -584,19 +584,15 @@ pub fn extension_json(p: &FabricParams) -> Value {
     o
 }
 
-/// The weave's far-field diffuse albedo: the coverage-weighted thread colour times the
-/// shadow-weighted thread area over one whole repeat (exact, `weave_box` over the repeat). This is
+/// The weave's far-field diffuse albedo: each thread's colour times its shadow-weighted area over
+/// one whole repeat (exact, `weave_box` over the repeat). This is
 /// what the fabric's Lambert term averages to where the weave is too small to see.
 pub fn far_field_albedo(p: &FabricParams) -> [f64; 3] {
     let [ru, rv] = p.repeat_uv();
-    let [c_warp, c_weft, sh] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
-    let thread = c_warp + c_weft;
-    if thread <= 0.0 {
-        return [0.0; 3];
-    }
+    let [_, _, s_warp, s_weft] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
     let mut out = [0.0; 3];
     for (k, o) in out.iter_mut().enumerate() {
-        *o = sh * (c_warp * p.rd_warp[k] as f64 + c_weft * p.rd_weft[k] as f64) / thread;
+        *o = s_warp * p.rd_warp[k] as f64 + s_weft * p.rd_weft[k] as f64;
     }
     out
 }
@@ -612,7 +608,7 @@ pub fn far_field_albedo(p: &FabricParams) -> [f64; 3] {
 ///   the threads' colour, paler, as a fibre's grazing sheen looks. Chosen by eye; not a fit.
 pub fn fallback_sheen(p: &FabricParams) -> ([f64; 3], f64) {
     let [ru, rv] = p.repeat_uv();
-    let [c_warp, c_weft, _] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
+    let [c_warp, c_weft, _, _] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
     let thread = c_warp + c_weft;
     let mut colour = [0.0; 3];
     if thread > 0.0 {
@@ -1194,7 +1190,8 @@ mod tests {
 
     #[test]
     fn far_field_albedo_is_the_plain_weave_formula() {
-        // docs/fabric-model.md §2: sh = 1 − 4g² − strength·width·(1 − 2g) for a plain weave.
+        // docs/fabric-model.md §2: s_warp + s_weft = 1 − 4g² − strength·width·(1 − 2g) for a
+        // plain weave.
         let p = FabricParams {
             rd_warp: [0.5; 3],
             rd_weft: [0.5; 3],

@@ -4,8 +4,8 @@
 //!
 //! Texel `(x, y)` of a level of `W × H` texels covers `[x/W, (x+1)/W] × [y/H, (y+1)/H]` of the repeat
 //! (row `y = 0` is `v = 0`: sample at `st = (u, v)·cell_per_uv / (cols, rows)`, no flip) and holds
-//! `(c_warp, c_weft, sh, 1)`: the area fractions of warp and weft on top and the
-//! shadow-weighted thread area (see `reference::weave`). These are linear in area, so trilinear and
+//! `(c_warp, c_weft, s_warp, s_weft)`: the area fractions of warp and weft on top and each
+//! weighted by the diffuse shadow factor (see `reference::weave`). These are linear in area, so trilinear and
 //! anisotropic filtering of them is again a correct footprint average.
 
 use crate::reference::weave::single::{weave_box, Weave};
@@ -112,7 +112,7 @@ pub fn weave_texels_cpu(push: &WeavePush) -> Vec<[f32; 4]> {
                 (x + 1) as f32 * sx,
                 (y + 1) as f32 * sy,
             );
-            out.push([c[0], c[1], c[2], 1.0]);
+            out.push(c);
         }
     }
     out

@@ -33,6 +33,8 @@ macro_rules! fabric_brdf_precision {
 
             /// A direction or a colour.
             pub type Vec3 = [$t; 3];
+            /// A weave coverage `(c_warp, c_weft, s_warp, s_weft)` (see `reference::weave`).
+            pub type Coverage = [$t; 4];
 
             /// Smallest value of the lobe's denominator `(h·k)·max(n·k1, n·k2)`: see the module docs.
             pub const DENOM_MIN: $t = 1e-6;
@@ -229,11 +231,22 @@ macro_rules! fabric_brdf_precision {
                 28.0 / (23.0 * PI) * (1.0 - rs) * ((1.0 - a2 * a2 * a) * (1.0 - b2 * b2 * b))
             }
 
-            /// The fabric model of §3 at one shading point. `coverage = (c_warp, c_weft, sh)`:
-            /// area fractions of warp-on-top and weft-on-top, and `sh` = the thread area weighted
-            /// by the diffuse shadow factor (so `sh = s·(c_warp + c_weft)` at a point): the diffuse
-            /// term is `sh · (c_warp·rd_warp + c_weft·rd_weft)/(c_warp + c_weft) · diffuse`.
-            pub fn fabric_brdf(k1: Vec3, k2: Vec3, coverage: Vec3, m: &FabricMaterial) -> Vec3 {
+            /// The diffuse albedo of a coverage: `s_warp·rd_warp + s_weft·rd_weft`, each thread's
+            /// albedo times its shadow-weighted area (linear in the coverage).
+            pub fn fabric_albedo(coverage: Coverage, m: &FabricMaterial) -> Vec3 {
+                [
+                    coverage[2] * m.rd_warp[0] + coverage[3] * m.rd_weft[0],
+                    coverage[2] * m.rd_warp[1] + coverage[3] * m.rd_weft[1],
+                    coverage[2] * m.rd_warp[2] + coverage[3] * m.rd_weft[2],
+                ]
+            }
+
+            /// The fabric model of §3 at one shading point. `coverage = (c_warp, c_weft, s_warp,
+            /// s_weft)`: area fractions of warp-on-top and weft-on-top, and the same weighted by
+            /// the diffuse shadow factor (at a point `s_warp = s·c_warp`): the diffuse term is
+            /// [`fabric_albedo`] times the diffuse lobe, the specular the coverages times each
+            /// orientation's lobe.
+            pub fn fabric_brdf(k1: Vec3, k2: Vec3, coverage: Coverage, m: &FabricMaterial) -> Vec3 {
                 let nk1 = k1[2];
                 let nk2 = k2[2];
                 if !(nk1 > 0.0 && nk2 > 0.0) {
@@ -241,7 +254,6 @@ macro_rules! fabric_brdf_precision {
                 }
                 let c_warp = coverage[0];
                 let c_weft = coverage[1];
-                let sh = coverage[2];
                 let rho_weft = as_lobe(k1, k2, m.e_along, m.e_across, m.rs);
                 let rho_warp = as_lobe(k1, k2, m.e_across, m.e_along, m.rs);
                 let diffuse = if m.coupled {
@@ -249,17 +261,12 @@ macro_rules! fabric_brdf_precision {
                 } else {
                     lambert()
                 };
-                let c_thread = c_warp + c_weft;
-                let w = if c_thread > 0.0 {
-                    sh * diffuse / c_thread
-                } else {
-                    0.0
-                };
                 let spec = c_weft * rho_weft + c_warp * rho_warp;
+                let rd = fabric_albedo(coverage, m);
                 [
-                    w * (c_warp * m.rd_warp[0] + c_weft * m.rd_weft[0]) + spec,
-                    w * (c_warp * m.rd_warp[1] + c_weft * m.rd_weft[1]) + spec,
-                    w * (c_warp * m.rd_warp[2] + c_weft * m.rd_weft[2]) + spec,
+                    diffuse * rd[0] + spec,
+                    diffuse * rd[1] + spec,
+                    diffuse * rd[2] + spec,
                 ]
             }
 
@@ -270,14 +277,13 @@ macro_rules! fabric_brdf_precision {
             pub fn fabric_brdf_averaged(
                 k1: Vec3,
                 k2: Vec3,
-                coverage: Vec3,
+                coverage: Coverage,
                 m: &FabricMaterial,
             ) -> Vec3 {
                 let nk1 = k1[2];
                 let nk2 = k2[2];
                 let c_warp = coverage[0];
                 let c_weft = coverage[1];
-                let sh = coverage[2];
                 let c_thread = c_warp + c_weft;
                 if !(nk1 > 0.0 && nk2 > 0.0 && c_thread > 0.0) {
                     return [0.0; 3];
@@ -290,12 +296,12 @@ macro_rules! fabric_brdf_precision {
                 } else {
                     lambert()
                 };
-                let w = sh * diffuse / c_thread;
                 let spec = c_thread * as_lobe(k1, k2, eu, ev, m.rs);
+                let rd = fabric_albedo(coverage, m);
                 [
-                    w * (c_warp * m.rd_warp[0] + c_weft * m.rd_weft[0]) + spec,
-                    w * (c_warp * m.rd_warp[1] + c_weft * m.rd_weft[1]) + spec,
-                    w * (c_warp * m.rd_warp[2] + c_weft * m.rd_weft[2]) + spec,
+                    diffuse * rd[0] + spec,
+                    diffuse * rd[1] + spec,
+                    diffuse * rd[2] + spec,
                 ]
             }
 

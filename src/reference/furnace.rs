@@ -2,7 +2,9 @@
 //! diffuse terms and of the whole fabric model, in f64, deterministic (stratified samples, fixed
 //! quadrature), for tests and for the documentation's figures.
 
-use super::brdf::double::{as_lobe, coupled_diffuse, fabric_brdf, lambert, FabricMaterial, Vec3};
+use super::brdf::double::{
+    as_lobe, coupled_diffuse, fabric_brdf, lambert, Coverage, FabricMaterial, Vec3,
+};
 use super::brdf::sampling::sample_k2;
 use std::f64::consts::PI;
 
@@ -43,27 +45,28 @@ pub fn diffuse_albedo(nk1: f64, rs: f64, coupled: bool) -> f64 {
 }
 
 /// Albedo of the full model (per colour channel) for light from `k1` with the weave `coverage`
-/// (`c_warp, c_weft, sh`): linear in the terms, so each lobe is importance-sampled on its own.
-pub fn fabric_albedo(k1: Vec3, m: &FabricMaterial, coverage: Vec3, n: usize) -> Vec3 {
-    let [c_warp, c_weft, sh] = coverage;
+/// (`c_warp, c_weft, s_warp, s_weft`): linear in the terms, so each lobe is importance-sampled on
+/// its own.
+pub fn fabric_albedo(k1: Vec3, m: &FabricMaterial, coverage: Coverage, n: usize) -> Vec3 {
+    let [c_warp, c_weft, s_warp, s_weft] = coverage;
     let spec = c_weft * lobe_albedo(k1, m.e_along, m.e_across, m.rs, n)
         + c_warp * lobe_albedo(k1, m.e_across, m.e_along, m.rs, n);
-    let c_thread = c_warp + c_weft;
-    let d = if c_thread > 0.0 {
-        sh * diffuse_albedo(k1[2], m.rs, m.coupled) / c_thread
-    } else {
-        0.0
-    };
+    let d = diffuse_albedo(k1[2], m.rs, m.coupled);
     let mut out = [0.0; 3];
     for (c, o) in out.iter_mut().enumerate() {
-        *o = spec + d * (c_warp * m.rd_warp[c] + c_weft * m.rd_weft[c]);
+        *o = spec + d * (s_warp * m.rd_warp[c] + s_weft * m.rd_weft[c]);
     }
     out
 }
 
 /// The same albedo by brute force, for checking the sampler: the midpoint rule over the hemisphere
 /// in `(cos θ, φ)` on `n × 4n` cells. Only accurate for lobes wider than a cell (exponents ≲ n²/10).
-pub fn fabric_albedo_quadrature(k1: Vec3, m: &FabricMaterial, coverage: Vec3, n: usize) -> Vec3 {
+pub fn fabric_albedo_quadrature(
+    k1: Vec3,
+    m: &FabricMaterial,
+    coverage: Coverage,
+    n: usize,
+) -> Vec3 {
     let mut out = [0.0; 3];
     let nphi = 4 * n;
     for i in 0..n {

@@ -32,7 +32,7 @@
 //!   lobe's peak): below it `exp` underflows differently in f32 (X > 87) and nothing is visible.
 //! - **The weave point**: coverages exactly 0 or 1 and the same class (the random points keep
 //!   1e-4 cell from every region border, and the hard cases on borders are dyadic, exact in
-//!   both); `sh` to `rel`.
+//!   both); `s_warp`, `s_weft` to `rel`.
 //! - **The box coverage** is a sum of products of 1-D measures, each from `floor`, products and
 //!   differences of numbers up to `M = max(|x0|, |x1|, cols)`: its absolute error is a few ulp of
 //!   `M` per boundary crossed, divided by the box size: `box_ulps·ε·(Mx/wx + My/wy)`, times the
@@ -65,7 +65,7 @@ use crate::fabric::{FabricParams, GpuFabric, WeavePattern};
 /// | 48  | `k2: vec4` | world direction to the viewer (xyz, unit) |
 /// | 64  | `point: vec4` | xy: point for the weave classifier, in cells |
 /// | 80  | `footprint: vec4` | (x0, y0, x1, y1): box for the weave coverage, in cells |
-/// | 96  | `coverage: vec4` | (c_warp, c_weft, sh) given to `fabric_brdf` |
+/// | 96  | `coverage: vec4` | (c_warp, c_weft, s_warp, s_weft) given to `fabric_brdf` |
 /// | 112 | `fabric: GpuFabric` | the material (80 bytes) |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -88,8 +88,8 @@ pub struct ProbeInput {
 /// | 16 | `expo` | E(h) weft | E(h) warp | h·n | h·k (clamped) |
 /// | 32 | `diffuse` | coupled diffuse (no Rd) | n·k1 | n·k2 | hn^E weft |
 /// | 48 | `f` | fabric f, r | g | b | 0 |
-/// | 64 | `point` | c_warp | c_weft | sh | class: 0 gap, 1 warp, 2 weft |
-/// | 80 | `footprint` | c_warp | c_weft | sh | 0 |
+/// | 64 | `point` | c_warp | c_weft | s_warp | s_weft |
+/// | 80 | `footprint` | c_warp | c_weft | s_warp | s_weft |
 /// | 96 | `f_point` | f with the point's coverage, r | g | b | 0 |
 /// | 112 | `f_avg` | `fabric_brdf_averaged` with the input coverage, r | g | b | 0 |
 /// | 128 | `phong` | `phong_brdf`, r | g | b | `phong_lobe` (exponent `fabric_phong_exponent`) |
@@ -124,8 +124,8 @@ pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "e_weft", "e_warp", "hn", "kh",
     "coupled_diffuse", "nk1", "nk2", "power_weft",
     "f.r", "f.g", "f.b", "f.w",
-    "point.c_warp", "point.c_weft", "point.sh", "point.class",
-    "footprint.c_warp", "footprint.c_weft", "footprint.sh", "footprint.w",
+    "point.c_warp", "point.c_weft", "point.s_warp", "point.s_weft",
+    "footprint.c_warp", "footprint.c_weft", "footprint.s_warp", "footprint.s_weft",
     "f_point.r", "f_point.g", "f_point.b", "f_point.w",
     "f_avg.r", "f_avg.g", "f_avg.b", "f_avg.w",
     "phong.r", "phong.g", "phong.b", "phong_lobe",
@@ -221,15 +221,8 @@ macro_rules! probe_eval {
             let k1 = fabric_local(v3(input.k1), frame);
             let k2 = fabric_local(v3(input.k2), frame);
             let (h, kh) = fabric_half(k1, k2);
-            let cov = v3(input.coverage);
+            let cov = input.coverage.map(|x| x as $t);
             let p = weave_point(&w, input.point[0] as $t, input.point[1] as $t);
-            let class: $t = if p[0] > 0.5 {
-                1.0
-            } else if p[1] > 0.5 {
-                2.0
-            } else {
-                0.0
-            };
             let fp = input.footprint;
             let b = weave_box(&w, fp[0] as $t, fp[1] as $t, fp[2] as $t, fp[3] as $t);
             let f = fabric_brdf(k1, k2, cov, &m);
@@ -257,11 +250,11 @@ macro_rules! probe_eval {
                 p[0],
                 p[1],
                 p[2],
-                class,
+                p[3],
                 b[0],
                 b[1],
                 b[2],
-                0.0,
+                b[3],
                 f_point[0],
                 f_point[1],
                 f_point[2],
@@ -390,7 +383,7 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
     };
     let (rho_weft, d_weft, p_weft) = lobe_err(m.e_along, m.e_across);
     let (rho_warp, _, _) = lobe_err(m.e_across, m.e_along);
-    let cov = v3(input.coverage);
+    let cov = input.coverage.map(|x| x as f64);
     let c_thread = cov[0] + cov[1];
     let rho_avg = if c_thread > 0.0 {
         let t = cov[1] / c_thread;
@@ -411,7 +404,7 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
 
     // fabric_brdf with coverage c: the lobes' errors weighted by coverage (`spec`), plus the
     // diffuse term to `rel` (Lambert) or to `rel` and its slope 0.97 times the error of n·k (coupled).
-    let diffuse_err = |c: [f64; 3]| -> f64 {
+    let diffuse_err = |c: [f64; 4]| -> f64 {
         let c_thread = c[0] + c[1];
         if !facing || !(c_thread > 0.0) {
             return 0.0;
@@ -426,10 +419,10 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         } else {
             lambert()
         };
-        let w = c[2] * rd_max;
+        let w = (c[2] + c[3]) * rd_max;
         b.rel * w * diffuse + if m.coupled { 2.0 * b.dir * w } else { 0.0 }
     };
-    let f_err = |c: [f64; 3]| -> f64 {
+    let f_err = |c: [f64; 4]| -> f64 {
         if !facing {
             return 1e-30;
         }
@@ -485,12 +478,12 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         1e-30
     };
     let phong_tol = if facing {
-        m.rs * phong_lobe_tol + diffuse_err([0.5, 0.5, 1.0]) + 1e-30
+        m.rs * phong_lobe_tol + diffuse_err([0.5, 0.5, 0.5, 0.5]) + 1e-30
     } else {
         1e-30
     };
     let plain_tol = if facing {
-        rho_weft + diffuse_err([0.5, 0.5, 1.0]) + 1e-30
+        rho_weft + diffuse_err([0.5, 0.5, 0.5, 0.5]) + 1e-30
     } else {
         1e-30
     };
@@ -501,8 +494,9 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         e_err(m.e_along, m.e_across), e_err(m.e_across, m.e_along), 2.0 * dir_h, 2.0 * b.dir,
         b.rel + 2.0 * b.dir, b.dir, b.dir, p_weft,
         f_tol, f_tol, f_tol, 0.0,
-        0.0, 0.0, b.rel, 0.0,
-        box_tol, box_tol, box_tol * (1.0 + input.fabric.shadow_strength as f64), 0.0,
+        0.0, 0.0, b.rel, b.rel,
+        box_tol, box_tol, box_tol * (1.0 + input.fabric.shadow_strength as f64),
+        box_tol * (1.0 + input.fabric.shadow_strength as f64),
         fp_tol, fp_tol, fp_tol, 0.0,
         f_avg_tol, f_avg_tol, f_avg_tol, 0.0,
         phong_tol, phong_tol, phong_tol, phong_lobe_tol,
@@ -627,7 +621,7 @@ fn base_input(fabric: GpuFabric) -> ProbeInput {
         k2: [0.0, 0.0, 1.0, 0.0],
         point: [0.5, 0.5, 0.0, 0.0],
         footprint: [0.25, 0.25, 0.75, 0.75],
-        coverage: [0.3, 0.5, 0.6, 0.0],
+        coverage: [0.3, 0.5, 0.2, 0.4],
         fabric,
     }
 }
@@ -1018,10 +1012,11 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
         let y0 = rng.range(-10.0, 10.0);
         let wx = rng.log_range(1e-3, 50.0);
         let wy = rng.log_range(1e-3, 50.0);
-        // Coverage given to fabric_brdf: c_warp + c_weft ≤ 1, sh ≤ c_warp + c_weft.
+        // Coverage given to fabric_brdf: c_warp + c_weft ≤ 1, s_warp ≤ c_warp, s_weft ≤ c_weft.
         let c_warp = rng.next_f64();
         let c_weft = rng.next_f64() * (1.0 - c_warp);
-        let sh = rng.next_f64() * (c_warp + c_weft);
+        let s_warp = rng.next_f64() * c_warp;
+        let s_weft = rng.next_f64() * c_weft;
         out.push(ProbeCase {
             name: format!("random {idx} (seed {seed})"),
             input: ProbeInput {
@@ -1031,7 +1026,7 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
                 k2: v4(k2, 0.0),
                 point: [px, py, 0.0, 0.0],
                 footprint: [x0 as f32, y0 as f32, (x0 + wx) as f32, (y0 + wy) as f32],
-                coverage: [c_warp as f32, c_weft as f32, sh as f32, 0.0],
+                coverage: [c_warp as f32, c_weft as f32, s_warp as f32, s_weft as f32],
                 fabric,
             },
         });

@@ -449,7 +449,7 @@ impl Raster {
                     (m.emissive[2] + g.z).max(0.0),
                 ]
             },
-            coverage: [0.0; 3],
+            coverage: [0.0; 4],
             fabric: None,
             gltf: None,
         };
@@ -511,15 +511,15 @@ fn any_tangent(n: Vec3) -> Vec3 {
     a.cross(n).normalize()
 }
 
-/// The weave coverage `(c_warp, c_weft, sh)` of the pixel footprint `{uv + a·dx + b·dy : a, b in
+/// The weave coverage `(c_warp, c_weft, s_warp, s_weft)` of the pixel footprint `{uv + a·dx + b·dy : a, b in
 /// [-1/2, 1/2]}`: the mean of the exact box coverages of the bounding boxes of its `k × k` pieces
 /// (equal areas, and every coverage is an area fraction, so the mean is the footprint's).
-pub fn footprint_coverage(params: &FabricParams, uv: Vec2, dx: Vec2, dy: Vec2, k: u32) -> [f32; 3] {
+pub fn footprint_coverage(params: &FabricParams, uv: Vec2, dx: Vec2, dy: Vec2, k: u32) -> [f32; 4] {
     let k = k.max(1);
     let (uv, dx, dy) = (uv.as_dvec2(), dx.as_dvec2(), dy.as_dvec2());
     let half =
         glam::DVec2::new(dx.x.abs() + dy.x.abs(), dx.y.abs() + dy.y.abs()) * (0.5 / k as f64);
-    let mut sum = [0.0f64; 3];
+    let mut sum = [0.0f64; 4];
     for j in 0..k {
         for i in 0..k {
             let a = (i as f64 + 0.5) / k as f64 - 0.5;
@@ -538,11 +538,7 @@ pub fn footprint_coverage(params: &FabricParams, uv: Vec2, dx: Vec2, dy: Vec2, k
         }
     }
     let n = (k * k) as f64;
-    [
-        (sum[0] / n) as f32,
-        (sum[1] / n) as f32,
-        (sum[2] / n) as f32,
-    ]
+    sum.map(|s| (s / n) as f32)
 }
 
 #[cfg(test)]

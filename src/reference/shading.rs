@@ -344,8 +344,8 @@ pub struct Surface {
     pub metallic: f32,
     pub roughness: f32,
     pub emissive: Vec3,
-    /// (c_warp, c_weft, shadow-weighted thread area), for fabric.
-    pub coverage: Vec3,
+    /// (c_warp, c_weft, s_warp, s_weft), for fabric.
+    pub coverage: [f32; 4],
     pub fabric: Option<GpuFabric>,
     /// The glTF material's extensions (non-fabric; None: the core material of `base_color`,
     /// `metallic`, `roughness`). Its `t` is the anisotropy direction.
@@ -430,15 +430,7 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
                 }
                 return radiance;
             }
-            let c_thread = cov[0] + cov[1];
-            let rd = if c_thread > 0.0 {
-                scale(
-                    add(scale(f.rd_warp, cov[0]), scale(f.rd_weft, cov[1])),
-                    cov[2] / c_thread,
-                )
-            } else {
-                [0.0; 3]
-            };
+            let rd = fb::fabric_albedo(cov, &m);
             radiance = add(radiance, mul(ambient, rd));
             for light in &lights[..count] {
                 let (l, e) = light_incoming(light, s.position);

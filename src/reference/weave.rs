@@ -20,12 +20,15 @@
 //! Every region is a union of axis-aligned rectangles per cell, so the coverage of a box is a sum
 //! of products of 1-D interval measures; each 1-D measure is taken per period with `floor`, so a
 //! box spanning any number of repeats costs the same. The box returns
-//! `(c_warp, c_weft, sh)`: area fractions of warp on top, weft on top, and the thread area weighted
-//! by the diffuse shadow factor (`sh ≤ c_warp + c_weft`), the form `fabric_brdf` takes.
+//! `(c_warp, c_weft, s_warp, s_weft)`: area fractions of warp on top and weft on top, and each
+//! weighted by the diffuse shadow factor (`s_warp ≤ c_warp`, `s_weft ≤ c_weft`), the form
+//! `fabric_brdf` takes. All four are areas, so the mean over pieces of a footprint is the
+//! footprint's, and the diffuse term, linear in them, averages exactly even when warp and weft
+//! differ in colour (one shadow-weighted total for both threads could not).
 //!
 //! For a plain weave over a whole repeat: `c_warp = c_weft = (1 - 4g²)/2`, gap `4g²`, and
-//! `sh = 1 - 4g² - shadow_strength·shadow_width·(1 - 2g)`: `shadow_width` is the fraction of each
-//! thread's length that is darkened.
+//! `s_warp = s_weft = (1 - 4g² - shadow_strength·shadow_width·(1 - 2g))/2`: `shadow_width` is the
+//! fraction of each thread's length that is darkened.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: it is true for NaN, as in the GLSL twin.
 
@@ -33,8 +36,8 @@ macro_rules! weave_precision {
     ($prec:ident, $t:ident, $doc:literal) => {
         #[doc = $doc]
         pub mod $prec {
-            /// `(c_warp, c_weft, sh)`.
-            pub type Coverage = [$t; 3];
+            /// `(c_warp, c_weft, s_warp, s_weft)`.
+            pub type Coverage = [$t; 4];
 
             /// Boxes narrower than this (cells) are treated as their centre point: below it an f32
             /// box is rounding noise (ulp(8) = 1e-6), and `1/(wx·wy)` stays far from overflow.
@@ -129,8 +132,9 @@ macro_rules! weave_precision {
                 (n1 - n0) * len + (r1 - lo).clamp(0.0, len) - (r0 - lo).clamp(0.0, len)
             }
 
-            /// The weave at the point `(x, y)` (cells): `(c_warp, c_weft, sh)` with one of the
-            /// coverages 1 (or both 0: gap) and `sh` = the diffuse shadow factor on a thread, 0 on gap.
+            /// The weave at the point `(x, y)` (cells): `(c_warp, c_weft, s_warp, s_weft)` with one
+            /// of the coverages 1 (or both 0: gap) and that thread's `s` its diffuse shadow factor
+            /// (the other `s` 0).
             pub fn weave_point(w: &Weave, x: $t, y: $t) -> Coverage {
                 let xr = weave_wrap(x, w.cols as $t);
                 let yr = weave_wrap(y, w.rows as $t);
@@ -139,7 +143,7 @@ macro_rules! weave_precision {
                 let a = xr - fi;
                 let b = yr - fj;
                 if a == 0.0 || b == 0.0 {
-                    return [0.0, 0.0, 0.0];
+                    return [0.0; 4];
                 }
                 let i = fi as u32;
                 let j = fj as u32;
@@ -154,25 +158,25 @@ macro_rules! weave_precision {
                         let left = !weave_weft_up(w, (i + w.cols - 1) % w.cols, j);
                         let right = !weave_weft_up(w, (i + 1) % w.cols, j);
                         let shadowed = (left && a < dive) || (right && a > 1.0 - dive);
-                        return [0.0, 1.0, if shadowed { dark } else { 1.0 }];
+                        return [0.0, 1.0, 0.0, if shadowed { dark } else { 1.0 }];
                     }
                     if in_warp_band {
                         let shadowed = b > q && b < 1.0 - q;
-                        return [1.0, 0.0, if shadowed { dark } else { 1.0 }];
+                        return [1.0, 0.0, if shadowed { dark } else { 1.0 }, 0.0];
                     }
                 } else {
                     if in_warp_band {
                         let below = weave_weft_up(w, i, (j + w.rows - 1) % w.rows);
                         let above = weave_weft_up(w, i, (j + 1) % w.rows);
                         let shadowed = (below && b < dive) || (above && b > 1.0 - dive);
-                        return [1.0, 0.0, if shadowed { dark } else { 1.0 }];
+                        return [1.0, 0.0, if shadowed { dark } else { 1.0 }, 0.0];
                     }
                     if in_weft_band {
                         let shadowed = a > q && a < 1.0 - q;
-                        return [0.0, 1.0, if shadowed { dark } else { 1.0 }];
+                        return [0.0, 1.0, 0.0, if shadowed { dark } else { 1.0 }];
                     }
                 }
-                [0.0, 0.0, 0.0]
+                [0.0; 4]
             }
 
             /// The exact coverage of the box `[x0, x1] × [y0, y1]` (cells). `x0` and `y0` should be
@@ -212,7 +216,8 @@ macro_rules! weave_precision {
                 }
                 let mut warp: $t = 0.0;
                 let mut weft: $t = 0.0;
-                let mut dark: $t = 0.0;
+                let mut dark_warp: $t = 0.0;
+                let mut dark_weft: $t = 0.0;
                 for j in 0..w.rows {
                     let r = j as $t;
                     let y_full = weave_measure(y0, y1, py, r, r + 1.0);
@@ -238,7 +243,8 @@ macro_rules! weave_precision {
                                 + (if right { x_high[k] } else { 0.0 });
                             weft += x_full[k] * y_band;
                             warp += x_band[k] * y_strip;
-                            dark += dive_x * y_band + x_band[k] * y_strip_dark;
+                            dark_weft += dive_x * y_band;
+                            dark_warp += x_band[k] * y_strip_dark;
                         } else {
                             let lo = weave_weft_up(w, i, below);
                             let hi = weave_weft_up(w, i, above);
@@ -246,15 +252,17 @@ macro_rules! weave_precision {
                                 (if lo { y_low } else { 0.0 }) + (if hi { y_high } else { 0.0 });
                             warp += x_band[k] * y_full;
                             weft += x_strip[k] * y_band;
-                            dark += x_band[k] * dive_y + x_strip_dark[k] * y_band;
+                            dark_warp += x_band[k] * dive_y;
+                            dark_weft += x_strip_dark[k] * y_band;
                         }
                     }
                 }
                 let inv_area = 1.0 / (wx * wy);
                 let c_warp = (warp * inv_area).clamp(0.0, 1.0);
                 let c_weft = (weft * inv_area).clamp(0.0, 1.0);
-                let sh = ((warp + weft - w.shadow_strength * dark) * inv_area).clamp(0.0, 1.0);
-                [c_warp, c_weft, sh]
+                let s_warp = ((warp - w.shadow_strength * dark_warp) * inv_area).clamp(0.0, c_warp);
+                let s_weft = ((weft - w.shadow_strength * dark_weft) * inv_area).clamp(0.0, c_weft);
+                [c_warp, c_weft, s_warp, s_weft]
             }
         }
     };

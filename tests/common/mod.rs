@@ -91,7 +91,12 @@ pub fn gbuffer_surface(
         metallic,
         roughness,
         emissive: [px(&g.emissive, 0), px(&g.emissive, 1), px(&g.emissive, 2)],
-        coverage: [px(&g.fabric, 0), px(&g.fabric, 1), px(&g.fabric, 2)],
+        coverage: [
+            px(&g.fabric, 0),
+            px(&g.fabric, 1),
+            px(&g.fabric, 2),
+            px(&g.fabric, 3),
+        ],
         fabric,
         gltf,
     })
