@@ -327,6 +327,9 @@ pub struct GroundTruthRow {
     pub times: PassTimes,
     /// Share of the image covered by fabric at every sample (the pixels the errors are over).
     pub fabric_fraction: f64,
+    /// The truth's own PSNR against the exact pixel integral, estimated ([`Truth::noise_psnr`]):
+    /// a level's PSNR is meaningful up to about this.
+    pub noise_psnr: Option<f64>,
 }
 
 /// One (view, level, precision) of the accuracy sweep.
@@ -531,6 +534,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
             samples: n,
             times: truth.times,
             fabric_fraction: mask.iter().filter(|m| **m).count() as f64 / mask.len().max(1) as f64,
+            noise_psnr: truth.noise_psnr(&mask),
         });
 
         let jobs = config
@@ -718,6 +722,9 @@ pub struct Truth {
     pub samples: u32,
     /// Summed over the sample frames.
     pub times: PassTimes,
+    /// The linear HDR means of the two halves of the strata (a checkerboard over the n x n grid),
+    /// RGB: their difference estimates the truth's own sampling noise ([`Truth::noise_psnr`]).
+    pub halves: [Vec<f64>; 2],
 }
 
 impl Truth {
@@ -726,6 +733,29 @@ impl Truth {
     pub fn fabric_everywhere(&self) -> Vec<bool> {
         let all = self.samples * self.samples;
         self.fabric_samples.iter().map(|&c| c == all).collect()
+    }
+
+    /// The PSNR (dB, as [`psnr_hdr_masked`]) of the truth against the exact pixel integral,
+    /// estimated from its two halves over `mask`: they are independent estimates with half the
+    /// samples each, so their difference has 4x the variance of the truth's error and the truth's
+    /// PSNR is theirs + 6.02 dB. None when n = 1 (no second half) or the halves are equal.
+    pub fn noise_psnr(&self, mask: &[bool]) -> Option<f64> {
+        if self.samples < 2 {
+            return None;
+        }
+        let (mut sum, mut n, mut peak) = (0.0f64, 0usize, 0.0f64);
+        for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
+            for c in 0..3 {
+                let d = self.halves[0][3 * i + c] - self.halves[1][3 * i + c];
+                sum += d * d;
+                peak = peak.max(self.frame.hdr[4 * i + c] as f64);
+            }
+            n += 3;
+        }
+        if n == 0 || sum == 0.0 {
+            return None;
+        }
+        Some(10.0 * (peak * peak / (sum / n as f64)).log10() + 10.0 * 4f64.log10())
     }
 }
 
@@ -749,6 +779,8 @@ pub fn pixel_truth(
     let n = n.max(1);
     let (w, h) = (options.width as usize, options.height as usize);
     let mut sum = vec![0.0f64; w * h * 3];
+    let mut halves = [vec![0.0f64; w * h * 3], vec![0.0f64; w * h * 3]];
+    let mut counts = [0u32; 2];
     let mut fabric_samples = vec![0u32; w * h];
     let (mut gbuffer, mut lighting) = (0.0, 0.0);
     let mut last = None;
@@ -777,9 +809,16 @@ pub fn pixel_truth(
             let frame = renderer.render_frame(scene, gpu, &o)?;
             gbuffer += pass_ms(&frame, "gbuffer");
             lighting += pass_ms(&frame, "lighting");
-            for (acc, px) in sum.chunks_exact_mut(3).zip(frame.hdr.chunks_exact(4)) {
+            let half = ((i + j) % 2) as usize;
+            counts[half] += 1;
+            for ((acc, hacc), px) in sum
+                .chunks_exact_mut(3)
+                .zip(halves[half].chunks_exact_mut(3))
+                .zip(frame.hdr.chunks_exact(4))
+            {
                 for c in 0..3 {
                     acc[c] += px[c] as f64;
+                    hacc[c] += px[c] as f64;
                 }
             }
             let g = renderer.read_gbuffer()?;
@@ -798,6 +837,10 @@ pub fn pixel_truth(
             last = Some(frame);
             done();
         }
+    }
+    for (h, &c) in halves.iter_mut().zip(&counts) {
+        let s = 1.0 / c.max(1) as f64;
+        h.iter_mut().for_each(|v| *v *= s);
     }
     let mut frame = last.expect("n >= 1 frames");
     let scale = 1.0 / (n * n) as f64;
@@ -823,6 +866,7 @@ pub fn pixel_truth(
     Ok(Truth {
         frame,
         fabric_samples,
+        halves,
         samples: n,
         times: PassTimes {
             gbuffer_ms: gbuffer,
@@ -1213,12 +1257,13 @@ impl BenchReport {
         for g in &self.ground_truth {
             let _ = writeln!(
                 t,
-                "  {:<10} ground truth {n}x{n} jittered point samples per pixel: gbuffer {} ms + lighting {} ms (sum of {} frames), fabric fills {:.0}% of the image",
+                "  {:<10} ground truth {n}x{n} jittered point samples per pixel: gbuffer {} ms + lighting {} ms (sum of {} frames), fabric fills {:.0}% of the image, its own PSNR {}",
                 g.view.name(),
                 fmt_ms(g.times.gbuffer_ms),
                 fmt_ms(g.times.lighting_ms),
                 g.times.frames,
                 g.fabric_fraction * 100.0,
+                g.noise_psnr.map(|p| format!("~{p:.1} dB")).unwrap_or_else(|| "unknown".into()),
                 n = g.samples,
             );
         }
@@ -1381,6 +1426,9 @@ impl BenchReport {
             );
             times(&mut r, &g.times);
             r.set("fabric_fraction", format!("{:.4}", g.fabric_fraction));
+            if let Some(p) = g.noise_psnr {
+                r.set("psnr_db", format!("{p:.3}"));
+            }
             r.push(&mut t);
         }
         for a in &self.accuracy {
