@@ -13,6 +13,10 @@ layout(constant_id = 1) const uint WEAVE_SOURCE = 0u;
 // How fabric is shaded (SHADING_* in frame.glsl): Gouraud adds the vertex stage's lighting to
 // the emitted radiance; the others change nothing here.
 layout(constant_id = 2) const uint SHADING = 0u;
+// The pixel footprint (RenderOptions::footprint): at most this many pieces per side of the
+// parallelogram spanned by the UV derivatives, each filtered by its bounding box (1: the whole
+// footprint's bounding box). Id 3 is gbuffer.vert's.
+layout(constant_id = 4) const uint FOOTPRINT_PIECES = 2u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
@@ -183,11 +187,40 @@ void main() {
         } else {
             vec4 coverage;
             if (WEAVE_SOURCE == 1u) {
-                vec2 lo = (fract(st) - ext) * repeat_cells;
-                vec2 hi = (fract(st) + ext) * repeat_cells;
-                coverage = weave_box(weave_from_fabric(f), lo.x, lo.y, hi.x, hi.y);
+                // The footprint parallelogram spanned by the st derivatives, in cells.
+                vec2 dx = st_dx * repeat_cells;
+                vec2 dy = st_dy * repeat_cells;
+                if (FOOTPRINT_PIECES == 0u) {
+                    vec2 lo = (fract(st) - ext) * repeat_cells;
+                    vec2 hi = (fract(st) + ext) * repeat_cells;
+                    coverage = weave_box(weave_from_fabric(f), lo.x, lo.y, hi.x, hi.y);
+                } else {
+                    coverage = weave_parallelogram(weave_from_fabric(f), fract(st) * repeat_cells, dx, dy,
+                                                   weave_pieces(dx, dy, FOOTPRINT_PIECES));
+                }
             } else {
-                coverage = textureGrad(weave_tex, st, st_dx, st_dy);
+                // The same pieces, each a filtered probe of its own size: the filter's footprint
+                // follows the parallelogram instead of spanning its bounding box (lavapipe has no
+                // anisotropic filtering; where a device has it, each probe also gets it).
+                uvec2 k = FOOTPRINT_PIECES == 0u ? uvec2(1u)
+                    : weave_pieces(st_dx * repeat_cells, st_dy * repeat_cells, FOOTPRINT_PIECES);
+                vec2 kf = vec2(k);
+                // Each probe's filter a level sharper where the footprint is within a cell or so
+                // (there the trilinear filter's own width, 2-3 texels of its level, would blur
+                // the threads), relaxing to none by two cells (where it would alias).
+                vec2 cells_extent = (abs(st_dx) + abs(st_dy)) * repeat_cells;
+                float sharpen = FOOTPRINT_PIECES == 0u ? 1.0
+                    : clamp(0.5 * max(cells_extent.x, cells_extent.y), 0.5, 1.0);
+                vec2 pdx = st_dx / kf.x * sharpen;
+                vec2 pdy = st_dy / kf.y * sharpen;
+                coverage = vec4(0.0);
+                for (uint j = 0u; j < k.y; j++) {
+                    for (uint i = 0u; i < k.x; i++) {
+                        vec2 p = st + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
+                        coverage += textureGrad(weave_tex, p, pdx, pdy);
+                    }
+                }
+                coverage /= kf.x * kf.y;
             }
             gb_fabric = clamp(coverage, 0.0, 1.0);
         }

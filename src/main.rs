@@ -84,6 +84,14 @@ struct SceneArgs {
         &render::WeavePrecision::ALL.map(render::WeavePrecision::name),
     ))]
     weave_precision: render::WeavePrecision,
+    /// How the weave is filtered over a pixel's footprint: parallelogram (oblique footprints cut
+    /// into 2 x 2 pieces), parallelogram:N (N x N, N up to 4), or box (its bounding box: faster,
+    /// blurrier where threads run oblique to the screen).
+    #[arg(long, default_value = "parallelogram", value_parser = Choice::new(
+        render::Footprint::parse,
+        &["parallelogram", "parallelogram:N", "box"],
+    ))]
+    footprint: render::Footprint,
     /// Show a G-buffer target instead of the lit image: albedo, normals, tangents,
     /// roughness-metallic, coverage, thread-dir, depth.
     #[arg(long, default_value = "none", value_parser = Choice::new(
@@ -250,6 +258,10 @@ struct BenchArgs {
     /// Only the accuracy sweep: skip the growth over resolution and lights and the PBR ratio.
     #[arg(long)]
     accuracy_only: bool,
+    /// Instead: the footprint filters (box against parallelogram:2 and :3) per view, texture and
+    /// analytic weave, timed in one run, against the pixel-integrating ground truth.
+    #[arg(long)]
+    footprint: bool,
 }
 
 fn parse_bench_view(text: &str) -> Result<weft::bench::View, String> {
@@ -418,6 +430,7 @@ fn load_scene_impl(
         debug_view: args.debug_view,
         accuracy: args.accuracy,
         weave_precision: args.weave_precision,
+        footprint: args.footprint,
         shading: args.shading,
         environment,
         ..Default::default()
@@ -573,6 +586,7 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
             fov: 40.0,
             accuracy: render::Accuracy::default(),
             weave_precision: render::WeavePrecision::default(),
+            footprint: render::Footprint::default(),
             debug_view: DebugView::None,
             shading: render::Shading::default(),
             env: args.env.clone(),
@@ -799,6 +813,26 @@ fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
         let mut renderer = Renderer::new(ctx)?;
         let report = weft::bench::plan_bench::run(&mut renderer, size, args.frames.unwrap_or(7))?;
         println!("{}", report.table());
+        return Ok(());
+    }
+    if args.footprint {
+        let ctx = open_device(args.device.as_deref(), false)?;
+        let views = args.views.unwrap_or_else(|| {
+            vec![
+                weft::bench::View::Cells10,
+                weft::bench::View::Cells1,
+                weft::bench::View::Far,
+            ]
+        });
+        let report = weft::bench::footprint_bench(
+            ctx,
+            &views,
+            (640, 360),
+            args.truth_samples.unwrap_or(16),
+            args.frames.unwrap_or(5),
+            &args.out,
+        )?;
+        println!("{}", report);
         return Ok(());
     }
     let mut config = if args.quick {

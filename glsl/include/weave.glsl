@@ -21,6 +21,7 @@
 // (ulp(8) = 1e-6), and 1/(wx·wy) stays far from overflow.
 #define WEAVE_MIN_BOX 1e-6
 
+
 // Rust twin: weft::reference::weave::single::Weave. Built from a GpuFabric or from WeavePush.
 struct Weave {
     uint pattern_lo;       // bit 8j+i = cell (i, j) weft-up, rows 0..3
@@ -202,6 +203,49 @@ vec4 weave_box(Weave w, float x0, float y0, float x1, float y1) {
     float s_warp = clamp((warp - w.shadow_strength * dark_warp) * inv_area, 0.0, c_warp);
     float s_weft = clamp((weft - w.shadow_strength * dark_weft) * inv_area, 0.0, c_weft);
     return vec4(c_warp, c_weft, s_warp, s_weft);
+}
+
+// Pieces for weave_parallelogram, along dx and along dy: the footprint's bounding box is exact
+// when the footprint is aligned with the weave (its box is itself) and harmless when it spans
+// many cells (the weave is averaged away either way); in between, the box's shape differs from
+// the parallelogram's and blurs the weave. Cutting the footprint into pieces (`most` along its
+// longer edge, proportionally fewer along the shorter, at least one) makes each piece's box fit
+// it better. dx, dy: the footprint's edges, in cells. Rust twin:
+// reference::weave::single::weave_pieces.
+uvec2 weave_pieces(vec2 dx, vec2 dy, uint most) {
+    float box_area = (abs(dx.x) + abs(dy.x)) * (abs(dx.y) + abs(dy.y));
+    float area = abs(dx.x * dy.y - dx.y * dy.x);
+    float extent = max(abs(dx.x) + abs(dy.x), abs(dx.y) + abs(dy.y));
+    if (!(box_area > 1.02 * area) || !(extent < 4.0) || most <= 1u) {
+        return uvec2(1u);
+    }
+    float lx = length(dx);
+    float ly = length(dy);
+    uint shorter = uint(clamp(floor(float(most) * min(lx, ly) / max(lx, ly) + 0.5), 1.0, float(most)));
+    return lx >= ly ? uvec2(most, shorter) : uvec2(shorter, most);
+}
+
+// The coverage of the parallelogram {c + a·dx + b·dy : a, b in [-1/2, 1/2]} (cells; c reduced to
+// the repeat) cut into k.x x k.y equal pieces: the mean of the exact box coverages of one box per
+// piece, its bounding box shrunk about its centre to the piece's area (equal areas, and every
+// coverage is an area, so the mean stands for the whole). Rust twin:
+// reference::weave::single::weave_parallelogram.
+vec4 weave_parallelogram(Weave w, vec2 c, vec2 dx, vec2 dy, uvec2 k) {
+    vec2 kf = vec2(max(k, uvec2(1u)));
+    vec2 half_box = (abs(dx) / kf.x + abs(dy) / kf.y) * 0.5;
+    float box_area = 4.0 * half_box.x * half_box.y;
+    float area = abs(dx.x * dy.y - dx.y * dy.x) / (kf.x * kf.y);
+    half_box *= box_area > area && area > 0.0 ? sqrt(area / box_area) : 1.0;
+    vec4 sum = vec4(0.0);
+    for (uint j = 0u; j < k.y; j++) {
+        for (uint i = 0u; i < k.x; i++) {
+            vec2 p = c + dx * ((float(i) + 0.5) / kf.x - 0.5) + dy * ((float(j) + 0.5) / kf.y - 0.5);
+            vec2 lo = p - half_box;
+            vec2 hi = p + half_box;
+            sum += weave_box(w, lo.x, lo.y, hi.x, hi.y);
+        }
+    }
+    return sum / (kf.x * kf.y);
 }
 
 #endif // WEFT_WEAVE_GLSL

@@ -38,7 +38,8 @@ pub struct RasterOptions {
     /// Exposure in EV, as `RenderOptions::exposure`.
     pub exposure: f32,
     /// The pixel footprint is cut into `subdivisions²` parallelograms for the weave coverage (1 =
-    /// the bounding box of the whole footprint).
+    /// the bounding box of the whole footprint; 0 = no footprint: the weave at the pixel centre,
+    /// as the samples of [`render_pixel_integrated`] take it).
     pub subdivisions: u32,
     /// How fabric is shaded (`RenderOptions::shading`); Gouraud lights fabric vertices as
     /// gbuffer.vert does and interpolates the result.
@@ -143,7 +144,7 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
     let raster = Raster {
         width,
         height,
-        subdivisions: options.subdivisions.max(1),
+        subdivisions: options.subdivisions,
     };
     for draw in &scene.draws {
         let mesh = &scene.meshes[draw.mesh];
@@ -498,7 +499,12 @@ impl Raster {
             // Derivatives of the UV along the pixel grid, from the triangle's plane.
             let dx = (uv_at(q + Vec2::X) - uv_at(q - Vec2::X)) * 0.5;
             let dy = (uv_at(q + Vec2::Y) - uv_at(q - Vec2::Y)) * 0.5;
-            surface.coverage = footprint_coverage(params, uv, dx, dy, self.subdivisions);
+            surface.coverage = if self.subdivisions == 0 {
+                let c = super::weave::weave_point_uv(params, uv.x as f64, uv.y as f64);
+                c.map(|x| x as f32)
+            } else {
+                footprint_coverage(params, uv, dx, dy, self.subdivisions)
+            };
             surface.fabric = Some(*gpu);
         }
         surface
@@ -509,6 +515,64 @@ impl Raster {
 fn any_tangent(n: Vec3) -> Vec3 {
     let a = if n.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
     a.cross(n).normalize()
+}
+
+/// A ground truth that integrates each pixel: the scene rendered at `n` x the size with the weave
+/// evaluated exactly at each sample point (no footprint), the linear HDR box-filtered down to
+/// `options.width` x `options.height` (`n`² regular samples per pixel), then tone-mapped. Shares
+/// no footprint approximation with the GPU's filters; `covered` is true where every sample hit a
+/// surface. `options.subdivisions` is ignored.
+pub fn render_pixel_integrated(
+    scene: &Scene,
+    options: &RasterOptions,
+    n: u32,
+) -> crate::Result<RasterImage> {
+    let n = n.max(1);
+    let fine = render(
+        scene,
+        &RasterOptions {
+            width: options.width * n,
+            height: options.height * n,
+            subdivisions: 0,
+            ..options.clone()
+        },
+    )?;
+    let (w, h) = (options.width as usize, options.height as usize);
+    let fw = w * n as usize;
+    let exposure = 2f32.powf(options.exposure);
+    let mut image = RasterImage {
+        width: options.width,
+        height: options.height,
+        ldr: Vec::with_capacity(w * h * 4),
+        hdr: Vec::with_capacity(w * h * 4),
+        covered: Vec::with_capacity(w * h),
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = [0.0f64; 3];
+            let mut all = true;
+            for sy in 0..n as usize {
+                for sx in 0..n as usize {
+                    let i = (y * n as usize + sy) * fw + x * n as usize + sx;
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += fine.hdr[4 * i + c] as f64;
+                    }
+                    all &= fine.covered[i];
+                }
+            }
+            let hdr = sum.map(|s| (s / (n * n) as f64) as f32);
+            let display = shading::tonemap(hdr, exposure);
+            image.hdr.extend_from_slice(&[hdr[0], hdr[1], hdr[2], 1.0]);
+            image.ldr.extend_from_slice(&[
+                shading::srgb_encode(display[0]),
+                shading::srgb_encode(display[1]),
+                shading::srgb_encode(display[2]),
+                255,
+            ]);
+            image.covered.push(all);
+        }
+    }
+    Ok(image)
 }
 
 /// The weave coverage `(c_warp, c_weft, s_warp, s_weft)` of the pixel footprint `{uv + a·dx + b·dy : a, b in

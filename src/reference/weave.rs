@@ -264,6 +264,76 @@ macro_rules! weave_precision {
                 let s_weft = ((weft - w.shadow_strength * dark_weft) * inv_area).clamp(0.0, c_weft);
                 [c_warp, c_weft, s_warp, s_weft]
             }
+
+            /// Pieces for [`weave_parallelogram`] along `dx` and along `dy` (`weave_pieces` of
+            /// weave.glsl): 1 x 1 when the footprint's bounding box is within 2 % of its area
+            /// (aligned with the weave), spans 4 cells or more (the weave averages out) or
+            /// `most` <= 1; else `most` along the longer edge and proportionally fewer (at least
+            /// one) along the shorter.
+            pub fn weave_pieces(dx: [$t; 2], dy: [$t; 2], most: u32) -> [u32; 2] {
+                let box_area = (dx[0].abs() + dy[0].abs()) * (dx[1].abs() + dy[1].abs());
+                let area = (dx[0] * dy[1] - dx[1] * dy[0]).abs();
+                let extent = (dx[0].abs() + dy[0].abs()).max(dx[1].abs() + dy[1].abs());
+                if !(box_area > 1.02 * area) || !(extent < 4.0) || most <= 1 {
+                    return [1, 1];
+                }
+                let lx = (dx[0] * dx[0] + dx[1] * dx[1]).sqrt();
+                let ly = (dy[0] * dy[0] + dy[1] * dy[1]).sqrt();
+                let shorter = (most as $t * lx.min(ly) / lx.max(ly) + 0.5)
+                    .floor()
+                    .clamp(1.0, most as $t) as u32;
+                if lx >= ly {
+                    [most, shorter]
+                } else {
+                    [shorter, most]
+                }
+            }
+
+            /// The coverage of the parallelogram `{c + a·dx + b·dy : a, b in [-1/2, 1/2]}` (cells,
+            /// `c` reduced to the repeat) cut into `k[0] × k[1]` equal pieces: the mean of the
+            /// exact box coverages of one box per piece, its bounding box shrunk about its centre
+            /// to the piece's area. Twin of weave.glsl's `weave_parallelogram`.
+            pub fn weave_parallelogram(
+                w: &Weave,
+                c: [$t; 2],
+                dx: [$t; 2],
+                dy: [$t; 2],
+                k: [u32; 2],
+            ) -> Coverage {
+                let kx = k[0].max(1) as $t;
+                let ky = k[1].max(1) as $t;
+                let mut half = [
+                    (dx[0].abs() / kx + dy[0].abs() / ky) * 0.5,
+                    (dx[1].abs() / kx + dy[1].abs() / ky) * 0.5,
+                ];
+                let box_area = 4.0 * half[0] * half[1];
+                let area = (dx[0] * dy[1] - dx[1] * dy[0]).abs() / (kx * ky);
+                let shrink = if box_area > area && area > 0.0 {
+                    (area / box_area).sqrt()
+                } else {
+                    1.0
+                };
+                half = [half[0] * shrink, half[1] * shrink];
+                let mut sum = [0.0; 4];
+                for j in 0..k[1].max(1) {
+                    for i in 0..k[0].max(1) {
+                        let a = (i as $t + 0.5) / kx - 0.5;
+                        let b = (j as $t + 0.5) / ky - 0.5;
+                        let p = [c[0] + dx[0] * a + dy[0] * b, c[1] + dx[1] * a + dy[1] * b];
+                        let cov = weave_box(
+                            w,
+                            p[0] - half[0],
+                            p[1] - half[1],
+                            p[0] + half[0],
+                            p[1] + half[1],
+                        );
+                        for (s, v) in sum.iter_mut().zip(cov) {
+                            *s += v;
+                        }
+                    }
+                }
+                sum.map(|s| s / (kx * ky))
+            }
         }
     };
 }

@@ -537,6 +537,7 @@ impl Renderer {
                     7
                 },
             ),
+            (4, options.footprint.pieces()),
         ];
         let lighting_key = vec![
             (0, options.accuracy.code()),
@@ -578,9 +579,10 @@ impl Renderer {
             };
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}]",
+                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}]",
                     options.accuracy.code(),
-                    gbuffer_key[3].1
+                    gbuffer_key[3].1,
+                    gbuffer_key[4].1
                 ),
                 vertex: &shaders::GBUFFER_VERT,
                 fragment: &shaders::GBUFFER_FRAG,

@@ -237,6 +237,69 @@ impl Accuracy {
 }
 
 /// Where the G-buffer pass gets the weave coverage from (model page §4, precision axis).
+/// How the G-buffer pass filters the weave over a pixel's footprint (the parallelogram spanned by
+/// the UV derivatives).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Footprint {
+    /// The footprint's axis-aligned bounding box: exact for a footprint aligned with the weave,
+    /// blurred by the box's excess area where it is oblique.
+    Box,
+    /// An oblique footprint near or below a few cells is cut into up to N x N pieces, each
+    /// filtered by its own bounding box (texture probes or exact boxes): the excess shrinks N-fold.
+    Parallelogram(u32),
+}
+
+impl Default for Footprint {
+    fn default() -> Self {
+        Footprint::Parallelogram(Footprint::DEFAULT_PIECES)
+    }
+}
+
+impl Footprint {
+    pub const DEFAULT_PIECES: u32 = 2;
+    pub const MAX_PIECES: u32 = 4;
+
+    /// The most pieces per side (the G-buffer pass's FOOTPRINT_PIECES; 0: the box).
+    pub fn pieces(self) -> u32 {
+        match self {
+            Footprint::Box => 0,
+            Footprint::Parallelogram(n) => n.clamp(1, Footprint::MAX_PIECES),
+        }
+    }
+
+    pub fn name(self) -> String {
+        match self {
+            Footprint::Box => "box".into(),
+            Footprint::Parallelogram(n) => format!("parallelogram:{n}"),
+        }
+    }
+
+    /// `box`, `parallelogram` (2 x 2 pieces) or `parallelogram:N`, N in 1..=4.
+    pub fn parse(text: &str) -> crate::Result<Footprint> {
+        let bad = || {
+            Error::input(format!(
+                "unknown footprint '{text}': choose box, parallelogram or parallelogram:N with N from 1 to {}",
+                Footprint::MAX_PIECES
+            ))
+        };
+        match text {
+            "box" => Ok(Footprint::Box),
+            "parallelogram" => Ok(Footprint::default()),
+            _ => {
+                let n: u32 = text
+                    .strip_prefix("parallelogram:")
+                    .and_then(|n| n.parse().ok())
+                    .ok_or_else(bad)?;
+                if (1..=Footprint::MAX_PIECES).contains(&n) {
+                    Ok(Footprint::Parallelogram(n))
+                } else {
+                    Err(bad())
+                }
+            }
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum WeavePrecision {
     /// The weave texture in RGBA8 UNORM.
@@ -308,6 +371,8 @@ pub struct RenderOptions {
     /// the image is sampled at pixel centre + jitter. Frames at stratified jitters, averaged,
     /// integrate the pixel (`weft::bench::pixel_truth`, the bench's ground truth).
     pub jitter: [f32; 2],
+    /// How the weave is filtered over a pixel's footprint (the parallelogram by default).
+    pub footprint: Footprint,
 }
 
 impl Default for RenderOptions {
@@ -327,6 +392,7 @@ impl Default for RenderOptions {
             environment: None,
             read_hdr: true,
             jitter: [0.0, 0.0],
+            footprint: Footprint::default(),
         }
     }
 }
@@ -349,6 +415,14 @@ impl RenderOptions {
         }
         if let Some(e) = &self.environment {
             e.validate()?;
+        }
+        if let Footprint::Parallelogram(n) = self.footprint {
+            if !(1..=Footprint::MAX_PIECES).contains(&n) {
+                return Err(Error::input(format!(
+                    "parallelogram:{n} is out of range: N must be between 1 and {}",
+                    Footprint::MAX_PIECES
+                )));
+            }
         }
         if !self.jitter.iter().all(|j| j.is_finite() && j.abs() <= 0.5) {
             return Err(Error::input(format!(
