@@ -312,7 +312,7 @@ impl Renderer {
             }
             cmd.compute_writes_before_vertex_reads();
         })?;
-        Ok(())
+        self.ctx.check_validation()
     }
 }
 
