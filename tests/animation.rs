@@ -38,9 +38,15 @@ fn khronos_samples_list_their_animations() {
         let a = s.animations();
         assert_eq!(a.len(), 1, "{path}");
         assert_eq!(a[0].name, name, "{path}");
-        assert!((a[0].duration - duration).abs() < 1e-4, "{path}: {}", a[0].duration);
         assert!(
-            !s.warnings.iter().any(|w| w.0.contains("skin") || w.0.contains("morph")),
+            (a[0].duration - duration).abs() < 1e-4,
+            "{path}: {}",
+            a[0].duration
+        );
+        assert!(
+            !s.warnings
+                .iter()
+                .any(|w| w.0.contains("skin") || w.0.contains("morph")),
             "{path}: {:?}",
             s.warnings
         );
@@ -94,10 +100,17 @@ fn the_skinned_strip_bends_as_its_joints_turn() {
         if (r.position[0] - 0.275).abs() < 0.03 {
             let x = r.position[0];
             let expect = Vec3::new(x * a.cos(), x * a.sin(), r.position[2]);
-            assert!((Vec3::from(p.position) - expect).length() < 1e-5, "{:?}", p.position);
+            assert!(
+                (Vec3::from(p.position) - expect).length() < 1e-5,
+                "{:?}",
+                p.position
+            );
             // The thread direction (tangent, +x at rest) turns with it.
             let t = Vec3::new(p.tangent[0], p.tangent[1], p.tangent[2]);
-            assert!((t - Vec3::new(a.cos(), a.sin(), 0.0)).length() < 1e-5, "{t}");
+            assert!(
+                (t - Vec3::new(a.cos(), a.sin(), 0.0)).length() < 1e-5,
+                "{t}"
+            );
             assert_eq!(p.tangent[3], r.tangent[3]);
             checked += 1;
         }
@@ -108,7 +121,11 @@ fn the_skinned_strip_bends_as_its_joints_turn() {
 #[test]
 fn morph_weights_follow_the_animation() {
     let mut s = load(MORPH_CUBE);
-    let b = s.rig.binding(0).expect("the cube is placed by a node").clone();
+    let b = s
+        .rig
+        .binding(0)
+        .expect("the cube is placed by a node")
+        .clone();
     assert_eq!(b.weights, [0.0, 0.0], "the mesh's default weights");
     // The deformed positions are the base plus the weighted deltas (by hand from the rig data).
     for t in [0.5f32, 1.7, 3.3] {
@@ -117,7 +134,12 @@ fn morph_weights_follow_the_animation() {
         assert!(w.iter().any(|&x| x > 0.01), "t = {t}: {w:?}");
         let deform = &s.rig.meshes[&s.draws[0].mesh];
         let posed = s.deformed_vertices(0).unwrap();
-        for (i, (v, p)) in s.meshes[s.draws[0].mesh].vertices.iter().zip(&posed).enumerate() {
+        for (i, (v, p)) in s.meshes[s.draws[0].mesh]
+            .vertices
+            .iter()
+            .zip(&posed)
+            .enumerate()
+        {
             let mut expect = Vec3::from(v.position);
             for (k, target) in deform.targets.iter().enumerate() {
                 expect += Vec3::from(target.positions[i]) * w[k];
@@ -171,7 +193,9 @@ fn gpu_skinning_and_morphing_match_the_cpu_twin() {
         for &t in times {
             s.pose(0, t).unwrap();
             let (dp, dn, dt, w) = gpu_against_cpu(&renderer, &s, draw);
-            println!("{path} t = {t}: position {dp:.2e} (relative), normal {dn:.2e}, tangent {dt:.2e}");
+            println!(
+                "{path} t = {t}: position {dp:.2e} (relative), normal {dn:.2e}, tangent {dt:.2e}"
+            );
             // Bounds: both sides compute the same f32 expressions in the same order (weighted sum
             // of four matrices, then matrix × vector); what differs is fused multiply-adds and the
             // GPU's inverse square root, a few ulps per operation over ~20 operations: 1e-5 is
@@ -256,7 +280,10 @@ fn rendered_thread_directions_follow_the_skin() {
     // Bound: the G-buffer stores the tangent as a 16-bit octahedral pair (a quantum of 3e-5 rad),
     // interpolated across a triangle whose three vertices have this same tangent (the region is
     // rigidly carried): 1e-3 covers the encoding; the rest pose's +x would be off by 0.85.
-    assert!(worst < 1e-3, "rendered tangent off the skinned one by {worst}");
+    assert!(
+        worst < 1e-3,
+        "rendered tangent off the skinned one by {worst}"
+    );
 }
 
 // --- bad animation data ---------------------------------------------------------------------------
@@ -272,7 +299,9 @@ fn skinned_gltf(joints: usize, bound: u16, times: &[f32], rotations: usize) -> V
         while bin.len() % 4 != 0 {
             bin.push(0);
         }
-        views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+        views.push(
+            serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}),
+        );
         bin.extend_from_slice(bytes);
         let mut acc = acc;
         acc["bufferView"] = serde_json::json!(views.len() - 1);
@@ -356,7 +385,11 @@ fn load_bytes(bytes: &[u8]) -> weft::Result<Scene> {
 #[test]
 fn a_well_formed_skin_loads_and_poses() {
     let mut s = load_bytes(&skinned_gltf(2, 1, &[0.0, 1.0], 2)).expect("valid file");
-    assert!(s.warnings.iter().all(|w| !w.0.contains("animation")), "{:?}", s.warnings);
+    assert!(
+        s.warnings.iter().all(|w| !w.0.contains("animation")),
+        "{:?}",
+        s.warnings
+    );
     assert_eq!(s.animations()[0].duration, 1.0);
     s.pose(0, 0.5).unwrap();
 }
@@ -366,9 +399,10 @@ fn sampler_count_mismatch_is_a_warning_and_the_channel_is_dropped() {
     let s = load_bytes(&skinned_gltf(2, 1, &[0.0, 1.0, 2.0], 2)).expect("the scene still loads");
     let w: Vec<_> = s.warnings.iter().map(|w| w.0.as_str()).collect();
     assert!(
-        w.iter().any(|w| w.contains("animation 'animation 0' channel 0")
-            && w.contains("3 keyframe times but 2 output values")
-            && w.contains("ignored")),
+        w.iter()
+            .any(|w| w.contains("animation 'animation 0' channel 0")
+                && w.contains("3 keyframe times but 2 output values")
+                && w.contains("ignored")),
         "{w:?}"
     );
     assert_eq!(s.animations()[0].duration, 0.0, "no usable channel left");
@@ -398,9 +432,17 @@ fn joint_index_out_of_range_is_an_error() {
 
 #[test]
 fn too_many_joints_is_an_error() {
-    let e = load_bytes(&skinned_gltf(weft::scene::animation::MAX_JOINTS + 1, 0, &[0.0], 1))
-        .err()
-        .expect("65537 joints")
-        .to_string();
-    assert!(e.contains("65537 joints") && e.contains("limit of 65536"), "{e}");
+    let e = load_bytes(&skinned_gltf(
+        weft::scene::animation::MAX_JOINTS + 1,
+        0,
+        &[0.0],
+        1,
+    ))
+    .err()
+    .expect("65537 joints")
+    .to_string();
+    assert!(
+        e.contains("65537 joints") && e.contains("limit of 65536"),
+        "{e}"
+    );
 }

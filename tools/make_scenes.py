@@ -485,7 +485,7 @@ def skinned_cloth():
         {"name": "joint 1", "translation": [joints_x[1] - joints_x[0], 0.0, 0.0], "children": [4]},
         {"name": "joint 2", "translation": [joints_x[2] - joints_x[1], 0.0, 0.0]},
         light_node("key", 0, [0.5, 1.5, 1.0], [0.0, 0.0, 0.0]),
-        camera_node("front", [0.1, 0.9, 1.3], [0.1, 0.15, 0.0], 0),
+        camera_node("front", [0.1, 1.0, 1.8], [0.1, 0.3, 0.0], 0),
     ]
     doc = {
         "asset": {"version": "2.0", "generator": "weft tools/make_scenes.py"},
