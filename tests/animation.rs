@@ -421,8 +421,7 @@ fn non_increasing_times_are_a_warning() {
 #[test]
 fn joint_index_out_of_range_is_an_error() {
     let e = load_bytes(&skinned_gltf(2, 5, &[0.0, 1.0], 2))
-        .err()
-        .expect("vertex bound to joint 5 of 2")
+        .expect_err("vertex bound to joint 5 of 2")
         .to_string();
     assert!(
         e.contains("bound to joint 5") && e.contains("only 2 joint(s)"),
@@ -438,8 +437,7 @@ fn too_many_joints_is_an_error() {
         &[0.0],
         1,
     ))
-    .err()
-    .expect("65537 joints")
+    .expect_err("65537 joints")
     .to_string();
     assert!(
         e.contains("65537 joints") && e.contains("limit of 65536"),
