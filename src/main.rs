@@ -167,6 +167,14 @@ struct RenderArgs {
     /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), repeatable.
     #[arg(long)]
     fabric: Vec<String>,
+    /// Pose the scene at this time of its animation, in seconds (clamped to the animation's
+    /// keyframes); the first animation unless --animation says which.
+    #[arg(long, allow_hyphen_values = true)]
+    time: Option<f32>,
+    /// The glTF animation to pose (name or index; `weft plan` lists them), at --time (0 when left
+    /// out).
+    #[arg(long)]
+    animation: Option<String>,
 }
 
 #[derive(Args)]
@@ -444,6 +452,26 @@ fn load_scene_impl(
     Ok((scene, options))
 }
 
+/// Poses `scene` for `--animation` / `--time` (nothing when both are left out).
+fn pose_scene(scene: &mut Scene, animation: Option<&str>, time: Option<f32>) -> anyhow::Result<()> {
+    if animation.is_none() && time.is_none() {
+        return Ok(());
+    }
+    let index = match animation {
+        Some(a) => scene.find_animation(a)?,
+        None if scene.animations().is_empty() => {
+            return Err(weft::Error::input(format!(
+                "--time was given but {} has no animations; leave --time out",
+                scene.source
+            ))
+            .into())
+        }
+        None => 0,
+    };
+    scene.pose(index, time.unwrap_or(0.0))?;
+    Ok(())
+}
+
 fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     let device = args
         .device
@@ -460,7 +488,10 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         Ok((renderer, start.elapsed().as_secs_f64() * 1e3))
     });
     let load_start = std::time::Instant::now();
-    let loaded = load_scene_fabric(&args.scene, &args.fabric);
+    let loaded = load_scene_fabric(&args.scene, &args.fabric).and_then(|(mut scene, options)| {
+        pose_scene(&mut scene, args.animation.as_deref(), args.time)?;
+        Ok((scene, options))
+    });
     let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
     let gpu = gpu
         .join()
@@ -908,6 +939,9 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "anisotropic_materials": plan.anisotropic_materials,
             "variants": plan.variants,
             "variant": plan.variant,
+            "animations": scene.animations().iter().map(|a| serde_json::json!({
+                "name": a.name, "duration": a.duration,
+            })).collect::<Vec<_>>(),
             "weaves": plan.weaves.iter().map(|w| serde_json::json!({
                 "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "materials": w.materials,
             })).collect::<Vec<_>>(),
@@ -940,6 +974,18 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
     } else {
         println!("scene       {}", scene.source);
         println!("{plan}");
+        for (i, a) in scene.animations().iter().enumerate() {
+            println!(
+                "{}{i}: '{}', {:.3} s",
+                if i == 0 {
+                    "animations  "
+                } else {
+                    "            "
+                },
+                a.name,
+                a.duration
+            );
+        }
     }
     Ok(())
 }

@@ -57,6 +57,11 @@ pub struct Case {
     pub env: Option<EnvCase>,
     /// KHR_materials_variants: the variant to load (None: the file's default materials).
     pub variant: Option<&'static str>,
+    /// glTF animation: (animation index, time in seconds) to pose the scene at (None: the rest
+    /// pose).
+    pub pose: Option<(usize, f32)>,
+    /// Load warnings the file is known to give (a part of each message); any other fails.
+    pub warnings: &'static [&'static str],
     /// What a person should see in the golden.
     pub shows: &'static str,
 }
@@ -86,6 +91,8 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         mirror: None,
         env: None,
         variant: None,
+        pose: None,
+        warnings: &[],
         shows,
     }
 }
@@ -444,5 +451,53 @@ pub fn cases() -> Vec<Case> {
             ..case(name, DEFAULT_SCENE, shows)
         });
     }
+    // glTF animation (issue 18): the Khronos skinning and morph samples and the skinned twill
+    // strip, each at two times of its animation (tests/animation.rs checks the deformation
+    // numerically; these show it).
+    // Under the default lighting, as `weft render` shows them: the studio, and the default key
+    // light and ground where the file has no lights.
+    let posed = |name, scene, (index, time), shows| Case {
+        pose: Some((index, time)),
+        env: STUDIO,
+        ..case(name, scene, shows)
+    };
+    cases.extend([
+        posed("khronos-rigged-simple-t0.4", "tests/data/khronos/RiggedSimple/glTF-Binary/RiggedSimple.glb", (0, 0.4),
+            "the green tapered tube on its two-joint skin, its upper half starting to lean right: one smooth bend at the middle joint, its shadow on the ground bent with it"),
+        posed("khronos-rigged-simple-t1.0", "tests/data/khronos/RiggedSimple/glTF-Binary/RiggedSimple.glb", (0, 1.0),
+            "the same tube fully bent (about 40 degrees) at the middle joint, no crease or tear at the bend"),
+        Case {
+            warnings: &["has no normals"],
+            ..posed("khronos-simple-skin-t1.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 1.0),
+                "the grey SimpleSkin strip (ten triangles on two joints, flat-shaded from generated normals) with its upper half bent over to the right at the middle, a notch where the two halves meet, its shadow on the ground")
+        },
+        Case {
+            warnings: &["has no normals"],
+            ..posed("khronos-simple-skin-t3.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 3.0),
+                "the same strip at t = 3, where the animation swings back through the rest shape: nearly straight and upright, slightly narrower at the bottom")
+        },
+        Case {
+            warnings: &["tangent(s) were zero-length"],
+            ..posed("khronos-morph-cube-t1.0", "tests/data/khronos/AnimatedMorphCube/glTF-Binary/AnimatedMorphCube.glb", (0, 1.0),
+                "the morph cube with its 'thin' target weighted in: a box wider than tall with its top face flattened out of view, framed by the automatic camera on the posed bounds, its shadow to the right")
+        },
+        Case {
+            warnings: &["tangent(s) were zero-length"],
+            ..posed("khronos-morph-cube-t3.0", "tests/data/khronos/AnimatedMorphCube/glTF-Binary/AnimatedMorphCube.glb", (0, 3.0),
+                "the cube with its 'angle' target in: a pale trapezoid, narrower at the top, an outline unlike t = 1's")
+        },
+        posed("skinned-cloth-t1.0", "assets/scenes/skinned_cloth.glb", (0, 1.0),
+            "the blue-grey twill strip bent up 50 degrees at its middle joint, its end twisted and widening towards the camera: the twill's diagonal lines continue through the bend"),
+        Case {
+            debug_view: DebugView::ThreadDir,
+            ..posed("skinned-cloth-thread-dir-t0.0", "assets/scenes/skinned_cloth.glb", (0, 0.0),
+                "thread directions of the flat strip at the bottom of the frame: one yellow everywhere (the tangent +x as 0.5 + 0.5 t)")
+        },
+        Case {
+            debug_view: DebugView::ThreadDir,
+            ..posed("skinned-cloth-thread-dir-t1.0", "assets/scenes/skinned_cloth.glb", (0, 1.0),
+                "thread directions of the bent strip: the flat part yellow as at t = 0, the raised part green (the tangent tilted 50 degrees up: more +y), blending smoothly across the bend, the twisted end a lighter green")
+        },
+    ]);
     cases
 }
