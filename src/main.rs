@@ -318,6 +318,14 @@ struct BenchArgs {
     /// ratio.
     #[arg(long)]
     startup: bool,
+    /// Instead: temporal stability: the camera turning slowly at the mid and far views, the
+    /// consecutive-frame change on fabric of every level against the supersampled ground truth's
+    /// (ratio = how much more it flickers). --size (default 320x180), --frames (default 9).
+    #[arg(long)]
+    temporal: bool,
+    /// Degrees the camera turns between frames in --temporal.
+    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    temporal_step: f32,
     /// The environment of the --ibl bench (default: the repository's tests/data/env/lebombo_1k.hdr).
     #[arg(long)]
     ibl_env: Option<PathBuf>,
@@ -1002,6 +1010,32 @@ fn checked_size(text: &str) -> anyhow::Result<(u32, u32)> {
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
     if args.startup {
         return run_startup_bench(&args);
+    }
+    if args.temporal {
+        let mut config = if args.quick {
+            weft::bench::temporal::TemporalConfig::quick()
+        } else {
+            weft::bench::temporal::TemporalConfig::default()
+        };
+        if args.size != "960x540" {
+            config.size = checked_size(&args.size)?;
+        }
+        if let Some(f) = args.frames {
+            config.frames = f;
+        }
+        config.degrees_per_frame = args.temporal_step;
+        config.out = args.out.clone();
+        config.check()?;
+        let ctx = open_device(args.device.as_deref(), false)?;
+        let mut renderer = Renderer::new(ctx)?;
+        let report = weft::bench::temporal::run(&mut renderer, &config)?;
+        println!("{}", report.table());
+        println!(
+            "wrote {} and {}",
+            config.out.join("temporal.csv").display(),
+            config.out.join("bench-temporal.png").display()
+        );
+        return Ok(());
     }
     if args.ibl {
         let size = checked_size(&args.size)?;
