@@ -670,6 +670,7 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
         resume: b.resume,
     };
     spec.check()?;
+    sequence::CameraMotion::check_speeds(b.orbit, b.dolly)?;
     if let Some(video) = &b.video {
         if task.count > 1 || spec.sweep.as_ref().is_some_and(|s| s.values.len() > 1) {
             anyhow::bail!(weft::Error::input(format!(

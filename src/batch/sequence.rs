@@ -31,16 +31,7 @@ impl CameraMotion {
     /// The motion with its centre at the centre of `scene`'s bounds (the origin for an empty
     /// scene). Refuses non-finite speeds.
     pub fn centered(scene: &Scene, orbit: f32, dolly: f32) -> crate::Result<CameraMotion> {
-        if !orbit.is_finite() || orbit.abs() > 1e6 {
-            return Err(Error::input(format!(
-                "--orbit {orbit} is out of range: give degrees per second, a finite number"
-            )));
-        }
-        if !dolly.is_finite() || dolly.abs() > 1e9 {
-            return Err(Error::input(format!(
-                "--dolly {dolly} is out of range: give world units per second, a finite number"
-            )));
-        }
+        CameraMotion::check_speeds(orbit, dolly)?;
         let center = scene
             .bounds()
             .map(|b| (b.min + b.max) * 0.5)
@@ -51,6 +42,21 @@ impl CameraMotion {
             dolly_per_second: dolly,
             center,
         })
+    }
+
+    /// Refuses non-finite or absurd speeds (before any scene is loaded).
+    pub fn check_speeds(orbit: f32, dolly: f32) -> crate::Result<()> {
+        if !orbit.is_finite() || orbit.abs() > 1e6 {
+            return Err(Error::input(format!(
+                "--orbit {orbit} is out of range: give degrees per second, a finite number"
+            )));
+        }
+        if !dolly.is_finite() || dolly.abs() > 1e9 {
+            return Err(Error::input(format!(
+                "--dolly {dolly} is out of range: give world units per second, a finite number"
+            )));
+        }
+        Ok(())
     }
 
     pub fn is_still(&self) -> bool {

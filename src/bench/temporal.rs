@@ -480,14 +480,23 @@ impl TemporalReport {
             muted,
         );
         let ratios: Vec<f64> = self.rows.iter().map(|r| r.ratio.max(1e-3)).collect();
-        let lo = ratios.iter().copied().fold(f64::INFINITY, f64::min).min(1.0);
+        let lo = ratios
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+            .min(1.0);
         let hi = ratios.iter().copied().fold(0.0, f64::max).max(1.0);
         let y = LogAxis::fit(lo, hi, bottom, top);
         // The x axis is categorical (the levels): a grid and tick labels on y only.
         let grid = [0.88, 0.88, 0.9];
         for (v, decade) in y.ticks() {
             let py = y.map(v);
-            c.line((left, py), (right, py), if decade { 1.2 } else { 0.8 }, grid);
+            c.line(
+                (left, py),
+                (right, py),
+                if decade { 1.2 } else { 0.8 },
+                grid,
+            );
             c.line((left - 6.0, py), (left, py), 1.0, black);
             let label = if v >= 1.0 {
                 format!("{v:.0}")
@@ -508,7 +517,14 @@ impl TemporalReport {
         let n = levels.len() + 1;
         let px = |i: usize| left + (right - left) * (i as f32 + 0.5) / n as f32;
         // The ground truth's line: ratio 1.
-        c.dashed((left, y.map(1.0)), (right, y.map(1.0)), 1.5, 8.0, 6.0, muted);
+        c.dashed(
+            (left, y.map(1.0)),
+            (right, y.map(1.0)),
+            1.5,
+            8.0,
+            6.0,
+            muted,
+        );
         let label = |i: usize| -> String {
             if i == 0 {
                 format!("GT {}", short_label(self.config.ground_truth))
@@ -532,7 +548,13 @@ impl TemporalReport {
                 black,
             );
         }
-        c.text_up(30, (top + bottom) as i32 / 2 + 110, "FLICKER / GROUND TRUTH", 2, black);
+        c.text_up(
+            30,
+            (top + bottom) as i32 / 2 + 110,
+            "FLICKER / GROUND TRUTH",
+            2,
+            black,
+        );
         let palette = [[1.0, 0.5, 0.05], [0.17, 0.63, 0.17], [0.12, 0.47, 0.71]];
         let mut legend_y = bottom as i32 + 60;
         for (vi, view) in self.config.views.iter().enumerate() {
@@ -548,10 +570,22 @@ impl TemporalReport {
                 c.line(pair[0], pair[1], 2.5, col);
             }
             for p in &pts {
-                c.fill_rect(p.0 as i32 - 5, p.1 as i32 - 5, p.0 as i32 + 5, p.1 as i32 + 5, col);
+                c.fill_rect(
+                    p.0 as i32 - 5,
+                    p.1 as i32 - 5,
+                    p.0 as i32 + 5,
+                    p.1 as i32 + 5,
+                    col,
+                );
             }
             c.fill_rect(left as i32, legend_y, left as i32 + 24, legend_y + 12, col);
-            c.text(left as i32 + 34, legend_y, &view.name().to_uppercase(), 2, black);
+            c.text(
+                left as i32 + 34,
+                legend_y,
+                &view.name().to_uppercase(),
+                2,
+                black,
+            );
             legend_y += 26;
         }
         c.text(
