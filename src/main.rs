@@ -159,6 +159,14 @@ struct RenderArgs {
     /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), repeatable.
     #[arg(long)]
     fabric: Vec<String>,
+    /// Pose the scene at this time of its animation, in seconds (clamped to the animation's
+    /// keyframes); the first animation unless --animation says which.
+    #[arg(long, allow_hyphen_values = true)]
+    time: Option<f32>,
+    /// The glTF animation to pose (name or index; `weft plan` lists them), at --time (0 when left
+    /// out).
+    #[arg(long)]
+    animation: Option<String>,
     #[command(flatten)]
     batch: BatchArgs,
 }
@@ -539,6 +547,26 @@ fn load_scene_impl(
     Ok((scene, options))
 }
 
+/// Poses `scene` for `--animation` / `--time` (nothing when both are left out).
+fn pose_scene(scene: &mut Scene, animation: Option<&str>, time: Option<f32>) -> anyhow::Result<()> {
+    if animation.is_none() && time.is_none() {
+        return Ok(());
+    }
+    let index = match animation {
+        Some(a) => scene.find_animation(a)?,
+        None if scene.animations().is_empty() => {
+            return Err(weft::Error::input(format!(
+                "--time was given but {} has no animations; leave --time out",
+                scene.source
+            ))
+            .into())
+        }
+        None => 0,
+    };
+    scene.pose(index, time.unwrap_or(0.0))?;
+    Ok(())
+}
+
 fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     if args.batch.on() {
         return run_batch(args);
@@ -558,7 +586,10 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         Ok((renderer, start.elapsed().as_secs_f64() * 1e3))
     });
     let load_start = std::time::Instant::now();
-    let loaded = load_scene_fabric(&args.scene, &args.fabric);
+    let loaded = load_scene_fabric(&args.scene, &args.fabric).and_then(|(mut scene, options)| {
+        pose_scene(&mut scene, args.animation.as_deref(), args.time)?;
+        Ok((scene, options))
+    });
     let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
     let gpu = gpu
         .join()
@@ -662,6 +693,7 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
         range,
         fps: b.fps,
         motion: Default::default(),
+        animation: None,
         sweep: b.sweep.clone(),
         task,
         split: b.split,
@@ -671,6 +703,11 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
     };
     spec.check()?;
     sequence::CameraMotion::check_speeds(b.orbit, b.dolly)?;
+    if let Some(t) = args.time {
+        anyhow::bail!(weft::Error::input(format!(
+            "--time {t} poses a still; in a sequence frame f is posed at f / --fps seconds: leave --time out (choose the frames with --frames-range)"
+        )));
+    }
     if let Some(video) = &b.video {
         if task.count > 1 || spec.sweep.as_ref().is_some_and(|s| s.values.len() > 1) {
             anyhow::bail!(weft::Error::input(format!(
@@ -713,6 +750,11 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
     options.exposure = args.exposure;
     options.validate()?;
     spec.motion = sequence::CameraMotion::centered(&scene, b.orbit, b.dolly)?;
+    // The animation played: --animation's, else the file's first (a still scene has none).
+    spec.animation = match args.animation.as_deref() {
+        Some(a) => Some(scene.find_animation(a)?),
+        None => (!scene.animations().is_empty()).then_some(0),
+    };
     let mut renderer = gpu?;
     let info = renderer.context().info().clone();
     eprintln!(
@@ -720,7 +762,7 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
         info.name, info.device_type, info.driver_name, info.driver_info
     );
     eprintln!(
-        "task {} of {} ({}, {}): {} job(s), frames {}..{} at {} fps",
+        "task {} of {} ({}, {}): {} job(s), frames {}..{} at {} fps{}",
         task.index,
         task.count,
         task.source,
@@ -728,7 +770,15 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
         jobs.len(),
         range.first,
         range.last,
-        spec.fps
+        spec.fps,
+        match spec.animation {
+            Some(i) => format!(
+                ", animation {i} '{}' ({:.3} s)",
+                scene.animations()[i].name,
+                scene.animations()[i].duration
+            ),
+            None => String::new(),
+        }
     );
     let mut gpu_scene = renderer.upload(&scene)?;
     let metrics = b.metrics_json;
@@ -1132,6 +1182,9 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "anisotropic_materials": plan.anisotropic_materials,
             "variants": plan.variants,
             "variant": plan.variant,
+            "animations": scene.animations().iter().map(|a| serde_json::json!({
+                "name": a.name, "duration": a.duration,
+            })).collect::<Vec<_>>(),
             "weaves": plan.weaves.iter().map(|w| serde_json::json!({
                 "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "materials": w.materials,
             })).collect::<Vec<_>>(),
@@ -1164,6 +1217,18 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
     } else {
         println!("scene       {}", scene.source);
         println!("{plan}");
+        for (i, a) in scene.animations().iter().enumerate() {
+            println!(
+                "{}{i}: '{}', {:.3} s",
+                if i == 0 {
+                    "animations  "
+                } else {
+                    "            "
+                },
+                a.name,
+                a.duration
+            );
+        }
     }
     Ok(())
 }

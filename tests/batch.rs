@@ -836,3 +836,46 @@ fn dask_fans_out_retries_a_killed_task_and_not_bad_input() {
     assert_eq!(s["codes"], serde_json::json!([2, 2]), "{s}");
     assert_eq!(s["attempts"], serde_json::json!({"0": 1, "1": 1}), "{s}");
 }
+
+/// A sequence of an animated file plays its animation: frame f of the sequence is the picture of
+/// a single `weft render --time f/fps` (posed once and uploaded, against posed per frame on the
+/// scene uploaded once), and the frames differ as the skin bends.
+#[test]
+fn a_sequence_plays_the_animation_as_single_renders_pose_it() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/RiggedSimple/glTF-Binary/RiggedSimple.glb");
+    let dir = tempfile::tempdir().unwrap();
+    run_ok(
+        weft()
+            .arg("render")
+            .arg(&scene)
+            .args([
+                "--validate",
+                "--size",
+                "64x48",
+                "--frames-range",
+                "0..3",
+                "--fps",
+                "2",
+            ])
+            .arg("-o")
+            .arg(dir.path().join("r%d.png")),
+    );
+    let frame = |n: u32| std::fs::read(dir.path().join(format!("r{n}.png"))).unwrap();
+    assert_ne!(frame(0), frame(2), "the animation moved the skin");
+    for (n, t) in [(0u32, "0"), (3, "1.5")] {
+        let single = dir.path().join(format!("single{n}.png"));
+        run_ok(
+            weft()
+                .arg("render")
+                .arg(&scene)
+                .args(["--validate", "--size", "64x48", "--time", t, "-o"])
+                .arg(&single),
+        );
+        assert_eq!(
+            std::fs::read(&single).unwrap(),
+            frame(n),
+            "frame {n} = --time {t}"
+        );
+    }
+}

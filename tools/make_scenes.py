@@ -15,6 +15,9 @@ Each scene stresses one thing (docs/regression.md has the list and what each gol
   shadows       a cloth under a ball and a floating box, lit by a directional and a spot light
                 that ask for shadow maps (light "extras": {"shadows": ...}) and a point light that
                 does not; one small ball does not cast (node "extras": {"cast_shadows": false})
+  skinned_cloth a twill strip on a three-joint skin, bent up and twisted by a 2-second animation
+                (a linear and a cubic-spline rotation channel): the thread directions must follow
+                the bend (tests/animation.rs, goldens skinned-cloth-*)
 
 Python 3 standard library only; the output is byte-for-byte deterministic. The geometry helpers
 and the glTF writer are those of tools/make_default_scene.py (imported). Y is up, units are
@@ -23,6 +26,7 @@ metres. Run from anywhere:  python3 tools/make_scenes.py
 
 import math
 import os
+import struct
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -430,6 +434,85 @@ def shadows():
     return doc, binary
 
 
+def skinned_cloth():
+    """A 1.4 m x 0.4 m denim twill strip along x (y = 0, facing +Y) on a chain of three joints at
+    x = -0.6, 0 and 0.4. Each vertex blends its joints by smoothsteps of x around the inner joints
+    (weights sum to 1). Animation "bend" (2 s): the middle joint turns about z by 0, 50, 20 degrees
+    at t = 0, 1, 2 (linear), the last about x by 0, 40, 70 degrees (cubic spline, zero tangents):
+    the strip bends up at x = 0 and its end twists."""
+    b = Builder()
+    mesh = patch_mesh(-0.6, 0.8, -0.2, 0.2, 56, 8, uv_per_m=10.0)
+    pos = mesh[0]
+    joints_x = [-0.6, 0.0, 0.4]
+
+    def smooth(e0, e1, x):
+        t = min(max((x - e0) / (e1 - e0), 0.0), 1.0)
+        return t * t * (3.0 - 2.0 * t)
+
+    weights = []
+    for p in pos:
+        w1 = smooth(-0.1, 0.1, p[0])
+        w2 = smooth(0.3, 0.5, p[0])
+        weights.append([r(1.0 - w1), r(w1 * (1.0 - w2)), r(w1 * w2), 0.0])
+    prim = b.primitive(mesh, 0)
+    joints_data = b"".join(struct.pack("<4H", 0, 1, 2, 0) for _ in pos)
+    b.accessors.append({"bufferView": b._view(joints_data, 34962), "componentType": 5123, "count": len(pos),
+                        "type": "VEC4"})
+    prim["attributes"]["JOINTS_0"] = len(b.accessors) - 1
+    prim["attributes"]["WEIGHTS_0"] = b.floats(weights, "VEC4")
+    # Inverse bind matrices: the joints' bind poses are translations along x (column-major).
+    ibm = [[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -x, 0, 0, 1] for x in joints_x]
+    ibm_acc = b.floats(ibm, "MAT4")
+
+    def quat(axis, deg):
+        h = math.radians(deg) / 2.0
+        q = [0.0, 0.0, 0.0, r(math.cos(h))]
+        q["xyz".index(axis)] = r(math.sin(h))
+        return q
+
+    times = b.floats([[0.0], [1.0], [2.0]], "SCALAR", with_bounds=True)
+    bend = b.floats([quat("z", d) for d in (0.0, 50.0, 20.0)], "VEC4")
+    zero = [0.0, 0.0, 0.0, 0.0]
+    twist = b.floats([row for d in (0.0, 40.0, 70.0) for row in (zero, quat("x", d), zero)], "VEC4")
+    materials = [fabric("skinned denim", pattern="twill", repeat=0.1, gap=0.006, rd_warp=(0.10, 0.16, 0.36),
+                        rd_weft=(0.62, 0.60, 0.55), base_color=(0.2, 0.25, 0.4))]
+    meshes = [{"name": "strip", "primitives": [prim]}]
+    lights = [directional("key", (1.0, 0.95, 0.9), 3.0)]
+    nodes = [
+        {"name": "skinned cloth", "children": [1, 2, 5, 6]},
+        {"name": "strip", "mesh": 0, "skin": 0},
+        {"name": "joint 0", "translation": [joints_x[0], 0.0, 0.0], "children": [3]},
+        {"name": "joint 1", "translation": [joints_x[1] - joints_x[0], 0.0, 0.0], "children": [4]},
+        {"name": "joint 2", "translation": [joints_x[2] - joints_x[1], 0.0, 0.0]},
+        light_node("key", 0, [0.5, 1.5, 1.0], [0.0, 0.0, 0.0]),
+        camera_node("front", [0.1, 0.9, 1.3], [0.1, 0.15, 0.0], 0),
+    ]
+    doc = {
+        "asset": {"version": "2.0", "generator": "weft tools/make_scenes.py"},
+        "extensionsUsed": ["KHR_lights_punctual", "WEFT_materials_fabric"],
+        "extensions": {"KHR_lights_punctual": {"lights": lights}},
+        "scene": 0,
+        "scenes": [{"name": "skinned cloth", "nodes": [0]}],
+        "nodes": nodes,
+        "skins": [{"name": "chain", "joints": [2, 3, 4], "inverseBindMatrices": ibm_acc, "skeleton": 2}],
+        "animations": [{"name": "bend", "channels": [
+            {"sampler": 0, "target": {"node": 3, "path": "rotation"}},
+            {"sampler": 1, "target": {"node": 4, "path": "rotation"}},
+        ], "samplers": [
+            {"input": times, "output": bend, "interpolation": "LINEAR"},
+            {"input": times, "output": twist, "interpolation": "CUBICSPLINE"},
+        ]}],
+        "cameras": [camera_def("front", 40.0, 0.05)],
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": b.accessors,
+        "bufferViews": b.views,
+    }
+    while len(b.bin) % 4:
+        b.bin.append(0)
+    return doc, bytes(b.bin)
+
+
 SCENES = {
     "closeup": closeup,
     "far": far,
@@ -439,6 +522,7 @@ SCENES = {
     "mirrored_uv": mirrored_uv,
     "spheres": spheres,
     "shadows": shadows,
+    "skinned_cloth": skinned_cloth,
 }
 
 

@@ -1,5 +1,6 @@
 //! The frame loop of `weft render --frames-range`: the scene is uploaded once, and per frame only
-//! what the frame's time changes is set ([`pose_frame`]), then the frame is rendered and written
+//! what the frame's time changes is set and re-uploaded ([`pose_frame`]: the animation's pose,
+//! the camera), then the frame is rendered and written
 //! atomically (a killed task leaves either a complete frame or none under the frame's name).
 
 use std::path::PathBuf;
@@ -92,27 +93,30 @@ impl CameraMotion {
 }
 
 /// Poses the scene at time `t` (seconds) for the frame about to be rendered, and returns the
-/// frame's options: today the camera of `motion` (the scene's own camera, or `--eye/--target`,
-/// moved); nothing is uploaded again.
-///
-/// glTF animation hooks in here (issue 18, the `anim` branch): with an animation chosen,
-/// `scene.pose(animation, t)?; renderer.update_pose(gpu, scene)?;` before the camera is taken,
-/// so that an animated camera node and the skinned geometry are both at `t`.
+/// frame's options. With `animation`, the glTF animation is sampled at `t` ([`Scene::pose`]) and
+/// only what it changed goes to the GPU ([`Renderer::update_pose`]: world matrices, lights,
+/// joint matrices and morph weights; meshes, materials and textures stay as uploaded). Then the
+/// camera: the scene's own (an animated camera node is already at `t`) or `--eye/--target`,
+/// moved by `motion`.
 pub fn pose_frame(
     scene: &mut Scene,
     renderer: &Renderer,
     gpu: &mut GpuScene,
     base: &RenderOptions,
     motion: &CameraMotion,
+    animation: Option<usize>,
     t: f32,
 ) -> crate::Result<RenderOptions> {
-    let _ = (renderer, gpu); // used by the animation hook above
+    if let Some(index) = animation {
+        scene.pose(index, t)?;
+        renderer.update_pose(gpu, scene)?;
+    }
     let camera = match &base.camera_override {
         Some(c) => c.clone(),
         None => scene.camera(base.camera)?,
     };
     let mut options = base.clone();
-    if !motion.is_still() {
+    if !motion.is_still() || animation.is_some() {
         options.camera_override = Some(motion.camera_at(&camera, t)?);
     }
     Ok(options)
@@ -124,6 +128,8 @@ pub struct SequenceSpec {
     pub range: FrameRange,
     pub fps: f32,
     pub motion: CameraMotion,
+    /// The glTF animation played (index into [`Scene::animations`]), None for none.
+    pub animation: Option<usize>,
     pub sweep: Option<Sweep>,
     pub task: TaskSpec,
     pub split: Split,
@@ -263,7 +269,15 @@ pub fn run(
             continue;
         }
         let start = Instant::now();
-        let mut options = pose_frame(scene, renderer, gpu, base, &spec.motion, time)?;
+        let mut options = pose_frame(
+            scene,
+            renderer,
+            gpu,
+            base,
+            &spec.motion,
+            spec.animation,
+            time,
+        )?;
         if let (Some(s), Some(i)) = (&spec.sweep, job.sweep) {
             s.apply(i, &mut options)?;
         }

@@ -206,6 +206,8 @@ pub(crate) struct DrawRange {
     pub(crate) double_sided: bool,
     pub(crate) cast_shadows: bool,
     pub(crate) receive_shadows: bool,
+    /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
+    pub(crate) scene_draw: usize,
 }
 
 /// A scene's data on the GPU.
@@ -232,10 +234,12 @@ pub struct GpuScene {
     pub(crate) textures: Vec<Image>,
     pub(crate) draws: Vec<DrawRange>,
     pub(crate) triangles: usize,
+    /// Skinning and morph targets (None when nothing deforms; see render::deform).
+    pub(crate) deform: Option<super::deform::GpuDeform>,
 }
 
 pub struct Renderer {
-    ctx: Context,
+    pub(crate) ctx: Context,
     frame_layout: SetLayout,
     material_layout: SetLayout,
     lighting_layout: SetLayout,
@@ -262,6 +266,8 @@ pub struct Renderer {
     env: super::environment::EnvPasses,
     /// Preprocessed environments, newest last (a few are kept, found by content hash).
     env_cache: Vec<super::environment::GpuEnvironment>,
+    /// The skinning pass (render::deform), made on the first scene that deforms.
+    pub(crate) skin_pass: std::sync::OnceLock<super::deform::SkinPass>,
 }
 
 /// Preprocessed environments a renderer keeps.
@@ -472,6 +478,7 @@ impl Renderer {
             no_shadows,
             shadow_atlas: None,
             targets: None,
+            skin_pass: std::sync::OnceLock::new(),
         })
     }
 
@@ -693,7 +700,7 @@ impl Renderer {
         }
         let mut draws = Vec::new();
         let mut triangles = 0;
-        for d in &scene.draws {
+        for (scene_draw, d) in scene.draws.iter().enumerate() {
             let mesh = &scene.meshes[d.mesh];
             let (first_index, index_count, vertex_offset) = mesh_ranges[d.mesh];
             if index_count == 0 {
@@ -712,10 +719,17 @@ impl Renderer {
                     .is_some_and(|m| m.double_sided),
                 cast_shadows: d.cast_shadows,
                 receive_shadows: d.receive_shadows,
+                scene_draw,
             });
         }
-        let vertices =
-            ctx.create_buffer_with("vertices", BufferUsageFlags::VERTEX_BUFFER, &vertices)?;
+        // Skinned and morphed draws get posed copies of their vertices, which the skinning pass
+        // writes (render::deform).
+        let deform = super::deform::upload(ctx, scene, &mut vertices, &mesh_ranges, &mut draws)?;
+        let vertices = ctx.create_buffer_with(
+            "vertices",
+            BufferUsageFlags::VERTEX_BUFFER | BufferUsageFlags::STORAGE_BUFFER,
+            &vertices,
+        )?;
         let indices =
             ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
         // Fabric records, and one weave texture per distinct weave (materials that differ only in
@@ -787,7 +801,7 @@ impl Renderer {
             .iter()
             .map(|t| upload_texture(ctx, t))
             .collect::<crate::Result<Vec<_>>>()?;
-        Ok(GpuScene {
+        let mut gpu = GpuScene {
             vertices,
             indices,
             materials,
@@ -803,7 +817,12 @@ impl Renderer {
             textures,
             draws,
             triangles,
-        })
+            deform,
+        };
+        if gpu.deform.is_some() {
+            self.update_pose(&mut gpu, scene)?;
+        }
+        Ok(gpu)
     }
 
     /// Renders a scene: upload, then one frame.

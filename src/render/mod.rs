@@ -1,5 +1,6 @@
 //! Rendering: the plan, the passes of a frame, and writing images.
 
+mod deform;
 mod frame;
 mod passes;
 pub use passes::environment;
@@ -9,6 +10,7 @@ pub mod plan;
 pub mod shadow;
 pub mod tiles;
 
+pub use deform::SkinPush;
 pub use frame::{
     check_target_memory, f16_to_f32, host_available_bytes, readback_bytes_per_pixel, Frame,
     FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer, TARGET_BYTES_PER_PIXEL,

@@ -21,12 +21,13 @@ use gltf::json::validation::{Checked, Validate};
 use gltf::mesh::{Mode, Semantic};
 
 use super::accessor::{self, Use};
+use super::animation::{self, MeshDeform, MorphTarget, VertexSkin};
 use super::material_ext::{self, TexRef};
 use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
-    Anisotropy, Camera, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Sheen,
-    SlotUv, Specular, Texture, TextureSlot, Vertex, Warning,
+    Anisotropy, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Sheen, SlotUv,
+    Specular, Texture, TextureSlot, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -200,7 +201,13 @@ fn load_checked(
     loader.load_materials()?;
     loader.lights = loader.light_definitions()?;
     loader.cameras = loader.camera_definitions()?;
+    loader.rig_nodes()?;
     loader.walk_nodes()?;
+    loader.load_skins()?;
+    loader.load_animations()?;
+    // Skinned draws take their world from the skin; everything else keeps the walk's matrices,
+    // which the rest pose reproduces.
+    loader.scene.rest_pose()?;
     if loader.scene.draws.is_empty() {
         loader.warn(
             "has nothing to draw: no node of the scene places a mesh with triangles, so the image shows only the background",
@@ -992,9 +999,13 @@ impl<'a> Loader<'a> {
             } else {
                 name.clone()
             };
-            if let Some(m) = self.primitive(&prim, &who, mesh_name)? {
+            if let Some((m, deform)) = self.primitive(&prim, &who, mesh_name)? {
                 self.scene.meshes.push(m);
-                ids.push(self.scene.meshes.len() - 1);
+                let id = self.scene.meshes.len() - 1;
+                if let Some(deform) = deform {
+                    self.scene.rig.meshes.insert(id, deform);
+                }
+                ids.push(id);
             }
         }
         if let Some(slot) = self.mesh_ids.get_mut(mesh.index()) {
@@ -1040,7 +1051,7 @@ impl<'a> Loader<'a> {
         prim: &gltf::Primitive<'a>,
         who: &str,
         name: String,
-    ) -> Result<Option<Mesh>> {
+    ) -> Result<Option<(Mesh, Option<MeshDeform>)>> {
         let buffers = self.buffers;
         let read = |semantic: &Semantic, dims: Dimensions| -> Result<Option<(usize, Vec<f32>)>> {
             match prim.get(semantic) {
@@ -1118,11 +1129,7 @@ impl<'a> Loader<'a> {
                 "{who} has vertex colours (COLOR_0), which weft ignores"
             ));
         }
-        if prim.morph_targets().len() > 0 {
-            self.warn(format_args!(
-                "{who} has morph targets, which weft ignores (it draws the base shape)"
-            ));
-        }
+        let mut deform = self.primitive_deform(prim, who, count)?;
 
         let mut indices = match prim.indices() {
             Some(acc) => {
@@ -1261,8 +1268,22 @@ impl<'a> Loader<'a> {
         let bad_tangents = if tangents.is_some() && !uv_transform.turns_or_mirrors() {
             tangents::repair_tangents(&mut vertices)
         } else if uvs.is_some() {
+            let before = deform.as_ref().map(|_| indices.clone());
             if !tangents::mikktspace_tangents(&mut vertices, &mut indices) {
                 tangents::arbitrary_tangents(&mut vertices);
+            }
+            // MikkTSpace splits vertices whose corners need different tangents: the copies get
+            // their original's joints and morph deltas.
+            if let (Some(d), Some(before)) = (deform.as_mut(), before) {
+                let mut origin: Vec<usize> = (0..vertices.len()).collect();
+                for (now, was) in indices.iter().zip(&before) {
+                    if now != was {
+                        if let Some(o) = origin.get_mut(*now as usize) {
+                            *o = *was as usize;
+                        }
+                    }
+                }
+                d.extend_to(&origin[count..]);
             }
             tangents::repair_tangents(&mut vertices)
         } else {
@@ -1281,12 +1302,152 @@ impl<'a> Loader<'a> {
             ));
         }
 
-        Ok(Some(Mesh {
-            name,
-            vertices,
-            indices,
-            material,
-        }))
+        Ok(Some((
+            Mesh {
+                name,
+                vertices,
+                indices,
+                material,
+            },
+            deform,
+        )))
+    }
+
+    /// A primitive's joint influences (JOINTS_0 / WEIGHTS_0) and morph targets, None when it has
+    /// neither. `count` is its vertex count, which every one of these accessors must match.
+    fn primitive_deform(
+        &mut self,
+        prim: &gltf::Primitive<'a>,
+        who: &str,
+        count: usize,
+    ) -> Result<Option<MeshDeform>> {
+        let buffers = self.buffers;
+        let label = self.label.clone();
+        let read = |acc: gltf::Accessor, what: String, dims: Dimensions| -> Result<Vec<f32>> {
+            let values = accessor::read_f32(
+                &acc,
+                dims,
+                buffers,
+                &Use {
+                    source: &label,
+                    what: &what,
+                },
+            )?;
+            let n = match dims {
+                Dimensions::Vec3 => 3,
+                _ => 4,
+            };
+            if values.len() / n != count {
+                return Err(Error::input(format!(
+                    "{label}: {what} (accessor {}) has {} elements but POSITION has {count}; all attributes of a primitive must have the same count: re-export the mesh",
+                    acc.index(),
+                    values.len() / n
+                )));
+            }
+            if values.iter().any(|v| !v.is_finite()) {
+                return Err(Error::input(format!(
+                    "{label}: {what} (accessor {}) holds a non-finite value; fix the mesh and re-export it",
+                    acc.index()
+                )));
+            }
+            Ok(values)
+        };
+        let mut deform = MeshDeform::default();
+        match (
+            prim.get(&Semantic::Joints(0)),
+            prim.get(&Semantic::Weights(0)),
+        ) {
+            (Some(j), Some(w)) => {
+                if !matches!(
+                    j.data_type(),
+                    gltf::accessor::DataType::U8 | gltf::accessor::DataType::U16
+                ) || j.normalized()
+                {
+                    return Err(self.error(format_args!(
+                        "{who}: JOINTS_0 (accessor {}) has component type {:?}{}; glTF requires unsigned byte or unsigned short joint indices: re-export the mesh",
+                        j.index(),
+                        j.data_type(),
+                        if j.normalized() { ", normalized" } else { "" }
+                    )));
+                }
+                let joints = read(j, format!("{who}, attribute JOINTS_0"), Dimensions::Vec4)?;
+                let weights = read(w, format!("{who}, attribute WEIGHTS_0"), Dimensions::Vec4)?;
+                let mut unweighted = 0;
+                deform.skin = (0..count)
+                    .map(|v| {
+                        let mut w = [0f32; 4];
+                        w.copy_from_slice(&weights[4 * v..4 * v + 4]);
+                        let w = w.map(|x| x.max(0.0));
+                        let sum: f32 = w.iter().sum();
+                        let weights = if sum > 1e-6 {
+                            // glTF asks for weights that sum to 1; exporters round (u8 weights
+                            // especially), so they are normalised.
+                            w.map(|x| x / sum)
+                        } else {
+                            unweighted += 1;
+                            [1.0, 0.0, 0.0, 0.0]
+                        };
+                        VertexSkin {
+                            joints: [0, 1, 2, 3].map(|k| joints[4 * v + k] as u32),
+                            weights,
+                        }
+                    })
+                    .collect();
+                if unweighted > 0 {
+                    self.warn(format_args!(
+                        "{who} has {unweighted} vertex/vertices whose WEIGHTS_0 are all zero; they follow their first joint"
+                    ));
+                }
+                if prim.get(&Semantic::Joints(1)).is_some() {
+                    self.warn(format_args!(
+                        "{who} has more than four joint influences per vertex (JOINTS_1); weft uses JOINTS_0 / WEIGHTS_0 only, so the skin deforms slightly differently"
+                    ));
+                }
+            }
+            (None, None) => {}
+            _ => {
+                self.warn(format_args!(
+                    "{who} has only one of JOINTS_0 and WEIGHTS_0; a skinned primitive needs both, so it is drawn unskinned"
+                ));
+            }
+        }
+        let targets: Vec<_> = prim.morph_targets().collect();
+        if targets.len() > animation::MAX_MORPH_TARGETS {
+            return Err(self.error(format_args!(
+                "{who} has {} morph targets, more than weft's limit of {}; bake or drop some shape keys",
+                targets.len(),
+                animation::MAX_MORPH_TARGETS
+            )));
+        }
+        let triples = |v: Vec<f32>| -> Vec<[f32; 3]> {
+            v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        };
+        for (k, t) in targets.iter().enumerate() {
+            let mut target = MorphTarget::default();
+            if let Some(a) = t.positions() {
+                target.positions = triples(read(
+                    a,
+                    format!("{who}, morph target {k} POSITION"),
+                    Dimensions::Vec3,
+                )?);
+            }
+            if let Some(a) = t.normals() {
+                target.normals = triples(read(
+                    a,
+                    format!("{who}, morph target {k} NORMAL"),
+                    Dimensions::Vec3,
+                )?);
+            }
+            if let Some(a) = t.tangents() {
+                target.tangents = triples(read(
+                    a,
+                    format!("{who}, morph target {k} TANGENT"),
+                    Dimensions::Vec3,
+                )?);
+            }
+            deform.targets.push(target);
+        }
+        Ok((!deform.skin.is_empty() || !deform.targets.is_empty()).then_some(deform))
     }
 
     // --- lights and cameras ---------------------------------------------------------------------
@@ -1578,6 +1739,7 @@ impl<'a> Loader<'a> {
                     )))
                 }
             }
+            self.scene.rig.order.push(node.index());
             let world = parent * self.local_transform(&node, &who)?;
             if !world.is_finite() {
                 return Err(self.error(format_args!(
@@ -1587,11 +1749,14 @@ impl<'a> Loader<'a> {
             let flags = self.node_shadow_flags(node.index(), inherited, &who)?;
 
             if let Some(mesh) = node.mesh() {
-                if node.skin().is_some() {
-                    self.warn(format_args!(
-                        "{who} is skinned; weft ignores skins and draws the mesh in its bind pose"
-                    ));
-                }
+                let skin = node.skin().map(|s| s.index());
+                let weights = self
+                    .scene
+                    .rig
+                    .nodes
+                    .get(node.index())
+                    .map(|n| n.weights.clone())
+                    .unwrap_or_default();
                 for id in self.mesh_ids(&mesh)? {
                     let triangles = self.scene.meshes.get(id).map_or(0, |m| m.indices.len() / 3);
                     self.triangles_drawn = self.triangles_drawn.saturating_add(triangles as u64);
@@ -1601,6 +1766,18 @@ impl<'a> Loader<'a> {
                             self.triangles_drawn
                         )));
                     }
+                    let deform = self.scene.rig.meshes.get(&id);
+                    let targets = deform.map_or(0, |d| d.targets.len());
+                    // A skin applies only to primitives with joints; the others follow the node.
+                    let skin = skin.filter(|_| deform.is_some_and(|d| !d.skin.is_empty()));
+                    self.scene.rig.draws.push(animation::DrawBinding {
+                        draw: self.scene.draws.len(),
+                        node: node.index(),
+                        skin,
+                        weights: (0..targets)
+                            .map(|k| weights.get(k).copied().unwrap_or(0.0))
+                            .collect(),
+                    });
                     self.scene.draws.push(Draw {
                         cast_shadows: flags.cast,
                         receive_shadows: flags.receive,
@@ -1609,7 +1786,11 @@ impl<'a> Loader<'a> {
                 }
             }
             if let Some(camera) = node.camera() {
+                let before = self.scene.cameras.len();
                 self.place_camera(camera.index(), world, &who);
+                if self.scene.cameras.len() > before {
+                    self.scene.rig.cameras.push((before, node.index()));
+                }
             }
             let light = doc
                 .as_json()
@@ -1619,7 +1800,11 @@ impl<'a> Loader<'a> {
                 .and_then(|e| e.khr_lights_punctual.as_ref())
                 .map(|l| l.light.value());
             if let Some(light) = light {
+                let before = self.scene.lights.len();
                 self.place_light(light, world, &who)?;
+                if self.scene.lights.len() > before {
+                    self.scene.rig.lights.push((before, node.index()));
+                }
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {
                 stack.push((child, world, flags));
@@ -1726,28 +1911,271 @@ impl<'a> Loader<'a> {
         };
         // The view is the inverse of the node's rigid motion: scale (even mirroring) is removed,
         // keeping the view direction (-Z) and the up direction (+Y) of the node.
-        let z = world.z_axis.truncate().try_normalize();
-        let y = z.and_then(|z| {
-            let y = world.y_axis.truncate();
-            (y - z * z.dot(y)).try_normalize()
-        });
-        let (Some(z), Some(y)) = (z, y) else {
+        let Some(camera) = animation::placed_camera(
+            def.name.clone(),
+            world,
+            def.yfov,
+            def.znear,
+            def.zfar,
+            def.aspect_ratio,
+        ) else {
             let name = def.name.clone();
             self.warn(format_args!(
                 "{who} scales camera '{name}' to nothing, so it has no orientation; the camera is skipped"
             ));
             return;
         };
-        let x = y.cross(z);
-        let rigid = Mat4::from_cols(x.extend(0.0), y.extend(0.0), z.extend(0.0), world.w_axis);
-        let camera = Camera {
-            name: def.name.clone(),
-            view: rigid.inverse(),
-            yfov: def.yfov,
-            znear: def.znear,
-            zfar: def.zfar,
-            aspect_ratio: def.aspect_ratio,
-        };
         self.scene.cameras.push(camera);
+    }
+}
+
+// --- animation: nodes, skins, channels ---------------------------------------------------------
+
+impl<'a> Loader<'a> {
+    /// Every node's parent, rest transform and rest morph weights ([`animation::Rig::nodes`], by
+    /// glTF node index).
+    fn rig_nodes(&mut self) -> Result<()> {
+        let doc = self.doc;
+        let mut parent = vec![None; doc.nodes().len()];
+        for node in doc.nodes() {
+            for child in node.children() {
+                if let Some(p) = parent.get_mut(child.index()) {
+                    *p = Some(node.index());
+                }
+            }
+        }
+        for node in doc.nodes() {
+            let targets = node
+                .mesh()
+                .and_then(|m| m.primitives().next())
+                .map_or(0, |p| p.morph_targets().len());
+            let weights = node
+                .weights()
+                .or_else(|| node.mesh().and_then(|m| m.weights()))
+                .map(<[f32]>::to_vec)
+                .unwrap_or_else(|| vec![0.0; targets]);
+            if weights.iter().any(|w| !w.is_finite()) {
+                return Err(self.error(format_args!(
+                    "node {} (or its mesh) has a non-finite morph target weight in {weights:?}; set finite weights",
+                    node.index()
+                )));
+            }
+            let (matrix, translation, rotation, scale) = match node.transform() {
+                gltf::scene::Transform::Matrix { matrix } => (
+                    Some(Mat4::from_cols_array_2d(&matrix)),
+                    Vec3::ZERO,
+                    Quat::IDENTITY,
+                    Vec3::ONE,
+                ),
+                gltf::scene::Transform::Decomposed {
+                    translation,
+                    rotation,
+                    scale,
+                } => {
+                    let q = Quat::from_array(rotation);
+                    // The walk refuses a bad quaternion on nodes the scene reaches.
+                    let q = if q.length_squared() > 1e-12 && q.is_finite() {
+                        q.normalize()
+                    } else {
+                        Quat::IDENTITY
+                    };
+                    (None, Vec3::from(translation), q, Vec3::from(scale))
+                }
+            };
+            self.scene.rig.nodes.push(animation::Node {
+                parent: parent.get(node.index()).copied().flatten(),
+                matrix,
+                translation,
+                rotation,
+                scale,
+                weights,
+            });
+        }
+        Ok(())
+    }
+
+    /// The file's skins (by glTF skin index), checked against the draws that use them.
+    fn load_skins(&mut self) -> Result<()> {
+        let doc = self.doc;
+        for skin in doc.skins() {
+            let name = skin
+                .name()
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("skin {}", skin.index()));
+            let who = format!("skin '{name}'");
+            let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+            if joints.len() > animation::MAX_JOINTS {
+                return Err(self.error(format_args!(
+                    "{who} has {} joints, more than glTF's limit of {} (joint indices are unsigned shorts); split the skeleton",
+                    joints.len(),
+                    animation::MAX_JOINTS
+                )));
+            }
+            let inverse_bind = match skin.inverse_bind_matrices() {
+                None => vec![Mat4::IDENTITY; joints.len()],
+                Some(acc) => {
+                    let what = format!("{who}, inverseBindMatrices");
+                    let index = acc.index();
+                    let values = accessor::read_f32(
+                        &acc,
+                        Dimensions::Mat4,
+                        self.buffers,
+                        &Use {
+                            source: &self.label,
+                            what: &what,
+                        },
+                    )?;
+                    let m: Vec<Mat4> = values.chunks_exact(16).map(Mat4::from_cols_slice).collect();
+                    if m.len() != joints.len() {
+                        return Err(self.error(format_args!(
+                            "{who} has {} joints but its inverseBindMatrices (accessor {index}) hold {} matrices; glTF requires one per joint: re-export the skin",
+                            joints.len(),
+                            m.len()
+                        )));
+                    }
+                    if let Some(k) = m.iter().position(|m| !m.is_finite()) {
+                        return Err(self.error(format_args!(
+                            "{who}: inverse bind matrix {k} is not finite; re-export the skin"
+                        )));
+                    }
+                    m
+                }
+            };
+            self.scene.rig.skins.push(animation::Skin {
+                name,
+                joint_matrices: vec![Mat4::IDENTITY; joints.len()],
+                joints,
+                inverse_bind,
+            });
+        }
+        for b in &self.scene.rig.draws {
+            let Some(s) = b.skin else { continue };
+            let Some(d) = self.scene.draws.get(b.draw) else {
+                continue;
+            };
+            let skin = &self.scene.rig.skins[s];
+            let mesh = &self.scene.meshes[d.mesh];
+            let Some(deform) = self.scene.rig.meshes.get(&d.mesh) else {
+                continue;
+            };
+            for (v, vs) in deform.skin.iter().enumerate() {
+                if let Some(k) = (0..4)
+                    .find(|&k| vs.weights[k] > 0.0 && vs.joints[k] as usize >= skin.joints.len())
+                {
+                    return Err(self.error(format_args!(
+                        "mesh '{}' (skinned by node {} with {}) has vertex {v} bound to joint {} (JOINTS_0), but the skin has only {} joint(s); fix the joint indices or the skin's joint list",
+                        mesh.name,
+                        b.node,
+                        skin.name,
+                        vs.joints[k],
+                        skin.joints.len()
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The file's animations: every channel checked, a broken one dropped with a warning (the
+    /// scene still renders, and the rest of the animation still plays).
+    fn load_animations(&mut self) -> Result<()> {
+        let doc = self.doc;
+        for anim in doc.animations() {
+            let name = anim
+                .name()
+                .map(str::to_owned)
+                .unwrap_or_else(|| format!("animation {}", anim.index()));
+            let mut channels = Vec::new();
+            for (c, channel) in anim.channels().enumerate() {
+                let who = format!("animation '{name}' channel {c}");
+                match self.channel(&channel, &who) {
+                    Ok(Some(ch)) => channels.push(ch),
+                    Ok(None) => {}
+                    Err(why) => self.warn(format_args!("{who} {why}; the channel is ignored")),
+                }
+            }
+            let duration = channels
+                .iter()
+                .map(|c: &animation::Channel| c.sampler.end())
+                .fold(0.0f32, f32::max);
+            self.scene.rig.infos.push(animation::AnimationInfo {
+                name: name.clone(),
+                duration,
+            });
+            self.scene
+                .rig
+                .animations
+                .push(animation::Animation { name, channels });
+        }
+        Ok(())
+    }
+
+    fn channel(
+        &mut self,
+        channel: &gltf::animation::Channel<'a>,
+        who: &str,
+    ) -> std::result::Result<Option<animation::Channel>, String> {
+        use gltf::animation::{Interpolation as I, Property};
+        let target = channel.target();
+        let node = target.node();
+        let (path, width, dims) = match target.property() {
+            Property::Translation => (animation::Path::Translation, 3, Dimensions::Vec3),
+            Property::Rotation => (animation::Path::Rotation, 4, Dimensions::Vec4),
+            Property::Scale => (animation::Path::Scale, 3, Dimensions::Vec3),
+            Property::MorphTargetWeights => {
+                let targets = self
+                    .scene
+                    .rig
+                    .nodes
+                    .get(node.index())
+                    .map_or(0, |n| n.weights.len());
+                if targets == 0 {
+                    return Err(format!(
+                        "animates the morph weights of node {}, which has no morph targets",
+                        node.index()
+                    ));
+                }
+                (animation::Path::Weights, targets, Dimensions::Scalar)
+            }
+        };
+        if self
+            .scene
+            .rig
+            .nodes
+            .get(node.index())
+            .is_some_and(|n| n.matrix.is_some())
+            && path != animation::Path::Weights
+        {
+            return Err(format!(
+                "animates node {}, which is given by a matrix (glTF allows channels only on nodes with translation, rotation and scale)",
+                node.index()
+            ));
+        }
+        let sampler = channel.sampler();
+        let read = |acc: gltf::Accessor, dims: Dimensions, what: &str| {
+            accessor::read_f32(
+                &acc,
+                dims,
+                self.buffers,
+                &Use {
+                    source: &self.label,
+                    what: &format!("{who}, {what}"),
+                },
+            )
+            .map_err(|e| format!("cannot be read: {e}"))
+        };
+        let times = read(sampler.input(), Dimensions::Scalar, "sampler input")?;
+        let values = read(sampler.output(), dims, "sampler output")?;
+        let interpolation = match sampler.interpolation() {
+            I::Step => animation::Interpolation::Step,
+            I::Linear => animation::Interpolation::Linear,
+            I::CubicSpline => animation::Interpolation::CubicSpline,
+        };
+        let s = animation::Sampler::new(interpolation, times, values, width, "its sampler")?;
+        Ok(Some(animation::Channel {
+            node: node.index(),
+            path,
+            sampler: s,
+        }))
     }
 }

@@ -6,15 +6,19 @@
 //! (`WEFT_materials_fabric`) is parsed into [`crate::fabric::FabricParams`]. Shadow settings come
 //! from `extras`: a light's `shadows`, a node's `cast_shadows` / `receive_shadows` (the convention
 //! is in `docs/scene-format.md`).
+//! Animation (node TRS channels, skins, morph targets) is kept in [`Scene::rig`] and applied by
+//! [`Scene::pose`] ([`animation`]).
 //! [`default_scene`] is the built-in scene embedded in the binary.
 
 use glam::{Mat4, Vec3};
 
 mod accessor;
+pub mod animation;
 mod gltf_load;
 mod material_ext;
 mod resources;
 mod tangents;
+pub use animation::AnimationInfo;
 pub use gltf_load::{
     default_scene, load, load_slice, load_slice_with, load_with, LoadOptions, DEFAULT_SCENE_GLB,
 };
@@ -346,6 +350,9 @@ pub struct Scene {
     /// KHR_materials_variants: the file's variant names, and the one the scene was loaded with.
     pub variants: Vec<String>,
     pub variant: Option<String>,
+    /// The node hierarchy, skins, morph targets and animations ([`animation`]): what
+    /// [`Scene::pose`] needs to move the draws, lights and cameras above.
+    pub rig: animation::Rig,
 }
 
 /// Axis-aligned bounds in world space.
@@ -369,8 +376,11 @@ impl Scene {
     fn bounds_of(&self, keep: impl Fn(&Draw) -> bool) -> Option<Bounds> {
         let mut min = Vec3::splat(f32::INFINITY);
         let mut max = Vec3::splat(f32::NEG_INFINITY);
-        for d in self.draws.iter().filter(|d| keep(d)) {
-            for v in &self.meshes[d.mesh].vertices {
+        for (i, d) in self.draws.iter().enumerate().filter(|(_, d)| keep(d)) {
+            // A skinned or morphed draw's bounds are those of its current pose.
+            let deformed = self.deformed_vertices(i);
+            let vertices = deformed.as_deref().unwrap_or(&self.meshes[d.mesh].vertices);
+            for v in vertices {
                 let p = d.world.transform_point3(Vec3::from(v.position));
                 if p.is_finite() {
                     min = min.min(p);

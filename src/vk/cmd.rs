@@ -132,6 +132,34 @@ impl<'s> Cmd<'s> {
         unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
     }
 
+    /// Orders a compute pass that rewrites vertex data after earlier vertex-input reads of it
+    /// (write after read: an execution dependency).
+    pub fn vertex_reads_before_compute(&mut self) {
+        let barrier = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT)
+            .src_access_mask(vk::AccessFlags2::NONE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .dst_access_mask(vk::AccessFlags2::NONE)];
+        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
+        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+    }
+
+    /// Makes compute-shader writes to buffers visible to later vertex-input reads and to host
+    /// reads after the submission's fence (a posed vertex buffer).
+    pub fn compute_writes_before_vertex_reads(&mut self) {
+        let barrier = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(
+                vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT | vk::PipelineStageFlags2::HOST,
+            )
+            .dst_access_mask(
+                vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::HOST_READ,
+            )];
+        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
+        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+    }
+
     /// Begins dynamic rendering over the full extent of the first attachment, and sets the
     /// viewport and scissor to it.
     pub fn begin_rendering(&mut self, colors: &[Attachment<'s>], depth: Option<Attachment<'s>>) {
