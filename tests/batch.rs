@@ -466,6 +466,24 @@ fn batch_bad_input_exits_2_without_touching_the_gpu() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(69), "{err}");
     assert!(err.contains("No Vulkan driver"), "{err}");
+    // A task whose share is empty (3 tasks, 2 frames) is done at once, without a device.
+    let o = weft_without_gpu()
+        .args([
+            "render",
+            "--frames-range",
+            "0..1",
+            "--task",
+            "2",
+            "--tasks",
+            "3",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("nothing to do"), "{err}");
     // A single render keeps its exit code 1 on bad input (tests/cli.rs).
     let o = weft_without_gpu()
         .args(["render", "--size", "0x5", "-o", "x.png"])

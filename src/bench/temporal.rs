@@ -53,7 +53,7 @@ pub struct TemporalConfig {
 impl Default for TemporalConfig {
     /// Mid and far at 640x360 (the size of `weft bench`'s accuracy sweep, so the footprints are
     /// its), 9 frames turning 0.1 degree each (a turntable of 3 degrees a second at 30 fps:
-    /// about 2 pixels a frame at the far view), every level and supersampled:16, ground truth
+    /// a fraction of a pixel a frame, docs/performance.md), every level and supersampled:16, ground truth
     /// supersampled:32. About 1.5 minutes on lavapipe with 2 cores.
     fn default() -> Self {
         let mut variants = super::cross_product(&super::LEVELS[..3], &[WeavePrecision::Rgba16f]);
