@@ -722,6 +722,7 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
             )));
         }
     }
+    spec.check_directories()?;
     let jobs = spec.my_jobs();
     if jobs.is_empty() {
         eprintln!(

@@ -189,7 +189,9 @@ fn task_numbers_come_from_the_flags_or_the_engines_variables() {
         (1, 2)
     );
     // Refused, each with a message naming the fix.
-    let refused: &[(Option<u32>, Option<u32>, &[(&str, &str)], &str)] = &[
+    // (--task, --tasks, variables, a fragment of the message)
+    type Case<'a> = (Option<u32>, Option<u32>, &'a [(&'a str, &'a str)], &'a str);
+    let refused: &[Case] = &[
         (Some(4), Some(4), &[], "does not exist"),
         (Some(0), Some(0), &[], "at least 1"),
         (Some(1), None, &[], "--task needs --tasks"),
@@ -432,6 +434,10 @@ fn batch_bad_input_exits_2_without_touching_the_gpu() {
             &["/nonexistent/scene.gltf", "--frames-range", "0..3"],
             "/nonexistent/scene.gltf",
         ),
+        (
+            &["--frames-range", "0..3", "-o", "/nonexistent/dir/f%d.png"],
+            "does not exist",
+        ),
     ];
     for (args, expect) in cases {
         let mut c = weft_without_gpu();
@@ -466,14 +472,15 @@ fn batch_bad_input_exits_2_without_touching_the_gpu() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(69), "{err}");
     assert!(err.contains("No Vulkan driver"), "{err}");
-    // A task whose share is empty (3 tasks, 2 frames) is done at once, without a device.
+    // A task whose share is empty (task 0 of 3 over 2 frames: jobs floor(0)..floor(2/3)) is
+    // done at once, without a device.
     let o = weft_without_gpu()
         .args([
             "render",
             "--frames-range",
             "0..1",
             "--task",
-            "2",
+            "0",
             "--tasks",
             "3",
             "-o",
@@ -550,6 +557,7 @@ fn sequence_writes_every_frame_and_resume_renders_only_what_is_missing() {
         assert!(m["passes"]["gbuffer"]["wall_ms"].as_f64().unwrap() > 0.0);
         assert!(m["passes"]["lighting"].is_object());
         assert!(m["wall_ms"].as_f64().unwrap() >= m["render_ms"].as_f64().unwrap());
+        assert!(m["render_ms"].as_f64().unwrap() >= m["pose_ms"].as_f64().unwrap());
         assert!(sequence::frame_done(Path::new(path), 48, 27));
     }
     let file = |n: u32| dir.path().join(format!("f_{n:04}.png"));

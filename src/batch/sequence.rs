@@ -156,6 +156,33 @@ impl SequenceSpec {
         Ok(())
     }
 
+    /// Refuses, before any rendering, output directories of this task's jobs that do not exist
+    /// (a frame would otherwise fail only after the device is open and earlier frames are done).
+    pub fn check_directories(&self) -> crate::Result<()> {
+        let mut seen = std::collections::HashSet::new();
+        for job in self.my_jobs() {
+            let mut paths = vec![self.png_path(&job)];
+            if let Some(exr) = &self.exr {
+                paths.push(exr.path(job.frame, self.sweep_value(&job)));
+            }
+            for path in paths {
+                let dir = path
+                    .parent()
+                    .filter(|p| !p.as_os_str().is_empty())
+                    .unwrap_or(std::path::Path::new("."))
+                    .to_path_buf();
+                if seen.insert(dir.clone()) && !dir.is_dir() {
+                    return Err(Error::input(format!(
+                        "the output directory '{}' (of '{}') does not exist: create it, or choose another -o",
+                        dir.display(),
+                        path.display()
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The jobs of this task, in the order they are rendered.
     pub fn my_jobs(&self) -> Vec<Job> {
         let all = super::jobs(self.range, self.sweep.as_ref());
@@ -190,6 +217,8 @@ pub struct JobReport {
     pub skipped: bool,
     /// Per pass: (name, GPU ms when the device has timestamps, wall ms).
     pub passes: Vec<(&'static str, Option<f64>, f64)>,
+    /// Posing (the animation sampled and its pose sent to the GPU, the camera moved).
+    pub pose_ms: f64,
     /// Posing, rendering and reading back.
     pub render_ms: f64,
     /// Encoding and writing the PNG (and EXR).
@@ -220,6 +249,7 @@ impl JobReport {
             "output": self.output.display().to_string(),
             "status": if self.skipped { "skipped" } else { "rendered" },
             "passes": passes,
+            "pose_ms": self.pose_ms,
             "render_ms": self.render_ms,
             "write_ms": self.write_ms,
             "wall_ms": self.render_ms + self.write_ms,
@@ -261,6 +291,7 @@ pub fn run(
                 output,
                 skipped: true,
                 passes: Vec::new(),
+                pose_ms: 0.0,
                 render_ms: 0.0,
                 write_ms: 0.0,
             };
@@ -278,6 +309,7 @@ pub fn run(
             spec.animation,
             time,
         )?;
+        let pose_ms = start.elapsed().as_secs_f64() * 1e3;
         if let (Some(s), Some(i)) = (&spec.sweep, job.sweep) {
             s.apply(i, &mut options)?;
         }
@@ -302,6 +334,7 @@ pub fn run(
                 .iter()
                 .map(|t| (t.name, t.gpu_ms, t.wall_ms))
                 .collect(),
+            pose_ms,
             render_ms,
             write_ms: start.elapsed().as_secs_f64() * 1e3,
         };
