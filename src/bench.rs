@@ -19,6 +19,7 @@
 pub mod ibl_bench;
 pub mod plan_bench;
 pub mod plot;
+pub mod temporal;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

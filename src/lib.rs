@@ -7,6 +7,7 @@
 //! `unsafe` is denied everywhere but in `vk`.
 #![deny(unsafe_code)]
 
+pub mod batch;
 pub mod bench;
 pub mod compare;
 pub mod env;

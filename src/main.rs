@@ -175,6 +175,102 @@ struct RenderArgs {
     /// out).
     #[arg(long)]
     animation: Option<String>,
+    #[command(flatten)]
+    batch: BatchArgs,
+}
+
+/// Sequences and the batch contract (docs/batch.md). Any of --frames-range, --sweep, --task,
+/// --tasks makes the render a batch task: -o (and --exr) become patterns, and the exit codes
+/// below apply.
+#[derive(Args)]
+#[command(next_help_heading = "Sequences and batches (docs/batch.md)")]
+struct BatchArgs {
+    /// Render frames FIRST..LAST (both included) in one process, the scene uploaded once; frame
+    /// f is posed at f / --fps seconds. -o is then a pattern: %04d is the frame number.
+    #[arg(long, value_name = "FIRST..LAST", conflicts_with = "frames",
+          value_parser = |s: &str| weft::batch::FrameRange::parse(s))]
+    frames_range: Option<weft::batch::FrameRange>,
+    /// Frames per second of the sequence (the time of frame f is f / FPS).
+    #[arg(long, default_value_t = 24.0)]
+    fps: f32,
+    /// Turn the camera about the vertical axis through the scene's centre, in degrees per second.
+    #[arg(
+        long,
+        value_name = "DEGREES_PER_SECOND",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    orbit: f32,
+    /// Move the camera along its view direction, in world units per second (negative: away).
+    #[arg(
+        long,
+        value_name = "UNITS_PER_SECOND",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    dolly: f32,
+    /// Skip frames whose PNG is already there, complete and of the frame's size.
+    #[arg(long)]
+    resume: bool,
+    /// This task's index, from 0 (overrides the engines' variables: SLURM_ARRAY_TASK_ID,
+    /// JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX, WEFT_TASK).
+    #[arg(long, value_name = "I")]
+    task: Option<u32>,
+    /// How many tasks share the jobs (else from SLURM_ARRAY_TASK_COUNT or _MIN/_MAX, or
+    /// WEFT_TASKS).
+    #[arg(long, value_name = "N")]
+    tasks: Option<u32>,
+    /// How the jobs are dealt to tasks: contiguous (task i gets one run of frames) or strided
+    /// (task i gets i, i+N, i+2N, ...).
+    #[arg(long, default_value = "contiguous", value_parser = Choice::new(
+        weft::batch::Split::parse, &["contiguous", "strided"]))]
+    split: weft::batch::Split,
+    /// Render every frame once per value: KEY=V1,V2,... with KEY exposure, accuracy,
+    /// env-intensity or env-rotation; -o must hold {sweep} (the value).
+    #[arg(long, value_name = "KEY=V1,V2,...", allow_hyphen_values = true,
+          value_parser = |s: &str| weft::batch::Sweep::parse(s))]
+    sweep: Option<weft::batch::Sweep>,
+    /// Print one JSON line per job on stdout: frame, time, output, status, per-pass GPU and wall
+    /// ms.
+    #[arg(long)]
+    metrics_json: bool,
+    /// After the frames, make a video of them with ffmpeg (must be on PATH; one task only, no
+    /// sweep). The codec is ffmpeg's default for the extension (e.g. .mp4).
+    #[arg(long, value_name = "PATH")]
+    video: Option<PathBuf>,
+}
+
+impl BatchArgs {
+    fn on(&self) -> bool {
+        self.frames_range.is_some()
+            || self.sweep.is_some()
+            || self.task.is_some()
+            || self.tasks.is_some()
+    }
+}
+
+/// Whether the command line asks for a batch render (so that even a flag value clap refuses
+/// exits with the batch contract's code).
+fn batch_command_line() -> bool {
+    std::env::args_os().any(|a| {
+        let a = a.to_string_lossy();
+        a.starts_with("--frames-range") || a.starts_with("--task") || a.starts_with("--sweep")
+    })
+}
+
+/// `weft render --help`'s epilogue: the batch exit codes and the engines' variables.
+fn render_after_help() -> String {
+    let mut t = String::from(
+        "Exit codes of a batch render (--frames-range, --sweep, --task, --tasks; a single render exits 1 on any error):\n",
+    );
+    for line in weft::batch::ExitClass::table().lines() {
+        t.push_str(&format!("  {line}\n"));
+    }
+    t.push_str("Task index and count from the environment when --task is not given:\n");
+    for (engine, vars) in weft::batch::TASK_ENV_VARS {
+        t.push_str(&format!("  {engine}: {vars}\n"));
+    }
+    t
 }
 
 #[derive(Args)]
@@ -238,6 +334,14 @@ struct BenchArgs {
     /// ratio.
     #[arg(long)]
     startup: bool,
+    /// Instead: temporal stability: the camera turning slowly at the mid and far views, the
+    /// consecutive-frame change on fabric of every level against the supersampled ground truth's
+    /// (ratio = how much more it flickers). --size (default 320x180), --frames (default 9).
+    #[arg(long)]
+    temporal: bool,
+    /// Degrees the camera turns between frames in --temporal.
+    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    temporal_step: f32,
     /// The environment of the --ibl bench (default: the repository's tests/data/env/lebombo_1k.hdr).
     #[arg(long)]
     ibl_env: Option<PathBuf>,
@@ -289,7 +393,14 @@ fn main() -> ExitCode {
     // A bad flag value is bad input like a bad scene: exit 1 with clap's one-line message (the
     // library's own, naming the choices). Other usage errors, --help and --version as clap has
     // them.
-    let cli = match Cli::try_parse() {
+    // A batch render's bad input exits 2 (weft::batch::ExitClass), clap's usage errors too.
+    let batch = batch_command_line();
+    let command = <Cli as clap::CommandFactory>::command()
+        .mut_subcommand("render", |c| c.after_help(render_after_help()));
+    let cli = match command
+        .try_get_matches()
+        .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m))
+    {
         Ok(cli) => cli,
         Err(e)
             if matches!(
@@ -298,10 +409,15 @@ fn main() -> ExitCode {
             ) =>
         {
             let _ = e.print();
-            return ExitCode::FAILURE;
+            return if batch {
+                ExitCode::from(weft::batch::ExitClass::BadInput.code())
+            } else {
+                ExitCode::FAILURE
+            };
         }
         Err(e) => e.exit(),
     };
+    let batch = matches!(&cli.command, Command::Render(r) if r.batch.on());
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Plan(args) => run_plan(args),
@@ -313,6 +429,12 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if batch => {
+            let class = weft::batch::ExitClass::of(&e);
+            eprintln!("error: {e:#}");
+            eprintln!("(exit {}: {class:?}; see weft render --help)", class.code());
+            ExitCode::from(class.code())
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -473,6 +595,9 @@ fn pose_scene(scene: &mut Scene, animation: Option<&str>, time: Option<f32>) -> 
 }
 
 fn run_render(args: RenderArgs) -> anyhow::Result<()> {
+    if args.batch.on() {
+        return run_batch(args);
+    }
     let device = args
         .device
         .as_deref()
@@ -580,6 +705,158 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             "shadows    {} map(s), {} caster draw(s)",
             frame.stats.shadow_maps, frame.stats.shadow_draws
         );
+    }
+    Ok(())
+}
+
+/// `weft render --frames-range / --sweep / --task`: this task's share of the jobs, in one
+/// process (weft::batch::sequence). Every flag is checked before a device is opened.
+fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
+    use weft::batch::{sequence, FrameRange, OutputPattern, TaskSpec};
+    let b = &args.batch;
+    let task = TaskSpec::resolve(b.task, b.tasks, |k| std::env::var(k).ok())?;
+    let range = b.frames_range.unwrap_or(FrameRange { first: 0, last: 0 });
+    let mut spec = sequence::SequenceSpec {
+        range,
+        fps: b.fps,
+        motion: Default::default(),
+        animation: None,
+        sweep: b.sweep.clone(),
+        task,
+        split: b.split,
+        output: OutputPattern::parse(&args.output)?,
+        exr: args.exr.as_deref().map(OutputPattern::parse).transpose()?,
+        resume: b.resume,
+    };
+    spec.check()?;
+    sequence::CameraMotion::check_speeds(b.orbit, b.dolly)?;
+    if let Some(t) = args.time {
+        anyhow::bail!(weft::Error::input(format!(
+            "--time {t} poses a still; in a sequence frame f is posed at f / --fps seconds: leave --time out (choose the frames with --frames-range)"
+        )));
+    }
+    if let Some(video) = &b.video {
+        if task.count > 1 || spec.sweep.as_ref().is_some_and(|s| s.values.len() > 1) {
+            anyhow::bail!(weft::Error::input(format!(
+                "--video '{}' needs every frame in this process: leave it out with --tasks or a --sweep, and run ffmpeg once all tasks are done (docs/batch.md)",
+                video.display()
+            )));
+        }
+        if !sequence::on_path("ffmpeg") {
+            anyhow::bail!(weft::Error::input(format!(
+                "--video '{}' needs ffmpeg on PATH, and there is none: install it (e.g. apt-get install ffmpeg) or leave --video out",
+                video.display()
+            )));
+        }
+    }
+    spec.check_directories()?;
+    let jobs = spec.my_jobs();
+    if jobs.is_empty() {
+        eprintln!(
+            "task {} of {} ({}): no jobs in this share of {} job(s); nothing to do",
+            task.index,
+            task.count,
+            task.source,
+            weft::batch::jobs(range, spec.sweep.as_ref()).len()
+        );
+        return Ok(());
+    }
+    let device = args
+        .device
+        .as_deref()
+        .map(DeviceChoice::parse)
+        .unwrap_or_else(DeviceChoice::from_env);
+    let validate = args.validate;
+    let gpu = std::thread::spawn(move || -> weft::Result<Renderer> {
+        Renderer::new(Context::new(&ContextOptions { validate, device })?)
+    });
+    let loaded = load_scene_fabric(&args.scene, &args.fabric);
+    let gpu = gpu
+        .join()
+        .map_err(|_| anyhow::anyhow!("the Vulkan set-up thread panicked"))?;
+    let (mut scene, mut options) = loaded?;
+    options.exposure = args.exposure;
+    options.validate()?;
+    spec.motion = sequence::CameraMotion::centered(&scene, b.orbit, b.dolly)?;
+    // The animation played: --animation's, else the file's first (a still scene has none).
+    spec.animation = match args.animation.as_deref() {
+        Some(a) => Some(scene.find_animation(a)?),
+        None => (!scene.animations().is_empty()).then_some(0),
+    };
+    let mut renderer = gpu?;
+    let info = renderer.context().info().clone();
+    eprintln!(
+        "device: {} ({}, {} {})",
+        info.name, info.device_type, info.driver_name, info.driver_info
+    );
+    eprintln!(
+        "task {} of {} ({}, {}): {} job(s), frames {}..{} at {} fps{}",
+        task.index,
+        task.count,
+        task.source,
+        spec.split.name(),
+        jobs.len(),
+        range.first,
+        range.last,
+        spec.fps,
+        match spec.animation {
+            Some(i) => format!(
+                ", animation {i} '{}' ({:.3} s)",
+                scene.animations()[i].name,
+                scene.animations()[i].duration
+            ),
+            None => String::new(),
+        }
+    );
+    let mut gpu_scene = renderer.upload(&scene)?;
+    let metrics = b.metrics_json;
+    let reports = sequence::run(
+        &mut renderer,
+        &mut scene,
+        &mut gpu_scene,
+        &options,
+        &spec,
+        |r| {
+            if r.skipped {
+                eprintln!(
+                    "frame {} already there: {}",
+                    r.job.frame,
+                    r.output.display()
+                );
+            } else {
+                eprintln!(
+                    "frame {} (t = {:.3} s) {:.0} ms: wrote {}",
+                    r.job.frame,
+                    r.time,
+                    r.render_ms + r.write_ms,
+                    r.output.display()
+                );
+            }
+            if metrics {
+                use std::io::Write;
+                let mut out = std::io::stdout().lock();
+                let _ = writeln!(out, "{}", r.json(&spec));
+                let _ = out.flush();
+            }
+        },
+    )?;
+    let rendered = reports.iter().filter(|r| !r.skipped).count();
+    eprintln!(
+        "done: {rendered} rendered, {} already there",
+        reports.len() - rendered
+    );
+    if let Some(video) = &b.video {
+        let status = sequence::video_command(&spec, video)
+            .status()
+            .map_err(|e| anyhow::anyhow!("could not run ffmpeg: {e}"))?;
+        if !status.success() {
+            anyhow::bail!(
+                "ffmpeg failed ({status}) making '{}' from '{}'",
+                video.display(),
+                spec.output.as_str()
+            );
+        }
+        eprintln!("wrote {}", video.display());
     }
     Ok(())
 }
@@ -813,6 +1090,32 @@ fn checked_size(text: &str) -> anyhow::Result<(u32, u32)> {
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
     if args.startup {
         return run_startup_bench(&args);
+    }
+    if args.temporal {
+        let mut config = if args.quick {
+            weft::bench::temporal::TemporalConfig::quick()
+        } else {
+            weft::bench::temporal::TemporalConfig::default()
+        };
+        if args.size != "960x540" {
+            config.size = checked_size(&args.size)?;
+        }
+        if let Some(f) = args.frames {
+            config.frames = f;
+        }
+        config.degrees_per_frame = args.temporal_step;
+        config.out = args.out.clone();
+        config.check()?;
+        let ctx = open_device(args.device.as_deref(), false)?;
+        let mut renderer = Renderer::new(ctx)?;
+        let report = weft::bench::temporal::run(&mut renderer, &config)?;
+        println!("{}", report.table());
+        println!(
+            "wrote {} and {}",
+            config.out.join("temporal.csv").display(),
+            config.out.join("bench-temporal.png").display()
+        );
+        return Ok(());
     }
     if args.ibl {
         let size = checked_size(&args.size)?;
