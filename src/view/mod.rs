@@ -446,7 +446,7 @@ impl App {
         self.last_frame = Some(start);
 
         // The panel, and what it changed.
-        let (full, mut actions) = {
+        let (full, mut actions, left) = {
             let r = self.running.as_mut().expect("started");
             let raw = r.egui_state.take_egui_input(&r.window);
             let mut actions = Vec::new();
@@ -461,12 +461,13 @@ impl App {
                 CameraMode::Scene(i) => Some(i),
                 CameraMode::Orbit => None,
             };
+            let mut left = 0.0;
             let full = r.egui_ctx.run(raw, |ctx| {
-                panel::show(ctx, ui, options, scene, camera, &stats, &mut actions)
+                left = panel::show(ctx, ui, options, scene, camera, &stats, &mut actions)
             });
             r.egui_state
                 .handle_platform_output(&r.window, full.platform_output.clone());
-            (full, actions)
+            (full, actions, left)
         };
         actions.append(&mut self.ui.take_key_actions());
         self.apply(actions);
@@ -474,8 +475,10 @@ impl App {
         let primitives = r.egui_ctx.tessellate(full.shapes, full.pixels_per_point);
         let ui_ms = start.elapsed().as_secs_f64() * 1e3;
 
+        // The scene is rendered in the part of the window right of the panel.
         let (w, h) = r.presenter.extent();
-        let options = self.frame_options(w, h)?;
+        let x0 = ((left * full.pixels_per_point).round().max(0.0) as u32).min(w.saturating_sub(1));
+        let options = self.frame_options(w - x0, h)?;
         let r = self.running.as_mut().expect("started");
         let t = Instant::now();
         let (frame, ldr) = r
@@ -493,7 +496,7 @@ impl App {
             pixels_per_point: full.pixels_per_point,
         };
         let t = Instant::now();
-        let presented = r.presenter.present(ldr, Some(panel), shot)?;
+        let presented = r.presenter.present(ldr, x0, Some(panel), shot)?;
         let present_ms = t.elapsed().as_secs_f64() * 1e3;
         if !presented.presented {
             let size = r.window.inner_size();
@@ -511,7 +514,11 @@ impl App {
                 crate::render::write_png(&path, sw, sh, &pixels)?;
                 self.ui.status = Some((format!("wrote {}", path.display()), false));
                 if auto_shot {
-                    eprintln!("weft view: wrote {} ({sw}x{sh})", path.display());
+                    eprintln!(
+                        "weft view: wrote {} ({sw}x{sh}; the scene {}x{sh} from x {x0})",
+                        path.display(),
+                        w - x0
+                    );
                     event_loop.exit();
                 }
             }
@@ -532,7 +539,7 @@ impl App {
         if let Some(n) = self.bench_frames {
             if self.presented >= BENCH_WARMUP + n {
                 let timed = &self.figures[self.figures.len() - n as usize..];
-                self.report = Some(bench_report(timed, w, h));
+                self.report = Some(bench_report(timed, w - x0, h));
                 event_loop.exit();
             }
         }

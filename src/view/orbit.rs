@@ -39,9 +39,11 @@ impl Orbit {
         }
     }
 
-    /// The orbit that frames the whole scene (its bounding sphere) from the current direction.
+    /// The orbit that frames the scene (the bounding sphere of what casts shadows, so that a
+    /// staged ground that only receives does not shrink the subject; all of it when nothing
+    /// casts) from the current direction.
     pub fn framed(&self, scene: &Scene) -> Orbit {
-        let Some(b) = scene.bounds() else {
+        let Some(b) = scene.caster_bounds().or_else(|| scene.bounds()) else {
             return *self;
         };
         let radius = ((b.max - b.min).length() * 0.5).max(1e-3);

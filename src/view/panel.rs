@@ -95,7 +95,8 @@ fn combo<T: PartialEq + Copy>(
     *value != before
 }
 
-/// Lays out the panel. `camera`: Some(the scene camera shown) or None when orbiting.
+/// Lays out the panel and returns the left edge, in points, of the area it leaves for the scene
+/// (0 when hidden). `camera`: Some(the scene camera shown) or None when orbiting.
 pub fn show(
     ctx: &egui::Context,
     state: &mut UiState,
@@ -104,9 +105,9 @@ pub fn show(
     camera: Option<Option<usize>>,
     stats: &Stats,
     actions: &mut Vec<Action>,
-) {
+) -> f32 {
     if !state.show {
-        return;
+        return 0.0;
     }
     egui::SidePanel::left("weft-panel")
         .resizable(false)
@@ -151,6 +152,7 @@ pub fn show(
                 ui.small("drag: orbit · shift/right drag: pan · wheel: zoom · F: frame · C: next camera · Tab: panel · P/F12: screenshot · drop a .gltf/.glb to open");
             });
         });
+    ctx.available_rect().left()
 }
 
 fn timings(ui: &mut egui::Ui, stats: &Stats) {

@@ -326,12 +326,13 @@ impl Presenter {
     }
 
     /// Shows `scene` (the renderer's tonemapped image, in `ColorAttachment` usage, as the tonemap
-    /// pass leaves it) with the panel over it, and with `screenshot` reads the presented image
-    /// back. `scene` is copied before this returns, so the renderer may draw the next frame into
-    /// it at once.
+    /// pass leaves it) from column `x0` of the window on (the panel's width; the rest is cleared),
+    /// with the panel over it, and with `screenshot` reads the presented image back. `scene` is
+    /// copied before this returns, so the renderer may draw the next frame into it at once.
     pub fn present(
         &mut self,
         scene: &Image,
+        x0: u32,
         panel: Option<PanelDraw>,
         screenshot: bool,
     ) -> crate::Result<Presented> {
@@ -478,6 +479,30 @@ impl Presenter {
             (L::UNDEFINED, S::ALL_TRANSFER, A::NONE),
             (L::TRANSFER_DST_OPTIMAL, S::ALL_TRANSFER, A::TRANSFER_WRITE),
         );
+        let clear = vk::ClearColorValue {
+            float32: [0.0, 0.0, 0.0, 1.0],
+        };
+        unsafe {
+            dev.cmd_clear_color_image(
+                cmd,
+                image,
+                L::TRANSFER_DST_OPTIMAL,
+                &clear,
+                &[color_range()],
+            )
+        };
+        let clear_done = [vk::MemoryBarrier2::default()
+            .src_stage_mask(S::ALL_TRANSFER)
+            .src_access_mask(A::TRANSFER_WRITE)
+            .dst_stage_mask(S::ALL_TRANSFER)
+            .dst_access_mask(A::TRANSFER_WRITE)];
+        unsafe {
+            dev.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().memory_barriers(&clear_done),
+            )
+        };
+        let x0 = x0.min(extent.width.saturating_sub(1));
         let (sw, shh) = source.extent();
         let blit = vk::ImageBlit::default()
             .src_subresource(color_layers())
@@ -491,7 +516,11 @@ impl Presenter {
             ])
             .dst_subresource(color_layers())
             .dst_offsets([
-                vk::Offset3D::default(),
+                vk::Offset3D {
+                    x: x0 as i32,
+                    y: 0,
+                    z: 0,
+                },
                 vk::Offset3D {
                     x: extent.width as i32,
                     y: extent.height as i32,
