@@ -4,8 +4,50 @@
 use crate::fabric::FabricParams;
 use crate::render::plan::weave_key;
 use crate::render::{GpuScene, Renderer};
-use crate::scene::Scene;
+use crate::env::LightsMode;
+use crate::scene::{LoadOptions, Scene};
 use crate::Error;
+
+use super::SceneSource;
+
+/// Loads a scene for the viewer (a file dropped on the window, another variant) and stages it as
+/// `weft render` does (`env::stage`: the default key light and ground when it has no lights).
+/// An error names the file and leaves the caller's current scene as it is.
+pub fn load(
+    source: &SceneSource,
+    variant: Option<String>,
+    lights: LightsMode,
+    env_rotation: f32,
+    own_env: bool,
+) -> crate::Result<Scene> {
+    let load = LoadOptions {
+        variant: variant.clone(),
+    };
+    let mut scene = match source {
+        SceneSource::File(path) => {
+            let ext = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(str::to_ascii_lowercase);
+            if !matches!(ext.as_deref(), Some("gltf") | Some("glb")) {
+                return Err(Error::input(format!(
+                    "{} is not a .gltf or .glb file: drop a glTF scene on the window",
+                    path.display()
+                )));
+            }
+            crate::scene::load_with(path, &load)?
+        }
+        SceneSource::Builtin if variant.is_none() => crate::scene::default_scene(),
+        SceneSource::Builtin => crate::scene::load_slice_with(
+            crate::scene::DEFAULT_SCENE_GLB,
+            "built-in default scene",
+            None,
+            &load,
+        )?,
+    };
+    crate::env::stage(&mut scene, lights, env_rotation, own_env);
+    Ok(scene)
+}
 
 /// What an edit of a material needs on the GPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

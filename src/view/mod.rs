@@ -22,7 +22,7 @@ use winit::window::{Window, WindowId};
 
 use crate::env::{EnvLighting, Environment, LightsMode};
 use crate::render::{GpuScene, PassTiming, RenderOptions, Renderer};
-use crate::scene::{LoadOptions, Scene};
+use crate::scene::Scene;
 use crate::vk::{Context, ContextOptions, PanelDraw, Presenter, FRAMES_IN_FLIGHT};
 use crate::Error;
 
@@ -313,38 +313,13 @@ impl App {
     /// Loads `source` (with `variant`) and stages it as the first scene was; on success it
     /// replaces the scene, on failure the old scene stays and the error is returned.
     fn open(&mut self, source: SceneSource, variant: Option<String>) -> crate::Result<()> {
-        let load = LoadOptions {
-            variant: variant.clone(),
-        };
-        let mut scene = match &source {
-            SceneSource::File(path) => {
-                let ext = path
-                    .extension()
-                    .and_then(|e| e.to_str())
-                    .map(str::to_ascii_lowercase);
-                if !matches!(ext.as_deref(), Some("gltf") | Some("glb")) {
-                    return Err(Error::input(format!(
-                        "{} is not a .gltf or .glb file: drop a glTF scene on the window",
-                        path.display()
-                    )));
-                }
-                crate::scene::load_with(path, &load)?
-            }
-            SceneSource::Builtin if variant.is_none() => crate::scene::default_scene(),
-            SceneSource::Builtin => crate::scene::load_slice_with(
-                crate::scene::DEFAULT_SCENE_GLB,
-                "built-in default scene",
-                None,
-                &load,
-            )?,
-        };
         let rotation = self
             .options
             .environment
             .as_ref()
             .map(|e| e.rotation)
             .unwrap_or(0.0);
-        crate::env::stage(&mut scene, self.lights, rotation, self.own_env);
+        let scene = controls::load(&source, variant, self.lights, rotation, self.own_env)?;
         if let Some(r) = &self.running {
             let gpu = r.renderer.upload(&scene)?;
             self.running.as_mut().expect("checked").gpu = gpu;
