@@ -461,12 +461,13 @@ fn run_view(args: ViewArgs) -> anyhow::Result<()> {
         None => weft::view::SceneSource::Builtin,
     };
     let lights = weft::env::LightsMode::parse(&args.scene.lights)?;
-    let own_env = !matches!(args.scene.env.as_str(), "none" | "studio");
+    let env_file =
+        (!matches!(args.scene.env.as_str(), "none" | "studio")).then(|| args.scene.env.clone());
     let report = weft::view::run(weft::view::ViewOptions {
         scene,
         source,
         lights,
-        own_env,
+        env_file,
         options,
         context: ContextOptions {
             validate: args.validate,

@@ -341,10 +341,17 @@ fn dropped_files_load_or_say_why() {
             false,
         )
     };
-    let e = load("tests/data/env/lebombo_1k.hdr").unwrap_err().to_string();
+    let e = load("tests/data/env/lebombo_1k.hdr")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("not a .gltf or .glb"), "{e}");
-    let e = load("tests/malformed/broken-json.gltf").unwrap_err().to_string();
-    assert!(e.contains("broken-json.gltf"), "the error names the file: {e}");
+    let e = load("tests/malformed/broken-json.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("broken-json.gltf"),
+        "the error names the file: {e}"
+    );
     let e = load("no/such/file.glb").unwrap_err().to_string();
     assert!(e.contains("no/such/file.glb"), "{e}");
     // A real file loads, and is staged: a file without lights gets the default key light.
@@ -352,7 +359,10 @@ fn dropped_files_load_or_say_why() {
     if Path::new(box_path).exists() {
         let scene = load(box_path).unwrap();
         assert!(!scene.draws.is_empty());
-        assert!(!scene.lights.is_empty(), "staged with the default key light");
+        assert!(
+            !scene.lights.is_empty(),
+            "staged with the default key light"
+        );
     } else {
         println!("({box_path} not present: the real-file half of this test is skipped)");
     }

@@ -1,10 +1,10 @@
 //! What the panel edits, as plain functions: the panel calls these, and so do the tests
 //! (tests/view.rs changes a fabric parameter through [`set_fabric`] and [`apply`]).
 
+use crate::env::LightsMode;
 use crate::fabric::FabricParams;
 use crate::render::plan::weave_key;
 use crate::render::{GpuScene, Renderer};
-use crate::env::LightsMode;
 use crate::scene::{LoadOptions, Scene};
 use crate::Error;
 

@@ -42,7 +42,8 @@ pub struct ViewOptions {
     pub source: SceneSource,
     /// How a scene loaded later (a variant, a dropped file) is staged.
     pub lights: LightsMode,
-    pub own_env: bool,
+    /// The environment is the user's own (`--env FILE`): this file.
+    pub env_file: Option<String>,
     /// The first frame's options (size = the window's inner size; camera as for render).
     pub options: RenderOptions,
     pub context: ContextOptions,
@@ -210,12 +211,13 @@ impl App {
             .camera(o.options.camera)
             .unwrap_or_else(|_| o.scene.auto_camera());
         let orbit = Orbit::from_camera(&cam, &o.scene);
-        let ui = panel::UiState::new(o.panel, &o.scene, &o.options);
+        let own_env = o.env_file.is_some();
+        let ui = panel::UiState::new(o.panel, &o.scene, &o.options, o.env_file);
         App {
             scene: o.scene,
             source: o.source,
             lights: o.lights,
-            own_env: o.own_env,
+            own_env,
             options: o.options,
             context: o.context,
             screenshot: o.screenshot,
@@ -301,7 +303,7 @@ impl App {
         Ok(o)
     }
 
-    fn to_orbit(&mut self) {
+    fn switch_to_orbit(&mut self) {
         if let CameraMode::Scene(i) = self.camera {
             if let Ok(cam) = self.scene.camera(i) {
                 self.orbit = Orbit::from_camera(&cam, &self.scene);
@@ -367,7 +369,7 @@ impl App {
         for a in actions {
             let result: crate::Result<Option<String>> = match a {
                 panel::Action::Frame => {
-                    self.to_orbit();
+                    self.switch_to_orbit();
                     self.orbit = self.orbit.framed(&self.scene);
                     Ok(None)
                 }
@@ -384,7 +386,10 @@ impl App {
                 panel::Action::Variant(v) => self
                     .open(self.source.clone(), v.clone())
                     .map(|_| Some(format!("variant {}", v.as_deref().unwrap_or("(default)")))),
-                panel::Action::Environment(choice) => self.set_environment(&choice).map(|_| None),
+                panel::Action::Environment(choice) => self.set_environment(&choice).map(|_| {
+                    self.ui.env = choice;
+                    None
+                }),
                 panel::Action::Fabric(material, params) => {
                     match controls::set_fabric(&mut self.scene, material, &params) {
                         Ok(update) => match &mut self.running {
@@ -538,7 +543,7 @@ impl App {
                         CameraMode::Orbit => CameraMode::Scene(if n > 0 { Some(0) } else { None }),
                     };
                     if next == CameraMode::Orbit {
-                        self.to_orbit();
+                        self.switch_to_orbit();
                     }
                     self.camera = next;
                 }
@@ -689,7 +694,7 @@ impl ApplicationHandler for App {
                     let (dx, dy) = ((x - px) as f32, (y - py) as f32);
                     let h = r.window.inner_size().height as f32;
                     if self.rotating || self.panning {
-                        self.to_orbit();
+                        self.switch_to_orbit();
                         if self.rotating {
                             self.orbit.rotate(dx, dy, h);
                         } else {
@@ -706,7 +711,7 @@ impl ApplicationHandler for App {
                     MouseScrollDelta::LineDelta(_, y) => y,
                     MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
                 };
-                self.to_orbit();
+                self.switch_to_orbit();
                 self.orbit.zoom(steps);
                 self.dirty = true;
             }

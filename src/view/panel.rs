@@ -32,7 +32,7 @@ pub struct UiState {
     /// The last message: text, and whether it is an error.
     pub status: Option<(String, bool)>,
     material: Option<usize>,
-    env: EnvChoice,
+    pub env: EnvChoice,
     env_path: String,
     samples: u32,
     keys: Vec<Action>,
@@ -44,10 +44,17 @@ pub struct Stats<'a> {
 }
 
 impl UiState {
-    pub fn new(show: bool, scene: &Scene, options: &RenderOptions) -> UiState {
-        let env = match &options.environment {
-            None => EnvChoice::None,
-            Some(_) => EnvChoice::Studio,
+    /// `env_file`: the environment's file when it is not the built-in studio.
+    pub fn new(
+        show: bool,
+        scene: &Scene,
+        options: &RenderOptions,
+        env_file: Option<String>,
+    ) -> UiState {
+        let env = match (&options.environment, env_file) {
+            (None, _) => EnvChoice::None,
+            (Some(_), Some(f)) => EnvChoice::File(f),
+            (Some(_), None) => EnvChoice::Studio,
         };
         let mut s = UiState {
             show,
@@ -116,14 +123,6 @@ pub fn show(
             egui::ScrollArea::vertical().show(ui, |ui| {
                 ui.heading("weft view");
                 ui.label(&scene.source);
-                if let Some((msg, error)) = &state.status {
-                    let color = if *error {
-                        egui::Color32::from_rgb(255, 110, 110)
-                    } else {
-                        egui::Color32::from_rgb(150, 220, 150)
-                    };
-                    ui.colored_label(color, msg);
-                }
                 timings(ui, stats);
                 ui.separator();
                 render_controls(ui, state, options);
@@ -149,6 +148,16 @@ pub fn show(
                 ui.separator();
                 fabric(ui, state, scene, actions);
                 ui.separator();
+                // Last, so that a message appearing does not move the controls under the cursor.
+                if let Some((msg, error)) = &state.status {
+                    let color = if *error {
+                        egui::Color32::from_rgb(255, 110, 110)
+                    } else {
+                        egui::Color32::from_rgb(150, 220, 150)
+                    };
+                    ui.colored_label(color, msg);
+                    ui.separator();
+                }
                 ui.small("drag: orbit · shift/right drag: pan · wheel: zoom · F: frame · C: next camera · Tab: panel · P/F12: screenshot · drop a .gltf/.glb to open");
             });
         });
@@ -237,11 +246,8 @@ fn environment(
     o: &mut RenderOptions,
     actions: &mut Vec<Action>,
 ) {
-    let before = state.env.clone();
-    let file = match &state.env {
-        EnvChoice::File(p) => p.clone(),
-        _ => state.env_path.clone(),
-    };
+    // Edited as a copy: the viewer sets `state.env` once the environment has loaded.
+    let mut choice = state.env.clone();
     let label = |c: &EnvChoice| match c {
         EnvChoice::None => "none".to_string(),
         EnvChoice::Studio => "studio".to_string(),
@@ -250,18 +256,17 @@ fn environment(
     egui::ComboBox::from_label("environment")
         .selected_text(label(&state.env))
         .show_ui(ui, |ui| {
-            ui.selectable_value(&mut state.env, EnvChoice::Studio, "studio");
-            ui.selectable_value(&mut state.env, EnvChoice::None, "none");
+            ui.selectable_value(&mut choice, EnvChoice::Studio, "studio");
+            ui.selectable_value(&mut choice, EnvChoice::None, "none");
         });
     ui.horizontal(|ui| {
         ui.add(egui::TextEdit::singleline(&mut state.env_path).hint_text(".hdr / .exr path"));
         if ui.button("load").clicked() && !state.env_path.trim().is_empty() {
-            state.env = EnvChoice::File(state.env_path.trim().to_string());
+            choice = EnvChoice::File(state.env_path.trim().to_string());
         }
     });
-    let _ = file;
-    if state.env != before {
-        actions.push(Action::Environment(state.env.clone()));
+    if choice != state.env {
+        actions.push(Action::Environment(choice));
     }
     if let Some(e) = o.environment.as_mut() {
         ui.add(egui::Slider::new(&mut e.rotation, 0.0..=360.0).text("rotation (°)"));

@@ -355,6 +355,12 @@ impl Presenter {
         out.slot_wait_ms = t.elapsed().as_secs_f64() * 1e3;
         if let Some(egui) = self.egui.as_mut() {
             let free = std::mem::take(&mut self.slots[slot_index].free);
+            if !free.is_empty() {
+                // The other slot's submission, in flight, may still draw with them.
+                let fences: Vec<vk::Fence> = self.slots.iter().map(|s| s.fence).collect();
+                unsafe { dev.wait_for_fences(&fences, true, u64::MAX) }
+                    .map_err(vkerr("vkWaitForFences"))?;
+            }
             egui.free_textures(&free)
                 .map_err(|e| Error::device(format!("freeing the panel's textures failed: {e}")))?;
         }
