@@ -213,19 +213,30 @@ fn panel_is_drawn_left_of_the_scene() {
 
 #[test]
 fn no_display_is_a_clean_error() {
-    let out = Command::new(WEFT)
-        .arg("view")
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("running weft view");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "exit code; stderr:\n{stderr}");
-    assert!(
-        stderr.contains("no display: use weft render"),
-        "stderr:\n{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "stderr:\n{stderr}");
+    // No DISPLAY at all, and a DISPLAY no X server listens on.
+    for display in [None, Some(":4711")] {
+        let mut cmd = Command::new(WEFT);
+        cmd.arg("view").env_remove("WAYLAND_DISPLAY");
+        match display {
+            Some(d) => cmd.env("DISPLAY", d),
+            None => cmd.env_remove("DISPLAY"),
+        };
+        let out = cmd.output().expect("running weft view");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{display:?}: exit code; stderr:\n{stderr}"
+        );
+        assert!(
+            stderr.contains("no display: use weft render"),
+            "{display:?}: stderr:\n{stderr}"
+        );
+        assert!(
+            !stderr.contains("panicked"),
+            "{display:?}: stderr:\n{stderr}"
+        );
+    }
 }
 
 /// Renders `scene` with `gpu`, returning the 8-bit image and, per pixel, whether a fabric

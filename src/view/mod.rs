@@ -126,7 +126,13 @@ pub fn run(options: ViewOptions) -> crate::Result<Option<BenchReport>> {
             "DISPLAY is not set"
         }));
     }
-    let event_loop = EventLoop::new().map_err(|e| no_display(&e.to_string()))?;
+    // winit's error names its own source file, not the display: say which display failed.
+    let event_loop = EventLoop::new().map_err(|_| {
+        no_display(&format!(
+            "cannot connect to the X server at DISPLAY={}",
+            std::env::var("DISPLAY").unwrap_or_default()
+        ))
+    })?;
     event_loop.set_control_flow(ControlFlow::Wait);
     let mut app = App::new(options);
     event_loop
