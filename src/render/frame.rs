@@ -1246,11 +1246,13 @@ impl Renderer {
         } else {
             Vec::new()
         };
-        timings.push(PassTiming {
-            name: "readback",
-            gpu_ms: None,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-        });
+        if readback {
+            timings.push(PassTiming {
+                name: "readback",
+                gpu_ms: None,
+                wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            });
+        }
         drop(pool);
         ctx.check_validation()?;
         Ok(Frame {
