@@ -17,6 +17,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod sheet;
+pub mod view;
 #[allow(unsafe_code)]
 pub mod vk;
 

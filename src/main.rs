@@ -43,6 +43,8 @@ enum Command {
     /// Write a copy of a .gltf/.glb with the woven fabric (WEFT_materials_fabric) on chosen
     /// materials, a preset's parameters, the thread pitch in world units, and a sheen fallback.
     Fabric(fabric_cmd::FabricArgs),
+    /// An interactive window on the same renderer: orbit camera, live controls (docs/viewer.md).
+    View(ViewArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
     Shaders {
         /// Directory to write the package into (created if missing).
@@ -274,6 +276,33 @@ fn render_after_help() -> String {
 }
 
 #[derive(Args)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Exposure in EV (stops), as for render (the panel changes it live).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Turn on the Vulkan validation layer; any message it reports ends the viewer with an error.
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name. Also WEFT_DEVICE.
+    #[arg(long)]
+    device: Option<String>,
+    /// Write the window's content to this PNG after --after frames, then exit.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Frames to present before --screenshot.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    after: u32,
+    /// Start with the panel hidden (Tab shows it): the window then shows exactly the render.
+    #[arg(long)]
+    no_panel: bool,
+    /// Time this many frames of the frame loop (after 3 warm-up frames), print a table, exit.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    bench_frames: Option<u32>,
+}
+
+#[derive(Args)]
 struct SheetArgs {
     /// .gltf/.glb files, or folders to search recursively.
     #[arg(required = true)]
@@ -426,6 +455,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => run_compare(args),
         Command::Sheet(args) => run_sheet(args),
         Command::Fabric(args) => fabric_cmd::run(args),
+        Command::View(args) => run_view(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -591,6 +621,42 @@ fn pose_scene(scene: &mut Scene, animation: Option<&str>, time: Option<f32>) -> 
         None => 0,
     };
     scene.pose(index, time.unwrap_or(0.0))?;
+    Ok(())
+}
+
+fn run_view(args: ViewArgs) -> anyhow::Result<()> {
+    let device = args
+        .device
+        .as_deref()
+        .map(DeviceChoice::parse)
+        .unwrap_or_else(DeviceChoice::from_env);
+    let (scene, mut options) = load_scene(&args.scene)?;
+    options.exposure = args.exposure;
+    options.validate()?;
+    let source = match &args.scene.scene {
+        Some(p) => weft::view::SceneSource::File(p.clone()),
+        None => weft::view::SceneSource::Builtin,
+    };
+    let lights = weft::env::LightsMode::parse(&args.scene.lights)?;
+    let env_file =
+        (!matches!(args.scene.env.as_str(), "none" | "studio")).then(|| args.scene.env.clone());
+    let report = weft::view::run(weft::view::ViewOptions {
+        scene,
+        source,
+        lights,
+        env_file,
+        options,
+        context: ContextOptions {
+            validate: args.validate,
+            device,
+        },
+        screenshot: args.screenshot.map(|p| (p, args.after)),
+        panel: !args.no_panel,
+        bench_frames: args.bench_frames,
+    })?;
+    if let Some(r) = report {
+        print!("{}", r.table());
+    }
     Ok(())
 }
 

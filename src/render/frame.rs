@@ -840,6 +840,76 @@ impl Renderer {
         gpu: &GpuScene,
         options: &RenderOptions,
     ) -> crate::Result<Frame> {
+        self.render_frame_impl(scene, gpu, options, true)
+    }
+
+    /// As [`Renderer::render_frame`], without the readback: the tonemapped image stays on the
+    /// device, returned in `ColorAttachment` usage (`weft view` copies it to the window). The
+    /// returned frame's `ldr` and `hdr` are empty.
+    pub fn render_frame_to_target(
+        &mut self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: &RenderOptions,
+    ) -> crate::Result<(Frame, &Image)> {
+        let frame = self.render_frame_impl(scene, gpu, options, false)?;
+        let ldr = &self
+            .targets
+            .as_ref()
+            .expect("render_frame_impl made them")
+            .ldr;
+        Ok((frame, ldr))
+    }
+
+    /// Rewrites the material and fabric records of an uploaded scene from `scene` (colours,
+    /// exponents, roughness...: `weft view`'s live parameters), without touching geometry,
+    /// textures or weave textures. Only for changes that keep every material's weave (its
+    /// `weave_key`) and repeat: anything else needs [`Renderer::upload`] again.
+    pub fn update_material_records(&self, scene: &Scene, gpu: &mut GpuScene) -> crate::Result<()> {
+        let mut fabric_bytes: Vec<u8> = Vec::new();
+        let mut fabric_index = Vec::new();
+        for m in &scene.materials {
+            match &m.fabric {
+                Some(f) => {
+                    fabric_index.push(Some(fabric_bytes.len() / 80));
+                    fabric_bytes.extend_from_slice(&f.to_gpu().to_bytes());
+                }
+                None => fabric_index.push(None),
+            }
+        }
+        if fabric_bytes.is_empty() {
+            fabric_bytes = vec![0; 80]; // a storage buffer cannot be empty
+        }
+        let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
+            vec![GpuMaterial::new(&Default::default(), None)]
+        } else {
+            scene
+                .materials
+                .iter()
+                .zip(&fabric_index)
+                .map(|(m, f)| GpuMaterial::new(m, *f))
+                .collect()
+        };
+        if materials.len() as u32 != gpu.material_count {
+            return Err(Error::input(
+                "update_material_records: the scene has a different number of materials than was uploaded",
+            ));
+        }
+        let ctx = &self.ctx;
+        gpu.fabrics =
+            ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+        gpu.materials =
+            ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
+        Ok(())
+    }
+
+    fn render_frame_impl(
+        &mut self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: &RenderOptions,
+        readback: bool,
+    ) -> crate::Result<Frame> {
         options.validate()?;
         let plan = Plan::new(scene, options);
         let mut timings = Vec::new();
@@ -1181,10 +1251,14 @@ impl Renderer {
         }
 
         let start = Instant::now();
-        let ldr = read_image(&ctx, &targets.ldr, Usage::ColorAttachment, 4)?;
+        let ldr = if readback {
+            read_image(&ctx, &targets.ldr, Usage::ColorAttachment, 4)?
+        } else {
+            Vec::new()
+        };
         // The HDR target only when asked for (EXR output, tests, the bench): the PNG needs only
         // the 8-bit target.
-        let hdr: Vec<f32> = if options.read_hdr {
+        let hdr: Vec<f32> = if readback && options.read_hdr {
             let hdr_half = read_image(&ctx, &targets.hdr, Usage::FragmentRead, 8)?;
             hdr_half
                 .chunks_exact(2)
@@ -1193,11 +1267,13 @@ impl Renderer {
         } else {
             Vec::new()
         };
-        timings.push(PassTiming {
-            name: "readback",
-            gpu_ms: None,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-        });
+        if readback {
+            timings.push(PassTiming {
+                name: "readback",
+                gpu_ms: None,
+                wall_ms: start.elapsed().as_secs_f64() * 1e3,
+            });
+        }
         drop(pool);
         ctx.check_validation()?;
         Ok(Frame {

@@ -438,6 +438,44 @@ impl<'s> Cmd<'s> {
         self.transition(image, Usage::TransferDst, to, Some((levels - 1, 1)));
     }
 
+    /// Copies mip 0 of `src` (in `TransferSrc` usage) into mip 0 of `dst` (in `TransferDst`) bit
+    /// for bit: the formats must have the same texel size (e.g. RGBA8 sRGB into RGBA8 UNORM).
+    ///
+    /// # Panics
+    /// If the two level-0 sizes or texel sizes differ.
+    pub fn copy_image(&mut self, src: &'s Image, dst: &'s Image) {
+        assert_eq!(src.extent(), dst.extent(), "copy_image: sizes differ");
+        assert_eq!(
+            texel_bytes(src.desc.format),
+            texel_bytes(dst.desc.format),
+            "copy_image: texel sizes differ"
+        );
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: src.aspect(),
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let region = vk::ImageCopy::default()
+            .src_subresource(layers)
+            .dst_subresource(layers)
+            .extent(vk::Extent3D {
+                width: src.desc.width,
+                height: src.desc.height,
+                depth: 1,
+            });
+        unsafe {
+            self.device().cmd_copy_image(
+                self.raw,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
     /// Copies mip `level` of `src` (in `TransferSrc` usage) into the same level of `dst` (in
     /// `TransferDst`), converting the format; both levels must have the same size.
     pub fn blit_level(&mut self, src: &'s Image, dst: &'s Image, level: u32) {

@@ -86,6 +86,9 @@ pub(crate) struct Shared {
     pub(crate) queue_lock: Mutex<()>,
     pub(crate) allocator: Mutex<Option<Allocator>>,
     pub(crate) info: DeviceInfo,
+    /// The physical device and the queue's family (a window's surface is checked against them).
+    pub(crate) physical: vk::PhysicalDevice,
+    pub(crate) queue_family: u32,
     pub(crate) limits: vk::PhysicalDeviceLimits,
     /// Boxed so the debug callback's user pointer stays valid for the instance's whole life.
     messages: Box<Mutex<Vec<String>>>,
@@ -165,6 +168,15 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
 
 impl Context {
     pub fn new(options: &ContextOptions) -> crate::Result<Context> {
+        Context::new_for_display(options, None)
+    }
+
+    /// As [`Context::new`], able to present to windows of `display` (`weft view`): the instance
+    /// gets the surface extensions the display needs, the device VK_KHR_swapchain.
+    pub fn new_for_display(
+        options: &ContextOptions,
+        display: Option<raw_window_handle::RawDisplayHandle>,
+    ) -> crate::Result<Context> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             no_driver(&format!(
                 "the Vulkan loader libvulkan.so.1 could not be loaded: {e}"
@@ -186,6 +198,14 @@ impl Context {
             }
             layers.push(VALIDATION_LAYER.as_ptr());
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        if let Some(display) = display {
+            let needed = ash_window::enumerate_required_extensions(display).map_err(|e| {
+                Error::device(format!(
+                    "this display needs Vulkan surface extensions the driver does not offer ({e}): install a Vulkan driver with window-system support (mesa-vulkan-drivers), or use weft render"
+                ))
+            })?;
+            extensions.extend_from_slice(needed);
         }
 
         let app = vk::ApplicationInfo::default()
@@ -304,9 +324,13 @@ impl Context {
         let mut features = vk::PhysicalDeviceFeatures2::default()
             .features(base_features)
             .push_next(&mut features13);
-        let device_info = vk::DeviceCreateInfo::default()
+        let device_extensions = [ash::khr::swapchain::NAME.as_ptr()];
+        let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .push_next(&mut features);
+        if display.is_some() {
+            device_info = device_info.enabled_extension_names(&device_extensions);
+        }
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .map_err(vkerr("vkCreateDevice"))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -353,6 +377,8 @@ impl Context {
                 queue_lock: Mutex::new(()),
                 allocator: Mutex::new(Some(allocator)),
                 info,
+                physical,
+                queue_family,
                 limits,
                 messages,
                 anisotropy,

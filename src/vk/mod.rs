@@ -12,6 +12,7 @@ mod cmd;
 mod context;
 mod pipeline;
 mod resources;
+mod swapchain;
 
 pub use ash::vk::Format;
 pub use ash::vk::{BufferUsageFlags, ImageUsageFlags};
@@ -22,6 +23,7 @@ pub use pipeline::{
     Resource, SetLayout, Stages, VertexLayout,
 };
 pub use resources::{Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler};
+pub use swapchain::{PanelDraw, Presented, Presenter, FRAMES_IN_FLIGHT};
 
 /// The pipeline stage a shader module is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,0 +1,380 @@
+//! `weft view`: the window shows what `weft render` renders (under Xvfb, lavapipe, validation on),
+//! the panel is drawn, and a fabric edit made through the panel's code changes the fabric's
+//! pixels and no others.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use weft::render::{RenderOptions, Renderer};
+use weft::view::controls::{self, MaterialUpdate};
+
+const WEFT: &str = env!("CARGO_BIN_EXE_weft");
+
+/// `xvfb-run` (package xvfb, installed by tools/setup), or None: the window tests then say they
+/// are skipped.
+fn xvfb_run() -> Option<&'static str> {
+    let found = Command::new("sh")
+        .args(["-c", "command -v xvfb-run"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    found.then_some("xvfb-run")
+}
+
+fn device() -> String {
+    std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into())
+}
+
+/// Runs `weft ARGS` under a fresh Xvfb server, returning its stderr; panics with its output
+/// when it fails.
+fn weft_in_xvfb(xvfb: &str, args: &[&str]) -> String {
+    let out = Command::new(xvfb)
+        .args(["-a", "-s", "-screen 0 1024x768x24", WEFT])
+        .args(args)
+        .env("WEFT_DEVICE", device())
+        .output()
+        .expect("running xvfb-run");
+    assert!(
+        out.status.success(),
+        "weft {args:?} under Xvfb failed ({}):\n{}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn weft_render(args: &[&str]) {
+    let out = Command::new(WEFT)
+        .arg("render")
+        .args(args)
+        .env("WEFT_DEVICE", device())
+        .output()
+        .expect("running weft render");
+    assert!(
+        out.status.success(),
+        "weft render {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn rgb(path: &Path) -> image::RgbImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8()
+}
+
+/// Mean FLIP of `test` against `reference`, over the columns from `x0` on.
+fn flip_mean(reference: &image::RgbImage, test: &image::RgbImage, x0: u32) -> f64 {
+    let (w, h) = reference.dimensions();
+    let crop = |img: &image::RgbImage| {
+        image::imageops::crop_imm(img, x0, 0, w - x0, h)
+            .to_image()
+            .into_raw()
+    };
+    let a = nv_flip::FlipImageRgb8::with_data(w - x0, h, &crop(reference));
+    let b = nv_flip::FlipImageRgb8::with_data(w - x0, h, &crop(test));
+    let error = nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&error).mean() as f64
+}
+
+fn max_abs_diff(a: &image::RgbImage, b: &image::RgbImage, x0: u32) -> u8 {
+    a.enumerate_pixels()
+        .filter(|(x, _, _)| *x >= x0)
+        .map(|(x, y, p)| {
+            let q = b.get_pixel(x, y);
+            (0..3).map(|c| p[c].abs_diff(q[c])).max().unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0)
+}
+
+#[test]
+fn window_shows_what_render_renders() {
+    let Some(xvfb) = xvfb_run() else {
+        println!("SKIPPED window_shows_what_render_renders: xvfb-run is not installed (tools/setup installs xvfb and xauth)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("view.png");
+    let reference = dir.path().join("render.png");
+    // The panel hidden: the whole window is the render. Same scene, camera (the scene's) and size.
+    weft_in_xvfb(
+        xvfb,
+        &[
+            "view",
+            "--validate",
+            "--no-panel",
+            "--size",
+            "320x240",
+            "--screenshot",
+            shot.to_str().unwrap(),
+            "--after",
+            "4",
+        ],
+    );
+    weft_render(&[
+        "--validate",
+        "--size",
+        "320x240",
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    let (a, b) = (rgb(&reference), rgb(&shot));
+    assert_eq!(a.dimensions(), b.dimensions(), "the window's size");
+    let flip = flip_mean(&a, &b, 0);
+    let max = max_abs_diff(&a, &b, 0);
+    println!("view vs render, 320x240, panel hidden: mean FLIP {flip:.6}, max |diff| {max}/255");
+    // The window shows the same tonemapped target: the only step between the two is a blit from
+    // the RGBA8 sRGB target into the BGRA8 sRGB swapchain image, a decode and re-encode of each
+    // 8-bit value, which a driver may round by at most one step (the sRGB conversion precision
+    // Vulkan requires is about 1 ULP of 8 bits). One step everywhere gives a mean FLIP below
+    // 0.01; anything else (a wrong camera, size, exposure, a channel swap, a missing pass)
+    // gives tenths.
+    assert!(
+        max <= 1,
+        "the window differs from weft render by {max}/255 somewhere"
+    );
+    assert!(
+        flip < 0.01,
+        "mean FLIP {flip} between the window and weft render"
+    );
+}
+
+#[test]
+fn panel_is_drawn_left_of_the_scene() {
+    let Some(xvfb) = xvfb_run() else {
+        println!("SKIPPED panel_is_drawn_left_of_the_scene: xvfb-run is not installed (tools/setup installs xvfb and xauth)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("view.png");
+    let reference = dir.path().join("render.png");
+    let stderr = weft_in_xvfb(
+        xvfb,
+        &[
+            "view",
+            "--validate",
+            "--size",
+            "640x360",
+            "--screenshot",
+            shot.to_str().unwrap(),
+            "--after",
+            "4",
+        ],
+    );
+    // "the scene WxH from x X0": the viewer renders the scene right of the panel, at that size.
+    let tail = stderr
+        .split("the scene ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no scene area in:\n{stderr}"));
+    let (size, rest) = tail.split_once(" from x ").unwrap();
+    let x0: u32 = rest
+        .trim_end_matches(|c: char| !c.is_ascii_digit())
+        .parse()
+        .unwrap();
+    println!("panel: the scene is {size} from x {x0}");
+    assert!(x0 > 100 && x0 < 640, "the panel's width {x0}");
+    weft_render(&[
+        "--validate",
+        "--size",
+        size,
+        "-o",
+        reference.to_str().unwrap(),
+    ]);
+    let (a, b) = (rgb(&reference), rgb(&shot));
+    assert_eq!(a.width() + x0, b.width());
+    // Right of the panel: the render of that size, the same bound as above (a blit of identical
+    // 8-bit values).
+    let right = image::imageops::crop_imm(&b, x0, 0, a.width(), a.height()).to_image();
+    let max = max_abs_diff(&a, &right, 0);
+    assert!(
+        max <= 1,
+        "right of the panel the window differs from weft render by {max}/255"
+    );
+    // Left of it, the panel: egui's dark fill and its widgets, nearly uniform, nothing like the
+    // scene (a window without the panel drawn would be the cleared black there, also checked).
+    let panel: Vec<[u8; 3]> = (0..b.height())
+        .flat_map(|y| (0..x0).map(move |x| (x, y)))
+        .map(|(x, y)| b.get_pixel(x, y).0)
+        .collect();
+    let mean = panel.iter().map(|p| p[0] as f64).sum::<f64>() / panel.len() as f64;
+    let lit = panel.iter().filter(|p| p[0] > 100).count();
+    println!(
+        "panel: mean red {mean:.1}, {lit} of {} pixels brighter than 100 (text, widgets)",
+        panel.len()
+    );
+    // egui's dark theme fills the panel with grey 27; its text and widgets are brighter. A black
+    // (undrawn) panel has mean 0 and nothing lit.
+    assert!(mean > 15.0 && mean < 80.0, "panel mean {mean}");
+    assert!(lit > 100, "no text or widgets drawn in the panel");
+}
+
+#[test]
+fn no_display_is_a_clean_error() {
+    // No DISPLAY at all, and a DISPLAY no X server listens on.
+    for display in [None, Some(":4711")] {
+        let mut cmd = Command::new(WEFT);
+        cmd.arg("view").env_remove("WAYLAND_DISPLAY");
+        match display {
+            Some(d) => cmd.env("DISPLAY", d),
+            None => cmd.env_remove("DISPLAY"),
+        };
+        let out = cmd.output().expect("running weft view");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{display:?}: exit code; stderr:\n{stderr}"
+        );
+        assert!(
+            stderr.contains("no display: use weft render"),
+            "{display:?}: stderr:\n{stderr}"
+        );
+        assert!(
+            !stderr.contains("panicked"),
+            "{display:?}: stderr:\n{stderr}"
+        );
+    }
+}
+
+/// Renders `scene` with `gpu`, returning the 8-bit image and, per pixel, whether a fabric
+/// material is drawn there (from the G-buffer's material index).
+fn render_with_mask(
+    renderer: &mut Renderer,
+    scene: &weft::scene::Scene,
+    gpu: &weft::render::GpuScene,
+    options: &RenderOptions,
+) -> (Vec<u8>, Vec<bool>) {
+    let frame = renderer.render_frame(scene, gpu, options).unwrap();
+    let g = renderer.read_gbuffer().unwrap();
+    let mask = (0..(options.width * options.height) as usize)
+        .map(|i| {
+            g.depth[i] > 0.0
+                && scene
+                    .materials
+                    .get(g.surface[i * 4 + 1].round() as usize)
+                    .is_some_and(|m| m.fabric.is_some())
+        })
+        .collect();
+    (frame.ldr, mask)
+}
+
+#[test]
+fn fabric_edit_changes_the_fabric_and_nothing_else() {
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let mut scene = weft::scene::default_scene();
+    weft::env::stage(&mut scene, weft::env::LightsMode::Auto, 0.0, false);
+    let options = RenderOptions {
+        width: 160,
+        height: 120,
+        read_hdr: false,
+        environment: Some(weft::env::EnvLighting::new(std::sync::Arc::new(
+            weft::env::Environment::studio(),
+        ))),
+        ..Default::default()
+    };
+    let mut gpu = renderer.upload(&scene).unwrap();
+    let (before, mask) = render_with_mask(&mut renderer, &scene, &gpu, &options);
+    let fabric_pixels = mask.iter().filter(|&&m| m).count();
+    assert!(fabric_pixels > 1000, "the default scene shows its cloth");
+
+    let (material, _) = controls::fabric_materials(&scene)[0].clone();
+    let original = scene.materials[material].fabric.clone().unwrap();
+
+    // Unchanged parameters: nothing to do.
+    assert_eq!(
+        controls::set_fabric(&mut scene, material, &original).unwrap(),
+        MaterialUpdate::None
+    );
+
+    // Edits as the panel makes them: (what changes, the update it needs).
+    let mut green = original.clone();
+    green.rd_warp = [0.1, 0.6, 0.1];
+    green.rd_weft = [0.1, 0.6, 0.1];
+    let mut gap = original.clone();
+    gap.gap = original.repeat * 0.3;
+    for (what, params, expect) in [
+        ("thread colours", green, MaterialUpdate::Records),
+        ("gap", gap, MaterialUpdate::Weave),
+    ] {
+        let update = controls::set_fabric(&mut scene, material, &params).unwrap();
+        assert_eq!(update, expect, "{what}");
+        controls::apply(&renderer, &scene, &mut gpu, update).unwrap();
+        let (after, mask_after) = render_with_mask(&mut renderer, &scene, &gpu, &options);
+        assert_eq!(
+            mask, mask_after,
+            "{what}: the fabric covers the same pixels"
+        );
+        let mut changed_fabric = 0;
+        let mut changed_other = 0;
+        for (i, m) in mask.iter().enumerate() {
+            let differs = before[i * 4..i * 4 + 3] != after[i * 4..i * 4 + 3];
+            match (differs, m) {
+                (true, true) => changed_fabric += 1,
+                (true, false) => changed_other += 1,
+                _ => {}
+            }
+        }
+        println!(
+            "{what} ({update:?}): {changed_fabric} of {fabric_pixels} fabric pixels changed, {changed_other} others"
+        );
+        // Deferred shading: every pixel is lit from its own G-buffer texel, and the cloth's
+        // parameters reach no other pixel (the shadow map holds depth only), so not one other
+        // pixel may change.
+        assert_eq!(
+            changed_other, 0,
+            "{what}: pixels that are not fabric changed"
+        );
+        // Red thread to green changes every lit fabric pixel; the gap (a third of the pitch
+        // instead of a tenth) darkens most of them. Half is far below both and far above noise.
+        assert!(
+            changed_fabric * 2 > fabric_pixels,
+            "{what}: only {changed_fabric} of {fabric_pixels} fabric pixels changed"
+        );
+        // Back to the original for the next edit.
+        let back = controls::set_fabric(&mut scene, material, &original).unwrap();
+        controls::apply(&renderer, &scene, &mut gpu, back).unwrap();
+    }
+}
+
+#[test]
+fn dropped_files_load_or_say_why() {
+    use weft::env::LightsMode;
+    use weft::view::SceneSource;
+    let load = |p: &str| {
+        controls::load(
+            &SceneSource::File(p.into()),
+            None,
+            LightsMode::Auto,
+            0.0,
+            false,
+        )
+    };
+    let e = load("tests/data/env/lebombo_1k.hdr")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a .gltf or .glb"), "{e}");
+    let e = load("tests/malformed/broken-json.gltf")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("broken-json.gltf"),
+        "the error names the file: {e}"
+    );
+    let e = load("no/such/file.glb").unwrap_err().to_string();
+    assert!(e.contains("no/such/file.glb"), "{e}");
+    // A real file loads, and is staged: a file without lights gets the default key light.
+    let box_path = "../shared/realworld/khronos/Box/glTF-Binary/Box.glb";
+    if Path::new(box_path).exists() {
+        let scene = load(box_path).unwrap();
+        assert!(!scene.draws.is_empty());
+        assert!(
+            !scene.lights.is_empty(),
+            "staged with the default key light"
+        );
+    } else {
+        println!("({box_path} not present: the real-file half of this test is skipped)");
+    }
+}
