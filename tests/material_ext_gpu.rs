@@ -470,6 +470,7 @@ fn the_terminator_is_not_biased_by_the_gbuffer() {
         camera: scene.camera(None).unwrap(),
         exposure: 0.0,
         subdivisions: 1,
+        pieces: 0,
         shading: weft::render::Shading::Fabric,
     };
     let cpu = weft::reference::raster::render(&scene, &raster).expect("reference");

@@ -50,6 +50,7 @@ fn oblique_close_ups_against_the_pixel_integral() {
                 camera: camera.clone(),
                 exposure: 0.0,
                 subdivisions: 0,
+                pieces: 0,
                 shading: Default::default(),
             },
             SAMPLES,

@@ -365,6 +365,7 @@ fn run_case(
                 camera,
                 exposure: options.exposure,
                 subdivisions: tol.subdivisions,
+                pieces: tol.pieces,
                 shading: case.shading,
             },
         )

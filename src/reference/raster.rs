@@ -41,6 +41,10 @@ pub struct RasterOptions {
     /// the bounding box of the whole footprint; 0 = no footprint: the weave at the pixel centre,
     /// as the samples of [`render_pixel_integrated`] take it).
     pub subdivisions: u32,
+    /// Instead of `subdivisions` when not 0: the G-buffer pass's own footprint filter
+    /// (`render::Footprint::Parallelogram(pieces)`) through its f64 twin
+    /// (`reference::weave::double::weave_parallelogram`), so that the GPU's is checked against it.
+    pub pieces: u32,
     /// How fabric is shaded (`RenderOptions::shading`); Gouraud lights fabric vertices as
     /// gbuffer.vert does and interpolates the result.
     pub shading: crate::render::Shading,
@@ -145,6 +149,7 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
         width,
         height,
         subdivisions: options.subdivisions,
+        pieces: options.pieces,
     };
     for draw in &scene.draws {
         let mesh = &scene.meshes[draw.mesh];
@@ -268,6 +273,7 @@ struct Raster {
     width: u32,
     height: u32,
     subdivisions: u32,
+    pieces: u32,
 }
 
 /// A triangle in screen space: pixel coordinates (x right, y down), NDC depth and 1/w per vertex.
@@ -499,7 +505,19 @@ impl Raster {
             // Derivatives of the UV along the pixel grid, from the triangle's plane.
             let dx = (uv_at(q + Vec2::X) - uv_at(q - Vec2::X)) * 0.5;
             let dy = (uv_at(q + Vec2::Y) - uv_at(q - Vec2::Y)) * 0.5;
-            surface.coverage = if self.subdivisions == 0 {
+            surface.coverage = if self.pieces > 0 {
+                use super::weave::{double, uv_to_cells, weave_of};
+                let w = weave_of(params);
+                let [x, y] = uv_to_cells(params, uv.x as f64, uv.y as f64);
+                let c = [
+                    double::weave_wrap(x, w.cols as f64),
+                    double::weave_wrap(y, w.rows as f64),
+                ];
+                let dxc = uv_to_cells(params, dx.x as f64, dx.y as f64);
+                let dyc = uv_to_cells(params, dy.x as f64, dy.y as f64);
+                let k = double::weave_pieces(dxc, dyc, self.pieces);
+                double::weave_parallelogram(&w, c, dxc, dyc, k).map(|x| x as f32)
+            } else if self.subdivisions == 0 {
                 let c = super::weave::weave_point_uv(params, uv.x as f64, uv.y as f64);
                 c.map(|x| x as f32)
             } else {
@@ -534,6 +552,7 @@ pub fn render_pixel_integrated(
             width: options.width * n,
             height: options.height * n,
             subdivisions: 0,
+            pieces: 0,
             ..options.clone()
         },
     )?;
