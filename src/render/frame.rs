@@ -775,7 +775,7 @@ impl Renderer {
             .collect::<crate::Result<Vec<_>>>()?;
         let weaves8 = weaves
             .iter()
-            .map(|w| self.convert_weave(w, WEAVE_FORMAT_8))
+            .map(|w| self.weave_rgba8(w))
             .collect::<crate::Result<Vec<_>>>()?;
         let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
             vec![GpuMaterial::new(&Default::default(), None)]
@@ -1320,26 +1320,40 @@ impl Renderer {
         Ok(image)
     }
 
-    /// A copy of a weave texture in another format (every level converted by a same-size blit:
-    /// RGBA8 rounds each coverage to 1/255).
-    fn convert_weave(&self, weave: &Image, format: Format) -> crate::Result<Image> {
+    /// The RGBA8 copy of a weave texture: every level read back and each coverage rounded to the
+    /// nearest 1/255 here. A format-converting blit may round toward zero (lavapipe does), which
+    /// darkened the far field by half a step on average (0.28 %: 54 against 61.5 dB).
+    pub fn weave_rgba8(&self, weave: &Image) -> crate::Result<Image> {
         let mut desc = weave.desc.clone();
-        desc.name = format!("{} ({format:?})", desc.name);
-        desc.format = format;
+        desc.name = format!("{} (RGBA8)", desc.name);
+        desc.format = WEAVE_FORMAT_8;
         desc.usage = ImageUsageFlags::SAMPLED
             | ImageUsageFlags::TRANSFER_DST
             | ImageUsageFlags::TRANSFER_SRC;
         let image = self.ctx.create_image(&desc)?;
+        let staging = (0..desc.mip_levels)
+            .map(|level| {
+                let bytes = unorm8_round(&self.read_weave(weave, level)?);
+                self.ctx.create_buffer_with(
+                    "weave rgba8 staging",
+                    BufferUsageFlags::TRANSFER_SRC,
+                    &bytes,
+                )
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
         self.ctx.submit(|cmd| {
-            cmd.transition(weave, Usage::FragmentRead, Usage::TransferSrc, None);
             cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
-            for level in 0..desc.mip_levels {
-                cmd.blit_level(weave, &image, level);
+            for (level, buffer) in staging.iter().enumerate() {
+                cmd.copy_buffer_to_image_level(buffer, &image, level as u32);
             }
-            cmd.transition(weave, Usage::TransferSrc, Usage::FragmentRead, None);
             cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
         })?;
         Ok(image)
+    }
+
+    /// Reads mip `level` of an RGBA8 weave texture ([`Renderer::weave_rgba8`]) back (for tests).
+    pub fn read_weave_rgba8(&self, image: &Image, level: u32) -> crate::Result<Vec<u8>> {
+        read_image_level(&self.ctx, image, level, Usage::FragmentRead, 4)
     }
 
     /// Reads mip `level` of a weave texture back as RGBA f32 (for tests).
@@ -1447,6 +1461,17 @@ fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
         cmd.generate_mips(&image, Usage::FragmentRead);
     })?;
     Ok(image)
+}
+
+/// Values in [0, 1] as UNORM8 bytes, rounded to nearest (NaN to 0).
+pub fn unorm8_round(values: &[f32]) -> Vec<u8> {
+    values
+        .iter()
+        .map(|v| {
+            let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+            (v * 255.0).round() as u8
+        })
+        .collect()
 }
 
 /// The whole number of weave repeats to take off a fabric mesh's UVs, per axis, computed in f64

@@ -335,17 +335,26 @@ impl<'s> Cmd<'s> {
     /// If the buffer is smaller than the image's level 0 (the GPU would read past its end), or
     /// the format is not one [`texel_bytes`] knows.
     pub fn copy_buffer_to_image(&mut self, buffer: &'s Buffer, image: &'s Image) {
-        check_copy_size(buffer, image, 0);
+        self.copy_buffer_to_image_level(buffer, image, 0);
+    }
+
+    /// Copies a buffer (tightly packed) into mip `level` of an image in `TransferDst` usage.
+    ///
+    /// # Panics
+    /// If `level` is not a level of the image, the buffer is smaller than that level (the GPU
+    /// would read past its end), or the format is not one [`texel_bytes`] knows.
+    pub fn copy_buffer_to_image_level(&mut self, buffer: &'s Buffer, image: &'s Image, level: u32) {
+        check_copy_size(buffer, image, level);
         let region = vk::BufferImageCopy::default()
             .image_subresource(vk::ImageSubresourceLayers {
                 aspect_mask: image.aspect(),
-                mip_level: 0,
+                mip_level: level,
                 base_array_layer: 0,
                 layer_count: image.desc.layers(),
             })
             .image_extent(vk::Extent3D {
-                width: image.desc.width,
-                height: image.desc.height,
+                width: (image.desc.width >> level).max(1),
+                height: (image.desc.height >> level).max(1),
                 depth: 1,
             });
         unsafe {
