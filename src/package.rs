@@ -176,10 +176,19 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          and dispatch `ceil(width / 8) × ceil(height / 8)` groups. weft's Rust twins: \
          `weft::fabric::WeavePush`, `weft::fabric::weave_texels_cpu`.",
     ),
+    (
+        "skin.comp",
+        "Deforms one draw's vertices for an animation pose: morph targets (weighted position,          normal and tangent deltas), then linear blend skinning with up to four joints per vertex;          normals by the cofactor matrix, tangents by the matrix then made orthogonal to the normal,          the handedness flipped where the skin mirrors. Reads the rest vertices at `src` and writes          the posed copy at `dst` of the same vertex buffer (16 floats per vertex: position, normal,          tangent, uv, weave uv, uv1). Push the 48-byte `SkinPush` (`uint src, dst, count, skin`          (0xffffffff: not skinned), `joint, joint_count, morph, target_count, weight`, 3 pad) and          dispatch `ceil(count / 64)` groups. weft's Rust twins: `weft::render::deform::SkinPush`,          `weft::scene::animation::deform_vertex`.",
+    ),
 ];
 
 /// What each descriptor binding holds: (module, set, binding, meaning).
 pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
+    ("skin.comp", 0, 0, "the vertex buffer (16 floats per vertex): rest vertices read at `src`, the posed copy written at `dst`"),
+    ("skin.comp", 0, 1, "per vertex of the mesh: `uvec4 joints` (indices into this skin's joints) and `vec4 weights` (normalised)"),
+    ("skin.comp", 0, 2, "morph deltas, target-major: (target t, vertex v) at `morph + 3 (t count + v)`: position, normal, tangent (w unused)"),
+    ("skin.comp", 0, 3, "joint matrices (`mat4`, world from bind pose), the skin's from `joint`"),
+    ("skin.comp", 0, 4, "morph weights (`float`), the draw's from `weight`"),
     ("fabric_probe.comp", 0, 0, "the inputs: `ProbeInput[count]`"),
     (
         "fabric_probe.comp",
@@ -335,7 +344,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
         0,
         "ACCURACY: 0 nearest (one level-0 texel), 1 filtered-params, 2 mixture (default), 3 supersampled (writes the footprint, st and half-extent, instead of coverages)",
     ),
-    ("gbuffer.frag", 1, "WEAVE_SOURCE: 0 the weave texture (default), 1 the exact coverage of the footprint box computed in the shader"),
+    ("gbuffer.frag", 1, "WEAVE_SOURCE: 0 the weave texture (default), 1 the exact coverage of the footprint computed in the shader"),
+    ("gbuffer.frag", 4, "FOOTPRINT_PIECES: how the weave is filtered over the pixel's footprint (the parallelogram of the UV derivatives): 0 its bounding box, N >= 1 an oblique footprint within 4 cells cut into up to N pieces along its longer edge, each filtered by its bounding box shrunk to its area (default 2)"),
     ("gbuffer.frag", 2, "SHADING: how fabric is shaded, as gbuffer.vert's and lighting.frag's; 1 (Gouraud) adds the vertex stage's lighting to the emissive target"),
     ("gbuffer.vert", 2, "SHADING: how fabric is shaded: 0 the fabric model (default), 1 Gouraud (the Phong reflection model per vertex, written for gbuffer.frag), 2 Phong, 3 plain Ashikhmin-Shirley; only 1 does work in this stage"),
     ("gbuffer.vert", 3, "LIGHT_TYPES: as lighting.frag's, for the per-vertex lighting of SHADING = 1 (default 7, all)"),

@@ -211,7 +211,12 @@ pub(crate) struct SkinPass {
 }
 
 impl SkinPass {
-    fn new(ctx: &Context) -> crate::Result<SkinPass> {
+    /// The pass's pipeline (for `Renderer::pipelines`).
+    pub(crate) fn pipeline(&self) -> &Pipeline {
+        &self.pipeline
+    }
+
+    pub(crate) fn new(ctx: &Context) -> crate::Result<SkinPass> {
         let layout = ctx.create_set_layout(
             &(0..5)
                 .map(|binding| Binding {

@@ -491,6 +491,9 @@ impl Renderer {
     pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
         let options = RenderOptions::default();
         self.variants(&options, &Plan::new(&Scene::default(), &options))?;
+        if self.skin_pass.get().is_none() {
+            let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
+        }
         let mut all = vec![
             &self.weave_pipeline,
             &self.tonemap_pipeline,
@@ -499,6 +502,7 @@ impl Renderer {
         all.extend(self.env.pipelines());
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
+        all.extend(self.skin_pass.get().map(|s| s.pipeline()));
         Ok(all)
     }
 

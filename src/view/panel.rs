@@ -2,7 +2,7 @@
 //! that the viewer applies through the same functions the tests call (`controls`).
 
 use crate::fabric::{FabricParams, WeavePattern};
-use crate::render::{Accuracy, DebugView, RenderOptions, Shading, WeavePrecision};
+use crate::render::{Accuracy, DebugView, Footprint, RenderOptions, Shading, WeavePrecision};
 use crate::scene::Scene;
 
 use super::FrameFigures;
@@ -224,6 +224,19 @@ fn render_controls(ui: &mut egui::Ui, state: &mut UiState, o: &mut RenderOptions
         "weave precision",
         &mut o.weave_precision,
         &WeavePrecision::ALL.map(|p| (p, p.name().to_string())),
+    );
+    combo(
+        ui,
+        "footprint",
+        &mut o.footprint,
+        &[
+            Footprint::Box,
+            Footprint::Parallelogram(1),
+            Footprint::Parallelogram(2),
+            Footprint::Parallelogram(3),
+            Footprint::Parallelogram(4),
+        ]
+        .map(|f| (f, f.name())),
     );
     combo(
         ui,
