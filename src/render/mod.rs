@@ -1,6 +1,6 @@
 //! Rendering: the plan, the passes of a frame, and writing images.
 
-mod deform;
+pub mod deform;
 mod frame;
 mod passes;
 pub use passes::environment;
