@@ -1103,8 +1103,8 @@ pub fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
     Some((slope, my - slope * mx))
 }
 
-/// Mean FLIP error (Andersson et al. 2020) of `test`'s sRGB image against `reference`'s.
-pub fn flip_mean(reference: &Frame, test: &Frame) -> f64 {
+/// The FLIP error map (Andersson et al. 2020) of `test`'s sRGB image against `reference`'s.
+fn flip_map(reference: &Frame, test: &Frame) -> Vec<f32> {
     let rgb = |f: &Frame| {
         f.ldr
             .chunks_exact(4)
@@ -1113,8 +1113,13 @@ pub fn flip_mean(reference: &Frame, test: &Frame) -> f64 {
     };
     let a = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &rgb(reference));
     let b = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &rgb(test));
-    let error = nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    nv_flip::FlipPool::from_image(&error).mean() as f64
+    nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
+}
+
+/// Mean FLIP error of `test`'s sRGB image against `reference`'s.
+pub fn flip_mean(reference: &Frame, test: &Frame) -> f64 {
+    let map = flip_map(reference, test);
+    map.iter().map(|&v| v as f64).sum::<f64>() / map.len().max(1) as f64
 }
 
 /// Root-mean-square difference of the linear HDR RGB (alpha ignored).
@@ -1138,16 +1143,7 @@ pub fn rmse_hdr(reference: &Frame, test: &Frame) -> f64 {
 /// Mean FLIP error of `test`'s sRGB image against `reference`'s over the pixels of `mask` (the
 /// error map is computed on the whole images: FLIP looks at neighbourhoods).
 pub fn flip_mean_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
-    let rgb = |f: &Frame| {
-        f.ldr
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect::<Vec<u8>>()
-    };
-    let a = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &rgb(reference));
-    let b = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &rgb(test));
-    let error = nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    let values = error.to_vec();
+    let values = flip_map(reference, test);
     let (mut sum, mut count) = (0.0f64, 0usize);
     for (v, _) in values.iter().zip(mask).filter(|(_, m)| **m) {
         sum += *v as f64;

@@ -740,36 +740,22 @@ impl Renderer {
             ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
         // Fabric records, and one weave texture per distinct weave (materials that differ only in
         // colour or exponents share one).
-        let mut fabric_bytes: Vec<u8> = Vec::new();
-        let mut fabric_index = Vec::new();
+        let (fabric_bytes, materials) = material_records(scene);
         let mut weave_keys: Vec<[u32; 7]> = Vec::new();
         let mut weave_params: Vec<FabricParams> = Vec::new();
         let mut material_weave = Vec::new();
         for m in &scene.materials {
-            match &m.fabric {
-                Some(f) => {
-                    fabric_index.push(Some(fabric_bytes.len() / 80));
-                    let g = f.to_gpu();
-                    fabric_bytes.extend_from_slice(&g.to_bytes());
-                    let key = weave_key(f);
-                    let w = weave_keys
-                        .iter()
-                        .position(|k| *k == key)
-                        .unwrap_or_else(|| {
-                            weave_keys.push(key);
-                            weave_params.push(f.clone());
-                            weave_keys.len() - 1
-                        });
-                    material_weave.push(Some(w));
-                }
-                None => {
-                    fabric_index.push(None);
-                    material_weave.push(None);
-                }
-            }
-        }
-        if fabric_bytes.is_empty() {
-            fabric_bytes = vec![0; 80]; // a storage buffer cannot be empty
+            material_weave.push(m.fabric.as_ref().map(|f| {
+                let key = weave_key(f);
+                weave_keys
+                    .iter()
+                    .position(|k| *k == key)
+                    .unwrap_or_else(|| {
+                        weave_keys.push(key);
+                        weave_params.push(f.clone());
+                        weave_keys.len() - 1
+                    })
+            }));
         }
         let fabrics =
             ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
@@ -781,16 +767,6 @@ impl Renderer {
             .iter()
             .map(|w| self.weave_rgba8(w))
             .collect::<crate::Result<Vec<_>>>()?;
-        let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
-            vec![GpuMaterial::new(&Default::default(), None)]
-        } else {
-            scene
-                .materials
-                .iter()
-                .zip(&fabric_index)
-                .map(|(m, f)| GpuMaterial::new(m, *f))
-                .collect()
-        };
         let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
         let material_count = materials.len() as u32;
         let materials =
@@ -870,30 +846,7 @@ impl Renderer {
     /// textures or weave textures. Only for changes that keep every material's weave (its
     /// `weave_key`) and repeat: anything else needs [`Renderer::upload`] again.
     pub fn update_material_records(&self, scene: &Scene, gpu: &mut GpuScene) -> crate::Result<()> {
-        let mut fabric_bytes: Vec<u8> = Vec::new();
-        let mut fabric_index = Vec::new();
-        for m in &scene.materials {
-            match &m.fabric {
-                Some(f) => {
-                    fabric_index.push(Some(fabric_bytes.len() / 80));
-                    fabric_bytes.extend_from_slice(&f.to_gpu().to_bytes());
-                }
-                None => fabric_index.push(None),
-            }
-        }
-        if fabric_bytes.is_empty() {
-            fabric_bytes = vec![0; 80]; // a storage buffer cannot be empty
-        }
-        let materials: Vec<GpuMaterial> = if scene.materials.is_empty() {
-            vec![GpuMaterial::new(&Default::default(), None)]
-        } else {
-            scene
-                .materials
-                .iter()
-                .zip(&fabric_index)
-                .map(|(m, f)| GpuMaterial::new(m, *f))
-                .collect()
-        };
+        let (fabric_bytes, materials) = material_records(scene);
         if materials.len() as u32 != gpu.material_count {
             return Err(Error::input(
                 "update_material_records: the scene has a different number of materials than was uploaded",
@@ -1465,6 +1418,34 @@ fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
         cmd.generate_mips(&image, Usage::FragmentRead);
     })?;
     Ok(image)
+}
+
+/// A scene's fabric records (80 bytes each; one zero record when there are none: a storage
+/// buffer cannot be empty) and the material records, which index them (one default material when
+/// the scene has none).
+fn material_records(scene: &Scene) -> (Vec<u8>, Vec<GpuMaterial>) {
+    let mut fabric_bytes: Vec<u8> = Vec::new();
+    let mut fabric_index = Vec::new();
+    for m in &scene.materials {
+        fabric_index.push(m.fabric.as_ref().map(|f| {
+            fabric_bytes.extend_from_slice(&f.to_gpu().to_bytes());
+            fabric_bytes.len() / 80 - 1
+        }));
+    }
+    if fabric_bytes.is_empty() {
+        fabric_bytes = vec![0; 80];
+    }
+    let materials = if scene.materials.is_empty() {
+        vec![GpuMaterial::new(&Default::default(), None)]
+    } else {
+        scene
+            .materials
+            .iter()
+            .zip(&fabric_index)
+            .map(|(m, f)| GpuMaterial::new(m, *f))
+            .collect()
+    };
+    (fabric_bytes, materials)
 }
 
 /// Values in [0, 1] as UNORM8 bytes, rounded to nearest (NaN to 0).
