@@ -442,7 +442,7 @@ pub fn plot(report: &BenchReport) -> (u32, u32, Vec<u8>) {
     c.text(
         left as i32,
         46,
-        "FLIP mean vs supersampled ground truth (analytic weave); time = G-buffer + lighting GPU ms, median of warm frames",
+        "FLIP mean over the fabric vs the pixel-integrating ground truth (jittered point samples); time = G-buffer + lighting GPU ms, median of warm frames",
         1,
         MUTED,
     );
