@@ -477,6 +477,8 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
     let (width, height) = config.size;
 
     // The accuracy sweep, view by view: the ground truth, then every variant against it.
+    // The ground truths' images go there as they are made.
+    create_out_dir(&config.out)?;
     let mut scenes: Vec<(BenchScene, Scene, GpuScene)> = Vec::new();
     for kind in config.views.iter().map(|v| v.scene()) {
         if !scenes.iter().any(|s| s.0 == kind) {
@@ -516,13 +518,6 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
             || progress.done(),
         )?;
         let mask = truth.fabric_everywhere();
-        std::fs::create_dir_all(&config.out).map_err(|e| Error::Io {
-            context: format!(
-                "creating the bench output directory '{}'",
-                config.out.display()
-            ),
-            source: e,
-        })?;
         let f = &truth.frame;
         crate::render::write_png(
             &config.out.join(format!("truth-{}.png", view.name())),
@@ -688,13 +683,6 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
     progress.finish();
     machine.load_end = load_average();
 
-    std::fs::create_dir_all(&config.out).map_err(|e| Error::Io {
-        context: format!(
-            "creating the bench output directory '{}'",
-            config.out.display()
-        ),
-        source: e,
-    })?;
     let mut report = BenchReport {
         machine,
         size: (width, height),
@@ -828,10 +816,7 @@ pub fn footprint_bench(
                 .unwrap_or_else(|| "unknown".into())
         );
     }
-    std::fs::create_dir_all(out).map_err(|e| Error::Io {
-        context: format!("creating the bench output directory '{}'", out.display()),
-        source: e,
-    })?;
+    create_out_dir(out)?;
     write_text(&out.join("footprint.csv"), &csv)?;
     let _ = writeln!(table, "vs box: total time against the box footprint of the same view and precision (same run, frames round-robin)");
     Ok(table)
@@ -879,7 +864,7 @@ impl Truth {
         if n == 0 || sum == 0.0 {
             return None;
         }
-        Some(10.0 * (peak * peak / (sum / n as f64)).log10() + 10.0 * 4f64.log10())
+        Some(psnr_db(peak, sum / n as f64) + 10.0 * 4f64.log10())
     }
 }
 
@@ -899,7 +884,7 @@ pub fn pixel_truth(
     n: u32,
     mut done: impl FnMut(),
 ) -> crate::Result<Truth> {
-    use crate::reference::shading::{srgb_encode, tonemap};
+    use crate::reference::shading::display_rgba8;
     let n = n.max(1);
     let (w, h) = (options.width as usize, options.height as usize);
     let mut sum = vec![0.0f64; w * h * 3];
@@ -945,18 +930,9 @@ pub fn pixel_truth(
                     hacc[c] += px[c] as f64;
                 }
             }
-            let g = renderer.read_gbuffer()?;
-            for ((count, d), surface) in fabric_samples
-                .iter_mut()
-                .zip(&g.depth)
-                .zip(g.surface.chunks_exact(4))
-            {
-                let fabric = *d > 0.0
-                    && scene
-                        .materials
-                        .get(surface[1].round().max(0.0) as usize)
-                        .is_some_and(|m| m.fabric.is_some());
-                *count += fabric as u32;
+            let (fabric, _) = fabric_mask(renderer, scene)?;
+            for (count, f) in fabric_samples.iter_mut().zip(fabric) {
+                *count += f as u32;
             }
             last = Some(frame);
             done();
@@ -982,10 +958,7 @@ pub fn pixel_truth(
     frame.ldr = frame
         .hdr
         .chunks_exact(4)
-        .flat_map(|c| {
-            let t = tonemap([c[0], c[1], c[2]], options.exposure.exp2());
-            [srgb_encode(t[0]), srgb_encode(t[1]), srgb_encode(t[2]), 255]
-        })
+        .flat_map(|c| display_rgba8([c[0], c[1], c[2]], options.exposure.exp2()))
         .collect();
     Ok(Truth {
         frame,
@@ -1103,17 +1076,31 @@ pub fn fit_line(points: &[(f64, f64)]) -> Option<(f64, f64)> {
     Some((slope, my - slope * mx))
 }
 
-/// The FLIP error map (Andersson et al. 2020) of `test`'s sRGB image against `reference`'s.
-fn flip_map(reference: &Frame, test: &Frame) -> Vec<f32> {
-    let rgb = |f: &Frame| {
-        f.ldr
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect::<Vec<u8>>()
-    };
-    let a = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &rgb(reference));
-    let b = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &rgb(test));
+/// A frame's sRGB image as packed RGB bytes (what FLIP takes).
+pub(crate) fn rgb8(frame: &Frame) -> Vec<u8> {
+    frame
+        .ldr
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect()
+}
+
+/// The per-pixel FLIP error (Andersson et al. 2020) of the packed sRGB image `test` against
+/// `reference`, both `w` x `h`.
+pub(crate) fn flip_map_rgb(w: u32, h: u32, reference: &[u8], test: &[u8]) -> Vec<f32> {
+    let a = nv_flip::FlipImageRgb8::with_data(w, h, reference);
+    let b = nv_flip::FlipImageRgb8::with_data(w, h, test);
     nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
+}
+
+/// The FLIP error map of `test`'s sRGB image against `reference`'s.
+fn flip_map(reference: &Frame, test: &Frame) -> Vec<f32> {
+    flip_map_rgb(
+        reference.width,
+        reference.height,
+        &rgb8(reference),
+        &rgb8(test),
+    )
 }
 
 /// Mean FLIP error of `test`'s sRGB image against `reference`'s.
@@ -1158,12 +1145,11 @@ pub fn flip_mean_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
 
 /// Sum of squared linear HDR RGB differences over `mask`, the channel count, and the reference's
 /// largest channel value there.
-fn masked_sse(reference: &Frame, test: &Frame, mask: &[bool]) -> (f64, usize, f64) {
+fn masked_sse(reference: &[f32], test: &[f32], mask: &[bool]) -> (f64, usize, f64) {
     let (mut sum, mut n, mut peak) = (0.0f64, 0usize, 0.0f64);
     for ((a, b), _) in reference
-        .hdr
         .chunks_exact(4)
-        .zip(test.hdr.chunks_exact(4))
+        .zip(test.chunks_exact(4))
         .zip(mask)
         .filter(|(_, m)| **m)
     {
@@ -1179,7 +1165,7 @@ fn masked_sse(reference: &Frame, test: &Frame, mask: &[bool]) -> (f64, usize, f6
 
 /// RMSE of the linear HDR RGB over the pixels of `mask`.
 pub fn rmse_hdr_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
-    let (sum, n, _) = masked_sse(reference, test, mask);
+    let (sum, n, _) = masked_sse(&reference.hdr, &test.hdr, mask);
     if n == 0 {
         0.0
     } else {
@@ -1190,34 +1176,58 @@ pub fn rmse_hdr_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
 /// PSNR (dB) of the linear HDR RGB over the pixels of `mask`: 10·log10(peak² / MSE), the peak
 /// being the reference's largest channel value over the mask; infinite for identical images.
 pub fn psnr_hdr_masked(reference: &Frame, test: &Frame, mask: &[bool]) -> f64 {
+    psnr_linear(&reference.hdr, &test.hdr, mask)
+}
+
+/// [`psnr_hdr_masked`] of linear RGBA images given as slices (e.g. a CPU reference's).
+pub fn psnr_linear(reference: &[f32], test: &[f32], mask: &[bool]) -> f64 {
     let (sum, n, peak) = masked_sse(reference, test, mask);
     if n == 0 || sum == 0.0 {
         return f64::INFINITY;
     }
-    10.0 * (peak * peak / (sum / n as f64)).log10()
+    psnr_db(peak, sum / n as f64)
+}
+
+/// 10·log10(peak² / mse).
+fn psnr_db(peak: f64, mse: f64) -> f64 {
+    10.0 * (peak * peak / mse).log10()
 }
 
 /// Shares of the last frame's pixels covered by fabric and by any surface.
 fn coverage_fractions(renderer: &Renderer, scene: &Scene) -> crate::Result<(f64, f64)> {
+    let (fabric, covered) = fabric_mask(renderer, scene)?;
+    let pixels = fabric.len().max(1) as f64;
+    let count = |m: &[bool]| m.iter().filter(|x| **x).count() as f64;
+    Ok((count(&fabric) / pixels, count(&covered) / pixels))
+}
+
+/// Per pixel of the last frame (from its G-buffer): whether a fabric material covers it, and
+/// whether any surface does.
+pub(crate) fn fabric_mask(
+    renderer: &Renderer,
+    scene: &Scene,
+) -> crate::Result<(Vec<bool>, Vec<bool>)> {
     let g = renderer.read_gbuffer()?;
-    let pixels = g.depth.len().max(1);
-    let covered = g.depth.iter().filter(|d| **d > 0.0).count();
-    let fabric = g
-        .depth
+    let covered: Vec<bool> = g.depth.iter().map(|d| *d > 0.0).collect();
+    let fabric = covered
         .iter()
         .zip(g.surface.chunks_exact(4))
-        .filter(|(d, s)| {
-            **d > 0.0
-                && scene
-                    .materials
-                    .get(s[1].round().max(0.0) as usize)
-                    .is_some_and(|m| m.fabric.is_some())
+        .map(|(c, s)| {
+            *c && scene
+                .materials
+                .get(s[1].round().max(0.0) as usize)
+                .is_some_and(|m| m.fabric.is_some())
         })
-        .count();
-    Ok((
-        fabric as f64 / pixels as f64,
-        covered as f64 / pixels as f64,
-    ))
+        .collect();
+    Ok((fabric, covered))
+}
+
+/// Creates the bench's output directory (and its parents) if missing.
+pub(crate) fn create_out_dir(dir: &Path) -> crate::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+        context: format!("creating the bench output directory '{}'", dir.display()),
+        source: e,
+    })
 }
 
 /// The scene with its lights replaced by `n` point lights of finite range on a spiral around the

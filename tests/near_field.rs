@@ -19,19 +19,10 @@ const WIDTH: u32 = 256;
 const HEIGHT: u32 = 144;
 const SAMPLES: u32 = 16;
 
+/// PSNR over the pixels the truth covers at every sample (`weft::bench::psnr_linear`, the bench's).
 fn psnr(truth: &raster::RasterImage, hdr: &[f32]) -> f64 {
-    let (mut sum, mut n, mut peak) = (0.0f64, 0usize, 0.0f64);
-    for (i, _) in truth.covered.iter().enumerate().filter(|(_, c)| **c) {
-        for c in 0..3 {
-            let t = truth.hdr[4 * i + c] as f64;
-            let d = t - hdr[4 * i + c] as f64;
-            sum += d * d;
-            peak = peak.max(t);
-        }
-        n += 3;
-    }
-    assert!(n > 0, "no covered pixels");
-    10.0 * (peak * peak / (sum / n as f64)).log10()
+    assert!(truth.covered.iter().any(|c| *c), "no covered pixels");
+    weft::bench::psnr_linear(&truth.hdr, hdr, &truth.covered)
 }
 
 #[test]

@@ -12,9 +12,9 @@ use crate::render::{Accuracy, WeavePrecision};
 type Rgb = [f32; 3];
 
 const WHITE: Rgb = [1.0, 1.0, 1.0];
-const BLACK: Rgb = [0.1, 0.1, 0.12];
+pub(crate) const BLACK: Rgb = [0.1, 0.1, 0.12];
 const GRID: Rgb = [0.88, 0.88, 0.9];
-const MUTED: Rgb = [0.35, 0.35, 0.4];
+pub(crate) const MUTED: Rgb = [0.35, 0.35, 0.4];
 
 /// One colour per view (the first four of a common categorical palette).
 fn view_color(view: View) -> Rgb {
@@ -368,6 +368,28 @@ fn tick_label(v: f64) -> String {
     }
 }
 
+/// The horizontal grid lines, ticks and tick labels of a log y axis between x = left and right.
+pub(crate) fn log_y_grid(c: &mut Canvas, y: &LogAxis, left: f32, right: f32) {
+    for (v, decade) in y.ticks() {
+        let py = y.map(v);
+        c.line(
+            (left, py),
+            (right, py),
+            if decade { 1.2 } else { 0.8 },
+            GRID,
+        );
+        c.line((left - 6.0, py), (left, py), 1.0, BLACK);
+        let label = tick_label(v);
+        c.text(
+            left as i32 - 10 - text_width(&label, 2),
+            py as i32 - 7,
+            &label,
+            2,
+            BLACK,
+        );
+    }
+}
+
 /// The grid, ticks and tick labels of a log-log plot, and its frame, in the box
 /// (left, right, top, bottom).
 pub(crate) fn log_frame(
@@ -394,24 +416,7 @@ pub(crate) fn log_frame(
             BLACK,
         );
     }
-    for (v, decade) in y.ticks() {
-        let py = y.map(v);
-        c.line(
-            (left, py),
-            (right, py),
-            if decade { 1.2 } else { 0.8 },
-            GRID,
-        );
-        c.line((left - 6.0, py), (left, py), 1.0, BLACK);
-        let label = tick_label(v);
-        c.text(
-            left as i32 - 10 - text_width(&label, 2),
-            py as i32 - 7,
-            &label,
-            2,
-            BLACK,
-        );
-    }
+    log_y_grid(c, y, left, right);
     c.line((left, top), (left, bottom), 1.5, BLACK);
     c.line((left, bottom), (right, bottom), 1.5, BLACK);
     c.line((left, top), (right, top), 1.0, MUTED);

@@ -185,14 +185,6 @@ fn luminance(frame: &Frame) -> Vec<f32> {
         .collect()
 }
 
-fn rgb(frame: &Frame) -> Vec<u8> {
-    frame
-        .ldr
-        .chunks_exact(4)
-        .flat_map(|p| [p[0], p[1], p[2]])
-        .collect()
-}
-
 /// Renders `frames` frames of `view` turning by `degrees_per_frame`; with `mask`, also returns
 /// per frame which pixels are fabric.
 fn render_sequence(
@@ -223,35 +215,15 @@ fn render_sequence(
         };
         let frame = renderer.render_frame(scene, gpu, &options)?;
         if mask.is_some() {
-            let g = renderer.read_gbuffer()?;
-            masks.push(
-                g.depth
-                    .iter()
-                    .zip(g.surface.chunks_exact(4))
-                    .map(|(d, s)| {
-                        *d > 0.0
-                            && scene
-                                .materials
-                                .get(s[1].round().max(0.0) as usize)
-                                .is_some_and(|m| m.fabric.is_some())
-                    })
-                    .collect(),
-            );
+            masks.push(super::fabric_mask(renderer, scene)?.0);
         }
         seq.luminance.push(luminance(&frame));
-        seq.rgb.push(rgb(&frame));
+        seq.rgb.push(super::rgb8(&frame));
     }
     if let Some(m) = mask {
         *m = masks;
     }
     Ok(seq)
-}
-
-/// Per-pixel FLIP error between two sRGB images.
-fn flip_map(w: u32, h: u32, a: &[u8], b: &[u8]) -> Vec<f32> {
-    let a = nv_flip::FlipImageRgb8::with_data(w, h, a);
-    let b = nv_flip::FlipImageRgb8::with_data(w, h, b);
-    nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec()
 }
 
 /// (flicker, FLIP, error) of `seq` against the ground truth `truth` on the pair masks.
@@ -281,7 +253,7 @@ fn measure(
         let denom = denom.max(1e-12);
         flicker += change / denom;
         error += err / denom;
-        let map = flip_map(w, h, &seq.rgb[k], &seq.rgb[k + 1]);
+        let map = super::flip_map_rgb(w, h, &seq.rgb[k], &seq.rgb[k + 1]);
         let sum: f64 = (0..both.len())
             .filter(|&i| both[i])
             .map(|i| f64::from(map[i]))
@@ -348,13 +320,7 @@ pub fn run(renderer: &mut Renderer, config: &TemporalConfig) -> crate::Result<Te
         device: format!("{} ({}, {})", info.name, info.driver_name, info.driver_info),
         seconds: start.elapsed().as_secs_f64(),
     };
-    std::fs::create_dir_all(&config.out).map_err(|e| Error::Io {
-        context: format!(
-            "creating the bench output directory '{}'",
-            config.out.display()
-        ),
-        source: e,
-    })?;
+    super::create_out_dir(&config.out)?;
     crate::render::write_file(&config.out.join("temporal.csv"), report.csv().as_bytes())?;
     let (w, h, rgba) = report.plot();
     crate::render::write_png(&config.out.join("bench-temporal.png"), w, h, &rgba)?;
@@ -458,8 +424,7 @@ impl TemporalReport {
         const H: u32 = 700;
         let (left, right, top, bottom) = (120.0f32, 1140.0f32, 80.0f32, 560.0f32);
         let mut c = Canvas::new(W, H, [1.0; 3]);
-        let black = [0.1, 0.1, 0.12];
-        let muted = [0.35, 0.35, 0.4];
+        let (black, muted) = (super::plot::BLACK, super::plot::MUTED);
         c.text(
             left as i32,
             20,
@@ -488,29 +453,7 @@ impl TemporalReport {
         let hi = ratios.iter().copied().fold(0.0, f64::max).max(1.0);
         let y = LogAxis::fit(lo, hi, bottom, top);
         // The x axis is categorical (the levels): a grid and tick labels on y only.
-        let grid = [0.88, 0.88, 0.9];
-        for (v, decade) in y.ticks() {
-            let py = y.map(v);
-            c.line(
-                (left, py),
-                (right, py),
-                if decade { 1.2 } else { 0.8 },
-                grid,
-            );
-            c.line((left - 6.0, py), (left, py), 1.0, black);
-            let label = if v >= 1.0 {
-                format!("{v:.0}")
-            } else {
-                format!("{v}")
-            };
-            c.text(
-                left as i32 - 10 - text_width(&label, 2),
-                py as i32 - 7,
-                &label,
-                2,
-                black,
-            );
-        }
+        super::plot::log_y_grid(&mut c, &y, left, right);
         c.line((left, top), (left, bottom), 1.5, black);
         c.line((left, bottom), (right, bottom), 1.5, black);
         let levels = &self.config.variants;

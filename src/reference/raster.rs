@@ -238,14 +238,10 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
             Some(f) => shading::shade_with(&frame, &lights, &f.surface, options.shading),
             None => background,
         };
-        let display = shading::tonemap(hdr, exposure);
         image.hdr.extend_from_slice(&[hdr[0], hdr[1], hdr[2], 1.0]);
-        image.ldr.extend_from_slice(&[
-            shading::srgb_encode(display[0]),
-            shading::srgb_encode(display[1]),
-            shading::srgb_encode(display[2]),
-            255,
-        ]);
+        image
+            .ldr
+            .extend_from_slice(&shading::display_rgba8(hdr, exposure));
     }
     Ok(image)
 }
@@ -580,14 +576,10 @@ pub fn render_pixel_integrated(
                 }
             }
             let hdr = sum.map(|s| (s / (n * n) as f64) as f32);
-            let display = shading::tonemap(hdr, exposure);
             image.hdr.extend_from_slice(&[hdr[0], hdr[1], hdr[2], 1.0]);
-            image.ldr.extend_from_slice(&[
-                shading::srgb_encode(display[0]),
-                shading::srgb_encode(display[1]),
-                shading::srgb_encode(display[2]),
-                255,
-            ]);
+            image
+                .ldr
+                .extend_from_slice(&shading::display_rgba8(hdr, exposure));
             image.covered.push(all);
         }
     }

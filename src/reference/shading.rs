@@ -515,6 +515,13 @@ pub fn tonemap(hdr: Vec3, exposure: f32) -> Vec3 {
     ]
 }
 
+/// What the output target holds for linear radiance `hdr`: tone-mapped (`exposure` a linear
+/// scale) and sRGB-encoded, alpha 255.
+pub fn display_rgba8(hdr: Vec3, exposure: f32) -> [u8; 4] {
+    let d = tonemap(hdr, exposure);
+    [srgb_encode(d[0]), srgb_encode(d[1]), srgb_encode(d[2]), 255]
+}
+
 /// Linear [0, 1] to an sRGB-encoded byte.
 pub fn srgb_encode(linear: f32) -> u8 {
     let l = linear.clamp(0.0, 1.0);

@@ -217,10 +217,10 @@ pub struct GpuScene {
     pub(crate) materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
     pub(crate) fabrics: Buffer,
-    /// One weave texture per distinct weave (RGBA16F, and an RGBA8 copy), and per material the
-    /// weave it uses.
+    /// One weave texture per distinct weave (RGBA16F; the RGBA8 copies are made by the first
+    /// frame that asks for that precision), and per material the weave it uses.
     pub(crate) weaves: Vec<Image>,
-    pub(crate) weaves8: Vec<Image>,
+    pub(crate) weaves8: std::sync::OnceLock<Vec<Image>>,
     pub(crate) material_weave: Vec<Option<usize>>,
     pub(crate) lights: Buffer,
     /// The light records as uploaded (no shadow maps): a frame with shadows uploads a copy with
@@ -763,10 +763,6 @@ impl Renderer {
             .iter()
             .map(|f| self.build_weave(f))
             .collect::<crate::Result<Vec<_>>>()?;
-        let weaves8 = weaves
-            .iter()
-            .map(|w| self.weave_rgba8(w))
-            .collect::<crate::Result<Vec<_>>>()?;
         let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
         let material_count = materials.len() as u32;
         let materials =
@@ -789,7 +785,7 @@ impl Renderer {
             materials,
             fabrics,
             weaves,
-            weaves8,
+            weaves8: std::sync::OnceLock::new(),
             material_weave,
             lights,
             light_records,
@@ -877,6 +873,14 @@ impl Renderer {
             _ => None,
         };
         let (gbuffer_key, lighting_key, env_index) = self.prepare(options, &plan, env)?;
+        if options.weave_precision == super::WeavePrecision::Rgba8 && gpu.weaves8.get().is_none() {
+            let copies = gpu
+                .weaves
+                .iter()
+                .map(|w| self.weave_rgba8(w))
+                .collect::<crate::Result<Vec<_>>>()?;
+            let _ = gpu.weaves8.set(copies);
+        }
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
             self.targets = None;
@@ -1081,7 +1085,7 @@ impl Renderer {
                                 Some(w)
                                     if options.weave_precision == super::WeavePrecision::Rgba8 =>
                                 {
-                                    &gpu.weaves8[w]
+                                    &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
                                 }
                                 Some(w) => &gpu.weaves[w],
                                 None => &self.white,

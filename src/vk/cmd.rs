@@ -120,44 +120,61 @@ impl<'s> Cmd<'s> {
         unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
     }
 
+    /// A global memory barrier: `src` stages' `src_access` before `dst` stages' `dst_access`.
+    fn memory_barrier(
+        &mut self,
+        (src, src_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+        (dst, dst_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+    ) {
+        let barrier = [vk::MemoryBarrier2::default()
+            .src_stage_mask(src)
+            .src_access_mask(src_access)
+            .dst_stage_mask(dst)
+            .dst_access_mask(dst_access)];
+        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
+        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+    }
+
     /// Makes transfer writes to buffers (a readback copy) visible to host reads after the
     /// submission's fence.
     pub fn buffer_barrier(&mut self) {
-        let barrier = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-            .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
-        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+        self.memory_barrier(
+            (
+                vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+        );
     }
 
     /// Orders a compute pass that rewrites vertex data after earlier vertex-input reads of it
     /// (write after read: an execution dependency).
     pub fn vertex_reads_before_compute(&mut self) {
-        let barrier = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT)
-            .src_access_mask(vk::AccessFlags2::NONE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .dst_access_mask(vk::AccessFlags2::NONE)];
-        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
-        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+        self.memory_barrier(
+            (
+                vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT,
+                vk::AccessFlags2::NONE,
+            ),
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::NONE,
+            ),
+        );
     }
 
     /// Makes compute-shader writes to buffers visible to later vertex-input reads and to host
     /// reads after the submission's fence (a posed vertex buffer).
     pub fn compute_writes_before_vertex_reads(&mut self) {
-        let barrier = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(
+        self.memory_barrier(
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ),
+            (
                 vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT | vk::PipelineStageFlags2::HOST,
-            )
-            .dst_access_mask(
                 vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::HOST_READ,
-            )];
-        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
-        unsafe { self.device().cmd_pipeline_barrier2(self.raw, &dep) };
+            ),
+        );
     }
 
     /// Begins dynamic rendering over the full extent of the first attachment, and sets the
