@@ -95,6 +95,30 @@ pub(crate) struct Shared {
     pub(crate) anisotropy: bool,
 }
 
+impl Shared {
+    /// What a pipeline's creation or destruction holds (issue 23): on a CPU device (lavapipe),
+    /// the queue lock, after waiting for the device to go idle, so that no shader is compiled or
+    /// freed while lavapipe's queue thread executes one, and no two are compiled at once; `None`
+    /// (no lock) on a GPU. Lavapipe 22.3 builds every pipeline's shaders through the gallium
+    /// context and draw module its queue thread renders with (`lvp_pipeline.c`: the queue's
+    /// `pipe_context::create_*_state`), which are not made for two threads; the reported heap
+    /// corruption with 128-bit vectors came from a lavapipe thread, more often the busier the
+    /// machine, and weft created pipelines on two threads while a third submitted work. The
+    /// environment thread and the variant threads in src/render still run: on lavapipe they take
+    /// turns here. docs/regression.md, "Driver configurations".
+    pub(crate) fn compile_lock(&self) -> crate::Result<Option<std::sync::MutexGuard<'_, ()>>> {
+        if !self.info.is_cpu() {
+            return Ok(None);
+        }
+        let guard = self
+            .queue_lock
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        unsafe { self.device.device_wait_idle() }.map_err(vkerr("vkDeviceWaitIdle"))?;
+        Ok(Some(guard))
+    }
+}
+
 impl Drop for Shared {
     fn drop(&mut self) {
         // Reverse order of creation. Every resource holding an Arc<Shared> is gone by now.

@@ -87,6 +87,9 @@ pub struct Pipeline {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
+        // Waits for lavapipe's queue to finish (Shared::compile_lock); a pipeline is only dropped
+        // when nothing pending uses it, so on a GPU nothing is waited for.
+        let _compiling = self.shared.compile_lock();
         unsafe {
             self.shared.device.destroy_pipeline(self.raw, None);
             self.shared
@@ -282,6 +285,7 @@ impl Context {
     }
 
     pub fn create_graphics_pipeline(&self, desc: &GraphicsDesc) -> crate::Result<Pipeline> {
+        let _compiling = self.shared.compile_lock()?;
         let device = &self.shared.device;
         let vs = module(&self.shared, desc.vertex, Stage::Vertex)?;
         let fs = module(&self.shared, desc.fragment, Stage::Fragment)?;
@@ -407,6 +411,7 @@ impl Context {
     }
 
     pub fn create_compute_pipeline(&self, desc: &ComputeDesc) -> crate::Result<Pipeline> {
+        let _compiling = self.shared.compile_lock()?;
         let device = &self.shared.device;
         let cs = module(&self.shared, desc.shader, Stage::Compute)?;
         let spec = specialization(desc.constants);

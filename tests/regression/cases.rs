@@ -11,22 +11,27 @@ use super::metrics::Tolerance;
 pub const WIDTH: u32 = 256;
 pub const HEIGHT: u32 = 144;
 
-/// Against the golden. Lavapipe is deterministic for one Mesa/LLVM build on one CPU vector width
-/// (tests/golden/VERSION pins all three; with a different one the test fails for that reason,
-/// named, rather than with a diff): two runs give byte-identical images, so identical output is
-/// expected. The bound only lets through what a shader edit that changes float rounding does
-/// (reassociated f32 arithmetic or different LLVM code for the same expression, or an f16 G-buffer
-/// value rounding the other way, moves an sRGB byte by 1, rarely 2 where the tone curve is steep,
-/// in scattered pixels: FLIP mean < 0.0001, as the debug views showed when only the lighting
-/// shader's fabric branch changed, and default and many-lights when light types became pipeline
-/// variants). A change a person could see side by side fails: a 5 % change of the fabric's
-/// diffuse term gives mean FLIP 0.013 to 0.07 (6 to 35 times the bound) and moves 11 % to 64 % of
-/// the pixels by more than 2/255 (docs/regression.md).
+/// Against the golden, on any CPU's lavapipe (issue 23; docs/regression.md, "What the bounds
+/// absorb"). Lavapipe is deterministic for one Mesa/LLVM build on one CPU, but it compiles shaders
+/// for the CPU it runs on, so another CPU (or `LP_NATIVE_VECTOR_WIDTH=128`) rounds scattered
+/// pixels by 1/255 the other way. Measured against the goldens (blessed on an Intel Xeon, AVX-512,
+/// 256-bit vectors), over all 46 cases: an AMD EPYC (AVX-512, 256-bit; shared/evidence) moved up
+/// to 12.9 % of a case's pixels by 1/255, 0.008 % by more than 3/255 (3 pixels, max 6/255, in
+/// env-spheres' sharp reflections), mean FLIP up to 0.0064, p99 up to 0.046, block bias up to
+/// 0.19/255 (debug-coverage); the Xeon with 128-bit vectors less (0.005 %, 6/255, FLIP 0.0015,
+/// block bias 0.06/255). The bounds take about twice the worst of those: mean FLIP 0.012, p99
+/// 0.08, > 3/255 on at most 0.05 % of the pixels (18 of 36 864; 6 x), block bias 0.4/255
+/// (2.1 x). Rounding noise averages out over a block; a real change does not: a fabric or base
+/// colour 2 % darker shifts a block by 0.49 (SheenChair, the weakest) to 1.47/255 (caught by the
+/// block bias alone: no pixel moves by more than 3/255), lights turned 5° move 17 to 41 % of
+/// the pixels by more than 3/255. tests/regression.rs renders those changes every run and fails
+/// if any passes.
 pub const GOLDEN: Tolerance = Tolerance {
-    flip_mean: 0.002,
-    flip_p99: 0.02,
-    abs: 2,
-    fail_fraction: 0.001,
+    flip_mean: 0.012,
+    flip_p99: 0.08,
+    abs: 3,
+    fail_fraction: 0.0005,
+    block_bias: Some(0.4),
 };
 
 /// One case of the suite.
@@ -146,12 +151,14 @@ pub const CPU_CLOSEUP: CpuBounds = CpuBounds {
         flip_p99: 0.35,
         abs: 24,
         fail_fraction: 0.15,
+        block_bias: None,
     },
     blocks: Tolerance {
         flip_mean: 0.03,
         flip_p99: 0.06,
         abs: 4,
         fail_fraction: 0.01,
+        block_bias: None,
     },
 };
 
@@ -168,12 +175,14 @@ pub const CPU_FAR: CpuBounds = CpuBounds {
         flip_p99: 0.12,
         abs: 8,
         fail_fraction: 0.001,
+        block_bias: None,
     },
     blocks: Tolerance {
         flip_mean: 0.025,
         flip_p99: 0.07,
         abs: 6,
         fail_fraction: 0.01,
+        block_bias: None,
     },
 };
 
@@ -191,12 +200,14 @@ pub const CPU_CLASSIC: CpuBounds = CpuBounds {
         flip_p99: 0.035,
         abs: 2,
         fail_fraction: 0.001,
+        block_bias: None,
     },
     blocks: Tolerance {
         flip_mean: 0.01,
         flip_p99: 0.03,
         abs: 2,
         fail_fraction: 0.001,
+        block_bias: None,
     },
 };
 
@@ -209,6 +220,7 @@ pub const MIRROR: Tolerance = Tolerance {
     flip_p99: 0.01,
     abs: 2,
     fail_fraction: 0.001,
+    block_bias: None,
 };
 
 /// The close-up with the shader's analytic weave (the exact coverage of the footprint, no
@@ -228,12 +240,14 @@ pub const CPU_ANALYTIC: CpuBounds = CpuBounds {
         flip_p99: 0.08,
         abs: 8,
         fail_fraction: 0.001,
+        block_bias: None,
     },
     blocks: Tolerance {
         flip_mean: 0.03,
         flip_p99: 0.06,
         abs: 4,
         fail_fraction: 0.01,
+        block_bias: None,
     },
 };
 
@@ -251,12 +265,14 @@ pub const CPU_SUPERSAMPLED: CpuBounds = CpuBounds {
         flip_p99: 0.25,
         abs: 32,
         fail_fraction: 0.02,
+        block_bias: None,
     },
     blocks: Tolerance {
         flip_mean: 0.03,
         flip_p99: 0.06,
         abs: 4,
         fail_fraction: 0.01,
+        block_bias: None,
     },
 };
 
@@ -273,12 +289,14 @@ pub const CPU_FILTERED_PARAMS: CpuBounds = CpuBounds {
         flip_p99: 0.65,
         abs: 8,
         fail_fraction: 0.25,
+        block_bias: None,
     },
     blocks: Tolerance {
         flip_mean: 0.15,
         flip_p99: 0.40,
         abs: 8,
         fail_fraction: 0.45,
+        block_bias: None,
     },
 };
 

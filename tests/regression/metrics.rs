@@ -12,7 +12,15 @@ pub struct Tolerance {
     pub abs: u8,
     /// At most this fraction of the pixels may fail.
     pub fail_fraction: f64,
+    /// The largest mean signed difference over a block of about `BIAS_BLOCK` pixels a side (all
+    /// three channels), in 1/255, when checked. Another CPU's code rounds scattered pixels up or
+    /// down by 1/255 and averages out over a block; a real change (a colour 2 % darker, a light
+    /// moved) shifts every pixel of a region the same way, below any per-pixel tolerance.
+    pub block_bias: Option<f32>,
 }
+
+/// About the side of the blocks of `Tolerance::block_bias`, in pixels.
+pub const BIAS_BLOCK: u32 = 32;
 
 /// What a comparison measured.
 #[derive(Clone, Copy, Debug, Default)]
@@ -25,6 +33,8 @@ pub struct Figures {
     /// Pixels with a channel difference above the tolerance's `abs`.
     pub failing_pixels: usize,
     pub pixels: usize,
+    /// The largest |mean signed difference| (test − reference) over a block (`block_bias`), 1/255.
+    pub block_bias: f32,
 }
 
 impl Figures {
@@ -35,13 +45,14 @@ impl Figures {
     /// One line: `FLIP mean 0.0012, p99 0.010, max 0.12; max |Δ| 3/255, 0.05 % of pixels > 2/255`.
     pub fn summary(&self, tol: &Tolerance) -> String {
         format!(
-            "FLIP mean {:.4}, p99 {:.4}, max {:.3}; max |Δ| {}/255, {:.3} % of pixels > {}/255",
+            "FLIP mean {:.4}, p99 {:.4}, max {:.3}; max |Δ| {}/255, {:.3} % of pixels > {}/255; block bias {:.3}/255",
             self.flip_mean,
             self.flip_p99,
             self.flip_max,
             self.max_abs,
             self.failing_fraction() * 100.0,
-            tol.abs
+            tol.abs,
+            self.block_bias
         )
     }
 }
@@ -70,16 +81,27 @@ impl Tolerance {
                 self.fail_fraction * 100.0
             ));
         }
+        if let Some(bound) = self.block_bias {
+            if !(f.block_bias <= bound) {
+                out.push(format!(
+                    "a block of ~{BIAS_BLOCK}x{BIAS_BLOCK} pixels is {:.3}/255 brighter or darker on average (at most {bound}/255)",
+                    f.block_bias
+                ));
+            }
+        }
         out
     }
 
     pub fn describe(&self) -> String {
         format!(
-            "FLIP mean ≤ {}, p99 ≤ {}; > {}/255 on ≤ {} % of pixels",
+            "FLIP mean ≤ {}, p99 ≤ {}; > {}/255 on ≤ {} % of pixels{}",
             self.flip_mean,
             self.flip_p99,
             self.abs,
-            self.fail_fraction * 100.0
+            self.fail_fraction * 100.0,
+            self.block_bias
+                .map(|b| format!("; block bias ≤ {b}/255"))
+                .unwrap_or_default()
         )
     }
 }
@@ -118,6 +140,7 @@ pub fn compare(reference: &[u8], test: &[u8], width: u32, height: u32, abs: u8) 
             failing_pixels += 1;
         }
     }
+    let block_bias = block_bias(reference, test, width, height);
     let error = nv_flip::flip(
         nv_flip::FlipImageRgb8::with_data(width, height, &rgb(reference)),
         nv_flip::FlipImageRgb8::with_data(width, height, &rgb(test)),
@@ -141,9 +164,37 @@ pub fn compare(reference: &[u8], test: &[u8], width: u32, height: u32, abs: u8) 
             max_abs,
             failing_pixels,
             pixels,
+            block_bias,
         },
         error_map,
     }
+}
+
+/// The largest |mean of (test − reference)| over the R, G, B bytes of a block, in 1/255. The
+/// image is cut into `round(width / BIAS_BLOCK) × round(height / BIAS_BLOCK)` blocks of about
+/// `BIAS_BLOCK` pixels a side that cover every pixel (the remainder spread over the blocks).
+fn block_bias(reference: &[u8], test: &[u8], width: u32, height: u32) -> f32 {
+    let blocks = |n: u32| ((n as f32 / BIAS_BLOCK as f32).round() as u32).clamp(1, n.max(1));
+    let (nx, ny) = (blocks(width), blocks(height));
+    let mut worst = 0f64;
+    for by in 0..ny {
+        for bx in 0..nx {
+            let (x0, x1) = (bx * width / nx, (bx + 1) * width / nx);
+            let (y0, y1) = (by * height / ny, (by + 1) * height / ny);
+            let mut sum = 0i64;
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let i = ((y * width + x) * 4) as usize;
+                    for c in 0..3 {
+                        sum += test[i + c] as i64 - reference[i + c] as i64;
+                    }
+                }
+            }
+            let n = (3 * (x1 - x0) * (y1 - y0)).max(1) as f64;
+            worst = worst.max((sum as f64 / n).abs());
+        }
+    }
+    worst as f32
 }
 
 /// The image mirrored left to right (RGBA8).
