@@ -83,7 +83,10 @@ mod tests {
             panic!("inside {}", "a dependency")
         });
         assert_eq!(r, Err("inside a dependency".to_string()));
-        assert!(!super::catching_panic(), "the flag is cleared after a panic too");
+        assert!(
+            !super::catching_panic(),
+            "the flag is cleared after a panic too"
+        );
         assert_eq!(super::catch_panic(|| 7), Ok(7));
     }
     use std::error::Error as _;

@@ -460,9 +460,11 @@ fn a_channel_to_a_missing_node_is_dropped_with_a_warning_naming_it() {
     let path = malformed("animation-target-missing-node.gltf");
     let s = scene::load(&path).expect("the scene still loads");
     assert!(
-        s.warnings.iter().any(|w| w.0.contains("animation 'broken' channel 0 targets node 99")
-            && w.0.contains("only 2 node(s)")
-            && w.0.contains("ignored")),
+        s.warnings.iter().any(
+            |w| w.0.contains("animation 'broken' channel 0 targets node 99")
+                && w.0.contains("only 2 node(s)")
+                && w.0.contains("ignored")
+        ),
         "{:?}",
         s.warnings
     );
@@ -490,7 +492,10 @@ fn a_channel_to_a_missing_node_is_dropped_with_a_warning_naming_it() {
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
-        assert!(err.contains("warning: ") && err.contains("targets node 99"), "{err}");
+        assert!(
+            err.contains("warning: ") && err.contains("targets node 99"),
+            "{err}"
+        );
         assert!(
             !err.contains("panicked") && !err.contains("backtrace") && !err.contains("unwrap"),
             "{args:?}: {err}"
@@ -515,7 +520,8 @@ fn zero_length_rotation_keyframes_drop_the_channel() {
         );
         let rest = s.draws[0].world;
         for t in [0.0, 0.5, 1.0, 2.0] {
-            s.pose(0, t).unwrap_or_else(|e| panic!("{file} at {t}: {e}"));
+            s.pose(0, t)
+                .unwrap_or_else(|e| panic!("{file} at {t}: {e}"));
             assert_eq!(s.draws[0].world, rest, "{file} at {t}");
         }
     }
@@ -552,8 +558,14 @@ fn a_weights_channel_counts_its_scalars() {
 #[test]
 fn deformations_that_overflow_are_errors_naming_the_mesh() {
     for (file, fragment) in [
-        ("skin-joint-matrix-overflow.gltf", "skin 'huge': the matrix of joint 0"),
-        ("morph-weight-overflow.gltf", "mesh 'quad' (node 0): its morph targets (weights [3e38]"),
+        (
+            "skin-joint-matrix-overflow.gltf",
+            "skin 'huge': the matrix of joint 0",
+        ),
+        (
+            "morph-weight-overflow.gltf",
+            "mesh 'quad' (node 0): its morph targets (weights [3e38]",
+        ),
     ] {
         let e = scene::load(&malformed(file)).expect_err(file).to_string();
         assert!(e.contains(fragment) && e.contains(file), "{file}: {e}");
@@ -561,7 +573,10 @@ fn deformations_that_overflow_are_errors_naming_the_mesh() {
     // At rest the animated weight is 0: the scene loads; half way it is 1.5e38 on a 3e38 delta.
     let mut s = scene::load(&malformed("animation-morph-weight-overflow.gltf")).unwrap();
     s.pose(0, 0.0).unwrap();
-    let e = s.pose(0, 0.5).expect_err("overflows at t = 0.5").to_string();
+    let e = s
+        .pose(0, 0.5)
+        .expect_err("overflows at t = 0.5")
+        .to_string();
     assert!(
         e.contains("mesh 'quad' (node 0): its morph targets")
             && e.contains("out of the range of 32-bit floating point in this pose"),

@@ -917,7 +917,10 @@ fn slurm_arrays_at_the_limits_are_counted_or_refused() {
     ])
     .unwrap_err()
     .to_string();
-    assert!(e.contains("4294967296 tasks") && e.contains("--tasks"), "{e}");
+    assert!(
+        e.contains("4294967296 tasks") && e.contains("--tasks"),
+        "{e}"
+    );
     let s = spec(&[
         ("SLURM_ARRAY_TASK_ID", "7"),
         ("SLURM_ARRAY_TASK_MAX", "4294967294"),
@@ -962,11 +965,34 @@ fn batch_outputs_are_checked_before_any_frame() {
     let original = std::fs::read(&scene).unwrap();
     let long = format!("f_%d_{}.png", "n".repeat(300));
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["s_0.glb", "--frames-range", "0..2", "-o", "s_%d.glb"], "-o of frame 0 's_0.glb' is 's_0.glb', a file this command reads"),
-        (vec!["--frames-range", "0..2", "-o", "f_%d.png", "--exr", "f_%d.png"], "--exr of frame 0 'f_0.png' and -o of frame 0 'f_0.png' are the same file"),
+        (
+            vec!["s_0.glb", "--frames-range", "0..2", "-o", "s_%d.glb"],
+            "-o of frame 0 's_0.glb' is 's_0.glb', a file this command reads",
+        ),
+        (
+            vec![
+                "--frames-range",
+                "0..2",
+                "-o",
+                "f_%d.png",
+                "--exr",
+                "f_%d.png",
+            ],
+            "--exr of frame 0 'f_0.png' and -o of frame 0 'f_0.png' are the same file",
+        ),
         (vec!["--frames-range", "0..1", "-o", &long], "at most 255"),
         // Across jobs: frame 10's PNG is frame 0's EXR.
-        (vec!["--frames-range", "0..12", "-o", "x_%d.png", "--exr", "x_1%d.png"], "-o of frame 10 'x_10.png' and --exr of frame 0 'x_10.png' are the same file"),
+        (
+            vec![
+                "--frames-range",
+                "0..12",
+                "-o",
+                "x_%d.png",
+                "--exr",
+                "x_1%d.png",
+            ],
+            "-o of frame 10 'x_10.png' and --exr of frame 0 'x_10.png' are the same file",
+        ),
     ];
     for (args, expect) in &cases {
         let o = weft_without_gpu()
@@ -996,7 +1022,14 @@ fn resume_renders_a_frame_again_when_its_exr_is_missing_or_truncated() {
     let render = |extra: &[&str]| {
         let mut c = weft();
         c.current_dir(dir.path())
-            .args(["render", "--size", "32x18", "--frames-range", "0..2", "--metrics-json"])
+            .args([
+                "render",
+                "--size",
+                "32x18",
+                "--frames-range",
+                "0..2",
+                "--metrics-json",
+            ])
             .args(["-o", "f_%d.png"])
             .args(extra);
         c

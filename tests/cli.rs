@@ -402,36 +402,97 @@ fn outputs_that_collide_with_inputs_or_each_other_are_refused_before_any_work() 
     let reads = "a file this command reads";
     let cases: Vec<(Vec<&str>, &str)> = vec![
         // The scene itself, by its name and by other spellings of it.
-        (vec!["render", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf"], reads),
-        (vec!["render", "SimpleSkin.gltf", "-o", "./SimpleSkin.gltf"], reads),
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf"],
+            reads,
+        ),
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "./SimpleSkin.gltf"],
+            reads,
+        ),
         (vec!["render", "SimpleSkin.gltf", "-o", &around], reads),
         // A buffer the scene refers to, and the environment map.
-        (vec!["render", "SimpleSkin.gltf", "-o", "skinGeometry.bin"], "skinGeometry.bin', a file this command reads"),
-        (vec!["render", "SimpleSkin.gltf", "--env", "room.hdr", "-o", "room.hdr"], reads),
-        (vec!["render", "SimpleSkin.gltf", "-o", "x.png", "--exr", "SimpleSkin.gltf"], "--exr 'SimpleSkin.gltf'"),
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "skinGeometry.bin"],
+            "skinGeometry.bin', a file this command reads",
+        ),
+        (
+            vec![
+                "render",
+                "SimpleSkin.gltf",
+                "--env",
+                "room.hdr",
+                "-o",
+                "room.hdr",
+            ],
+            reads,
+        ),
+        (
+            vec![
+                "render",
+                "SimpleSkin.gltf",
+                "-o",
+                "x.png",
+                "--exr",
+                "SimpleSkin.gltf",
+            ],
+            "--exr 'SimpleSkin.gltf'",
+        ),
         // The two outputs of one render.
-        (vec!["render", "SimpleSkin.gltf", "-o", "o.png", "--exr", "o.png"], "are the same file"),
-        (vec!["render", "-o", "o.png", "--exr", "./o.png"], "are the same file"),
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "o.png", "--exr", "o.png"],
+            "are the same file",
+        ),
+        (
+            vec!["render", "-o", "o.png", "--exr", "./o.png"],
+            "are the same file",
+        ),
         // Other commands: the same check.
-        (vec!["compare", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf"], reads),
+        (
+            vec!["compare", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf"],
+            reads,
+        ),
         (vec!["sheet", ".", "-o", "SimpleSkin.gltf"], reads),
-        (vec!["view", "SimpleSkin.gltf", "--screenshot", "SimpleSkin.gltf"], reads),
-        (vec!["fabric", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf", "--material", "0", "--preset", "denim-twill"], reads),
+        (
+            vec!["view", "SimpleSkin.gltf", "--screenshot", "SimpleSkin.gltf"],
+            reads,
+        ),
+        (
+            vec![
+                "fabric",
+                "SimpleSkin.gltf",
+                "-o",
+                "SimpleSkin.gltf",
+                "--material",
+                "0",
+                "--preset",
+                "denim-twill",
+            ],
+            reads,
+        ),
         // Names no file system takes, and directories.
         (vec!["render", "-o", &long], "at most 255"),
         (vec!["render", "-o", "."], "names no file"),
         (vec!["render", "-o", "sub/"], "names no file"),
     ];
     for (args, expect) in &cases {
-        let o = weft_without_gpu().current_dir(&dir).args(args).output().unwrap();
+        let o = weft_without_gpu()
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
         // (The scene's own warnings may come first.)
         assert!(
-            err.lines().any(|l| l.starts_with("error: ") && l.contains(expect)),
+            err.lines()
+                .any(|l| l.starts_with("error: ") && l.contains(expect)),
             "{args:?}: {err}"
         );
-        assert!(!err.contains("Vulkan") && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            !err.contains("Vulkan") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
         assert_eq!(snapshot(&dir), before, "{args:?} changed the folder");
     }
     // The scene file was not replaced: still the same glTF, byte for byte.
@@ -448,13 +509,24 @@ fn a_failed_render_leaves_none_of_its_outputs() {
     let dir = temp("leftover");
     let o = weft()
         .current_dir(&dir)
-        .args(["render", "--size", "16x9", "-o", "left.png", "--exr", "/nonexistent/o.exr"])
+        .args([
+            "render",
+            "--size",
+            "16x9",
+            "-o",
+            "left.png",
+            "--exr",
+            "/nonexistent/o.exr",
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("'/nonexistent' does not exist"), "{err}");
-    assert!(!dir.join("left.png").exists(), "the PNG of a failed render was left");
+    assert!(
+        !dir.join("left.png").exists(),
+        "the PNG of a failed render was left"
+    );
     assert!(snapshot(&dir).is_empty(), "{:?}", snapshot(&dir));
 }
 
@@ -466,18 +538,30 @@ fn one_pixel_renders_write_one_pixel() {
     for size in ["1x1", "2x1", "1x3"] {
         let o = weft()
             .current_dir(&dir)
-            .args(["render", "--size", size, "-o", "one.png", "--exr", "one.exr"])
+            .args([
+                "render", "--size", size, "-o", "one.png", "--exr", "one.exr",
+            ])
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(0), "{size}: {err}");
         let (w, h) = weft::render::parse_size(size).unwrap();
-        assert_eq!(image::open(dir.join("one.png")).unwrap().to_rgba8().dimensions(), (w, h));
+        assert_eq!(
+            image::open(dir.join("one.png"))
+                .unwrap()
+                .to_rgba8()
+                .dimensions(),
+            (w, h)
+        );
         let hdr = image::open(dir.join("one.exr")).unwrap().to_rgba32f();
         assert_eq!(hdr.dimensions(), (w, h));
         assert!(hdr.as_raw().iter().all(|v| v.is_finite()));
         let names: Vec<String> = snapshot(&dir).into_iter().map(|(n, _)| n).collect();
-        assert_eq!(names, ["one.exr", "one.png"], "{size}: something left behind");
+        assert_eq!(
+            names,
+            ["one.exr", "one.png"],
+            "{size}: something left behind"
+        );
     }
 }
 
@@ -493,7 +577,12 @@ fn the_longest_file_names_are_written() {
         .args(["render", "--size", "8x8", "-o", &name])
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(dir.join(&name).is_file());
 }
 
@@ -518,24 +607,45 @@ fn non_finite_number_flags_are_refused_before_any_gpu_work() {
             let err = String::from_utf8_lossy(&o.stderr);
             assert_eq!(o.status.code(), Some(1), "{flag} {value} {extra:?}: {err}");
             assert!(
-                err.starts_with("error: invalid value") && err.contains(&format!("{flag} {value} is not a finite number")),
+                err.starts_with("error: invalid value")
+                    && err.contains(&format!("{flag} {value} is not a finite number")),
                 "{flag} {value}: {err}"
             );
         }
     }
     // In a batch, the same refusal is bad input (exit 2).
     let o = weft_without_gpu()
-        .args(["render", "--frames-range", "0..1", "--dolly", "nan", "-o", "/nonexistent/f%d.png"])
+        .args([
+            "render",
+            "--frames-range",
+            "0..1",
+            "--dolly",
+            "nan",
+            "-o",
+            "/nonexistent/f%d.png",
+        ])
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// `weft sheet --columns 0` is refused (it was accepted, and a sheet of one column made).
 #[test]
 fn sheet_columns_must_be_at_least_one() {
     let o = weft_without_gpu()
-        .args(["sheet", "assets", "--columns", "0", "-o", "/nonexistent/s.png"])
+        .args([
+            "sheet",
+            "assets",
+            "--columns",
+            "0",
+            "-o",
+            "/nonexistent/s.png",
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);

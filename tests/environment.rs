@@ -291,7 +291,10 @@ fn environment_maps_of_the_wrong_shape_or_kind_are_refused() {
     let e = Environment::load(&exr("all-nan.exr", &|_| f32::NAN))
         .expect_err("no finite texel")
         .to_string();
-    assert!(e.contains("all-nan.exr") && e.contains("no finite texel"), "{e}");
+    assert!(
+        e.contains("all-nan.exr") && e.contains("no finite texel"),
+        "{e}"
+    );
     let env = Environment::load(&exr("some-nan.exr", &|i| {
         if i % 8 == 0 {
             f32::INFINITY
@@ -333,8 +336,18 @@ fn automatic_framing_looks_at_the_side_single_sided_surfaces_face() {
         s.draws[0].world = Mat4::from_rotation_y(degrees.to_radians());
         s
     };
-    for (degrees, expect) in [(0.0, 0.0), (180.0, 180.0), (90.0, 90.0), (-90.0, 270.0), (150.0, 180.0)] {
-        assert_eq!(curtain(degrees, false).framing_azimuth(), expect, "turned {degrees}");
+    for (degrees, expect) in [
+        (0.0, 0.0),
+        (180.0, 180.0),
+        (90.0, 90.0),
+        (-90.0, 270.0),
+        (150.0, 180.0),
+    ] {
+        assert_eq!(
+            curtain(degrees, false).framing_azimuth(),
+            expect,
+            "turned {degrees}"
+        );
     }
     assert_eq!(curtain(180.0, true).framing_azimuth(), 0.0, "double-sided");
     assert_eq!(scene::default_scene().framing_azimuth(), 0.0);
@@ -370,7 +383,10 @@ fn automatic_framing_looks_at_the_side_single_sided_surfaces_face() {
         let camera = s.camera(None).unwrap();
         light_sides.push(camera.view.transform_vector3(s.lights[0].direction));
     }
-    println!("red pixels from the front {} and from behind {}", red_pixels[0], red_pixels[1]);
+    println!(
+        "red pixels from the front {} and from behind {}",
+        red_pixels[0], red_pixels[1]
+    );
     assert!(red_pixels[0] > 300, "{red_pixels:?}");
     assert!(
         red_pixels[1] * 10 >= red_pixels[0] * 9 && red_pixels[1] * 10 <= red_pixels[0] * 11,

@@ -1090,12 +1090,18 @@ fn outputs_are_compared_with_inputs_by_the_file_they_name() {
     );
     assert!(linked.is_err());
     // Two spellings of one output.
-    let e = check(&[("-o", dir.join("a.png")), ("--exr", dir.join("sub/up/a.png"))])
-        .expect_err("one file");
+    let e = check(&[
+        ("-o", dir.join("a.png")),
+        ("--exr", dir.join("sub/up/a.png")),
+    ])
+    .expect_err("one file");
     assert!(e.contains("are the same file"), "{e}");
     // Names and places no file system takes.
     let e = check(&[("-o", dir.join("x".repeat(256)))]).expect_err("256 bytes");
-    assert!(e.contains("256 bytes long") && e.contains("at most 255"), "{e}");
+    assert!(
+        e.contains("256 bytes long") && e.contains("at most 255"),
+        "{e}"
+    );
     assert!(check(&[("-o", dir.join("x".repeat(255)))]).is_ok());
     let e = check(&[("-o", dir.join("s.gltf/x.png"))]).expect_err("under a file");
     assert!(e.contains("is not a directory"), "{e}");
@@ -1106,5 +1112,9 @@ fn outputs_are_compared_with_inputs_by_the_file_they_name() {
     // The batch classes: every such refusal is bad input (exit 2), and so is a name the file
     // system refuses at write time (ENAMETOOLONG), which used to be "retry" (75).
     let e = render::write_png(&dir.join("y".repeat(300)), 4, 4, &gradient(4, 4)).unwrap_err();
-    assert_eq!(weft::batch::ExitClass::of_error(&e), weft::batch::ExitClass::BadInput, "{e}");
+    assert_eq!(
+        weft::batch::ExitClass::of_error(&e),
+        weft::batch::ExitClass::BadInput,
+        "{e}"
+    );
 }

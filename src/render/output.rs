@@ -99,9 +99,9 @@ pub fn temp_name(name: &std::ffi::OsStr) -> String {
             cut -= 1;
         }
         // FNV-1a.
-        let hash = name
-            .bytes()
-            .fold(0x811c_9dc5u32, |h, b| (h ^ u32::from(b)).wrapping_mul(0x0100_0193));
+        let hash = name.bytes().fold(0x811c_9dc5u32, |h, b| {
+            (h ^ u32::from(b)).wrapping_mul(0x0100_0193)
+        });
         format!("{}~{hash:08x}", &name[..cut])
     };
     format!(".{shown}.{}.{thread}.tmp", std::process::id())
@@ -242,7 +242,13 @@ fn stage(
 
 /// Refuses a pixel buffer that is not exactly `width` x `height` texels of `channels` values
 /// (the encoders panic on a longer one).
-fn check_len(what: &str, width: u32, height: u32, channels: usize, len: usize) -> crate::Result<()> {
+fn check_len(
+    what: &str,
+    width: u32,
+    height: u32,
+    channels: usize,
+    len: usize,
+) -> crate::Result<()> {
     let expect = width as usize * height as usize * channels;
     if width == 0 || height == 0 || len != expect {
         return Err(Error::device(format!(
@@ -448,7 +454,12 @@ mod tests {
         let a = format!("{}.png", "x".repeat(246));
         let b = format!("{}.exr", "x".repeat(246));
         let (ta, tb) = (temp_name(a.as_ref()), temp_name(b.as_ref()));
-        assert!(ta.len() <= NAME_MAX && tb.len() <= NAME_MAX, "{} {}", ta.len(), tb.len());
+        assert!(
+            ta.len() <= NAME_MAX && tb.len() <= NAME_MAX,
+            "{} {}",
+            ta.len(),
+            tb.len()
+        );
         assert_ne!(ta, tb);
         // Short names are kept whole, as docs/batch.md describes them.
         assert!(temp_name("f_0001.png".as_ref()).starts_with(".f_0001.png."));

@@ -104,9 +104,8 @@ pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let (scene, files) = resources::recording_files(|| {
-        load_slice_with(&bytes, &source, Some(base_dir), options)
-    });
+    let (scene, files) =
+        resources::recording_files(|| load_slice_with(&bytes, &source, Some(base_dir), options));
     let mut scene = scene?;
     scene.files = std::iter::once(path.to_path_buf()).chain(files).collect();
     Ok(scene)
@@ -2114,7 +2113,10 @@ impl<'a> Loader<'a> {
                 let who = format!("animation '{name}' channel {c}");
                 // The gltf crate's validator does not check a channel's target node, and its
                 // Target::node() unwraps it: check before anything asks for it.
-                let node = doc.as_json().animations[anim.index()].channels[c].target.node.value();
+                let node = doc.as_json().animations[anim.index()].channels[c]
+                    .target
+                    .node
+                    .value();
                 if node >= doc.nodes().len() {
                     self.warn(format_args!(
                         "{who} targets node {node}, but the file has only {} node(s); the channel is ignored",

@@ -200,9 +200,14 @@ impl SlotUv {
             }
         }
         let [[a, b, c], [d, e, f]] = self.m;
-        [(lo[0], lo[1]), (lo[0], hi[1]), (hi[0], lo[1]), (hi[0], hi[1])]
-            .iter()
-            .any(|&(u, v)| !((a * u + b * v + c).is_finite() && (d * u + e * v + f).is_finite()))
+        [
+            (lo[0], lo[1]),
+            (lo[0], hi[1]),
+            (hi[0], lo[1]),
+            (hi[0], hi[1]),
+        ]
+        .iter()
+        .any(|&(u, v)| !((a * u + b * v + c).is_finite() && (d * u + e * v + f).is_finite()))
     }
 }
 
