@@ -40,9 +40,55 @@ impl Error {
     }
 }
 
+thread_local! {
+    static CATCHING: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
+}
+
+/// Runs `f`, turning a panic in it (a dependency's, on input that slipped past weft's checks)
+/// into `Err` with the panic's message. While `f` runs, [`catching_panic`] is true on this
+/// thread, so a panic hook can stay quiet about a panic that becomes an error (the `weft`
+/// binary's does: the user sees the error naming the file, not panic text and a backtrace).
+pub fn catch_panic<T>(f: impl FnOnce() -> T) -> std::result::Result<T, String> {
+    struct Depth;
+    impl Drop for Depth {
+        fn drop(&mut self) {
+            CATCHING.with(|c| c.set(c.get() - 1));
+        }
+    }
+    CATCHING.with(|c| c.set(c.get() + 1));
+    let _depth = Depth;
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|panic| {
+        panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no details".into())
+    })
+}
+
+/// Whether this thread is inside [`catch_panic`]: a panic now becomes an error, not a crash.
+pub fn catching_panic() -> bool {
+    CATCHING.with(|c| c.get() > 0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::Error;
+
+    #[test]
+    fn caught_panics_become_their_message() {
+        assert!(!super::catching_panic());
+        let r: Result<(), String> = super::catch_panic(|| {
+            assert!(super::catching_panic());
+            panic!("inside {}", "a dependency")
+        });
+        assert_eq!(r, Err("inside a dependency".to_string()));
+        assert!(
+            !super::catching_panic(),
+            "the flag is cleared after a panic too"
+        );
+        assert_eq!(super::catch_panic(|| 7), Ok(7));
+    }
     use std::error::Error as _;
 
     /// The OS message is the source, not also part of the message: a chain printer (anyhow's

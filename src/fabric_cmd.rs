@@ -209,15 +209,27 @@ pub fn run(args: FabricArgs) -> anyhow::Result<()> {
             output.display()
         ),
     }
-    if let (Ok(a), Ok(b)) = (input.canonicalize(), output.canonicalize()) {
-        if a == b {
-            anyhow::bail!("the output is the input; write the copy to another file");
-        }
-    }
     let in_dir = match input.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
+    let out_dir = match output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    // The output against what is read (the input and the files it refers to), as for render.
+    let mut inputs = vec![input.clone()];
+    if in_kind == "gltf" {
+        if let Ok(doc) = serde_json::from_slice::<serde_json::Value>(&bytes) {
+            inputs.extend(assets::external_files(&doc).iter().map(|f| in_dir.join(f)));
+        }
+    }
+    std::fs::create_dir_all(&out_dir)
+        .map_err(|e| anyhow::anyhow!("cannot create '{}': {e}", out_dir.display()))?;
+    weft::render::check_outputs(
+        &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+        &[weft::render::OutputPath::new("-o", output)],
+    )?;
     let source_name = input.display().to_string();
     let (out_bytes, applied) = assets::transform(
         &bytes,
@@ -225,12 +237,6 @@ pub fn run(args: FabricArgs) -> anyhow::Result<()> {
         Some(&in_dir),
         std::slice::from_ref(&request),
     )?;
-    let out_dir = match output.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    std::fs::create_dir_all(&out_dir)
-        .map_err(|e| anyhow::anyhow!("cannot create '{}': {e}", out_dir.display()))?;
     let copied = if in_kind == "gltf" {
         let doc: serde_json::Value = serde_json::from_slice(&out_bytes)?;
         assets::copy_external_files(&doc, &in_dir, &out_dir)?

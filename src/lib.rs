@@ -22,6 +22,6 @@ pub mod view;
 pub mod vk;
 
 mod error;
-pub use error::Error;
+pub use error::{catch_panic, catching_panic, Error};
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

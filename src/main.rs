@@ -72,7 +72,7 @@ struct SceneArgs {
           value_parser = |s: &str| render::parse_vec3("--target", s))]
     target: Option<glam::Vec3>,
     /// Vertical field of view of the --eye camera, in degrees.
-    #[arg(long, default_value_t = 40.0)]
+    #[arg(long, default_value_t = 40.0, value_parser = |s: &str| render::parse_finite("--fov", s))]
     fov: f32,
     /// How the weave becomes reflectance: nearest, filtered-params, mixture, supersampled:N.
     #[arg(long, default_value = "mixture", value_parser = Choice::new(
@@ -113,10 +113,12 @@ struct SceneArgs {
     #[arg(long, default_value = "studio")]
     env: String,
     /// Turn the environment about the vertical axis, in degrees.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--env-rotation", s))]
     env_rotation: f32,
     /// Scale the environment's radiance.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--env-intensity", s))]
     env_intensity: f32,
     /// What empty pixels show: env, env:BLUR (0..1), color, color:R,G,B (linear), none
     /// (transparent).
@@ -147,7 +149,8 @@ struct RenderArgs {
     #[arg(long)]
     exr: Option<PathBuf>,
     /// Exposure in EV (stops): the image is scaled by 2^EV before tone mapping.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--exposure", s))]
     exposure: f32,
     /// Turn on the Vulkan validation layer; any message it reports fails the render.
     #[arg(long)]
@@ -171,7 +174,8 @@ struct RenderArgs {
     fabric: Vec<String>,
     /// Pose the scene at this time of its animation, in seconds (clamped to the animation's
     /// keyframes); the first animation unless --animation says which.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--time", s))]
     time: Option<f32>,
     /// The glTF animation to pose (name or index; `weft plan` lists them), at --time (0 when left
     /// out).
@@ -193,14 +197,15 @@ struct BatchArgs {
           value_parser = |s: &str| weft::batch::FrameRange::parse(s))]
     frames_range: Option<weft::batch::FrameRange>,
     /// Frames per second of the sequence (the time of frame f is f / FPS).
-    #[arg(long, default_value_t = 24.0)]
+    #[arg(long, default_value_t = 24.0, value_parser = |s: &str| render::parse_finite("--fps", s))]
     fps: f32,
     /// Turn the camera about the vertical axis through the scene's centre, in degrees per second.
     #[arg(
         long,
         value_name = "DEGREES_PER_SECOND",
         default_value_t = 0.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = |s: &str| render::parse_finite("--orbit", s)
     )]
     orbit: f32,
     /// Move the camera along its view direction, in world units per second (negative: away).
@@ -208,10 +213,12 @@ struct BatchArgs {
         long,
         value_name = "UNITS_PER_SECOND",
         default_value_t = 0.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = |s: &str| render::parse_finite("--dolly", s)
     )]
     dolly: f32,
-    /// Skip frames whose PNG is already there, complete and of the frame's size.
+    /// Skip frames whose outputs are all there (the PNG, and the EXR with --exr), complete and
+    /// of the frame's size.
     #[arg(long)]
     resume: bool,
     /// This task's index, from 0 (overrides the engines' variables: SLURM_ARRAY_TASK_ID,
@@ -280,7 +287,8 @@ struct ViewArgs {
     #[command(flatten)]
     scene: SceneArgs,
     /// Exposure in EV (stops), as for render (the panel changes it live).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--exposure", s))]
     exposure: f32,
     /// Turn on the Vulkan validation layer; any message it reports ends the viewer with an error.
     #[arg(long)]
@@ -314,7 +322,7 @@ struct SheetArgs {
     #[arg(long, default_value = "256x192", value_parser = checked_size)]
     size: (u32, u32),
     /// Cells per row.
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..))]
     columns: u32,
     /// Environment, as for render: a .hdr/.exr file, studio or none.
     #[arg(long, default_value = "studio")]
@@ -335,7 +343,8 @@ struct CompareArgs {
     #[arg(short, long, default_value = "figure.png")]
     output: PathBuf,
     /// Exposure in EV (stops), as for render.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--exposure", s))]
     exposure: f32,
     /// Turn on the Vulkan validation layer; any message it reports fails the run.
     #[arg(long)]
@@ -369,7 +378,8 @@ struct BenchArgs {
     #[arg(long)]
     temporal: bool,
     /// Degrees the camera turns between frames in --temporal.
-    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--temporal-step", s))]
     temporal_step: f32,
     /// The environment of the --ibl bench (default: the repository's tests/data/env/lebombo_1k.hdr).
     #[arg(long)]
@@ -419,6 +429,15 @@ struct PlanArgs {
 }
 
 fn main() -> ExitCode {
+    // A panic the library catches and turns into an error (weft::catch_panic: a dependency's,
+    // on input that slipped past weft's checks) is reported as that error, naming the file;
+    // its panic text and backtrace would only bury it. Any other panic is a bug: shown as is.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !weft::catching_panic() {
+            default_hook(info);
+        }
+    }));
     // A bad flag value is bad input like a bad scene: exit 1 with clap's one-line message (the
     // library's own, naming the choices). Other usage errors, --help and --version as clap has
     // them.
@@ -555,12 +574,13 @@ fn load_scene_impl(
     let (env, own_env) = match args.env.as_str() {
         "none" => (None, false),
         "studio" => (Some(studio()), false),
-        path => (
-            Some(std::sync::Arc::new(weft::env::Environment::load(
-                std::path::Path::new(path),
-            )?)),
-            true,
-        ),
+        path => {
+            let env = weft::env::Environment::load(std::path::Path::new(path))?;
+            scene
+                .warnings
+                .extend(env.warnings.iter().cloned().map(scene::Warning));
+            (Some(std::sync::Arc::new(env)), true)
+        }
     };
     let environment = env.map(|e| {
         let mut l = weft::env::EnvLighting::new(e);
@@ -604,6 +624,23 @@ fn load_scene_impl(
     Ok((scene, options))
 }
 
+/// The files a command reads, which none of its outputs may be: the scene file, the buffers
+/// and images it refers to, and the environment map.
+fn inputs_of(args: &SceneArgs, scene: &Scene) -> Vec<PathBuf> {
+    let mut inputs: Vec<PathBuf> = args.scene.iter().cloned().collect();
+    inputs.extend(scene.files.iter().cloned());
+    if !matches!(args.env.as_str(), "none" | "studio") {
+        inputs.push(PathBuf::from(&args.env));
+    }
+    inputs
+}
+
+/// [`render::check_outputs`] with this command's inputs.
+fn check_outputs(inputs: &[PathBuf], outputs: &[render::OutputPath]) -> anyhow::Result<()> {
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    Ok(render::check_outputs(&inputs, outputs)?)
+}
+
 /// Poses `scene` for `--animation` / `--time` (nothing when both are left out).
 fn pose_scene(scene: &mut Scene, animation: Option<&str>, time: Option<f32>) -> anyhow::Result<()> {
     if animation.is_none() && time.is_none() {
@@ -633,6 +670,12 @@ fn run_view(args: ViewArgs) -> anyhow::Result<()> {
     let (scene, mut options) = load_scene(&args.scene)?;
     options.exposure = args.exposure;
     options.validate()?;
+    if let Some(shot) = &args.screenshot {
+        check_outputs(
+            &inputs_of(&args.scene, &scene),
+            &[render::OutputPath::new("--screenshot", shot)],
+        )?;
+    }
     let source = match &args.scene.scene {
         Some(p) => weft::view::SceneSource::File(p.clone()),
         None => weft::view::SceneSource::Builtin,
@@ -689,6 +732,9 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         .map_err(|_| anyhow::anyhow!("the Vulkan set-up thread panicked"))?;
     // A bad scene or flag is the error to report even when there is no driver too.
     let (scene, mut options) = loaded?;
+    let mut outputs = vec![render::OutputPath::new("-o", &args.output)];
+    outputs.extend(args.exr.iter().map(|e| render::OutputPath::new("--exr", e)));
+    check_outputs(&inputs_of(&args.scene, &scene), &outputs)?;
     let (mut renderer, setup_ms) = gpu?;
     options.exposure = args.exposure;
     options.read_hdr = args.exr.is_some();
@@ -721,7 +767,15 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     let render_ms = median(render_ms);
-    render::write_png(&args.output, frame.width, frame.height, &frame.ldr)?;
+    // Both outputs or neither (as a batch frame): encoded first, then renamed into place.
+    render::write_frame(
+        &args.output,
+        args.exr.as_deref(),
+        frame.width,
+        frame.height,
+        &frame.ldr,
+        &frame.hdr,
+    )?;
     eprintln!(
         "wrote {} ({}x{})",
         args.output.display(),
@@ -729,7 +783,6 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         frame.height
     );
     if let Some(exr) = &args.exr {
-        render::write_exr(exr, frame.width, frame.height, &frame.hdr)?;
         eprintln!("wrote {}", exr.display());
     }
     if args.timings {
@@ -815,7 +868,6 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
             )));
         }
     }
-    spec.check_directories()?;
     let jobs = spec.my_jobs();
     if jobs.is_empty() {
         eprintln!(
@@ -843,6 +895,9 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
     let (mut scene, mut options) = loaded?;
     options.exposure = args.exposure;
     options.validate()?;
+    // Every output of this task's jobs, against the inputs and each other (before the device's
+    // error, so that bad output paths are bad input on a node without a driver too).
+    check_outputs(&inputs_of(&args.scene, &scene), &spec.outputs())?;
     spec.motion = sequence::CameraMotion::centered(&scene, b.orbit, b.dolly)?;
     // The animation played: --animation's, else the file's first (a still scene has none).
     spec.animation = match args.animation.as_deref() {
@@ -940,6 +995,7 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
                 .join(", ")
         );
     }
+    check_outputs(&files, &[render::OutputPath::new("-o", &args.output)])?;
     let ctx = open_device(args.device.as_deref(), args.validate)?;
     let mut renderer = Renderer::new(ctx)?;
     let mut cells = Vec::new();
@@ -1122,6 +1178,10 @@ fn run_compare(args: CompareArgs) -> anyhow::Result<()> {
     let (scene, mut options) = load_scene_sized(&args.scene, "480x360")?;
     options.exposure = args.exposure;
     options.validate()?;
+    check_outputs(
+        &inputs_of(&args.scene, &scene),
+        &[render::OutputPath::new("-o", &args.output)],
+    )?;
     let ctx = open_device(args.device.as_deref(), args.validate)?;
     let mut renderer = Renderer::new(ctx)?;
     let figure = weft::compare::figure(&mut renderer, &scene, &options)?;

@@ -444,3 +444,142 @@ fn too_many_joints_is_an_error() {
         "{e}"
     );
 }
+
+// --- bad animation data, round two (project issue 30) -----------------------------------------
+
+fn malformed(name: &str) -> std::path::PathBuf {
+    root().join("tests/malformed").join(name)
+}
+
+/// A channel whose target node does not exist made the gltf crate panic while weft walked the
+/// animation; weft turned the panic into an error, but printed its text and a backtrace first.
+/// Now the channel is checked before the crate sees it, and dropped with a warning naming it,
+/// as every other bad channel is. `weft plan` and `weft render` print no panic text.
+#[test]
+fn a_channel_to_a_missing_node_is_dropped_with_a_warning_naming_it() {
+    let path = malformed("animation-target-missing-node.gltf");
+    let s = scene::load(&path).expect("the scene still loads");
+    assert!(
+        s.warnings.iter().any(
+            |w| w.0.contains("animation 'broken' channel 0 targets node 99")
+                && w.0.contains("only 2 node(s)")
+                && w.0.contains("ignored")
+        ),
+        "{:?}",
+        s.warnings
+    );
+    assert_eq!(s.animations()[0].duration, 0.0, "no usable channel left");
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        vec!["plan".to_string()],
+        vec![
+            "render".to_string(),
+            "--size".into(),
+            "16x9".into(),
+            "-o".into(),
+            dir.path().join("o.png").display().to_string(),
+        ],
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_weft"))
+            .args(&args)
+            .arg(&path)
+            .env("RUST_BACKTRACE", "1")
+            .env(
+                "WEFT_DEVICE",
+                std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
+            )
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        assert!(
+            err.contains("warning: ") && err.contains("targets node 99"),
+            "{err}"
+        );
+        assert!(
+            !err.contains("panicked") && !err.contains("backtrace") && !err.contains("unwrap"),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+/// A zero-length rotation keyframe drops the channel with a warning (LINEAR failed the whole
+/// render, blaming "an animated scale or translation"; STEP collapsed the node): posed anywhere,
+/// the node stays at rest.
+#[test]
+fn zero_length_rotation_keyframes_drop_the_channel() {
+    for file in [
+        "animation-zero-rotation-linear.gltf",
+        "animation-zero-rotation-step.gltf",
+    ] {
+        let mut s = scene::load(&malformed(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert!(
+            s.warnings.iter().any(|w| w.0.contains("channel 0 rotates by the quaternion [0.0, 0.0, 0.0, 0.0] at keyframe 1, which has zero length")),
+            "{file}: {:?}",
+            s.warnings
+        );
+        let rest = s.draws[0].world;
+        for t in [0.0, 0.5, 1.0, 2.0] {
+            s.pose(0, t)
+                .unwrap_or_else(|e| panic!("{file} at {t}: {e}"));
+            assert_eq!(s.draws[0].world, rest, "{file} at {t}");
+        }
+    }
+    // A usable rotation that is not unit length is normalised, not applied as a scale.
+    let c = weft::scene::animation::Channel::new(
+        0,
+        weft::scene::animation::Path::Rotation,
+        weft::scene::animation::Interpolation::Step,
+        vec![0.0],
+        vec![0.0, 0.0, 0.0, 2.0],
+        4,
+    )
+    .unwrap();
+    assert_eq!(c.sampler.values, [0.0, 0.0, 0.0, 1.0]);
+}
+
+/// A weights channel's count mismatch is reported in the accessor's own units: 2 keyframes of 2
+/// targets need 4 scalars; the file has 3 (the message said "1 output values": 3 / 2).
+#[test]
+fn a_weights_channel_counts_its_scalars() {
+    let s = scene::load(&malformed("animation-weights-count-mismatch.gltf")).unwrap();
+    assert!(
+        s.warnings.iter().any(|w| w.0.contains(
+            "2 keyframe times but 3 output values; Linear interpolation needs 2 value(s) per keyframe (4 in all)"
+        )),
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// Finite weights times finite deltas can overflow; so can finite joint matrices. Each product
+/// is checked where it is made: at load (the rest pose) and at every pose, with an error naming
+/// the mesh, instead of a mesh that vanishes.
+#[test]
+fn deformations_that_overflow_are_errors_naming_the_mesh() {
+    for (file, fragment) in [
+        (
+            "skin-joint-matrix-overflow.gltf",
+            "skin 'huge': the matrix of joint 0",
+        ),
+        (
+            "morph-weight-overflow.gltf",
+            "mesh 'quad' (node 0): its morph targets (weights [3e38]",
+        ),
+    ] {
+        let e = scene::load(&malformed(file)).expect_err(file).to_string();
+        assert!(e.contains(fragment) && e.contains(file), "{file}: {e}");
+    }
+    // At rest the animated weight is 0: the scene loads; half way it is 1.5e38 on a 3e38 delta.
+    let mut s = scene::load(&malformed("animation-morph-weight-overflow.gltf")).unwrap();
+    s.pose(0, 0.0).unwrap();
+    let e = s
+        .pose(0, 0.5)
+        .expect_err("overflows at t = 0.5")
+        .to_string();
+    assert!(
+        e.contains("mesh 'quad' (node 0): its morph targets")
+            && e.contains("out of the range of 32-bit floating point in this pose"),
+        "{e}"
+    );
+}

@@ -905,3 +905,157 @@ fn a_sequence_plays_the_animation_as_single_renders_pose_it() {
         );
     }
 }
+
+/// Slurm's numbers at their limits: an array up to 4294967295 has one task more than u32 holds
+/// (the count wrapped to 0), and a step of 0 is no array (it was read as 1).
+#[test]
+fn slurm_arrays_at_the_limits_are_counted_or_refused() {
+    let spec = |vars: &[(&str, &str)]| TaskSpec::resolve(None, None, env(vars));
+    let e = spec(&[
+        ("SLURM_ARRAY_TASK_ID", "7"),
+        ("SLURM_ARRAY_TASK_MAX", "4294967295"),
+    ])
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("4294967296 tasks") && e.contains("--tasks"),
+        "{e}"
+    );
+    let s = spec(&[
+        ("SLURM_ARRAY_TASK_ID", "7"),
+        ("SLURM_ARRAY_TASK_MAX", "4294967294"),
+    ])
+    .unwrap();
+    assert_eq!((s.index, s.count), (7, u32::MAX));
+    let s = spec(&[
+        ("SLURM_ARRAY_TASK_ID", "4294967295"),
+        ("SLURM_ARRAY_TASK_MIN", "1"),
+        ("SLURM_ARRAY_TASK_MAX", "4294967295"),
+    ])
+    .unwrap();
+    assert_eq!((s.index, s.count), (u32::MAX - 1, u32::MAX));
+    let e = spec(&[
+        ("SLURM_ARRAY_TASK_ID", "0"),
+        ("SLURM_ARRAY_TASK_MAX", "9"),
+        ("SLURM_ARRAY_TASK_STEP", "0"),
+    ])
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("SLURM_ARRAY_TASK_STEP is 0"), "{e}");
+    let e = spec(&[
+        ("SLURM_ARRAY_TASK_ID", "5"),
+        ("SLURM_ARRAY_TASK_MIN", "5"),
+        ("SLURM_ARRAY_TASK_MAX", "2"),
+    ])
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("below SLURM_ARRAY_TASK_MIN"), "{e}");
+}
+
+/// A batch's outputs are checked as a single render's, before any frame (project issue 30):
+/// against the inputs, against each other, and for names no file system takes. Each is bad
+/// input (exit 2, not 75: a farm would retry a 300-byte name forever), on a node without a
+/// driver too, and nothing is written.
+#[test]
+fn batch_outputs_are_checked_before_any_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = dir.path().join("s_0.glb");
+    std::fs::copy(root.join("assets/scenes/spheres.glb"), &scene).unwrap();
+    let original = std::fs::read(&scene).unwrap();
+    let long = format!("f_%d_{}.png", "n".repeat(300));
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["s_0.glb", "--frames-range", "0..2", "-o", "s_%d.glb"],
+            "-o of frame 0 's_0.glb' is 's_0.glb', a file this command reads",
+        ),
+        (
+            vec![
+                "--frames-range",
+                "0..2",
+                "-o",
+                "f_%d.png",
+                "--exr",
+                "f_%d.png",
+            ],
+            "--exr of frame 0 'f_0.png' and -o of frame 0 'f_0.png' are the same file",
+        ),
+        (vec!["--frames-range", "0..1", "-o", &long], "at most 255"),
+        // Across jobs: frame 10's PNG is frame 0's EXR.
+        (
+            vec![
+                "--frames-range",
+                "0..12",
+                "-o",
+                "x_%d.png",
+                "--exr",
+                "x_1%d.png",
+            ],
+            "-o of frame 10 'x_10.png' and --exr of frame 0 'x_10.png' are the same file",
+        ),
+    ];
+    for (args, expect) in &cases {
+        let o = weft_without_gpu()
+            .current_dir(dir.path())
+            .arg("render")
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!err.contains("Vulkan"), "{args:?}: {err}");
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["s_0.glb"], "{args:?}");
+    }
+    assert_eq!(std::fs::read(&scene).unwrap(), original);
+}
+
+/// `--resume` skips a job only when all its outputs are there (defect 5): a frame whose PNG is
+/// whole but whose requested EXR is missing or cut short is rendered again.
+#[test]
+fn resume_renders_a_frame_again_when_its_exr_is_missing_or_truncated() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |extra: &[&str]| {
+        let mut c = weft();
+        c.current_dir(dir.path())
+            .args([
+                "render",
+                "--size",
+                "32x18",
+                "--frames-range",
+                "0..2",
+                "--metrics-json",
+            ])
+            .args(["-o", "f_%d.png"])
+            .args(extra);
+        c
+    };
+    run_ok(&mut render(&[]));
+    let exr = |n: u32| dir.path().join(format!("f_{n}.exr"));
+    // The job again with --exr added: every EXR is missing, so every frame is rendered.
+    let o = run_ok(&mut render(&["--exr", "f_%d.exr", "--resume"]));
+    let status: Vec<_> = metrics(&o.stdout)
+        .iter()
+        .map(|m| m["status"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(status, ["rendered", "rendered", "rendered"]);
+    for n in 0..3 {
+        assert!(sequence::frame_done(&exr(n), 32, 18), "frame {n}'s EXR");
+    }
+    // One EXR cut short, one removed: those two frames again, the third skipped.
+    let whole = std::fs::read(exr(0)).unwrap();
+    std::fs::write(exr(0), &whole[..whole.len() / 2]).unwrap();
+    std::fs::remove_file(exr(2)).unwrap();
+    let o = run_ok(&mut render(&["--exr", "f_%d.exr", "--resume"]));
+    let status: Vec<_> = metrics(&o.stdout)
+        .iter()
+        .map(|m| m["status"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(status, ["rendered", "skipped", "rendered"]);
+    assert_eq!(std::fs::read(exr(0)).unwrap(), whole);
+    assert!(sequence::frame_done(&exr(2), 32, 18));
+}

@@ -353,3 +353,303 @@ fn os_message_appears_once() {
     assert!(err.contains("a-file"), "{err}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `weft` with no Vulkan driver: a command refused before any device work still says why.
+fn weft_without_gpu() -> Command {
+    let mut c = weft();
+    c.env("VK_ICD_FILENAMES", "/nonexistent")
+        .env("VK_DRIVER_FILES", "/nonexistent");
+    c
+}
+
+/// Every file in `dir` with its bytes, to show that a refused command changed nothing.
+fn snapshot(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// Outputs may not be inputs, nor each other (project issue 30, defects 1 and 4): one check,
+/// before any work, for every output of every command. Checked with no Vulkan driver: the
+/// refusal comes first, and nothing in the folder changes.
+#[test]
+fn outputs_that_collide_with_inputs_or_each_other_are_refused_before_any_work() {
+    let dir = temp("collide");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for f in std::fs::read_dir(root.join("tests/data/khronos/SimpleSkin/glTF")).unwrap() {
+        let f = f.unwrap();
+        std::fs::copy(f.path(), dir.join(f.file_name())).unwrap();
+    }
+    std::fs::copy(
+        root.join("tests/data/env/lebombo_1k.hdr"),
+        dir.join("room.hdr"),
+    )
+    .unwrap();
+    let before = snapshot(&dir);
+    // The scene again, through the folder's parent.
+    let around = format!(
+        "../{}/SimpleSkin.gltf",
+        dir.file_name().unwrap().to_string_lossy()
+    );
+    let long = format!("{}.png", "n".repeat(300));
+    let reads = "a file this command reads";
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        // The scene itself, by its name and by other spellings of it.
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf"],
+            reads,
+        ),
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "./SimpleSkin.gltf"],
+            reads,
+        ),
+        (vec!["render", "SimpleSkin.gltf", "-o", &around], reads),
+        // A buffer the scene refers to, and the environment map.
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "skinGeometry.bin"],
+            "skinGeometry.bin', a file this command reads",
+        ),
+        (
+            vec![
+                "render",
+                "SimpleSkin.gltf",
+                "--env",
+                "room.hdr",
+                "-o",
+                "room.hdr",
+            ],
+            reads,
+        ),
+        (
+            vec![
+                "render",
+                "SimpleSkin.gltf",
+                "-o",
+                "x.png",
+                "--exr",
+                "SimpleSkin.gltf",
+            ],
+            "--exr 'SimpleSkin.gltf'",
+        ),
+        // The two outputs of one render.
+        (
+            vec!["render", "SimpleSkin.gltf", "-o", "o.png", "--exr", "o.png"],
+            "are the same file",
+        ),
+        (
+            vec!["render", "-o", "o.png", "--exr", "./o.png"],
+            "are the same file",
+        ),
+        // Other commands: the same check.
+        (
+            vec!["compare", "SimpleSkin.gltf", "-o", "SimpleSkin.gltf"],
+            reads,
+        ),
+        (vec!["sheet", ".", "-o", "SimpleSkin.gltf"], reads),
+        (
+            vec!["view", "SimpleSkin.gltf", "--screenshot", "SimpleSkin.gltf"],
+            reads,
+        ),
+        (
+            vec![
+                "fabric",
+                "SimpleSkin.gltf",
+                "-o",
+                "SimpleSkin.gltf",
+                "--material",
+                "0",
+                "--preset",
+                "denim-twill",
+            ],
+            reads,
+        ),
+        // Names no file system takes, and directories.
+        (vec!["render", "-o", &long], "at most 255"),
+        (vec!["render", "-o", "."], "names no file"),
+        (vec!["render", "-o", "sub/"], "names no file"),
+    ];
+    for (args, expect) in &cases {
+        let o = weft_without_gpu()
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        // (The scene's own warnings may come first.)
+        assert!(
+            err.lines()
+                .any(|l| l.starts_with("error: ") && l.contains(expect)),
+            "{args:?}: {err}"
+        );
+        assert!(
+            !err.contains("Vulkan") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(snapshot(&dir), before, "{args:?} changed the folder");
+    }
+    // The scene file was not replaced: still the same glTF, byte for byte.
+    assert_eq!(
+        std::fs::read(dir.join("SimpleSkin.gltf")).unwrap(),
+        std::fs::read(root.join("tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf")).unwrap()
+    );
+}
+
+/// A failed single render leaves nothing behind (defect 7): its outputs are checked before the
+/// render, and written all or none.
+#[test]
+fn a_failed_render_leaves_none_of_its_outputs() {
+    let dir = temp("leftover");
+    let o = weft()
+        .current_dir(&dir)
+        .args([
+            "render",
+            "--size",
+            "16x9",
+            "-o",
+            "left.png",
+            "--exr",
+            "/nonexistent/o.exr",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("'/nonexistent' does not exist"), "{err}");
+    assert!(
+        !dir.join("left.png").exists(),
+        "the PNG of a failed render was left"
+    );
+    assert!(snapshot(&dir).is_empty(), "{:?}", snapshot(&dir));
+}
+
+/// Degenerate sizes: a 1 x 1 image is 4 bytes, a quarter of the smallest readback buffer; it
+/// panicked in the PNG encoder and left a 0-byte temporary file (defect 2).
+#[test]
+fn one_pixel_renders_write_one_pixel() {
+    let dir = temp("onepixel");
+    for size in ["1x1", "2x1", "1x3"] {
+        let o = weft()
+            .current_dir(&dir)
+            .args([
+                "render", "--size", size, "-o", "one.png", "--exr", "one.exr",
+            ])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(0), "{size}: {err}");
+        let (w, h) = weft::render::parse_size(size).unwrap();
+        assert_eq!(
+            image::open(dir.join("one.png"))
+                .unwrap()
+                .to_rgba8()
+                .dimensions(),
+            (w, h)
+        );
+        let hdr = image::open(dir.join("one.exr")).unwrap().to_rgba32f();
+        assert_eq!(hdr.dimensions(), (w, h));
+        assert!(hdr.as_raw().iter().all(|v| v.is_finite()));
+        let names: Vec<String> = snapshot(&dir).into_iter().map(|(n, _)| n).collect();
+        assert_eq!(
+            names,
+            ["one.exr", "one.png"],
+            "{size}: something left behind"
+        );
+    }
+}
+
+/// A long file name the file system takes (250 bytes) is written: the temporary file's name,
+/// which adds the process and thread ids, is kept under the limit too.
+#[test]
+fn the_longest_file_names_are_written() {
+    let dir = temp("longname");
+    let name = format!("{}.png", "l".repeat(246));
+    assert_eq!(name.len(), 250);
+    let o = weft()
+        .current_dir(&dir)
+        .args(["render", "--size", "8x8", "-o", &name])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(dir.join(&name).is_file());
+}
+
+/// Non-finite numbers are refused where a flag enters, whatever uses it later (defect 6:
+/// `--env-rotation NaN` with `--env none` placed the default key light at NaN).
+#[test]
+fn non_finite_number_flags_are_refused_before_any_gpu_work() {
+    for (flag, value) in [
+        ("--env-rotation", "NaN"),
+        ("--env-rotation", "inf"),
+        ("--env-intensity", "nan"),
+        ("--exposure", "-inf"),
+        ("--fov", "NaN"),
+        ("--time", "inf"),
+    ] {
+        for extra in [&["--env", "none"][..], &[][..]] {
+            let o = weft_without_gpu()
+                .args(["render", flag, value, "-o", "/nonexistent/never.png"])
+                .args(extra)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(1), "{flag} {value} {extra:?}: {err}");
+            assert!(
+                err.starts_with("error: invalid value")
+                    && err.contains(&format!("{flag} {value} is not a finite number")),
+                "{flag} {value}: {err}"
+            );
+        }
+    }
+    // In a batch, the same refusal is bad input (exit 2).
+    let o = weft_without_gpu()
+        .args([
+            "render",
+            "--frames-range",
+            "0..1",
+            "--dolly",
+            "nan",
+            "-o",
+            "/nonexistent/f%d.png",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// `weft sheet --columns 0` is refused (it was accepted, and a sheet of one column made).
+#[test]
+fn sheet_columns_must_be_at_least_one() {
+    let o = weft_without_gpu()
+        .args([
+            "sheet",
+            "assets",
+            "--columns",
+            "0",
+            "-o",
+            "/nonexistent/s.png",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("--columns") && err.contains("0"), "{err}");
+    assert!(!err.contains("Vulkan"), "{err}");
+}

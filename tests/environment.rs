@@ -240,3 +240,160 @@ fn default_lighting_adds_a_key_light_and_ground_only_where_asked() {
     stage(&mut s, LightsMode::Default, 0.0, false);
     assert_eq!(s.camera(None).unwrap().view, before);
 }
+
+/// Environment maps of the wrong shape or kind are refused by name (project issue 30): an
+/// equirectangular map is twice as wide as high; a PNG renamed .hdr is not radiance; an EXR with
+/// no finite texel holds no light. A map with a few non-finite texels loads, with a warning.
+#[test]
+fn environment_maps_of_the_wrong_shape_or_kind_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let hdr = |name: &str, w: u32, h: u32| {
+        let path = dir.path().join(name);
+        let img = image::Rgb32FImage::from_pixel(w, h, image::Rgb([0.5, 0.5, 0.5]));
+        image::DynamicImage::ImageRgb32F(img).save(&path).unwrap();
+        path
+    };
+    for (w, h) in [(1, 2), (4096, 1), (64, 64), (48, 64)] {
+        let path = hdr(&format!("shape-{w}x{h}.hdr"), w, h);
+        let e = Environment::load(&path).expect_err("not 2:1").to_string();
+        assert!(
+            e.contains(&format!("is {w}x{h}, not an equirectangular")) && e.contains("shape-"),
+            "{e}"
+        );
+    }
+    for (w, h) in [(2, 1), (64, 32), (2048, 1024)] {
+        let env = Environment::load(&hdr(&format!("ok-{w}x{h}.hdr"), w, h)).unwrap();
+        assert_eq!((env.width, env.height), (w, h));
+        assert!(env.warnings.is_empty(), "{:?}", env.warnings);
+    }
+    // A PNG under an HDR's name: its sRGB bytes are not radiance.
+    let png = dir.path().join("photo.png");
+    image::RgbImage::from_pixel(64, 32, image::Rgb([200, 100, 50]))
+        .save(&png)
+        .unwrap();
+    for name in ["photo.hdr", "photo.exr"] {
+        std::fs::copy(&png, dir.path().join(name)).unwrap();
+        let e = Environment::load(&dir.path().join(name))
+            .expect_err("a PNG")
+            .to_string();
+        assert!(e.contains(name) && e.contains("holds a PNG image"), "{e}");
+    }
+    // EXRs with NaN: all of it refused; some of it taken as black, said.
+    let exr = |name: &str, f: &dyn Fn(u32) -> f32| {
+        let path = dir.path().join(name);
+        let img = image::Rgb32FImage::from_fn(64, 32, |x, y| {
+            let v = f(y * 64 + x);
+            image::Rgb([v, v, v])
+        });
+        image::DynamicImage::ImageRgb32F(img).save(&path).unwrap();
+        path
+    };
+    let e = Environment::load(&exr("all-nan.exr", &|_| f32::NAN))
+        .expect_err("no finite texel")
+        .to_string();
+    assert!(
+        e.contains("all-nan.exr") && e.contains("no finite texel"),
+        "{e}"
+    );
+    let env = Environment::load(&exr("some-nan.exr", &|i| {
+        if i % 8 == 0 {
+            f32::INFINITY
+        } else {
+            1.0
+        }
+    }))
+    .unwrap();
+    assert_eq!(env.warnings.len(), 1, "{:?}", env.warnings);
+    assert!(
+        env.warnings[0].contains("256 of its 2048 texels are NaN or infinite"),
+        "{:?}",
+        env.warnings
+    );
+    assert!(env.rgb.iter().all(|v| v.is_finite()));
+}
+
+/// A single-sided sheet whose fronts face away from +Z (a curtain seen from behind) showed
+/// nothing but its shadow from the automatic camera (project issue 30): automatic framing now
+/// looks from the side the single-sided surfaces face, and the default key light turns with it.
+/// Double-sided surfaces and closed meshes keep the usual view from +Z.
+#[test]
+fn automatic_framing_looks_at_the_side_single_sided_surfaces_face() {
+    let red = Material {
+        name: "red".into(),
+        base_color: [0.8, 0.05, 0.05, 1.0],
+        ..Material::default()
+    };
+    // quad_scene's quad faces +Z; turned about +Y by `degrees`.
+    let curtain = |degrees: f32, double_sided: bool| {
+        let mut s = quad_scene(
+            Material {
+                double_sided,
+                ..red.clone()
+            },
+            vec![],
+        );
+        s.cameras.clear();
+        s.draws[0].world = Mat4::from_rotation_y(degrees.to_radians());
+        s
+    };
+    for (degrees, expect) in [
+        (0.0, 0.0),
+        (180.0, 180.0),
+        (90.0, 90.0),
+        (-90.0, 270.0),
+        (150.0, 180.0),
+    ] {
+        assert_eq!(
+            curtain(degrees, false).framing_azimuth(),
+            expect,
+            "turned {degrees}"
+        );
+    }
+    assert_eq!(curtain(180.0, true).framing_azimuth(), 0.0, "double-sided");
+    assert_eq!(scene::default_scene().framing_azimuth(), 0.0);
+    let eye = |s: &Scene| {
+        s.camera(None)
+            .unwrap()
+            .view
+            .inverse()
+            .transform_point3(glam::Vec3::ZERO)
+    };
+    let behind = curtain(180.0, false);
+    let e = eye(&behind);
+    assert!(e.z < -1.0 && e.y > 0.0 && e.x.abs() < 1e-4, "{e}");
+
+    // Rendered with the default lighting, the turned curtain shows as the unturned one does:
+    // its red front fills the middle, lit by the key light from the same side of the camera.
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let studio = Arc::new(Environment::studio());
+    let mut red_pixels = Vec::new();
+    let mut light_sides = Vec::new();
+    for degrees in [0.0, 180.0] {
+        let mut s = curtain(degrees, false);
+        assert!(stage(&mut s, LightsMode::Auto, 0.0, false));
+        let frame = renderer.render(&s, &options(Some(studio.clone()))).unwrap();
+        red_pixels.push(
+            frame
+                .ldr
+                .chunks_exact(4)
+                .filter(|p| p[0] > 60 && p[0] as u32 > 2 * p[1] as u32 + 10)
+                .count(),
+        );
+        // The light's direction seen from the camera: the same for both.
+        let camera = s.camera(None).unwrap();
+        light_sides.push(camera.view.transform_vector3(s.lights[0].direction));
+    }
+    println!(
+        "red pixels from the front {} and from behind {}",
+        red_pixels[0], red_pixels[1]
+    );
+    assert!(red_pixels[0] > 300, "{red_pixels:?}");
+    assert!(
+        red_pixels[1] * 10 >= red_pixels[0] * 9 && red_pixels[1] * 10 <= red_pixels[0] * 11,
+        "{red_pixels:?}"
+    );
+    assert!(
+        (light_sides[0] - light_sides[1]).length() < 1e-4,
+        "{light_sides:?}"
+    );
+}

@@ -214,7 +214,11 @@ fn catalogue() -> Vec<Entry> {
 /// What `weft render FILE ARGS` does before the GPU: load, then the options (mirrors main.rs).
 /// Renders at 64x36 unless the entry sets --size.
 fn prepare(path: &Path, args: &[String]) -> weft::Result<(Scene, RenderOptions)> {
-    let scene = scene::load(path)?;
+    let variant = args
+        .iter()
+        .position(|a| a == "--variant")
+        .and_then(|i| args.get(i + 1).cloned());
+    let scene = scene::load_with(path, &scene::LoadOptions { variant })?;
     let mut options = RenderOptions {
         width: 64,
         height: 36,
@@ -236,6 +240,7 @@ fn prepare(path: &Path, args: &[String]) -> weft::Result<(Scene, RenderOptions)>
             "--eye" => eye = Some(render::parse_vec3("--eye", &value)?),
             "--target" => target = Some(render::parse_vec3("--target", &value)?),
             "--fov" => fov = value.parse().expect("--fov takes degrees"),
+            "--variant" => {} // taken by the load above
             other => panic!("the catalogue uses {other}, which this test does not know"),
         }
     }
@@ -998,4 +1003,118 @@ fn threads_writing_one_target_do_not_collide() {
     render::write_file(&dir.join("a.csv"), b"x,y\n").unwrap();
     assert_eq!(std::fs::read(dir.join("a.csv")).unwrap(), b"x,y\n");
     assert_eq!(std::fs::read_dir(&*dir).unwrap().count(), 2);
+}
+
+// --- outputs, round two (project issue 30) --------------------------------------------------------
+
+fn listing(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// A frame's PNG and EXR are written all or none (a single render wrote the PNG first and left
+/// it when the EXR failed): a failure of either leaves neither, and an existing PNG as it was.
+#[test]
+fn a_frame_is_written_whole_or_not_at_all() {
+    let dir = TempDir::new("frame-whole");
+    let png = dir.join("f.png");
+    let ldr = gradient(4, 4);
+    let hdr = [0.5f32; 64];
+    // The EXR's directory is missing: no PNG.
+    let e = render::write_frame(&png, Some(&dir.join("no/f.exr")), 4, 4, &ldr, &hdr)
+        .expect_err("the EXR cannot be written")
+        .to_string();
+    assert!(e.contains("does not exist"), "{e}");
+    assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+    // An HDR value the EXR writer refuses, over an existing PNG: the old PNG stays, byte for byte.
+    render::write_png(&png, 4, 4, &gradient(4, 4)).unwrap();
+    let old = std::fs::read(&png).unwrap();
+    let mut bad = hdr;
+    bad[5] = f32::NAN;
+    let e = render::write_frame(&png, Some(&dir.join("f.exr")), 4, 4, &noise(4, 4), &bad)
+        .expect_err("NaN refused")
+        .to_string();
+    assert!(e.contains("non-finite"), "{e}");
+    assert_eq!(std::fs::read(&png).unwrap(), old);
+    assert_eq!(listing(&dir), ["f.png"]);
+    // Both good: both there, and nothing else.
+    render::write_frame(&png, Some(&dir.join("f.exr")), 4, 4, &ldr, &hdr).unwrap();
+    assert_eq!(listing(&dir), ["f.exr", "f.png"]);
+    // A pixel buffer of the wrong length is an error, not the encoder's panic (1 x 1 frames were
+    // read back as 16 bytes), and leaves no temporary file.
+    let e = render::write_png(&dir.join("one.png"), 1, 1, &[0u8; 16])
+        .expect_err("16 bytes for 1 pixel")
+        .to_string();
+    assert!(e.contains("holds 16 values, not the 4"), "{e}");
+    assert_eq!(listing(&dir), ["f.exr", "f.png"]);
+    // A staged file dropped before its commit (an error or a panic between) is removed.
+    let staged = render::stage_png(&dir.join("later.png"), 4, 4, &ldr).unwrap();
+    assert_eq!(listing(&dir).len(), 3, "the temporary file while staged");
+    drop(staged);
+    assert_eq!(listing(&dir), ["f.exr", "f.png"]);
+}
+
+/// The one output check (render, batch, sheet, compare, view, fabric): entries are compared by
+/// what a rename replaces, so every spelling of an input is caught, a link to its directory
+/// included, and an input named through a link protects the file it resolves to.
+#[test]
+fn outputs_are_compared_with_inputs_by_the_file_they_name() {
+    use render::OutputPath;
+    let dir = TempDir::new("check-outputs");
+    let scene = dir.join("s.gltf");
+    std::fs::write(&scene, b"{}").unwrap();
+    std::fs::create_dir(dir.join("sub")).unwrap();
+    std::os::unix::fs::symlink(&*dir, dir.join("sub/up")).unwrap();
+    std::os::unix::fs::symlink(&scene, dir.join("link.gltf")).unwrap();
+    let check = |outs: &[(&str, PathBuf)]| {
+        let outs: Vec<OutputPath> = outs.iter().map(|(f, p)| OutputPath::new(*f, p)).collect();
+        render::check_outputs(&[scene.as_path()], &outs).map_err(|e| e.to_string())
+    };
+    for spelling in [
+        scene.clone(),
+        dir.join("sub/../s.gltf"),
+        dir.join("sub/up/s.gltf"),
+        dir.join("./s.gltf"),
+    ] {
+        let e = check(&[("-o", spelling.clone())]).expect_err("the input");
+        assert!(e.contains("a file this command reads"), "{spelling:?}: {e}");
+    }
+    // An input named through a link: the file the link resolves to is what the command reads.
+    let linked = render::check_outputs(
+        &[dir.join("link.gltf").as_path()],
+        &[OutputPath::new("-o", dir.join("s.gltf"))],
+    );
+    assert!(linked.is_err());
+    // Two spellings of one output.
+    let e = check(&[
+        ("-o", dir.join("a.png")),
+        ("--exr", dir.join("sub/up/a.png")),
+    ])
+    .expect_err("one file");
+    assert!(e.contains("are the same file"), "{e}");
+    // Names and places no file system takes.
+    let e = check(&[("-o", dir.join("x".repeat(256)))]).expect_err("256 bytes");
+    assert!(
+        e.contains("256 bytes long") && e.contains("at most 255"),
+        "{e}"
+    );
+    assert!(check(&[("-o", dir.join("x".repeat(255)))]).is_ok());
+    let e = check(&[("-o", dir.join("s.gltf/x.png"))]).expect_err("under a file");
+    assert!(e.contains("is not a directory"), "{e}");
+    let e = check(&[("-o", dir.join("sub"))]).expect_err("a directory");
+    assert!(e.contains("is a directory"), "{e}");
+    // Distinct outputs beside the input are fine.
+    assert!(check(&[("-o", dir.join("a.png")), ("--exr", dir.join("a.exr"))]).is_ok());
+    // The batch classes: every such refusal is bad input (exit 2), and so is a name the file
+    // system refuses at write time (ENAMETOOLONG), which used to be "retry" (75).
+    let e = render::write_png(&dir.join("y".repeat(300)), 4, 4, &gradient(4, 4)).unwrap_err();
+    assert_eq!(
+        weft::batch::ExitClass::of_error(&e),
+        weft::batch::ExitClass::BadInput,
+        "{e}"
+    );
 }

@@ -205,6 +205,33 @@ def camera_doc(perspective):
     return d
 
 
+def add_animation(d, node, path, interpolation, times, values, kind):
+    """An animation with one channel on `path` of `node`, keyframes `times` and `values`."""
+    inp = d.push("accessors", {"bufferView": d.view(struct.pack("<%df" % len(times), *times)), "componentType": 5126,
+                               "count": len(times), "type": "SCALAR", "min": [min(times)], "max": [max(times)]})
+    flat = [x for row in values for x in row]
+    count = len(flat) // {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[kind]
+    out = d.push("accessors", {"bufferView": d.view(struct.pack("<%df" % len(flat), *flat)), "componentType": 5126, "count": count, "type": kind})
+    d.json["animations"] = [{"name": "broken", "channels": [{"sampler": 0, "target": {"node": node, "path": path}}],
+                             "samplers": [{"input": inp, "output": out, "interpolation": interpolation}]}]
+
+
+def animated_doc(node, path, interpolation, values):
+    """The quad with one animation channel of two keyframes (t = 0, 1) on `path` of `node`."""
+    d = quad_doc()
+    add_animation(d, node, path, interpolation, [0.0, 1.0], values, "VEC4" if path == "rotation" else "VEC3")
+    return d
+
+
+def morph_doc(delta, weights, targets):
+    """The quad with `targets` morph targets moving its positions by `delta`, at mesh `weights`."""
+    d = quad_doc()
+    prim = d.json["meshes"][0]["primitives"][0]
+    prim["targets"] = [{"POSITION": d.floats(delta, "VEC3")} for _ in range(targets)]
+    d.json["meshes"][0]["weights"] = weights
+    return d
+
+
 def build():
     # Controls: what the broken files are broken from.
     entry("valid-quad.gltf", gltf(quad_doc()), "nothing: the control every other file is a variation of", "renders")
@@ -427,6 +454,67 @@ def build():
     d = quad_doc()
     d.json["nodes"][0]["extras"] = {"cast_shadows": 3}
     entry("node-cast-shadows-number.gltf", gltf(d), "a node's \"extras\": {\"cast_shadows\": 3} (true or false is allowed)", "error: `extras.cast_shadows = 3`")
+
+    # Degenerate output sizes: readbacks smaller than the 16 bytes a Vulkan buffer is made at least.
+    for size in ["1x1", "1x2", "3x1"]:
+        entry("valid-quad-size-%s.gltf" % size, gltf(quad_doc()), "a valid scene, rendered at --size %s (an image of %d bytes)" % (size, 4 * eval(size.replace("x", "*"))), "renders", "--size " + size)
+
+    # Animation channels: every bad one is dropped with a warning naming it, the scene still loads.
+    entry("animation-target-missing-node.gltf", gltf(animated_doc(99, "translation", "LINEAR", [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]])),
+          "an animation channel whose target node 99 does not exist (the gltf crate's validator misses it, and its walk panicked)", "renders, warning: `targets node 99`")
+    entry("animation-zero-rotation-linear.gltf", gltf(animated_doc(0, "rotation", "LINEAR", [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]])),
+          "a LINEAR rotation channel with a zero-length quaternion keyframe (interpolated, it made the node's transform NaN)", "renders, warning: `which has zero length`")
+    entry("animation-zero-rotation-step.gltf", gltf(animated_doc(0, "rotation", "STEP", [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]])),
+          "a STEP rotation channel with a zero-length quaternion keyframe (it collapsed the node)", "renders, warning: `which has zero length`")
+    d = morph_doc([[0.0, 0.0, 0.1]] * 4, weights=[0.0, 0.0], targets=2)
+    add_animation(d, 0, "weights", "LINEAR", [0.0, 1.0], [[0.0], [0.5], [1.0]], "SCALAR")
+    entry("animation-weights-count-mismatch.gltf", gltf(d),
+          "a weights channel of a mesh with 2 morph targets: 2 keyframes, 3 output scalars (4 needed)", "renders, warning: `2 keyframe times but 3 output values`")
+
+    # Finite numbers whose products overflow: refused or repaired where the product is made.
+    d = quad_doc()
+    joints = d.push("accessors", {"bufferView": d.view(struct.pack("<16B", *([0] * 16))), "componentType": 5121, "count": 4, "type": "VEC4"})
+    weights = d.floats([[1.0, 0.0, 0.0, 0.0]] * 4, "VEC4")
+    prim = d.json["meshes"][0]["primitives"][0]
+    prim["attributes"]["JOINTS_0"] = joints
+    prim["attributes"]["WEIGHTS_0"] = weights
+    ibm = d.push("accessors", {"bufferView": d.view(struct.pack("<16f", 1e30, 0, 0, 0, 0, 1e30, 0, 0, 0, 0, 1e30, 0, 0, 0, 0, 1)), "componentType": 5126, "count": 1, "type": "MAT4"})
+    joint = d.push("nodes", {"name": "joint", "scale": [1e30, 1e30, 1e30]})
+    d.json["scenes"][0]["nodes"].append(joint)
+    d.json["skins"] = [{"name": "huge", "joints": [joint], "inverseBindMatrices": ibm}]
+    d.json["nodes"][0]["skin"] = 0
+    entry("skin-joint-matrix-overflow.gltf", gltf(d), "a skin whose inverse bind matrix scales by 1e30 and whose joint scales by 1e30: each finite, their product not (the mesh vanished)", "error: `overflows 32-bit floating point`")
+    entry("morph-weight-overflow.gltf", gltf(morph_doc([[3e38, 0.0, 0.0]] * 4, weights=[3e38], targets=1)),
+          "a morph target weight of 3e38 on a delta of 3e38 (the mesh vanished)", "error: `out of the range of 32-bit floating point`")
+    d = morph_doc([[3e38, 0.0, 0.0]] * 4, weights=[0.0], targets=1)
+    add_animation(d, 0, "weights", "LINEAR", [0.0, 1.0], [[0.0], [3e38]], "SCALAR")
+    entry("animation-morph-weight-overflow.gltf", gltf(d),
+          "a morph target delta of 3e38, animated from weight 0 to 3e38: the rest pose is fine; posed at t = 0.5 the product overflows (tests/animation.rs poses it: an error naming the mesh)", "renders")
+    tiny = png(2, 2, [[255, 0, 0, 255, 0, 255, 0, 255], [0, 0, 255, 255, 255, 255, 255, 128]])
+    d = textured_doc({"uri": png_uri(tiny)})
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = {"KHR_texture_transform": {"scale": [3e38, 3e38], "offset": [3e38, 3e38]}}
+    d.json["extensionsUsed"].append("KHR_texture_transform")
+    entry("texture-transform-overflow.gltf", gltf(d), "a KHR_texture_transform of scale and offset 3e38: finite, but at texture coordinate 1 the result is not (the surface was black)", "renders, warning: `out of the range of 32-bit floating point`")
+    d = textured_doc({"uri": png_uri(tiny)})
+    d.json["meshes"] = []
+    d.json["nodes"] = d.json["nodes"][1:]
+    d.json["scenes"][0]["nodes"] = [0]
+    d.mesh(QUAD_P, QUAD_N, [[0.0, 1e20], [1e20, 1e20], [1e20, 0.0], [0.0, 0.0]], None, QUAD_I, 0)
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = {"KHR_texture_transform": {"scale": [1e19, 1e19]}}
+    d.json["extensionsUsed"].append("KHR_texture_transform")
+    entry("texture-transform-overflow-baked.gltf", gltf(d), "texture coordinates of 1e20 through a KHR_texture_transform scale of 1e19 (baked into the vertices: 1e39 overflows)", "renders, warning: `made so by its material's KHR_texture_transform`")
+
+    # KHR_materials_variants: a mapping is checked against the file's materials, not the loader's.
+    d = Doc()
+    d.json["materials"] = [{"name": "grey"}]
+    d.mesh(QUAD_P, QUAD_N, QUAD_UV, None, QUAD_I, None)
+    prim = d.mesh([[p[0] + 3.0, p[1], p[2]] for p in QUAD_P], QUAD_N, QUAD_UV, None, QUAD_I, 0)
+    prim["extensions"] = {"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [0]}]}}
+    d.json["extensions"] = {"KHR_materials_variants": {"variants": [{"name": "red"}]}}
+    d.json["extensionsUsed"] = ["KHR_materials_variants"]
+    d.light()
+    d.json["extensions"]["KHR_materials_variants"] = {"variants": [{"name": "red"}]}
+    entry("variant-mapping-past-materials.gltf", gltf(d), "a variant maps a primitive to material 1 of a file with one material (weft's own default material, made for another primitive, sat at index 1)", "error: `names material 1, but the file has 1 materials`", "--variant red")
 
     # Made at run time by tests/robustness.rs (120 MB of indices): listed so the table is complete.
     ENTRIES.append((

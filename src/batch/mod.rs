@@ -182,11 +182,31 @@ impl TaskSpec {
             let id = parse_env_u32("SLURM_ARRAY_TASK_ID", &id)?;
             let get = |k: &str| env(k).map(|v| parse_env_u32(k, &v)).transpose();
             let min = get("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
-            let step = get("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1).max(1);
+            let step = get("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1);
+            if step == 0 {
+                return Err(Error::input(
+                    "SLURM_ARRAY_TASK_STEP is 0: an array's step is at least 1 (unset it for 1)",
+                ));
+            }
             let count = match (tasks, get("SLURM_ARRAY_TASK_COUNT")?, get("SLURM_ARRAY_TASK_MAX")?) {
                 (Some(n), _, _) => n,
                 (None, Some(n), _) => n,
-                (None, None, Some(max)) if max >= min => (max - min) / step + 1,
+                // In u64: MAX = 4294967295 with MIN 0 and STEP 1 is 2^32 tasks, one more than
+                // u32 holds (it wrapped to 0).
+                (None, None, Some(max)) if max >= min => {
+                    let n = u64::from(max - min) / u64::from(step) + 1;
+                    u32::try_from(n).map_err(|_| {
+                        Error::input(format!(
+                            "SLURM_ARRAY_TASK_MIN/MAX/STEP ({min}, {max}, {step}) make an array of {n} tasks, more than weft can count ({}): pass --tasks N",
+                            u32::MAX
+                        ))
+                    })?
+                }
+                (None, None, Some(max)) => {
+                    return Err(Error::input(format!(
+                        "SLURM_ARRAY_TASK_MAX {max} is below SLURM_ARRAY_TASK_MIN {min}: pass --tasks N"
+                    )))
+                }
                 _ => {
                     return Err(Error::input(
                         "SLURM_ARRAY_TASK_ID is set but neither SLURM_ARRAY_TASK_COUNT nor SLURM_ARRAY_TASK_MAX: pass --tasks N",
@@ -610,7 +630,9 @@ impl ExitClass {
                 | std::io::ErrorKind::PermissionDenied
                 | std::io::ErrorKind::ReadOnlyFilesystem
                 | std::io::ErrorKind::IsADirectory
-                | std::io::ErrorKind::NotADirectory => ExitClass::BadInput,
+                | std::io::ErrorKind::NotADirectory
+                | std::io::ErrorKind::InvalidFilename
+                | std::io::ErrorKind::InvalidInput => ExitClass::BadInput,
                 _ => ExitClass::TempFail,
             },
         }

@@ -135,7 +135,7 @@ pub struct SequenceSpec {
     pub split: Split,
     pub output: OutputPattern,
     pub exr: Option<OutputPattern>,
-    /// Skip jobs whose PNG is already there (a complete image of the frame's size).
+    /// Skip jobs whose outputs are all there (complete images of the frame's size).
     pub resume: bool,
 }
 
@@ -156,31 +156,44 @@ impl SequenceSpec {
         Ok(())
     }
 
-    /// Refuses, before any rendering, output directories of this task's jobs that do not exist
-    /// (a frame would otherwise fail only after the device is open and earlier frames are done).
-    pub fn check_directories(&self) -> crate::Result<()> {
-        let mut seen = std::collections::HashSet::new();
+    /// Every file this task's jobs write (the PNG, and the EXR with `--exr`), named for
+    /// messages: what `render::check_outputs` checks before any rendering (against the inputs
+    /// and each other: directories that exist, names the file system takes, no two jobs or
+    /// patterns on one file).
+    pub fn outputs(&self) -> Vec<crate::render::OutputPath> {
+        let mut out = Vec::new();
         for job in self.my_jobs() {
-            let mut paths = vec![self.png_path(&job)];
-            if let Some(exr) = &self.exr {
-                paths.push(exr.path(job.frame, self.sweep_value(&job)));
-            }
-            for path in paths {
-                let dir = path
-                    .parent()
-                    .filter(|p| !p.as_os_str().is_empty())
-                    .unwrap_or(std::path::Path::new("."))
-                    .to_path_buf();
-                if seen.insert(dir.clone()) && !dir.is_dir() {
-                    return Err(Error::input(format!(
-                        "the output directory '{}' (of '{}') does not exist: create it, or choose another -o",
-                        dir.display(),
-                        path.display()
-                    )));
-                }
+            let of = match self.sweep_value(&job) {
+                Some(v) => format!(
+                    " of frame {} at {} {v}",
+                    job.frame,
+                    self.sweep.as_ref().map_or("", |s| s.key.name())
+                ),
+                None => format!(" of frame {}", job.frame),
+            };
+            out.push(crate::render::OutputPath::new(
+                format!("-o{of}"),
+                self.png_path(&job),
+            ));
+            if let Some(path) = self.exr_path(&job) {
+                out.push(crate::render::OutputPath::new(format!("--exr{of}"), path));
             }
         }
-        Ok(())
+        out
+    }
+
+    /// Whether every output of `job` is already there, complete and `width` x `height` (what
+    /// `--resume` skips): the PNG, and the EXR when one is asked for. A job with a missing or
+    /// truncated EXR is rendered again, even if its PNG is whole.
+    pub fn job_done(&self, job: &Job, width: u32, height: u32) -> bool {
+        frame_done(&self.png_path(job), width, height)
+            && self
+                .exr_path(job)
+                .is_none_or(|exr| frame_done(&exr, width, height))
+    }
+
+    fn exr_path(&self, job: &Job) -> Option<PathBuf> {
+        Some(self.exr.as_ref()?.path(job.frame, self.sweep_value(job)))
     }
 
     /// The jobs of this task, in the order they are rendered.
@@ -284,7 +297,7 @@ pub fn run(
     for job in spec.my_jobs() {
         let time = spec.time(job.frame);
         let output = spec.png_path(&job);
-        if spec.resume && frame_done(&output, base.width, base.height) {
+        if spec.resume && spec.job_done(&job, base.width, base.height) {
             let r = JobReport {
                 job,
                 time,
@@ -317,13 +330,15 @@ pub fn run(
         let frame = renderer.render_frame(scene, gpu, &options)?;
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
         let start = Instant::now();
-        if let Some(exr) = &spec.exr {
-            let path = exr.path(job.frame, spec.sweep_value(&job));
-            crate::render::write_exr(&path, frame.width, frame.height, &frame.hdr)?;
-        }
-        // The PNG last: it is what --resume looks for, so a frame counts as done only once
-        // everything of it is written.
-        crate::render::write_png(&output, frame.width, frame.height, &frame.ldr)?;
+        // All of the frame or none of it; the PNG is renamed into place last.
+        crate::render::write_frame(
+            &output,
+            spec.exr_path(&job).as_deref(),
+            frame.width,
+            frame.height,
+            &frame.ldr,
+            &frame.hdr,
+        )?;
         let r = JobReport {
             job,
             time,

@@ -32,6 +32,8 @@ pub struct Environment {
     pub width: u32,
     pub height: u32,
     pub rgb: Vec<f32>,
+    /// What loading repaired, for the user (non-finite texels replaced by 0).
+    pub warnings: Vec<String>,
     hash: [u8; 32],
 }
 
@@ -83,6 +85,7 @@ impl Environment {
             width,
             height,
             rgb,
+            warnings: Vec::new(),
             hash: h.finalize().into(),
         })
     }
@@ -109,6 +112,20 @@ impl Environment {
             .map_err(|e| Error::input(format!("cannot open environment map '{shown}': {e}")))?
             .with_guessed_format()
             .map_err(|e| Error::input(format!("cannot read environment map '{shown}': {e}")))?;
+        // By what the bytes are, not what the name says: a PNG renamed .hdr would decode, and
+        // its sRGB bytes would be taken for radiance.
+        match reader.format() {
+            Some(image::ImageFormat::Hdr | image::ImageFormat::OpenExr) => {}
+            other => {
+                return Err(Error::input(format!(
+                    "environment map '{shown}' is named .{ext} but {}: weft reads equirectangular Radiance HDR and OpenEXR maps (linear radiance); convert it to one of those",
+                    match other {
+                        Some(f) => format!("holds a {} image", format!("{f:?}").to_uppercase()),
+                        None => "is neither a Radiance HDR nor an OpenEXR file".into(),
+                    }
+                )))
+            }
+        }
         let mut reader = reader;
         // The environment is at most MAX_ENV_SIDE square in f32 RGB(A).
         let mut limits = image::Limits::default();
@@ -123,7 +140,31 @@ impl Environment {
         })?;
         let rgb = img.into_rgb32f();
         let (w, h) = rgb.dimensions();
-        Environment::from_rgb(shown.to_string(), w, h, rgb.into_raw())
+        // An equirectangular map spans 360 by 180 degrees: twice as wide as high. Anything else
+        // (a cube cross, a strip, a photo) would be stretched over the sphere.
+        if w.abs_diff(2 * h) > (w / 100).max(1) {
+            return Err(Error::input(format!(
+                "environment map '{shown}' is {w}x{h}, not an equirectangular (latitude-longitude) map, which is twice as wide as high (e.g. 2048x1024); convert it to one"
+            )));
+        }
+        let rgb = rgb.into_raw();
+        let texels = rgb.len() / 3;
+        let bad = rgb
+            .chunks_exact(3)
+            .filter(|t| !t.iter().all(|v| v.is_finite()))
+            .count();
+        if bad == texels {
+            return Err(Error::input(format!(
+                "environment map '{shown}' has no finite texel ({w}x{h}, every one NaN or infinite), so it holds no light: re-export it"
+            )));
+        }
+        let mut env = Environment::from_rgb(shown.to_string(), w, h, rgb)?;
+        if bad > 0 {
+            env.warnings.push(format!(
+                "environment map '{shown}': {bad} of its {texels} texels are NaN or infinite; they are taken as black"
+            ));
+        }
+        Ok(env)
     }
 
     /// A uniform environment of radiance `value` (the white furnace).
@@ -723,14 +764,18 @@ pub fn stage(
     let Some(bounds) = scene.bounds() else {
         return false;
     };
+    // The key light stays where it is for the camera: when automatic framing looks from
+    // another side (the one a single-sided sheet faces), the light turns with it.
+    let mut turn = 0.0;
     if scene.cameras.is_empty() {
         let camera = scene.auto_camera();
         scene.cameras.push(camera);
+        turn = scene.framing_azimuth();
     }
     let k = glam::Vec3::from(STUDIO_KEY_DIRECTION)
         .normalize()
         .as_dvec3();
-    let to_light = glam::DVec3::from(world_from_env(rotation, k.into())).as_vec3();
+    let to_light = glam::DVec3::from(world_from_env(rotation + turn, k.into())).as_vec3();
     scene.lights.push(Light {
         name: "default key light".into(),
         kind: LightKind::Directional,

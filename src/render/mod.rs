@@ -15,7 +15,10 @@ pub use frame::{
     check_target_memory, f16_to_f32, host_available_bytes, readback_bytes_per_pixel, Frame,
     FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer, TARGET_BYTES_PER_PIXEL,
 };
-pub use output::{temp_name, write_exr, write_file, write_png};
+pub use output::{
+    check_outputs, commit_all, stage_exr, stage_png, temp_name, write_exr, write_file, write_frame,
+    write_png, OutputPath, Staged, NAME_MAX, PATH_MAX,
+};
 pub use plan::{EnvPlan, FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
 
 use crate::Error;
@@ -492,6 +495,18 @@ pub fn parse_vec3(what: &str, text: &str) -> crate::Result<glam::Vec3> {
             Ok(glam::Vec3::new(x, y, z))
         }
         _ => Err(bad()),
+    }
+}
+
+/// Parses a number flag (`--env-rotation 90`): NaN and infinities are refused here, where the
+/// value enters, whatever later uses it (an environment, the default key light, a camera).
+pub fn parse_finite(what: &str, text: &str) -> crate::Result<f32> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(Error::input(format!(
+            "{what} {text} is not a finite number: give an ordinary number (NaN and infinities have no meaning here)"
+        ))),
+        Err(_) => Err(Error::input(format!("{what} '{text}' is not a number"))),
     }
 }
 

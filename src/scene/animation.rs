@@ -71,6 +71,20 @@ impl Sampler {
         width: usize,
         what: &str,
     ) -> std::result::Result<Sampler, String> {
+        Sampler::counted(interpolation, times, values, width, width, what)
+    }
+
+    /// [`Sampler::new`], with messages counting the output accessor's elements of `element`
+    /// floats each (`width` for a vector, 1 for morph weights, which glTF stores as scalars,
+    /// `width` of them per keyframe).
+    fn counted(
+        interpolation: Interpolation,
+        times: Vec<f32>,
+        values: Vec<f32>,
+        width: usize,
+        element: usize,
+        what: &str,
+    ) -> std::result::Result<Sampler, String> {
         if times.is_empty() {
             return Err(format!("{what} has no keyframes"));
         }
@@ -94,13 +108,14 @@ impl Sampler {
             width
         };
         if width == 0 || values.len() != times.len() * per_key {
+            let element = element.max(1);
             return Err(format!(
                 "{what} has {} keyframe times but {} output values; {:?} interpolation needs {} value(s) per keyframe ({} in all)",
                 times.len(),
-                values.len() / width.max(1),
+                values.len() / element,
                 interpolation,
-                per_key / width.max(1),
-                times.len() * per_key / width.max(1)
+                per_key / element,
+                times.len() * per_key / element
             ));
         }
         if values.iter().any(|v| !v.is_finite()) {
@@ -177,7 +192,7 @@ impl Sampler {
                     let q = if q.is_finite() {
                         q
                     } else {
-                        quat(self.value(k))
+                        quat(self.value(k)).normalize()
                     };
                     out.copy_from_slice(&q.to_array());
                 }
@@ -222,6 +237,49 @@ pub struct Channel {
     pub node: usize,
     pub path: Path,
     pub sampler: Sampler,
+}
+
+impl Channel {
+    /// A channel on `path` of `node` from a sampler's keyframes, checked as [`Sampler::new`]
+    /// checks them and for what `path` needs: a rotation's keyframe values must be quaternions
+    /// of non-zero length (glTF stores unit ones; a zero one is no rotation at all and would
+    /// collapse the node or, interpolated, make its transform NaN). They are normalised, so
+    /// STEP and LINEAR sampling see unit quaternions. The error says why the channel cannot be
+    /// used (the loader drops it with a warning).
+    pub fn new(
+        node: usize,
+        path: Path,
+        interpolation: Interpolation,
+        times: Vec<f32>,
+        values: Vec<f32>,
+        width: usize,
+    ) -> std::result::Result<Channel, String> {
+        let element = if path == Path::Weights { 1 } else { width };
+        let mut sampler =
+            Sampler::counted(interpolation, times, values, width, element, "its sampler")?;
+        if path == Path::Rotation && width == 4 {
+            for k in 0..sampler.times.len() {
+                let q = quat(sampler.value(k));
+                let length = q.length();
+                if !(length > 1e-6 && length.is_finite()) {
+                    return Err(format!(
+                        "rotates by the quaternion {:?} at keyframe {k}, which has {} length; a rotation keyframe must be a unit quaternion",
+                        q.to_array(),
+                        if length.is_finite() { "zero" } else { "no finite" }
+                    ));
+                }
+                if interpolation != Interpolation::CubicSpline {
+                    let unit = q / length;
+                    sampler.values[k * 4..k * 4 + 4].copy_from_slice(&unit.to_array());
+                }
+            }
+        }
+        Ok(Channel {
+            node,
+            path,
+            sampler,
+        })
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -480,13 +538,22 @@ impl Scene {
         let world = self.rig.world_matrices(trs);
         if let Some(i) = world.iter().position(|m| !m.is_finite()) {
             return Err(Error::input(format!(
-                "{}: node {i} has a world transform that is not finite in this pose (an animated scale or translation overflows); check the animation's output values",
+                "{}: node {i} has a world transform that is not finite in this pose (its or its parents' translation, rotation or scale, as the file or the animation sets them, overflow 32-bit floating point); check the node and the animation's output values",
                 self.source
             )));
         }
+        // Finite factors can still overflow: each product the GPU will use is checked where it
+        // is made, so a mesh never vanishes silently.
         for skin in &mut self.rig.skins {
             for (k, &j) in skin.joints.iter().enumerate() {
-                skin.joint_matrices[k] = world[j] * skin.inverse_bind[k];
+                let m = world[j] * skin.inverse_bind[k];
+                if !m.is_finite() {
+                    return Err(Error::input(format!(
+                        "{}: skin '{}': the matrix of joint {k} (node {j}'s world transform times its inverse bind matrix) overflows 32-bit floating point in this pose; check the skin's inverse bind matrices and the joint's scale",
+                        self.source, skin.name
+                    )));
+                }
+                skin.joint_matrices[k] = m;
             }
         }
         let mut bindings = std::mem::take(&mut self.rig.draws);
@@ -504,6 +571,7 @@ impl Scene {
             }
         }
         self.rig.draws = bindings;
+        self.check_deformed()?;
         for &(l, n) in &self.rig.lights {
             if let (Some(light), Some((p, d))) = (self.lights.get_mut(l), light_frame(world[n])) {
                 light.position = p;
@@ -513,6 +581,55 @@ impl Scene {
         for &(c, n) in &self.rig.cameras {
             if let (Some(camera), Some(view)) = (self.cameras.get_mut(c), camera_view(world[n])) {
                 camera.view = view;
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuses a pose in which a deforming draw's morph targets (weights times deltas) or skin
+    /// (joint matrices times positions) take a vertex out of 32-bit floating point: the GPU
+    /// would draw NaN, and the mesh would vanish without a word.
+    fn check_deformed(&self) -> Result<()> {
+        let empty = MeshDeform::default();
+        for b in &self.rig.draws {
+            let Some(d) = self.draws.get(b.draw) else {
+                continue;
+            };
+            let Some(mesh) = self.meshes.get(d.mesh) else {
+                continue;
+            };
+            if !self.rig.deforms(d.mesh, b) {
+                continue;
+            }
+            let deform = self.rig.meshes.get(&d.mesh).unwrap_or(&empty);
+            let skin = b.skin.and_then(|s| self.rig.skins.get(s));
+            let joints = skin.map(|s| &s.joint_matrices[..]);
+            let morphed = b.weights.iter().any(|w| *w != 0.0);
+            if !morphed && joints.is_none() {
+                continue;
+            }
+            for (i, v) in mesh.vertices.iter().enumerate() {
+                let (p, n, t) = deform_raw(v, i, deform, &b.weights, None);
+                let by = if !(p.is_finite() && n.is_finite() && t.is_finite()) && morphed {
+                    format!(
+                        "its morph targets (weights {:?} times the targets' deltas)",
+                        b.weights
+                    )
+                } else if joints.is_some() && {
+                    let (p, n, t) = deform_raw(v, i, deform, &b.weights, joints);
+                    !(p.is_finite() && n.is_finite() && t.is_finite())
+                } {
+                    format!(
+                        "its skin '{}' (the joint matrices times the vertex)",
+                        skin.map_or("", |s| s.name.as_str())
+                    )
+                } else {
+                    continue;
+                };
+                return Err(Error::input(format!(
+                    "{}: mesh '{}' (node {}): {by} move vertex {i} out of the range of 32-bit floating point in this pose, so the mesh cannot be drawn; check the morph weights and target deltas, or the skin's inverse bind matrices and joint scales",
+                    self.source, mesh.name, b.node
+                )));
             }
         }
         Ok(())
@@ -555,10 +672,53 @@ pub fn deform_vertex(
     weights: &[f32],
     joints: Option<&[Mat4]>,
 ) -> Vertex {
+    let (p, n, t) = deform_raw(v, index, deform, weights, joints);
+    let w = v.tangent[3] * skin_sign(index, deform, joints);
+    let n = n.try_normalize().unwrap_or(Vec3::Z);
+    let t = (t - n * n.dot(t))
+        .try_normalize()
+        .unwrap_or_else(|| n.any_orthonormal_vector());
+    Vertex {
+        position: p.to_array(),
+        normal: n.to_array(),
+        tangent: [t.x, t.y, t.z, w],
+        ..*v
+    }
+}
+
+/// The skin matrix of vertex `index` (the weighted sum of its joints' matrices), None when not
+/// skinned.
+fn skin_matrix(index: usize, deform: &MeshDeform, joints: Option<&[Mat4]>) -> Option<Mat4> {
+    let (joints, s) = (joints?, deform.skin.get(index)?);
+    let mut m = Mat4::ZERO;
+    for k in 0..4 {
+        if let Some(j) = joints.get(s.joints[k] as usize) {
+            m += *j * s.weights[k];
+        }
+    }
+    Some(m)
+}
+
+/// -1 where the skin mirrors vertex `index`, else 1.
+fn skin_sign(index: usize, deform: &MeshDeform, joints: Option<&[Mat4]>) -> f32 {
+    match skin_matrix(index, deform, joints) {
+        Some(m) if Mat3::from_mat4(m).determinant() < 0.0 => -1.0,
+        _ => 1.0,
+    }
+}
+
+/// [`deform_vertex`] before normalising: position, normal and tangent (xyz) as morphed and
+/// skinned, where overflow shows as non-finite values.
+fn deform_raw(
+    v: &Vertex,
+    index: usize,
+    deform: &MeshDeform,
+    weights: &[f32],
+    joints: Option<&[Mat4]>,
+) -> (Vec3, Vec3, Vec3) {
     let mut p = Vec3::from(v.position);
     let mut n = Vec3::from(v.normal);
     let mut t = Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
-    let mut w = v.tangent[3];
     for (target, &k) in deform.targets.iter().zip(weights) {
         if let Some(d) = target.positions.get(index) {
             p += Vec3::from(*d) * k;
@@ -570,13 +730,7 @@ pub fn deform_vertex(
             t += Vec3::from(*d) * k;
         }
     }
-    if let (Some(joints), Some(s)) = (joints, deform.skin.get(index)) {
-        let mut m = Mat4::ZERO;
-        for k in 0..4 {
-            if let Some(j) = joints.get(s.joints[k] as usize) {
-                m += *j * s.weights[k];
-            }
-        }
+    if let Some(m) = skin_matrix(index, deform, joints) {
         p = m.transform_point3(p);
         let m3 = Mat3::from_mat4(m);
         let det = m3.determinant();
@@ -584,18 +738,8 @@ pub fn deform_vertex(
         let sign = if det < 0.0 { -1.0 } else { 1.0 };
         n = cof * n * sign;
         t = m3 * t;
-        w *= sign;
     }
-    let n = n.try_normalize().unwrap_or(Vec3::Z);
-    let t = (t - n * n.dot(t))
-        .try_normalize()
-        .unwrap_or_else(|| n.any_orthonormal_vector());
-    Vertex {
-        position: p.to_array(),
-        normal: n.to_array(),
-        tangent: [t.x, t.y, t.z, w],
-        ..*v
-    }
+    (p, n, t)
 }
 
 /// The cofactor matrix of `m` (det(m) · m⁻ᵀ, defined for singular m too): what normals transform

@@ -11,7 +11,6 @@
 //! scene can still be drawn. Nothing here indexes unchecked into the file's data.
 
 use std::collections::HashMap;
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use glam::{Mat4, Quat, Vec3, Vec4};
@@ -105,7 +104,11 @@ pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    load_slice_with(&bytes, &source, Some(base_dir), options)
+    let (scene, files) =
+        resources::recording_files(|| load_slice_with(&bytes, &source, Some(base_dir), options));
+    let mut scene = scene?;
+    scene.files = std::iter::once(path.to_path_buf()).chain(files).collect();
+    Ok(scene)
 }
 
 /// Loads a scene from the bytes of a `.gltf` or `.glb` file. `source` names it in messages;
@@ -123,16 +126,10 @@ pub fn load_slice_with(
 ) -> Result<Scene> {
     // Everything below checks the file before use, but the gltf crate's accessors unwrap on
     // documents that slip past its validator; a panic there must still reach the user as an error.
-    match catch_unwind(AssertUnwindSafe(|| {
-        load_checked(bytes, source, base_dir, options)
-    })) {
+    // (crate::error::catch_panic: the `weft` binary's panic hook stays quiet meanwhile.)
+    match crate::error::catch_panic(|| load_checked(bytes, source, base_dir, options)) {
         Ok(result) => result,
-        Err(panic) => {
-            let detail = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "no details".into());
+        Err(detail) => {
             Err(Error::input(format!(
                 "'{source}': the glTF reader failed on this file ({detail}); it is probably malformed: check it with the Khronos glTF Validator and re-export it"
             )))
@@ -1023,11 +1020,12 @@ impl<'a> Loader<'a> {
             if let Some(m) =
                 material_ext::mapped_material(ext, variant, count).map_err(|e| self.error(e))?
             {
-                if m >= self.scene.materials.len().max(self.material_uv.len()) {
+                // The file's materials, not the loader's (its default material may follow them).
+                if m >= self.doc.materials().len() {
                     return Err(self.error(format_args!(
                         "{}.mappings names material {m}, but the file has {} materials; fix the mapping",
                         material_ext::VARIANTS,
-                        self.material_uv.len()
+                        self.doc.materials().len()
                     )));
                 }
                 return Ok(Some(m));
@@ -1220,24 +1218,30 @@ impl<'a> Loader<'a> {
             .unwrap_or(UvTransform::IDENTITY);
 
         if uvs.is_some() {
-            let bad = vertices
-                .iter()
-                .filter(|v| !v.uv.iter().all(|c| c.is_finite()))
-                .count();
-            if bad > 0 {
-                self.warn(format_args!(
-                    "{who} has {bad} non-finite texture coordinate(s); replaced by (0, 0)"
-                ));
-                for v in vertices
-                    .iter_mut()
-                    .filter(|v| !v.uv.iter().all(|c| c.is_finite()))
-                {
-                    v.uv = [0.0, 0.0];
-                }
-            }
+            // The transform first: finite coordinates through a finite transform can still
+            // overflow, and get the same repair as the file's own non-finite ones.
+            let finite = |v: &Vertex| v.uv.iter().all(|c| c.is_finite());
+            let in_file = vertices.iter().filter(|v| !finite(v)).count();
             if uv_transform != UvTransform::IDENTITY {
                 for v in vertices.iter_mut() {
                     v.uv = uv_transform.apply(v.uv);
+                }
+            }
+            let bad = vertices.iter().filter(|v| !finite(v)).count();
+            if bad > 0 {
+                let made = if bad > in_file {
+                    format!(
+                        " ({} of them made so by its material's KHR_texture_transform, whose result overflows 32-bit floating point)",
+                        bad - in_file
+                    )
+                } else {
+                    String::new()
+                };
+                self.warn(format_args!(
+                    "{who} has {bad} non-finite texture coordinate(s){made}; replaced by (0, 0)"
+                ));
+                for v in vertices.iter_mut().filter(|v| !finite(v)) {
+                    v.uv = [0.0, 0.0];
                 }
             }
         } else {
@@ -1253,6 +1257,25 @@ impl<'a> Loader<'a> {
                 let mname = m.map(|m| m.name.clone()).unwrap_or_default();
                 self.warn(format_args!(
                     "{who} has no texture coordinates (TEXCOORD_0) but its material '{mname}' has textures or a weave; they will look flat: add UVs to the mesh"
+                ));
+            }
+        }
+
+        // Each slot's own transform runs in the shader, on these coordinates: one that
+        // overflows on them would make the surface black.
+        if let Some(m) = self.scene.materials.get_mut(material) {
+            let slots: Vec<usize> = (0..m.uv.len())
+                .filter(|&k| m.uv[k].overflows_on(&vertices))
+                .collect();
+            for &k in &slots {
+                m.uv[k] = SlotUv::IDENTITY;
+            }
+            if !slots.is_empty() {
+                let names: Vec<&str> = slots.iter().map(|&k| TextureSlot::NAMES[k]).collect();
+                let mname = m.name.clone();
+                self.warn(format_args!(
+                    "{who}: the KHR_texture_transform of the {} texture of its material '{mname}' takes its texture coordinates out of the range of 32-bit floating point; sampled without the transform",
+                    names.join(", ")
                 ));
             }
         }
@@ -2088,6 +2111,19 @@ impl<'a> Loader<'a> {
             let mut channels = Vec::new();
             for (c, channel) in anim.channels().enumerate() {
                 let who = format!("animation '{name}' channel {c}");
+                // The gltf crate's validator does not check a channel's target node, and its
+                // Target::node() unwraps it: check before anything asks for it.
+                let node = doc.as_json().animations[anim.index()].channels[c]
+                    .target
+                    .node
+                    .value();
+                if node >= doc.nodes().len() {
+                    self.warn(format_args!(
+                        "{who} targets node {node}, but the file has only {} node(s); the channel is ignored",
+                        doc.nodes().len()
+                    ));
+                    continue;
+                }
                 match self.channel(&channel, &who) {
                     Ok(Some(ch)) => channels.push(ch),
                     Ok(None) => {}
@@ -2171,11 +2207,6 @@ impl<'a> Loader<'a> {
             I::Linear => animation::Interpolation::Linear,
             I::CubicSpline => animation::Interpolation::CubicSpline,
         };
-        let s = animation::Sampler::new(interpolation, times, values, width, "its sampler")?;
-        Ok(Some(animation::Channel {
-            node: node.index(),
-            path,
-            sampler: s,
-        }))
+        animation::Channel::new(node.index(), path, interpolation, times, values, width).map(Some)
     }
 }

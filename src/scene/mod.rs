@@ -10,7 +10,7 @@
 //! [`Scene::pose`] ([`animation`]).
 //! [`default_scene`] is the built-in scene embedded in the binary.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec3};
 
 mod accessor;
 pub mod animation;
@@ -153,6 +153,19 @@ pub enum TextureSlot {
 
 impl TextureSlot {
     pub const COUNT: usize = 10;
+    /// The slots' names in messages, in slot order.
+    pub const NAMES: [&'static str; TextureSlot::COUNT] = [
+        "base colour",
+        "metallic-roughness",
+        "normal",
+        "emissive",
+        "occlusion",
+        "sheen colour",
+        "sheen roughness",
+        "specular",
+        "specular colour",
+        "anisotropy",
+    ];
 }
 
 /// The texture coordinates of one texture slot: UV set `set` (0 or 1) through the affine map
@@ -169,6 +182,33 @@ impl SlotUv {
         set: 0,
         m: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
     };
+
+    /// Whether the map takes some texture coordinate of `vertices` (of its set) out of 32-bit
+    /// floating point: finite factors whose product overflows, which the shader would turn into
+    /// a black surface. An affine map is largest at the corners of the coordinates' bounds, so
+    /// those are what is tried.
+    pub fn overflows_on(&self, vertices: &[Vertex]) -> bool {
+        if *self == SlotUv::IDENTITY || vertices.is_empty() {
+            return false;
+        }
+        let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+        for v in vertices {
+            let uv = if self.set == 1 { v.uv1 } else { v.uv };
+            for k in 0..2 {
+                lo[k] = lo[k].min(uv[k]);
+                hi[k] = hi[k].max(uv[k]);
+            }
+        }
+        let [[a, b, c], [d, e, f]] = self.m;
+        [
+            (lo[0], lo[1]),
+            (lo[0], hi[1]),
+            (hi[0], lo[1]),
+            (hi[0], hi[1]),
+        ]
+        .iter()
+        .any(|&(u, v)| !((a * u + b * v + c).is_finite() && (d * u + e * v + f).is_finite()))
+    }
 }
 
 impl Default for SlotUv {
@@ -347,6 +387,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub cameras: Vec<Camera>,
     pub warnings: Vec<Warning>,
+    /// The files the scene was read from: the scene file, then the buffers and images beside
+    /// it that it refers to (empty for a scene loaded from memory). What a command must not
+    /// write over (`render::check_outputs`).
+    pub files: Vec<std::path::PathBuf>,
     /// KHR_materials_variants: the file's variant names, and the one the scene was loaded with.
     pub variants: Vec<String>,
     pub variant: Option<String>,
@@ -459,14 +503,17 @@ impl Scene {
         })
     }
 
-    /// Frames the scene's bounds: looks at the centre from the +Z side, 20 degrees above. Bounds
-    /// too large to frame in f32 (coordinates near +-3e38) get the framing of the unit cube.
+    /// Frames the scene's bounds: looks at the centre from 20 degrees above, from the +Z side, or
+    /// from the side the single-sided surfaces face when +Z sees mostly their backs
+    /// ([`Scene::framing_azimuth`]). Bounds too large to frame in f32 (coordinates near +-3e38)
+    /// get the framing of the unit cube.
     pub fn auto_camera(&self) -> Camera {
         let unit = Bounds {
             min: Vec3::splat(-1.0),
             max: Vec3::splat(1.0),
         };
-        let camera = Self::framing(self.bounds().unwrap_or(unit));
+        let azimuth = self.framing_azimuth();
+        let camera = Self::framing(self.bounds().unwrap_or(unit), azimuth);
         let usable = camera.view.is_finite()
             && camera.znear.is_finite()
             && camera.znear > 0.0
@@ -476,16 +523,80 @@ impl Scene {
         if usable {
             camera
         } else {
-            Self::framing(unit)
+            Self::framing(unit, azimuth)
         }
     }
 
-    fn framing(b: Bounds) -> Camera {
+    /// The side automatic framing looks from, as degrees about +Y from +Z (0: the front; 90:
+    /// +X; 180: the back; 270: -X). Single-sided surfaces show only their fronts (the side
+    /// their counter-clockwise winding faces), so a sheet whose normals all point away from +Z
+    /// (a curtain seen from behind) would show nothing but its shadow: the side that sees the
+    /// most front-facing area (projected, double-sided surfaces counted from both sides) is
+    /// chosen, unless +Z sees at least half as much. A closed mesh shows about as much front
+    /// from every side, and keeps +Z. At most about a million triangles are sampled.
+    pub fn framing_azimuth(&self) -> f32 {
+        const SIDES: [f32; 4] = [0.0, 90.0, 180.0, 270.0];
+        let e = 20f32.to_radians();
+        let dirs = SIDES.map(|a| {
+            let a = a.to_radians();
+            Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos())
+        });
+        let triangles: usize = self
+            .draws
+            .iter()
+            .filter_map(|d| self.meshes.get(d.mesh))
+            .map(|m| m.indices.len() / 3)
+            .sum();
+        let stride = (triangles >> 20).max(1);
+        let mut front = [0f64; 4];
+        for d in &self.draws {
+            let Some(mesh) = self.meshes.get(d.mesh) else {
+                continue;
+            };
+            let two_sided = self
+                .materials
+                .get(mesh.material)
+                .is_some_and(|m| m.double_sided);
+            // A mirroring transform turns the winding, and with it the front.
+            let sign = if Mat3::from_mat4(d.world).determinant() < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            let at = |i: u32| {
+                mesh.vertices
+                    .get(i as usize)
+                    .map(|v| d.world.transform_point3(Vec3::from(v.position)))
+            };
+            for t in mesh.indices.chunks_exact(3).step_by(stride) {
+                let (Some(a), Some(b), Some(c)) = (at(t[0]), at(t[1]), at(t[2])) else {
+                    continue;
+                };
+                let n = (b - a).cross(c - a) * sign;
+                if !n.is_finite() {
+                    continue;
+                }
+                for (f, dir) in front.iter_mut().zip(&dirs) {
+                    let seen = f64::from(n.dot(*dir));
+                    *f += if two_sided { seen.abs() } else { seen.max(0.0) };
+                }
+            }
+        }
+        let best = (0..4).fold(0, |b, k| if front[k] > front[b] { k } else { b });
+        if front[0] >= 0.5 * front[best] {
+            0.0
+        } else {
+            SIDES[best]
+        }
+    }
+
+    fn framing(b: Bounds, azimuth_degrees: f32) -> Camera {
         let center = (b.min + b.max) * 0.5;
         let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
         let yfov = 45f32.to_radians();
         let dist = radius / (yfov * 0.5).sin() * 1.05;
-        let dir = Vec3::new(0.0, 20f32.to_radians().sin(), 20f32.to_radians().cos());
+        let (e, a) = (20f32.to_radians(), azimuth_degrees.to_radians());
+        let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
         let eye = center + dir * dist;
         Camera {
             name: "automatic framing".into(),

@@ -45,6 +45,20 @@ pub(super) fn describe_uri(uri: &str) -> String {
     }
 }
 
+thread_local! {
+    /// The files [`fetch`] read on this thread while [`recording_files`] runs.
+    static READ: std::cell::RefCell<Option<Vec<PathBuf>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` (a load), returning with its result the files beside the scene it read (buffers and
+/// images), in order: what a command must not overwrite ([`super::Scene::files`]).
+pub(super) fn recording_files<T>(f: impl FnOnce() -> T) -> (T, Vec<PathBuf>) {
+    let outer = READ.with(|r| r.replace(Some(Vec::new())));
+    let result = f();
+    let files = READ.with(|r| r.replace(outer)).unwrap_or_default();
+    (result, files)
+}
+
 /// Reads a URI relative to `base_dir`. `what` says who refers to it ("buffer 0", "material 'x'
 /// (base colour texture) image 2"); `label` is the scene, for messages.
 pub(super) fn fetch(
@@ -103,7 +117,16 @@ pub(super) fn fetch(
     };
     let path = base_dir.join(&relative);
     match std::fs::read(&path) {
-        Ok(bytes) => Ok(Fetched { bytes, mime: None, origin: Origin::File(path) }),
+        Ok(bytes) => {
+            READ.with(|r| {
+                if let Some(files) = r.borrow_mut().as_mut() {
+                    if !files.contains(&path) {
+                        files.push(path.clone());
+                    }
+                }
+            });
+            Ok(Fetched { bytes, mime: None, origin: Origin::File(path) })
+        }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(Error::input(format!(
             "{label}: {what} refers to '{uri}', but '{}' does not exist; put the file there or fix the uri in the scene",
             path.display()

@@ -28,7 +28,11 @@ pub struct Buffer {
     shared: Arc<Shared>,
     pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
+    /// The size of the Vulkan buffer: what was asked for, but at least 16 bytes.
     pub size: u64,
+    /// The bytes asked for, what [`Buffer::read`] returns (a 1 x 1 RGBA8 readback is 4 bytes
+    /// in a 16-byte buffer).
+    len: u64,
     pub name: String,
 }
 
@@ -59,7 +63,7 @@ impl Buffer {
         self.allocation
             .as_ref()
             .and_then(|a| a.mapped_slice())
-            .map(|s| &s[..self.size as usize])
+            .map(|s| &s[..self.len as usize])
             .ok_or_else(|| Error::device(format!("buffer '{}' is not host-visible", self.name)))
     }
 }
@@ -261,6 +265,7 @@ impl Context {
         usage: vk::BufferUsageFlags,
         location: BufferLocation,
     ) -> crate::Result<Buffer> {
+        let len = size;
         let size = size.max(16);
         let device = &self.shared.device;
         let info = vk::BufferCreateInfo::default()
@@ -300,6 +305,7 @@ impl Context {
             raw,
             allocation: Some(allocation),
             size,
+            len,
             name: name.into(),
         };
         let a = buffer.allocation.as_ref().expect("just set");
