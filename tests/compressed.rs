@@ -14,6 +14,7 @@
 //!   error that says "the glTF reader failed", which these tests refuse).
 //! - On the GPU (lavapipe, validation on), each compressed Avocado renders within a stated FLIP of
 //!   the original.
+//! - Draco and required KTX2 are refused with the reason and a way out.
 
 mod common;
 
@@ -456,7 +457,7 @@ fn counts_strides_and_modes_the_specification_forbids_are_errors() {
         (0, |d| d["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["count"] = json!(80), "80 elements of 12 bytes make 960 bytes, and the buffer view's byteLength is 972"),
         (0, |d| d["bufferViews"][0]["byteLength"] = json!(900), "the counts do not match"),
         (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(8), "differs from the buffer view's own byteStride 4"),
-        (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(3), "mode TRIANGLES needs 2 or 4"),
+        (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(3), "its byteStride is 3; mode TRIANGLES needs 2 or 4"),
         (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("OCTAHEDRAL"), "only ATTRIBUTES takes a filter"),
         (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("QUATERNION"), "filter QUATERNION does not allow (it needs 8)"),
         (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("COLOR"), "COLOR is KHR_meshopt_compression's"),
@@ -604,6 +605,29 @@ fn encoded(rgba: [u8; 4], format: image::ImageFormat) -> Vec<u8> {
         .write_to(&mut std::io::Cursor::new(&mut out), format)
         .unwrap();
     out
+}
+
+#[test]
+fn draco_and_required_ktx2_are_refused_with_the_reason_and_a_way_out() {
+    let msg = scene::load(&data("avocado_draco.glb")).err().expect("refused").to_string();
+    assert!(
+        msg.contains("avocado_draco.glb")
+            && msg.contains("requires the glTF extension 'KHR_draco_mesh_compression'")
+            && msg.contains("no Draco decoder")
+            && msg.contains("gltf-transform meshopt"),
+        "{msg}"
+    );
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_texture_basisu"],
+        "extensionsRequired": ["KHR_texture_basisu"],
+    });
+    let msg = scene::load_slice(&glb(&doc, &[]), "lamp.glb", None).err().expect("refused").to_string();
+    assert!(
+        msg.contains("'lamp.glb' requires the glTF extension 'KHR_texture_basisu'")
+            && msg.contains("no Basis Universal transcoder"),
+        "{msg}"
+    );
 }
 
 // --- on the GPU ---------------------------------------------------------------------------------

@@ -200,6 +200,20 @@ fn readers(root: &json::Root, view: usize) -> String {
     String::new()
 }
 
+/// A precise reason and fix for a required extension weft does not read, where there is more to say
+/// than that it is unsupported.
+pub(super) fn refusal_hint(ext: &str) -> Option<&'static str> {
+    match ext {
+        "KHR_draco_mesh_compression" => Some(
+            "weft has no Draco decoder; re-compress the geometry with meshopt, which weft reads and which decodes faster: `gltf-transform meshopt IN OUT` reads the Draco file and writes EXT_meshopt_compression",
+        ),
+        BASISU => Some(
+            "weft has no Basis Universal transcoder, so it cannot read KTX2 textures; use the asset's PNG or JPEG variant, or write the textures as PNG or WebP in your pipeline (`gltf-transform webp` reads PNG and JPEG sources)",
+        ),
+        _ => None,
+    }
+}
+
 /// Decodes every meshopt-compressed buffer view of `root` from `buffers` into a new buffer of its
 /// own (appended to `buffers` and to `root.buffers`) and points the view at it, offset 0; checks
 /// that no view still reads a fallback buffer. After this the document has no compressed data
@@ -213,6 +227,8 @@ pub(super) fn decode_buffer_views(
     let fallback: Vec<bool> = (0..root.buffers.len())
         .map(|b| is_fallback_buffer(root, b))
         .collect();
+    // The file's own buffers: decoded ones are appended after them.
+    let file_buffers = buffers.len();
     let mut decoded_total: u64 = 0;
     for v in 0..root.buffer_views.len() {
         let view = &root.buffer_views[v];
@@ -242,11 +258,10 @@ pub(super) fn decode_buffer_views(
                 c.buffer
             )));
         }
-        let source = buffers.get(c.buffer).ok_or_else(|| {
+        let source = buffers[..file_buffers].get(c.buffer).ok_or_else(|| {
             bad(format_args!(
-                "its compressed data is in buffer {}, and the file has {} buffer(s)",
-                c.buffer,
-                buffers.len()
+                "its compressed data is in buffer {}, and the file has {file_buffers} buffer(s)",
+                c.buffer
             ))
         })?;
         let stream = c
@@ -386,15 +401,6 @@ fn check(
             )));
         }
     }
-    let decoded = s.checked_mul(c.count).map(|n| n as u64);
-    if decoded != Some(view.byte_length.0) {
-        return Err(bad(format_args!(
-            "{} elements of {s} bytes make {} bytes, and the buffer view's byteLength is {}: the counts do not match",
-            c.count,
-            decoded.map_or_else(|| "more than any buffer can hold".to_owned(), |n| n.to_string()),
-            view.byte_length.0
-        )));
-    }
     match c.mode {
         Mode::Attributes if s == 0 || s % 4 != 0 || s > 256 => {
             return Err(bad(format_args!(
@@ -435,6 +441,15 @@ fn check(
                 Filter::Quaternion => "it needs 8",
                 _ => "it needs 4 or 8",
             }
+        )));
+    }
+    let decoded = s.checked_mul(c.count).map(|n| n as u64);
+    if decoded != Some(view.byte_length.0) {
+        return Err(bad(format_args!(
+            "{} elements of {s} bytes make {} bytes, and the buffer view's byteLength is {}: the counts do not match",
+            c.count,
+            decoded.map_or_else(|| "more than any buffer can hold".to_owned(), |n| n.to_string()),
+            view.byte_length.0
         )));
     }
     Ok(())

@@ -338,6 +338,11 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         .iter()
         .find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
     {
+        if let Some(hint) = compressed::refusal_hint(ext) {
+            return Err(Error::input(format!(
+                "{label} requires the glTF extension '{ext}': {hint}"
+            )));
+        }
         return Err(Error::input(format!(
             "{label} requires the glTF extension '{ext}', which weft does not support (it supports {}); re-export the scene without that extension (for example, turn off mesh compression in the exporter)",
             SUPPORTED_EXTENSIONS.join(", ")
