@@ -383,11 +383,11 @@ def build():
     entry("texture-absurd-size.gltf", gltf(textured_doc({"uri": png_uri(png(100000, 100000))})), "a PNG whose header claims 100000x100000 pixels (40 GB decoded)", "error: `100000x100000 pixels`")
     entry("texture-zero-size.gltf", gltf(textured_doc({"uri": png_uri(png(0, 0))})), "a PNG whose header claims 0x0 pixels", "error: `could not be decoded`")
     entry("texture-at-limit-truncated.gltf", gltf(textured_doc({"uri": png_uri(png(16384, 16384))})), "a PNG claiming 16384x16384 (the largest allowed; 1 GiB decoded) with only a few bytes of pixels", "error: `could not be decoded`")
-    entry("texture-not-an-image.gltf", gltf(textured_doc({"uri": "data:application/octet-stream;base64," + b64(b"definitely not pixels" * 4)})), "the texture's bytes are text", "error: `weft reads PNG and JPEG`")
+    entry("texture-not-an-image.gltf", gltf(textured_doc({"uri": "data:application/octet-stream;base64," + b64(b"definitely not pixels" * 4)})), "the texture's bytes are text", "error: `weft reads PNG, JPEG and WebP`")
     corrupt = bytearray(png(4, 4, [[200, 100, 50, 255] * 4] * 4))
     corrupt[40:48] = b"\xff" * 8
     entry("texture-corrupt-png.gltf", gltf(textured_doc({"uri": png_uri(bytes(corrupt))})), "a 4x4 PNG with its compressed pixels overwritten", "error: `could not be decoded`")
-    entry("texture-gif.gltf", gltf(textured_doc({"uri": "data:image/gif;base64," + b64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")})), "a GIF texture (glTF allows PNG and JPEG)", "error: `weft reads PNG and JPEG`")
+    entry("texture-gif.gltf", gltf(textured_doc({"uri": "data:image/gif;base64," + b64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")})), "a GIF texture (glTF allows PNG and JPEG)", "error: `weft reads PNG, JPEG and WebP`")
     d = quad_doc()
     d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 5}
     entry("texture-index-out-of-range.gltf", gltf(d), "the material uses texture 5; there are none", "error: `refers to an object that does not exist`")
@@ -401,7 +401,7 @@ def build():
     d.json["extensionsUsed"].append("KHR_draco_mesh_compression")
     entry("unsupported-required-extension.gltf", gltf(d), "requires KHR_draco_mesh_compression", "error: `requires the glTF extension 'KHR_draco_mesh_compression'`")
     d = quad_doc()
-    d.json["extensionsUsed"].append("EXT_meshopt_compression")
+    d.json["extensionsUsed"].append("MSFT_lod")
     entry("unsupported-used-extension.gltf", gltf(d), "uses (without requiring) an extension weft does not know", "renders, warning: `which weft ignores`")
     entry(
         "fabric-all-out-of-range.gltf",

@@ -20,6 +20,7 @@ use gltf::json::validation::{Checked, Validate};
 use gltf::mesh::{Mode, Semantic};
 
 use super::accessor::{self, Use};
+use super::compressed;
 use super::animation::{self, MeshDeform, MorphTarget, VertexSkin};
 use super::material_ext::{self, TexRef};
 use super::resources;
@@ -64,6 +65,11 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::ANISOTROPY,
     material_ext::VARIANTS,
     FABRIC_EXTENSION,
+    // Quantized, meshopt-compressed and WebP data: src/scene/compressed.rs.
+    compressed::EXTENSIONS[0],
+    compressed::EXTENSIONS[1],
+    compressed::EXTENSIONS[2],
+    compressed::EXTENSIONS[3],
 ];
 
 /// What a load may choose beyond the file itself.
@@ -147,8 +153,10 @@ fn load_checked(
     let (mut root, glb_bin) = parse(bytes, source)?;
     let mut warnings = Vec::new();
     check_extensions(&mut root, &label, &mut warnings)?;
+    compressed::choose_texture_sources(&mut root, &label)?;
     validate(&root, &label)?;
-    let buffers = resources::load_buffers(&root, glb_bin, base_dir, &label)?;
+    let mut buffers = resources::load_buffers(&root, glb_bin, base_dir, &label)?;
+    compressed::decode_buffer_views(&mut root, &mut buffers, &label)?;
     let doc = gltf::Document::from_json_without_validation(root);
 
     let variants = material_ext::variant_names(doc.extension_value(material_ext::VARIANTS))
@@ -327,6 +335,11 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         .iter()
         .find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
     {
+        if let Some(hint) = compressed::refusal_hint(ext) {
+            return Err(Error::input(format!(
+                "{label} requires the glTF extension '{ext}': {hint}"
+            )));
+        }
         return Err(Error::input(format!(
             "{label} requires the glTF extension '{ext}', which weft does not support (it supports {}); re-export the scene without that extension (for example, turn off mesh compression in the exporter)",
             SUPPORTED_EXTENSIONS.join(", ")
@@ -350,7 +363,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::VARIANTS,
     ];
     root.extensions_required
-        .retain(|e| !OWN.contains(&e.as_str()));
+        .retain(|e| !OWN.contains(&e.as_str()) && !compressed::EXTENSIONS.contains(&e.as_str()));
     Ok(())
 }
 

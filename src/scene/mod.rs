@@ -14,6 +14,7 @@ use glam::{Mat3, Mat4, Vec3};
 
 mod accessor;
 pub mod animation;
+mod compressed;
 mod gltf_load;
 mod material_ext;
 mod resources;

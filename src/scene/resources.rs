@@ -151,6 +151,12 @@ pub(super) fn load_buffers(
             Some(name) => format!("buffer {i} ('{name}')"),
             None => format!("buffer {i}"),
         };
+        // A meshopt fallback buffer is never read: its views are decoded from their compressed
+        // streams (src/scene/compressed.rs), so it has no data to load.
+        if buffer.uri.is_none() && super::compressed::is_fallback_buffer(root, i) {
+            out.push(Vec::new());
+            continue;
+        }
         let (bytes, from) = match &buffer.uri {
             Some(uri) => (fetch(uri, base_dir, label, &what)?.bytes, describe_uri(uri)),
             None => match glb_bin.take() {
@@ -252,10 +258,13 @@ pub(super) fn load_image(
     let format = match mime.as_deref() {
         Some("image/png") => Some(image::ImageFormat::Png),
         Some("image/jpeg") => Some(image::ImageFormat::Jpeg),
+        Some("image/webp") => Some(image::ImageFormat::WebP),
         _ => None,
     };
     let format = match format.or_else(|| image::guess_format(&bytes).ok()) {
-        Some(f @ (image::ImageFormat::Png | image::ImageFormat::Jpeg)) => f,
+        Some(
+            f @ (image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::WebP),
+        ) => f,
         other => {
             // KTX2 (KHR_texture_basisu, or core texture.source as AnisotropyBarnLamp has it):
             // named as such, since no kept crate here decodes Basis Universal.
@@ -271,7 +280,7 @@ pub(super) fn load_image(
                 (None, None) => "not a recognisable image".to_owned(),
             };
             return Err(Error::input(format!(
-                "{label}: {who} comes from {origin} and is {kind}; weft reads PNG and JPEG textures: convert the image"
+                "{label}: {who} comes from {origin} and is {kind}; weft reads PNG, JPEG and WebP textures: convert the image"
             )));
         }
     };

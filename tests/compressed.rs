@@ -1,0 +1,658 @@
+//! The files production pipelines ship: KHR_mesh_quantization, EXT_texture_webp and
+//! EXT_/KHR_meshopt_compression.
+//!
+//! - The Khronos Avocado put through `gltf-transform` 4.5.1 (tests/data/compressed/README.md) loads
+//!   to the mesh of the uncompressed file: same vertex and index counts, every position within the
+//!   quantization step, normals, tangents and UVs within theirs.
+//! - Files built here with meshoptimizer's own encoders cover every mode (ATTRIBUTES, TRIANGLES,
+//!   INDICES, 16- and 32-bit indices) and the vertex filters a mesh uses, under both extension
+//!   names and both vertex codec versions; the filters one by one are pinned in
+//!   src/scene/compressed.rs's unit tests.
+//! - Hostile data (a truncated or corrupted stream, counts that do not match, strides the
+//!   specification forbids, data in a fallback buffer) is a clear error naming the file, the buffer
+//!   view, the mesh that reads it and what is wrong; never a panic (the loader turns a panic into an
+//!   error that says "the glTF reader failed", which these tests refuse).
+//! - On the GPU (lavapipe, validation on), each compressed Avocado renders within a stated FLIP of
+//!   the original.
+//! - Draco and required KTX2 are refused with the reason and a way out.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat3, Vec3};
+use serde_json::{json, Value};
+use weft::scene::{self, Scene};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/compressed")
+        .join(name)
+}
+
+fn load(name: &str) -> Scene {
+    let scene = scene::load(&data(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    for w in &scene.warnings {
+        assert!(!w.0.contains("extension"), "{name}: {w}");
+    }
+    scene
+}
+
+/// The one mesh of a file, in world space.
+struct World {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    tangents: Vec<(Vec3, f32)>,
+    uvs: Vec<[f32; 2]>,
+    indices: Vec<u32>,
+}
+
+fn world(scene: &Scene) -> World {
+    assert_eq!(scene.draws.len(), 1, "{}", scene.source);
+    let draw = &scene.draws[0];
+    let mesh = &scene.meshes[draw.mesh];
+    let normal_matrix = Mat3::from_mat4(draw.world).inverse().transpose();
+    let linear = Mat3::from_mat4(draw.world);
+    World {
+        positions: mesh
+            .vertices
+            .iter()
+            .map(|v| draw.world.transform_point3(Vec3::from(v.position)))
+            .collect(),
+        normals: mesh
+            .vertices
+            .iter()
+            .map(|v| (normal_matrix * Vec3::from(v.normal)).normalize())
+            .collect(),
+        tangents: mesh
+            .vertices
+            .iter()
+            .map(|v| {
+                let t = v.tangent;
+                ((linear * Vec3::new(t[0], t[1], t[2])).normalize(), t[3])
+            })
+            .collect(),
+        uvs: mesh.vertices.iter().map(|v| v.uv).collect(),
+        indices: mesh.indices.clone(),
+    }
+}
+
+/// Checks `got` against the uncompressed `want`: same counts; every vertex of `got` has a vertex
+/// of `want` within `step` (and the other way round); among those, one whose normal, tangent and
+/// UV agree within the attributes' quantization; every triangle of `got` is a triangle of `want`.
+fn assert_same_mesh(name: &str, want: &World, got: &World, step: f32) {
+    assert_eq!(got.positions.len(), want.positions.len(), "{name}: vertex count");
+    assert_eq!(got.indices.len(), want.indices.len(), "{name}: index count");
+    let near = |p: Vec3, set: &[Vec3]| -> Vec<usize> {
+        (0..set.len()).filter(|&i| set[i].distance(p) <= step).collect()
+    };
+    let mut worst = 0.0f32;
+    for (i, &p) in got.positions.iter().enumerate() {
+        let close = near(p, &want.positions);
+        assert!(!close.is_empty(), "{name}: vertex {i} at {p} has no original within {step}");
+        worst = worst.max(close.iter().map(|&j| want.positions[j].distance(p)).fold(f32::MAX, f32::min));
+        // 10-bit octahedral normals and tangents (gltf-transform's default): under 0.2 degrees
+        // off, cos > 0.99999; 0.9995 (1.8 degrees) leaves room for the renormalisation.
+        let matches = close.iter().any(|&j| {
+            got.normals[i].dot(want.normals[j]) > 0.9995
+                && got.tangents[i].0.dot(want.tangents[j].0) > 0.9995
+                && got.tangents[i].1 == want.tangents[j].1
+                // 12-bit texture coordinates: within one step of 1/4095.
+                && (0..2).all(|k| (got.uvs[i][k] - want.uvs[j][k]).abs() <= 1.0 / 4095.0)
+        });
+        assert!(matches, "{name}: vertex {i} at {p}: no original there has its normal {}, tangent {:?} and uv {:?}", got.normals[i], got.tangents[i], got.uvs[i]);
+    }
+    for &p in &want.positions {
+        assert!(!near(p, &got.positions).is_empty(), "{name}: original vertex at {p} lost");
+    }
+    // Triangles, as sets of corner positions (the codecs may rotate a triangle's corners).
+    let corners = |w: &World, t: &[u32]| -> [Vec3; 3] {
+        [0, 1, 2].map(|k| w.positions[t[k] as usize])
+    };
+    let want_tris: Vec<[Vec3; 3]> = want.indices.chunks_exact(3).map(|t| corners(want, t)).collect();
+    for (k, t) in got.indices.chunks_exact(3).enumerate() {
+        let c = corners(got, t);
+        let found = want_tris.iter().any(|w| {
+            (0..3).any(|r| (0..3).all(|m| w[(m + r) % 3].distance(c[m]) <= step))
+        });
+        assert!(found, "{name}: triangle {k} {c:?} is not a triangle of the original");
+    }
+    eprintln!("{name}: worst position error {worst:e} (step {step:e})");
+}
+
+/// gltf-transform's default position quantization: 14 bits over the mesh's largest extent.
+fn position_step(w: &World) -> f32 {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for &p in &w.positions {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (hi - lo).max_element() / ((1 << 14) - 1) as f32
+}
+
+#[test]
+fn quantized_avocado_matches_the_original() {
+    let want = world(&load("avocado_small.glb"));
+    let got = world(&load("avocado_quant.glb"));
+    assert_same_mesh("avocado_quant.glb", &want, &got, position_step(&want));
+}
+
+#[test]
+fn meshopt_avocado_matches_the_original_under_both_extension_names() {
+    let want = world(&load("avocado_small.glb"));
+    let step = position_step(&want);
+    let got = world(&load("avocado_meshopt.glb"));
+    assert_same_mesh("avocado_meshopt.glb", &want, &got, step);
+
+    // KHR_meshopt_compression is the same JSON under the ratified name (both names are 23
+    // characters, so the .glb's chunk lengths stay right).
+    let bytes = std::fs::read(data("avocado_meshopt.glb")).unwrap();
+    let khr = replace(&bytes, b"EXT_meshopt_compression", b"KHR_meshopt_compression");
+    assert_ne!(khr, bytes);
+    let scene = scene::load_slice(&khr, "avocado_khr_meshopt.glb", None).expect("KHR file loads");
+    assert_same_mesh("avocado_khr_meshopt.glb", &want, &world(&scene), step);
+}
+
+fn replace(bytes: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {
+    assert_eq!(from.len(), to.len());
+    let mut out = bytes.to_vec();
+    let mut i = 0;
+    while i + from.len() <= out.len() {
+        if &out[i..i + from.len()] == from {
+            out[i..i + from.len()].copy_from_slice(to);
+            i += from.len();
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+#[test]
+fn webp_avocado_has_the_original_textures_within_lossy_coding() {
+    let want = load("avocado_small.glb");
+    let got = load("avocado_webp.glb");
+    assert_same_mesh("avocado_webp.glb", &world(&want), &world(&got), 0.0);
+    assert_eq!(got.textures.len(), want.textures.len());
+    for (w, g) in want.textures.iter().zip(&got.textures) {
+        assert_eq!((g.width, g.height, g.color_space), (w.width, w.height, w.color_space), "{}", g.name);
+        let diff = w.rgba8.iter().zip(&g.rgba8).map(|(a, b)| a.abs_diff(*b) as f64).sum::<f64>()
+            / w.rgba8.len() as f64;
+        // gltf-transform's WebP is lossy (quality 80): a mean of a few levels in 255.
+        assert!(diff < 6.0, "{}: mean difference {diff:.2} of 255", g.name);
+        eprintln!("{}: mean difference {diff:.2} of 255", g.name);
+    }
+}
+
+// --- files built here ---------------------------------------------------------------------------
+
+/// A .glb from JSON and one binary chunk.
+fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = serde_json::to_vec(json).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + text.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// A grid of `n` x `n` vertices on a gently curved sheet, in plain floats.
+struct Grid {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 4]>,
+    tangents: Vec<[f32; 4]>,
+    uvs: Vec<[f32; 2]>,
+    indices: Vec<u32>,
+}
+
+fn grid(n: u32) -> Grid {
+    let mut g = Grid { positions: vec![], normals: vec![], tangents: vec![], uvs: vec![], indices: vec![] };
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = (i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
+            let x = u * 2.0 - 1.0;
+            // z = 0.2 x^2: normal (-0.4 x, 0, 1), tangent along +x (the u direction).
+            g.positions.push([x, v * 2.0 - 1.0, 0.2 * x * x]);
+            let nrm = Vec3::new(-0.4 * x, 0.0, 1.0).normalize();
+            g.normals.push([nrm.x, nrm.y, nrm.z, 0.0]);
+            let t = Vec3::new(1.0, 0.0, 0.4 * x).normalize();
+            g.tangents.push([t.x, t.y, t.z, 1.0]);
+            g.uvs.push([u, 1.0 - v]);
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i;
+            g.indices.extend([a, a + 1, a + n, a + n, a + 1, a + n + 1]);
+        }
+    }
+    g
+}
+
+/// How one synthesized file is compressed, and what a test breaks in it.
+#[derive(Clone)]
+struct Recipe {
+    ext: &'static str,
+    vertex_version: i32,
+    /// "TRIANGLES" or "INDICES".
+    index_mode: &'static str,
+    index_stride: usize,
+    /// Applied to the JSON after it is built (to break it).
+    edit: fn(&mut Value),
+    /// Applied to the binary chunk (to break it).
+    corrupt: fn(&mut Vec<u8>),
+}
+
+impl Default for Recipe {
+    fn default() -> Self {
+        Recipe {
+            ext: "EXT_meshopt_compression",
+            vertex_version: 0,
+            index_mode: "TRIANGLES",
+            index_stride: 2,
+            edit: |_| {},
+            corrupt: |_| {},
+        }
+    }
+}
+
+/// The grid as a meshopt-compressed .glb: POSITION as floats with the EXPONENTIAL filter, NORMAL as
+/// 8-bit OCTAHEDRAL, TANGENT as 16-bit OCTAHEDRAL, TEXCOORD_0 as normalized 16-bit integers
+/// (KHR_mesh_quantization) without a filter, indices in the recipe's mode. Buffer 0 is the .glb
+/// chunk with the streams; buffer 1 the fallback. Views 0-3 are the attributes, view 4 the indices.
+fn meshopt_glb(g: &Grid, r: &Recipe) -> Vec<u8> {
+    let n = g.positions.len();
+    let mut bin = Vec::new();
+    let mut views = Vec::new();
+    let mut fallback_len = 0usize;
+    let mut add = |stream: Vec<u8>, mode: &str, filter: &str, stride: usize, count: usize, target: u32| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let mut ext = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": stream.len(),
+            "byteStride": stride, "count": count, "mode": mode});
+        if filter != "NONE" {
+            ext["filter"] = json!(filter);
+        }
+        let mut view = json!({"buffer": 1, "byteOffset": fallback_len, "byteLength": stride * count,
+            "target": target, "extensions": {r.ext: ext}});
+        if target == 34962 {
+            view["byteStride"] = json!(stride);
+        }
+        views.push(view);
+        fallback_len += (stride * count + 3) / 4 * 4;
+        bin.extend(stream);
+    };
+    let v = Some(r.vertex_version);
+    let pos = meshopt::encode_filter_exp(&g.positions, 23, meshopt::EncodeExpMode::SharedVector);
+    add(meshopt::encode_vertex_buffer_level(&pos, 2, v).unwrap(), "ATTRIBUTES", "EXPONENTIAL", 12, n, 34962);
+    let nrm = meshopt::encode_filter_oct::<i8>(&g.normals, 8);
+    add(meshopt::encode_vertex_buffer_level(&nrm, 2, v).unwrap(), "ATTRIBUTES", "OCTAHEDRAL", 4, n, 34962);
+    let tan = meshopt::encode_filter_oct::<i16>(&g.tangents, 12);
+    add(meshopt::encode_vertex_buffer_level(&tan, 2, v).unwrap(), "ATTRIBUTES", "OCTAHEDRAL", 8, n, 34962);
+    let uv: Vec<[u16; 2]> = g.uvs.iter().map(|t| t.map(|c| (c * 65535.0).round() as u16)).collect();
+    add(meshopt::encode_vertex_buffer_level(&uv, 2, v).unwrap(), "ATTRIBUTES", "NONE", 4, n, 34962);
+    let indices = match r.index_mode {
+        "TRIANGLES" => meshopt::encode_index_buffer(&g.indices, n).unwrap(),
+        _ => meshopt::encode_index_sequence(&g.indices, n).unwrap(),
+    };
+    add(indices, r.index_mode, "NONE", r.index_stride, g.indices.len(), 34963);
+    let (lo, hi) = g.positions.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
+        ([0, 1, 2].map(|k| lo[k].min(p[k])), [0, 1, 2].map(|k| hi[k].max(p[k])))
+    });
+    let mut doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": [r.ext, "KHR_mesh_quantization"],
+        "extensionsRequired": [r.ext, "KHR_mesh_quantization"],
+        "buffers": [{"byteLength": bin.len()}, {"byteLength": fallback_len, "extensions": {r.ext: {"fallback": true}}}],
+        "bufferViews": views,
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": n, "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5120, "normalized": true, "count": n, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5122, "normalized": true, "count": n, "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5123, "normalized": true, "count": n, "type": "VEC2"},
+            {"bufferView": 4, "componentType": if r.index_stride == 2 { 5123 } else { 5125 }, "count": g.indices.len(), "type": "SCALAR"},
+        ],
+        "meshes": [{"name": "sheet", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TANGENT": 2, "TEXCOORD_0": 3}, "indices": 4}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    });
+    (r.edit)(&mut doc);
+    (r.corrupt)(&mut bin);
+    glb(&doc, &bin)
+}
+
+fn load_recipe(r: &Recipe) -> weft::Result<Scene> {
+    scene::load_slice(&meshopt_glb(&grid(9), r), "sheet.glb", None)
+}
+
+#[test]
+fn every_meshopt_mode_and_mesh_filter_decodes_to_the_grid() {
+    let g = grid(9);
+    for ext in ["EXT_meshopt_compression", "KHR_meshopt_compression"] {
+        for vertex_version in [0, 1] {
+            for (index_mode, index_stride) in [("TRIANGLES", 2), ("TRIANGLES", 4), ("INDICES", 2), ("INDICES", 4)] {
+                let r = Recipe { ext, vertex_version, index_mode, index_stride, ..Recipe::default() };
+                let what = format!("{ext} v{vertex_version} {index_mode}/{index_stride}");
+                let scene = load_recipe(&r).unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert!(scene.warnings.is_empty(), "{what}: {:?}", scene.warnings);
+                let mesh = &scene.meshes[0];
+                assert_eq!(mesh.vertices.len(), g.positions.len(), "{what}");
+                for (k, (v, p)) in mesh.vertices.iter().zip(&g.positions).enumerate() {
+                    // EXPONENTIAL with 23 mantissa bits and a shared exponent: within 2^-22 of the
+                    // largest component (1).
+                    for c in 0..3 {
+                        assert!((v.position[c] - p[c]).abs() < 4e-7, "{what}: vertex {k} {:?} against {p:?}", v.position);
+                    }
+                    // 8-bit octahedral normals: a few degrees; 12-bit tangents: a fraction of one.
+                    let n = Vec3::from(v.normal);
+                    assert!(n.dot(Vec3::from_slice(&g.normals[k][..3])) > 0.997, "{what}: normal {k} {n}");
+                    let t = Vec3::from_slice(&v.tangent[..3]);
+                    assert!(t.dot(Vec3::from_slice(&g.tangents[k][..3])) > 0.9999, "{what}: tangent {k} {t}");
+                    assert_eq!(v.tangent[3], 1.0, "{what}: tangent sign {k}");
+                    for c in 0..2 {
+                        assert!((v.uv[c] - g.uvs[k][c]).abs() <= 0.5 / 65535.0 + 1e-7, "{what}: uv {k}");
+                    }
+                }
+                // The same triangles, each possibly rotated (TRIANGLES may rotate; INDICES keeps
+                // the sequence exactly).
+                assert_eq!(mesh.indices.len(), g.indices.len(), "{what}");
+                for (a, b) in g.indices.chunks_exact(3).zip(mesh.indices.chunks_exact(3)) {
+                    let rotations = [[b[0], b[1], b[2]], [b[1], b[2], b[0]], [b[2], b[0], b[1]]];
+                    assert!(rotations.contains(&[a[0], a[1], a[2]]), "{what}: triangle {a:?} became {b:?}");
+                    if index_mode == "INDICES" {
+                        assert_eq!(a, b, "{what}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+// --- hostile data -------------------------------------------------------------------------------
+
+fn error_of(r: &Recipe) -> String {
+    match load_recipe(r) {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// The message names the file, the view, who reads it, and contains each of `says`.
+fn assert_names(msg: &str, view: usize, reader: &str, says: &[&str]) {
+    assert!(!msg.contains("the glTF reader failed"), "a panic: {msg}");
+    assert!(msg.contains("'sheet.glb'"), "no file name: {msg}");
+    assert!(msg.contains(&format!("buffer view {view}")), "no buffer view {view}: {msg}");
+    assert!(msg.contains(reader), "no '{reader}': {msg}");
+    for s in says {
+        assert!(msg.contains(s), "no '{s}': {msg}");
+    }
+}
+
+#[test]
+fn a_truncated_or_corrupted_stream_is_an_error_naming_the_view_and_the_mesh() {
+    // The POSITION stream one byte short: its tail block is then read from the wrong place.
+    let r = Recipe {
+        edit: |d| {
+            let e = &mut d["bufferViews"][0]["extensions"]["EXT_meshopt_compression"];
+            e["byteLength"] = json!(e["byteLength"].as_u64().unwrap() - 20);
+        },
+        ..Recipe::default()
+    };
+    assert_names(&error_of(&r), 0, "mesh 'sheet' primitive 0, attribute POSITION", &["does not decode", "EXT_meshopt_compression"]);
+
+    // The header byte of the NORMAL stream overwritten.
+    let r = Recipe {
+        corrupt: |bin| {
+            // View 1's stream starts after view 0's, at the first 4-aligned offset; its header is
+            // 0xa0 (version 0): find it after the first stream.
+            let at = bin.iter().enumerate().skip(1).find(|(_, &b)| b == 0xa0).map(|(i, _)| i).unwrap();
+            bin[at] = 0x17;
+        },
+        ..Recipe::default()
+    };
+    let msg = error_of(&r);
+    assert_names(&msg, 1, "attribute NORMAL", &["does not decode", "not a meshopt stream"]);
+
+    // The index stream truncated to 3 bytes.
+    let r = Recipe {
+        edit: |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteLength"] = json!(3),
+        ..Recipe::default()
+    };
+    assert_names(&error_of(&r), 4, "mesh 'sheet' primitive 0, indices", &["does not decode", "mode TRIANGLES"]);
+
+    // The stream past the end of its buffer.
+    let r = Recipe {
+        edit: |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["byteOffset"] = json!(1 << 20),
+        ..Recipe::default()
+    };
+    assert_names(&error_of(&r), 3, "attribute TEXCOORD_0", &["lies outside that buffer", "truncated"]);
+
+    // The whole binary chunk cut short (the .glb itself declares its length: a container error).
+    let mut bytes = meshopt_glb(&grid(9), &Recipe::default());
+    bytes.truncate(bytes.len() - 100);
+    let msg = scene::load_slice(&bytes, "sheet.glb", None).err().expect("truncated").to_string();
+    assert!(msg.contains("'sheet.glb'") && msg.contains("truncated"), "{msg}");
+}
+
+#[test]
+fn counts_strides_and_modes_the_specification_forbids_are_errors() {
+    type Edit = fn(&mut Value);
+    let cases: &[(usize, Edit, &str)] = &[
+        (0, |d| d["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["count"] = json!(80), "80 elements of 12 bytes make 960 bytes, and the buffer view's byteLength is 972"),
+        (0, |d| d["bufferViews"][0]["byteLength"] = json!(900), "the counts do not match"),
+        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(8), "differs from the buffer view's own byteStride 4"),
+        (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(3), "its byteStride is 3; mode TRIANGLES needs 2 or 4"),
+        (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("OCTAHEDRAL"), "only ATTRIBUTES takes a filter"),
+        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("QUATERNION"), "filter QUATERNION does not allow (it needs 8)"),
+        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("COLOR"), "COLOR is KHR_meshopt_compression's"),
+        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("SMOOTH"), "filter is \"SMOOTH\""),
+        (2, |d| d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]["mode"] = json!("STRIPS"), "mode is \"STRIPS\""),
+        (2, |d| { d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"].as_object_mut().unwrap().remove("mode"); }, "\"mode\" is missing"),
+        (2, |d| d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]["count"] = json!(-4), "\"count\" is -4"),
+        (3, |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["buffer"] = json!(1), "a fallback buffer that holds no data"),
+        (3, |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["buffer"] = json!(7), "the file has 2 buffer(s)"),
+        (3, |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"] = json!(12), "not an object"),
+    ];
+    for (view, edit, says) in cases {
+        let r = Recipe { edit: *edit, ..Recipe::default() };
+        let msg = error_of(&r);
+        assert_names(&msg, *view, "mesh 'sheet'", &[says]);
+    }
+    // A view of the fallback buffer that is not itself compressed has no data.
+    let r = Recipe {
+        edit: |d| {
+            d["bufferViews"][3].as_object_mut().unwrap().remove("extensions");
+        },
+        ..Recipe::default()
+    };
+    let msg = error_of(&r);
+    assert_names(&msg, 3, "attribute TEXCOORD_0", &["fallback buffer that holds no data", "not compressed itself"]);
+    // Stride 2 with TRIANGLES needs every index under 65536; a count that is not a multiple of 3.
+    let r = Recipe {
+        edit: |d| {
+            let v = &mut d["bufferViews"][4];
+            v["byteLength"] = json!(2 * 383);
+            v["extensions"]["EXT_meshopt_compression"]["count"] = json!(383);
+        },
+        ..Recipe::default()
+    };
+    assert_names(&error_of(&r), 4, "indices", &["not a multiple of 3"]);
+}
+
+#[test]
+fn damaged_streams_never_panic() {
+    // Every byte of every stream of the Avocado, one at a time, replaced by a few values, and the
+    // compressed lengths shortened: the load succeeds (meshoptimizer may decode garbage, which the
+    // loader's own checks then judge) or fails with an input error, never with a caught panic.
+    let bytes = std::fs::read(data("avocado_meshopt.glb")).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let bin_start = 20 + json_len + 8;
+    let doc: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let mut streams = Vec::new();
+    for v in doc["bufferViews"].as_array().unwrap() {
+        if let Some(e) = v["extensions"].get("EXT_meshopt_compression") {
+            let (o, l) = (e["byteOffset"].as_u64().unwrap() as usize, e["byteLength"].as_u64().unwrap() as usize);
+            streams.push(bin_start + o..bin_start + o + l);
+        }
+    }
+    assert_eq!(streams.len(), 5);
+    let mut rng = common::Rng(0x2026_0026);
+    let (mut ok, mut refused) = (0, 0);
+    for _ in 0..600 {
+        let s = &streams[rng.below(streams.len())];
+        let at = s.start + rng.below(s.len());
+        let mut broken = bytes.clone();
+        broken[at] = [0x00, 0xff, 0xa1, broken[at] ^ 0x55][rng.below(4)];
+        match scene::load_slice(&broken, "broken.glb", None) {
+            Ok(_) => ok += 1,
+            Err(e) => {
+                let msg = e.to_string();
+                assert!(!msg.contains("the glTF reader failed"), "a panic: {msg}");
+                assert!(msg.contains("'broken.glb'"), "{msg}");
+                refused += 1;
+            }
+        }
+    }
+    eprintln!("{ok} damaged files loaded, {refused} refused");
+    assert!(refused > 0, "no damage was noticed");
+}
+
+#[test]
+fn webp_is_preferred_over_the_fallback_and_a_bad_source_is_an_error() {
+    let png = encoded([200, 0, 0, 255], image::ImageFormat::Png);
+    let webp = encoded([0, 200, 0, 255], image::ImageFormat::WebP);
+    let mut bin = png.clone();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let webp_at = bin.len();
+    bin.extend(&webp);
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let geometry_at = bin.len();
+    for f in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend(f.to_le_bytes());
+    }
+    let doc = |texture: Value| {
+        json!({
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["EXT_texture_webp"],
+            "buffers": [{"byteLength": bin.len()}],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": png.len()},
+                {"buffer": 0, "byteOffset": webp_at, "byteLength": webp.len()},
+                {"buffer": 0, "byteOffset": geometry_at, "byteLength": 36},
+            ],
+            "images": [{"bufferView": 0, "mimeType": "image/png"}, {"bufferView": 1, "mimeType": "image/webp"}],
+            "textures": [texture],
+            "materials": [{"name": "paint", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+            "accessors": [{"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+            "nodes": [{"mesh": 0}],
+            "scenes": [{"nodes": [0]}],
+        })
+    };
+    let texel = |texture: Value| -> weft::Result<[u8; 4]> {
+        let scene = scene::load_slice(&glb(&doc(texture), &bin), "paint.glb", None)?;
+        let t = &scene.textures[scene.materials[0].base_color_texture.unwrap()];
+        Ok(t.rgba8[..4].try_into().unwrap())
+    };
+    // Both sources: the WebP one (green), not the PNG fallback (red).
+    assert_eq!(texel(json!({"source": 0, "extensions": {"EXT_texture_webp": {"source": 1}}})).unwrap(), [0, 200, 0, 255]);
+    // WebP only, as gltf-transform writes it (no core source).
+    assert_eq!(texel(json!({"extensions": {"EXT_texture_webp": {"source": 1}}})).unwrap(), [0, 200, 0, 255]);
+    // A WebP image as a core source decodes too.
+    assert_eq!(texel(json!({"source": 1})).unwrap(), [0, 200, 0, 255]);
+    for (texture, says) in [
+        (json!({"extensions": {"EXT_texture_webp": {"source": 5}}}), "source of image 5, but the file has 2 image(s)"),
+        (json!({"extensions": {"EXT_texture_webp": {}}}), "without a valid \"source\""),
+    ] {
+        let msg = texel(texture).err().expect("an error").to_string();
+        assert!(msg.contains("'paint.glb'") && msg.contains("texture 0") && msg.contains(says), "{msg}");
+    }
+    // Damaged WebP bytes: an error naming the material, the image and the format.
+    let mut broken = bin.clone();
+    for b in &mut broken[webp_at + 12..webp_at + webp.len()] {
+        *b = 0x5a;
+    }
+    let msg = scene::load_slice(&glb(&doc(json!({"source": 1})), &broken), "paint.glb", None)
+        .err()
+        .expect("an error")
+        .to_string();
+    assert!(msg.contains("'paint.glb'") && msg.contains("material 'paint'") && msg.contains("WebP"), "{msg}");
+}
+
+fn encoded(rgba: [u8; 4], format: image::ImageFormat) -> Vec<u8> {
+    let mut out = Vec::new();
+    image::RgbaImage::from_pixel(4, 4, image::Rgba(rgba))
+        .write_to(&mut std::io::Cursor::new(&mut out), format)
+        .unwrap();
+    out
+}
+
+#[test]
+fn draco_and_required_ktx2_are_refused_with_the_reason_and_a_way_out() {
+    let msg = scene::load(&data("avocado_draco.glb")).err().expect("refused").to_string();
+    assert!(
+        msg.contains("avocado_draco.glb")
+            && msg.contains("requires the glTF extension 'KHR_draco_mesh_compression'")
+            && msg.contains("no Draco decoder")
+            && msg.contains("gltf-transform meshopt"),
+        "{msg}"
+    );
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_texture_basisu"],
+        "extensionsRequired": ["KHR_texture_basisu"],
+    });
+    let msg = scene::load_slice(&glb(&doc, &[]), "lamp.glb", None).err().expect("refused").to_string();
+    assert!(
+        msg.contains("'lamp.glb' requires the glTF extension 'KHR_texture_basisu'")
+            && msg.contains("no Basis Universal transcoder"),
+        "{msg}"
+    );
+}
+
+// --- on the GPU ---------------------------------------------------------------------------------
+
+#[test]
+fn compressed_avocados_render_like_the_original() {
+    use weft::render::{RenderOptions, Renderer};
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let options = RenderOptions { width: 256, height: 256, ..Default::default() };
+    let render = |renderer: &mut Renderer, name: &str| {
+        renderer.render(&load(name), &options).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let original = render(&mut renderer, "avocado_small.glb");
+    // Measured on lavapipe: see each bound's comment.
+    for (name, bound) in [
+        // Positions within 4e-6 m, normals within 0.2 degrees: the same picture but for a few
+        // edge pixels.
+        ("avocado_quant.glb", 0.002),
+        ("avocado_meshopt.glb", 0.002),
+        // Lossy WebP (quality 80) textures.
+        ("avocado_webp.glb", 0.02),
+    ] {
+        let frame = render(&mut renderer, name);
+        let flip = weft::bench::flip_mean(&original, &frame);
+        eprintln!("{name}: mean FLIP {flip:.5} against the original");
+        assert!(flip <= bound, "{name}: mean FLIP {flip} > {bound}");
+    }
+}
