@@ -1215,6 +1215,49 @@ mod tests {
     }
 
     #[test]
+    fn from_sheen_keeps_the_sheen_colour_texture_as_thread_colour() {
+        // With a sheenColorTexture: rd = sheenColorFactor, the texture over it, and said.
+        let m = json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "baseColorTexture": {"index": 0}},
+            "extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": 0.5, "sheenColorFactor": [1, 0.5, 0.25],
+                "sheenColorTexture": {"index": 1}}}
+        });
+        let mut notes = Vec::new();
+        let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
+        assert_eq!(p.thread_texture, ThreadTexture::SheenColor);
+        assert_eq!(p.rd_warp, [1.0, 0.5, 0.25]);
+        assert!(notes.iter().any(|n| n.contains("sheenColorTexture is the thread colour")), "{notes:?}");
+        assert!(notes.iter().any(|n| n.contains("baseColorTexture is not used")), "{notes:?}");
+        // Without one: the base colour and its texture, as before.
+        let m = json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "baseColorTexture": {"index": 0}},
+            "extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": 0.5, "sheenColorFactor": [1, 0.5, 0.25]}}
+        });
+        let mut notes = Vec::new();
+        let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
+        assert_eq!(p.thread_texture, ThreadTexture::BaseColor);
+        assert_eq!(p.rd_warp, [0.2, 0.4, 0.6]);
+        // The texture notes say what each texture does, and the extension round-trips the field.
+        let mut notes = Vec::new();
+        texture_notes(
+            &json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}, "normalTexture": {"index": 1}, "occlusionTexture": {"index": 2}}),
+            &p,
+            &mut notes,
+        );
+        assert_eq!(notes.len(), 3, "{notes:?}");
+        assert!(notes[0].contains("baseColorTexture multiplies the thread colours"), "{notes:?}");
+        let back = FabricParams::from_gltf_extension(&extension_json(&p), "x", &mut Vec::new()).unwrap();
+        assert_eq!(back.thread_texture, ThreadTexture::BaseColor);
+        let none = FabricParams { thread_texture: ThreadTexture::None, ..p.clone() };
+        let back = FabricParams::from_gltf_extension(&extension_json(&none), "x", &mut Vec::new()).unwrap();
+        assert_eq!(back.thread_texture, ThreadTexture::None);
+        let e = FabricParams::from_gltf_extension(&json!({"thread_texture": "albedo"}), "x", &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("thread_texture") && e.contains("base_color"), "{e}");
+    }
+
+    #[test]
     fn sheen_roughness_round_trips_through_from_sheen() {
         // from-sheen is the inverse of the fallback's roughness, so a fabric made from a sheen
         // asset writes back (nearly) the roughness it came from.
