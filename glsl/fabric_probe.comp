@@ -8,7 +8,7 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// Rust twin: weft::reference::probe::ProbeInput (192 bytes).
+// Rust twin: weft::reference::probe::ProbeInput (208 bytes).
 struct ProbeInput {
     vec4 n;          // world normal (xyz)
     vec4 t;          // world tangent (xyz), w = handedness sign
@@ -17,10 +17,11 @@ struct ProbeInput {
     vec4 point;      // xy: point for weave_point, in cells
     vec4 footprint;  // (x0, y0, x1, y1): box for weave_box, in cells
     vec4 coverage;   // (c_warp, c_weft, s_warp, s_weft) given to fabric_brdf
+    vec4 tint;       // rgb: the thread texture's value given to fabric_tinted
     GpuFabric fabric;
 };
 
-// Rust twin: weft::reference::probe::ProbeOutput (160 bytes).
+// Rust twin: weft::reference::probe::ProbeOutput (176 bytes).
 struct ProbeOutput {
     vec4 lobe;       // ρs weft-oriented, ρs warp-oriented, D(h) weft-oriented, F(h·k)
     vec4 expo;       // E(h) weft, E(h) warp, h·n, h·k
@@ -32,6 +33,7 @@ struct ProbeOutput {
     vec4 f_avg;      // fabric_brdf_averaged with the input coverage (rgb), 0
     vec4 phong;      // phong_brdf (rgb), phong_lobe with fabric_phong_exponent
     vec4 plain_as;   // plain_as_brdf (rgb), 0
+    vec4 f_tint;     // fabric_brdf of fabric_tinted(m, tint) with the input coverage (rgb), 0
 };
 
 // set 0, binding 0: the inputs.
@@ -70,6 +72,7 @@ void main() {
     vec3 f_avg = fabric_brdf_averaged(k1, k2, cov, m);
     vec3 phong = phong_brdf(k1, k2, m);
     vec3 plain_as = plain_as_brdf(k1, k2, m);
+    vec3 f_tint = fabric_brdf(k1, k2, cov, fabric_tinted(m, inp.tint.rgb));
 
     ProbeOutput o;
     o.lobe = vec4(
@@ -94,5 +97,6 @@ void main() {
     o.f_avg = vec4(f_avg, 0.0);
     o.phong = vec4(phong, phong_lobe(k1, k2, fabric_phong_exponent(m)));
     o.plain_as = vec4(plain_as, 0.0);
+    o.f_tint = vec4(f_tint, 0.0);
     outputs[id] = o;
 }

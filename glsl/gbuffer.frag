@@ -110,7 +110,8 @@ void main() {
         t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
     }
 
-    vec4 base = m.base_color * sample_slot(base_color_tex, m, SLOT_BASE_COLOR);
+    vec4 base_texel = sample_slot(base_color_tex, m, SLOT_BASE_COLOR);
+    vec4 base = m.base_color * base_texel;
     vec4 mr = sample_slot(metallic_roughness_tex, m, SLOT_METALLIC_ROUGHNESS);
     float metallic = clamp(m.metallic_roughness.x * mr.b, 0.0, 1.0);
     float roughness = clamp(m.metallic_roughness.y * mr.g, 0.0, 1.0);
@@ -142,6 +143,20 @@ void main() {
     }
 
     gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
+    if (fabric > 0u) {
+        // The fabric's albedo target holds its thread texture's filtered value (white without
+        // one), which the lighting pass multiplies over the thread colours (fabric_tinted). The
+        // base colour factor is not in it: on a woven material it is the fallback's far-field
+        // albedo (docs/fabric-on-assets.md), and the thread colours replace it.
+        uint ff = fabrics[fabric - 1u].flags;
+        vec3 tint = vec3(1.0);
+        if ((ff & FABRIC_FLAG_TEXTURE_BASE_COLOR) != 0u) {
+            tint = base_texel.rgb;
+        } else if ((ff & FABRIC_FLAG_TEXTURE_SHEEN_COLOR) != 0u) {
+            tint = sample_slot(sheen_color_tex, m, SLOT_SHEEN_COLOR).rgb;
+        }
+        gb_albedo = vec4(clamp(tint, 0.0, 1.0), 0.0);
+    }
     gb_frame = frame_encode(oct_encode(n), oct_encode(frame_t));
     gb_surface = vec4(roughness, float(draw.material), fabric > 0u ? sign : clamp(anisotropy, 0.0, 1.0),
                       (draw.flags & 1u) != 0u ? 1.0 : 0.0);

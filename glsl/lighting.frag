@@ -446,7 +446,9 @@ void main() {
         // The fabric model (docs/fabric-model.md §3) with the weave coverages of the pixel's
         // footprint (filtered by the G-buffer pass), or, supersampled, the analytic weave at
         // N x N points of the footprint.
-        GpuFabric f = fabrics[fabric - 1u];
+        // The thread texture (gbuffer.frag writes its value to the albedo target) over the
+        // thread colours.
+        GpuFabric f = fabric_tinted(fabrics[fabric - 1u], base);
         mat3 tbn = fabric_frame(n, oct_decode(fr.zw), surface.z);
         vec3 k2 = fabric_local(v, tbn);
         vec4 g = texelFetch(gb_fabric, px, 0);

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use weft::fabric::assets::{self, Colour, MaterialRef, Overrides, Request, Source};
-use weft::fabric::{presets, WeavePattern};
+use weft::fabric::{presets, ThreadTexture, WeavePattern};
 
 #[derive(Args)]
 pub struct FabricArgs {
@@ -62,6 +62,10 @@ pub struct FabricArgs {
     /// Use the Ashikhmin-Shirley coupled diffuse instead of Lambert.
     #[arg(long)]
     pub coupled_diffuse: bool,
+    /// The material's texture multiplied over the thread colours: base_color (the default),
+    /// sheen_color or none.
+    #[arg(long)]
+    pub thread_texture: Option<String>,
 }
 
 fn unit_range(flag: &str, x: Option<f32>) -> anyhow::Result<Option<f32>> {
@@ -123,6 +127,15 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
         rd_warp: colour("--rd-warp", &args.rd_warp)?,
         rd_weft: colour("--rd-weft", &args.rd_weft)?,
         coupled_diffuse: args.coupled_diffuse.then_some(true),
+        thread_texture: match &args.thread_texture {
+            None => None,
+            Some(t) => Some(ThreadTexture::by_name(t).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--thread-texture '{t}' is not one of {:?} (the material's texture multiplied over the thread colours)",
+                    ThreadTexture::NAMES
+                )
+            })?),
+        },
     })
 }
 

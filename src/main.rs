@@ -1380,6 +1380,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "fresnel": plan.features.fresnel,
                 "coupled_diffuse": plan.features.coupled_diffuse,
                 "far_field_mixture": plan.features.far_field_mixture,
+                "thread_texture": plan.features.thread_texture,
             },
             "light_types_mask": plan.light_types_mask(),
             "shadows": plan.shadows.iter().map(|s| serde_json::json!({

@@ -71,11 +71,12 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "Evaluates every function of the fabric BRDF (`include/fabric.glsl`) and of the weave \
          (`include/weave.glsl`) on a batch of inputs, one invocation per input: the way to check \
          that a driver computes the BRDF as weft's CPU reference does. Bind a buffer of `count` \
-         192-byte `ProbeInput` records (std430: `vec4 n, t, k1, k2, point, footprint, coverage` \
-         then the 80-byte `GpuFabric` of `include/fabric.glsl`; `t.w` is the tangent's \
-         handedness, `k1`/`k2` the unit directions to the light and the viewer) and a buffer for \
-         `count` 160-byte `ProbeOutput` records (ten `vec4`: `lobe`, `expo`, `diffuse`, `f`, \
-         `point`, `footprint`, `f_point`, `f_avg`, `phong`, `plain_as`). Push the `uint count`; dispatch \
+         208-byte `ProbeInput` records (std430: `vec4 n, t, k1, k2, point, footprint, coverage, \
+         tint` then the 80-byte `GpuFabric` of `include/fabric.glsl`; `t.w` is the tangent's \
+         handedness, `k1`/`k2` the unit directions to the light and the viewer, `tint.rgb` the \
+         thread texture's value) and a buffer for `count` 176-byte `ProbeOutput` records (eleven \
+         `vec4`: `lobe`, `expo`, `diffuse`, `f`, `point`, `footprint`, `f_point`, `f_avg`, \
+         `phong`, `plain_as`, `f_tint`). Push the `uint count`; dispatch \
          `ceil(count / 64)` groups. weft's Rust twins and error bounds: \
          `weft::reference::probe`.",
     ),
@@ -89,7 +90,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "gbuffer.frag",
         "G-buffer pass, fragment stage: samples the material's textures (and, for fabric, the \
          weave texture built by `weave.comp`, with derivatives, so the mip level follows the \
-         pixel footprint) and writes six colour targets: albedo (RGBA8 sRGB), normal+tangent \
+         pixel footprint) and writes six colour targets: albedo (RGBA8 sRGB; for fabric the \
+         thread texture's value, which the lighting pass multiplies over the thread colours), normal+tangent \
          (RGBA16_UINT, octahedral, explicitly rounded: `frame_encode` in include/frame.glsl), surface (RGBA16F), fabric coverage (RGBA16F; for other materials \
          the KHR_materials_sheen colour and roughness), emissive (RGBA16F), specular (RGBA16F: \
          KHR_materials_specular's dielectric F0 and weight). Each texture slot has its own UV set \

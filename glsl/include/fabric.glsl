@@ -16,6 +16,10 @@
 #define FABRIC_DENOM_MIN 1e-6
 #define FABRIC_SERIES_MAX_S 0.25
 #define FABRIC_FLAG_COUPLED_DIFFUSE 1u
+// The thread colours are multiplied by a texture of the material (WEFT_materials_fabric
+// "thread_texture", docs/fabric-model.md §4): its base colour texture, or its sheen colour texture.
+#define FABRIC_FLAG_TEXTURE_BASE_COLOR 2u
+#define FABRIC_FLAG_TEXTURE_SHEEN_COLOR 4u
 
 // One material (std430, 80 bytes). Rust twin: weft::fabric::GpuFabric.
 struct GpuFabric {
@@ -25,7 +29,7 @@ struct GpuFabric {
     float e_along;         // 28: A–S exponent along a thread
     float e_across;        // 32: A–S exponent across a thread
     float cell_per_uv;     // 36: weave cells per texture unit (2/s_p)
-    uint flags;            // 40: bit 0 = coupled diffuse
+    uint flags;            // 40: bit 0 = coupled diffuse, bit 1/2 = thread texture base/sheen colour
     float shadow_strength; // 44: diffuse factor in shadow = 1 - shadow_strength
     uint pattern_lo;       // 48: bit 8j+i = cell (i, j) weft-up, rows 0..3
     uint pattern_hi;       // 52: rows 4..7
@@ -169,6 +173,15 @@ float coupled_diffuse(float rs, float nk1, float nk2) {
     float a2 = a * a;
     float b2 = b * b;
     return 28.0 / (23.0 * FABRIC_PI) * (1.0 - rs) * ((1.0 - a2 * a2 * a) * (1.0 - b2 * b2 * b));
+}
+
+// The material with both threads' colours multiplied by `tint` (the thread texture's filtered
+// value at the pixel, rgb in [0, 1]; white without one). The BRDF is linear in the colours, so
+// this is the texture multiplied over the diffuse term wherever the model uses them.
+GpuFabric fabric_tinted(GpuFabric m, vec3 tint) {
+    m.rd_warp = m.rd_warp * tint;
+    m.rd_weft = m.rd_weft * tint;
+    return m;
 }
 
 // The diffuse albedo of a coverage (c_warp, c_weft, s_warp, s_weft): each thread's albedo times

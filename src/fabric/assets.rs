@@ -23,7 +23,9 @@ use std::path::{Component, Path, PathBuf};
 
 use serde_json::{json, Map, Value};
 
-use super::{presets, presets::Preset, FabricParams, WeavePattern, EXTENSION_NAME, REPEAT_RANGE};
+use super::{
+    presets, presets::Preset, FabricParams, ThreadTexture, WeavePattern, EXTENSION_NAME, REPEAT_RANGE,
+};
 use crate::scene::Scene;
 use crate::{Error, Result};
 
@@ -139,6 +141,8 @@ pub struct Overrides {
     pub rd_warp: Option<Colour>,
     pub rd_weft: Option<Colour>,
     pub coupled_diffuse: Option<bool>,
+    /// The texture multiplied over the thread colours (default: the source's choice).
+    pub thread_texture: Option<ThreadTexture>,
 }
 
 /// Materials and what to give them.
@@ -581,6 +585,7 @@ pub fn extension_json(p: &FabricParams) -> Value {
     if p.coupled_diffuse {
         o["coupled_diffuse"] = json!(true);
     }
+    o["thread_texture"] = json!(p.thread_texture.name());
     o
 }
 
@@ -676,15 +681,16 @@ fn base_colour(material: &Value, who: &str) -> Result<[f64; 4]> {
 
 /// The fabric for a material with `KHR_materials_sheen`, and what the mapping did:
 ///
-/// - `rd_warp = rd_weft = baseColorFactor.rgb` (clamped to [0, 1]);
+/// - `rd_warp = rd_weft = baseColorFactor.rgb` (clamped to [0, 1]), the base colour texture (if
+///   any) over them; or, where the sheen has a `sheenColorTexture`, `rd = sheenColorFactor` with
+///   that texture over them (`thread_texture: "sheen_color"`): the sheen colour is the fibres';
 /// - the exponents from `sheenRoughnessFactor` r (clamped to [0.05, 1]), the inverse of
 ///   [`fallback_sheen`]'s roughness: `α = r²`, `E = 2/α² − 2`, split with
 ///   `e_along/e_across` = [`FROM_SHEEN_RATIO`] at the same peak, `sqrt((ea+1)(ex+1)) = E + 1`;
 /// - `rs = 0.04` (glTF's default dielectric F0, IOR 1.5);
 /// - plain weave, gap and shadows of cotton-plain: the sheen carries no weave;
-/// - `sheenColorFactor`, and every texture (sheen colour/roughness, base colour) have no
-///   counterpart: the woven highlight is untinted Fresnel and the fabric takes no textures. Said
-///   in the notes.
+/// - without a sheen colour texture, `sheenColorFactor` has no counterpart (the woven highlight
+///   is untinted Fresnel); `sheenRoughnessTexture` never has one. Said in the notes.
 pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Result<FabricParams> {
     let sheen = material
         .get("extensions")
@@ -715,44 +721,92 @@ pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Resul
     }
     let e_along = FROM_SHEEN_RATIO * (e_across + 1.0) - 1.0;
     let cotton = presets::by_name("cotton-plain").expect("cotton-plain is a preset");
-    let rd = [base[0], base[1], base[2]].map(|x| x.clamp(0.0, 1.0) as f32);
+    let sheen_texture = sheen.get("sheenColorTexture").is_some();
+    let thread = if sheen_texture { colour } else { [base[0], base[1], base[2]] };
+    let rd = thread.map(|x| x.clamp(0.0, 1.0) as f32);
     let mut p = cotton.params(1.0);
     p.rd_warp = rd;
     p.rd_weft = rd;
     p.rs = 0.04;
     p.e_along = (e_along as f32).clamp(0.0, 1e6);
     p.e_across = (e_across as f32).clamp(0.0, 1e6);
+    p.thread_texture = if sheen_texture {
+        ThreadTexture::SheenColor
+    } else {
+        ThreadTexture::BaseColor
+    };
     notes.push(format!(
-        "from-sheen: rd = baseColorFactor [{:.3}, {:.3}, {:.3}]; sheenRoughnessFactor {r}{} -> isotropic exponent {e:.1} -> e_along {:.1}, e_across {:.1} (ratio {FROM_SHEEN_RATIO}); rs 0.04 (glTF default F0); plain weave with cotton-plain's gap and shadow",
+        "from-sheen: rd = {} [{:.3}, {:.3}, {:.3}]; sheenRoughnessFactor {r}{} -> isotropic exponent {e:.1} -> e_along {:.1}, e_across {:.1} (ratio {FROM_SHEEN_RATIO}); rs 0.04 (glTF default F0); plain weave with cotton-plain's gap and shadow",
+        if sheen_texture { "sheenColorFactor" } else { "baseColorFactor" },
         rd[0], rd[1], rd[2],
         if rc != r { format!(" (clamped to {rc})") } else { String::new() },
         p.e_along, p.e_across
     ));
-    if colour.iter().all(|&c| c == 0.0) {
+    let base_texture = material
+        .get("pbrMetallicRoughness")
+        .and_then(|p| p.get("baseColorTexture"))
+        .is_some();
+    if sheen_texture {
+        notes.push(
+            "from-sheen: its sheenColorTexture is the thread colour's texture (thread_texture \"sheen_color\"), multiplied over sheenColorFactor".into(),
+        );
+        if base_texture {
+            notes.push(
+                "from-sheen: its baseColorTexture is not used by the woven model (the sheen colour texture is); the material keeps it for other viewers".into(),
+            );
+        }
+    } else if colour.iter().all(|&c| c == 0.0) {
         notes.push(
             "from-sheen: sheenColorFactor is 0 (this material's sheen is off); only its base colour and roughness were used".into(),
         );
     } else {
         notes.push(format!(
-            "from-sheen: sheenColorFactor [{:.3}, {:.3}, {:.3}] is not mapped (the woven highlight is untinted Fresnel)",
+            "from-sheen: sheenColorFactor [{:.3}, {:.3}, {:.3}] is not mapped (the woven highlight is untinted Fresnel; without a sheenColorTexture the base colour is the thread colour)",
             colour[0], colour[1], colour[2]
         ));
     }
-    for (obj, key) in [
-        (sheen, "sheenColorTexture"),
-        (sheen, "sheenRoughnessTexture"),
-        (
-            material.get("pbrMetallicRoughness").unwrap_or(&Value::Null),
-            "baseColorTexture",
-        ),
-    ] {
-        if obj.get(key).is_some() {
-            notes.push(format!(
-                "from-sheen: {key} is not used by the woven model (it takes no textures); the material keeps it for other viewers"
-            ));
-        }
+    if sheen.get("sheenRoughnessTexture").is_some() {
+        notes.push(
+            "from-sheen: sheenRoughnessTexture is not used by the woven model (its lobe widths are per material); the material keeps it for other viewers".into(),
+        );
     }
     Ok(p)
+}
+
+/// What the woven model does with each texture of the material (said, never silent): the thread
+/// texture multiplies the thread colours; the normal map and the occlusion texture stay.
+fn texture_notes(material: &Value, p: &FabricParams, notes: &mut Vec<String>) {
+    let pbr = material.get("pbrMetallicRoughness");
+    let has = |obj: Option<&Value>, key: &str| obj.and_then(|o| o.get(key)).is_some();
+    let sheen = material
+        .get("extensions")
+        .and_then(|e| e.get(SHEEN_EXTENSION));
+    let base = has(pbr, "baseColorTexture");
+    let sheen_colour = has(sheen, "sheenColorTexture");
+    match p.thread_texture {
+        ThreadTexture::BaseColor if base => notes.push(
+            "textures: its baseColorTexture multiplies the thread colours (thread_texture \"base_color\": the print, dye or damask over the weave)".into(),
+        ),
+        ThreadTexture::SheenColor if sheen_colour => notes.push(
+            "textures: its sheenColorTexture multiplies the thread colours (thread_texture \"sheen_color\")".into(),
+        ),
+        ThreadTexture::BaseColor | ThreadTexture::SheenColor => notes.push(format!(
+            "textures: thread_texture \"{}\" but the material has no such texture: plain thread colours",
+            p.thread_texture.name()
+        )),
+        ThreadTexture::None if base || sheen_colour => notes.push(
+            "textures: thread_texture \"none\": the woven model ignores its colour textures".into(),
+        ),
+        ThreadTexture::None => {}
+    }
+    if material.get("normalTexture").is_some() {
+        notes.push("textures: its normalTexture stays and bends the weave's shading frame".into());
+    }
+    if material.get("occlusionTexture").is_some() {
+        notes.push(
+            "textures: its occlusionTexture stays and darkens the environment light on the weave (glTF: indirect light only)".into(),
+        );
+    }
 }
 
 /// Adds `name` to the document's `extensionsUsed` when missing.
@@ -892,6 +946,10 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
             if let Some(c) = o.coupled_diffuse {
                 params.coupled_diffuse = c;
             }
+            if let Some(t) = o.thread_texture {
+                params.thread_texture = t;
+            }
+            texture_notes(&original, &params, &mut notes);
             let sane = params.sanitized();
             if sane != params {
                 return Err(Error::input(format!(
@@ -936,7 +994,7 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
                 let pbr = object_at(m, "pbrMetallicRoughness", &who)?;
                 if pbr.contains_key("baseColorTexture") {
                     notes.push(
-                        "its baseColorTexture stays: other viewers show it multiplied by the new baseColorFactor".into(),
+                        "its baseColorTexture stays: other viewers show it multiplied by the new baseColorFactor (the woven model's far field with the texture, as a product of their averages)".into(),
                     );
                 }
                 pbr.insert(
@@ -1154,6 +1212,49 @@ mod tests {
                 .to_string()
                 .contains("--rd"));
         }
+    }
+
+    #[test]
+    fn from_sheen_keeps_the_sheen_colour_texture_as_thread_colour() {
+        // With a sheenColorTexture: rd = sheenColorFactor, the texture over it, and said.
+        let m = json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "baseColorTexture": {"index": 0}},
+            "extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": 0.5, "sheenColorFactor": [1, 0.5, 0.25],
+                "sheenColorTexture": {"index": 1}}}
+        });
+        let mut notes = Vec::new();
+        let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
+        assert_eq!(p.thread_texture, ThreadTexture::SheenColor);
+        assert_eq!(p.rd_warp, [1.0, 0.5, 0.25]);
+        assert!(notes.iter().any(|n| n.contains("sheenColorTexture is the thread colour")), "{notes:?}");
+        assert!(notes.iter().any(|n| n.contains("baseColorTexture is not used")), "{notes:?}");
+        // Without one: the base colour and its texture, as before.
+        let m = json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "baseColorTexture": {"index": 0}},
+            "extensions": {SHEEN_EXTENSION: {"sheenRoughnessFactor": 0.5, "sheenColorFactor": [1, 0.5, 0.25]}}
+        });
+        let mut notes = Vec::new();
+        let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
+        assert_eq!(p.thread_texture, ThreadTexture::BaseColor);
+        assert_eq!(p.rd_warp, [0.2, 0.4, 0.6]);
+        // The texture notes say what each texture does, and the extension round-trips the field.
+        let mut notes = Vec::new();
+        texture_notes(
+            &json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}, "normalTexture": {"index": 1}, "occlusionTexture": {"index": 2}}),
+            &p,
+            &mut notes,
+        );
+        assert_eq!(notes.len(), 3, "{notes:?}");
+        assert!(notes[0].contains("baseColorTexture multiplies the thread colours"), "{notes:?}");
+        let back = FabricParams::from_gltf_extension(&extension_json(&p), "x", &mut Vec::new()).unwrap();
+        assert_eq!(back.thread_texture, ThreadTexture::BaseColor);
+        let none = FabricParams { thread_texture: ThreadTexture::None, ..p.clone() };
+        let back = FabricParams::from_gltf_extension(&extension_json(&none), "x", &mut Vec::new()).unwrap();
+        assert_eq!(back.thread_texture, ThreadTexture::None);
+        let e = FabricParams::from_gltf_extension(&json!({"thread_texture": "albedo"}), "x", &mut Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("thread_texture") && e.contains("base_color"), "{e}");
     }
 
     #[test]

@@ -31,6 +31,55 @@ pub const EXTENSION_NAME: &str = "WEFT_materials_fabric";
 /// `GpuFabric::flags` bit: use the A–S coupled diffuse (eq. 5) instead of Lambert.
 pub const FLAG_COUPLED_DIFFUSE: u32 = 1;
 
+/// `GpuFabric::flags` bit: the thread colours are multiplied by the material's base colour texture.
+pub const FLAG_TEXTURE_BASE_COLOR: u32 = 2;
+/// `GpuFabric::flags` bit: the thread colours are multiplied by the material's sheen colour texture.
+pub const FLAG_TEXTURE_SHEEN_COLOR: u32 = 4;
+
+/// Which texture of the material, if any, is multiplied over the thread colours (the extension's
+/// `thread_texture`): a print, a dye, a damask over the weave.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ThreadTexture {
+    /// `"base_color"`: the material's `baseColorTexture` (the default; white where it has none).
+    #[default]
+    BaseColor,
+    /// `"sheen_color"`: `KHR_materials_sheen`'s `sheenColorTexture` (white where it has none).
+    SheenColor,
+    /// `"none"`: plain thread colours.
+    None,
+}
+
+impl ThreadTexture {
+    /// The extension's spellings.
+    pub const NAMES: [&'static str; 3] = ["base_color", "sheen_color", "none"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ThreadTexture::BaseColor => "base_color",
+            ThreadTexture::SheenColor => "sheen_color",
+            ThreadTexture::None => "none",
+        }
+    }
+
+    pub fn by_name(name: &str) -> Option<ThreadTexture> {
+        match name {
+            "base_color" => Some(ThreadTexture::BaseColor),
+            "sheen_color" => Some(ThreadTexture::SheenColor),
+            "none" => Some(ThreadTexture::None),
+            _ => None,
+        }
+    }
+
+    /// Its `GpuFabric::flags` bit.
+    pub fn flag(self) -> u32 {
+        match self {
+            ThreadTexture::BaseColor => FLAG_TEXTURE_BASE_COLOR,
+            ThreadTexture::SheenColor => FLAG_TEXTURE_SHEEN_COLOR,
+            ThreadTexture::None => 0,
+        }
+    }
+}
+
 /// Accepted range of `repeat` (s_p, texture units).
 pub const REPEAT_RANGE: (f32, f32) = (1e-6, 1e6);
 /// Accepted range of the exponents.
@@ -64,6 +113,8 @@ pub struct FabricParams {
     pub shadow_width: f32,
     /// A–S eq. 5 coupled diffuse instead of the paper's Lambert `Rd/π`.
     pub coupled_diffuse: bool,
+    /// The material's texture multiplied over the thread colours.
+    pub thread_texture: ThreadTexture,
 }
 
 impl Default for FabricParams {
@@ -80,6 +131,7 @@ impl Default for FabricParams {
             shadow_strength: 0.5,
             shadow_width: 0.25,
             coupled_diffuse: false,
+            thread_texture: ThreadTexture::BaseColor,
         }
     }
 }
@@ -91,7 +143,7 @@ impl Default for FabricParams {
 /// | 0  | `rd_warp: vec3`, `rs: float` | warp diffuse albedo; Schlick's Rs |
 /// | 16 | `rd_weft: vec3`, `e_along: float` | weft diffuse albedo; exponent along a thread |
 /// | 32 | `e_across`, `cell_per_uv` | exponent across; cells per texture unit (`2/s_p`) |
-/// | 40 | `flags: uint`, `shadow_strength` | bit 0 = coupled diffuse |
+/// | 40 | `flags: uint`, `shadow_strength` | bit 0 = coupled diffuse; bit 1, 2 = thread texture base, sheen colour |
 /// | 48 | `pattern_lo`, `pattern_hi: uint` | bit `8j+i` = cell (i, j) weft-up |
 /// | 56 | `cols`, `rows: uint` | pattern size in cells (1..8) |
 /// | 64 | `gap`, `shadow_dist` | `s_g/s_p` and `shadow_width/2`, in cells |
@@ -185,6 +237,7 @@ impl FabricParams {
             shadow_strength: clamp_or(self.shadow_strength, 0.0, 1.0, d.shadow_strength),
             shadow_width: clamp_or(self.shadow_width, 0.0, 1.0, d.shadow_width),
             coupled_diffuse: self.coupled_diffuse,
+            thread_texture: self.thread_texture,
         }
     }
 
@@ -202,7 +255,7 @@ impl FabricParams {
                 FLAG_COUPLED_DIFFUSE
             } else {
                 0
-            },
+            } | p.thread_texture.flag(),
             shadow_strength: p.shadow_strength,
             pattern_lo: p.pattern.bits_lo(),
             pattern_hi: p.pattern.bits_hi(),
@@ -273,6 +326,17 @@ impl FabricParams {
                 "rs" => p.rs = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
                 "shadow_strength" => p.shadow_strength = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
                 "shadow_width" => p.shadow_width = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
+                "thread_texture" => {
+                    let name = v.as_str().ok_or_else(|| {
+                        ctx.err(key, format!("must be one of {:?}, got {}", ThreadTexture::NAMES, short(v)))
+                    })?;
+                    p.thread_texture = ThreadTexture::by_name(name).ok_or_else(|| {
+                        ctx.err(
+                            key,
+                            format!("is \"{name}\", which is not one of {:?}", ThreadTexture::NAMES),
+                        )
+                    })?
+                }
                 "coupled_diffuse" => {
                     p.coupled_diffuse = v
                         .as_bool()
@@ -283,7 +347,7 @@ impl FabricParams {
                 other => warnings.push(Warning(format!(
                     "material '{material_name}': {EXTENSION_NAME} has unknown field '{other}' (ignored); \
                      known fields: pattern, repeat, gap, e_along, e_across, rd, rd_warp, rd_weft, rs, \
-                     shadow_strength, shadow_width, coupled_diffuse"
+                     shadow_strength, shadow_width, coupled_diffuse, thread_texture"
                 ))),
             }
         }

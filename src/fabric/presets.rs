@@ -153,6 +153,7 @@ impl Preset {
             shadow_strength: self.shadow_strength,
             shadow_width: self.shadow_width,
             coupled_diffuse: false,
+            thread_texture: crate::fabric::ThreadTexture::BaseColor,
         }
     }
 }

@@ -231,6 +231,17 @@ macro_rules! fabric_brdf_precision {
                 28.0 / (23.0 * PI) * (1.0 - rs) * ((1.0 - a2 * a2 * a) * (1.0 - b2 * b2 * b))
             }
 
+            /// The material with both threads' colours multiplied by `tint` (the thread
+            /// texture's filtered value at the pixel, white without one): `fabric_tinted` of
+            /// fabric.glsl. The BRDF is linear in the colours, so this multiplies the texture
+            /// over the diffuse term wherever the model uses them.
+            pub fn fabric_tinted(m: &FabricMaterial, tint: Vec3) -> FabricMaterial {
+                let mut t = *m;
+                t.rd_warp = [m.rd_warp[0] * tint[0], m.rd_warp[1] * tint[1], m.rd_warp[2] * tint[2]];
+                t.rd_weft = [m.rd_weft[0] * tint[0], m.rd_weft[1] * tint[1], m.rd_weft[2] * tint[2]];
+                t
+            }
+
             /// The diffuse albedo of a coverage: `s_warp·rd_warp + s_weft·rd_weft`, each thread's
             /// albedo times its shadow-weighted area (linear in the coverage).
             pub fn fabric_albedo(coverage: Coverage, m: &FabricMaterial) -> Vec3 {

@@ -85,7 +85,10 @@ impl EnvQuadrature {
         };
         match &s.fabric {
             Some(f) => {
-                let m = fd::FabricMaterial::from_gpu(f);
+                let m = fd::fabric_tinted(
+                    &fd::FabricMaterial::from_gpu(f),
+                    s.base_color.map(|x| x as f64),
+                );
                 let tbn = fd::fabric_frame(
                     s.normal.map(|x| x as f64),
                     s.tangent.map(|x| x as f64),

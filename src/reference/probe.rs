@@ -55,7 +55,7 @@ use super::brdf;
 use super::weave;
 use crate::fabric::{FabricParams, GpuFabric, WeavePattern};
 
-/// One probe input (std430, 192 bytes; `ProbeInput` in `glsl/fabric_probe.comp`).
+/// One probe input (std430, 208 bytes; `ProbeInput` in `glsl/fabric_probe.comp`).
 ///
 /// | offset | field | meaning |
 /// |---|---|---|
@@ -66,7 +66,8 @@ use crate::fabric::{FabricParams, GpuFabric, WeavePattern};
 /// | 64  | `point: vec4` | xy: point for the weave classifier, in cells |
 /// | 80  | `footprint: vec4` | (x0, y0, x1, y1): box for the weave coverage, in cells |
 /// | 96  | `coverage: vec4` | (c_warp, c_weft, s_warp, s_weft) given to `fabric_brdf` |
-/// | 112 | `fabric: GpuFabric` | the material (80 bytes) |
+/// | 112 | `tint: vec4` | rgb: the thread texture's value given to `fabric_tinted` |
+/// | 128 | `fabric: GpuFabric` | the material (80 bytes) |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ProbeInput {
@@ -77,10 +78,11 @@ pub struct ProbeInput {
     pub point: [f32; 4],
     pub footprint: [f32; 4],
     pub coverage: [f32; 4],
+    pub tint: [f32; 4],
     pub fabric: GpuFabric,
 }
 
-/// One probe output (std430, 160 bytes; `ProbeOutput` in `glsl/fabric_probe.comp`).
+/// One probe output (std430, 176 bytes; `ProbeOutput` in `glsl/fabric_probe.comp`).
 ///
 /// | offset | field | x | y | z | w |
 /// |---|---|---|---|---|---|
@@ -94,6 +96,7 @@ pub struct ProbeInput {
 /// | 112 | `f_avg` | `fabric_brdf_averaged` with the input coverage, r | g | b | 0 |
 /// | 128 | `phong` | `phong_brdf`, r | g | b | `phong_lobe` (exponent `fabric_phong_exponent`) |
 /// | 144 | `plain_as` | `plain_as_brdf`, r | g | b | 0 |
+/// | 160 | `f_tint` | `fabric_brdf` of `fabric_tinted(m, tint)`, input coverage, r | g | b | 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ProbeOutput {
@@ -107,17 +110,18 @@ pub struct ProbeOutput {
     pub f_avg: [f32; 4],
     pub phong: [f32; 4],
     pub plain_as: [f32; 4],
+    pub f_tint: [f32; 4],
 }
 
 const _: () = {
-    assert!(std::mem::size_of::<ProbeInput>() == 192);
+    assert!(std::mem::size_of::<ProbeInput>() == 208);
     assert!(std::mem::offset_of!(ProbeInput, coverage) == 96);
-    assert!(std::mem::offset_of!(ProbeInput, fabric) == 112);
-    assert!(std::mem::size_of::<ProbeOutput>() == 160);
+    assert!(std::mem::offset_of!(ProbeInput, fabric) == 128);
+    assert!(std::mem::size_of::<ProbeOutput>() == 176);
     assert!(std::mem::offset_of!(ProbeOutput, f_point) == 96);
 };
 
-/// Names of the 40 output components, in memory order (for messages).
+/// Names of the 44 output components, in memory order (for messages).
 #[rustfmt::skip]
 pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "rho_weft", "rho_warp", "d_weft", "fresnel",
@@ -130,10 +134,11 @@ pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "f_avg.r", "f_avg.g", "f_avg.b", "f_avg.w",
     "phong.r", "phong.g", "phong.b", "phong_lobe",
     "plain_as.r", "plain_as.g", "plain_as.b", "plain_as.w",
+    "f_tint.r", "f_tint.g", "f_tint.b", "f_tint.w",
 ];
 
 /// Number of f32 components of a [`ProbeOutput`].
-pub const PROBE_OUTPUTS: usize = 40;
+pub const PROBE_OUTPUTS: usize = 44;
 
 impl ProbeOutput {
     pub fn to_array(&self) -> [f32; PROBE_OUTPUTS] {
@@ -149,6 +154,7 @@ impl ProbeOutput {
             self.f_avg,
             self.phong,
             self.plain_as,
+            self.f_tint,
         ]
         .iter()
         .enumerate()
@@ -171,10 +177,11 @@ impl ProbeOutput {
             f_avg: v(7),
             phong: v(8),
             plain_as: v(9),
+            f_tint: v(10),
         }
     }
 
-    /// Reads one output from the shader's buffer bytes (little-endian, 160 bytes).
+    /// Reads one output from the shader's buffer bytes (little-endian, 176 bytes).
     pub fn from_bytes(b: &[u8]) -> Self {
         let mut a = [0.0f32; PROBE_OUTPUTS];
         for (k, x) in a.iter_mut().enumerate() {
@@ -185,9 +192,9 @@ impl ProbeOutput {
 }
 
 impl ProbeInput {
-    /// The input's bytes as the shader reads them (little-endian, 192 bytes).
-    pub fn to_bytes(&self) -> [u8; 192] {
-        let mut out = [0u8; 192];
+    /// The input's bytes as the shader reads them (little-endian, 208 bytes).
+    pub fn to_bytes(&self) -> [u8; 208] {
+        let mut out = [0u8; 208];
         let vecs = [
             self.n,
             self.t,
@@ -196,13 +203,14 @@ impl ProbeInput {
             self.point,
             self.footprint,
             self.coverage,
+            self.tint,
         ];
         for (k, v) in vecs.iter().enumerate() {
             for (c, x) in v.iter().enumerate() {
                 out[16 * k + 4 * c..16 * k + 4 * c + 4].copy_from_slice(&x.to_le_bytes());
             }
         }
-        out[112..].copy_from_slice(&self.fabric.to_bytes());
+        out[128..].copy_from_slice(&self.fabric.to_bytes());
         out
     }
 }
@@ -230,6 +238,8 @@ macro_rules! probe_eval {
             let f_avg = fabric_brdf_averaged(k1, k2, cov, &m);
             let phong = phong_brdf(k1, k2, &m);
             let plain_as = plain_as_brdf(k1, k2, &m);
+            let tint = [input.tint[0] as $t, input.tint[1] as $t, input.tint[2] as $t];
+            let f_tint = fabric_brdf(k1, k2, cov, &fabric_tinted(&m, tint));
             let out: [$t; PROBE_OUTPUTS] = [
                 as_lobe(k1, k2, m.e_along, m.e_across, m.rs),
                 as_lobe(k1, k2, m.e_across, m.e_along, m.rs),
@@ -270,6 +280,10 @@ macro_rules! probe_eval {
                 plain_as[0],
                 plain_as[1],
                 plain_as[2],
+                0.0,
+                f_tint[0],
+                f_tint[1],
+                f_tint[2],
                 0.0,
             ];
             ProbeOutput::from_array(&out.map(|x| x as f32))
@@ -501,6 +515,9 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         f_avg_tol, f_avg_tol, f_avg_tol, 0.0,
         phong_tol, phong_tol, phong_tol, phong_lobe_tol,
         plain_tol, plain_tol, plain_tol, 0.0,
+        // f_tint: the tint (each in [0, 1]) scales the diffuse term down, with one more
+        // rounding, well within `rel`: f's bound holds.
+        f_tol, f_tol, f_tol, 0.0,
     ];
     ProbeOutput::from_array(&out.map(|x| x as f32))
 }
@@ -622,6 +639,7 @@ fn base_input(fabric: GpuFabric) -> ProbeInput {
         point: [0.5, 0.5, 0.0, 0.0],
         footprint: [0.25, 0.25, 0.75, 0.75],
         coverage: [0.3, 0.5, 0.2, 0.4],
+        tint: [0.75, 0.5, 0.25, 0.0],
         fabric,
     }
 }
@@ -969,6 +987,7 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
             shadow_strength: rng.next_f64() as f32,
             shadow_width: rng.next_f64() as f32,
             coupled_diffuse: rng.next_f64() < 0.5,
+            ..Default::default()
         };
         let fabric = params.to_gpu();
         // Frame and directions.
@@ -1027,6 +1046,7 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
                 point: [px, py, 0.0, 0.0],
                 footprint: [x0 as f32, y0 as f32, (x0 + wx) as f32, (y0 + wy) as f32],
                 coverage: [c_warp as f32, c_weft as f32, s_warp as f32, s_weft as f32],
+                tint: [rng.next_f64() as f32, rng.next_f64() as f32, rng.next_f64() as f32, 0.0],
                 fabric,
             },
         });

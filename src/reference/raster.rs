@@ -520,6 +520,9 @@ impl Raster {
                 footprint_coverage(params, uv, dx, dy, self.subdivisions)
             };
             surface.fabric = Some(*gpu);
+            // gbuffer.frag's albedo of a fabric pixel: the thread texture, white here (the CPU
+            // rasterizer refuses textured materials).
+            surface.base_color = [1.0; 3];
         }
         surface
     }

@@ -406,7 +406,9 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
     let count = (frame.light_count as usize).min(lights.len());
     match &s.fabric {
         Some(f) => {
-            let m = fb::FabricMaterial::from_gpu(f);
+            // The thread texture's value (the G-buffer's albedo of a fabric pixel) over the
+            // thread colours.
+            let m = fb::fabric_tinted(&fb::FabricMaterial::from_gpu(f), s.base_color);
             let cov = s.coverage;
             let tbn = fb::fabric_frame(n, s.tangent, s.sign);
             let k2 = fb::fabric_local(v, tbn);

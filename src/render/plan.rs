@@ -70,6 +70,9 @@ pub struct FabricFeatures {
     pub coupled_diffuse: bool,
     /// The far-field two-lobe mixture is evaluated (accuracy mixture or supersampled).
     pub far_field_mixture: bool,
+    /// Some material's thread colours are multiplied by one of its textures (`thread_texture`
+    /// naming a texture the material has).
+    pub thread_texture: bool,
 }
 
 /// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
@@ -191,6 +194,13 @@ impl Plan {
             features.thread_shadowing |= g.shadow_strength > 0.0 && g.shadow_dist > 0.0;
             features.fresnel |= g.rs > 0.0;
             features.coupled_diffuse |= f.coupled_diffuse;
+            features.thread_texture |= match f.thread_texture {
+                crate::fabric::ThreadTexture::BaseColor => m.base_color_texture.is_some(),
+                crate::fabric::ThreadTexture::SheenColor => {
+                    m.sheen.as_ref().is_some_and(|s| s.color_texture.is_some())
+                }
+                crate::fabric::ThreadTexture::None => false,
+            };
             let key = weave_key(f);
             match keys.iter().position(|k| *k == key) {
                 Some(i) => weaves[i].materials.push(m.name.clone()),
@@ -384,8 +394,8 @@ impl fmt::Display for Plan {
         let ft = &self.features;
         writeln!(
             f,
-            "features    gaps {}, thread shadowing {}, fresnel {}, coupled diffuse {}, far-field mixture {}",
-            ft.gaps, ft.thread_shadowing, ft.fresnel, ft.coupled_diffuse, ft.far_field_mixture
+            "features    gaps {}, thread shadowing {}, fresnel {}, coupled diffuse {}, far-field mixture {}, thread texture {}",
+            ft.gaps, ft.thread_shadowing, ft.fresnel, ft.coupled_diffuse, ft.far_field_mixture, ft.thread_texture
         )?;
         writeln!(
             f,

@@ -529,5 +529,11 @@ pub fn cases() -> Vec<Case> {
                 "thread directions of the bent strip: the flat part yellow as at t = 0, the raised part green (the tangent tilted 50 degrees up: more +y), blending smoothly across the bend, the twisted end a lighter green")
         },
     ]);
+    // The woven model over a real asset's textures (issue 27): SheenChair through `weft fabric
+    // --material 0 --preset cotton-plain` (the file beside the original, so its images resolve).
+    cases.push(Case {
+        env: STUDIO,
+        ..case("khronos-sheen-chair-cotton-plain", "tests/data/khronos/SheenChair/glTF/SheenChair-cotton-plain.gltf", "the chair with the cotton-plain weave on its seat and back: off-white cloth that keeps the damask pattern of the base colour texture (darker motifs over the thread colour) and the tufting of the normal map, occlusion in the creases; the wood unchanged")
+    });
     cases
 }
