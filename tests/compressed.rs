@@ -81,16 +81,30 @@ fn world(scene: &Scene) -> World {
 /// of `want` within `step` (and the other way round); among those, one whose normal, tangent and
 /// UV agree within the attributes' quantization; every triangle of `got` is a triangle of `want`.
 fn assert_same_mesh(name: &str, want: &World, got: &World, step: f32) {
-    assert_eq!(got.positions.len(), want.positions.len(), "{name}: vertex count");
+    assert_eq!(
+        got.positions.len(),
+        want.positions.len(),
+        "{name}: vertex count"
+    );
     assert_eq!(got.indices.len(), want.indices.len(), "{name}: index count");
     let near = |p: Vec3, set: &[Vec3]| -> Vec<usize> {
-        (0..set.len()).filter(|&i| set[i].distance(p) <= step).collect()
+        (0..set.len())
+            .filter(|&i| set[i].distance(p) <= step)
+            .collect()
     };
     let mut worst = 0.0f32;
     for (i, &p) in got.positions.iter().enumerate() {
         let close = near(p, &want.positions);
-        assert!(!close.is_empty(), "{name}: vertex {i} at {p} has no original within {step}");
-        worst = worst.max(close.iter().map(|&j| want.positions[j].distance(p)).fold(f32::MAX, f32::min));
+        assert!(
+            !close.is_empty(),
+            "{name}: vertex {i} at {p} has no original within {step}"
+        );
+        worst = worst.max(
+            close
+                .iter()
+                .map(|&j| want.positions[j].distance(p))
+                .fold(f32::MAX, f32::min),
+        );
         // 10-bit octahedral normals and tangents (gltf-transform's default): under 0.2 degrees
         // off, cos > 0.99999; 0.9995 (1.8 degrees) leaves room for the renormalisation.
         let matches = close.iter().any(|&j| {
@@ -103,19 +117,28 @@ fn assert_same_mesh(name: &str, want: &World, got: &World, step: f32) {
         assert!(matches, "{name}: vertex {i} at {p}: no original there has its normal {}, tangent {:?} and uv {:?}", got.normals[i], got.tangents[i], got.uvs[i]);
     }
     for &p in &want.positions {
-        assert!(!near(p, &got.positions).is_empty(), "{name}: original vertex at {p} lost");
+        assert!(
+            !near(p, &got.positions).is_empty(),
+            "{name}: original vertex at {p} lost"
+        );
     }
     // Triangles, as sets of corner positions (the codecs may rotate a triangle's corners).
-    let corners = |w: &World, t: &[u32]| -> [Vec3; 3] {
-        [0, 1, 2].map(|k| w.positions[t[k] as usize])
-    };
-    let want_tris: Vec<[Vec3; 3]> = want.indices.chunks_exact(3).map(|t| corners(want, t)).collect();
+    let corners =
+        |w: &World, t: &[u32]| -> [Vec3; 3] { [0, 1, 2].map(|k| w.positions[t[k] as usize]) };
+    let want_tris: Vec<[Vec3; 3]> = want
+        .indices
+        .chunks_exact(3)
+        .map(|t| corners(want, t))
+        .collect();
     for (k, t) in got.indices.chunks_exact(3).enumerate() {
         let c = corners(got, t);
-        let found = want_tris.iter().any(|w| {
-            (0..3).any(|r| (0..3).all(|m| w[(m + r) % 3].distance(c[m]) <= step))
-        });
-        assert!(found, "{name}: triangle {k} {c:?} is not a triangle of the original");
+        let found = want_tris
+            .iter()
+            .any(|w| (0..3).any(|r| (0..3).all(|m| w[(m + r) % 3].distance(c[m]) <= step)));
+        assert!(
+            found,
+            "{name}: triangle {k} {c:?} is not a triangle of the original"
+        );
     }
     eprintln!("{name}: worst position error {worst:e} (step {step:e})");
 }
@@ -147,7 +170,11 @@ fn meshopt_avocado_matches_the_original_under_both_extension_names() {
     // KHR_meshopt_compression is the same JSON under the ratified name (both names are 23
     // characters, so the .glb's chunk lengths stay right).
     let bytes = std::fs::read(data("avocado_meshopt.glb")).unwrap();
-    let khr = replace(&bytes, b"EXT_meshopt_compression", b"KHR_meshopt_compression");
+    let khr = replace(
+        &bytes,
+        b"EXT_meshopt_compression",
+        b"KHR_meshopt_compression",
+    );
     assert_ne!(khr, bytes);
     let scene = scene::load_slice(&khr, "avocado_khr_meshopt.glb", None).expect("KHR file loads");
     assert_same_mesh("avocado_khr_meshopt.glb", &want, &world(&scene), step);
@@ -175,8 +202,18 @@ fn webp_avocado_has_the_original_textures_within_lossy_coding() {
     assert_same_mesh("avocado_webp.glb", &world(&want), &world(&got), 0.0);
     assert_eq!(got.textures.len(), want.textures.len());
     for (w, g) in want.textures.iter().zip(&got.textures) {
-        assert_eq!((g.width, g.height, g.color_space), (w.width, w.height, w.color_space), "{}", g.name);
-        let diff = w.rgba8.iter().zip(&g.rgba8).map(|(a, b)| a.abs_diff(*b) as f64).sum::<f64>()
+        assert_eq!(
+            (g.width, g.height, g.color_space),
+            (w.width, w.height, w.color_space),
+            "{}",
+            g.name
+        );
+        let diff = w
+            .rgba8
+            .iter()
+            .zip(&g.rgba8)
+            .map(|(a, b)| a.abs_diff(*b) as f64)
+            .sum::<f64>()
             / w.rgba8.len() as f64;
         // gltf-transform's WebP is lossy (quality 80): a mean of a few levels in 255.
         assert!(diff < 6.0, "{}: mean difference {diff:.2} of 255", g.name);
@@ -220,7 +257,13 @@ struct Grid {
 }
 
 fn grid(n: u32) -> Grid {
-    let mut g = Grid { positions: vec![], normals: vec![], tangents: vec![], uvs: vec![], indices: vec![] };
+    let mut g = Grid {
+        positions: vec![],
+        normals: vec![],
+        tangents: vec![],
+        uvs: vec![],
+        indices: vec![],
+    };
     for j in 0..n {
         for i in 0..n {
             let (u, v) = (i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
@@ -279,7 +322,12 @@ fn meshopt_glb(g: &Grid, r: &Recipe) -> Vec<u8> {
     let mut bin = Vec::new();
     let mut views = Vec::new();
     let mut fallback_len = 0usize;
-    let mut add = |stream: Vec<u8>, mode: &str, filter: &str, stride: usize, count: usize, target: u32| {
+    let mut add = |stream: Vec<u8>,
+                   mode: &str,
+                   filter: &str,
+                   stride: usize,
+                   count: usize,
+                   target: u32| {
         while bin.len() % 4 != 0 {
             bin.push(0);
         }
@@ -299,21 +347,66 @@ fn meshopt_glb(g: &Grid, r: &Recipe) -> Vec<u8> {
     };
     let v = Some(r.vertex_version);
     let pos = meshopt::encode_filter_exp(&g.positions, 23, meshopt::EncodeExpMode::SharedVector);
-    add(meshopt::encode_vertex_buffer_level(&pos, 2, v).unwrap(), "ATTRIBUTES", "EXPONENTIAL", 12, n, 34962);
+    add(
+        meshopt::encode_vertex_buffer_level(&pos, 2, v).unwrap(),
+        "ATTRIBUTES",
+        "EXPONENTIAL",
+        12,
+        n,
+        34962,
+    );
     let nrm = meshopt::encode_filter_oct::<i8>(&g.normals, 8);
-    add(meshopt::encode_vertex_buffer_level(&nrm, 2, v).unwrap(), "ATTRIBUTES", "OCTAHEDRAL", 4, n, 34962);
+    add(
+        meshopt::encode_vertex_buffer_level(&nrm, 2, v).unwrap(),
+        "ATTRIBUTES",
+        "OCTAHEDRAL",
+        4,
+        n,
+        34962,
+    );
     let tan = meshopt::encode_filter_oct::<i16>(&g.tangents, 12);
-    add(meshopt::encode_vertex_buffer_level(&tan, 2, v).unwrap(), "ATTRIBUTES", "OCTAHEDRAL", 8, n, 34962);
-    let uv: Vec<[u16; 2]> = g.uvs.iter().map(|t| t.map(|c| (c * 65535.0).round() as u16)).collect();
-    add(meshopt::encode_vertex_buffer_level(&uv, 2, v).unwrap(), "ATTRIBUTES", "NONE", 4, n, 34962);
+    add(
+        meshopt::encode_vertex_buffer_level(&tan, 2, v).unwrap(),
+        "ATTRIBUTES",
+        "OCTAHEDRAL",
+        8,
+        n,
+        34962,
+    );
+    let uv: Vec<[u16; 2]> = g
+        .uvs
+        .iter()
+        .map(|t| t.map(|c| (c * 65535.0).round() as u16))
+        .collect();
+    add(
+        meshopt::encode_vertex_buffer_level(&uv, 2, v).unwrap(),
+        "ATTRIBUTES",
+        "NONE",
+        4,
+        n,
+        34962,
+    );
     let indices = match r.index_mode {
         "TRIANGLES" => meshopt::encode_index_buffer(&g.indices, n).unwrap(),
         _ => meshopt::encode_index_sequence(&g.indices, n).unwrap(),
     };
-    add(indices, r.index_mode, "NONE", r.index_stride, g.indices.len(), 34963);
-    let (lo, hi) = g.positions.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
-        ([0, 1, 2].map(|k| lo[k].min(p[k])), [0, 1, 2].map(|k| hi[k].max(p[k])))
-    });
+    add(
+        indices,
+        r.index_mode,
+        "NONE",
+        r.index_stride,
+        g.indices.len(),
+        34963,
+    );
+    let (lo, hi) = g
+        .positions
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
+            (
+                [0, 1, 2].map(|k| lo[k].min(p[k])),
+                [0, 1, 2].map(|k| hi[k].max(p[k])),
+            )
+        });
     let mut doc = json!({
         "asset": {"version": "2.0"},
         "extensionsUsed": [r.ext, "KHR_mesh_quantization"],
@@ -346,8 +439,19 @@ fn every_meshopt_mode_and_mesh_filter_decodes_to_the_grid() {
     let g = grid(9);
     for ext in ["EXT_meshopt_compression", "KHR_meshopt_compression"] {
         for vertex_version in [0, 1] {
-            for (index_mode, index_stride) in [("TRIANGLES", 2), ("TRIANGLES", 4), ("INDICES", 2), ("INDICES", 4)] {
-                let r = Recipe { ext, vertex_version, index_mode, index_stride, ..Recipe::default() };
+            for (index_mode, index_stride) in [
+                ("TRIANGLES", 2),
+                ("TRIANGLES", 4),
+                ("INDICES", 2),
+                ("INDICES", 4),
+            ] {
+                let r = Recipe {
+                    ext,
+                    vertex_version,
+                    index_mode,
+                    index_stride,
+                    ..Recipe::default()
+                };
                 let what = format!("{ext} v{vertex_version} {index_mode}/{index_stride}");
                 let scene = load_recipe(&r).unwrap_or_else(|e| panic!("{what}: {e}"));
                 assert!(scene.warnings.is_empty(), "{what}: {:?}", scene.warnings);
@@ -357,16 +461,29 @@ fn every_meshopt_mode_and_mesh_filter_decodes_to_the_grid() {
                     // EXPONENTIAL with 23 mantissa bits and a shared exponent: within 2^-22 of the
                     // largest component (1).
                     for c in 0..3 {
-                        assert!((v.position[c] - p[c]).abs() < 4e-7, "{what}: vertex {k} {:?} against {p:?}", v.position);
+                        assert!(
+                            (v.position[c] - p[c]).abs() < 4e-7,
+                            "{what}: vertex {k} {:?} against {p:?}",
+                            v.position
+                        );
                     }
                     // 8-bit octahedral normals: a few degrees; 12-bit tangents: a fraction of one.
                     let n = Vec3::from(v.normal);
-                    assert!(n.dot(Vec3::from_slice(&g.normals[k][..3])) > 0.997, "{what}: normal {k} {n}");
+                    assert!(
+                        n.dot(Vec3::from_slice(&g.normals[k][..3])) > 0.997,
+                        "{what}: normal {k} {n}"
+                    );
                     let t = Vec3::from_slice(&v.tangent[..3]);
-                    assert!(t.dot(Vec3::from_slice(&g.tangents[k][..3])) > 0.9999, "{what}: tangent {k} {t}");
+                    assert!(
+                        t.dot(Vec3::from_slice(&g.tangents[k][..3])) > 0.9999,
+                        "{what}: tangent {k} {t}"
+                    );
                     assert_eq!(v.tangent[3], 1.0, "{what}: tangent sign {k}");
                     for c in 0..2 {
-                        assert!((v.uv[c] - g.uvs[k][c]).abs() <= 0.5 / 65535.0 + 1e-7, "{what}: uv {k}");
+                        assert!(
+                            (v.uv[c] - g.uvs[k][c]).abs() <= 0.5 / 65535.0 + 1e-7,
+                            "{what}: uv {k}"
+                        );
                     }
                 }
                 // The same triangles, each possibly rotated (TRIANGLES may rotate; INDICES keeps
@@ -374,7 +491,10 @@ fn every_meshopt_mode_and_mesh_filter_decodes_to_the_grid() {
                 assert_eq!(mesh.indices.len(), g.indices.len(), "{what}");
                 for (a, b) in g.indices.chunks_exact(3).zip(mesh.indices.chunks_exact(3)) {
                     let rotations = [[b[0], b[1], b[2]], [b[1], b[2], b[0]], [b[2], b[0], b[1]]];
-                    assert!(rotations.contains(&[a[0], a[1], a[2]]), "{what}: triangle {a:?} became {b:?}");
+                    assert!(
+                        rotations.contains(&[a[0], a[1], a[2]]),
+                        "{what}: triangle {a:?} became {b:?}"
+                    );
                     if index_mode == "INDICES" {
                         assert_eq!(a, b, "{what}");
                     }
@@ -397,7 +517,10 @@ fn error_of(r: &Recipe) -> String {
 fn assert_names(msg: &str, view: usize, reader: &str, says: &[&str]) {
     assert!(!msg.contains("the glTF reader failed"), "a panic: {msg}");
     assert!(msg.contains("'sheet.glb'"), "no file name: {msg}");
-    assert!(msg.contains(&format!("buffer view {view}")), "no buffer view {view}: {msg}");
+    assert!(
+        msg.contains(&format!("buffer view {view}")),
+        "no buffer view {view}: {msg}"
+    );
     assert!(msg.contains(reader), "no '{reader}': {msg}");
     for s in says {
         assert!(msg.contains(s), "no '{s}': {msg}");
@@ -414,75 +537,208 @@ fn a_truncated_or_corrupted_stream_is_an_error_naming_the_view_and_the_mesh() {
         },
         ..Recipe::default()
     };
-    assert_names(&error_of(&r), 0, "mesh 'sheet' primitive 0, attribute POSITION", &["does not decode", "EXT_meshopt_compression"]);
+    assert_names(
+        &error_of(&r),
+        0,
+        "mesh 'sheet' primitive 0, attribute POSITION",
+        &["does not decode", "EXT_meshopt_compression"],
+    );
 
     // The header byte of the NORMAL stream overwritten.
     let r = Recipe {
         corrupt: |bin| {
             // View 1's stream starts after view 0's, at the first 4-aligned offset; its header is
             // 0xa0 (version 0): find it after the first stream.
-            let at = bin.iter().enumerate().skip(1).find(|(_, &b)| b == 0xa0).map(|(i, _)| i).unwrap();
+            let at = bin
+                .iter()
+                .enumerate()
+                .skip(1)
+                .find(|(_, &b)| b == 0xa0)
+                .map(|(i, _)| i)
+                .unwrap();
             bin[at] = 0x17;
         },
         ..Recipe::default()
     };
     let msg = error_of(&r);
-    assert_names(&msg, 1, "attribute NORMAL", &["does not decode", "not a meshopt stream"]);
+    assert_names(
+        &msg,
+        1,
+        "attribute NORMAL",
+        &["does not decode", "not a meshopt stream"],
+    );
 
     // The index stream truncated to 3 bytes.
     let r = Recipe {
-        edit: |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteLength"] = json!(3),
+        edit: |d| {
+            d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteLength"] = json!(3)
+        },
         ..Recipe::default()
     };
-    assert_names(&error_of(&r), 4, "mesh 'sheet' primitive 0, indices", &["does not decode", "mode TRIANGLES"]);
+    assert_names(
+        &error_of(&r),
+        4,
+        "mesh 'sheet' primitive 0, indices",
+        &["does not decode", "mode TRIANGLES"],
+    );
 
     // The stream past the end of its buffer.
     let r = Recipe {
-        edit: |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["byteOffset"] = json!(1 << 20),
+        edit: |d| {
+            d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["byteOffset"] =
+                json!(1 << 20)
+        },
         ..Recipe::default()
     };
-    assert_names(&error_of(&r), 3, "attribute TEXCOORD_0", &["lies outside that buffer", "truncated"]);
+    assert_names(
+        &error_of(&r),
+        3,
+        "attribute TEXCOORD_0",
+        &["lies outside that buffer", "truncated"],
+    );
 
     // The whole binary chunk cut short (the .glb itself declares its length: a container error).
     let mut bytes = meshopt_glb(&grid(9), &Recipe::default());
     bytes.truncate(bytes.len() - 100);
-    let msg = scene::load_slice(&bytes, "sheet.glb", None).err().expect("truncated").to_string();
-    assert!(msg.contains("'sheet.glb'") && msg.contains("truncated"), "{msg}");
+    let msg = scene::load_slice(&bytes, "sheet.glb", None)
+        .err()
+        .expect("truncated")
+        .to_string();
+    assert!(
+        msg.contains("'sheet.glb'") && msg.contains("truncated"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn counts_strides_and_modes_the_specification_forbids_are_errors() {
     type Edit = fn(&mut Value);
     let cases: &[(usize, Edit, &str)] = &[
-        (0, |d| d["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["count"] = json!(80), "80 elements of 12 bytes make 960 bytes, and the buffer view's byteLength is 972"),
-        (0, |d| d["bufferViews"][0]["byteLength"] = json!(900), "the counts do not match"),
-        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(8), "differs from the buffer view's own byteStride 4"),
-        (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteStride"] = json!(3), "its byteStride is 3; mode TRIANGLES needs 2 or 4"),
-        (4, |d| d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("OCTAHEDRAL"), "only ATTRIBUTES takes a filter"),
-        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("QUATERNION"), "filter QUATERNION does not allow (it needs 8)"),
-        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("COLOR"), "COLOR is KHR_meshopt_compression's"),
-        (1, |d| d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("SMOOTH"), "filter is \"SMOOTH\""),
-        (2, |d| d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]["mode"] = json!("STRIPS"), "mode is \"STRIPS\""),
-        (2, |d| { d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"].as_object_mut().unwrap().remove("mode"); }, "\"mode\" is missing"),
-        (2, |d| d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]["count"] = json!(-4), "\"count\" is -4"),
-        (3, |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["buffer"] = json!(1), "a fallback buffer that holds no data"),
-        (3, |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["buffer"] = json!(7), "the file has 2 buffer(s)"),
-        (3, |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"] = json!(12), "not an object"),
+        (
+            0,
+            |d| d["bufferViews"][0]["extensions"]["EXT_meshopt_compression"]["count"] = json!(80),
+            "80 elements of 12 bytes make 960 bytes, and the buffer view's byteLength is 972",
+        ),
+        (
+            0,
+            |d| d["bufferViews"][0]["byteLength"] = json!(900),
+            "the counts do not match",
+        ),
+        (
+            1,
+            |d| {
+                d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["byteStride"] =
+                    json!(8)
+            },
+            "differs from the buffer view's own byteStride 4",
+        ),
+        (
+            4,
+            |d| {
+                d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["byteStride"] =
+                    json!(3)
+            },
+            "its byteStride is 3; mode TRIANGLES needs 2 or 4",
+        ),
+        (
+            4,
+            |d| {
+                d["bufferViews"][4]["extensions"]["EXT_meshopt_compression"]["filter"] =
+                    json!("OCTAHEDRAL")
+            },
+            "only ATTRIBUTES takes a filter",
+        ),
+        (
+            1,
+            |d| {
+                d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] =
+                    json!("QUATERNION")
+            },
+            "filter QUATERNION does not allow (it needs 8)",
+        ),
+        (
+            1,
+            |d| {
+                d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] =
+                    json!("COLOR")
+            },
+            "COLOR is KHR_meshopt_compression's",
+        ),
+        (
+            1,
+            |d| {
+                d["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] =
+                    json!("SMOOTH")
+            },
+            "filter is \"SMOOTH\"",
+        ),
+        (
+            2,
+            |d| {
+                d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]["mode"] =
+                    json!("STRIPS")
+            },
+            "mode is \"STRIPS\"",
+        ),
+        (
+            2,
+            |d| {
+                d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("mode");
+            },
+            "\"mode\" is missing",
+        ),
+        (
+            2,
+            |d| d["bufferViews"][2]["extensions"]["EXT_meshopt_compression"]["count"] = json!(-4),
+            "\"count\" is -4",
+        ),
+        (
+            3,
+            |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["buffer"] = json!(1),
+            "a fallback buffer that holds no data",
+        ),
+        (
+            3,
+            |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"]["buffer"] = json!(7),
+            "the file has 2 buffer(s)",
+        ),
+        (
+            3,
+            |d| d["bufferViews"][3]["extensions"]["EXT_meshopt_compression"] = json!(12),
+            "not an object",
+        ),
     ];
     for (view, edit, says) in cases {
-        let r = Recipe { edit: *edit, ..Recipe::default() };
+        let r = Recipe {
+            edit: *edit,
+            ..Recipe::default()
+        };
         let msg = error_of(&r);
         assert_names(&msg, *view, "mesh 'sheet'", &[says]);
     }
     // A view of the fallback buffer that is not itself compressed has no data.
     let r = Recipe {
         edit: |d| {
-            d["bufferViews"][3].as_object_mut().unwrap().remove("extensions");
+            d["bufferViews"][3]
+                .as_object_mut()
+                .unwrap()
+                .remove("extensions");
         },
         ..Recipe::default()
     };
     let msg = error_of(&r);
-    assert_names(&msg, 3, "attribute TEXCOORD_0", &["fallback buffer that holds no data", "not compressed itself"]);
+    assert_names(
+        &msg,
+        3,
+        "attribute TEXCOORD_0",
+        &[
+            "fallback buffer that holds no data",
+            "not compressed itself",
+        ],
+    );
     // Stride 2 with TRIANGLES needs every index under 65536; a count that is not a multiple of 3.
     let r = Recipe {
         edit: |d| {
@@ -507,7 +763,10 @@ fn damaged_streams_never_panic() {
     let mut streams = Vec::new();
     for v in doc["bufferViews"].as_array().unwrap() {
         if let Some(e) = v["extensions"].get("EXT_meshopt_compression") {
-            let (o, l) = (e["byteOffset"].as_u64().unwrap() as usize, e["byteLength"].as_u64().unwrap() as usize);
+            let (o, l) = (
+                e["byteOffset"].as_u64().unwrap() as usize,
+                e["byteLength"].as_u64().unwrap() as usize,
+            );
             streams.push(bin_start + o..bin_start + o + l);
         }
     }
@@ -575,17 +834,32 @@ fn webp_is_preferred_over_the_fallback_and_a_bad_source_is_an_error() {
         Ok(t.rgba8[..4].try_into().unwrap())
     };
     // Both sources: the WebP one (green), not the PNG fallback (red).
-    assert_eq!(texel(json!({"source": 0, "extensions": {"EXT_texture_webp": {"source": 1}}})).unwrap(), [0, 200, 0, 255]);
+    assert_eq!(
+        texel(json!({"source": 0, "extensions": {"EXT_texture_webp": {"source": 1}}})).unwrap(),
+        [0, 200, 0, 255]
+    );
     // WebP only, as gltf-transform writes it (no core source).
-    assert_eq!(texel(json!({"extensions": {"EXT_texture_webp": {"source": 1}}})).unwrap(), [0, 200, 0, 255]);
+    assert_eq!(
+        texel(json!({"extensions": {"EXT_texture_webp": {"source": 1}}})).unwrap(),
+        [0, 200, 0, 255]
+    );
     // A WebP image as a core source decodes too.
     assert_eq!(texel(json!({"source": 1})).unwrap(), [0, 200, 0, 255]);
     for (texture, says) in [
-        (json!({"extensions": {"EXT_texture_webp": {"source": 5}}}), "source of image 5, but the file has 2 image(s)"),
-        (json!({"extensions": {"EXT_texture_webp": {}}}), "without a valid \"source\""),
+        (
+            json!({"extensions": {"EXT_texture_webp": {"source": 5}}}),
+            "source of image 5, but the file has 2 image(s)",
+        ),
+        (
+            json!({"extensions": {"EXT_texture_webp": {}}}),
+            "without a valid \"source\"",
+        ),
     ] {
         let msg = texel(texture).err().expect("an error").to_string();
-        assert!(msg.contains("'paint.glb'") && msg.contains("texture 0") && msg.contains(says), "{msg}");
+        assert!(
+            msg.contains("'paint.glb'") && msg.contains("texture 0") && msg.contains(says),
+            "{msg}"
+        );
     }
     // Damaged WebP bytes: an error naming the material, the image and the format.
     let mut broken = bin.clone();
@@ -596,7 +870,10 @@ fn webp_is_preferred_over_the_fallback_and_a_bad_source_is_an_error() {
         .err()
         .expect("an error")
         .to_string();
-    assert!(msg.contains("'paint.glb'") && msg.contains("material 'paint'") && msg.contains("WebP"), "{msg}");
+    assert!(
+        msg.contains("'paint.glb'") && msg.contains("material 'paint'") && msg.contains("WebP"),
+        "{msg}"
+    );
 }
 
 fn encoded(rgba: [u8; 4], format: image::ImageFormat) -> Vec<u8> {
@@ -609,7 +886,10 @@ fn encoded(rgba: [u8; 4], format: image::ImageFormat) -> Vec<u8> {
 
 #[test]
 fn draco_and_required_ktx2_are_refused_with_the_reason_and_a_way_out() {
-    let msg = scene::load(&data("avocado_draco.glb")).err().expect("refused").to_string();
+    let msg = scene::load(&data("avocado_draco.glb"))
+        .err()
+        .expect("refused")
+        .to_string();
     assert!(
         msg.contains("avocado_draco.glb")
             && msg.contains("requires the glTF extension 'KHR_draco_mesh_compression'")
@@ -622,7 +902,10 @@ fn draco_and_required_ktx2_are_refused_with_the_reason_and_a_way_out() {
         "extensionsUsed": ["KHR_texture_basisu"],
         "extensionsRequired": ["KHR_texture_basisu"],
     });
-    let msg = scene::load_slice(&glb(&doc, &[]), "lamp.glb", None).err().expect("refused").to_string();
+    let msg = scene::load_slice(&glb(&doc, &[]), "lamp.glb", None)
+        .err()
+        .expect("refused")
+        .to_string();
     assert!(
         msg.contains("'lamp.glb' requires the glTF extension 'KHR_texture_basisu'")
             && msg.contains("no Basis Universal transcoder"),
@@ -636,9 +919,15 @@ fn draco_and_required_ktx2_are_refused_with_the_reason_and_a_way_out() {
 fn compressed_avocados_render_like_the_original() {
     use weft::render::{RenderOptions, Renderer};
     let mut renderer = Renderer::new(common::context()).expect("renderer");
-    let options = RenderOptions { width: 256, height: 256, ..Default::default() };
+    let options = RenderOptions {
+        width: 256,
+        height: 256,
+        ..Default::default()
+    };
     let render = |renderer: &mut Renderer, name: &str| {
-        renderer.render(&load(name), &options).unwrap_or_else(|e| panic!("{name}: {e}"))
+        renderer
+            .render(&load(name), &options)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
     };
     let original = render(&mut renderer, "avocado_small.glb");
     // Measured on lavapipe: see each bound's comment.

@@ -131,7 +131,10 @@ const SIDES: [f64; 5] = [0.25, 1.0, 4.0, 16.0, 64.0];
 
 #[test]
 fn product_of_mips_against_mip_of_product() {
-    println!("footprint side (cells) | {}", SIDES.map(|s| format!("{s:>14}")).join(" | "));
+    println!(
+        "footprint side (cells) | {}",
+        SIDES.map(|s| format!("{s:>14}")).join(" | ")
+    );
     let mut table = Vec::new();
     for t in textures() {
         let row: Vec<(f64, f64)> = SIDES.iter().map(|&s| error(&t, s, 60)).collect();
@@ -150,7 +153,11 @@ fn product_of_mips_against_mip_of_product() {
     // on average at every size, and within 0.5 % once the footprint spans 16 cells (the texture
     // and the weave average out independently).
     for (k, (worst, mean)) in table[0].iter().enumerate() {
-        assert!(*worst < 0.06 && *mean < 0.015, "smooth print, side {}: {worst} {mean}", SIDES[k]);
+        assert!(
+            *worst < 0.06 && *mean < 0.015,
+            "smooth print, side {}: {worst} {mean}",
+            SIDES[k]
+        );
         if SIDES[k] >= 16.0 {
             assert!(*worst < 0.005, "smooth print, side {}: {worst}", SIDES[k]);
         }
@@ -159,9 +166,17 @@ fn product_of_mips_against_mip_of_product() {
     // motif edge (up to 30 % in one channel of one footprint, 2 % on average), within 1 % (0.3 %
     // on average) from 16 cells on.
     for (k, (worst, mean)) in table[1].iter().enumerate() {
-        assert!(*worst < 0.30 && *mean < 0.02, "motif, side {}: {worst} {mean}", SIDES[k]);
+        assert!(
+            *worst < 0.30 && *mean < 0.02,
+            "motif, side {}: {worst} {mean}",
+            SIDES[k]
+        );
         if SIDES[k] >= 16.0 {
-            assert!(*worst < 0.01 && *mean < 0.003, "motif, side {}: {worst} {mean}", SIDES[k]);
+            assert!(
+                *worst < 0.01 && *mean < 0.003,
+                "motif, side {}: {worst} {mean}",
+                SIDES[k]
+            );
         }
     }
     // A texture in step with the threads is where the two differ: the texture and the weave's
@@ -170,7 +185,11 @@ fn product_of_mips_against_mip_of_product() {
     // figure).
     for (k, (worst, mean)) in table[2].iter().enumerate() {
         if SIDES[k] >= 1.0 {
-            assert!(*mean > 0.2 && *worst > 0.2, "checks, side {}: {mean} {worst}", SIDES[k]);
+            assert!(
+                *mean > 0.2 && *worst > 0.2,
+                "checks, side {}: {mean} {worst}",
+                SIDES[k]
+            );
         }
     }
 }
@@ -183,7 +202,10 @@ fn within_a_texel_the_product_is_exact() {
     let mut rng = weft::reference::probe::XorShift::new(11);
     for _ in 0..200 {
         // A footprint of 1/20 texel inside one texel.
-        let (i, j) = (rng.range(-100.0, 100.0).floor(), rng.range(-100.0, 100.0).floor());
+        let (i, j) = (
+            rng.range(-100.0, 100.0).floor(),
+            rng.range(-100.0, 100.0).floor(),
+        );
         let side = t.h / 20.0;
         let x0 = (i + rng.range(0.0, 0.9)) * t.h;
         let y0 = (j + rng.range(0.0, 0.9)) * t.h;

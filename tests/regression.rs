@@ -221,7 +221,11 @@ fn image_regression() {
             println!(
                 "{name:<26} {change:<40} {} -> {}",
                 figures.summary(&case.golden),
-                if violations.is_empty() { "NOT CAUGHT" } else { "caught" }
+                if violations.is_empty() {
+                    "NOT CAUGHT"
+                } else {
+                    "caught"
+                }
             );
             if violations.is_empty() {
                 caught_nothing.push(format!("{name} with {change}"));
@@ -305,7 +309,11 @@ fn perturbations() -> Vec<Perturbation> {
         ("far", "fabric diffuse 2 % darker", darker_fabric),
         ("closeup", "fabric diffuse 2 % darker", darker_fabric),
         ("env-cloth", "fabric diffuse 2 % darker", darker_fabric),
-        ("khronos-sheen-chair", "base colour 2 % darker", darker_base_colour),
+        (
+            "khronos-sheen-chair",
+            "base colour 2 % darker",
+            darker_base_colour,
+        ),
         ("spheres", "base colour 2 % darker", darker_base_colour),
         ("default", "lights turned 5°", light_turned),
         ("shadows", "lights turned 5°", light_turned),
@@ -353,7 +361,14 @@ fn render_case(
     case: &Case,
     renderer: &mut Renderer,
     mut scene: Scene,
-) -> (Scene, RenderOptions, u32, u32, Vec<u8>, Option<weft::render::Frame>) {
+) -> (
+    Scene,
+    RenderOptions,
+    u32,
+    u32,
+    Vec<u8>,
+    Option<weft::render::Frame>,
+) {
     if let Some((index, time)) = case.pose {
         scene
             .pose(index, time)

@@ -24,7 +24,8 @@ use std::path::{Component, Path, PathBuf};
 use serde_json::{json, Map, Value};
 
 use super::{
-    presets, presets::Preset, FabricParams, ThreadTexture, WeavePattern, EXTENSION_NAME, REPEAT_RANGE,
+    presets, presets::Preset, FabricParams, ThreadTexture, WeavePattern, EXTENSION_NAME,
+    REPEAT_RANGE,
 };
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -722,7 +723,11 @@ pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Resul
     let e_along = FROM_SHEEN_RATIO * (e_across + 1.0) - 1.0;
     let cotton = presets::by_name("cotton-plain").expect("cotton-plain is a preset");
     let sheen_texture = sheen.get("sheenColorTexture").is_some();
-    let thread = if sheen_texture { colour } else { [base[0], base[1], base[2]] };
+    let thread = if sheen_texture {
+        colour
+    } else {
+        [base[0], base[1], base[2]]
+    };
     let rd = thread.map(|x| x.clamp(0.0, 1.0) as f32);
     let mut p = cotton.params(1.0);
     p.rd_warp = rd;
@@ -1226,8 +1231,18 @@ mod tests {
         let p = from_sheen(&m, "material 0 'x'", &mut notes).unwrap();
         assert_eq!(p.thread_texture, ThreadTexture::SheenColor);
         assert_eq!(p.rd_warp, [1.0, 0.5, 0.25]);
-        assert!(notes.iter().any(|n| n.contains("sheenColorTexture is the thread colour")), "{notes:?}");
-        assert!(notes.iter().any(|n| n.contains("baseColorTexture is not used")), "{notes:?}");
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("sheenColorTexture is the thread colour")),
+            "{notes:?}"
+        );
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("baseColorTexture is not used")),
+            "{notes:?}"
+        );
         // Without one: the base colour and its texture, as before.
         let m = json!({
             "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1], "baseColorTexture": {"index": 0}},
@@ -1245,16 +1260,31 @@ mod tests {
             &mut notes,
         );
         assert_eq!(notes.len(), 3, "{notes:?}");
-        assert!(notes[0].contains("baseColorTexture multiplies the thread colours"), "{notes:?}");
-        let back = FabricParams::from_gltf_extension(&extension_json(&p), "x", &mut Vec::new()).unwrap();
+        assert!(
+            notes[0].contains("baseColorTexture multiplies the thread colours"),
+            "{notes:?}"
+        );
+        let back =
+            FabricParams::from_gltf_extension(&extension_json(&p), "x", &mut Vec::new()).unwrap();
         assert_eq!(back.thread_texture, ThreadTexture::BaseColor);
-        let none = FabricParams { thread_texture: ThreadTexture::None, ..p.clone() };
-        let back = FabricParams::from_gltf_extension(&extension_json(&none), "x", &mut Vec::new()).unwrap();
+        let none = FabricParams {
+            thread_texture: ThreadTexture::None,
+            ..p.clone()
+        };
+        let back = FabricParams::from_gltf_extension(&extension_json(&none), "x", &mut Vec::new())
+            .unwrap();
         assert_eq!(back.thread_texture, ThreadTexture::None);
-        let e = FabricParams::from_gltf_extension(&json!({"thread_texture": "albedo"}), "x", &mut Vec::new())
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("thread_texture") && e.contains("base_color"), "{e}");
+        let e = FabricParams::from_gltf_extension(
+            &json!({"thread_texture": "albedo"}),
+            "x",
+            &mut Vec::new(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("thread_texture") && e.contains("base_color"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -237,8 +237,16 @@ macro_rules! fabric_brdf_precision {
             /// over the diffuse term wherever the model uses them.
             pub fn fabric_tinted(m: &FabricMaterial, tint: Vec3) -> FabricMaterial {
                 let mut t = *m;
-                t.rd_warp = [m.rd_warp[0] * tint[0], m.rd_warp[1] * tint[1], m.rd_warp[2] * tint[2]];
-                t.rd_weft = [m.rd_weft[0] * tint[0], m.rd_weft[1] * tint[1], m.rd_weft[2] * tint[2]];
+                t.rd_warp = [
+                    m.rd_warp[0] * tint[0],
+                    m.rd_warp[1] * tint[1],
+                    m.rd_warp[2] * tint[2],
+                ];
+                t.rd_weft = [
+                    m.rd_weft[0] * tint[0],
+                    m.rd_weft[1] * tint[1],
+                    m.rd_weft[2] * tint[2],
+                ];
                 t
             }
 

@@ -238,7 +238,11 @@ macro_rules! probe_eval {
             let f_avg = fabric_brdf_averaged(k1, k2, cov, &m);
             let phong = phong_brdf(k1, k2, &m);
             let plain_as = plain_as_brdf(k1, k2, &m);
-            let tint = [input.tint[0] as $t, input.tint[1] as $t, input.tint[2] as $t];
+            let tint = [
+                input.tint[0] as $t,
+                input.tint[1] as $t,
+                input.tint[2] as $t,
+            ];
             let f_tint = fabric_brdf(k1, k2, cov, &fabric_tinted(&m, tint));
             let out: [$t; PROBE_OUTPUTS] = [
                 as_lobe(k1, k2, m.e_along, m.e_across, m.rs),
@@ -1046,7 +1050,12 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
                 point: [px, py, 0.0, 0.0],
                 footprint: [x0 as f32, y0 as f32, (x0 + wx) as f32, (y0 + wy) as f32],
                 coverage: [c_warp as f32, c_weft as f32, s_warp as f32, s_weft as f32],
-                tint: [rng.next_f64() as f32, rng.next_f64() as f32, rng.next_f64() as f32, 0.0],
+                tint: [
+                    rng.next_f64() as f32,
+                    rng.next_f64() as f32,
+                    rng.next_f64() as f32,
+                    0.0,
+                ],
                 fabric,
             },
         });

@@ -40,9 +40,7 @@ pub(super) const EXTENSIONS: [&str; 4] = [QUANTIZATION, WEBP, MESHOPT_EXT, MESHO
 pub(super) const MAX_DECODED_BYTES: u64 = 1 << 31;
 
 /// The meshopt extension object of a buffer or buffer view, KHR first, with its name.
-fn meshopt_ext(
-    others: Option<&serde_json::Map<String, Value>>,
-) -> Option<(&'static str, &Value)> {
+fn meshopt_ext(others: Option<&serde_json::Map<String, Value>>) -> Option<(&'static str, &Value)> {
     let others = others?;
     [MESHOPT_KHR, MESHOPT_EXT]
         .into_iter()
@@ -325,9 +323,9 @@ fn parse(
 ) -> Result<Compressed> {
     let uint = |key: &str, default: Option<u64>| -> Result<usize> {
         match value.get(key) {
-            None => default.map(|d| d as usize).ok_or_else(|| {
-                bad(format_args!("its \"{key}\" is missing"))
-            }),
+            None => default
+                .map(|d| d as usize)
+                .ok_or_else(|| bad(format_args!("its \"{key}\" is missing"))),
             Some(v) => v
                 .as_u64()
                 .and_then(|n| usize::try_from(n).ok())
@@ -348,7 +346,9 @@ fn parse(
         }
     };
     if !value.is_object() {
-        return Err(bad(format_args!("its extension object is {value}, not an object")));
+        return Err(bad(format_args!(
+            "its extension object is {value}, not an object"
+        )));
     }
     let mode = match text("mode")? {
         Some("ATTRIBUTES") => Mode::Attributes,
@@ -575,7 +575,13 @@ mod tests {
     //! was encoded, within the filter's precision.
     use super::*;
 
-    fn compressed(mode: Mode, filter: Filter, stride: usize, count: usize, length: usize) -> Compressed {
+    fn compressed(
+        mode: Mode,
+        filter: Filter,
+        stride: usize,
+        count: usize,
+        length: usize,
+    ) -> Compressed {
         Compressed {
             buffer: 0,
             offset: 0,
@@ -590,7 +596,13 @@ mod tests {
     fn attributes<T>(elements: &[T], filter: Filter, version: Option<i32>) -> Vec<u8> {
         let stream = meshopt::encode_vertex_buffer_level(elements, 2, version).unwrap();
         let stride = std::mem::size_of::<T>();
-        let c = compressed(Mode::Attributes, filter, stride, elements.len(), stream.len());
+        let c = compressed(
+            Mode::Attributes,
+            filter,
+            stride,
+            elements.len(),
+            stream.len(),
+        );
         let bytes = decode(&c, &stream).expect("decodes");
         assert_eq!(bytes.len(), stride * elements.len());
         bytes
@@ -603,13 +615,21 @@ mod tests {
                 let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
                 let r = (1.0 - z * z).sqrt();
                 let phi = i as f32 * 2.399_963;
-                [r * phi.cos(), r * phi.sin(), z, if i % 3 == 0 { -1.0 } else { 1.0 }]
+                [
+                    r * phi.cos(),
+                    r * phi.sin(),
+                    z,
+                    if i % 3 == 0 { -1.0 } else { 1.0 },
+                ]
             })
             .collect()
     }
 
     fn i16s(bytes: &[u8]) -> Vec<i16> {
-        bytes.chunks_exact(2).map(|b| i16::from_le_bytes([b[0], b[1]])).collect()
+        bytes
+            .chunks_exact(2)
+            .map(|b| i16::from_le_bytes([b[0], b[1]]))
+            .collect()
     }
 
     #[test]
@@ -678,7 +698,11 @@ mod tests {
                 let v = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
                 // 23-bit signed mantissa: 22 bits of magnitude under an exponent of at most
                 // twice |p|, rounded: within 2^-22 |p|.
-                assert!((v - p[k]).abs() <= p[k].abs() * 2f32.powi(-22), "{v} against {}", p[k]);
+                assert!(
+                    (v - p[k]).abs() <= p[k].abs() * 2f32.powi(-22),
+                    "{v} against {}",
+                    p[k]
+                );
             }
         }
     }
@@ -718,26 +742,53 @@ mod tests {
             .collect();
         let stream = meshopt::encode_index_buffer(&tris, 82).unwrap();
         for stride in [2, 4] {
-            let c = compressed(Mode::Triangles, Filter::None, stride, tris.len(), stream.len());
+            let c = compressed(
+                Mode::Triangles,
+                Filter::None,
+                stride,
+                tris.len(),
+                stream.len(),
+            );
             let bytes = decode(&c, &stream).unwrap();
             let got: Vec<u32> = match stride {
-                2 => bytes.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]]) as u32).collect(),
-                _ => bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+                2 => bytes
+                    .chunks_exact(2)
+                    .map(|b| u16::from_le_bytes([b[0], b[1]]) as u32)
+                    .collect(),
+                _ => bytes
+                    .chunks_exact(4)
+                    .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect(),
             };
             // The codec may rotate a triangle's corners, never change the triangle or its winding.
             for (a, b) in tris.chunks_exact(3).zip(got.chunks_exact(3)) {
                 let rotations = [[b[0], b[1], b[2]], [b[1], b[2], b[0]], [b[2], b[0], b[1]]];
-                assert!(rotations.contains(&[a[0], a[1], a[2]]), "{a:?} became {b:?}");
+                assert!(
+                    rotations.contains(&[a[0], a[1], a[2]]),
+                    "{a:?} became {b:?}"
+                );
             }
         }
         let sequence: Vec<u32> = (0..500u32).map(|i| (i * 7919) % 1000).collect();
         let stream = meshopt::encode_index_sequence(&sequence, 1000).unwrap();
         for stride in [2, 4] {
-            let c = compressed(Mode::Indices, Filter::None, stride, sequence.len(), stream.len());
+            let c = compressed(
+                Mode::Indices,
+                Filter::None,
+                stride,
+                sequence.len(),
+                stream.len(),
+            );
             let bytes = decode(&c, &stream).unwrap();
             let got: Vec<u32> = match stride {
-                2 => bytes.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]]) as u32).collect(),
-                _ => bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+                2 => bytes
+                    .chunks_exact(2)
+                    .map(|b| u16::from_le_bytes([b[0], b[1]]) as u32)
+                    .collect(),
+                _ => bytes
+                    .chunks_exact(4)
+                    .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect(),
             };
             assert_eq!(got, sequence);
         }

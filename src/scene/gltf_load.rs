@@ -20,8 +20,8 @@ use gltf::json::validation::{Checked, Validate};
 use gltf::mesh::{Mode, Semantic};
 
 use super::accessor::{self, Use};
-use super::compressed;
 use super::animation::{self, MeshDeform, MorphTarget, VertexSkin};
+use super::compressed;
 use super::material_ext::{self, TexRef};
 use super::resources;
 use super::tangents::{self, UvTransform};
