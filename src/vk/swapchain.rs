@@ -177,6 +177,11 @@ impl Presenter {
             p.format,
             vk::Format::B8G8R8A8_SRGB | vk::Format::R8G8B8A8_SRGB
         );
+        // egui-ash-renderer compiles its pipeline here and destroys it on drop: on lavapipe, like
+        // weft's own pipelines, only with the queue idle and locked (Shared::compile_lock;
+        // without it `weft view` with its panel aborted with heap corruption at 128-bit vectors,
+        // docs/regression.md "Driver configurations").
+        let compiling = p.ctx.shared.compile_lock()?;
         let egui = egui_ash_renderer::Renderer::with_default_allocator(
             &p.ctx.shared.instance,
             p.ctx.shared.physical,
@@ -193,6 +198,7 @@ impl Presenter {
             },
         )
         .map_err(|e| Error::device(format!("creating the panel's renderer failed: {e}")))?;
+        drop(compiling);
         p.egui = Some(egui);
         Ok(p)
     }
@@ -699,8 +705,13 @@ fn color_layers() -> vk::ImageSubresourceLayers {
 impl Drop for Presenter {
     fn drop(&mut self) {
         let _ = self.ctx.wait_idle();
-        // egui's buffers and textures first, then this module's objects, then the surface.
-        self.egui = None;
+        // egui's buffers and textures first (its pipeline destroyed under the compile lock, as it
+        // was made), then this module's objects, then the surface.
+        {
+            let ctx = self.ctx.clone();
+            let _compiling = ctx.shared.compile_lock();
+            self.egui = None;
+        }
         self.destroy_swapchain_objects();
         let dev = &self.ctx.shared.device;
         unsafe {
