@@ -331,3 +331,102 @@ fn oversize_targets_are_refused_before_allocation() {
             .expect("a small frame after the refused one");
     }
 }
+
+/// glTF samplers: a 2 x 1 texture (black, white) on a quad whose u runs from -1 to 2, seen in the
+/// albedo view at the middle of each half-unit of u, with nearest filtering: REPEAT tiles it,
+/// CLAMP_TO_EDGE holds the edge texels outside [0, 1], MIRRORED_REPEAT mirrors every other tile
+/// (issue 28: wrap modes were ignored, every texture repeated).
+#[test]
+fn texture_wrap_modes_follow_the_sampler() {
+    use glam::{Mat4, Vec3};
+    use weft::scene::{
+        Camera, ColorSpace, Draw, Material, Mesh, MipFilter, Scene, TexelFilter, Texture,
+        TextureSampler, TextureSlot, Vertex, Wrap,
+    };
+    let (w, h) = (120u32, 40u32);
+    let v = |x: f32, y: f32, u: f32| Vertex {
+        position: [x, y, 0.0],
+        normal: [0.0, 0.0, 1.0],
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [u, 0.5],
+        uv1: [0.0; 2],
+    };
+    let scene_with = |wrap: Wrap| {
+        let mut material = Material {
+            base_color_texture: Some(0),
+            metallic: 0.0,
+            ..Material::default()
+        };
+        material.samplers[TextureSlot::BaseColor as usize] = TextureSampler {
+            wrap_s: wrap,
+            wrap_t: Wrap::Repeat,
+            mag: TexelFilter::Nearest,
+            min: TexelFilter::Nearest,
+            mip: MipFilter::None,
+        };
+        // The quad fills the frame: 6 x 2 units, seen from 1 unit away with a 90° vertical
+        // field of view at an aspect ratio of 3.
+        Scene {
+            source: "wrap-mode quad".into(),
+            meshes: vec![Mesh {
+                name: "quad".into(),
+                vertices: vec![
+                    v(-3.0, -1.0, -1.0),
+                    v(3.0, -1.0, 2.0),
+                    v(3.0, 1.0, 2.0),
+                    v(-3.0, 1.0, -1.0),
+                ],
+                indices: vec![0, 1, 2, 0, 2, 3],
+                material: 0,
+            }],
+            draws: vec![Draw::new(0, Mat4::IDENTITY)],
+            materials: vec![material],
+            textures: vec![Texture {
+                name: "black-white".into(),
+                width: 2,
+                height: 1,
+                color_space: ColorSpace::Srgb,
+                rgba8: vec![0, 0, 0, 255, 255, 255, 255, 255],
+            }],
+            cameras: vec![Camera {
+                name: "front".into(),
+                view: Mat4::look_at_rh(Vec3::new(0.0, 0.0, 1.0), Vec3::ZERO, Vec3::Y),
+                yfov: std::f32::consts::FRAC_PI_2,
+                znear: 0.01,
+                zfar: None,
+                aspect_ratio: Some(3.0),
+            }],
+            ..Default::default()
+        }
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let options = RenderOptions {
+        width: w,
+        height: h,
+        debug_view: DebugView::Albedo,
+        ..Default::default()
+    };
+    // u at the middle of each sixth of the frame: -0.75, -0.25, 0.25, 0.75, 1.25, 1.75.
+    let expect = [
+        (Wrap::Repeat, "BWBWBW"),
+        (Wrap::ClampToEdge, "BBBWWW"),
+        (Wrap::MirroredRepeat, "WBBWWB"),
+    ];
+    for (wrap, want) in expect {
+        let frame = renderer
+            .render(&scene_with(wrap), &options)
+            .expect("render without validation messages");
+        let got: String = (0..6)
+            .map(|i| {
+                let x = (2 * i + 1) * w as usize / 12;
+                let p = (h as usize / 2 * w as usize + x) * 4;
+                match frame.ldr[p] {
+                    0..=20 => 'B',
+                    235..=255 => 'W',
+                    _ => '?',
+                }
+            })
+            .collect();
+        assert_eq!(got, want, "{wrap:?}");
+    }
+}

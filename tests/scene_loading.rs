@@ -1964,3 +1964,74 @@ fn a_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
         "{msg}"
     );
 }
+
+/// Each texture slot keeps its glTF sampler (TextureSettingsTest, tests/data/khronos: five
+/// samplers mixing REPEAT, CLAMP_TO_EDGE and MIRRORED_REPEAT per axis, NEAREST_MIPMAP_LINEAR
+/// minification).
+#[test]
+fn texture_slots_keep_their_samplers() {
+    use weft::scene::{MipFilter, TexelFilter, TextureSlot, Wrap};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/khronos/TextureSettingsTest/glTF-Binary/TextureSettingsTest.glb");
+    let s = weft::scene::load(&path).expect("TextureSettingsTest");
+    let sampler = |name: &str| {
+        let m = s
+            .materials
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap_or_else(|| panic!("no material {name}"));
+        m.samplers[TextureSlot::BaseColor as usize]
+    };
+    let wraps = |name: &str| {
+        let x = sampler(name);
+        (x.wrap_s, x.wrap_t)
+    };
+    assert_eq!(
+        wraps("TextureClampMaterialT"),
+        (Wrap::Repeat, Wrap::ClampToEdge)
+    );
+    assert_eq!(
+        wraps("TextureClampMaterialS"),
+        (Wrap::ClampToEdge, Wrap::Repeat)
+    );
+    assert_eq!(
+        wraps("TextureMirrorMaterialT"),
+        (Wrap::Repeat, Wrap::MirroredRepeat)
+    );
+    assert_eq!(
+        wraps("TextureMirrorMaterialS"),
+        (Wrap::MirroredRepeat, Wrap::Repeat)
+    );
+    // "Repeat T" repeats along T and clamps S (sampler RepeatTClampSSampler).
+    assert_eq!(
+        wraps("TextureRepeatMaterialT"),
+        (Wrap::ClampToEdge, Wrap::Repeat)
+    );
+    let f = sampler("TextureClampMaterialT");
+    assert_eq!(
+        (f.mag, f.min, f.mip),
+        (TexelFilter::Linear, TexelFilter::Nearest, MipFilter::Linear)
+    );
+    // No texture warnings: samplers are read, not ignored.
+    assert!(
+        s.warnings.iter().all(|w| !w.0.contains("sampler")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// Sampler codes outside the specification are errors that name the value.
+#[test]
+fn unknown_sampler_codes_are_refused_by_name() {
+    use weft::scene::TextureSampler;
+    let e = TextureSampler::from_gltf_codes(10497, 12345, None, None).unwrap_err();
+    assert!(e.contains("wrapT is 12345"), "{e}");
+    let e = TextureSampler::from_gltf_codes(10497, 10497, Some(1), None).unwrap_err();
+    assert!(e.contains("magFilter is 1"), "{e}");
+    let e = TextureSampler::from_gltf_codes(10497, 10497, None, Some(9990)).unwrap_err();
+    assert!(e.contains("minFilter is 9990"), "{e}");
+    assert_eq!(
+        TextureSampler::from_gltf_codes(10497, 10497, None, None).unwrap(),
+        TextureSampler::default()
+    );
+}

@@ -231,6 +231,10 @@ pub struct GpuScene {
     /// Per material: base colour, metallic-roughness, normal, emissive and occlusion textures
     /// (indices into `textures`, None = a default).
     pub(crate) material_textures: Vec<[Option<usize>; 10]>,
+    /// Per material and slot: the index into `samplers` of the slot's glTF sampler.
+    pub(crate) material_samplers: Vec<[usize; 10]>,
+    /// The distinct samplers the materials' texture slots use (wrap modes and filters).
+    pub(crate) samplers: Vec<Sampler>,
     pub(crate) textures: Vec<Image>,
     pub(crate) draws: Vec<DrawRange>,
     pub(crate) triangles: usize,
@@ -764,6 +768,7 @@ impl Renderer {
             .map(|f| self.build_weave(f))
             .collect::<crate::Result<Vec<_>>>()?;
         let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
+        let (material_samplers, samplers) = texture_samplers(ctx, scene)?;
         let material_count = materials.len() as u32;
         let materials =
             ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
@@ -792,6 +797,8 @@ impl Renderer {
             light_count,
             material_count,
             material_textures,
+            material_samplers,
+            samplers,
             textures,
             draws,
             triangles,
@@ -1074,6 +1081,17 @@ impl Renderer {
                     let material_sets = (0..gpu.material_count as usize)
                         .map(|m| {
                             let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 10]);
+                            let samplers = gpu.material_samplers.get(m).copied();
+                            // A slot's own sampler where it has a texture; the default
+                            // (trilinear, repeat) for the 1x1 fallbacks.
+                            let sampler = |slot: usize| -> &Sampler {
+                                match (tex[slot], samplers) {
+                                    (Some(_), Some(s)) => {
+                                        gpu.samplers.get(s[slot]).unwrap_or(&self.linear)
+                                    }
+                                    _ => &self.linear,
+                                }
+                            };
                             let pick = |slot: usize, fallback: &'static str| -> &Image {
                                 match tex[slot].and_then(|i| gpu.textures.get(i)) {
                                     Some(t) => t,
@@ -1093,17 +1111,17 @@ impl Renderer {
                             pool.set(
                                 &self.material_layout,
                                 &[
-                                    (0, Resource::Sampled(pick(0, "white"), &self.linear)),
-                                    (1, Resource::Sampled(pick(1, "white"), &self.linear)),
-                                    (2, Resource::Sampled(pick(2, "normal"), &self.linear)),
-                                    (3, Resource::Sampled(pick(3, "white"), &self.linear)),
+                                    (0, Resource::Sampled(pick(0, "white"), sampler(0))),
+                                    (1, Resource::Sampled(pick(1, "white"), sampler(1))),
+                                    (2, Resource::Sampled(pick(2, "normal"), sampler(2))),
+                                    (3, Resource::Sampled(pick(3, "white"), sampler(3))),
                                     (4, Resource::Sampled(weave, &self.linear)),
-                                    (5, Resource::Sampled(pick(4, "white"), &self.linear)),
-                                    (6, Resource::Sampled(pick(5, "white"), &self.linear)),
-                                    (7, Resource::Sampled(pick(6, "white"), &self.linear)),
-                                    (8, Resource::Sampled(pick(7, "white"), &self.linear)),
-                                    (9, Resource::Sampled(pick(8, "white"), &self.linear)),
-                                    (10, Resource::Sampled(pick(9, "white"), &self.linear)),
+                                    (5, Resource::Sampled(pick(4, "white"), sampler(4))),
+                                    (6, Resource::Sampled(pick(5, "white"), sampler(5))),
+                                    (7, Resource::Sampled(pick(6, "white"), sampler(6))),
+                                    (8, Resource::Sampled(pick(7, "white"), sampler(7))),
+                                    (9, Resource::Sampled(pick(8, "white"), sampler(8))),
+                                    (10, Resource::Sampled(pick(9, "white"), sampler(9))),
                                 ],
                             )
                         })
@@ -1532,4 +1550,50 @@ mod tests {
         assert!(f16_to_f32(0x7c00).is_infinite());
         assert!(f16_to_f32(0x7e00).is_nan());
     }
+}
+
+/// The distinct samplers of the scene's material texture slots, and per material and slot the
+/// index of its own (glTF: a texture's sampler sets its wrap modes and filters).
+fn texture_samplers(
+    ctx: &Context,
+    scene: &Scene,
+) -> crate::Result<(Vec<[usize; 10]>, Vec<Sampler>)> {
+    use crate::scene::{MipFilter, TexelFilter, Wrap};
+    use crate::vk::{Address, TextureSamplerDesc};
+    let address = |w: Wrap| match w {
+        Wrap::Repeat => Address::Repeat,
+        Wrap::ClampToEdge => Address::ClampToEdge,
+        Wrap::MirroredRepeat => Address::MirroredRepeat,
+    };
+    let mut keys: Vec<crate::scene::TextureSampler> = Vec::new();
+    let mut samplers = Vec::new();
+    let mut per_material = Vec::with_capacity(scene.materials.len());
+    for m in &scene.materials {
+        let mut slots = [0usize; 10];
+        for (slot, s) in m.samplers.iter().enumerate().take(10) {
+            if m.textures()[slot].is_none() {
+                continue;
+            }
+            slots[slot] = match keys.iter().position(|k| k == s) {
+                Some(i) => i,
+                None => {
+                    samplers.push(ctx.create_texture_sampler(TextureSamplerDesc {
+                        address_u: address(s.wrap_s),
+                        address_v: address(s.wrap_t),
+                        mag_linear: s.mag == TexelFilter::Linear,
+                        min_linear: s.min == TexelFilter::Linear,
+                        mip_linear: match s.mip {
+                            MipFilter::None => None,
+                            MipFilter::Nearest => Some(false),
+                            MipFilter::Linear => Some(true),
+                        },
+                    })?);
+                    keys.push(*s);
+                    keys.len() - 1
+                }
+            };
+        }
+        per_material.push(slots);
+    }
+    Ok((per_material, samplers))
 }

@@ -27,7 +27,7 @@ use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
     Anisotropy, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Sheen, SlotUv,
-    Specular, Texture, TextureSlot, Vertex, Warning,
+    Specular, Texture, TextureSampler, TextureSlot, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -576,14 +576,14 @@ impl<'a> Loader<'a> {
 
         // Each texture slot's UV set and transform, in slot order (the first on TEXCOORD_0
         // becomes the frame transform baked into the vertices).
-        let mut uv_transforms: Vec<(TextureSlot, UvTransform, u32)> = Vec::new();
+        let mut uv_transforms: Vec<(TextureSlot, UvTransform, u32, TextureSampler)> = Vec::new();
         let slot = |loader: &mut Self,
                     info_tex: gltf::Texture<'a>,
                     tex_coord: u32,
                     transform: Option<(UvTransform, Option<u32>)>,
                     kind: (TextureSlot, &'static str),
                     color_space: ColorSpace,
-                    uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32)>|
+                    uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32, TextureSampler)>|
          -> Result<usize> {
             let (slot_kind, slot_name) = kind;
             let (uv, mut set) = match transform {
@@ -596,7 +596,8 @@ impl<'a> Loader<'a> {
                 ));
                 set = 0;
             }
-            uv_transforms.push((slot_kind, uv, set));
+            let sampler = loader.sampler(&info_tex, &who, slot_name)?;
+            uv_transforms.push((slot_kind, uv, set, sampler));
             loader.texture(&info_tex, color_space, &who, slot_name)
         };
 
@@ -745,36 +746,37 @@ impl<'a> Loader<'a> {
         for w in std::mem::take(&mut ctx.warnings) {
             self.warn(w);
         }
-        let ext_texture = |loader: &mut Self,
-                           r: &Option<TexRef>,
-                           kind: (TextureSlot, &'static str),
-                           color_space: ColorSpace,
-                           uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32)>|
-         -> Result<Option<usize>> {
-            let Some(r) = r else { return Ok(None) };
-            let Some(texture) = loader.doc.textures().nth(r.index) else {
-                return Err(loader.error(format_args!(
+        let ext_texture =
+            |loader: &mut Self,
+             r: &Option<TexRef>,
+             kind: (TextureSlot, &'static str),
+             color_space: ColorSpace,
+             uv_transforms: &mut Vec<(TextureSlot, UvTransform, u32, TextureSampler)>|
+             -> Result<Option<usize>> {
+                let Some(r) = r else { return Ok(None) };
+                let Some(texture) = loader.doc.textures().nth(r.index) else {
+                    return Err(loader.error(format_args!(
                     "{who}'s {} refers to texture {}, but the file has {} textures; fix the index",
                     kind.1,
                     r.index,
                     loader.doc.textures().len()
                 )));
+                };
+                let transform = match &r.transform {
+                    Some(v) => Some(loader.parse_texture_transform(v, &who, kind.1)?),
+                    None => None,
+                };
+                slot(
+                    loader,
+                    texture,
+                    r.tex_coord,
+                    transform,
+                    kind,
+                    color_space,
+                    uv_transforms,
+                )
+                .map(Some)
             };
-            let transform = match &r.transform {
-                Some(v) => Some(loader.parse_texture_transform(v, &who, kind.1)?),
-                None => None,
-            };
-            slot(
-                loader,
-                texture,
-                r.tex_coord,
-                transform,
-                kind,
-                color_space,
-                uv_transforms,
-            )
-            .map(Some)
-        };
         let sheen = match &sheen_ext {
             None => None,
             Some(e) => Some(Sheen {
@@ -838,11 +840,13 @@ impl<'a> Loader<'a> {
         // baked coordinates (or from TEXCOORD_1) to its own.
         let frame = uv_transforms
             .iter()
-            .find(|(_, t, set)| *set == 0 && t.inverse().is_some())
-            .map_or(UvTransform::IDENTITY, |(_, t, _)| *t);
+            .find(|(_, t, set, _)| *set == 0 && t.inverse().is_some())
+            .map_or(UvTransform::IDENTITY, |(_, t, _, _)| *t);
         let frame_inverse = frame.inverse().unwrap_or(UvTransform::IDENTITY.affine());
         let mut slot_uv = [SlotUv::IDENTITY; TextureSlot::COUNT];
-        for (kind, t, set) in &uv_transforms {
+        let mut samplers = [TextureSampler::default(); TextureSlot::COUNT];
+        for (kind, t, set, sampler) in &uv_transforms {
+            samplers[*kind as usize] = *sampler;
             let m = if *set == 0 {
                 UvTransform::compose(t.affine(), frame_inverse)
             } else {
@@ -883,6 +887,7 @@ impl<'a> Loader<'a> {
             specular,
             anisotropy,
             uv: slot_uv,
+            samplers,
         };
         Ok((material, uv))
     }
@@ -940,6 +945,56 @@ impl<'a> Loader<'a> {
             return Err(bad());
         }
         Ok((uv, tex_coord))
+    }
+
+    /// `texture`'s sampler (glTF's defaults without one): wrap modes and filters.
+    fn sampler(
+        &self,
+        texture: &gltf::Texture<'a>,
+        who: &str,
+        slot: &str,
+    ) -> Result<TextureSampler> {
+        let root = self.doc.as_json();
+        let Some(index) = root
+            .textures
+            .get(texture.index())
+            .and_then(|t| t.sampler.as_ref())
+            .map(|i| i.value())
+        else {
+            return Ok(TextureSampler::default());
+        };
+        let Some(sampler) = root.samplers.get(index) else {
+            return Err(self.error(format_args!(
+                "{who}'s {slot} uses sampler {index}, but the file has {} samplers; fix the index",
+                root.samplers.len()
+            )));
+        };
+        let code = |what: &str, c: &Checked<u32>| -> Result<u32> {
+            match c {
+                Checked::Valid(v) => Ok(*v),
+                Checked::Invalid => Err(self.error(format_args!(
+                    "{who}'s {slot}: sampler {index} has an invalid {what}; glTF allows the codes of the specification (e.g. 10497 REPEAT, 9729 LINEAR)"
+                ))),
+            }
+        };
+        let gl = |c: &Checked<gltf::texture::WrappingMode>| match c {
+            Checked::Valid(v) => Checked::Valid(v.as_gl_enum()),
+            Checked::Invalid => Checked::Invalid,
+        };
+        let wrap_s = code("wrapS", &gl(&sampler.wrap_s))?;
+        let wrap_t = code("wrapT", &gl(&sampler.wrap_t))?;
+        let mag = match &sampler.mag_filter {
+            None => None,
+            Some(Checked::Valid(f)) => Some(f.as_gl_enum()),
+            Some(Checked::Invalid) => Some(code("magFilter", &Checked::Invalid)?),
+        };
+        let min = match &sampler.min_filter {
+            None => None,
+            Some(Checked::Valid(f)) => Some(f.as_gl_enum()),
+            Some(Checked::Invalid) => Some(code("minFilter", &Checked::Invalid)?),
+        };
+        TextureSampler::from_gltf_codes(wrap_s, wrap_t, mag, min)
+            .map_err(|why| self.error(format_args!("{who}'s {slot}: sampler {index}: {why}")))
     }
 
     /// The scene texture for `texture`'s image in `color_space`, decoding the image on first use.

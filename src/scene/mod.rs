@@ -116,6 +116,8 @@ pub struct Material {
     pub anisotropy: Option<Anisotropy>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
+    /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
+    pub samplers: [TextureSampler; TextureSlot::COUNT],
 }
 
 impl Material {
@@ -133,6 +135,97 @@ impl Material {
             self.specular.color_texture,
             self.anisotropy.as_ref().and_then(|a| a.texture),
         ]
+    }
+}
+
+/// How texture coordinates outside [0, 1] are mapped (glTF `sampler.wrapS` / `wrapT`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// 10497, glTF's default.
+    #[default]
+    Repeat,
+    /// 33071.
+    ClampToEdge,
+    /// 33648.
+    MirroredRepeat,
+}
+
+/// Texel filter (glTF `magFilter`, and the texel part of `minFilter`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TexelFilter {
+    Nearest,
+    #[default]
+    Linear,
+}
+
+/// The mip part of glTF's `minFilter`: `None` for NEAREST and LINEAR (the base level only).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum MipFilter {
+    None,
+    Nearest,
+    #[default]
+    Linear,
+}
+
+/// A glTF sampler. The default (no sampler, or one without filters) is what glTF leaves to the
+/// renderer for filters and REPEAT for wrapping: weft's trilinear with anisotropy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct TextureSampler {
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    pub mag: TexelFilter,
+    pub min: TexelFilter,
+    pub mip: MipFilter,
+}
+
+impl TextureSampler {
+    /// From glTF's numeric codes (None where the file gives none); unknown codes are errors
+    /// naming the value.
+    pub fn from_gltf_codes(
+        wrap_s: u32,
+        wrap_t: u32,
+        mag: Option<u32>,
+        min: Option<u32>,
+    ) -> std::result::Result<TextureSampler, String> {
+        let wrap = |code: u32, name: &str| {
+            match code {
+            10497 => Ok(Wrap::Repeat),
+            33071 => Ok(Wrap::ClampToEdge),
+            33648 => Ok(Wrap::MirroredRepeat),
+            other => Err(format!(
+                "{name} is {other}; glTF allows 10497 (REPEAT), 33071 (CLAMP_TO_EDGE) and 33648 (MIRRORED_REPEAT)"
+            )),
+        }
+        };
+        let mag = match mag {
+            None | Some(9729) => TexelFilter::Linear,
+            Some(9728) => TexelFilter::Nearest,
+            Some(other) => {
+                return Err(format!(
+                    "magFilter is {other}; glTF allows 9728 (NEAREST) and 9729 (LINEAR)"
+                ))
+            }
+        };
+        let (min, mip) = match min {
+            None | Some(9987) => (TexelFilter::Linear, MipFilter::Linear),
+            Some(9728) => (TexelFilter::Nearest, MipFilter::None),
+            Some(9729) => (TexelFilter::Linear, MipFilter::None),
+            Some(9984) => (TexelFilter::Nearest, MipFilter::Nearest),
+            Some(9985) => (TexelFilter::Linear, MipFilter::Nearest),
+            Some(9986) => (TexelFilter::Nearest, MipFilter::Linear),
+            Some(other) => {
+                return Err(format!(
+                    "minFilter is {other}; glTF allows 9728, 9729 and 9984 to 9987"
+                ))
+            }
+        };
+        Ok(TextureSampler {
+            wrap_s: wrap(wrap_s, "wrapS")?,
+            wrap_t: wrap(wrap_t, "wrapT")?,
+            mag,
+            min,
+            mip,
+        })
     }
 }
 
@@ -299,6 +392,7 @@ impl Default for Material {
             specular: Specular::default(),
             anisotropy: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
+            samplers: [TextureSampler::default(); TextureSlot::COUNT],
         }
     }
 }

@@ -22,7 +22,10 @@ pub use pipeline::{
     Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline,
     Resource, SetLayout, Stages, VertexLayout,
 };
-pub use resources::{Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler};
+pub use resources::{
+    Address, Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler,
+    TextureSamplerDesc,
+};
 pub use swapchain::{PanelDraw, Presented, Presenter, FRAMES_IN_FLIGHT};
 
 /// The pipeline stage a shader module is for.

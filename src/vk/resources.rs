@@ -220,6 +220,27 @@ pub enum Filter {
     ShadowCompare,
 }
 
+/// Addressing outside [0, 1] of a [`TextureSamplerDesc`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Address {
+    Repeat,
+    ClampToEdge,
+    MirroredRepeat,
+}
+
+/// A material texture's sampler (a glTF sampler): addressing per axis, texel filters, and the
+/// mip filter (None: the base level only). Anisotropy where the device has it when every filter
+/// is linear.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct TextureSamplerDesc {
+    pub address_u: Address,
+    pub address_v: Address,
+    pub mag_linear: bool,
+    pub min_linear: bool,
+    /// None: no mipmapping; Some(true): linear between levels; Some(false): nearest level.
+    pub mip_linear: Option<bool>,
+}
+
 /// Timestamp queries, read back in nanoseconds.
 pub struct QueryPool {
     shared: Arc<Shared>,
@@ -500,6 +521,55 @@ impl Context {
             .max_lod(vk::LOD_CLAMP_NONE)
             .compare_enable(filter == Filter::ShadowCompare)
             .compare_op(vk::CompareOp::GREATER_OR_EQUAL);
+        let raw = unsafe { self.shared.device.create_sampler(&info, None) }
+            .map_err(vkerr("vkCreateSampler"))?;
+        Ok(Sampler {
+            shared: self.shared.clone(),
+            raw,
+        })
+    }
+
+    /// A sampler for a material texture ([`TextureSamplerDesc`]).
+    pub fn create_texture_sampler(&self, desc: TextureSamplerDesc) -> crate::Result<Sampler> {
+        let address = |a: Address| match a {
+            Address::Repeat => vk::SamplerAddressMode::REPEAT,
+            Address::ClampToEdge => vk::SamplerAddressMode::CLAMP_TO_EDGE,
+            Address::MirroredRepeat => vk::SamplerAddressMode::MIRRORED_REPEAT,
+        };
+        let filter = |linear: bool| {
+            if linear {
+                vk::Filter::LINEAR
+            } else {
+                vk::Filter::NEAREST
+            }
+        };
+        let aniso = self.shared.anisotropy
+            && desc.mag_linear
+            && desc.min_linear
+            && desc.mip_linear == Some(true);
+        let max_aniso = self.shared.limits.max_sampler_anisotropy.min(16.0);
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(filter(desc.mag_linear))
+            .min_filter(filter(desc.min_linear))
+            .mipmap_mode(if desc.mip_linear == Some(true) {
+                vk::SamplerMipmapMode::LINEAR
+            } else {
+                vk::SamplerMipmapMode::NEAREST
+            })
+            .address_mode_u(address(desc.address_u))
+            .address_mode_v(address(desc.address_v))
+            .address_mode_w(address(desc.address_u))
+            .anisotropy_enable(aniso)
+            .max_anisotropy(if aniso { max_aniso } else { 1.0 })
+            .min_lod(0.0)
+            // glTF's NEAREST and LINEAR minification read the base level only (Vulkan's
+            // equivalent of a non-mipmapped minFilter: maxLod 0.25 keeps magnification
+            // distinguishable from minification, as the Vulkan spec recommends).
+            .max_lod(if desc.mip_linear.is_none() {
+                0.25
+            } else {
+                vk::LOD_CLAMP_NONE
+            });
         let raw = unsafe { self.shared.device.create_sampler(&info, None) }
             .map_err(vkerr("vkCreateSampler"))?;
         Ok(Sampler {
