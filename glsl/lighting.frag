@@ -196,6 +196,13 @@ float sheen_albedo(float cos_theta, float r) {
     return textureLod(env_dfg, vec2(clamp(cos_theta, 0.0, 1.0), r), 0.0).b;
 }
 
+// The GGX lobe's directional albedo Ess(cos θ) = A + B at roughness r (the DFG table's first two
+// channels), for ggx_energy_compensation.
+float ggx_albedo(float cos_theta, float r) {
+    vec2 ab = textureLod(env_dfg, vec2(clamp(cos_theta, 0.0, 1.0), r), 0.0).rg;
+    return ab.x + ab.y;
+}
+
 // The split sum's look-up direction for roughness r about normal n: the mirror direction bent
 // towards the normal as the lobe widens (Lagarde & de Rousiers 2014, "dominant direction"): a
 // rough lobe's mass is nearer n.
@@ -222,6 +229,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
         // heuristic (the mixture pdf of the two samplers).
         mat3 tbn = fabric_frame(n, any_perpendicular(n), 1.0);
         float alpha = max(roughness * roughness, 1e-3);
+        float ess = ggx_albedo(nv, roughness);
         vec2 rot = pixel_random();
         vec3 sum = vec3(0.0);
         for (uint i = 0u; i < IBL_SAMPLES; ++i) {
@@ -239,14 +247,19 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
                 float p_ggx = vh > 0.0 ? ggx_d(clamp(dot(n, hl), 0.0, 1.0), alpha) * clamp(dot(n, hl), 0.0, 1.0) / (4.0 * vh) : 0.0;
                 float pdf = 0.5 * p_ggx + 0.5 * nl / PI;
                 float e_l = has_sheen ? sheen_albedo(nl, s.sheen_roughness) : 0.0;
-                sum += env_radiance_at(l, 0.0) * gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l)) / pdf;
+                sum += env_radiance_at(l, 0.0) * gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l), ess) / pdf;
             }
         }
         return sum / float(2u * IBL_SAMPLES) * ao;
     }
     vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
-    vec3 dielectric = s.f0 * ab.x + ab.y;
-    vec3 spec_albedo = mix(s.specular * dielectric, base * ab.x + ab.y, metallic);
+    // Each lobe with its multiple-scattering compensation, as for the lamps (gltf_brdf_cos); the
+    // diffuse below takes what the compensated dielectric lobe leaves, so a white dielectric
+    // still reflects exactly 1 of a white furnace.
+    float ess = ab.x + ab.y;
+    vec3 dielectric = (s.f0 * ab.x + ab.y) * ggx_energy_compensation(s.f0, ess);
+    vec3 spec_albedo = mix(s.specular * dielectric,
+                           (base * ab.x + ab.y) * ggx_energy_compensation(base, ess), metallic);
     vec3 bent = n;
     float lookup_roughness = roughness;
     if (s.anisotropy > 0.0) {
@@ -285,7 +298,8 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
 void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, out vec3 weft, out vec3 warp) {
     weft = vec3(0.0);
     warp = vec3(0.0);
-    if (!(k2.z > 0.0) || f.rs <= 0.0) {
+    // rs = 0 keeps its lobes: Schlick's Fresnel is (1 - c)^5 there, not 0 (as for the lamps).
+    if (!(k2.z > 0.0)) {
         return;
     }
     if (IBL == 1u) {
@@ -504,6 +518,7 @@ void main() {
         GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z);
         bool has_sheen = max3(s.sheen) > 0.0;
         float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;
+        float ess = ggx_albedo(dot(n, v), roughness);
         if (IBL != 0u) {
             radiance += pbr_env(n, v, s, ao, e_v);
         } else {
@@ -519,7 +534,7 @@ void main() {
                 continue;
             }
             float e_l = has_sheen ? sheen_albedo(dot(n, l), s.sheen_roughness) : 0.0;
-            vec3 c = gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l));
+            vec3 c = gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l), ess);
             if (all(equal(c, vec3(0.0)))) {
                 continue;
             }

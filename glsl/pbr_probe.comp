@@ -16,7 +16,7 @@ struct PbrProbeInput {
     vec4 f0_specular;    // rgb dielectric F0, a specular weight
     vec4 sheen;          // rgb sheen colour, a sheen roughness
     vec4 t_anisotropy;   // xyz anisotropy direction (unit, ⟂ n), w strength
-    vec4 params;         // x roughness, y E(n·v), z E(n·l)
+    vec4 params;         // x roughness, y E(n·v), z E(n·l), w Ess(n·v) (energy compensation)
     vec4 terms_in;       // x n·h, y n·l, z n·v (inputs of the scalar terms), w sheen roughness
 };
 
@@ -47,7 +47,7 @@ void main() {
     GltfSurface s = GltfSurface(p.base_metallic.rgb, p.base_metallic.a, p.params.x, p.f0_specular.a,
                                 p.f0_specular.rgb, p.sheen.rgb, p.sheen.a, p.t_anisotropy.xyz,
                                 p.t_anisotropy.w);
-    vec3 brdf = gltf_brdf_cos(p.n.xyz, p.v.xyz, p.l.xyz, s, p.params.yz);
+    vec3 brdf = gltf_brdf_cos(p.n.xyz, p.v.xyz, p.l.xyz, s, p.params.yz, p.params.w);
     float nh = p.terms_in.x;
     float sr = p.terms_in.w;
     float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);

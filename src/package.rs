@@ -131,7 +131,7 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          `sheen_brdf_cos`, `ggx_aniso_d`, `sheen_lambda`) on a batch of inputs, one invocation per \
          input. Bind a buffer of `count` 144-byte `PbrProbeInput` records (nine `vec4`: `n`, `v`, \
          `l`, `base_metallic`, `f0_specular`, `sheen`, `t_anisotropy`, `params` (roughness, \
-         E(n·v), E(n·l)), `terms_in` (n·h, n·l, n·v, sheen roughness)) and a buffer for `count` \
+         E(n·v), E(n·l), Ess(n·v) of the energy compensation), `terms_in` (n·h, n·l, n·v, sheen roughness)) and a buffer for `count` \
          32-byte outputs (`vec4 brdf`, `vec4 terms`). Push the `uint count`; dispatch \
          `ceil(count / 64)` groups. The Rust twin: `weft::reference::shading::gltf_brdf_cos`.",
     ),

@@ -145,16 +145,18 @@ fn white_furnace() {
                 level.name()
             );
         }
-        // Metal F0 = 1: A + B, the single-scattering albedo of GGX: 1 when smooth, lower when
-        // rough and at grazing view (multiple scattering is missing from every
-        // single-scattering model, glTF's included), so "about 1" means: equal to the CPU
-        // quadrature of the same BRDF, and never above 1. The split sum is exact under a uniform
-        // environment but for the 32² DFG table's bilinear interpolation (~1 %) and f16 storage;
-        // Monte Carlo with 64 GGX samples is noisy where the lobe is wide (a few %).
+        // Metal F0 = 1: the single-scattering albedo of GGX is A + B, 1 when smooth and down to
+        // ~0.6 when rough at grazing view (issue 28: the glTF default material, a rough white
+        // metal, was 0.88 EV darker than a path tracer); the energy compensation
+        // 1 + F0·(1/Ess - 1) restores the multiply scattered light, so a white metal reflects 1
+        // at every roughness and angle. The split sum is exact then but for f16 storage (the
+        // same table gives Ess and A + B); measured within 0.003 of 1 at every pixel of every
+        // roughness, bound 0.01. Monte Carlo with 64 GGX samples is noisy where the lobe is
+        // wide (a few %): its mean over the metals is bounded below instead.
         if level != IblLevel::MonteCarlo(64) {
             assert!(
-                metal_hi < 1.005,
-                "{}: [{metal_lo}, {metal_hi}]",
+                metal_hi < 1.01 && metal_lo > 0.99,
+                "{}: white metal in [{metal_lo}, {metal_hi}], not 1 at every roughness",
                 level.name()
             );
         }
@@ -199,6 +201,157 @@ fn white_furnace() {
         };
         assert!(n > 50 && rel < bound, "{}: {rel}", level.name());
     }
+}
+
+/// Every fabric parameter set under a uniform white environment against the CPU quadrature of the
+/// same BRDF (its directional albedo): the environment path must keep every term the lamps keep.
+/// Issue 31 found an `rs = 0` fabric 21-23 % too dark under the environment at every level (an
+/// early exit dropped its Fresnel lobe, which is `(1 - c)^5`, not 0): the `rs = 0` sets here would
+/// have caught it.
+#[test]
+fn fabric_furnace_every_parameter_set() {
+    use weft::fabric::{FabricParams, WeavePattern};
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let env = Arc::new(Environment::uniform([1.0; 3]));
+    let q = EnvQuadrature::new(&env, 0.0, 1.0, 1);
+    let base = FabricParams::default();
+    let sets: Vec<(&str, FabricParams)> = vec![
+        ("default", base.clone()),
+        (
+            "rs 0",
+            FabricParams {
+                rs: 0.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "rs 0, coupled diffuse",
+            FabricParams {
+                rs: 0.0,
+                coupled_diffuse: true,
+                ..base.clone()
+            },
+        ),
+        (
+            "rs 0.5",
+            FabricParams {
+                rs: 0.5,
+                ..base.clone()
+            },
+        ),
+        // Lobes only (black threads): all the light is the specular lobes', so dropping them is
+        // a 100 % error, not the few % it is under a white diffuse.
+        (
+            "rs 0, lobes only",
+            FabricParams {
+                rs: 0.0,
+                rd_warp: [0.0; 3],
+                rd_weft: [0.0; 3],
+                ..base.clone()
+            },
+        ),
+        (
+            "rs 0.04, lobes only",
+            FabricParams {
+                rd_warp: [0.0; 3],
+                rd_weft: [0.0; 3],
+                ..base.clone()
+            },
+        ),
+        (
+            "no gaps, no shadowing",
+            FabricParams {
+                gap: 0.0,
+                shadow_strength: 0.0,
+                ..base.clone()
+            },
+        ),
+        (
+            "wide lobes, coloured",
+            FabricParams {
+                e_along: 20.0,
+                e_across: 2.0,
+                rd_warp: [0.8, 0.2, 0.1],
+                rd_weft: [0.1, 0.3, 0.9],
+                ..base.clone()
+            },
+        ),
+        (
+            "satin, narrow lobes",
+            FabricParams {
+                pattern: WeavePattern::satin(),
+                e_along: 2000.0,
+                e_across: 40.0,
+                ..base.clone()
+            },
+        ),
+    ];
+    let mut failures = Vec::new();
+    for (name, params) in &sets {
+        let mut cloth = cloth();
+        for m in cloth.materials.iter_mut().filter(|m| m.fabric.is_some()) {
+            m.fabric = Some(params.clone());
+        }
+        for level in [
+            IblLevel::Approx,
+            IblLevel::Fis(16),
+            IblLevel::MonteCarlo(64),
+        ] {
+            let o = options(&env, level, 0.0);
+            let frame = renderer.render(&cloth, &o).expect("render");
+            let g = renderer.read_gbuffer().unwrap();
+            let (surf, eye) = surfaces(&g, &cloth, &o);
+            let (mut sum_err, mut sum_got, mut sum_ref, mut n) = (0f64, 0f64, 0f64, 0usize);
+            for (i, s) in surf.iter().filter(|(_, s)| s.fabric.is_some()).step_by(5) {
+                let want = luminance(q.reflected(s, eye));
+                let got = luminance([0, 1, 2].map(|c| frame.hdr[i * 4 + c] as f64));
+                assert!(got.is_finite(), "{name}, {}: not finite", level.name());
+                sum_err += (got - want).abs();
+                sum_got += got;
+                sum_ref += want;
+                n += 1;
+            }
+            let rel = sum_err / sum_ref;
+            let bias = sum_got / sum_ref - 1.0;
+            println!(
+                "{name:>24}, {:>6}: {n} pixels, mean |GPU - CPU| / mean CPU = {rel:.4}, mean bias {bias:+.4}",
+                level.name()
+            );
+            // The bounds of `white_furnace` (0.16 approx, 0.03 sampled: ~1.3x the default
+            // cloth's measured error), and the mean bias within them too.
+            //
+            // Lobes only (black threads), measured on lavapipe: rs 0 approx 1.21 (bias +1.17),
+            // fis:16 0.19 (-0.11), mc:64 0.066 (-0.047); rs 0.04 approx 0.52, fis:16 0.080,
+            // mc:64 0.024. What is left there is the estimators' own error on lobes that live
+            // near the horizon (approx takes a lobe's albedo as Schlick's Fresnel at n·v; fis:16
+            // and mc:64 are few samples of a peaked integrand): issue 31 item 1. Bounds ~1.3x
+            // those; and every level's mean bias above -0.5, which dropping the lobes (-1.0, as
+            // the early exit did) cannot pass.
+            let lobes_only = params.rd_warp == [0.0; 3] && params.rd_weft == [0.0; 3];
+            let ok = if lobes_only {
+                let bound = match level {
+                    IblLevel::Approx => 1.6,
+                    IblLevel::MonteCarlo(_) => 0.09,
+                    _ => 0.25,
+                };
+                bias > -0.5 && rel < bound
+            } else {
+                let bound = if level == IblLevel::Approx {
+                    0.16
+                } else {
+                    0.03
+                };
+                rel < bound && bias.abs() < bound
+            };
+            if !(n > 50 && ok) {
+                failures.push(format!(
+                    "{name}, {}: {rel:.4} (bias {bias:+.4})",
+                    level.name()
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "fabric furnace failures: {failures:?}");
 }
 
 #[test]

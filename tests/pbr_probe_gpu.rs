@@ -95,6 +95,7 @@ fn twin(inp: &PbrProbeInput) -> [f32; 8] {
         xyz(inp.l),
         &s,
         [inp.params[1], inp.params[2]],
+        inp.params[3],
     );
     let nh = inp.terms_in[0];
     let sr = inp.terms_in[3];
@@ -177,7 +178,9 @@ fn bounds(inp: &PbrProbeInput) -> [f64; 8] {
     } else {
         0.0
     };
-    let r_brdf = 2.0 * (64.0 * U + ggx + aniso + schlick + sheen);
+    // 64 ulp for the products and sums, 8 more for the energy compensation (a division, a
+    // product and a sum per lobe).
+    let r_brdf = 2.0 * (72.0 * U + ggx + aniso + schlick + sheen);
     let tnh = inp.terms_in[0] as f64;
     let tsr = inp.terms_in[3] as f64;
     let r_charlie = 2.0 * charlie_rel(tnh, tsr, 0.0);
@@ -224,7 +227,13 @@ fn case(
             f0_specular: v4(s.f0, s.specular),
             sheen: v4(s.sheen, s.sheen_roughness),
             t_anisotropy: v4(s.t, s.anisotropy),
-            params: [s.roughness, e[0], e[1], 0.0],
+            // Ess at n·v (n = +z) for the energy compensation, as the lighting pass reads it.
+            params: [
+                s.roughness,
+                e[0],
+                e[1],
+                weft::reference::shading::ggx_albedo_lookup(v[2], s.roughness),
+            ],
             terms_in: terms,
         },
     }
@@ -446,10 +455,10 @@ fn sheen_albedo_scaling_conserves_energy() {
                 let phi = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
                 let l = dir(cl, phi);
                 let w = (1.0 / nt as f64) * (std::f64::consts::TAU / np as f64);
-                scaled += gltf_brdf_cos(n, v, l, &s, [e_v, e(cl)])[0] as f64 * w;
+                scaled += gltf_brdf_cos(n, v, l, &s, [e_v, e(cl)], 1.0)[0] as f64 * w;
                 let mut plain = s;
                 plain.sheen = [0.0; 3];
-                unscaled += (gltf_brdf_cos(n, v, l, &plain, [0.0; 2])[0]
+                unscaled += (gltf_brdf_cos(n, v, l, &plain, [0.0; 2], 1.0)[0]
                     + sheen_brdf_cos(
                         cl as f32,
                         cv as f32,

@@ -91,13 +91,25 @@ float max3(vec3 c) {
     return max(c.r, max(c.g, c.b));
 }
 
+// Multiple-scattering energy compensation of a GGX lobe (Kulla & Conty 2017, in the single-table
+// form of Fdez-Agüera 2019 that Filament uses): a single-scattering lobe of Fresnel F0 reflects
+// about F0·Ess(n·v) of a white furnace, where Ess is its directional albedo with F = 1 (A + B of
+// the DFG table): the light that scatters more than once between microfacets is lost, most for
+// rough surfaces. Scaling the lobe by 1 + F0·(1/Ess - 1) restores it (a white metal reflects 1 at
+// every roughness). ess = 1 gives the single-scattering lobe.
+vec3 ggx_energy_compensation(vec3 f0, float ess) {
+    return 1.0 + f0 * (1.0 / max(ess, 1e-2) - 1.0);
+}
+
 // The glTF BRDF with KHR_materials_specular, _sheen and _anisotropy, times n·l, for light
 // direction l and view direction v (both unit, away from the surface): the metal and the
 // dielectric (Fresnel-mixed diffuse and specular, weighted by the specular factor) mixed by
 // metallic, under the sheen layer, which scales them by its albedo:
 // min(1 - max(sheen)·E(n·v), 1 - max(sheen)·E(n·l)). sheen_e = (E(n·v), E(n·l)) for the sheen
 // roughness (the directional albedo of the sheen BRDF with colour 1; env_dfg.b on the GPU).
-vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e) {
+// ess: the GGX lobe's directional albedo Ess(n·v) at the roughness (env_dfg.r + .g), for the
+// energy compensation of both specular lobes (1: single scattering).
+vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e, float ess) {
     float n_l = dot(n, l);
     float n_v = dot(n, v);
     if (n_l <= 0.0 || n_v <= 0.0) {
@@ -118,8 +130,9 @@ vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e) {
     }
     float w = pow(1.0 - v_h, 5.0);
     vec3 fr = s.f0 + (1.0 - s.f0) * w;
-    vec3 dielectric = (1.0 - s.specular * max3(fr)) * s.base / PI + s.specular * fr * dv;
-    vec3 metal = (s.base + (1.0 - s.base) * w) * dv;
+    vec3 dielectric = (1.0 - s.specular * max3(fr)) * s.base / PI
+        + s.specular * fr * dv * ggx_energy_compensation(s.f0, ess);
+    vec3 metal = (s.base + (1.0 - s.base) * w) * dv * ggx_energy_compensation(s.base, ess);
     vec3 f = mix(dielectric, metal, s.metallic) * n_l;
     if (max3(s.sheen) > 0.0) {
         // Clamped at 0: the Charlie lobe's albedo exceeds 1 at grazing angles and low roughness,
@@ -130,9 +143,10 @@ vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e) {
     return f;
 }
 
-// The core glTF metallic-roughness BRDF (no extensions) times n·l.
+// The core glTF metallic-roughness BRDF (no extensions, single scattering: what the DFG table
+// integrates) times n·l.
 vec3 pbr_brdf_cos(vec3 n, vec3 v, vec3 l, vec3 base, float metallic, float roughness) {
-    return gltf_brdf_cos(n, v, l, gltf_surface(base, metallic, roughness), vec2(0.0));
+    return gltf_brdf_cos(n, v, l, gltf_surface(base, metallic, roughness), vec2(0.0), 1.0);
 }
 
 #endif

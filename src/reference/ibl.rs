@@ -128,14 +128,20 @@ impl EnvQuadrature {
                     let f = x - i as f64;
                     (table[i] * (1.0 - f) + table[i + 1] * f) as f32
                 };
-                let e_v = albedo(n[0] * vf[0] + n[1] * vf[1] + n[2] * vf[2]);
+                let nv = n[0] * vf[0] + n[1] * vf[1] + n[2] * vf[2];
+                let e_v = albedo(nv);
+                // The GGX lobe's directional albedo for its energy compensation, by its own
+                // quadrature (crate::env::dfg, 1024 Hammersley samples in f64), not the GPU's
+                // table.
+                let [a, b] = crate::env::dfg(nv.clamp(1e-4, 1.0) as f64, gs.roughness as f64, 1024);
+                let ess = (a + b) as f32;
                 self.integrate(|l| {
                     let lf = l.map(|x| x as f32);
                     let nl = n[0] * lf[0] + n[1] * lf[1] + n[2] * lf[2];
                     if nl <= 0.0 {
                         return [0.0; 3];
                     }
-                    gltf_brdf_cos(n, vf, lf, &gs, [e_v, albedo(nl)]).map(|x| x as f64)
+                    gltf_brdf_cos(n, vf, lf, &gs, [e_v, albedo(nl)], ess).map(|x| x as f64)
                 })
             }
         }

@@ -218,9 +218,25 @@ pub fn ggx_aniso_v(
     }
 }
 
+/// `ggx_energy_compensation` of pbr.glsl: the factor 1 + F0·(1/Ess - 1) that restores a GGX
+/// lobe's multiply scattered light (Kulla & Conty; Fdez-Agüera's single-table form), Ess being the
+/// lobe's directional albedo with F = 1 at n·v.
+pub fn ggx_energy_compensation(f0: Vec3, ess: f32) -> Vec3 {
+    let k = 1.0 / ess.max(1e-2) - 1.0;
+    f0.map(|c| 1.0 + c * k)
+}
+
 /// `gltf_brdf_cos` of pbr.glsl: the glTF BRDF with its extensions times n·l; `sheen_e` =
-/// (E(n·v), E(n·l)) at the sheen roughness.
-pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 2]) -> Vec3 {
+/// (E(n·v), E(n·l)) at the sheen roughness; `ess` the GGX lobe's directional albedo Ess(n·v) for
+/// the energy compensation of both specular lobes (1: single scattering).
+pub fn gltf_brdf_cos(
+    n: Vec3,
+    v: Vec3,
+    l: Vec3,
+    s: &GltfSurface,
+    sheen_e: [f32; 2],
+    ess: f32,
+) -> Vec3 {
     let n_l = dot(n, l);
     let n_v = dot(n, v);
     if n_l <= 0.0 || n_v <= 0.0 {
@@ -251,9 +267,15 @@ pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 
     let fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
     let dielectric = add(
         scale(s.base, (1.0 - s.specular * max3(fr)) / PI),
-        scale(fr, s.specular * dv),
+        mul(
+            scale(fr, s.specular * dv),
+            ggx_energy_compensation(s.f0, ess),
+        ),
     );
-    let metal = scale(add(s.base, scale(sub([1.0; 3], s.base), w)), dv);
+    let metal = mul(
+        scale(add(s.base, scale(sub([1.0; 3], s.base), w)), dv),
+        ggx_energy_compensation(s.base, ess),
+    );
     let mut f = scale(mix(dielectric, metal, s.metallic), n_l);
     if max3(s.sheen) > 0.0 {
         let k = max3(s.sheen);
@@ -268,7 +290,8 @@ pub fn gltf_brdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, sheen_e: [f32; 
     f
 }
 
-/// `pbr_brdf_cos` of pbr.glsl: the core glTF BRDF times n·l.
+/// `pbr_brdf_cos` of pbr.glsl: the core glTF BRDF times n·l, single scattering (what the DFG
+/// table integrates).
 pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughness: f32) -> Vec3 {
     gltf_brdf_cos(
         n,
@@ -276,22 +299,41 @@ pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughn
         l,
         &GltfSurface::core(base, metallic, roughness),
         [0.0; 2],
+        1.0,
     )
 }
 
 /// `sheen_albedo` of lighting.frag: the DFG table's third channel as the GPU stores it (f16)
 /// and samples it (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
 pub fn sheen_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
-    use crate::render::environment::DFG_SIZE;
-    static TABLE: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    dfg_lookup(cos_theta, roughness)[2]
+}
+
+/// `ggx_albedo` of lighting.frag: Ess = A + B of the DFG table as the GPU stores and samples it
+/// (the sum of the two bilinear look-ups).
+pub fn ggx_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
+    let [a, b, _] = dfg_lookup(cos_theta, roughness);
+    a + b
+}
+
+/// The DFG table (A, B, E) at (cos θ, roughness) as the GPU stores it (f16) and samples it
+/// (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
+fn dfg_lookup(cos_theta: f32, roughness: f32) -> [f32; 3] {
+    static TABLE: std::sync::OnceLock<Vec<[f32; 3]>> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
         crate::env::dfg_table_kept()
             .iter()
-            .map(|t| t[2].to_f32())
+            .map(|t| t.map(|x| x.to_f32()))
             .collect()
     });
+    [0, 1, 2].map(|c| bilinear(table, c, cos_theta, roughness))
+}
+
+fn bilinear(table: &[[f32; 3]], c: usize, cos_theta: f32, roughness: f32) -> f32 {
+    use crate::render::environment::DFG_SIZE;
+    let table = |k: usize| table[k][c];
     let n = DFG_SIZE as i32;
-    let at = |i: i32, j: i32| table[(j.clamp(0, n - 1) * n + i.clamp(0, n - 1)) as usize];
+    let at = |i: i32, j: i32| table((j.clamp(0, n - 1) * n + i.clamp(0, n - 1)) as usize);
     let x = cos_theta.clamp(0.0, 1.0) * n as f32 - 0.5;
     let y = roughness.clamp(0.0, 1.0) * n as f32 - 0.5;
     let (i, j) = (x.floor() as i32, y.floor() as i32);
@@ -459,6 +501,7 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
                 }
             };
             let e_v = albedo(dot(n, v));
+            let ess = ggx_albedo_lookup(dot(n, v), s.roughness);
             let spec_ambient = scale(mix([0.04; 3], base, s.metallic), (1.0 - s.roughness) * 0.5);
             radiance = add(
                 radiance,
@@ -474,7 +517,10 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
                 }
                 radiance = add(
                     radiance,
-                    mul(e, gltf_brdf_cos(n, v, l, &gs, [e_v, albedo(dot(n, l))])),
+                    mul(
+                        e,
+                        gltf_brdf_cos(n, v, l, &gs, [e_v, albedo(dot(n, l))], ess),
+                    ),
                 );
             }
         }
