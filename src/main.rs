@@ -152,6 +152,10 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
           value_parser = |s: &str| render::parse_finite("--exposure", s))]
     exposure: f32,
+    /// Tone curve: pbr-neutral (Khronos PBR Neutral), aces (three.js' ACES fit with the 1/2.2
+    /// display gamma of Khronos' render-fidelity goldens), agx, or none. Written into the PNG.
+    #[arg(long, default_value = "pbr-neutral", value_parser = parse_tonemap)]
+    tonemap: render::ToneCurve,
     /// Turn on the Vulkan validation layer; any message it reports fails the render.
     #[arg(long)]
     validate: bool,
@@ -737,6 +741,7 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     check_outputs(&inputs_of(&args.scene, &scene), &outputs)?;
     let (mut renderer, setup_ms) = gpu?;
     options.exposure = args.exposure;
+    options.tonemap = args.tonemap;
     options.read_hdr = args.exr.is_some();
     options.validate()?;
     let info = renderer.context().info().clone();
@@ -775,6 +780,7 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         frame.height,
         &frame.ldr,
         &frame.hdr,
+        &options,
     )?;
     eprintln!(
         "wrote {} ({}x{})",
@@ -894,6 +900,7 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
         .map_err(|_| anyhow::anyhow!("the Vulkan set-up thread panicked"))?;
     let (mut scene, mut options) = loaded?;
     options.exposure = args.exposure;
+    options.tonemap = args.tonemap;
     options.validate()?;
     // Every output of this task's jobs, against the inputs and each other (before the device's
     // error, so that bad output paths are bad input on a node without a driver too).
@@ -1418,4 +1425,10 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+fn parse_tonemap(text: &str) -> Result<render::ToneCurve, String> {
+    render::ToneCurve::by_name(text).ok_or_else(|| {
+        format!("unknown tone curve '{text}': choose pbr-neutral, aces, agx or none")
+    })
 }

@@ -161,7 +161,7 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "tonemap.frag",
         "Exposure and tone mapping (Khronos PBR Neutral) of the HDR target, drawn with \
          `fullscreen.vert`; write to an `R8G8B8A8_SRGB` target, which does the sRGB encoding. \
-         Push `float exposure` (linear scale, 2^EV) and `uint passthrough` (1: no curve).",
+         Push `float exposure` (linear scale, 2^EV), `uint passthrough` (1: no exposure, no curve: debug views), `uint curve` (0 Khronos PBR Neutral, 1 none, 2 three.js' ACES fit with the 1/2.2 display gamma, 3 AgX) and a `uint` of padding.",
     ),
     (
         "weave.comp",

@@ -653,3 +653,68 @@ fn sheet_columns_must_be_at_least_one() {
     assert!(err.contains("--columns") && err.contains("0"), "{err}");
     assert!(!err.contains("Vulkan"), "{err}");
 }
+
+/// `--tonemap` chooses the curve, the PNG says which (text chunk `weft:display`), and an unknown
+/// name is refused with the choices.
+#[test]
+fn tonemap_is_chosen_and_written_into_the_png() {
+    let dir = temp("tonemap");
+    let text_of = |png: &std::path::Path| -> Vec<(String, String)> {
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png).unwrap()));
+        let reader = decoder.read_info().unwrap();
+        reader
+            .info()
+            .uncompressed_latin1_text
+            .iter()
+            .map(|t| (t.keyword.clone(), t.text.clone()))
+            .collect()
+    };
+    for (curve, exposure) in [
+        ("pbr-neutral", "0"),
+        ("aces", "0.5"),
+        ("agx", "-1"),
+        ("none", "0"),
+    ] {
+        let png = dir.join(format!("{curve}.png"));
+        let out = weft()
+            .args([
+                "render",
+                "--size",
+                "32x18",
+                "--tonemap",
+                curve,
+                "--exposure",
+                exposure,
+                "-o",
+            ])
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = text_of(&png);
+        let want = format!("tonemap {curve}, exposure {exposure} EV");
+        assert!(
+            text.iter().any(|(k, v)| k == "weft:display" && *v == want),
+            "{curve}: {text:?}"
+        );
+        assert!(text
+            .iter()
+            .any(|(k, v)| k == "Software" && v.starts_with("weft ")));
+    }
+    let out = weft()
+        .args(["render", "--size", "32x18", "--tonemap", "filmic", "-o"])
+        .arg(dir.join("x.png"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unknown tone curve 'filmic'")
+            && err.contains("pbr-neutral, aces, agx or none"),
+        "{err}"
+    );
+}

@@ -430,3 +430,56 @@ fn texture_wrap_modes_follow_the_sampler() {
         assert_eq!(got, want, "{wrap:?}");
     }
 }
+
+/// Every tone curve of the tonemap pass against its CPU twin
+/// (`reference::shading::display_rgba8_with`) on the GPU's own HDR image: the 8-bit image is the
+/// twin's within rounding (1/255; the curves' pow, log2 and divisions are a few ulp apart).
+#[test]
+fn every_tone_curve_matches_its_twin() {
+    use weft::reference::shading::display_rgba8_with;
+    use weft::render::ToneCurve;
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let scene = scene::default_scene();
+    let mut means = Vec::new();
+    for curve in ToneCurve::ALL {
+        for exposure in [-1.0f32, 0.0, 2.0] {
+            let options = RenderOptions {
+                width: 96,
+                height: 54,
+                exposure,
+                tonemap: curve,
+                ..Default::default()
+            };
+            let frame = renderer.render(&scene, &options).expect("render");
+            let (mut worst, mut off) = (0i32, 0usize);
+            for (px, hdr) in frame.ldr.chunks_exact(4).zip(frame.hdr.chunks_exact(4)) {
+                let want = display_rgba8_with(curve, [hdr[0], hdr[1], hdr[2]], 2f32.powf(exposure));
+                for c in 0..3 {
+                    let d = (px[c] as i32 - want[c] as i32).abs();
+                    worst = worst.max(d);
+                    off += (d > 0) as usize;
+                }
+            }
+            assert!(
+                worst <= 1,
+                "{} at {exposure} EV: GPU and twin {worst}/255 apart ({off} channels differ)",
+                curve.name()
+            );
+            if exposure == 0.0 {
+                means.push((curve, common::mean_rgb(&frame.ldr)));
+            }
+        }
+    }
+    // The curves are different curves: no two give the same image.
+    for (i, a) in means.iter().enumerate() {
+        for b in &means[i + 1..] {
+            assert!(
+                (a.1 - b.1).abs() > 0.5,
+                "{} and {} give the same mean {}",
+                a.0.name(),
+                b.0.name(),
+                a.1
+            );
+        }
+    }
+}

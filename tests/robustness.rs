@@ -1025,9 +1025,17 @@ fn a_frame_is_written_whole_or_not_at_all() {
     let ldr = gradient(4, 4);
     let hdr = [0.5f32; 64];
     // The EXR's directory is missing: no PNG.
-    let e = render::write_frame(&png, Some(&dir.join("no/f.exr")), 4, 4, &ldr, &hdr)
-        .expect_err("the EXR cannot be written")
-        .to_string();
+    let e = render::write_frame(
+        &png,
+        Some(&dir.join("no/f.exr")),
+        4,
+        4,
+        &ldr,
+        &hdr,
+        &Default::default(),
+    )
+    .expect_err("the EXR cannot be written")
+    .to_string();
     assert!(e.contains("does not exist"), "{e}");
     assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
     // An HDR value the EXR writer refuses, over an existing PNG: the old PNG stays, byte for byte.
@@ -1035,14 +1043,31 @@ fn a_frame_is_written_whole_or_not_at_all() {
     let old = std::fs::read(&png).unwrap();
     let mut bad = hdr;
     bad[5] = f32::NAN;
-    let e = render::write_frame(&png, Some(&dir.join("f.exr")), 4, 4, &noise(4, 4), &bad)
-        .expect_err("NaN refused")
-        .to_string();
+    let e = render::write_frame(
+        &png,
+        Some(&dir.join("f.exr")),
+        4,
+        4,
+        &noise(4, 4),
+        &bad,
+        &Default::default(),
+    )
+    .expect_err("NaN refused")
+    .to_string();
     assert!(e.contains("non-finite"), "{e}");
     assert_eq!(std::fs::read(&png).unwrap(), old);
     assert_eq!(listing(&dir), ["f.png"]);
     // Both good: both there, and nothing else.
-    render::write_frame(&png, Some(&dir.join("f.exr")), 4, 4, &ldr, &hdr).unwrap();
+    render::write_frame(
+        &png,
+        Some(&dir.join("f.exr")),
+        4,
+        4,
+        &ldr,
+        &hdr,
+        &Default::default(),
+    )
+    .unwrap();
     assert_eq!(listing(&dir), ["f.exr", "f.png"]);
     // A pixel buffer of the wrong length is an error, not the encoder's panic (1 x 1 frames were
     // read back as 16 bytes), and leaves no temporary file.

@@ -236,6 +236,9 @@ pub struct JobReport {
     pub render_ms: f64,
     /// Encoding and writing the PNG (and EXR).
     pub write_ms: f64,
+    /// How the linear image became the PNG's pixels: tone curve and exposure
+    /// (`render::display_note`, also in the PNG's text).
+    pub display: String,
 }
 
 impl JobReport {
@@ -260,6 +263,7 @@ impl JobReport {
             "task": spec.task.index,
             "tasks": spec.task.count,
             "output": self.output.display().to_string(),
+            "display": self.display,
             "status": if self.skipped { "skipped" } else { "rendered" },
             "passes": passes,
             "pose_ms": self.pose_ms,
@@ -307,6 +311,7 @@ pub fn run(
                 pose_ms: 0.0,
                 render_ms: 0.0,
                 write_ms: 0.0,
+                display: crate::render::display_note(base),
             };
             report(&r);
             done.push(r);
@@ -338,6 +343,7 @@ pub fn run(
             frame.height,
             &frame.ldr,
             &frame.hdr,
+            &options,
         )?;
         let r = JobReport {
             job,
@@ -352,6 +358,7 @@ pub fn run(
             pose_ms,
             render_ms,
             write_ms: start.elapsed().as_secs_f64() * 1e3,
+            display: crate::render::display_note(&options),
         };
         report(&r);
         done.push(r);

@@ -546,16 +546,139 @@ pub fn pbr_neutral(color: Vec3) -> Vec3 {
     mix(color, [new_peak; 3], g)
 }
 
+/// The tone curve of tonemap.frag (`--tonemap`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ToneCurve {
+    /// Khronos PBR Neutral (the default).
+    #[default]
+    PbrNeutral,
+    /// No curve: exposure, then the clamp to [0, 1].
+    None,
+    /// three.js' ACES filmic fit with its 1/0.6 exposure scale and the 1/2.2 display gamma of
+    /// the Khronos render-fidelity goldens (the comparison's tone mapping).
+    Aces,
+    /// AgX (Sobotka), Wrensch's minimal form with the default look.
+    Agx,
+}
+
+impl ToneCurve {
+    pub const ALL: [ToneCurve; 4] = [
+        ToneCurve::PbrNeutral,
+        ToneCurve::None,
+        ToneCurve::Aces,
+        ToneCurve::Agx,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ToneCurve::PbrNeutral => "pbr-neutral",
+            ToneCurve::None => "none",
+            ToneCurve::Aces => "aces",
+            ToneCurve::Agx => "agx",
+        }
+    }
+
+    pub fn by_name(name: &str) -> Option<ToneCurve> {
+        ToneCurve::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// tonemap.frag's `curve`.
+    pub fn code(self) -> u32 {
+        match self {
+            ToneCurve::PbrNeutral => 0,
+            ToneCurve::None => 1,
+            ToneCurve::Aces => 2,
+            ToneCurve::Agx => 3,
+        }
+    }
+}
+
+/// Column-major 3x3 (GLSL's `mat3(c0, c1, c2)`) times a vector.
+fn mat3_mul(cols: &[f32; 9], v: Vec3) -> Vec3 {
+    [0, 1, 2].map(|r| cols[r] * v[0] + cols[3 + r] * v[1] + cols[6 + r] * v[2])
+}
+
+/// `aces_three` of tonemap.frag: three.js' ACES filmic fit, the 1/2.2 display gamma, returned as
+/// the linear value whose sRGB encoding is that.
+pub fn aces_three(c: Vec3) -> Vec3 {
+    const M_IN: [f32; 9] = [
+        0.59719, 0.07600, 0.02840, 0.35458, 0.90834, 0.13383, 0.04823, 0.01566, 0.83777,
+    ];
+    const M_OUT: [f32; 9] = [
+        1.60475, -0.10208, -0.00327, -0.53108, 1.10813, -0.07276, -0.07367, -0.00605, 1.07602,
+    ];
+    let v = mat3_mul(&M_IN, scale(c, 1.0 / 0.6));
+    let v = v
+        .map(|x| (x * (x + 0.0245786) - 0.000090537) / (x * (0.983729 * x + 0.4329510) + 0.238081));
+    mat3_mul(&M_OUT, v).map(|x| {
+        let g = x.clamp(0.0, 0.9999).powf(1.0 / 2.2);
+        if g < 0.04045 {
+            g / 12.92
+        } else {
+            ((g + 0.055) / 1.055).powf(2.4)
+        }
+    })
+}
+
+/// `agx` of tonemap.frag: AgX with the default contrast, back to linear by the 2.2 EOTF.
+pub fn agx(c: Vec3) -> Vec3 {
+    const INSET: [f32; 9] = [
+        0.842479062253094,
+        0.0423282422610123,
+        0.0423756549057051,
+        0.0784335999999992,
+        0.878468636469772,
+        0.0784336,
+        0.0792237451477643,
+        0.0791661274605434,
+        0.879142973793104,
+    ];
+    const OUTSET: [f32; 9] = [
+        1.19687900512017,
+        -0.0528968517574562,
+        -0.0529716355144438,
+        -0.0980208811401368,
+        1.15190312990417,
+        -0.0980434501171241,
+        -0.0990297440797205,
+        -0.0989611768448433,
+        1.15107367264116,
+    ];
+    const MIN_EV: f32 = -12.47393;
+    const MAX_EV: f32 = 4.026069;
+    let v = mat3_mul(&INSET, c).map(|x| {
+        let e = x.max(1e-10).log2().clamp(MIN_EV, MAX_EV);
+        let v = (e - MIN_EV) / (MAX_EV - MIN_EV);
+        let x2 = v * v;
+        let x4 = x2 * x2;
+        -17.86 * x4 * x2 * v + 78.01 * x4 * x2 - 126.7 * x4 * v + 92.06 * x4 - 28.72 * x2 * v
+            + 4.361 * x2
+            - 0.1718 * v
+            + 0.002857
+    });
+    mat3_mul(&OUTSET, v).map(|x| x.max(0.0).powf(2.2))
+}
+
 /// tonemap.frag: exposure (a linear scale, 2^EV), the curve, and the clamp to [0, 1]. The sRGB
 /// encoding after it is the output target's; [`srgb_encode`] is its CPU side.
 pub fn tonemap(hdr: Vec3, exposure: f32) -> Vec3 {
+    tonemap_with(ToneCurve::PbrNeutral, hdr, exposure)
+}
+
+/// [`tonemap`] with any [`ToneCurve`].
+pub fn tonemap_with(curve: ToneCurve, hdr: Vec3, exposure: f32) -> Vec3 {
     let c = if hdr.iter().any(|v| !v.is_finite()) {
         [0.0; 3]
     } else {
         hdr
     };
-    let c = [c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)];
-    let c = pbr_neutral(scale(c, exposure));
+    let c = scale([c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)], exposure);
+    let c = match curve {
+        ToneCurve::PbrNeutral => pbr_neutral(c),
+        ToneCurve::None => c,
+        ToneCurve::Aces => aces_three(c),
+        ToneCurve::Agx => agx(c),
+    };
     [
         c[0].clamp(0.0, 1.0),
         c[1].clamp(0.0, 1.0),
@@ -566,7 +689,12 @@ pub fn tonemap(hdr: Vec3, exposure: f32) -> Vec3 {
 /// What the output target holds for linear radiance `hdr`: tone-mapped (`exposure` a linear
 /// scale) and sRGB-encoded, alpha 255.
 pub fn display_rgba8(hdr: Vec3, exposure: f32) -> [u8; 4] {
-    let d = tonemap(hdr, exposure);
+    display_rgba8_with(ToneCurve::PbrNeutral, hdr, exposure)
+}
+
+/// [`display_rgba8`] with any [`ToneCurve`].
+pub fn display_rgba8_with(curve: ToneCurve, hdr: Vec3, exposure: f32) -> [u8; 4] {
+    let d = tonemap_with(curve, hdr, exposure);
     [srgb_encode(d[0]), srgb_encode(d[1]), srgb_encode(d[2]), 255]
 }
 

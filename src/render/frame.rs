@@ -1207,6 +1207,8 @@ impl Renderer {
                     let push = TonemapPush {
                         exposure: 2f32.powf(options.exposure),
                         passthrough: (options.debug_view != super::DebugView::None) as u32,
+                        curve: options.tonemap.code(),
+                        _pad: 0,
                     };
                     timed_pass(
                         &ctx,

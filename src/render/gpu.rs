@@ -303,4 +303,7 @@ pub struct ShadowPush {
 pub struct TonemapPush {
     pub exposure: f32,
     pub passthrough: u32,
+    /// The tone curve: [`crate::reference::shading::ToneCurve::code`].
+    pub curve: u32,
+    pub _pad: u32,
 }

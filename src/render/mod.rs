@@ -16,8 +16,8 @@ pub use frame::{
     FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer, TARGET_BYTES_PER_PIXEL,
 };
 pub use output::{
-    check_outputs, commit_all, stage_exr, stage_png, temp_name, write_exr, write_file, write_frame,
-    write_png, OutputPath, Staged, NAME_MAX, PATH_MAX,
+    check_outputs, commit_all, display_note, stage_exr, stage_png, stage_png_with_text, temp_name,
+    write_exr, write_file, write_frame, write_png, OutputPath, Staged, NAME_MAX, PATH_MAX,
 };
 pub use plan::{EnvPlan, FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
 
@@ -344,6 +344,9 @@ impl WeavePrecision {
     }
 }
 
+/// The tone curves of the tonemap pass (defined beside their CPU twins).
+pub use crate::reference::shading::ToneCurve;
+
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
     pub width: u32,
@@ -354,6 +357,8 @@ pub struct RenderOptions {
     pub camera_override: Option<crate::scene::Camera>,
     /// Exposure in EV: the HDR radiance is scaled by 2^exposure before tone mapping.
     pub exposure: f32,
+    /// The tone curve (`--tonemap`; Khronos PBR Neutral by default).
+    pub tonemap: ToneCurve,
     pub debug_view: DebugView,
     pub accuracy: Accuracy,
     pub weave_precision: WeavePrecision,
@@ -388,6 +393,7 @@ impl Default for RenderOptions {
             camera: None,
             camera_override: None,
             exposure: 0.0,
+            tonemap: ToneCurve::PbrNeutral,
             debug_view: DebugView::None,
             accuracy: Accuracy::Mixture,
             weave_precision: WeavePrecision::Rgba16f,

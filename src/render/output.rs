@@ -265,7 +265,39 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba8: &[u8]) -> crate::R
 
 /// [`write_png`] up to the rename: the PNG complete in its temporary file.
 pub fn stage_png(path: &Path, width: u32, height: u32, rgba8: &[u8]) -> crate::Result<Staged> {
+    stage_png_with_text(path, width, height, rgba8, &[])
+}
+
+/// [`stage_png`] with PNG text chunks (tEXt, Latin-1 keys and values: what the image is, e.g.
+/// the tone curve and exposure a render used).
+pub fn stage_png_with_text(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgba8: &[u8],
+    text: &[(String, String)],
+) -> crate::Result<Staged> {
     check_len("RGBA8", width, height, 4, rgba8.len())?;
+    if !text.is_empty() {
+        return stage(path, |out| {
+            let to_io = |e: png::EncodingError| {
+                image::ImageError::IoError(std::io::Error::other(e.to_string()))
+            };
+            let mut encoder = png::Encoder::new(out, width, height);
+            encoder.set_color(png::ColorType::Rgba);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_compression(png::Compression::Fast);
+            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            for (k, v) in text {
+                encoder
+                    .add_text_chunk(k.clone(), v.clone())
+                    .map_err(to_io)?;
+            }
+            let mut writer = encoder.write_header().map_err(to_io)?;
+            writer.write_image_data(rgba8).map_err(to_io)?;
+            writer.finish().map_err(to_io)
+        });
+    }
     // Fast compression with adaptive filtering: a 1920x1080 frame encodes in a fraction of the
     // default level's time, for files ~10 % larger.
     stage(path, |out| {
@@ -309,6 +341,8 @@ pub fn stage_exr(path: &Path, width: u32, height: u32, rgba: &[f32]) -> crate::R
 /// Writes a frame's image and, when asked, its HDR image, all or nothing: both are encoded and
 /// flushed to temporary files first, then renamed, the PNG last (what `--resume` looks for). A
 /// failure at any step leaves neither (a single render and a batch frame alike).
+/// The PNG records how it was made in text chunks: `Software` (weft and its version) and
+/// `weft:display` (the tone curve and exposure that turned the linear image into these pixels).
 pub fn write_frame(
     png: &Path,
     exr: Option<&Path>,
@@ -316,13 +350,34 @@ pub fn write_frame(
     height: u32,
     ldr: &[u8],
     hdr: &[f32],
+    options: &super::RenderOptions,
 ) -> crate::Result<()> {
     let mut staged = Vec::new();
     if let Some(exr) = exr {
         staged.push(stage_exr(exr, width, height, hdr)?);
     }
-    staged.push(stage_png(png, width, height, ldr)?);
+    let text = [
+        (
+            "Software".to_string(),
+            format!("weft {}", env!("CARGO_PKG_VERSION")),
+        ),
+        ("weft:display".to_string(), display_note(options)),
+    ];
+    staged.push(stage_png_with_text(png, width, height, ldr, &text)?);
     commit_all(staged)
+}
+
+/// `tonemap NAME, exposure E EV` (debug views: `debug view NAME, no tone curve`).
+pub fn display_note(options: &super::RenderOptions) -> String {
+    if options.debug_view != super::DebugView::None {
+        format!("debug view {}, no tone curve", options.debug_view.name())
+    } else {
+        format!(
+            "tonemap {}, exposure {} EV",
+            options.tonemap.name(),
+            options.exposure
+        )
+    }
 }
 
 /// A file a command is about to write, and how the user named it, for messages (`-o`,
