@@ -499,7 +499,7 @@ pub fn cases() -> Vec<Case> {
         Case {
             warnings: &["has no normals"],
             ..posed("khronos-simple-skin-t1.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 1.0),
-                "the grey SimpleSkin strip (ten triangles on two joints, flat-shaded from generated normals) with its upper half bent over to the right at the middle, a notch where the two halves meet, its shadow on the ground")
+                "the SimpleSkin strip in glTF's default material (a rough white metal: near white since the GGX energy compensation, mid-grey before) (ten triangles on two joints, flat-shaded from generated normals) with its upper half bent over to the right at the middle, a notch where the two halves meet, its shadow on the ground")
         },
         Case {
             warnings: &["has no normals"],
