@@ -211,6 +211,44 @@ vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
     return normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
 }
 
+// The anisotropic GGX lobes (KHR_materials_anisotropy) under the environment at fis:N (issue 28:
+// the split sum's bent normal left anisotropic metals nearly matte): N half vectors from the lobe's
+// own distribution (the isotropic sampler at alpha 1 with its slopes stretched by (at, ab): GGX
+// is stretch-invariant, so the pdf is D_aniso(h)·(n·h)), each direction's radiance filtered to the
+// solid angle its pdf gives it (fis_lod, as for the fabric's lobes), weighted by the BRDF over
+// the pdf, 4·Vis·F·(n·l)(v·h)/(n·h), both lobes with their energy compensation.
+vec3 aniso_env_specular(vec3 n, vec3 v, GltfSurface s, float ess) {
+    vec3 b = cross(n, s.t);
+    float alpha = max(s.roughness * s.roughness, 1e-3);
+    float at = mix(alpha, 1.0, s.anisotropy * s.anisotropy);
+    float nv = max(dot(n, v), 1e-4);
+    vec3 comp_d = s.specular * ggx_energy_compensation(s.f0, ess);
+    vec3 comp_m = ggx_energy_compensation(s.base, ess);
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < IBL_SAMPLES; ++i) {
+        vec3 h1 = ggx_sample_h(ibl_sample(i, IBL_SAMPLES, vec2(0.0)), 1.0);
+        vec3 hl = normalize(vec3(at * h1.x, alpha * h1.y, h1.z));
+        vec3 h = hl.x * s.t + hl.y * b + hl.z * n;
+        float vh = dot(v, h);
+        if (!(vh > 0.0) || !(hl.z > 0.0)) {
+            continue;
+        }
+        vec3 l = 2.0 * vh * h - v;
+        float nl = dot(n, l);
+        if (!(nl > 0.0)) {
+            continue;
+        }
+        float pdf = ggx_aniso_d(hl.x, hl.y, hl.z, at, alpha) * hl.z / (4.0 * vh);
+        float vis = ggx_aniso_v(dot(s.t, v), dot(b, v), nv, dot(s.t, l), dot(b, l), nl, at, alpha);
+        float w = pow(1.0 - vh, 5.0);
+        vec3 f = mix((s.f0 + (1.0 - s.f0) * w) * comp_d, (s.base + (1.0 - s.base) * w) * comp_m,
+                     s.metallic);
+        sum += env_radiance_at(l, fis_lod(pdf, IBL_SAMPLES, frame.env_params.z)) * f
+             * (4.0 * vis * nl * vh / hl.z);
+    }
+    return sum / float(IBL_SAMPLES);
+}
+
 // The glTF BRDF (with its extensions) under the environment: SH irradiance for the diffuse, the
 // split sum for the specular and the sheen (approx and fis), or Monte Carlo (mc). ao: the
 // occlusion texture. Anisotropy bends the look-up normal (McAuley's bent reflection vector, as
@@ -281,7 +319,10 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
     vec3 prefiltered = textureLod(env_specular, d, lookup_roughness * frame.env_params.y).rgb * frame.env_params.x;
     vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
     vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric));
-    vec3 result = diffuse * ao + prefiltered * spec_albedo * specular_occlusion(nv, ao, roughness);
+    // fis: an anisotropic lobe is sampled (the bent normal above stays approx's).
+    vec3 specular = IBL == 2u && s.anisotropy > 0.0 ? aniso_env_specular(n, v, s, ess)
+                                                    : prefiltered * spec_albedo;
+    vec3 result = diffuse * ao + specular * specular_occlusion(nv, ao, roughness);
     if (has_sheen) {
         // The Charlie lobe is broad and lives near the horizon: its light is closer to the
         // cosine-weighted mean (the SH irradiance / π) than to any prefiltered GGX look-up.

@@ -339,8 +339,8 @@ fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
 /// Environment light on the extension spheres (no lamps) against the CPU ground truth
 /// (`reference::ibl::EnvQuadrature`: f64 quadrature over every 2 x 2 block of map pixels of the
 /// twin BRDF, the sheen albedo by its own quadrature), per material and IBL level: what the split
-/// sum (approx and fis, the same for glTF materials) costs for sheen, tinted specular and
-/// anisotropy, and that Monte Carlo converges to the reference.
+/// sum costs for sheen, tinted specular and anisotropy (approx; fis samples the anisotropic lobe),
+/// and that Monte Carlo converges to the reference.
 #[test]
 fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
     use std::sync::Arc;
@@ -359,7 +359,11 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
     let (w, h) = (128u32, 48u32);
     let mut refs: Option<Vec<(usize, usize, [f64; 3])>> = None;
     let mut report = Vec::new();
-    for level in [IblLevel::Approx, IblLevel::MonteCarlo(1024)] {
+    for level in [
+        IblLevel::Approx,
+        IblLevel::Fis(8),
+        IblLevel::MonteCarlo(1024),
+    ] {
         let mut e = EnvLighting::new(env.clone());
         e.level = level;
         e.rotation = rotation;
@@ -406,9 +410,15 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
     // tinted specular 0.032 (the split sum), brushed 0.32 (strength 0.8: the bent normal and the
     // mean of the two alphas for the look-up approximate a lobe stretched 3x; without bending
     // 0.55), all three 0.10; Monte Carlo with 1024 sample pairs 0.003-0.011 (unbiased; noise).
+    // fis:8 (the default) samples the anisotropic lobe instead of bending the look-up (issue 28):
+    // brushed 0.115 (0.074 at fis:16, 0.031 at fis:64: it converges), all three 0.123 (0.106,
+    // 0.094: what is left there is the sheen's, as for velvet); velvet and tinted specular as
+    // approx (the split sum, unchanged).
     for (level, material, rel) in &report {
         let bound = match (level.as_str(), material.as_str()) {
             ("mc:1024", _) => 0.015,
+            ("fis:8", "brushed") => 0.15,
+            ("fis:8", "everything") => 0.16,
             (_, "velvet") => 0.09,
             (_, "tinted specular") => 0.042,
             (_, "brushed") => 0.42,
