@@ -20,6 +20,9 @@ use ktx2::{ColorModel, Format, SupercompressionScheme};
 /// The identifier every KTX2 file starts with.
 pub(super) const MAGIC: &[u8; 12] = b"\xABKTX 20\xBB\r\n\x1A\n";
 
+/// The way out of a damaged file.
+const REENCODE: &str = "; re-encode the texture (for example with `toktx`) or re-export the scene";
+
 /// Whether `bytes` (with the media type a data: URI or the image declares) is a KTX2 file.
 pub(super) fn is_ktx2(bytes: &[u8], mime: Option<&str>) -> bool {
     bytes.starts_with(MAGIC) || mime == Some("image/ktx2")
@@ -44,10 +47,10 @@ pub(super) fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
 /// basic descriptor's texel block dimensions plus one, which overflows for 255: checked here first.
 fn open(bytes: &[u8]) -> Result<ktx2::Reader<&[u8]>, String> {
     if !bytes.starts_with(MAGIC) {
-        return Err("does not start with the KTX2 identifier (it is declared image/ktx2 but is not a KTX2 file)".into());
+        return Err("does not start with the KTX2 identifier (it is declared image/ktx2 but is not a KTX2 file); fix the image's mimeType or give it a KTX2 file".into());
     }
     check_descriptor_blocks(bytes)?;
-    ktx2::Reader::new(bytes).map_err(|e| format!("is a damaged KTX2 file ({e})"))
+    ktx2::Reader::new(bytes).map_err(|e| format!("is a damaged KTX2 file ({e}){REENCODE}"))
 }
 
 /// Walks the data format descriptor's blocks (the same walk as `ktx2`'s, on bounds-checked
@@ -57,7 +60,7 @@ fn check_descriptor_blocks(bytes: &[u8]) -> Result<(), String> {
     let u32_at = |at: usize| -> Option<u32> {
         Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
     };
-    let damaged = || "is a damaged KTX2 file (unexpected end of buffer)".to_string();
+    let damaged = || format!("is a damaged KTX2 file (unexpected end of buffer){REENCODE}");
     let (Some(offset), Some(length)) = (u32_at(48), u32_at(52)) else {
         return Err(damaged());
     };
@@ -75,10 +78,9 @@ fn check_descriptor_blocks(bytes: &[u8]) -> Result<(), String> {
         if basic {
             if let Some(dims) = blocks.get(12..16) {
                 if dims.contains(&255) {
-                    return Err(
-                        "is a damaged KTX2 file (its data format descriptor gives a texel block dimension of 256)"
-                            .into(),
-                    );
+                    return Err(format!(
+                        "is a damaged KTX2 file (its data format descriptor gives a texel block dimension of 256){REENCODE}"
+                    ));
                 }
             }
         }
