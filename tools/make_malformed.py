@@ -651,6 +651,18 @@ def seeds():
     del d.json["scene"]
     del d.json["scenes"]
     out.append(("seed-no-scene-no-indices.gltf", gltf(d)))
+
+    # KHR_texture_basisu: a 2x2 RGBA8 KTX2 texture under ZLIB, in the binary chunk for the fuzzer
+    # to mutate (header, level index, descriptor and stream).
+    d = quad_doc()
+    texels = bytes([255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128])
+    ktx = ktx2(2, 2, zlib.compress(texels, 9), scheme=3, uncompressed=16)
+    d.json["images"] = [{"bufferView": d.view(ktx), "mimeType": "image/ktx2"}]
+    d.json["textures"] = [{"extensions": {"KHR_texture_basisu": {"source": 0}}}]
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    d.json["extensionsUsed"] = d.json.get("extensionsUsed", []) + ["KHR_texture_basisu"]
+    d.json["extensionsRequired"] = ["KHR_texture_basisu"]
+    out.append(("seed-ktx2.glb", glb(d)))
     return out
 
 
