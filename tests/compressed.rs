@@ -18,8 +18,9 @@
 //!   encoder decodes to its source image within a stated bound, plain 8-bit layouts under every
 //!   supercompression weft reads decode exactly, in the colour space of the material slot; damaged,
 //!   truncated and unsupported files (BasisLZ, BC7, cube maps, bad Zstandard and ZLIB streams) are
-//!   errors naming the file, the material and the image, never a panic. AnisotropyBarnLamp's
-//!   textures decode when ../shared is present.
+//!   errors naming the file, the material and the image, never a panic. The Avocado with UASTC
+//!   textures (avocado_ktx2.glb) renders within a stated FLIP of the original (below), and
+//!   AnisotropyBarnLamp's textures decode when ../shared is present.
 //! - Draco is refused with the reason and a way out.
 
 mod common;
