@@ -1947,8 +1947,10 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
     );
 }
 
+/// A KTX2 texture is read (tests/compressed.rs covers the formats); a damaged one is an error that
+/// names the material, the format and the fix.
 #[test]
-fn a_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
+fn a_damaged_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
     let mut d = Doc::new();
     d.quad(true, true);
     let mut ktx = b"\xABKTX 20\xBB\r\n\x1A\n".to_vec();
@@ -1960,7 +1962,9 @@ fn a_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let msg = error_text(d.load("ktx2"));
     assert!(
-        msg.contains("KTX2") && msg.contains("lamp metal") && msg.contains("PNG"),
+        msg.contains("damaged KTX2 file")
+            && msg.contains("lamp metal")
+            && msg.contains("re-encode the texture"),
         "{msg}"
     );
 }

@@ -173,6 +173,26 @@ def png_uri(data):
     return "data:image/png;base64," + b64(data)
 
 
+def ktx2(width, height, level, vk_format=43, scheme=0, uncompressed=None):
+    """A one-level 2D KTX2 file (R8G8B8A8_SRGB by default) whose level 0 is `level`, stored as
+    given; `uncompressed` is the length the level index declares (that of `level` if None)."""
+    samples = b"".join(struct.pack("<IIII", (c * 8) | 7 << 16 | ch << 24, 0, 0, 255) for c, ch in enumerate([0, 1, 2, 15]))
+    block = struct.pack("<IHH4B4B8B", 0, 2, 24 + len(samples), 1, 1, 2, 0, 0, 0, 0, 0, 4, 0, 0, 0, 0, 0, 0, 0) + samples
+    dfd = struct.pack("<I", 4 + len(block)) + block
+    dfd_at = 80 + 24
+    level_at = dfd_at + len(dfd)
+    level_at += -level_at % 16
+    header = b"\xabKTX 20\xbb\r\n\x1a\n" + struct.pack("<9I", vk_format, 1, width, height, 0, 0, 1, 1, scheme)
+    header += struct.pack("<IIIIQQ", dfd_at, len(dfd), 0, 0, 0, 0)
+    index = struct.pack("<QQQ", level_at, len(level), len(level) if uncompressed is None else uncompressed)
+    out = header + index + dfd
+    return out + b"\0" * (level_at - len(out)) + level
+
+
+def ktx2_uri(data):
+    return "data:image/ktx2;base64," + b64(data)
+
+
 # --- the catalogue --------------------------------------------------------------------------------
 #
 # Each entry: file name, its bytes, what is wrong, the expected outcome, extra CLI arguments.
@@ -383,11 +403,21 @@ def build():
     entry("texture-absurd-size.gltf", gltf(textured_doc({"uri": png_uri(png(100000, 100000))})), "a PNG whose header claims 100000x100000 pixels (40 GB decoded)", "error: `100000x100000 pixels`")
     entry("texture-zero-size.gltf", gltf(textured_doc({"uri": png_uri(png(0, 0))})), "a PNG whose header claims 0x0 pixels", "error: `could not be decoded`")
     entry("texture-at-limit-truncated.gltf", gltf(textured_doc({"uri": png_uri(png(16384, 16384))})), "a PNG claiming 16384x16384 (the largest allowed; 1 GiB decoded) with only a few bytes of pixels", "error: `could not be decoded`")
-    entry("texture-not-an-image.gltf", gltf(textured_doc({"uri": "data:application/octet-stream;base64," + b64(b"definitely not pixels" * 4)})), "the texture's bytes are text", "error: `weft reads PNG, JPEG and WebP`")
+    entry("texture-not-an-image.gltf", gltf(textured_doc({"uri": "data:application/octet-stream;base64," + b64(b"definitely not pixels" * 4)})), "the texture's bytes are text", "error: `weft reads PNG, JPEG, WebP and KTX2`")
     corrupt = bytearray(png(4, 4, [[200, 100, 50, 255] * 4] * 4))
     corrupt[40:48] = b"\xff" * 8
     entry("texture-corrupt-png.gltf", gltf(textured_doc({"uri": png_uri(bytes(corrupt))})), "a 4x4 PNG with its compressed pixels overwritten", "error: `could not be decoded`")
-    entry("texture-gif.gltf", gltf(textured_doc({"uri": "data:image/gif;base64," + b64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")})), "a GIF texture (glTF allows PNG and JPEG)", "error: `weft reads PNG, JPEG and WebP`")
+    entry("texture-gif.gltf", gltf(textured_doc({"uri": "data:image/gif;base64," + b64(b"GIF89a\x01\x00\x01\x00\x00\x00\x00;")})), "a GIF texture (glTF allows PNG and JPEG)", "error: `weft reads PNG, JPEG, WebP and KTX2`")
+    texels = bytes([255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128])
+    entry("texture-ktx2-rgba8.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, texels))})), "nothing: a 2x2 R8G8B8A8_SRGB KTX2 texture stored as is (the control of the KTX2 entries)", "renders")
+    entry("texture-ktx2-zlib.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, zlib.compress(texels, 9), scheme=3, uncompressed=16))})), "nothing: the same texture under ZLIB supercompression", "renders")
+    entry("texture-ktx2-truncated.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, texels)[:90])})), "a KTX2 texture cut off inside its level index", "error: `damaged KTX2 file (unexpected end of buffer)`")
+    entry("texture-ktx2-absurd-size.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(100000, 100000, texels))})), "a KTX2 header that claims 100000x100000 pixels with 16 bytes of texels", "error: `100000x100000 pixels`")
+    entry("texture-ktx2-short-level.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(4, 4, texels))})), "a 4x4 RGBA8 KTX2 texture whose level holds 16 bytes (one row of 64)", "error: `holds 16 bytes where its 4x4 format needs 64`")
+    entry("texture-ktx2-bad-zstd.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, b"\x5a" * 24, scheme=2, uncompressed=16))})), "a KTX2 texture whose Zstandard stream is not one", "error: `Zstandard-compressed level 0 does not decode`")
+    entry("texture-ktx2-zstd-bomb.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, b"\x5a" * 24, scheme=2, uncompressed=1 << 40))})), "a 2x2 KTX2 texture whose level index declares 1 TiB once decompressed", "error: `declares 1099511627776 uncompressed bytes where its 2x2 format needs 16`")
+    entry("texture-ktx2-basislz.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, texels, vk_format=0, scheme=1))})), "a KTX2 texture in ETC1S (BasisLZ supercompression)", "error: `ETC1S mode (BasisLZ supercompression)`")
+    entry("texture-ktx2-bc7.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(4, 4, texels, vk_format=146))})), "a KTX2 texture in BC7_SRGB_BLOCK, which weft does not read", "error: `vkFormat BC7_SRGB_BLOCK, which weft does not read`")
     d = quad_doc()
     d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 5}
     entry("texture-index-out-of-range.gltf", gltf(d), "the material uses texture 5; there are none", "error: `refers to an object that does not exist`")
@@ -621,6 +651,18 @@ def seeds():
     del d.json["scene"]
     del d.json["scenes"]
     out.append(("seed-no-scene-no-indices.gltf", gltf(d)))
+
+    # KHR_texture_basisu: a 2x2 RGBA8 KTX2 texture under ZLIB, in the binary chunk for the fuzzer
+    # to mutate (header, level index, descriptor and stream).
+    d = quad_doc()
+    texels = bytes([255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128])
+    ktx = ktx2(2, 2, zlib.compress(texels, 9), scheme=3, uncompressed=16)
+    d.json["images"] = [{"bufferView": d.view(ktx), "mimeType": "image/ktx2"}]
+    d.json["textures"] = [{"extensions": {"KHR_texture_basisu": {"source": 0}}}]
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    d.json["extensionsUsed"] = d.json.get("extensionsUsed", []) + ["KHR_texture_basisu"]
+    d.json["extensionsRequired"] = ["KHR_texture_basisu"]
+    out.append(("seed-ktx2.glb", glb(d)))
     return out
 
 

@@ -8,6 +8,8 @@
 //! - `EXT_texture_webp`: a texture's WebP source is chosen over its fallback (weft reads both, and
 //!   the extension's source is the one the file's author meant), and decoded by `image`'s WebP
 //!   decoder (src/scene/resources.rs).
+//! - `KHR_texture_basisu`: likewise a texture's KTX2 source is chosen over its fallback, and
+//!   decoded (UASTC transcoded, Zstandard undone) by src/scene/ktx.rs.
 //! - `EXT_meshopt_compression` / `KHR_meshopt_compression`: every compressed buffer view is decoded
 //!   (modes ATTRIBUTES, TRIANGLES, INDICES; filters NONE, OCTAHEDRAL, QUATERNION, EXPONENTIAL and
 //!   KHR's COLOR) by meshoptimizer, through the `meshopt` crate, into a buffer of its own that the
@@ -32,7 +34,7 @@ pub(super) const BASISU: &str = "KHR_texture_basisu";
 
 /// The extensions of this module: supported in `extensionsRequired`, and taken off that list
 /// before the gltf crate's validator (which knows none of them) runs.
-pub(super) const EXTENSIONS: [&str; 4] = [QUANTIZATION, WEBP, MESHOPT_EXT, MESHOPT_KHR];
+pub(super) const EXTENSIONS: [&str; 5] = [QUANTIZATION, WEBP, MESHOPT_EXT, MESHOPT_KHR, BASISU];
 
 /// Decoded bytes of all of a scene's compressed buffer views together: 2 GiB, past the vertex and
 /// index limits of src/scene/gltf_load.rs for any layout. Checked from the JSON before decoding, so
@@ -72,10 +74,9 @@ pub(super) fn is_fallback_buffer(root: &json::Root, index: usize) -> bool {
         && views.all(|v| meshopt_ext(v.extensions.as_ref().map(|e| &e.others)).is_some())
 }
 
-/// Points every texture with an `EXT_texture_webp` source at that image (weft decodes WebP, and
-/// the extension's image is the one meant; the core source is a fallback for viewers without
-/// WebP). A `KHR_texture_basisu` texture keeps its core source when it has one; without one it is
-/// pointed at its KTX2 image, which the image loader refuses with a message naming the material.
+/// Points every texture with an `EXT_texture_webp` or `KHR_texture_basisu` source at that image
+/// (weft decodes WebP and KTX2, and the extension's image is the one meant; the core source is a
+/// fallback for viewers without the extension). WebP is taken first when a texture has both.
 /// Runs before the gltf crate's validator, which requires a core source.
 pub(super) fn choose_texture_sources(root: &mut json::Root, label: &str) -> Result<()> {
     let images = root.images.len();
@@ -83,7 +84,6 @@ pub(super) fn choose_texture_sources(root: &mut json::Root, label: &str) -> Resu
         let Some(ext) = texture.extensions.as_ref().map(|e| &e.others) else {
             continue;
         };
-        let has_core = texture.source.value() != u32::MAX as usize;
         let source_of = |name: &str| -> Result<Option<u32>> {
             let Some(value) = ext.get(name) else {
                 return Ok(None);
@@ -100,7 +100,7 @@ pub(super) fn choose_texture_sources(root: &mut json::Root, label: &str) -> Resu
         };
         let webp = source_of(WEBP)?;
         let basisu = source_of(BASISU)?;
-        if let Some(s) = webp.or(if has_core { None } else { basisu }) {
+        if let Some(s) = webp.or(basisu) {
             texture.source = json::Index::new(s);
         }
     }
@@ -204,9 +204,6 @@ pub(super) fn refusal_hint(ext: &str) -> Option<&'static str> {
     match ext {
         "KHR_draco_mesh_compression" => Some(
             "weft has no Draco decoder; re-compress the geometry with meshopt, which weft reads and which decodes faster: `gltf-transform meshopt IN OUT` reads the Draco file and writes EXT_meshopt_compression",
-        ),
-        BASISU => Some(
-            "weft has no Basis Universal transcoder, so it cannot read KTX2 textures; use the asset's PNG or JPEG variant, or write the textures as PNG or WebP in your pipeline (`gltf-transform webp` reads PNG and JPEG sources)",
         ),
         _ => None,
     }

@@ -65,11 +65,12 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::ANISOTROPY,
     material_ext::VARIANTS,
     FABRIC_EXTENSION,
-    // Quantized, meshopt-compressed and WebP data: src/scene/compressed.rs.
+    // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
     compressed::EXTENSIONS[1],
     compressed::EXTENSIONS[2],
     compressed::EXTENSIONS[3],
+    compressed::EXTENSIONS[4],
 ];
 
 /// What a load may choose beyond the file itself.

@@ -16,6 +16,7 @@ mod accessor;
 pub mod animation;
 mod compressed;
 mod gltf_load;
+mod ktx;
 mod material_ext;
 mod resources;
 mod tangents;

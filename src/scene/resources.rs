@@ -255,6 +255,20 @@ pub(super) fn load_image(
         }
     };
 
+    // KTX2 (KHR_texture_basisu, or a core texture.source as AnisotropyBarnLamp has it).
+    if super::ktx::is_ktx2(&bytes, mime.as_deref()) {
+        let refused =
+            |why: String| Error::input(format!("{label}: {who} comes from {origin} and {why}"));
+        let (width, height) = super::ktx::dimensions(&bytes).map_err(refused)?;
+        check_size(width, height, label, &who, &origin, bytes_left)?;
+        let decoded = super::ktx::decode(&bytes).map_err(refused)?;
+        return Ok(Decoded {
+            width: decoded.width,
+            height: decoded.height,
+            rgba8: decoded.rgba8,
+        });
+    }
+
     let format = match mime.as_deref() {
         Some("image/png") => Some(image::ImageFormat::Png),
         Some("image/jpeg") => Some(image::ImageFormat::Jpeg),
@@ -266,21 +280,13 @@ pub(super) fn load_image(
             f @ (image::ImageFormat::Png | image::ImageFormat::Jpeg | image::ImageFormat::WebP),
         ) => f,
         other => {
-            // KTX2 (KHR_texture_basisu, or core texture.source as AnisotropyBarnLamp has it):
-            // named as such, since no kept crate here decodes Basis Universal.
-            const KTX2: &[u8] = b"\xABKTX 20\xBB\r\n\x1A\n";
-            if bytes.starts_with(KTX2) || mime.as_deref() == Some("image/ktx2") {
-                return Err(Error::input(format!(
-                    "{label}: {who} comes from {origin} and is a KTX2 (Basis Universal) texture, which weft does not decode; convert the file's textures to PNG or JPEG (for example `gltf-transform png IN OUT`, or take the asset's glTF variant with PNG textures)"
-                )));
-            }
             let kind = match (other, mime.as_deref()) {
                 (Some(f), _) => format!("{f:?}"),
                 (None, Some(m)) => m.to_owned(),
                 (None, None) => "not a recognisable image".to_owned(),
             };
             return Err(Error::input(format!(
-                "{label}: {who} comes from {origin} and is {kind}; weft reads PNG, JPEG and WebP textures: convert the image"
+                "{label}: {who} comes from {origin} and is {kind}; weft reads PNG, JPEG, WebP and KTX2 textures: convert the image"
             )));
         }
     };
@@ -291,19 +297,7 @@ pub(super) fn load_image(
             "{label}: {who} comes from {origin} and could not be decoded as {format:?}: {e}; re-save the image"
         ))
     })?;
-    if width > MAX_TEXTURE_SIZE || height > MAX_TEXTURE_SIZE || width == 0 || height == 0 {
-        return Err(Error::input(format!(
-            "{label}: {who} comes from {origin} and is {width}x{height} pixels; textures must be between 1 and {MAX_TEXTURE_SIZE} pixels on each side: scale the image down"
-        )));
-    }
-    let decoded_bytes = u64::from(width) * u64::from(height) * 4;
-    if decoded_bytes > *bytes_left {
-        return Err(Error::input(format!(
-            "{label}: {who} comes from {origin} and is {width}x{height} pixels, which brings the scene's decoded textures past weft's limit of {} GiB; scale the textures down",
-            MAX_TEXTURE_BYTES >> 30
-        )));
-    }
-    *bytes_left -= decoded_bytes;
+    check_size(width, height, label, &who, &origin, bytes_left)?;
     let mut reader = image::ImageReader::with_format(Cursor::new(&bytes[..]), format);
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIZE);
@@ -322,6 +316,32 @@ pub(super) fn load_image(
         height: rgba.height(),
         rgba8: rgba.into_raw(),
     })
+}
+
+/// Refuses an image of `width` x `height` beyond [`MAX_TEXTURE_SIZE`] or past what is left of
+/// [`MAX_TEXTURE_BYTES`]; otherwise takes its RGBA8 size from `bytes_left`.
+fn check_size(
+    width: u32,
+    height: u32,
+    label: &str,
+    who: &str,
+    origin: &str,
+    bytes_left: &mut u64,
+) -> crate::Result<()> {
+    if width > MAX_TEXTURE_SIZE || height > MAX_TEXTURE_SIZE || width == 0 || height == 0 {
+        return Err(Error::input(format!(
+            "{label}: {who} comes from {origin} and is {width}x{height} pixels; textures must be between 1 and {MAX_TEXTURE_SIZE} pixels on each side: scale the image down"
+        )));
+    }
+    let decoded_bytes = u64::from(width) * u64::from(height) * 4;
+    if decoded_bytes > *bytes_left {
+        return Err(Error::input(format!(
+            "{label}: {who} comes from {origin} and is {width}x{height} pixels, which brings the scene's decoded textures past weft's limit of {} GiB; scale the textures down",
+            MAX_TEXTURE_BYTES >> 30
+        )));
+    }
+    *bytes_left -= decoded_bytes;
+    Ok(())
 }
 
 /// Standard or URL-safe base64, padding optional, whitespace ignored. None if malformed.

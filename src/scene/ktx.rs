@@ -1,0 +1,316 @@
+//! KTX2 images (`KHR_texture_basisu`, or a core `texture.source` that is a `.ktx2` file), decoded
+//! to RGBA8 for weft's ordinary texture path (which builds the mip chain itself and picks sRGB or
+//! linear by the material slot, as for PNG):
+//!
+//! - the container is read by the `ktx2` crate, after weft's own check of the one field that crate
+//!   trusts (a basic data format descriptor's texel block dimensions);
+//! - supercompression: none, Zstandard (`ruzstd`) and ZLIB (`miniz_oxide`), each level's declared
+//!   uncompressed length checked against what the format needs before anything is allocated;
+//!   BasisLZ (ETC1S) is refused with the way out;
+//! - UASTC (vkFormat UNDEFINED with a UASTC descriptor) is transcoded to RGBA32 by Binomial's
+//!   transcoder (`basis-universal`'s `LowLevelUastcTranscoder`, as Bevy does);
+//! - plain 8-bit UNORM/SRGB formats (R, RG, RGB, RGBA, BGR, BGRA) are read directly, R and RG
+//!   filled out as Vulkan samples them (missing colour channels 0, alpha 1).
+//!
+//! Only level 0 is read; a file's smaller levels are ignored (weft generates its mip chain).
+//! Every failure is an error whose text the caller prefixes with the file and the texture.
+
+use ktx2::{ColorModel, Format, SupercompressionScheme};
+
+/// The identifier every KTX2 file starts with.
+pub(super) const MAGIC: &[u8; 12] = b"\xABKTX 20\xBB\r\n\x1A\n";
+
+/// The way out of a damaged file.
+const REENCODE: &str = "; re-encode the texture (for example with `toktx`) or re-export the scene";
+
+/// Whether `bytes` (with the media type a data: URI or the image declares) is a KTX2 file.
+pub(super) fn is_ktx2(bytes: &[u8], mime: Option<&str>) -> bool {
+    bytes.starts_with(MAGIC) || mime == Some("image/ktx2")
+}
+
+/// A KTX2 file's level 0 as RGBA8, rows top to bottom.
+pub(super) struct Rgba8 {
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+/// The header fields that size the image, read before anything is decoded (for the caller's size
+/// limits). `Err` is the reason the file cannot be read, to be completed by the caller.
+pub(super) fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
+    let reader = open(bytes)?;
+    let h = reader.header();
+    Ok((h.pixel_width, h.pixel_height.max(1)))
+}
+
+/// Parses the container. The `ktx2` crate bounds-checks every section and level, but unwraps a
+/// basic descriptor's texel block dimensions plus one, which overflows for 255: checked here first.
+fn open(bytes: &[u8]) -> Result<ktx2::Reader<&[u8]>, String> {
+    if !bytes.starts_with(MAGIC) {
+        return Err("does not start with the KTX2 identifier (it is declared image/ktx2 but is not a KTX2 file); fix the image's mimeType or give it a KTX2 file".into());
+    }
+    check_descriptor_blocks(bytes)?;
+    ktx2::Reader::new(bytes).map_err(|e| format!("is a damaged KTX2 file ({e}){REENCODE}"))
+}
+
+/// Walks the data format descriptor's blocks (the same walk as `ktx2`'s, on bounds-checked
+/// slices) and refuses a basic block whose texel block dimension byte is 255 (a 256-texel block:
+/// no format has one).
+fn check_descriptor_blocks(bytes: &[u8]) -> Result<(), String> {
+    let u32_at = |at: usize| -> Option<u32> {
+        Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
+    };
+    let damaged = || format!("is a damaged KTX2 file (unexpected end of buffer){REENCODE}");
+    let (Some(offset), Some(length)) = (u32_at(48), u32_at(52)) else {
+        return Err(damaged());
+    };
+    let end = (offset as usize).saturating_add(length as usize);
+    // The descriptor starts with its own total length (4 bytes), then the blocks.
+    let Some(mut blocks) = bytes.get((offset as usize).saturating_add(4)..end) else {
+        // `ktx2` reports this one itself.
+        return Ok(());
+    };
+    while blocks.len() >= 8 {
+        let word = u32::from_le_bytes([blocks[0], blocks[1], blocks[2], blocks[3]]);
+        let version = u16::from_le_bytes([blocks[4], blocks[5]]);
+        let size = usize::from(u16::from_le_bytes([blocks[6], blocks[7]]));
+        let basic = word == 0 && version == 2;
+        if basic {
+            if let Some(dims) = blocks.get(12..16) {
+                if dims.contains(&255) {
+                    return Err(format!(
+                        "is a damaged KTX2 file (its data format descriptor gives a texel block dimension of 256){REENCODE}"
+                    ));
+                }
+            }
+        }
+        if size < 8 || size > blocks.len() {
+            break; // `ktx2` reports it
+        }
+        blocks = &blocks[size..];
+    }
+    Ok(())
+}
+
+/// Decodes level 0 of a KTX2 file. `Err` is the reason, phrased to follow "… which comes from
+/// FILE and", with the fix.
+pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
+    let reader = open(bytes)?;
+    let header = reader.header();
+    let width = header.pixel_width;
+    if header.pixel_height == 0 {
+        return Err(format!(
+            "is a one-dimensional KTX2 texture ({width} texels wide, no height); glTF textures are 2D: write it as a 2D image"
+        ));
+    }
+    let height = header.pixel_height;
+    let max = super::resources::MAX_TEXTURE_SIZE;
+    if width > max || height > max {
+        // The caller refuses these first (with the limit and the fix); checked again here since
+        // the sizes below are computed from them.
+        return Err(format!(
+            "is {width}x{height} pixels; textures must be between 1 and {max} pixels on each side: scale the image down"
+        ));
+    }
+    if header.pixel_depth > 1 {
+        return Err(format!(
+            "is a 3D KTX2 texture ({width}x{height}x{}); glTF textures are 2D: write it as a 2D image",
+            header.pixel_depth
+        ));
+    }
+    if header.face_count != 1 {
+        return Err(format!(
+            "is a KTX2 cube map ({} faces); glTF textures are 2D: write it as a 2D image",
+            header.face_count
+        ));
+    }
+    if header.layer_count > 1 {
+        return Err(format!(
+            "is a KTX2 texture array ({} layers); glTF textures are single 2D images: write one layer",
+            header.layer_count
+        ));
+    }
+    let Some(level) = reader.levels().next() else {
+        return Err("is a KTX2 file with no image data".into());
+    };
+
+    // What level 0 must hold once supercompression is undone, and how to turn it into RGBA8.
+    enum Kind {
+        Uastc { has_alpha: bool },
+        Plain { channels: usize, bgr: bool },
+    }
+    let dfd = reader.basic_dfd();
+    let model = dfd.and_then(|d| d.color_model);
+    let kind = match header.format {
+        None if header.supercompression_scheme == Some(SupercompressionScheme::BasisLZ)
+            || model == Some(ColorModel::ETC1S) =>
+        {
+            return Err(
+                "is a KTX2 texture in Basis Universal's ETC1S mode (BasisLZ supercompression), which weft does not transcode; re-encode it as UASTC (`toktx --encode uastc --zcmp 18`, or `gltf-transform uastc IN OUT`), or use PNG or JPEG".into(),
+            )
+        }
+        None if model == Some(ColorModel::UASTC) => {
+            // UASTC's descriptor has one sample, whose channel id says what the blocks hold:
+            // RGB 0, RGBA 3, RRR 4, RRRG 5, RG 6 (KTX2 specification, section 3.10.2).
+            let has_alpha = dfd
+                .and_then(|d| d.sample_information.first())
+                .is_some_and(|s| matches!(s.channel_type, 3 | 5));
+            Kind::Uastc { has_alpha }
+        }
+        None => {
+            return Err(format!(
+                "is a KTX2 texture with vkFormat UNDEFINED and a {} data format descriptor, which weft cannot read; only UASTC is read among the universal formats: re-encode it as UASTC or use PNG",
+                match model {
+                    Some(m) => format!("{m:?}"),
+                    None => "missing".to_string(),
+                }
+            ))
+        }
+        Some(f) => {
+            let (channels, bgr) = match f {
+                Format::R8_UNORM | Format::R8_SRGB => (1, false),
+                Format::R8G8_UNORM | Format::R8G8_SRGB => (2, false),
+                Format::R8G8B8_UNORM | Format::R8G8B8_SRGB => (3, false),
+                Format::B8G8R8_UNORM | Format::B8G8R8_SRGB => (3, true),
+                Format::R8G8B8A8_UNORM | Format::R8G8B8A8_SRGB => (4, false),
+                Format::B8G8R8A8_UNORM | Format::B8G8R8A8_SRGB => (4, true),
+                other => {
+                    return Err(format!(
+                        "is a KTX2 texture in vkFormat {other:?}, which weft does not read (it reads UASTC and 8-bit UNORM/SRGB R, RG, RGB and RGBA); re-encode it as UASTC or as R8G8B8A8, or use PNG"
+                    ))
+                }
+            };
+            Kind::Plain { channels, bgr }
+        }
+    };
+
+    let pixels = u64::from(width) * u64::from(height);
+    let (blocks_x, blocks_y) = (width.div_ceil(4), height.div_ceil(4));
+    let expected = match kind {
+        Kind::Uastc { .. } => u64::from(blocks_x) * u64::from(blocks_y) * 16,
+        Kind::Plain { channels, .. } => pixels * channels as u64,
+    };
+    let data = unsupercompress(&header, &level, expected)?;
+
+    let mut rgba8 = match kind {
+        Kind::Uastc { has_alpha } => {
+            // basis-universal 0.3.1 sizes the RGBA32 output, and sets its row pitch, as
+            // ceil(original_width / 4) pixels (it divides by the 4-texel block width even for an
+            // uncompressed format), and the C++ transcoder then writes rows of that pitch: with
+            // the true width the buffer is a quarter of the image and the transcoder writes past
+            // it (heap corruption on the lamp's 2048 x 2048 textures). The transcoder uses the
+            // width for nothing else once it is given a pitch (basisu_transcoder.cpp,
+            // basisu_lowlevel_uastc_transcoder::transcode_slice), so four times the width gives a
+            // pitch and a buffer of exactly `width` pixels, and clipping of the last block column
+            // at `width`. Should the binding be fixed, the output is four times too large and the
+            // length check below refuses it instead of reading it wrong.
+            let transcoder = basis_universal::LowLevelUastcTranscoder::new();
+            let out = transcoder
+                .transcode_slice(
+                    &data,
+                    basis_universal::SliceParametersUastc {
+                        num_blocks_x: blocks_x,
+                        num_blocks_y: blocks_y,
+                        has_alpha,
+                        original_width: width * 4,
+                        original_height: height,
+                    },
+                    basis_universal::DecodeFlags::HIGH_QUALITY,
+                    basis_universal::TranscoderBlockFormat::RGBA32,
+                )
+                .map_err(|e| {
+                    format!("is a KTX2 UASTC texture that the Basis Universal transcoder rejected ({e:?}): the file is damaged; re-encode it")
+                })?;
+            if out.len() as u64 != pixels * 4 {
+                return Err(format!(
+                    "is a KTX2 UASTC texture whose transcoded level 0 is {} bytes instead of {} (the basis-universal binding has changed how it sizes its output: weft must be updated for it)",
+                    out.len(),
+                    pixels * 4
+                ));
+            }
+            out
+        }
+        Kind::Plain { channels, bgr } => {
+            let mut out = Vec::with_capacity(pixels as usize * 4);
+            for px in data.chunks_exact(channels) {
+                let texel = match (channels, bgr) {
+                    (1, _) => [px[0], 0, 0, 255],
+                    (2, _) => [px[0], px[1], 0, 255],
+                    (3, false) => [px[0], px[1], px[2], 255],
+                    (3, true) => [px[2], px[1], px[0], 255],
+                    (_, false) => [px[0], px[1], px[2], px[3]],
+                    (_, true) => [px[2], px[1], px[0], px[3]],
+                };
+                out.extend_from_slice(&texel);
+            }
+            out
+        }
+    };
+
+    // KTXorientation "rd" (rows go down, the default) is glTF's; "ru" is flipped here.
+    let up = reader
+        .key_value_data()
+        .find(|(key, _)| *key == "KTXorientation")
+        .is_some_and(|(_, value)| value.get(1) == Some(&b'u'));
+    if up {
+        let row = width as usize * 4;
+        let rows: Vec<&[u8]> = rgba8.chunks_exact(row).rev().collect();
+        rgba8 = rows.concat();
+    }
+    Ok(Rgba8 {
+        width,
+        height,
+        rgba8,
+    })
+}
+
+/// Level 0's bytes with its supercompression undone, exactly `expected` bytes long.
+fn unsupercompress<'a>(
+    header: &ktx2::Header,
+    level: &ktx2::Level<'a>,
+    expected: u64,
+) -> Result<std::borrow::Cow<'a, [u8]>, String> {
+    let scheme = header.supercompression_scheme;
+    if scheme.is_some() && level.uncompressed_byte_length != expected {
+        return Err(format!(
+            "is a KTX2 texture whose level 0 declares {} uncompressed bytes where its {}x{} format needs {expected}; the file is damaged: re-encode it",
+            level.uncompressed_byte_length, header.pixel_width, header.pixel_height
+        ));
+    }
+    let data = match scheme {
+        None => std::borrow::Cow::Borrowed(level.data),
+        Some(SupercompressionScheme::Zstandard) => {
+            let mut out = Vec::with_capacity(expected as usize);
+            ruzstd::decoding::FrameDecoder::new()
+                .decode_all_to_vec(level.data, &mut out)
+                .map_err(|e| {
+                    format!("is a KTX2 texture whose Zstandard-compressed level 0 does not decode ({e}); the file is damaged: re-encode it")
+                })?;
+            std::borrow::Cow::Owned(out)
+        }
+        Some(SupercompressionScheme::ZLIB) => {
+            let out = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(
+                level.data,
+                expected as usize,
+            )
+            .map_err(|e| {
+                format!("is a KTX2 texture whose ZLIB-compressed level 0 does not decode ({:?}); the file is damaged: re-encode it", e.status)
+            })?;
+            std::borrow::Cow::Owned(out)
+        }
+        Some(other) => {
+            return Err(format!(
+                "is a KTX2 texture with supercompression scheme {other:?}, which weft does not read (it reads none, Zstandard and ZLIB); re-encode it with Zstandard"
+            ))
+        }
+    };
+    if data.len() as u64 != expected {
+        return Err(format!(
+            "is a KTX2 texture whose level 0 holds {} bytes where its {}x{} format needs {expected}; the file is damaged or truncated: re-encode it",
+            data.len(),
+            header.pixel_width,
+            header.pixel_height
+        ));
+    }
+    Ok(data)
+}
