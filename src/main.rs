@@ -1366,6 +1366,10 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "sheen_materials": plan.sheen_materials,
             "specular_materials": plan.specular_materials,
             "anisotropic_materials": plan.anisotropic_materials,
+            "unlit_materials": plan.unlit_materials,
+            "unlit_code": plan.unlit,
+            "vertex_color_meshes": plan.vertex_color_meshes,
+            "vertex_color_code": plan.vertex_colors,
             "variants": plan.variants,
             "variant": plan.variant,
             "animations": scene.animations().iter().map(|a| serde_json::json!({

@@ -104,7 +104,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          vec3), normal (1, vec3), tangent (2, vec4, w = handedness), uv (3, vec2) and weave uv (4, \
          vec2: the uv with whole weave repeats removed per mesh) and uv1 (5, vec2: TEXCOORD_1), and, \
          for SHADING = 1 (Gouraud), per-vertex lighting of fabric at output location 5 for \
-         gbuffer.frag. Push constants per draw: `mat4 \
+         gbuffer.frag; the vertex colour (COLOR_0, from a storage buffer, white unless \
+         VERTEX_COLORS = 1) at output location 7. Push constants per draw: `mat4 \
          world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
          (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
          front faces; the projection flips y.",
@@ -250,6 +251,12 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         "lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)",
     ),
     (
+        "gbuffer.vert",
+        0,
+        4,
+        "vertex colours (`vec4[]`, linear RGBA, glTF COLOR_0): one per vertex of the vertex buffer, indexed by `gl_VertexIndex` (vertex offset included), white for vertices without; read only when VERTEX_COLORS = 1",
+    ),
+    (
         "ibl_probe.comp",
         0,
         0,
@@ -351,6 +358,9 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("gbuffer.frag", 2, "SHADING: how fabric is shaded, as gbuffer.vert's and lighting.frag's; 1 (Gouraud) adds the vertex stage's lighting to the emissive target"),
     ("gbuffer.vert", 2, "SHADING: how fabric is shaded: 0 the fabric model (default), 1 Gouraud (the Phong reflection model per vertex, written for gbuffer.frag), 2 Phong, 3 plain Ashikhmin-Shirley; only 1 does work in this stage"),
     ("gbuffer.vert", 3, "LIGHT_TYPES: as lighting.frag's, for the per-vertex lighting of SHADING = 1 (default 7, all)"),
+    ("gbuffer.vert", 5, "VERTEX_COLORS: 1 reads each vertex's colour (set 0, binding 4) and writes it to output location 7 for gbuffer.frag; 0 (default) reads none and writes white"),
+    ("gbuffer.frag", 5, "VERTEX_COLORS: 1 multiplies the vertex colour (input location 7) into the base colour and alpha, and for fabric into the thread texture's value; 0 (default) compiles that out"),
+    ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",
         0,

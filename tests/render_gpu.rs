@@ -331,3 +331,151 @@ fn oversize_targets_are_refused_before_allocation() {
             .expect("a small frame after the refused one");
     }
 }
+
+/// A 2 x 2 quad in z = 0 facing +z, with `colors` per corner (empty: none) and `material`, and
+/// one directional light from the front; the automatic camera looks at its front.
+fn quad_scene(colors: Vec<[f32; 4]>, material: scene::Material) -> scene::Scene {
+    let corner = |x: f32, y: f32| scene::Vertex {
+        position: [x, y, 0.0],
+        normal: [0.0, 0.0, 1.0],
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [x * 0.5 + 0.5, 0.5 - y * 0.5],
+        uv1: [0.0; 2],
+    };
+    let mut s = scene::Scene {
+        source: "quad".into(),
+        meshes: vec![scene::Mesh {
+            name: "quad".into(),
+            vertices: vec![
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: 0,
+            colors,
+        }],
+        draws: vec![scene::Draw::new(0, glam::Mat4::IDENTITY)],
+        materials: vec![material],
+        ..Default::default()
+    };
+    s.lights.push(scene::Light {
+        name: "front".into(),
+        kind: scene::LightKind::Directional,
+        color: [1.0; 3],
+        intensity: 3.0,
+        range: None,
+        position: glam::Vec3::ZERO,
+        direction: glam::Vec3::new(0.0, 0.0, -1.0),
+        shadow: None,
+    });
+    s
+}
+
+/// The HDR radiance at the centre of a frame.
+fn centre(frame: &weft::render::Frame) -> [f32; 3] {
+    let i = ((frame.height / 2) * frame.width + frame.width / 2) as usize * 4;
+    [frame.hdr[i], frame.hdr[i + 1], frame.hdr[i + 2]]
+}
+
+fn small() -> RenderOptions {
+    RenderOptions {
+        width: 64,
+        height: 48,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    let material = scene::Material {
+        base_color: [0.8, 0.8, 0.8, 1.0],
+        metallic: 0.0,
+        roughness: 0.6,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let albedo = |s: &scene::Scene, r: &mut Renderer| {
+        let options = RenderOptions {
+            debug_view: DebugView::Albedo,
+            ..small()
+        };
+        centre(&r.render(s, &options).expect("render"))
+    };
+    let tint = [1.0, 0.5, 0.25, 1.0];
+    let coloured = quad_scene(vec![tint; 4], material.clone());
+    let plain = quad_scene(Vec::new(), material);
+    let a = albedo(&coloured, &mut renderer);
+    let b = albedo(&plain, &mut renderer);
+    for k in 0..3 {
+        let want = 0.8 * tint[k];
+        // The albedo target is sRGB 8-bit: within half a step there.
+        assert!(
+            (a[k] - want).abs() < 0.01,
+            "channel {k}: {a:?}, want {want}"
+        );
+        assert!((b[k] - 0.8).abs() < 0.01, "channel {k}: {b:?}");
+    }
+    // And lit: the colour scales the diffuse light (the blue channel is darkest).
+    let lit = renderer.render(&coloured, &small()).expect("render");
+    let c = centre(&lit);
+    assert!(c[0] > c[1] && c[1] > c[2], "{c:?}");
+    assert!(lit
+        .stats
+        .pipelines
+        .iter()
+        .any(|p| p.starts_with("gbuffer[") && p.contains("vertex_colors=1")));
+}
+
+#[test]
+fn unlit_materials_show_their_base_colour_exactly() {
+    let material = scene::Material {
+        base_color: [0.6, 0.3, 0.1, 1.0],
+        metallic: 0.0,
+        roughness: 0.2,
+        unlit: true,
+        ..Default::default()
+    };
+    let tint = [0.5, 1.0, 1.0, 1.0];
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    for (colors, want) in [
+        (Vec::new(), [0.6, 0.3, 0.1]),
+        (vec![tint; 4], [0.3, 0.3, 0.1]),
+    ] {
+        let frame = renderer
+            .render(&quad_scene(colors, material.clone()), &small())
+            .expect("render");
+        let c = centre(&frame);
+        for k in 0..3 {
+            // The base colour passes the sRGB 8-bit albedo target: within half a step of it.
+            assert!(
+                (c[k] - want[k]).abs() < 0.006,
+                "channel {k}: {c:?}, want {want:?}"
+            );
+        }
+        assert!(frame
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p.starts_with("lighting[") && p.contains("unlit=1")));
+    }
+    // Unlit ignores the lights: a brighter light changes nothing; lit, it does.
+    for unlit in [true, false] {
+        let mut s = quad_scene(
+            Vec::new(),
+            scene::Material {
+                unlit,
+                ..material.clone()
+            },
+        );
+        let before = centre(&renderer.render(&s, &small()).expect("render"));
+        s.lights[0].intensity *= 3.0;
+        let after = centre(&renderer.render(&s, &small()).expect("render"));
+        assert_eq!(
+            before == after,
+            unlit,
+            "unlit {unlit}: {before:?} then {after:?}"
+        );
+    }
+}

@@ -84,6 +84,7 @@ const uint SLOT_ANISOTROPY = 9u;
 // Material.extra.w flags.
 const uint MATERIAL_ANISOTROPY = 1u;
 const uint MATERIAL_ANISOTROPY_TEXTURE = 2u;
+const uint MATERIAL_UNLIT = 4u;  // KHR_materials_unlit
 
 struct Material {
     vec4 base_color;          // linear rgba factor

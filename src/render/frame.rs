@@ -213,6 +213,13 @@ pub(crate) struct DrawRange {
 /// A scene's data on the GPU.
 pub struct GpuScene {
     pub(crate) vertices: Buffer,
+    /// COLOR_0 of every vertex of `vertices` (linear RGBA, white where a mesh has none), or one
+    /// white entry when no mesh has vertex colours (the G-buffer pass then reads none).
+    pub(crate) colors: Buffer,
+    /// Whether `colors` holds one entry per vertex (some mesh has COLOR_0), and how many
+    /// vertices `vertices` holds (posed copies included).
+    pub(crate) has_colors: bool,
+    pub(crate) vertex_count: usize,
     pub(crate) indices: Buffer,
     pub(crate) materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
@@ -284,7 +291,7 @@ fn sampled(binding: u32, stages: Stages) -> Binding {
 impl Renderer {
     pub fn new(ctx: Context) -> crate::Result<Renderer> {
         // Frame, materials, fabrics, and lights (the vertex stage reads the last three only when
-        // it lights vertices for Gouraud shading).
+        // it lights vertices for Gouraud shading), and the vertex colours.
         let frame_layout = ctx.create_set_layout(&[
             Binding {
                 binding: 0,
@@ -303,6 +310,12 @@ impl Renderer {
             },
             Binding {
                 binding: 3,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::VERTEX,
+            },
+            // COLOR_0 per vertex (read only when the plan compiles vertex colours in).
+            Binding {
+                binding: 4,
                 kind: BindingKind::StorageBuffer,
                 stages: Stages::VERTEX,
             },
@@ -549,6 +562,7 @@ impl Renderer {
                 },
             ),
             (4, options.footprint.pieces()),
+            (5, plan.vertex_colors as u32),
         ];
         let lighting_key = vec![
             (0, options.accuracy.code()),
@@ -567,6 +581,7 @@ impl Renderer {
                     .map(|e| e.level.samples())
                     .unwrap_or(1),
             ),
+            (9, plan.unlit as u32),
         ];
         let need_gbuffer = !self.gbuffer_variants.contains_key(&gbuffer_key);
         let need_lighting = !self.lighting_variants.contains_key(&lighting_key);
@@ -590,10 +605,11 @@ impl Renderer {
             };
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}]",
+                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}]",
                     options.accuracy.code(),
                     gbuffer_key[3].1,
-                    gbuffer_key[4].1
+                    gbuffer_key[4].1,
+                    gbuffer_key[5].1
                 ),
                 vertex: &shaders::GBUFFER_VERT,
                 fragment: &shaders::GBUFFER_FRAG,
@@ -616,14 +632,15 @@ impl Renderer {
         let make_lighting = || -> crate::Result<Pipeline> {
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}, ibl={}, ibl_samples={}]",
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}, ibl={}, ibl_samples={}, unlit={}]",
                     options.accuracy.code(),
                     options.accuracy.samples(),
                     options.fabric_as_pbr as u32,
                     plan.shadow_sampling as u32,
                     plan.range_culling as u32,
                     lighting_key[7].1,
-                    lighting_key[8].1
+                    lighting_key[8].1,
+                    lighting_key[9].1
                 ),
                 vertex: &shaders::FULLSCREEN_VERT,
                 fragment: &shaders::LIGHTING_FRAG,
@@ -731,6 +748,11 @@ impl Renderer {
         // Skinned and morphed draws get posed copies of their vertices, which the skinning pass
         // writes (render::deform).
         let deform = super::deform::upload(ctx, scene, &mut vertices, &mesh_ranges, &mut draws)?;
+        let vertex_count = vertices.len();
+        let colors = vertex_colors(scene, vertex_count, &mesh_ranges, &draws);
+        let has_colors = scene.meshes.iter().any(|m| !m.colors.is_empty());
+        let colors =
+            ctx.create_buffer_with("vertex colours", BufferUsageFlags::STORAGE_BUFFER, &colors)?;
         let vertices = ctx.create_buffer_with(
             "vertices",
             BufferUsageFlags::VERTEX_BUFFER | BufferUsageFlags::STORAGE_BUFFER,
@@ -781,6 +803,9 @@ impl Renderer {
             .collect::<crate::Result<Vec<_>>>()?;
         let mut gpu = GpuScene {
             vertices,
+            colors,
+            has_colors,
+            vertex_count,
             indices,
             materials,
             fabrics,
@@ -998,6 +1023,17 @@ impl Renderer {
             _ => &self.no_shadows,
         };
 
+        // Vertex colours compiled in (forced) for a scene that has none: every vertex reads white.
+        let forced_colors = if plan.vertex_colors && !gpu.has_colors {
+            Some(self.ctx.create_buffer_with(
+                "vertex colours (white)",
+                BufferUsageFlags::STORAGE_BUFFER,
+                &vec![[1.0f32; 4]; gpu.vertex_count.max(1)],
+            )?)
+        } else {
+            None
+        };
+        let colors = forced_colors.as_ref().unwrap_or(&gpu.colors);
         let ctx = self.ctx.clone();
         let targets = self.targets.as_ref().expect("created above");
         let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
@@ -1069,6 +1105,7 @@ impl Renderer {
                             (1, Resource::Storage(&gpu.materials)),
                             (2, Resource::Storage(&gpu.fabrics)),
                             (3, Resource::Storage(&gpu.lights)),
+                            (4, Resource::Storage(colors)),
                         ],
                     )?;
                     let material_sets = (0..gpu.material_count as usize)
@@ -1427,6 +1464,45 @@ fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
 /// A scene's fabric records (80 bytes each; one zero record when there are none: a storage
 /// buffer cannot be empty) and the material records, which index them (one default material when
 /// the scene has none).
+/// The vertex colour buffer: one RGBA per vertex of the uploaded vertex buffer (`vertex_count`,
+/// posed copies included: a deforming draw's copy gets its mesh's colours), white where a mesh
+/// has none; a single white entry when no mesh has COLOR_0 (a storage buffer cannot be empty).
+fn vertex_colors(
+    scene: &Scene,
+    vertex_count: usize,
+    mesh_ranges: &[(u32, u32, i32)],
+    draws: &[DrawRange],
+) -> Vec<[f32; 4]> {
+    if scene.meshes.iter().all(|m| m.colors.is_empty()) {
+        return vec![[1.0; 4]];
+    }
+    let mut colors = vec![[1.0f32; 4]; vertex_count];
+    let mut copy = |mesh: &crate::scene::Mesh, at: usize| {
+        if let Some(dst) = colors.get_mut(at..) {
+            for (d, c) in dst
+                .iter_mut()
+                .zip(mesh.colors.iter().take(mesh.vertices.len()))
+            {
+                *d = *c;
+            }
+        }
+    };
+    for (mesh, range) in scene.meshes.iter().zip(mesh_ranges) {
+        copy(mesh, range.2.max(0) as usize);
+    }
+    for d in draws {
+        let Some(mesh) = scene
+            .draws
+            .get(d.scene_draw)
+            .and_then(|sd| scene.meshes.get(sd.mesh))
+        else {
+            continue;
+        };
+        copy(mesh, d.vertex_offset.max(0) as usize);
+    }
+    colors
+}
+
 fn material_records(scene: &Scene) -> (Vec<u8>, Vec<GpuMaterial>) {
     let mut fabric_bytes: Vec<u8> = Vec::new();
     let mut fabric_index = Vec::new();

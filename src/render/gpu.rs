@@ -174,6 +174,8 @@ const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96 + 32 * TextureSlo
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
 const MATERIAL_ANISOTROPY_TEXTURE: u32 = 2;
+/// KHR_materials_unlit (read by lighting.frag only when the plan compiles the unlit path in).
+pub const MATERIAL_UNLIT: u32 = 4;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -225,6 +227,7 @@ impl GpuMaterial {
                     ),
                     None => (0.0, 0.0, 0),
                 };
+                let flags = flags | if m.unlit { MATERIAL_UNLIT } else { 0 };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
             uv: {

@@ -122,6 +122,14 @@ pub struct Plan {
     pub sheen_materials: usize,
     pub specular_materials: usize,
     pub anisotropic_materials: usize,
+    /// Materials with KHR_materials_unlit, and whether lighting.frag compiles the unlit path in
+    /// (some material is unlit, or forced).
+    pub unlit_materials: usize,
+    pub unlit: bool,
+    /// Drawn meshes with vertex colours (COLOR_0), and whether the G-buffer pass reads them
+    /// (some mesh has them, or forced): without, no colour buffer is read and nothing multiplied.
+    pub vertex_color_meshes: usize,
+    pub vertex_colors: bool,
     /// KHR_materials_variants: the file's variants and the one loaded (None: the defaults).
     pub variants: Vec<String>,
     pub variant: Option<String>,
@@ -290,8 +298,25 @@ impl Plan {
         if environment.is_some() {
             passes.insert(0, Pass::Environment);
         }
+        let unlit_materials = scene.materials.iter().filter(|m| m.unlit).count();
+        let mut drawn = vec![false; scene.meshes.len()];
+        for d in &scene.draws {
+            if let Some(x) = drawn.get_mut(d.mesh) {
+                *x = true;
+            }
+        }
+        let vertex_color_meshes = scene
+            .meshes
+            .iter()
+            .zip(&drawn)
+            .filter(|(m, &drawn)| drawn && !m.colors.is_empty())
+            .count();
         Plan {
             width: options.width,
+            unlit_materials,
+            unlit: unlit_materials > 0 || options.force.unlit,
+            vertex_color_meshes,
+            vertex_colors: vertex_color_meshes > 0 || options.force.vertex_colors,
             height: options.height,
             passes,
             draws: scene.draws.len(),
@@ -369,11 +394,23 @@ impl fmt::Display for Plan {
         )?;
         writeln!(
             f,
-            "materials   {} fabric, {} sheen, {} specular, {} anisotropic",
+            "materials   {} fabric, {} sheen, {} specular, {} anisotropic, {} unlit (unlit code {})",
             self.fabric_materials,
             self.sheen_materials,
             self.specular_materials,
-            self.anisotropic_materials
+            self.anisotropic_materials,
+            self.unlit_materials,
+            if self.unlit { "compiled" } else { "none" }
+        )?;
+        writeln!(
+            f,
+            "vertex col. {} drawn mesh(es) with COLOR_0 (colour code {})",
+            self.vertex_color_meshes,
+            if self.vertex_colors {
+                "compiled"
+            } else {
+                "none"
+            }
         )?;
         if !self.variants.is_empty() {
             writeln!(

@@ -54,9 +54,13 @@ const DEFAULT_SCENE_SOURCE: &str = "built-in default scene";
 /// The fabric material extension; its parameters are parsed by [`FabricParams`].
 const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
 
+/// KHR_materials_unlit: base colour only, no lighting.
+const UNLIT: &str = "KHR_materials_unlit";
+
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    UNLIT,
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
     material_ext::SHEEN,
@@ -356,6 +360,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
     // which refuses unknown required extensions: take them off before it runs.
     const OWN: &[&str] = &[
         FABRIC_EXTENSION,
+        UNLIT,
         material_ext::SHEEN,
         material_ext::SPECULAR,
         material_ext::IOR,
@@ -466,6 +471,48 @@ fn extras_object(extras: &json::Extras) -> Option<serde_json::Map<String, serde_
         Ok(serde_json::Value::Object(map)) => Some(map),
         _ => None,
     }
+}
+
+/// A primitive mode as the glTF specification names it.
+fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Points => "POINTS",
+        Mode::Lines => "LINES",
+        Mode::LineLoop => "LINE_LOOP",
+        Mode::LineStrip => "LINE_STRIP",
+        Mode::Triangles => "TRIANGLES",
+        Mode::TriangleStrip => "TRIANGLE_STRIP",
+        Mode::TriangleFan => "TRIANGLE_FAN",
+    }
+}
+
+/// A TRIANGLE_STRIP's vertex sequence as a triangle list, with the winding of glTF 2.0 §3.7.2.1:
+/// triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), so every other triangle swaps its last two
+/// corners and all face the same way. Degenerate triangles (two equal indices, which exporters
+/// use to join strips) are dropped.
+pub(super) fn strip_to_list(strip: &[u32]) -> Vec<u32> {
+    let mut list = Vec::with_capacity(strip.len().saturating_sub(2) * 3);
+    for i in 0..strip.len().saturating_sub(2) {
+        let odd = i % 2;
+        let t = [strip[i], strip[i + 1 + odd], strip[i + 2 - odd]];
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            list.extend_from_slice(&t);
+        }
+    }
+    list
+}
+
+/// A TRIANGLE_FAN's vertex sequence as a triangle list (glTF 2.0 §3.7.2.1: triangle i is
+/// (v_{i+1}, v_{i+2}, v_0)); degenerate triangles are dropped.
+pub(super) fn fan_to_list(fan: &[u32]) -> Vec<u32> {
+    let mut list = Vec::with_capacity(fan.len().saturating_sub(2) * 3);
+    for i in 0..fan.len().saturating_sub(2) {
+        let t = [fan[i + 1], fan[i + 2], fan[0]];
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            list.extend_from_slice(&t);
+        }
+    }
+    list
 }
 
 /// A perspective camera before a node places it.
@@ -864,6 +911,14 @@ impl<'a> Loader<'a> {
             None => None,
         };
 
+        let mut unlit = m.extensions().and_then(|e| e.get(UNLIT)).is_some();
+        if unlit && fabric.is_some() {
+            self.warn(format_args!(
+                "{who} has both {UNLIT} and {FABRIC_EXTENSION}; the woven model is lit, so {UNLIT} is ignored on it"
+            ));
+            unlit = false;
+        }
+
         let material = Material {
             name,
             base_color,
@@ -883,6 +938,7 @@ impl<'a> Loader<'a> {
             specular,
             anisotropy,
             uv: slot_uv,
+            unlit,
         };
         Ok((material, uv))
     }
@@ -997,10 +1053,15 @@ impl<'a> Loader<'a> {
         let mut ids = Vec::new();
         for prim in mesh.primitives() {
             let who = format!("mesh '{name}' primitive {}", prim.index());
-            if prim.mode() != Mode::Triangles {
+            if !matches!(
+                prim.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                // Points and lines would need pipelines of their own topology; the mesh's
+                // triangle primitives are still drawn.
                 self.warn(format_args!(
-                    "{who} has mode {:?}; weft draws only TRIANGLES, so this primitive is skipped (export it as triangles to see it)",
-                    prim.mode()
+                    "{who} has mode {}; weft draws TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN but not points or lines yet, so this primitive is skipped (the mesh's other primitives are drawn)",
+                    mode_name(prim.mode())
                 ));
                 continue;
             }
@@ -1135,11 +1196,7 @@ impl<'a> Loader<'a> {
                 }
             }
         }
-        if prim.get(&Semantic::Colors(0)).is_some() {
-            self.warn(format_args!(
-                "{who} has vertex colours (COLOR_0), which weft ignores"
-            ));
-        }
+        let mut colors = self.vertex_colors(prim, who, count)?;
         let mut deform = self.primitive_deform(prim, who, count)?;
 
         let mut indices = match prim.indices() {
@@ -1175,6 +1232,11 @@ impl<'a> Loader<'a> {
             }
             None => (0..count as u32).collect(),
         };
+        match prim.mode() {
+            Mode::TriangleStrip => indices = strip_to_list(&indices),
+            Mode::TriangleFan => indices = fan_to_list(&indices),
+            _ => {}
+        }
         if indices.len() % 3 != 0 {
             self.warn(format_args!(
                 "{who} has {} indices, not a multiple of 3; the last {} are ignored",
@@ -1304,13 +1366,13 @@ impl<'a> Loader<'a> {
         let bad_tangents = if tangents.is_some() && !uv_transform.turns_or_mirrors() {
             tangents::repair_tangents(&mut vertices)
         } else if uvs.is_some() {
-            let before = deform.as_ref().map(|_| indices.clone());
+            let before = (deform.is_some() || !colors.is_empty()).then(|| indices.clone());
             if !tangents::mikktspace_tangents(&mut vertices, &mut indices) {
                 tangents::arbitrary_tangents(&mut vertices);
             }
             // MikkTSpace splits vertices whose corners need different tangents: the copies get
-            // their original's joints and morph deltas.
-            if let (Some(d), Some(before)) = (deform.as_mut(), before) {
+            // their original's joints, morph deltas and colour.
+            if let Some(before) = before {
                 let mut origin: Vec<usize> = (0..vertices.len()).collect();
                 for (now, was) in indices.iter().zip(&before) {
                     if now != was {
@@ -1319,7 +1381,14 @@ impl<'a> Loader<'a> {
                         }
                     }
                 }
-                d.extend_to(&origin[count..]);
+                if let Some(d) = deform.as_mut() {
+                    d.extend_to(&origin[count..]);
+                }
+                if !colors.is_empty() {
+                    for &o in &origin[count..] {
+                        colors.push(colors.get(o).copied().unwrap_or([1.0; 4]));
+                    }
+                }
             }
             tangents::repair_tangents(&mut vertices)
         } else {
@@ -1344,9 +1413,93 @@ impl<'a> Loader<'a> {
                 vertices,
                 indices,
                 material,
+                colors,
             },
             deform,
         )))
+    }
+
+    /// A primitive's COLOR_0 as linear RGBA per vertex (alpha 1 for VEC3), empty when it has
+    /// none. glTF allows VEC3 or VEC4 of float, normalized unsigned byte or normalized unsigned
+    /// short; anything else is ignored with a warning. Values are clamped to [0, 1] (a non-finite
+    /// one becomes 1).
+    fn vertex_colors(
+        &mut self,
+        prim: &gltf::Primitive<'a>,
+        who: &str,
+        count: usize,
+    ) -> Result<Vec<[f32; 4]>> {
+        use gltf::accessor::DataType;
+        let Some(acc) = prim.get(&Semantic::Colors(0)) else {
+            return Ok(Vec::new());
+        };
+        let n = match acc.dimensions() {
+            Dimensions::Vec3 => 3,
+            Dimensions::Vec4 => 4,
+            other => {
+                self.warn(format_args!(
+                    "{who}: COLOR_0 (accessor {}) is {other:?}; glTF allows VEC3 or VEC4, so the vertex colours are ignored: re-export the mesh",
+                    acc.index()
+                ));
+                return Ok(Vec::new());
+            }
+        };
+        let allowed = match acc.data_type() {
+            DataType::F32 => true,
+            DataType::U8 | DataType::U16 => acc.normalized(),
+            _ => false,
+        };
+        if !allowed {
+            self.warn(format_args!(
+                "{who}: COLOR_0 (accessor {}) has component type {:?}{}; glTF allows float, normalized unsigned byte or normalized unsigned short, so the vertex colours are ignored: re-export the mesh",
+                acc.index(),
+                acc.data_type(),
+                if acc.normalized() { ", normalized" } else { "" }
+            ));
+            return Ok(Vec::new());
+        }
+        let what = format!("{who}, attribute COLOR_0");
+        let values = accessor::read_f32(
+            &acc,
+            acc.dimensions(),
+            self.buffers,
+            &Use {
+                source: &self.label,
+                what: &what,
+            },
+        )?;
+        if values.len() / n != count {
+            return Err(self.error(format_args!(
+                "{who}: attribute COLOR_0 (accessor {}) has {} elements but POSITION has {count}; all attributes of a primitive must have the same count: re-export the mesh",
+                acc.index(),
+                values.len() / n
+            )));
+        }
+        let mut out_of_range = 0usize;
+        let colors = values
+            .chunks_exact(n)
+            .map(|c| {
+                let mut rgba = [1.0f32; 4];
+                for (k, v) in c.iter().enumerate() {
+                    rgba[k] = if v.is_finite() {
+                        v.clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    if rgba[k] != *v {
+                        out_of_range += 1;
+                    }
+                }
+                rgba
+            })
+            .collect();
+        if out_of_range > 0 {
+            self.warn(format_args!(
+                "{who}: COLOR_0 (accessor {}) has {out_of_range} component(s) outside [0, 1] or not finite; clamped (a non-finite one to 1)",
+                acc.index()
+            ));
+        }
+        Ok(colors)
     }
 
     /// A primitive's joint influences (JOINTS_0 / WEIGHTS_0) and morph targets, None when it has

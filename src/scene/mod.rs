@@ -45,6 +45,9 @@ pub struct Mesh {
     pub vertices: Vec<Vertex>,
     pub indices: Vec<u32>,
     pub material: usize,
+    /// COLOR_0, linear RGBA per vertex (alpha 1 where the file has RGB), multiplied into the base
+    /// colour (for fabric, into the thread colours) and its alpha; empty when the mesh has none.
+    pub colors: Vec<[f32; 4]>,
 }
 
 /// An instance of a mesh in the world.
@@ -116,6 +119,9 @@ pub struct Material {
     pub anisotropy: Option<Anisotropy>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
+    /// KHR_materials_unlit: the base colour (factor × texture × COLOR_0) is the pixel's
+    /// radiance, with no lighting (not for fabric: the loader drops it there with a warning).
+    pub unlit: bool,
 }
 
 impl Material {
@@ -299,6 +305,7 @@ impl Default for Material {
             specular: Specular::default(),
             anisotropy: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
+            unlit: false,
         }
     }
 }
