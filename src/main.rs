@@ -1366,10 +1366,6 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "sheen_materials": plan.sheen_materials,
             "specular_materials": plan.specular_materials,
             "anisotropic_materials": plan.anisotropic_materials,
-            "unlit_materials": plan.unlit_materials,
-            "unlit_code": plan.unlit,
-            "vertex_color_meshes": plan.vertex_color_meshes,
-            "vertex_color_code": plan.vertex_colors,
             "variants": plan.variants,
             "variant": plan.variant,
             "animations": scene.animations().iter().map(|a| serde_json::json!({
@@ -1404,6 +1400,23 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "background": e.background,
             })),
         });
+        // The glTF core features (issue 25), added after: one json! call this long overflows
+        // the macro's recursion limit.
+        let mut json = json;
+        for (key, value) in [
+            ("unlit_materials", serde_json::json!(plan.unlit_materials)),
+            ("unlit_code", serde_json::json!(plan.unlit)),
+            (
+                "vertex_color_meshes",
+                serde_json::json!(plan.vertex_color_meshes),
+            ),
+            ("vertex_color_code", serde_json::json!(plan.vertex_colors)),
+            ("instanced_nodes", serde_json::json!(plan.instanced_nodes)),
+            ("instances", serde_json::json!(plan.instances)),
+            ("camera", serde_json::json!(plan.camera)),
+        ] {
+            json[key] = value;
+        }
         println!("{}", serde_json::to_string_pretty(&json)?);
     } else {
         println!("scene       {}", scene.source);

@@ -479,3 +479,45 @@ fn unlit_materials_show_their_base_colour_exactly() {
         );
     }
 }
+
+#[test]
+fn orthographic_cameras_keep_size_at_any_distance() {
+    let material = scene::Material {
+        metallic: 0.0,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let mut rows_seen = Vec::new();
+    for distance in [5.0f32, 50.0] {
+        let mut s = quad_scene(Vec::new(), material.clone());
+        s.cameras.push(scene::Camera {
+            name: "ortho".into(),
+            view: glam::Mat4::look_at_rh(glam::Vec3::Z * distance, glam::Vec3::ZERO, glam::Vec3::Y),
+            yfov: 0.8,
+            znear: 0.1,
+            zfar: Some(100.0),
+            aspect_ratio: None,
+            orthographic: Some([2.0, 2.0]),
+        });
+        let options = RenderOptions {
+            camera: Some(0),
+            ..small()
+        };
+        let frame = renderer.render(&s, &options).expect("render");
+        assert!(frame.plan.camera.contains("orthographic"));
+        // Rows of the centre column that show the quad (not the background).
+        let x = frame.width / 2;
+        let rows = (0..frame.height)
+            .filter(|&y| {
+                let i = ((y * frame.width + x) * 4) as usize;
+                (frame.hdr[i] - 0.010).abs() > 1e-3
+            })
+            .count();
+        rows_seen.push(rows);
+    }
+    // ymag 2: the view is 4 m tall, the quad 2 m: half the image, at 5 m as at 50 m.
+    let half = (small().height / 2) as usize;
+    for rows in &rows_seen {
+        assert!(rows.abs_diff(half) <= 1, "{rows_seen:?}, want {half}");
+    }
+}

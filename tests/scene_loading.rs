@@ -1402,20 +1402,15 @@ fn camera_with_zero_yfov_is_an_error_naming_it() {
 }
 
 #[test]
-fn orthographic_camera_is_skipped_with_a_warning() {
+fn orthographic_camera_is_read_not_skipped() {
     let d = with_camera(
         json!({"name": "ortho", "type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}),
         json!({"camera": 0}),
     );
     let s = d.load("ortho").unwrap();
-    assert!(s.cameras.is_empty());
-    assert!(
-        s.warnings
-            .iter()
-            .any(|w| w.0.contains("ortho") && w.0.contains("orthographic")),
-        "{:?}",
-        s.warnings
-    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.cameras.len(), 1);
+    assert_eq!(s.cameras[0].orthographic, Some([1.0, 1.0]));
 }
 
 #[test]
@@ -2234,4 +2229,170 @@ fn a_ktx2_texture_is_an_error_that_names_the_format_and_the_fix() {
         msg.contains("KTX2") && msg.contains("lamp metal") && msg.contains("PNG"),
         "{msg}"
     );
+}
+
+/// The quad of `Doc::quad` on a node translated to z = 5, with EXT_mesh_gpu_instancing
+/// attributes given as (key, accessor) pairs.
+fn instanced_quad(d: &mut Doc, attributes: Value) -> usize {
+    let (_, node) = d.quad(true, false);
+    d.json["nodes"][node]["translation"] = json!([0.0, 0.0, 5.0]);
+    d.json["nodes"][node]["extensions"] =
+        json!({"EXT_mesh_gpu_instancing": {"attributes": attributes}});
+    d.json["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    d.json["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]);
+    node
+}
+
+#[test]
+fn gpu_instancing_draws_the_mesh_once_per_instance_under_its_node() {
+    let mut d = Doc::new();
+    let t = d.floats(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 3.0, 0.0]]);
+    let q = glam::Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let r = d.floats(&[[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], q.to_array()]);
+    let s = d.floats(&[[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 1.0, 1.0]]);
+    instanced_quad(&mut d, json!({"TRANSLATION": t, "ROTATION": r, "SCALE": s}));
+    let scene = d.load("instancing").unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_well_formed(&scene);
+    assert_eq!(scene.draws.len(), 3);
+    assert!(scene.draws.iter().all(|d| d.mesh == 0));
+    assert_eq!((scene.instanced_nodes, scene.instances), (1, 3));
+    // The node's transform after the instance's: x = 1 scaled by 2, moved by 2, then z + 5.
+    let p = |i: usize, v: Vec3| scene.draws[i].world.transform_point3(v);
+    assert!(p(0, Vec3::X).abs_diff_eq(Vec3::new(1.0, 0.0, 5.0), 1e-5));
+    assert!(p(1, Vec3::X).abs_diff_eq(Vec3::new(4.0, 0.0, 5.0), 1e-5));
+    assert!(
+        p(2, Vec3::X).abs_diff_eq(Vec3::new(0.0, 4.0, 5.0), 1e-5),
+        "{}",
+        p(2, Vec3::X)
+    );
+    // The rest pose (what animation starts from) keeps the instances apart.
+    let mut posed = scene.clone();
+    posed.rest_pose().unwrap();
+    for (a, b) in posed.draws.iter().zip(&scene.draws) {
+        assert!(a.world.abs_diff_eq(b.world, 1e-6));
+    }
+    let plan = weft::render::Plan::new(&scene, &weft::render::RenderOptions::default());
+    assert_eq!(
+        (plan.instanced_nodes, plan.instances, plan.draws),
+        (1, 3, 3)
+    );
+    assert!(
+        plan.to_string()
+            .contains("instancing  3 instance(s) on 1 node(s)"),
+        "{plan}"
+    );
+}
+
+#[test]
+fn gpu_instancing_with_bad_accessors_is_an_error_that_names_them() {
+    // Counts that differ.
+    let mut d = Doc::new();
+    let t = d.floats(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]);
+    let s = d.floats(&[[1.0, 1.0, 1.0]]);
+    instanced_quad(&mut d, json!({"TRANSLATION": t, "SCALE": s}));
+    let msg = error_text(d.load("instancing-counts"));
+    assert!(
+        msg.contains("EXT_mesh_gpu_instancing")
+            && msg.contains("SCALE")
+            && msg.contains("TRANSLATION"),
+        "{msg}"
+    );
+    // An accessor that does not exist.
+    let mut d = Doc::new();
+    instanced_quad(&mut d, json!({"TRANSLATION": 99}));
+    let msg = error_text(d.load("instancing-index"));
+    assert!(msg.contains("accessor 99"), "{msg}");
+    // A zero rotation.
+    let mut d = Doc::new();
+    let r = d.floats(&[[0.0, 0.0, 0.0, 0.0]]);
+    instanced_quad(&mut d, json!({"ROTATION": r}));
+    let msg = error_text(d.load("instancing-rotation"));
+    assert!(
+        msg.contains("instance 0") && msg.contains("rotation"),
+        "{msg}"
+    );
+    // No attributes: drawn once, with a warning.
+    let mut d = Doc::new();
+    instanced_quad(&mut d, json!({}));
+    let scene = d.load("instancing-empty").unwrap();
+    assert_eq!(scene.draws.len(), 1);
+    assert!(scene
+        .warnings
+        .iter()
+        .any(|w| w.0.contains("EXT_mesh_gpu_instancing")));
+}
+
+#[test]
+fn simple_instancing_is_a_grid_of_125_cubes() {
+    let path =
+        Path::new("../shared/realworld/khronos/SimpleInstancing/glTF-Binary/SimpleInstancing.glb");
+    if !path.exists() {
+        println!("({} not present: skipped)", path.display());
+        return;
+    }
+    let scene = scene::load(path).unwrap();
+    assert!(
+        !scene.warnings.iter().any(|w| w.0.contains("ignores")),
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(scene.instances, 125);
+    assert_eq!(scene.draws.len(), 125 * scene.meshes.len());
+}
+
+#[test]
+fn orthographic_cameras_are_read_and_chosen_like_perspective_ones() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["cameras"] = json!([
+        {"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}},
+        {"type": "orthographic", "name": "top", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 100.0}},
+    ]);
+    d.push(
+        "nodes",
+        json!({"camera": 0, "translation": [0.5, 0.5, 3.0]}),
+    );
+    d.push(
+        "nodes",
+        json!({"camera": 1, "translation": [0.5, 0.5, 4.0]}),
+    );
+    let n = d.json["nodes"].as_array().unwrap().len();
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .extend([json!(n - 2), json!(n - 1)]);
+    let s = d.load("ortho").unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.cameras.len(), 2);
+    assert_eq!(s.cameras[0].orthographic, None);
+    assert_eq!(s.cameras[1].orthographic, Some([2.0, 1.5]));
+    assert_eq!(s.cameras[1].zfar, Some(100.0));
+    let options = weft::render::RenderOptions {
+        camera: Some(1),
+        ..Default::default()
+    };
+    let plan = weft::render::Plan::new(&s, &options);
+    assert!(
+        plan.camera.contains("orthographic (xmag 2, ymag 1.5)"),
+        "{}",
+        plan.camera
+    );
+    // Broken ones are errors naming the camera.
+    for (bad, what) in [
+        (
+            json!({"xmag": 0.0, "ymag": 1.0, "znear": 0.0, "zfar": 1.0}),
+            "xmag",
+        ),
+        (
+            json!({"xmag": 1.0, "ymag": 1.0, "znear": 2.0, "zfar": 1.0}),
+            "zfar",
+        ),
+    ] {
+        let mut d2 = Doc::new();
+        d2.quad(true, false);
+        d2.json["cameras"] = json!([{"type": "orthographic", "orthographic": bad}]);
+        let msg = error_text(d2.load(&format!("ortho-{what}")));
+        assert!(msg.contains("camera 0") && msg.contains(what), "{msg}");
+    }
 }

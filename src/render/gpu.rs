@@ -43,11 +43,33 @@ impl FrameData {
         let aspect = width as f32 / height as f32;
         // Reversed-Z keeps D32F depth precision nearly uniform, so a cloth 1.5 cm above a ball
         // does not z-fight at 15 m. The camera's zfar is not needed.
-        let mut proj =
-            Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6));
+        let mut proj = match camera.orthographic {
+            // Orthographic (glTF xmag, ymag): ymag kept, the half-width from the image's aspect,
+            // reversed-Z between the far (0) and near (1) planes.
+            Some([_, ymag]) => {
+                let (h, w) = (ymag.abs().max(1e-6), ymag.abs().max(1e-6) * aspect);
+                let near = camera.znear.max(0.0);
+                let far = camera.zfar.filter(|f| *f > near).unwrap_or(near + 1e3);
+                Mat4::orthographic_rh(-w, w, -h, h, far, near)
+            }
+            None => {
+                Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6))
+            }
+        };
         proj.y_axis.y = -proj.y_axis.y;
         let view_proj = proj * camera.view;
-        let eye = camera.view.inverse().transform_point3(Vec3::ZERO);
+        let camera_to_world = camera.view.inverse();
+        let mut eye = camera_to_world.transform_point3(Vec3::ZERO);
+        if camera.orthographic.is_some() {
+            // Every view ray is parallel: the shaders take the direction to the viewer as
+            // normalize(eye - p), so the eye is put far back along the view axis, where that
+            // direction is the axis to within 1e-7 rad (1e6 times the far plane's distance).
+            let back = camera_to_world
+                .transform_vector3(Vec3::Z)
+                .normalize_or(Vec3::Z);
+            let far = camera.zfar.unwrap_or(1e3).abs().max(1.0);
+            eye += back * (far * 1e6).min(1e30);
+        }
         FrameData {
             view: camera.view.to_cols_array_2d(),
             proj: proj.to_cols_array_2d(),

@@ -130,6 +130,13 @@ pub struct Plan {
     /// (some mesh has them, or forced): without, no colour buffer is read and nothing multiplied.
     pub vertex_color_meshes: usize,
     pub vertex_colors: bool,
+    /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
+    /// its own, counted in `draws`; no pipeline or pass of its own).
+    pub instanced_nodes: usize,
+    pub instances: usize,
+    /// The camera the frame renders with: its name and projection (an orthographic camera needs
+    /// no code of its own, only its projection matrix).
+    pub camera: String,
     /// KHR_materials_variants: the file's variants and the one loaded (None: the defaults).
     pub variants: Vec<String>,
     pub variant: Option<String>,
@@ -317,6 +324,24 @@ impl Plan {
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
             vertex_colors: vertex_color_meshes > 0 || options.force.vertex_colors,
+            camera: match options
+                .camera_override
+                .clone()
+                .map(Ok)
+                .unwrap_or_else(|| scene.camera(options.camera))
+            {
+                Ok(c) => match c.orthographic {
+                    Some([x, y]) => format!("'{}', orthographic (xmag {x}, ymag {y})", c.name),
+                    None => format!(
+                        "'{}', perspective (yfov {:.1}°)",
+                        c.name,
+                        c.yfov.to_degrees()
+                    ),
+                },
+                Err(_) => "none (the index is out of range)".into(),
+            },
+            instanced_nodes: scene.instanced_nodes,
+            instances: scene.instances,
             height: options.height,
             passes,
             draws: scene.draws.len(),
@@ -387,6 +412,14 @@ impl fmt::Display for Plan {
             "draws       {} ({} triangles)",
             self.draws, self.triangles
         )?;
+        writeln!(f, "camera      {}", self.camera)?;
+        if self.instanced_nodes > 0 {
+            writeln!(
+                f,
+                "instancing  {} instance(s) on {} node(s) (EXT_mesh_gpu_instancing), one draw each",
+                self.instances, self.instanced_nodes
+            )?;
+        }
         writeln!(
             f,
             "lights      {} directional, {} point, {} spot",

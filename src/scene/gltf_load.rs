@@ -57,10 +57,18 @@ const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
 /// KHR_materials_unlit: base colour only, no lighting.
 const UNLIT: &str = "KHR_materials_unlit";
 
+/// EXT_mesh_gpu_instancing: a node places its mesh once per instance (TRANSLATION, ROTATION,
+/// SCALE accessors).
+const INSTANCING: &str = "EXT_mesh_gpu_instancing";
+
+/// Instances, summed over the scene's instanced nodes: 2^20 (each is a draw of its own).
+pub(super) const MAX_INSTANCES: usize = 1 << 20;
+
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     UNLIT,
+    INSTANCING,
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
     material_ext::SHEEN,
@@ -361,6 +369,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
     const OWN: &[&str] = &[
         FABRIC_EXTENSION,
         UNLIT,
+        INSTANCING,
         material_ext::SHEEN,
         material_ext::SPECULAR,
         material_ext::IOR,
@@ -515,9 +524,11 @@ pub(super) fn fan_to_list(fan: &[u32]) -> Vec<u32> {
     list
 }
 
-/// A perspective camera before a node places it.
+/// A camera before a node places it.
 struct CameraDef {
     name: String,
+    /// Orthographic: (xmag, ymag), and `yfov` is unused.
+    orthographic: Option<[f32; 2]>,
     yfov: f32,
     znear: f32,
     zfar: Option<f32>,
@@ -542,7 +553,7 @@ struct Loader<'a> {
     /// Per glTF mesh: the scene meshes made from its primitives, once a node used it.
     mesh_ids: Vec<Option<Vec<usize>>>,
     lights: Vec<LightDef>,
-    /// None for orthographic cameras, which are skipped.
+    /// Per glTF camera (None for none: every camera is read, or the file refused).
     cameras: Vec<Option<CameraDef>>,
     /// What the file has cost so far, against the limits above.
     vertices_read: usize,
@@ -1818,10 +1829,37 @@ impl<'a> Loader<'a> {
             let p = match (&c.type_, &c.perspective) {
                 (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
                 (Checked::Valid(json::camera::Type::Orthographic), _) => {
-                    self.warn(format_args!(
-                        "{who} is orthographic; weft renders perspective cameras only, so it is skipped"
-                    ));
-                    out.push(None);
+                    let Some(o) = c.orthographic.as_ref() else {
+                        return Err(self.error(format_args!(
+                            "{who} has type orthographic but no \"orthographic\" object; add one with xmag, ymag, znear and zfar"
+                        )));
+                    };
+                    if !(o.xmag.is_finite() && o.xmag != 0.0 && o.ymag.is_finite() && o.ymag != 0.0) {
+                        return Err(self.error(format_args!(
+                            "{who} has xmag {} and ymag {}; both must be finite and not zero (half the width and height of the view, in metres): fix the camera",
+                            o.xmag, o.ymag
+                        )));
+                    }
+                    if o.xmag < 0.0 || o.ymag < 0.0 {
+                        self.warn(format_args!(
+                            "{who} has a negative xmag or ymag ({}, {}); glTF asks for positive ones, so their magnitudes are used",
+                            o.xmag, o.ymag
+                        ));
+                    }
+                    if !(o.znear.is_finite() && o.znear >= 0.0 && o.zfar.is_finite() && o.zfar > o.znear) {
+                        return Err(self.error(format_args!(
+                            "{who} has znear {} and zfar {}; an orthographic camera needs 0 <= znear < zfar, both finite: fix the camera",
+                            o.znear, o.zfar
+                        )));
+                    }
+                    out.push(Some(CameraDef {
+                        name,
+                        orthographic: Some([o.xmag.abs(), o.ymag.abs()]),
+                        yfov: 45f32.to_radians(),
+                        znear: o.znear,
+                        zfar: Some(o.zfar),
+                        aspect_ratio: Some(o.xmag.abs() / o.ymag.abs()),
+                    }));
                     continue;
                 }
                 _ => {
@@ -1859,6 +1897,7 @@ impl<'a> Loader<'a> {
             }
             out.push(Some(CameraDef {
                 name,
+                orthographic: None,
                 yfov: p.yfov,
                 znear: p.znear,
                 zfar: p.zfar,
@@ -1936,6 +1975,17 @@ impl<'a> Loader<'a> {
                 )));
             }
             let flags = self.node_shadow_flags(node.index(), inherited, &who)?;
+            let instances = self.instance_transforms(&node, &who)?;
+            if instances.is_some() && node.mesh().is_none() {
+                self.warn(format_args!(
+                    "{who} has {INSTANCING} but no mesh; the instances are ignored (the extension places a node's mesh)"
+                ));
+            }
+            let instance_list = instances.clone().unwrap_or_else(|| vec![Mat4::IDENTITY]);
+            if let (Some(list), Some(_)) = (&instances, node.mesh()) {
+                self.scene.instanced_nodes += 1;
+                self.scene.instances += list.len();
+            }
 
             if let Some(mesh) = node.mesh() {
                 let skin = node.skin().map(|s| s.index());
@@ -1946,7 +1996,11 @@ impl<'a> Loader<'a> {
                     .get(node.index())
                     .map(|n| n.weights.clone())
                     .unwrap_or_default();
-                for id in self.mesh_ids(&mesh)? {
+                for (id, &instance) in self
+                    .mesh_ids(&mesh)?
+                    .into_iter()
+                    .flat_map(|id| instance_list.iter().map(move |m| (id, m)))
+                {
                     let triangles = self.scene.meshes.get(id).map_or(0, |m| m.indices.len() / 3);
                     self.triangles_drawn = self.triangles_drawn.saturating_add(triangles as u64);
                     if self.triangles_drawn > MAX_DRAWN_TRIANGLES {
@@ -1966,11 +2020,12 @@ impl<'a> Loader<'a> {
                         weights: (0..targets)
                             .map(|k| weights.get(k).copied().unwrap_or(0.0))
                             .collect(),
+                        instance,
                     });
                     self.scene.draws.push(Draw {
                         cast_shadows: flags.cast,
                         receive_shadows: flags.receive,
-                        ..Draw::new(id, world)
+                        ..Draw::new(id, world * instance)
                     });
                 }
             }
@@ -2000,6 +2055,118 @@ impl<'a> Loader<'a> {
             }
         }
         Ok(())
+    }
+
+    /// EXT_mesh_gpu_instancing: the node's instance transforms (translation × rotation × scale,
+    /// each from its accessor or the identity), None when the node has no such extension. The
+    /// accessors must have one count; rotations are normalised (a zero or non-finite one, like a
+    /// non-finite translation or scale, is an error naming the instance).
+    fn instance_transforms(
+        &mut self,
+        node: &gltf::Node<'a>,
+        who: &str,
+    ) -> Result<Option<Vec<Mat4>>> {
+        let Some(ext) = node.extension_value(INSTANCING) else {
+            return Ok(None);
+        };
+        let Some(attributes) = ext.get("attributes").and_then(|a| a.as_object()) else {
+            return Err(self.error(format_args!(
+                "{who}: {INSTANCING} has no \"attributes\" object; it needs TRANSLATION, ROTATION and/or SCALE accessors: fix or re-export the node"
+            )));
+        };
+        let mut count: Option<(usize, &str)> = None;
+        let mut columns: [Option<Vec<f32>>; 3] = [None, None, None];
+        for (k, (key, dims, n)) in [
+            ("TRANSLATION", Dimensions::Vec3, 3),
+            ("ROTATION", Dimensions::Vec4, 4),
+            ("SCALE", Dimensions::Vec3, 3),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let Some(value) = attributes.get(key) else {
+                continue;
+            };
+            let Some(index) = value.as_u64().and_then(|i| usize::try_from(i).ok()) else {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING}.attributes.{key} is {}, not an accessor index: fix the node",
+                    short_json(value)
+                )));
+            };
+            let Some(acc) = self.doc.accessors().nth(index) else {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING}.attributes.{key} names accessor {index}, but the file has only {} accessor(s): fix the index",
+                    self.doc.accessors().len()
+                )));
+            };
+            if key == "ROTATION"
+                && acc.data_type() != gltf::accessor::DataType::F32
+                && !acc.normalized()
+            {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING} ROTATION (accessor {index}) has component type {:?} without normalized; rotations are float or normalized byte or short quaternions: re-export the node",
+                    acc.data_type()
+                )));
+            }
+            let what = format!("{who}, {INSTANCING} {key}");
+            let values = accessor::read_f32(
+                &acc,
+                dims,
+                self.buffers,
+                &Use {
+                    source: &self.label,
+                    what: &what,
+                },
+            )?;
+            let c = values.len() / n;
+            match count {
+                Some((other, name)) if other != c => {
+                    return Err(self.error(format_args!(
+                        "{who}: {INSTANCING} {key} has {c} elements but {name} has {other}; every attribute has one element per instance: fix the accessors"
+                    )))
+                }
+                _ => count = Some((c, key)),
+            }
+            columns[k] = Some(values);
+        }
+        let Some((count, _)) = count else {
+            self.warn(format_args!(
+                "{who}: {INSTANCING} has none of TRANSLATION, ROTATION and SCALE; the mesh is drawn once"
+            ));
+            return Ok(None);
+        };
+        let total = self.scene.instances.saturating_add(count);
+        if total > MAX_INSTANCES {
+            return Err(self.error(format_args!(
+                "{who} brings the {INSTANCING} instances to {total}, more than weft's limit of {MAX_INSTANCES} (each is a draw of its own): use fewer instances"
+            )));
+        }
+        let [t, r, s] = &columns;
+        let mut out = Vec::with_capacity(count);
+        for i in 0..count {
+            let v3 = |c: &Option<Vec<f32>>, default: Vec3| {
+                c.as_ref()
+                    .map_or(default, |v| Vec3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]))
+            };
+            let translation = v3(t, Vec3::ZERO);
+            let scale = v3(s, Vec3::ONE);
+            let rotation = r.as_ref().map_or(Quat::IDENTITY, |v| {
+                Quat::from_xyzw(v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3])
+            });
+            if !(translation.is_finite() && scale.is_finite() && rotation.is_finite())
+                || rotation.length_squared() < 1e-12
+            {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING} instance {i} has translation {translation}, rotation {rotation} and scale {scale}; each must be finite and the rotation a unit quaternion: fix the accessors"
+                )));
+            }
+            out.push(Mat4::from_scale_rotation_translation(
+                scale,
+                rotation.normalize(),
+                translation,
+            ));
+        }
+        Ok(Some(out))
     }
 
     /// The node's `extras.cast_shadows` and `extras.receive_shadows` (true or false), each
@@ -2100,7 +2267,7 @@ impl<'a> Loader<'a> {
         };
         // The view is the inverse of the node's rigid motion: scale (even mirroring) is removed,
         // keeping the view direction (-Z) and the up direction (+Y) of the node.
-        let Some(camera) = animation::placed_camera(
+        let Some(mut camera) = animation::placed_camera(
             def.name.clone(),
             world,
             def.yfov,
@@ -2114,6 +2281,7 @@ impl<'a> Loader<'a> {
             ));
             return;
         };
+        camera.orthographic = def.orthographic;
         self.scene.cameras.push(camera);
     }
 }

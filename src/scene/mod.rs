@@ -359,7 +359,7 @@ impl Default for Shadow {
     }
 }
 
-/// A perspective camera in world space.
+/// A camera in world space: perspective, or orthographic when `orthographic` is set.
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub name: String,
@@ -372,6 +372,10 @@ pub struct Camera {
     pub zfar: Option<f32>,
     /// Aspect ratio stored in the file; the renderer uses the output image's.
     pub aspect_ratio: Option<f32>,
+    /// An orthographic camera's glTF (xmag, ymag): half the width and height of the view
+    /// volume. The renderer keeps ymag and takes the half-width from the output image's aspect
+    /// (as it does with a perspective camera's yfov), and needs `zfar`. None: perspective.
+    pub orthographic: Option<[f32; 2]>,
 }
 
 /// Non-fatal problems found while loading: the scene still renders, and the CLI prints these.
@@ -402,6 +406,11 @@ pub struct Scene {
     /// KHR_materials_variants: the file's variant names, and the one the scene was loaded with.
     pub variants: Vec<String>,
     pub variant: Option<String>,
+    /// EXT_mesh_gpu_instancing: the nodes that place their mesh several times, and their
+    /// instances summed (each instance is a draw of its own: a node with 125 instances of a
+    /// one-primitive mesh makes 125 draws).
+    pub instanced_nodes: usize,
+    pub instances: usize,
     /// The node hierarchy, skins, morph targets and animations ([`animation`]): what
     /// [`Scene::pose`] needs to move the draws, lights and cameras above.
     pub rig: animation::Rig,
@@ -508,6 +517,7 @@ impl Scene {
             znear,
             zfar,
             aspect_ratio: None,
+            orthographic: None,
         })
     }
 
@@ -613,6 +623,7 @@ impl Scene {
             znear: (dist - radius).max(radius * 1e-3),
             zfar: Some(dist + radius * 2.0),
             aspect_ratio: None,
+            orthographic: None,
         }
     }
 }
