@@ -20,6 +20,10 @@ layout(constant_id = 4) const uint FOOTPRINT_PIECES = 2u;
 // 1: multiply the vertex colour (COLOR_0, from gbuffer.vert) into the base colour and alpha, and
 // into fabric's thread texture value; 0: the scene has none.
 layout(constant_id = 5) const uint VERTEX_COLORS = 0u;
+// 1: some drawn material is alphaMode MASK: pixels whose base colour alpha is below the cutoff
+// are discarded (at the end, after every derivative); 0: no discard is compiled in, so early
+// depth testing stays possible.
+layout(constant_id = 6) const uint ALPHA_MASK = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
@@ -257,4 +261,7 @@ void main() {
     // metallic_roughness.w.
     float ao = clamp(1.0 + m.metallic_roughness.w * (sample_slot(occlusion_tex, m, SLOT_OCCLUSION).r - 1.0), 0.0, 1.0);
     gb_emissive = vec4(max(emissive, vec3(0.0)), ao);
+    if (ALPHA_MASK != 0u && alpha_cut(m, base.a)) {
+        discard;
+    }
 }

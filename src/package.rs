@@ -149,6 +149,24 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "Shadow pass, fragment stage: empty (depth only); pair it with `shadow.vert`.",
     ),
     (
+        "shadow_mask.frag",
+        "Shadow pass for alphaMode MASK casters, fragment stage: discards where the base colour's \
+         alpha (`Material.base_color.a` x the base colour texture's alpha through the slot's UV \
+         set and map x the vertex colour alpha) is below the material's cutoff \
+         (`Material.alpha.x`, flag 8 in `Material.extra.w`), so cut-outs cast cut-out shadows. \
+         Pair it with `shadow_mask.vert`; set 0 binding 0 the material records, set 1 binding 0 \
+         the caster material's base colour texture.",
+    ),
+    (
+        "shadow_mask.vert",
+        "Shadow pass for alphaMode MASK casters, vertex stage: as `shadow.vert`, with the G-buffer \
+         pass's vertex buffer read at position (location 0, offset 0), uv (1, offset 40) and uv1 \
+         (2, offset 56), and each vertex's colour alpha from set 0 binding 1 when VERTEX_COLORS = \
+         1. Push `mat4 clip_from_object`, `uint material` and three pad words (80 bytes, vertex \
+         and fragment stages) per draw. weft makes this pipeline only for a frame with a shadow \
+         map and a MASK material that casts.",
+    ),
+    (
         "shadow.vert",
         "Shadow pass, vertex stage: depth-only rendering of shadow casters into one light's tile of \
          a D32 shadow atlas (reversed-Z: clear to 0, depth compare GREATER, nearest to the light \
@@ -250,6 +268,9 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         3,
         "lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)",
     ),
+    ("shadow_mask.frag", 0, 0, "material records (`Material[]`, include/frame.glsl): the base colour factor, its texture's UV map and the MASK cutoff"),
+    ("shadow_mask.vert", 0, 1, "vertex colours (`vec4[]`, as gbuffer.vert's set 0 binding 4; read only when VERTEX_COLORS = 1)"),
+    ("shadow_mask.frag", 1, 0, "the caster material's base colour texture (sRGB; white when none): its alpha"),
     (
         "gbuffer.vert",
         0,
@@ -360,6 +381,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("gbuffer.vert", 3, "LIGHT_TYPES: as lighting.frag's, for the per-vertex lighting of SHADING = 1 (default 7, all)"),
     ("gbuffer.vert", 5, "VERTEX_COLORS: 1 reads each vertex's colour (set 0, binding 4) and writes it to output location 7 for gbuffer.frag; 0 (default) reads none and writes white"),
     ("gbuffer.frag", 5, "VERTEX_COLORS: 1 multiplies the vertex colour (input location 7) into the base colour and alpha, and for fabric into the thread texture's value; 0 (default) compiles that out"),
+    ("gbuffer.frag", 6, "ALPHA_MASK: 1 discards pixels of alphaMode MASK materials (`Material.extra.w` flag 8) whose base colour alpha (factor x texture x vertex colour) is below the cutoff `Material.alpha.x`, after every target is written; 0 (default) compiles the discard out"),
+    ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 1) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",

@@ -433,3 +433,36 @@ fn no_unlit_material_compiles_no_unlit_code_and_forcing_it_changes_nothing() {
     flat.materials[0].unlit = true;
     assert!(Plan::new(&flat, &options()).unlit);
 }
+
+#[test]
+fn no_mask_material_compiles_no_discard_and_forcing_it_changes_nothing() {
+    let scene = shadows_scene();
+    let plan = Plan::new(&scene, &options());
+    assert_eq!(
+        (plan.mask_draws, plan.alpha_mask, plan.mask_casters),
+        (0, false, 0)
+    );
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let planned = renderer.render(&scene, &options()).unwrap();
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    alpha_mask: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    assert!(gbuffer_pipeline(&planned).contains("alpha_mask=0"));
+    assert!(gbuffer_pipeline(&forced).contains("alpha_mask=1"));
+    assert!(!planned
+        .stats
+        .pipelines
+        .iter()
+        .any(|p| p.starts_with("shadow_mask")));
+    assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+    assert_eq!(planned.ldr, forced.ldr);
+}

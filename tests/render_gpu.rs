@@ -521,3 +521,168 @@ fn orthographic_cameras_keep_size_at_any_distance() {
         assert!(rows.abs_diff(half) <= 1, "{rows_seen:?}, want {half}");
     }
 }
+
+#[test]
+fn alpha_mask_cuts_out_below_the_cutoff_in_the_image() {
+    let material = |cutoff: Option<f32>| scene::Material {
+        metallic: 0.0,
+        alpha_cutoff: cutoff,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let background = weft::render::gpu::BACKGROUND;
+    let is_background = |c: [f32; 3]| (0..3).all(|k| (c[k] - background[k]).abs() < 1e-4);
+    // Vertex alpha 0.4: cut out at cutoff 0.5, kept at 0.3; opaque ignores alpha.
+    for (cutoff, cut) in [(Some(0.5), true), (Some(0.3), false), (None, false)] {
+        let s = quad_scene(vec![[1.0, 1.0, 1.0, 0.4]; 4], material(cutoff));
+        let frame = renderer.render(&s, &small()).expect("render");
+        assert_eq!(
+            is_background(centre(&frame)),
+            cut,
+            "cutoff {cutoff:?}: {:?}",
+            centre(&frame)
+        );
+        assert!(frame
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p.starts_with("gbuffer[")
+                && p.contains(if cutoff.is_some() {
+                    "alpha_mask=1"
+                } else {
+                    "alpha_mask=0"
+                })));
+    }
+}
+
+/// A floor (y = 0, receiving) under a 1 x 1 m MASK card at y = 1 (casting), a directional
+/// light at 45° with a shadow map, looked at from above.
+fn card_over_floor(card_alpha: f32) -> scene::Scene {
+    let v = |p: [f32; 3], n: [f32; 3]| scene::Vertex {
+        position: p,
+        normal: n,
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [0.0; 2],
+        uv1: [0.0; 2],
+    };
+    let up = [0.0, 1.0, 0.0];
+    let floor = scene::Mesh {
+        name: "floor".into(),
+        vertices: vec![
+            v([-3.0, 0.0, 3.0], up),
+            v([3.0, 0.0, 3.0], up),
+            v([3.0, 0.0, -3.0], up),
+            v([-3.0, 0.0, -3.0], up),
+        ],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+        colors: Vec::new(),
+    };
+    let card = scene::Mesh {
+        name: "card".into(),
+        vertices: vec![
+            v([-0.5, 1.0, 0.5], up),
+            v([0.5, 1.0, 0.5], up),
+            v([0.5, 1.0, -0.5], up),
+            v([-0.5, 1.0, -0.5], up),
+        ],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 1,
+        colors: vec![[1.0, 1.0, 1.0, card_alpha]; 4],
+    };
+    let mut floor_draw = scene::Draw::new(0, glam::Mat4::IDENTITY);
+    floor_draw.cast_shadows = false;
+    let mut card_draw = scene::Draw::new(1, glam::Mat4::IDENTITY);
+    card_draw.receive_shadows = false;
+    let mut s = scene::Scene {
+        source: "card".into(),
+        meshes: vec![floor, card],
+        draws: vec![floor_draw, card_draw],
+        materials: vec![
+            scene::Material {
+                metallic: 0.0,
+                ..Default::default()
+            },
+            scene::Material {
+                metallic: 0.0,
+                alpha_cutoff: Some(0.5),
+                double_sided: true,
+                ..Default::default()
+            },
+        ],
+        ..Default::default()
+    };
+    s.lights.push(scene::Light {
+        name: "sun".into(),
+        kind: scene::LightKind::Directional,
+        color: [1.0; 3],
+        intensity: 3.0,
+        range: None,
+        position: glam::Vec3::ZERO,
+        // 45° from +x: the card's shadow falls 1 m to its +x side.
+        direction: glam::Vec3::new(1.0, -1.0, 0.0).normalize(),
+        shadow: Some(scene::Shadow::default()),
+    });
+    // From above and to the side, so the card's shadow on the floor is in view beside it.
+    s.cameras.push(
+        s.look_at_camera(
+            glam::Vec3::new(0.0, 6.0, 3.0),
+            glam::Vec3::new(0.5, 0.0, 0.0),
+            0.9,
+        )
+        .unwrap(),
+    );
+    s
+}
+
+#[test]
+fn alpha_mask_cut_outs_cast_cut_out_shadows() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let options = RenderOptions {
+        camera: Some(0),
+        width: 96,
+        height: 72,
+        ..Default::default()
+    };
+    // The middle of the card's shadow on the floor (1 m to its +x side, not behind the card as
+    // the camera sees it), projected into the image.
+    let floor_pixel = |s: &scene::Scene| {
+        let cam = s.cameras[0].clone();
+        let frame = weft::render::gpu::FrameData::new(&cam, options.width, options.height);
+        let vp = glam::Mat4::from_cols_array_2d(&frame.view_proj);
+        let p = vp.project_point3(glam::Vec3::new(1.0, 0.0, 0.0));
+        let x = ((p.x * 0.5 + 0.5) * options.width as f32) as u32;
+        let y = ((p.y * 0.5 + 0.5) * options.height as f32) as u32;
+        ((y * options.width + x) * 4) as usize
+    };
+    let mut lum = Vec::new();
+    for alpha in [1.0, 0.2] {
+        let s = card_over_floor(alpha);
+        let frame = renderer.render(&s, &options).expect("render");
+        assert!(
+            frame
+                .stats
+                .pipelines
+                .iter()
+                .any(|p| p.starts_with("shadow_mask[")),
+            "{:?}",
+            frame.stats.pipelines
+        );
+        let i = floor_pixel(&s);
+        lum.push(frame.hdr[i] + frame.hdr[i + 1] + frame.hdr[i + 2]);
+    }
+    // Without the card at all: the floor fully lit.
+    let mut bare = card_over_floor(1.0);
+    bare.draws.truncate(1);
+    let frame = renderer.render(&bare, &options).expect("render");
+    let i = floor_pixel(&bare);
+    let lit = frame.hdr[i] + frame.hdr[i + 1] + frame.hdr[i + 2];
+    assert!(
+        lum[0] < 0.5 * lit,
+        "the opaque card shadows the floor: {lum:?} vs {lit}"
+    );
+    assert!(
+        (lum[1] - lit).abs() < 0.02 * lit,
+        "the cut-out card casts nothing: {lum:?} vs {lit}"
+    );
+}

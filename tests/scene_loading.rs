@@ -2396,3 +2396,35 @@ fn orthographic_cameras_are_read_and_chosen_like_perspective_ones() {
         assert!(msg.contains("camera 0") && msg.contains(what), "{msg}");
     }
 }
+
+#[test]
+fn alpha_mask_materials_are_read_and_blend_is_drawn_opaque_with_a_warning() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["materials"] = json!([
+        {"name": "lace", "alphaMode": "MASK", "alphaCutoff": 0.3},
+        {"name": "default cutoff", "alphaMode": "MASK"},
+        {"name": "glass", "alphaMode": "BLEND"},
+        {"name": "too high", "alphaMode": "MASK", "alphaCutoff": 1.5},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load("mask").unwrap();
+    let cutoffs: Vec<Option<f32>> = s.materials.iter().map(|m| m.alpha_cutoff).collect();
+    assert_eq!(cutoffs, vec![Some(0.3), Some(0.5), None, Some(1.0)]);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("'glass'") && w.0.contains("BLEND")),
+        "{:?}",
+        s.warnings
+    );
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("'too high'") && w.0.contains("clamped")),
+        "{:?}",
+        s.warnings
+    );
+    let plan = weft::render::Plan::new(&s, &weft::render::RenderOptions::default());
+    assert_eq!((plan.mask_draws, plan.alpha_mask), (1, true));
+}

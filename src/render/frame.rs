@@ -206,6 +206,8 @@ pub(crate) struct DrawRange {
     pub(crate) double_sided: bool,
     pub(crate) cast_shadows: bool,
     pub(crate) receive_shadows: bool,
+    /// The material is alphaMode MASK (the shadow pass casts it with its cut-out pipeline).
+    pub(crate) alpha_mask: bool,
     /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
     pub(crate) scene_draw: usize,
 }
@@ -238,6 +240,8 @@ pub struct GpuScene {
     /// Per material: base colour, metallic-roughness, normal, emissive and occlusion textures
     /// (indices into `textures`, None = a default).
     pub(crate) material_textures: Vec<[Option<usize>; 10]>,
+    /// Per material: alphaMode MASK.
+    pub(crate) material_mask: Vec<bool>,
     pub(crate) textures: Vec<Image>,
     pub(crate) draws: Vec<DrawRange>,
     pub(crate) triangles: usize,
@@ -259,6 +263,12 @@ pub struct Renderer {
     lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     tonemap_pipeline: Pipeline,
     shadow_pipeline: Pipeline,
+    /// The shadow pass's cut-out pipeline for alphaMode MASK casters (shadow_mask.vert/.frag), by
+    /// VERTEX_COLORS, made when a frame first needs it; its two set layouts (materials and
+    /// vertex colours; the base colour texture).
+    shadow_mask_variants: HashMap<u32, Pipeline>,
+    shadow_mask_layout: SetLayout,
+    shadow_mask_texture_layout: SetLayout,
     linear: Sampler,
     nearest: Sampler,
     shadow_sampler: Sampler,
@@ -362,6 +372,19 @@ impl Renderer {
         lighting_bindings.extend((13..17).map(|b| sampled(b, Stages::FRAGMENT)));
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
+        let shadow_mask_layout = ctx.create_set_layout(&[
+            Binding {
+                binding: 0,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
+            Binding {
+                binding: 1,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::VERTEX,
+            },
+        ])?;
+        let shadow_mask_texture_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
         let weave_layout = ctx.create_set_layout(&[Binding {
             binding: 0,
             kind: BindingKind::StorageImage,
@@ -483,6 +506,9 @@ impl Renderer {
             lighting_variants: HashMap::new(),
             tonemap_pipeline,
             shadow_pipeline,
+            shadow_mask_variants: HashMap::new(),
+            shadow_mask_layout,
+            shadow_mask_texture_layout,
             linear,
             nearest,
             shadow_sampler,
@@ -507,16 +533,46 @@ impl Renderer {
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
+        self.shadow_mask_pipeline(false)?;
         let mut all = vec![
             &self.weave_pipeline,
             &self.tonemap_pipeline,
             &self.shadow_pipeline,
         ];
         all.extend(self.env.pipelines());
+        all.extend(self.shadow_mask_variants.values());
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
         Ok(all)
+    }
+
+    /// The shadow pass's cut-out pipeline for alphaMode MASK casters, made on first use.
+    fn shadow_mask_pipeline(&mut self, vertex_colors: bool) -> crate::Result<u32> {
+        let key = vertex_colors as u32;
+        if !self.shadow_mask_variants.contains_key(&key) {
+            let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!("shadow_mask[vertex_colors={key}]"),
+                vertex: &shaders::SHADOW_MASK_VERT,
+                fragment: &shaders::SHADOW_MASK_FRAG,
+                vertex_layout: Some(VertexLayout {
+                    stride: (VERTEX_FLOATS * 4) as u32,
+                    attributes: vec![
+                        (0, Format::R32G32B32_SFLOAT, 0),
+                        (1, Format::R32G32_SFLOAT, 40),
+                        (2, Format::R32G32_SFLOAT, 56),
+                    ],
+                }),
+                color_formats: &[],
+                depth_format: Some(SHADOW_FORMAT),
+                set_layouts: &[&self.shadow_mask_layout, &self.shadow_mask_texture_layout],
+                push_constant_size: std::mem::size_of::<super::gpu::ShadowMaskPush>() as u32,
+                push_stages: Stages::GRAPHICS,
+                constants: &[(0, key)],
+            })?;
+            self.shadow_mask_variants.insert(key, pipeline);
+        }
+        Ok(key)
     }
 
     /// The G-buffer and lighting pipeline variants `options` needs, made if missing; returns their
@@ -563,6 +619,7 @@ impl Renderer {
             ),
             (4, options.footprint.pieces()),
             (5, plan.vertex_colors as u32),
+            (6, plan.alpha_mask as u32),
         ];
         let lighting_key = vec![
             (0, options.accuracy.code()),
@@ -605,11 +662,12 @@ impl Renderer {
             };
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}]",
+                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}]",
                     options.accuracy.code(),
                     gbuffer_key[3].1,
                     gbuffer_key[4].1,
-                    gbuffer_key[5].1
+                    gbuffer_key[5].1,
+                    gbuffer_key[6].1
                 ),
                 vertex: &shaders::GBUFFER_VERT,
                 fragment: &shaders::GBUFFER_FRAG,
@@ -742,6 +800,10 @@ impl Renderer {
                     .is_some_and(|m| m.double_sided),
                 cast_shadows: d.cast_shadows,
                 receive_shadows: d.receive_shadows,
+                alpha_mask: scene
+                    .materials
+                    .get(mesh.material)
+                    .is_some_and(|m| m.alpha_cutoff.is_some()),
                 scene_draw,
             });
         }
@@ -786,6 +848,11 @@ impl Renderer {
             .map(|f| self.build_weave(f))
             .collect::<crate::Result<Vec<_>>>()?;
         let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
+        let material_mask = scene
+            .materials
+            .iter()
+            .map(|m| m.alpha_cutoff.is_some())
+            .collect();
         let material_count = materials.len() as u32;
         let materials =
             ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
@@ -817,6 +884,7 @@ impl Renderer {
             light_count,
             material_count,
             material_textures,
+            material_mask,
             textures,
             draws,
             triangles,
@@ -898,6 +966,12 @@ impl Renderer {
             _ => None,
         };
         let (gbuffer_key, lighting_key, env_index) = self.prepare(options, &plan, env)?;
+        // The cut-out shadow pipeline only when a MASK material casts into a shadow map.
+        let shadow_mask_key = if plan.mask_casters > 0 && plan.runs(Pass::Shadow) {
+            Some(self.shadow_mask_pipeline(plan.vertex_colors)?)
+        } else {
+            None
+        };
         if options.weave_precision == super::WeavePrecision::Rgba8 && gpu.weaves8.get().is_none() {
             let copies = gpu
                 .weaves
@@ -1038,7 +1112,7 @@ impl Renderer {
         let targets = self.targets.as_ref().expect("created above");
         let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
         let lighting_pipeline = &self.lighting_variants[&lighting_key];
-        let pool = ctx.create_descriptor_pool(4 + gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(5 + 2 * gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
         let (env_radiance, env_specular) = match env_index {
             Some(i) => (&self.env_cache[i].radiance, &self.env_cache[i].specular),
@@ -1168,17 +1242,58 @@ impl Renderer {
                         .iter()
                         .map(|(_, m, (x, y, r))| (*x, *y, *r, *m))
                         .collect();
+                    // MASK casters: the cut-out pipeline, the materials and vertex colours, and
+                    // each MASK material's base colour texture.
+                    let mask = match shadow_mask_key {
+                        Some(key) => {
+                            let set = pool.set(
+                                &self.shadow_mask_layout,
+                                &[
+                                    (0, Resource::Storage(&gpu.materials)),
+                                    (1, Resource::Storage(&gpu.colors)),
+                                ],
+                            )?;
+                            let textures = (0..gpu.material_count as usize)
+                                .map(|m| {
+                                    if !gpu.material_mask.get(m).copied().unwrap_or(false) {
+                                        return Ok(None);
+                                    }
+                                    let base = gpu
+                                        .material_textures
+                                        .get(m)
+                                        .and_then(|t| t[0])
+                                        .and_then(|i| gpu.textures.get(i))
+                                        .unwrap_or(&self.white);
+                                    pool.set(
+                                        &self.shadow_mask_texture_layout,
+                                        &[(0, Resource::Sampled(base, &self.linear))],
+                                    )
+                                    .map(Some)
+                                })
+                                .collect::<crate::Result<Vec<_>>>()?;
+                            Some(passes::shadow::MaskCasters {
+                                pipeline: &self.shadow_mask_variants[&key],
+                                set,
+                                textures,
+                            })
+                        }
+                        None => None,
+                    };
                     if !tiles.is_empty() {
                         timed_pass(&ctx, queries.as_ref(), &mut timings, "shadow", &mut |cmd| {
                             passes::shadow::shadow_pass(
                                 cmd,
                                 &self.shadow_pipeline,
+                                mask.as_ref(),
                                 gpu,
                                 atlas,
                                 &tiles,
                             )
                         })?;
                         stats.pipelines.push(self.shadow_pipeline.name.clone());
+                        if let Some(m) = &mask {
+                            stats.pipelines.push(m.pipeline.name.clone());
+                        }
                         stats.shadow_maps = tiles.len();
                         stats.shadow_draws =
                             tiles.len() * gpu.draws.iter().filter(|d| d.cast_shadows).count();

@@ -190,14 +190,18 @@ pub struct GpuMaterial {
     pub extra: [f32; 4],
     /// Per texture slot: the two rows of its affine UV map, row 0's w the UV set.
     pub uv: [[f32; 4]; 2 * TextureSlot::COUNT],
+    /// x: the alphaCutoff of a MASK material (flag [`MATERIAL_MASK`]); y, z, w unused.
+    pub alpha: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 112 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
 const MATERIAL_ANISOTROPY_TEXTURE: u32 = 2;
 /// KHR_materials_unlit (read by lighting.frag only when the plan compiles the unlit path in).
 pub const MATERIAL_UNLIT: u32 = 4;
+/// alphaMode MASK: `alpha[0]` is the cutoff.
+pub const MATERIAL_MASK: u32 = 8;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -249,7 +253,13 @@ impl GpuMaterial {
                     ),
                     None => (0.0, 0.0, 0),
                 };
-                let flags = flags | if m.unlit { MATERIAL_UNLIT } else { 0 };
+                let flags = flags
+                    | if m.unlit { MATERIAL_UNLIT } else { 0 }
+                    | if m.alpha_cutoff.is_some() {
+                        MATERIAL_MASK
+                    } else {
+                        0
+                    };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
             uv: {
@@ -260,6 +270,7 @@ impl GpuMaterial {
                 }
                 uv
             },
+            alpha: [m.alpha_cutoff.unwrap_or(0.0), 0.0, 0.0, 0.0],
         }
     }
 }
@@ -322,6 +333,17 @@ const _: () = assert!(std::mem::size_of::<GpuShadow>() == 96);
 pub struct ShadowPush {
     pub clip_from_object: [[f32; 4]; 4],
 }
+
+/// Push constants of the shadow pass for alphaMode MASK casters (shadow_mask.vert/.frag, 80
+/// bytes): the caster's material as well.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowMaskPush {
+    pub clip_from_object: [[f32; 4]; 4],
+    pub material: u32,
+    pub pad: [u32; 3],
+}
+const _: () = assert!(std::mem::size_of::<ShadowMaskPush>() == 80);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

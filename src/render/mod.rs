@@ -162,6 +162,8 @@ pub struct Force {
     pub vertex_colors: bool,
     /// Compile the KHR_materials_unlit path in (lighting UNLIT = 1) with no unlit material.
     pub unlit: bool,
+    /// Compile the alphaMode MASK discard in (gbuffer ALPHA_MASK = 1) with no MASK material.
+    pub alpha_mask: bool,
 }
 
 impl Force {
@@ -171,6 +173,7 @@ impl Force {
         no_range_culling: false,
         vertex_colors: false,
         unlit: false,
+        alpha_mask: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -178,6 +181,7 @@ impl Force {
         no_range_culling: true,
         vertex_colors: true,
         unlit: true,
+        alpha_mask: true,
     };
 }
 

@@ -130,6 +130,12 @@ pub struct Plan {
     /// (some mesh has them, or forced): without, no colour buffer is read and nothing multiplied.
     pub vertex_color_meshes: usize,
     pub vertex_colors: bool,
+    /// alphaMode MASK: drawn draws with a MASK material, whether gbuffer.frag compiles the
+    /// discard in (some, or forced), and the casters among them (the shadow pass then makes and
+    /// uses its cut-out pipeline for them, when it runs).
+    pub mask_draws: usize,
+    pub alpha_mask: bool,
+    pub mask_casters: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
     pub instanced_nodes: usize,
@@ -318,8 +324,24 @@ impl Plan {
             .zip(&drawn)
             .filter(|(m, &drawn)| drawn && !m.colors.is_empty())
             .count();
+        let is_mask = |d: &crate::scene::Draw| {
+            scene
+                .meshes
+                .get(d.mesh)
+                .and_then(|m| scene.materials.get(m.material))
+                .is_some_and(|m| m.alpha_cutoff.is_some())
+        };
+        let mask_draws = scene.draws.iter().filter(|d| is_mask(d)).count();
+        let mask_casters = scene
+            .draws
+            .iter()
+            .filter(|d| d.cast_shadows && is_mask(d))
+            .count();
         Plan {
             width: options.width,
+            mask_draws,
+            alpha_mask: mask_draws > 0 || options.force.alpha_mask,
+            mask_casters,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -434,6 +456,18 @@ impl fmt::Display for Plan {
             self.anisotropic_materials,
             self.unlit_materials,
             if self.unlit { "compiled" } else { "none" }
+        )?;
+        writeln!(
+            f,
+            "alpha mask  {} draw(s) with alphaMode MASK, {} casting (cut-out code {}{})",
+            self.mask_draws,
+            self.mask_casters,
+            if self.alpha_mask { "compiled" } else { "none" },
+            if self.mask_casters > 0 && !self.shadows.is_empty() {
+                ", cut-out shadow pipeline"
+            } else {
+                ""
+            }
         )?;
         writeln!(
             f,

@@ -767,12 +767,26 @@ impl<'a> Loader<'a> {
             }
             None => (None, 1.0),
         };
-        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            self.warn(format_args!(
-                "{who} has alphaMode {:?}; weft draws every material opaque",
-                m.alpha_mode()
-            ));
-        }
+        let alpha_cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => {
+                let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+                finite("alphaCutoff", &[cutoff])?;
+                if !(0.0..=1.0).contains(&cutoff) {
+                    self.warn(format_args!(
+                        "{who} has alphaCutoff {cutoff}, outside [0, 1]; clamped to {}",
+                        cutoff.clamp(0.0, 1.0)
+                    ));
+                }
+                Some(cutoff.clamp(0.0, 1.0))
+            }
+            gltf::material::AlphaMode::Blend => {
+                self.warn(format_args!(
+                    "{who} has alphaMode BLEND, which weft does not draw yet; it is drawn opaque (MASK, a cutoff, is drawn)"
+                ));
+                None
+            }
+        };
 
         // The material extensions (sheen, specular, ior, anisotropy), with their textures.
         let ext = |key: &str| m.extensions().and_then(|e| e.get(key));
@@ -950,6 +964,7 @@ impl<'a> Loader<'a> {
             anisotropy,
             uv: slot_uv,
             unlit,
+            alpha_cutoff,
         };
         Ok((material, uv))
     }

@@ -122,6 +122,10 @@ pub struct Material {
     /// KHR_materials_unlit: the base colour (factor × texture × COLOR_0) is the pixel's
     /// radiance, with no lighting (not for fabric: the loader drops it there with a warning).
     pub unlit: bool,
+    /// alphaMode MASK: the alphaCutoff (where the base colour's alpha, factor × texture ×
+    /// COLOR_0, is below it, the surface is cut out, in the image and in shadow maps). None:
+    /// opaque (alphaMode OPAQUE, and BLEND, which weft draws opaque with a warning).
+    pub alpha_cutoff: Option<f32>,
 }
 
 impl Material {
@@ -306,6 +310,7 @@ impl Default for Material {
             anisotropy: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             unlit: false,
+            alpha_cutoff: None,
         }
     }
 }
