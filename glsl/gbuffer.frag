@@ -58,13 +58,11 @@ layout(push_constant, std430) uniform Draw {
 layout(location = 0) in vec3 in_world_pos;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec4 in_tangent;
-// TEXCOORD_0 and TEXCOORD_1 in one location (gbuffer.vert says why).
-layout(location = 3) in vec4 in_uvs;
-#define in_uv (in_uvs.xy)
-#define in_uv1 (in_uvs.zw)
+layout(location = 3) in vec2 in_uv;
 layout(location = 4) in vec2 in_weave_uv;
 layout(location = 5) in vec3 in_gouraud;
-layout(location = 6) in vec4 in_color;
+layout(location = 6) in vec2 in_uv1;
+layout(location = 7) in vec4 in_color;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out uvec4 gb_frame;    // RGBA16_UINT: octahedral normal (xy), tangent (zw), frame_encode

@@ -46,12 +46,11 @@ layout(location = 5) in vec2 in_uv1;
 layout(location = 0) out vec3 out_world_pos;
 layout(location = 1) out vec3 out_normal;
 layout(location = 2) out vec4 out_tangent;
-// TEXCOORD_0 (xy) and TEXCOORD_1 (zw) share one location: with an eighth output location
-// lavapipe (Mesa 22.3) corrupts its heap at LP_NATIVE_VECTOR_WIDTH=128 (issue 23; seven are fine).
-layout(location = 3) out vec4 out_uvs;
+layout(location = 3) out vec2 out_uv;
 layout(location = 4) out vec2 out_weave_uv;
 layout(location = 5) out vec3 out_gouraud;
-layout(location = 6) out vec4 out_color;
+layout(location = 6) out vec2 out_uv1;
+layout(location = 7) out vec4 out_color;
 
 // The Phong reflection model at a fabric vertex: hemispherical ambient and every light, with the
 // normal turned towards the viewer (the vertex stage cannot know which face will be drawn).
@@ -83,8 +82,9 @@ void main() {
     out_world_pos = world_pos.xyz;
     out_normal = nm * in_normal;
     out_tangent = vec4(mat3(draw.world) * in_tangent.xyz, in_tangent.w * draw.tangent_sign);
-    out_uvs = vec4(in_uv, in_uv1);
+    out_uv = in_uv;
     out_weave_uv = in_weave_uv;
+    out_uv1 = in_uv1;
     out_color = VERTEX_COLORS != 0u ? colors[gl_VertexIndex] : vec4(1.0);
     out_gouraud = vec3(0.0);
     if (SHADING == SHADING_GOURAUD) {
