@@ -372,9 +372,6 @@ pub struct DrawBinding {
     pub skin: Option<usize>,
     /// The current morph weights (one per target of the draw's mesh).
     pub weights: Vec<f32>,
-    /// The instance's transform under its node (EXT_mesh_gpu_instancing; identity otherwise):
-    /// the draw's world is the node's world times this.
-    pub instance: Mat4,
 }
 
 /// What posing needs beyond the flattened scene.
@@ -565,7 +562,7 @@ impl Scene {
                 d.world = if b.skin.is_some() {
                     Mat4::IDENTITY
                 } else {
-                    world[b.node] * b.instance
+                    world[b.node]
                 };
             }
             let w = &weights[b.node];
@@ -768,7 +765,6 @@ pub(super) fn placed_camera(
         znear,
         zfar,
         aspect_ratio,
-        orthographic: None,
     })
 }
 
