@@ -1572,8 +1572,9 @@ fn texture_samplers(
     let mut per_material = Vec::with_capacity(scene.materials.len());
     for m in &scene.materials {
         let mut slots = [0usize; 10];
+        let textures = m.textures();
         for (slot, s) in m.samplers.iter().enumerate().take(10) {
-            if m.textures()[slot].is_none() {
+            if textures[slot].is_none() {
                 continue;
             }
             slots[slot] = match keys.iter().position(|k| k == s) {
