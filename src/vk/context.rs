@@ -190,6 +190,39 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
     }
 }
 
+/// Makes lavapipe's CPU description agree with a vector width forced by `LP_NATIVE_VECTOR_WIDTH`.
+///
+/// Mesa's lavapipe (seen in 22.3.6) asked for 128-bit vectors on a CPU that has AVX generates a
+/// vertex-shader loop eight vertices wide in its draw module while it sizes the vertex buffers for
+/// counts rounded to four (plus 512 bytes): a draw of 1 to 4 vertices past a multiple of eight
+/// writes up to four vertices past the end of a heap block, and the process aborts later with
+/// "corrupted size vs. prev_size" and the like (issue 23; Electric Fence stops at the store:
+/// docs/regression.md, "Driver configurations"). A CPU that really lacks 256-bit vectors does not
+/// do this, and Mesa can be told to see the CPU as one: `GALLIUM_OVERRIDE_CPU_CAPS=sse4.1`. So
+/// when the width is forced to 128 bits or fewer on an AVX CPU and the caps are not already
+/// overridden, weft sets that override before the driver reads it (lavapipe reads it once, when
+/// the first instance is created): the device still reports 128 bits and runs the code a 128-bit
+/// CPU gets. `tests/driver_config.rs` renders the case that overflowed, under glibc's heap checker.
+fn consistent_lavapipe_cpu() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let narrow = std::env::var("LP_NATIVE_VECTOR_WIDTH")
+            .ok()
+            .and_then(|v| v.trim().parse::<u32>().ok())
+            .is_some_and(|bits| bits <= 128);
+        if !narrow || std::env::var_os("GALLIUM_OVERRIDE_CPU_CAPS").is_some() {
+            return;
+        }
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // Before any Vulkan library is loaded by this call; the Once makes every thread that
+            // creates a context wait for it, and Rust's own reads of the environment take the
+            // same lock as this write.
+            std::env::set_var("GALLIUM_OVERRIDE_CPU_CAPS", "sse4.1");
+        }
+    });
+}
+
 impl Context {
     pub fn new(options: &ContextOptions) -> crate::Result<Context> {
         Context::new_for_display(options, None)
@@ -201,6 +234,7 @@ impl Context {
         options: &ContextOptions,
         display: Option<raw_window_handle::RawDisplayHandle>,
     ) -> crate::Result<Context> {
+        consistent_lavapipe_cpu();
         let entry = unsafe { ash::Entry::load() }.map_err(|e| {
             no_driver(&format!(
                 "the Vulkan loader libvulkan.so.1 could not be loaded: {e}"

@@ -1,0 +1,88 @@
+//! Driver configurations that must not crash weft (issue 23).
+//!
+//! Mesa 22.3's lavapipe, asked for 128-bit vectors (`LP_NATIVE_VECTOR_WIDTH=128`) on a CPU with
+//! AVX, runs its draw module's vertex shader eight vertices at a time while it sizes the vertex
+//! buffer for counts rounded to four: a heap overflow inside the driver, which aborts the process
+//! at some later `malloc` or `free`, or not at all (docs/regression.md, "Driver configurations").
+//! weft works around it in `src/vk/context.rs` (`consistent_lavapipe_cpu`). These renders are
+//! the configurations that overflowed, each in a child process so that an abort is a failure of
+//! this test and not of the harness. glibc's heap checker (`libc_malloc_debug.so.0` with
+//! `MALLOC_CHECK_=3`) turns the intermittent abort into a certain one: without the workaround,
+//! `--lights default` aborted in 3 of 3 runs under it on this project's machine (Intel Xeon, Mesa
+//! 22.3.6), and 0 of 3 with it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const MALLOC_DEBUG: &str = "/usr/lib/x86_64-linux-gnu/libc_malloc_debug.so.0";
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("weft-driver-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `weft render ARGS` at 128-bit vectors, validated, under the heap checker where this system
+/// has it; returns (exit status success, stderr).
+fn render_at_128_bits(args: &[&str], out: &Path) -> (bool, String) {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
+    c.env(
+        "WEFT_DEVICE",
+        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
+    )
+    .env("LP_NATIVE_VECTOR_WIDTH", "128")
+    .env_remove("GALLIUM_OVERRIDE_CPU_CAPS")
+    .args(["render", "--validate"])
+    .args(args)
+    .arg("-o")
+    .arg(out);
+    if Path::new(MALLOC_DEBUG).exists() {
+        c.env("LD_PRELOAD", MALLOC_DEBUG).env("MALLOC_CHECK_", "3");
+    } else {
+        eprintln!("{MALLOC_DEBUG} is absent: the renders run without glibc's heap checker, so an overflow shows only when it happens to abort");
+    }
+    let output = c.output().expect("the weft binary runs");
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn renders_at_128_bit_vectors_do_not_corrupt_the_heap() {
+    let dir = temp("128");
+    let cases: [(&str, &[&str]); 5] = [
+        ("default", &["--size", "32x18"]),
+        (
+            "lights-default",
+            &["--size", "32x18", "--lights", "default"],
+        ),
+        ("studio", &["--size", "32x18", "--env", "studio"]),
+        (
+            "supersampled",
+            &["--size", "32x18", "--accuracy", "supersampled:4"],
+        ),
+        (
+            "analytic",
+            &["--size", "32x18", "--weave-precision", "analytic"],
+        ),
+    ];
+    let mut failures = Vec::new();
+    for (name, args) in cases {
+        let out = dir.join(format!("{name}.png"));
+        let (ok, stderr) = render_at_128_bits(args, &out);
+        if !ok || !out.exists() {
+            failures.push(format!("{name} ({args:?}): {}", stderr.trim()));
+        } else {
+            // A picture, not an empty file: the driver ran the frame to the end.
+            let img = image::open(&out).expect("the render wrote a PNG");
+            assert_eq!((img.width(), img.height()), (32, 18), "{name}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        failures.is_empty(),
+        "renders at LP_NATIVE_VECTOR_WIDTH=128 failed:\n{}",
+        failures.join("\n")
+    );
+}
