@@ -17,6 +17,13 @@ layout(constant_id = 2) const uint SHADING = 0u;
 // parallelogram spanned by the UV derivatives, each filtered by its bounding box (1: the whole
 // footprint's bounding box). Id 3 is gbuffer.vert's.
 layout(constant_id = 4) const uint FOOTPRINT_PIECES = 2u;
+// 1: multiply the vertex colour (COLOR_0, from gbuffer.vert) into the base colour and alpha, and
+// into fabric's thread texture value; 0: the scene has none.
+layout(constant_id = 5) const uint VERTEX_COLORS = 0u;
+// 1: some drawn material is alphaMode MASK: pixels whose base colour alpha is below the cutoff
+// are discarded (at the end, after every derivative); 0: no discard is compiled in, so early
+// depth testing stays possible.
+layout(constant_id = 6) const uint ALPHA_MASK = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
@@ -55,6 +62,7 @@ layout(location = 3) in vec2 in_uv;
 layout(location = 4) in vec2 in_weave_uv;
 layout(location = 5) in vec3 in_gouraud;
 layout(location = 6) in vec2 in_uv1;
+layout(location = 7) in vec4 in_color;
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out uvec4 gb_frame;    // RGBA16_UINT: octahedral normal (xy), tangent (zw), frame_encode
@@ -112,6 +120,9 @@ void main() {
 
     vec4 base_texel = sample_slot(base_color_tex, m, SLOT_BASE_COLOR);
     vec4 base = m.base_color * base_texel;
+    if (VERTEX_COLORS != 0u) {
+        base *= in_color;
+    }
     vec4 mr = sample_slot(metallic_roughness_tex, m, SLOT_METALLIC_ROUGHNESS);
     float metallic = clamp(m.metallic_roughness.x * mr.b, 0.0, 1.0);
     float roughness = clamp(m.metallic_roughness.y * mr.g, 0.0, 1.0);
@@ -154,6 +165,9 @@ void main() {
             tint = base_texel.rgb;
         } else if ((ff & FABRIC_FLAG_TEXTURE_SHEEN_COLOR) != 0u) {
             tint = sample_slot(sheen_color_tex, m, SLOT_SHEEN_COLOR).rgb;
+        }
+        if (VERTEX_COLORS != 0u) {
+            tint *= in_color.rgb;
         }
         gb_albedo = vec4(clamp(tint, 0.0, 1.0), 0.0);
     }
@@ -247,4 +261,7 @@ void main() {
     // metallic_roughness.w.
     float ao = clamp(1.0 + m.metallic_roughness.w * (sample_slot(occlusion_tex, m, SLOT_OCCLUSION).r - 1.0), 0.0, 1.0);
     gb_emissive = vec4(max(emissive, vec3(0.0)), ao);
+    if (ALPHA_MASK != 0u && alpha_cut(m, base.a)) {
+        discard;
+    }
 }

@@ -8,6 +8,9 @@
 layout(constant_id = 2) const uint SHADING = 0u;
 // Light types the scene has, as in lighting.frag.
 layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
+// 1: the scene has vertex colours (COLOR_0): each vertex's is read from the colour buffer and
+// passed on (0: none is read, gbuffer.frag multiplies nothing).
+layout(constant_id = 5) const uint VERTEX_COLORS = 0u;
 // Lights out of range are skipped (as lighting.frag's RANGE_CULLING).
 const uint RANGE_CULLING = 1u;
 
@@ -18,6 +21,9 @@ layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
+// COLOR_0, linear RGBA, one per vertex of the vertex buffer (indexed like it, by gl_VertexIndex,
+// which includes the draw's vertex offset); white where a mesh has none.
+layout(set = 0, binding = 4, std430) readonly buffer Colors { vec4 colors[]; };
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -44,6 +50,7 @@ layout(location = 3) out vec2 out_uv;
 layout(location = 4) out vec2 out_weave_uv;
 layout(location = 5) out vec3 out_gouraud;
 layout(location = 6) out vec2 out_uv1;
+layout(location = 7) out vec4 out_color;
 
 // The Phong reflection model at a fabric vertex: hemispherical ambient and every light, with the
 // normal turned towards the viewer (the vertex stage cannot know which face will be drawn).
@@ -78,6 +85,7 @@ void main() {
     out_uv = in_uv;
     out_weave_uv = in_weave_uv;
     out_uv1 = in_uv1;
+    out_color = VERTEX_COLORS != 0u ? colors[gl_VertexIndex] : vec4(1.0);
     out_gouraud = vec3(0.0);
     if (SHADING == SHADING_GOURAUD) {
         uint fabric = uint(materials[draw.material].metallic_roughness.z + 0.5);

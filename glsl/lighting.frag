@@ -31,6 +31,9 @@ layout(constant_id = 6) const uint RANGE_CULLING = 1u;
 layout(constant_id = 7) const uint IBL = 0u;
 // N of fis:N and mc:N.
 layout(constant_id = 8) const uint IBL_SAMPLES = 16u;
+// 1: some material is unlit (KHR_materials_unlit, MATERIAL_UNLIT): its pixels show the base colour
+// from the albedo target as their radiance, unlit; 0: the check is compiled out.
+layout(constant_id = 9) const uint UNLIT = 0u;
 
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
@@ -496,6 +499,11 @@ void main() {
     vec3 ambient = IBL != 0u ? vec3(0.0) : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
     uint material = uint(surface.y + 0.5);
     uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
+    if (UNLIT != 0u && (uint(materials[min(material, frame.material_count - 1u)].extra.w + 0.5) & MATERIAL_UNLIT) != 0u) {
+        // KHR_materials_unlit: the base colour (factor × texture × vertex colour) is the radiance.
+        out_color = vec4(base, 1.0);
+        return;
+    }
 
     if (fabric > 0u && FABRIC_AS_PBR == 0u) {
         // The fabric model (docs/fabric-model.md §3) with the weave coverages of the pixel's

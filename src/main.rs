@@ -1407,6 +1407,26 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "background": e.background,
             })),
         });
+        // The glTF core features (issue 25), added after: one json! call this long overflows
+        // the macro's recursion limit.
+        let mut json = json;
+        for (key, value) in [
+            ("unlit_materials", serde_json::json!(plan.unlit_materials)),
+            ("unlit_code", serde_json::json!(plan.unlit)),
+            (
+                "vertex_color_meshes",
+                serde_json::json!(plan.vertex_color_meshes),
+            ),
+            ("vertex_color_code", serde_json::json!(plan.vertex_colors)),
+            ("mask_draws", serde_json::json!(plan.mask_draws)),
+            ("mask_casters", serde_json::json!(plan.mask_casters)),
+            ("alpha_mask_code", serde_json::json!(plan.alpha_mask)),
+            ("instanced_nodes", serde_json::json!(plan.instanced_nodes)),
+            ("instances", serde_json::json!(plan.instances)),
+            ("camera", serde_json::json!(plan.camera)),
+        ] {
+            json[key] = value;
+        }
         println!("{}", serde_json::to_string_pretty(&json)?);
     } else {
         println!("scene       {}", scene.source);

@@ -104,7 +104,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          vec3), normal (1, vec3), tangent (2, vec4, w = handedness), uv (3, vec2) and weave uv (4, \
          vec2: the uv with whole weave repeats removed per mesh) and uv1 (5, vec2: TEXCOORD_1), and, \
          for SHADING = 1 (Gouraud), per-vertex lighting of fabric at output location 5 for \
-         gbuffer.frag. Push constants per draw: `mat4 \
+         gbuffer.frag; the vertex colour (COLOR_0, from a storage buffer, white unless \
+         VERTEX_COLORS = 1) at output location 7. Push constants per draw: `mat4 \
          world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
          (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
          front faces; the projection flips y.",
@@ -146,6 +147,24 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
     (
         "shadow.frag",
         "Shadow pass, fragment stage: empty (depth only); pair it with `shadow.vert`.",
+    ),
+    (
+        "shadow_mask.frag",
+        "Shadow pass for alphaMode MASK casters, fragment stage: discards where the base colour's \
+         alpha (`Material.base_color.a` x the base colour texture's alpha through the slot's UV \
+         set and map x the vertex colour alpha) is below the material's cutoff \
+         (`Material.alpha.x`, flag 8 in `Material.extra.w`), so cut-outs cast cut-out shadows. \
+         Pair it with `shadow_mask.vert`; set 0 binding 0 the material records, set 1 binding 0 \
+         the caster material's base colour texture.",
+    ),
+    (
+        "shadow_mask.vert",
+        "Shadow pass for alphaMode MASK casters, vertex stage: as `shadow.vert`, with the G-buffer \
+         pass's vertex buffer read at position (location 0, offset 0), uv (1, offset 40) and uv1 \
+         (2, offset 56), and each vertex's colour alpha from set 0 binding 1 when VERTEX_COLORS = \
+         1. Push `mat4 clip_from_object`, `uint material` and three pad words (80 bytes, vertex \
+         and fragment stages) per draw. weft makes this pipeline only for a frame with a shadow \
+         map and a MASK material that casts.",
     ),
     (
         "shadow.vert",
@@ -249,6 +268,15 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
         3,
         "lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)",
     ),
+    ("shadow_mask.frag", 0, 0, "material records (`Material[]`, include/frame.glsl): the base colour factor, its texture's UV map and the MASK cutoff"),
+    ("shadow_mask.vert", 0, 1, "vertex colours (`vec4[]`, as gbuffer.vert's set 0 binding 4; read only when VERTEX_COLORS = 1)"),
+    ("shadow_mask.frag", 1, 0, "the caster material's base colour texture (sRGB; white when none): its alpha"),
+    (
+        "gbuffer.vert",
+        0,
+        4,
+        "vertex colours (`vec4[]`, linear RGBA, glTF COLOR_0): one per vertex of the vertex buffer, indexed by `gl_VertexIndex` (vertex offset included), white for vertices without; read only when VERTEX_COLORS = 1",
+    ),
     (
         "ibl_probe.comp",
         0,
@@ -351,6 +379,11 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("gbuffer.frag", 2, "SHADING: how fabric is shaded, as gbuffer.vert's and lighting.frag's; 1 (Gouraud) adds the vertex stage's lighting to the emissive target"),
     ("gbuffer.vert", 2, "SHADING: how fabric is shaded: 0 the fabric model (default), 1 Gouraud (the Phong reflection model per vertex, written for gbuffer.frag), 2 Phong, 3 plain Ashikhmin-Shirley; only 1 does work in this stage"),
     ("gbuffer.vert", 3, "LIGHT_TYPES: as lighting.frag's, for the per-vertex lighting of SHADING = 1 (default 7, all)"),
+    ("gbuffer.vert", 5, "VERTEX_COLORS: 1 reads each vertex's colour (set 0, binding 4) and writes it to output location 7 for gbuffer.frag; 0 (default) reads none and writes white"),
+    ("gbuffer.frag", 5, "VERTEX_COLORS: 1 multiplies the vertex colour (input location 7) into the base colour and alpha, and for fabric into the thread texture's value; 0 (default) compiles that out"),
+    ("gbuffer.frag", 6, "ALPHA_MASK: 1 discards pixels of alphaMode MASK materials (`Material.extra.w` flag 8) whose base colour alpha (factor x texture x vertex colour) is below the cutoff `Material.alpha.x`, after every target is written; 0 (default) compiles the discard out"),
+    ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 1) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
+    ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",
         0,

@@ -118,6 +118,7 @@ fn quad_scene(material: Material, textures: Vec<Texture>) -> Scene {
             ],
             indices: vec![0, 1, 2, 0, 2, 3],
             material: 0,
+            colors: Vec::new(),
         }],
         draws: vec![Draw::new(0, Mat4::IDENTITY)],
         materials: vec![material],

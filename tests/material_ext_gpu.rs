@@ -48,6 +48,7 @@ fn sphere(material: usize, r: f32) -> Mesh {
         vertices,
         indices,
         material,
+        colors: Vec::new(),
     }
 }
 
@@ -268,6 +269,7 @@ fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
                 vertices: vec![v(-2.0, -2.0), v(2.0, -2.0), v(2.0, 2.0), v(-2.0, 2.0)],
                 indices: vec![0, 1, 2, 0, 2, 3],
                 material: 0,
+                colors: Vec::new(),
             }],
             draws: vec![Draw::new(0, Mat4::IDENTITY)],
             materials: vec![Material {

@@ -358,3 +358,111 @@ fn range_culling_changes_nothing() {
     assert!(lighting_pipeline(&all).contains("range_culling=0"));
     assert_eq!(max_hdr_diff(&culled, &all), 0.0);
 }
+
+fn gbuffer_pipeline(frame: &weft::render::Frame) -> String {
+    frame
+        .stats
+        .pipelines
+        .iter()
+        .find(|p| p.starts_with("gbuffer["))
+        .cloned()
+        .unwrap_or_default()
+}
+
+#[test]
+fn no_vertex_colours_compile_no_colour_code_and_forcing_it_changes_nothing() {
+    let scene = scene::default_scene();
+    let plan = Plan::new(&scene, &options());
+    assert_eq!(plan.vertex_color_meshes, 0);
+    assert!(!plan.vertex_colors);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let planned = renderer.render(&scene, &options()).unwrap();
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    vertex_colors: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    assert!(gbuffer_pipeline(&planned).contains("vertex_colors=0"));
+    assert!(gbuffer_pipeline(&forced).contains("vertex_colors=1"));
+    assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+    assert_eq!(planned.ldr, forced.ldr);
+
+    // A drawn mesh with colours turns the code on; an undrawn one does not.
+    let mut coloured = scene.clone();
+    let n = coloured.meshes[0].vertices.len();
+    coloured.meshes[0].colors = vec![[1.0, 0.5, 0.25, 1.0]; n];
+    let plan = Plan::new(&coloured, &options());
+    assert_eq!((plan.vertex_color_meshes, plan.vertex_colors), (1, true));
+    coloured.draws.retain(|d| d.mesh != 0);
+    let plan = Plan::new(&coloured, &options());
+    assert_eq!((plan.vertex_color_meshes, plan.vertex_colors), (0, false));
+}
+
+#[test]
+fn no_unlit_material_compiles_no_unlit_code_and_forcing_it_changes_nothing() {
+    let scene = scene::default_scene();
+    let plan = Plan::new(&scene, &options());
+    assert_eq!(plan.unlit_materials, 0);
+    assert!(!plan.unlit);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let planned = renderer.render(&scene, &options()).unwrap();
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    unlit: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    assert!(lighting_pipeline(&planned).contains("unlit=0"));
+    assert!(lighting_pipeline(&forced).contains("unlit=1"));
+    assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+    assert_eq!(planned.ldr, forced.ldr);
+    let mut flat = scene.clone();
+    flat.materials[0].unlit = true;
+    assert!(Plan::new(&flat, &options()).unlit);
+}
+
+#[test]
+fn no_mask_material_compiles_no_discard_and_forcing_it_changes_nothing() {
+    let scene = shadows_scene();
+    let plan = Plan::new(&scene, &options());
+    assert_eq!(
+        (plan.mask_draws, plan.alpha_mask, plan.mask_casters),
+        (0, false, 0)
+    );
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let planned = renderer.render(&scene, &options()).unwrap();
+    let forced = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                force: weft::render::Force {
+                    alpha_mask: true,
+                    ..Default::default()
+                },
+                ..options()
+            },
+        )
+        .unwrap();
+    assert!(gbuffer_pipeline(&planned).contains("alpha_mask=0"));
+    assert!(gbuffer_pipeline(&forced).contains("alpha_mask=1"));
+    assert!(!planned
+        .stats
+        .pipelines
+        .iter()
+        .any(|p| p.starts_with("shadow_mask")));
+    assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+    assert_eq!(planned.ldr, forced.ldr);
+}

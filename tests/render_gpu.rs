@@ -378,6 +378,7 @@ fn texture_wrap_modes_follow_the_sampler() {
                 ],
                 indices: vec![0, 1, 2, 0, 2, 3],
                 material: 0,
+                colors: Vec::new(),
             }],
             draws: vec![Draw::new(0, Mat4::IDENTITY)],
             materials: vec![material],
@@ -395,6 +396,7 @@ fn texture_wrap_modes_follow_the_sampler() {
                 znear: 0.01,
                 zfar: None,
                 aspect_ratio: Some(3.0),
+                orthographic: None,
             }],
             ..Default::default()
         }
@@ -482,4 +484,358 @@ fn every_tone_curve_matches_its_twin() {
             );
         }
     }
+}
+/// A 2 x 2 quad in z = 0 facing +z, with `colors` per corner (empty: none) and `material`, and
+/// one directional light from the front; the automatic camera looks at its front.
+fn quad_scene(colors: Vec<[f32; 4]>, material: scene::Material) -> scene::Scene {
+    let corner = |x: f32, y: f32| scene::Vertex {
+        position: [x, y, 0.0],
+        normal: [0.0, 0.0, 1.0],
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [x * 0.5 + 0.5, 0.5 - y * 0.5],
+        uv1: [0.0; 2],
+    };
+    let mut s = scene::Scene {
+        source: "quad".into(),
+        meshes: vec![scene::Mesh {
+            name: "quad".into(),
+            vertices: vec![
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            ],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: 0,
+            colors,
+        }],
+        draws: vec![scene::Draw::new(0, glam::Mat4::IDENTITY)],
+        materials: vec![material],
+        ..Default::default()
+    };
+    s.lights.push(scene::Light {
+        name: "front".into(),
+        kind: scene::LightKind::Directional,
+        color: [1.0; 3],
+        intensity: 3.0,
+        range: None,
+        position: glam::Vec3::ZERO,
+        direction: glam::Vec3::new(0.0, 0.0, -1.0),
+        shadow: None,
+    });
+    s
+}
+
+/// The HDR radiance at the centre of a frame.
+fn centre(frame: &weft::render::Frame) -> [f32; 3] {
+    let i = ((frame.height / 2) * frame.width + frame.width / 2) as usize * 4;
+    [frame.hdr[i], frame.hdr[i + 1], frame.hdr[i + 2]]
+}
+
+fn small() -> RenderOptions {
+    RenderOptions {
+        width: 64,
+        height: 48,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    let material = scene::Material {
+        base_color: [0.8, 0.8, 0.8, 1.0],
+        metallic: 0.0,
+        roughness: 0.6,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let albedo = |s: &scene::Scene, r: &mut Renderer| {
+        let options = RenderOptions {
+            debug_view: DebugView::Albedo,
+            ..small()
+        };
+        centre(&r.render(s, &options).expect("render"))
+    };
+    let tint = [1.0, 0.5, 0.25, 1.0];
+    let coloured = quad_scene(vec![tint; 4], material.clone());
+    let plain = quad_scene(Vec::new(), material);
+    let a = albedo(&coloured, &mut renderer);
+    let b = albedo(&plain, &mut renderer);
+    for k in 0..3 {
+        let want = 0.8 * tint[k];
+        // The albedo target is sRGB 8-bit: within half a step there.
+        assert!(
+            (a[k] - want).abs() < 0.01,
+            "channel {k}: {a:?}, want {want}"
+        );
+        assert!((b[k] - 0.8).abs() < 0.01, "channel {k}: {b:?}");
+    }
+    // And lit: the colour scales the diffuse light (the blue channel is darkest).
+    let lit = renderer.render(&coloured, &small()).expect("render");
+    let c = centre(&lit);
+    assert!(c[0] > c[1] && c[1] > c[2], "{c:?}");
+    assert!(lit
+        .stats
+        .pipelines
+        .iter()
+        .any(|p| p.starts_with("gbuffer[") && p.contains("vertex_colors=1")));
+}
+
+#[test]
+fn unlit_materials_show_their_base_colour_exactly() {
+    let material = scene::Material {
+        base_color: [0.6, 0.3, 0.1, 1.0],
+        metallic: 0.0,
+        roughness: 0.2,
+        unlit: true,
+        ..Default::default()
+    };
+    let tint = [0.5, 1.0, 1.0, 1.0];
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    for (colors, want) in [
+        (Vec::new(), [0.6, 0.3, 0.1]),
+        (vec![tint; 4], [0.3, 0.3, 0.1]),
+    ] {
+        let frame = renderer
+            .render(&quad_scene(colors, material.clone()), &small())
+            .expect("render");
+        let c = centre(&frame);
+        for k in 0..3 {
+            // The base colour passes the sRGB 8-bit albedo target: within half a step of it.
+            assert!(
+                (c[k] - want[k]).abs() < 0.006,
+                "channel {k}: {c:?}, want {want:?}"
+            );
+        }
+        assert!(frame
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p.starts_with("lighting[") && p.contains("unlit=1")));
+    }
+    // Unlit ignores the lights: a brighter light changes nothing; lit, it does.
+    for unlit in [true, false] {
+        let mut s = quad_scene(
+            Vec::new(),
+            scene::Material {
+                unlit,
+                ..material.clone()
+            },
+        );
+        let before = centre(&renderer.render(&s, &small()).expect("render"));
+        s.lights[0].intensity *= 3.0;
+        let after = centre(&renderer.render(&s, &small()).expect("render"));
+        assert_eq!(
+            before == after,
+            unlit,
+            "unlit {unlit}: {before:?} then {after:?}"
+        );
+    }
+}
+
+#[test]
+fn orthographic_cameras_keep_size_at_any_distance() {
+    let material = scene::Material {
+        metallic: 0.0,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let mut rows_seen = Vec::new();
+    for distance in [5.0f32, 50.0] {
+        let mut s = quad_scene(Vec::new(), material.clone());
+        s.cameras.push(scene::Camera {
+            name: "ortho".into(),
+            view: glam::Mat4::look_at_rh(glam::Vec3::Z * distance, glam::Vec3::ZERO, glam::Vec3::Y),
+            yfov: 0.8,
+            znear: 0.1,
+            zfar: Some(100.0),
+            aspect_ratio: None,
+            orthographic: Some([2.0, 2.0]),
+        });
+        let options = RenderOptions {
+            camera: Some(0),
+            ..small()
+        };
+        let frame = renderer.render(&s, &options).expect("render");
+        assert!(frame.plan.camera.contains("orthographic"));
+        // Rows of the centre column that show the quad (not the background).
+        let x = frame.width / 2;
+        let rows = (0..frame.height)
+            .filter(|&y| {
+                let i = ((y * frame.width + x) * 4) as usize;
+                (frame.hdr[i] - 0.010).abs() > 1e-3
+            })
+            .count();
+        rows_seen.push(rows);
+    }
+    // ymag 2: the view is 4 m tall, the quad 2 m: half the image, at 5 m as at 50 m.
+    let half = (small().height / 2) as usize;
+    for rows in &rows_seen {
+        assert!(rows.abs_diff(half) <= 1, "{rows_seen:?}, want {half}");
+    }
+}
+
+#[test]
+fn alpha_mask_cuts_out_below_the_cutoff_in_the_image() {
+    let material = |cutoff: Option<f32>| scene::Material {
+        metallic: 0.0,
+        alpha_cutoff: cutoff,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let background = weft::render::gpu::BACKGROUND;
+    let is_background = |c: [f32; 3]| (0..3).all(|k| (c[k] - background[k]).abs() < 1e-4);
+    // Vertex alpha 0.4: cut out at cutoff 0.5, kept at 0.3; opaque ignores alpha.
+    for (cutoff, cut) in [(Some(0.5), true), (Some(0.3), false), (None, false)] {
+        let s = quad_scene(vec![[1.0, 1.0, 1.0, 0.4]; 4], material(cutoff));
+        let frame = renderer.render(&s, &small()).expect("render");
+        assert_eq!(
+            is_background(centre(&frame)),
+            cut,
+            "cutoff {cutoff:?}: {:?}",
+            centre(&frame)
+        );
+        assert!(frame
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p.starts_with("gbuffer[")
+                && p.contains(if cutoff.is_some() {
+                    "alpha_mask=1"
+                } else {
+                    "alpha_mask=0"
+                })));
+    }
+}
+
+/// A floor (y = 0, receiving) under a 1 x 1 m MASK card at y = 1 (casting), a directional
+/// light at 45° with a shadow map, looked at from above.
+fn card_over_floor(card_alpha: f32) -> scene::Scene {
+    let v = |p: [f32; 3], n: [f32; 3]| scene::Vertex {
+        position: p,
+        normal: n,
+        tangent: [1.0, 0.0, 0.0, 1.0],
+        uv: [0.0; 2],
+        uv1: [0.0; 2],
+    };
+    let up = [0.0, 1.0, 0.0];
+    let floor = scene::Mesh {
+        name: "floor".into(),
+        vertices: vec![
+            v([-3.0, 0.0, 3.0], up),
+            v([3.0, 0.0, 3.0], up),
+            v([3.0, 0.0, -3.0], up),
+            v([-3.0, 0.0, -3.0], up),
+        ],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+        colors: Vec::new(),
+    };
+    let card = scene::Mesh {
+        name: "card".into(),
+        vertices: vec![
+            v([-0.5, 1.0, 0.5], up),
+            v([0.5, 1.0, 0.5], up),
+            v([0.5, 1.0, -0.5], up),
+            v([-0.5, 1.0, -0.5], up),
+        ],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 1,
+        colors: vec![[1.0, 1.0, 1.0, card_alpha]; 4],
+    };
+    let mut floor_draw = scene::Draw::new(0, glam::Mat4::IDENTITY);
+    floor_draw.cast_shadows = false;
+    let mut card_draw = scene::Draw::new(1, glam::Mat4::IDENTITY);
+    card_draw.receive_shadows = false;
+    let mut s = scene::Scene {
+        source: "card".into(),
+        meshes: vec![floor, card],
+        draws: vec![floor_draw, card_draw],
+        materials: vec![
+            scene::Material {
+                metallic: 0.0,
+                ..Default::default()
+            },
+            scene::Material {
+                metallic: 0.0,
+                alpha_cutoff: Some(0.5),
+                double_sided: true,
+                ..Default::default()
+            },
+        ],
+        ..Default::default()
+    };
+    s.lights.push(scene::Light {
+        name: "sun".into(),
+        kind: scene::LightKind::Directional,
+        color: [1.0; 3],
+        intensity: 3.0,
+        range: None,
+        position: glam::Vec3::ZERO,
+        // 45° from +x: the card's shadow falls 1 m to its +x side.
+        direction: glam::Vec3::new(1.0, -1.0, 0.0).normalize(),
+        shadow: Some(scene::Shadow::default()),
+    });
+    // From above and to the side, so the card's shadow on the floor is in view beside it.
+    s.cameras.push(
+        s.look_at_camera(
+            glam::Vec3::new(0.0, 6.0, 3.0),
+            glam::Vec3::new(0.5, 0.0, 0.0),
+            0.9,
+        )
+        .unwrap(),
+    );
+    s
+}
+
+#[test]
+fn alpha_mask_cut_outs_cast_cut_out_shadows() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let options = RenderOptions {
+        camera: Some(0),
+        width: 96,
+        height: 72,
+        ..Default::default()
+    };
+    // The middle of the card's shadow on the floor (1 m to its +x side, not behind the card as
+    // the camera sees it), projected into the image.
+    let floor_pixel = |s: &scene::Scene| {
+        let cam = s.cameras[0].clone();
+        let frame = weft::render::gpu::FrameData::new(&cam, options.width, options.height);
+        let vp = glam::Mat4::from_cols_array_2d(&frame.view_proj);
+        let p = vp.project_point3(glam::Vec3::new(1.0, 0.0, 0.0));
+        let x = ((p.x * 0.5 + 0.5) * options.width as f32) as u32;
+        let y = ((p.y * 0.5 + 0.5) * options.height as f32) as u32;
+        ((y * options.width + x) * 4) as usize
+    };
+    let mut lum = Vec::new();
+    for alpha in [1.0, 0.2] {
+        let s = card_over_floor(alpha);
+        let frame = renderer.render(&s, &options).expect("render");
+        assert!(
+            frame
+                .stats
+                .pipelines
+                .iter()
+                .any(|p| p.starts_with("shadow_mask[")),
+            "{:?}",
+            frame.stats.pipelines
+        );
+        let i = floor_pixel(&s);
+        lum.push(frame.hdr[i] + frame.hdr[i + 1] + frame.hdr[i + 2]);
+    }
+    // Without the card at all: the floor fully lit.
+    let mut bare = card_over_floor(1.0);
+    bare.draws.truncate(1);
+    let frame = renderer.render(&bare, &options).expect("render");
+    let i = floor_pixel(&bare);
+    let lit = frame.hdr[i] + frame.hdr[i + 1] + frame.hdr[i + 2];
+    assert!(
+        lum[0] < 0.5 * lit,
+        "the opaque card shadows the floor: {lum:?} vs {lit}"
+    );
+    assert!(
+        (lum[1] - lit).abs() < 0.02 * lit,
+        "the cut-out card casts nothing: {lum:?} vs {lit}"
+    );
 }

@@ -727,6 +727,277 @@ fn non_triangle_primitives_are_skipped_with_a_warning() {
     );
 }
 
+/// The geometric normal of each triangle of mesh `m` (from its positions and winding).
+fn face_normals(s: &Scene, m: usize) -> Vec<Vec3> {
+    let mesh = &s.meshes[m];
+    mesh.indices
+        .chunks_exact(3)
+        .map(|t| {
+            let p = |k: usize| Vec3::from(mesh.vertices[t[k] as usize].position);
+            (p(1) - p(0)).cross(p(2) - p(0)).normalize()
+        })
+        .collect()
+}
+
+/// The quad of `Doc::quad` (normal +Z) as one primitive of mode `mode` whose vertex sequence is
+/// `order` (indices into the quad's corners): indexed, or with the corners written out in that
+/// order when `indexed` is false.
+fn quad_in_mode(mode: u32, order: &[u32], indexed: bool, test: &str) -> Scene {
+    let corners = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let mut d = Doc::new();
+    if indexed {
+        d.mesh(&corners, Some(&[[0.0, 0.0, 1.0]; 4]), None, Some(order));
+    } else {
+        let p: Vec<[f32; 3]> = order.iter().map(|&i| corners[i as usize]).collect();
+        let n = vec![[0.0, 0.0, 1.0]; p.len()];
+        d.mesh(&p, Some(&n), None, None);
+    }
+    d.json["meshes"][0]["primitives"][0]["mode"] = json!(mode);
+    let s = d.load(test).unwrap();
+    assert_well_formed(&s);
+    s
+}
+
+#[test]
+fn triangle_strips_become_triangles_that_all_face_the_front() {
+    for indexed in [true, false] {
+        // Strip 0 1 3 2: triangles (0 1 3) and, odd, (1 2 3) with its last corners swapped.
+        let s = quad_in_mode(5, &[0, 1, 3, 2], indexed, &format!("strip-{indexed}"));
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        assert_eq!(s.meshes[0].indices.len(), 6, "indexed {indexed}");
+        for n in face_normals(&s, 0) {
+            assert!(
+                n.abs_diff_eq(Vec3::Z, 1e-6),
+                "indexed {indexed}: face normal {n}"
+            );
+        }
+    }
+    // Degenerate joins (a repeated index) are dropped, and the winding stays right after them.
+    let s = quad_in_mode(5, &[0, 1, 3, 3, 3, 2, 1, 2], true, "strip-degenerate");
+    let normals = face_normals(&s, 0);
+    assert!(!normals.is_empty());
+    for n in normals {
+        assert!(
+            n.abs_diff_eq(Vec3::Z, 1e-6) || n.abs_diff_eq(-Vec3::Z, 1e-6),
+            "{n}"
+        );
+    }
+    // Too short for a triangle: skipped with the usual warning.
+    let s = quad_in_mode(5, &[0, 1], true, "strip-short");
+    assert!(s.meshes.is_empty());
+}
+
+#[test]
+fn triangle_fans_become_triangles_that_all_face_the_front() {
+    for indexed in [true, false] {
+        let s = quad_in_mode(6, &[0, 1, 2, 3], indexed, &format!("fan-{indexed}"));
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        assert_eq!(s.meshes[0].indices.len(), 6, "indexed {indexed}");
+        for n in face_normals(&s, 0) {
+            assert!(
+                n.abs_diff_eq(Vec3::Z, 1e-6),
+                "indexed {indexed}: face normal {n}"
+            );
+        }
+    }
+}
+
+#[test]
+fn points_and_lines_are_skipped_with_a_warning_and_the_triangles_kept() {
+    for (mode, name) in [
+        (0, "POINTS"),
+        (1, "LINES"),
+        (2, "LINE_LOOP"),
+        (3, "LINE_STRIP"),
+    ] {
+        let mut d = Doc::new();
+        d.quad(true, false);
+        // A second primitive of the same mesh in this mode.
+        let prim = d.json["meshes"][0]["primitives"][0].clone();
+        let mut lines = prim.clone();
+        lines["mode"] = json!(mode);
+        d.json["meshes"][0]["primitives"] = json!([lines, prim]);
+        let s = d.load(&format!("mode-{mode}")).unwrap();
+        assert_eq!(s.meshes.len(), 1, "{name}: the triangles are kept");
+        assert_eq!(s.draws.len(), 1);
+        assert!(
+            s.warnings.iter().any(|w| w.0.contains("primitive 0")
+                && w.0.contains(name)
+                && w.0.contains("points or lines")),
+            "{name}: {:?}",
+            s.warnings
+        );
+    }
+}
+
+/// The quad of `Doc::quad` with a COLOR_0 accessor of component type `component` (5126 float,
+/// 5121 unsigned byte, 5123 unsigned short), `kind` VEC3 or VEC4, from the raw little-endian
+/// `bytes` of its four elements.
+fn quad_with_colors(component: u32, kind: &str, normalized: bool, bytes: &[u8]) -> Doc {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    let view = d.view(bytes);
+    // Vertex attributes are 4-byte aligned: each element is a quarter of the bytes.
+    d.json["bufferViews"][view]["byteStride"] = json!(bytes.len() / 4);
+    let mut acc = json!({"bufferView": view, "componentType": component, "count": 4, "type": kind});
+    if normalized {
+        acc["normalized"] = json!(true);
+    }
+    let acc = d.push("accessors", acc);
+    d.json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(acc);
+    d
+}
+
+#[test]
+fn vertex_colors_are_read_in_every_accessor_type_the_spec_allows() {
+    let rgba = [
+        [1.0f32, 0.5, 0.0, 1.0],
+        [0.0, 1.0, 0.5, 0.25],
+        [0.2, 0.4, 0.6, 0.8],
+        [0.0, 0.0, 0.0, 0.0],
+    ];
+    let floats = |n: usize| -> Vec<u8> {
+        rgba.iter()
+            .flat_map(|c| c[..n].iter().flat_map(|f| f.to_le_bytes()))
+            .collect()
+    };
+    let bytes = |n: usize| -> Vec<u8> {
+        // Rows padded to 4 bytes, as glTF requires of vertex attributes.
+        rgba.iter()
+            .flat_map(|c| {
+                let mut row: Vec<u8> = c[..n].iter().map(|f| (f * 255.0).round() as u8).collect();
+                row.resize(4, 0);
+                row
+            })
+            .collect()
+    };
+    let shorts = |n: usize| -> Vec<u8> {
+        rgba.iter()
+            .flat_map(|c| {
+                let mut row: Vec<u8> = c[..n]
+                    .iter()
+                    .flat_map(|f| ((f * 65535.0).round() as u16).to_le_bytes())
+                    .collect();
+                row.resize(8, 0);
+                row
+            })
+            .collect()
+    };
+    for (component, n, data, tolerance) in [
+        (5126, 3, floats(3), 1e-6),
+        (5126, 4, floats(4), 1e-6),
+        (5121, 3, bytes(3), 0.6 / 255.0),
+        (5121, 4, bytes(4), 0.6 / 255.0),
+        (5123, 3, shorts(3), 0.6 / 65535.0),
+        (5123, 4, shorts(4), 0.6 / 65535.0),
+    ] {
+        let kind = if n == 3 { "VEC3" } else { "VEC4" };
+        let d = quad_with_colors(component, kind, component != 5126, &data);
+        let s = d.load(&format!("colors-{component}-{n}")).unwrap();
+        assert!(
+            s.warnings.is_empty(),
+            "{component} {kind}: {:?}",
+            s.warnings
+        );
+        let colors = &s.meshes[0].colors;
+        assert_eq!(colors.len(), s.meshes[0].vertices.len());
+        for (got, want) in colors.iter().zip(&rgba) {
+            for k in 0..4 {
+                let want = if k < n { want[k] } else { 1.0 };
+                assert!(
+                    (got[k] - want).abs() <= tolerance,
+                    "{component} {kind}: {got:?} vs {want}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn vertex_colors_of_a_type_the_spec_forbids_are_ignored_with_a_warning() {
+    // Unsigned bytes that are not normalized.
+    let d = quad_with_colors(5121, "VEC4", false, &[255; 16]);
+    let s = d.load("colors-not-normalized").unwrap();
+    assert!(s.meshes[0].colors.is_empty());
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("COLOR_0") && w.0.contains("normalized")),
+        "{:?}",
+        s.warnings
+    );
+    // VEC2.
+    let d = quad_with_colors(5126, "VEC2", false, &[0; 32]);
+    let s = d.load("colors-vec2").unwrap();
+    assert!(s.meshes[0].colors.is_empty());
+    assert!(s
+        .warnings
+        .iter()
+        .any(|w| w.0.contains("COLOR_0") && w.0.contains("VEC3 or VEC4")));
+    // Out of range: clamped, with a warning.
+    let big: Vec<u8> = [2.0f32, -1.0, 0.5]
+        .repeat(4)
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let s = quad_with_colors(5126, "VEC3", false, &big)
+        .load("colors-range")
+        .unwrap();
+    assert_eq!(s.meshes[0].colors[0], [1.0, 0.0, 0.5, 1.0]);
+    assert!(
+        s.warnings.iter().any(|w| w.0.contains("clamped")),
+        "{:?}",
+        s.warnings
+    );
+    // A count that is not POSITION's is an error that names the attribute.
+    let mut d = quad_with_colors(5126, "VEC3", false, &[0; 48]);
+    let last = d.json["accessors"].as_array().unwrap().len() - 1;
+    d.json["accessors"][last]["count"] = json!(3);
+    let msg = error_text(d.load("colors-count"));
+    assert!(msg.contains("COLOR_0") && msg.contains("POSITION"), "{msg}");
+}
+
+#[test]
+fn vertex_colors_follow_vertices_that_mikktspace_splits() {
+    // With UVs, tangents are generated; every vertex (copies included) keeps a colour.
+    let mut d = Doc::new();
+    d.quad(true, true);
+    let view = d.view(
+        &[0.25f32, 0.5, 0.75]
+            .repeat(4)
+            .iter()
+            .flat_map(|f| f.to_le_bytes())
+            .collect::<Vec<u8>>(),
+    );
+    let acc = d.push(
+        "accessors",
+        json!({"bufferView": view, "componentType": 5126, "count": 4, "type": "VEC3"}),
+    );
+    d.json["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(acc);
+    let s = d.load("colors-mikk").unwrap();
+    let m = &s.meshes[0];
+    assert_eq!(m.colors.len(), m.vertices.len());
+    assert!(m.colors.iter().all(|c| *c == [0.25, 0.5, 0.75, 1.0]));
+}
+
+#[test]
+fn unlit_materials_are_read() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["materials"] = json!([{"name": "flat", "extensions": {"KHR_materials_unlit": {}}}]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    d.json["extensionsUsed"] = json!(["KHR_materials_unlit"]);
+    d.json["extensionsRequired"] = json!(["KHR_materials_unlit"]);
+    let s = d.load("unlit").unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert!(s.materials[0].unlit);
+}
+
 #[test]
 fn node_transforms_compose_parent_times_child() {
     let mut d = Doc::new();
@@ -1131,20 +1402,15 @@ fn camera_with_zero_yfov_is_an_error_naming_it() {
 }
 
 #[test]
-fn orthographic_camera_is_skipped_with_a_warning() {
+fn orthographic_camera_is_read_not_skipped() {
     let d = with_camera(
         json!({"name": "ortho", "type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}),
         json!({"camera": 0}),
     );
     let s = d.load("ortho").unwrap();
-    assert!(s.cameras.is_empty());
-    assert!(
-        s.warnings
-            .iter()
-            .any(|w| w.0.contains("ortho") && w.0.contains("orthographic")),
-        "{:?}",
-        s.warnings
-    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.cameras.len(), 1);
+    assert_eq!(s.cameras[0].orthographic, Some([1.0, 1.0]));
 }
 
 #[test]
@@ -2038,4 +2304,202 @@ fn unknown_sampler_codes_are_refused_by_name() {
         TextureSampler::from_gltf_codes(10497, 10497, None, None).unwrap(),
         TextureSampler::default()
     );
+}
+
+/// The quad of `Doc::quad` on a node translated to z = 5, with EXT_mesh_gpu_instancing
+/// attributes given as (key, accessor) pairs.
+fn instanced_quad(d: &mut Doc, attributes: Value) -> usize {
+    let (_, node) = d.quad(true, false);
+    d.json["nodes"][node]["translation"] = json!([0.0, 0.0, 5.0]);
+    d.json["nodes"][node]["extensions"] =
+        json!({"EXT_mesh_gpu_instancing": {"attributes": attributes}});
+    d.json["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing"]);
+    d.json["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]);
+    node
+}
+
+#[test]
+fn gpu_instancing_draws_the_mesh_once_per_instance_under_its_node() {
+    let mut d = Doc::new();
+    let t = d.floats(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 3.0, 0.0]]);
+    let q = glam::Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let r = d.floats(&[[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], q.to_array()]);
+    let s = d.floats(&[[1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [1.0, 1.0, 1.0]]);
+    instanced_quad(&mut d, json!({"TRANSLATION": t, "ROTATION": r, "SCALE": s}));
+    let scene = d.load("instancing").unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_well_formed(&scene);
+    assert_eq!(scene.draws.len(), 3);
+    assert!(scene.draws.iter().all(|d| d.mesh == 0));
+    assert_eq!((scene.instanced_nodes, scene.instances), (1, 3));
+    // The node's transform after the instance's: x = 1 scaled by 2, moved by 2, then z + 5.
+    let p = |i: usize, v: Vec3| scene.draws[i].world.transform_point3(v);
+    assert!(p(0, Vec3::X).abs_diff_eq(Vec3::new(1.0, 0.0, 5.0), 1e-5));
+    assert!(p(1, Vec3::X).abs_diff_eq(Vec3::new(4.0, 0.0, 5.0), 1e-5));
+    assert!(
+        p(2, Vec3::X).abs_diff_eq(Vec3::new(0.0, 4.0, 5.0), 1e-5),
+        "{}",
+        p(2, Vec3::X)
+    );
+    // The rest pose (what animation starts from) keeps the instances apart.
+    let mut posed = scene.clone();
+    posed.rest_pose().unwrap();
+    for (a, b) in posed.draws.iter().zip(&scene.draws) {
+        assert!(a.world.abs_diff_eq(b.world, 1e-6));
+    }
+    let plan = weft::render::Plan::new(&scene, &weft::render::RenderOptions::default());
+    assert_eq!(
+        (plan.instanced_nodes, plan.instances, plan.draws),
+        (1, 3, 3)
+    );
+    assert!(
+        plan.to_string()
+            .contains("instancing  3 instance(s) on 1 node(s)"),
+        "{plan}"
+    );
+}
+
+#[test]
+fn gpu_instancing_with_bad_accessors_is_an_error_that_names_them() {
+    // Counts that differ.
+    let mut d = Doc::new();
+    let t = d.floats(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0]]);
+    let s = d.floats(&[[1.0, 1.0, 1.0]]);
+    instanced_quad(&mut d, json!({"TRANSLATION": t, "SCALE": s}));
+    let msg = error_text(d.load("instancing-counts"));
+    assert!(
+        msg.contains("EXT_mesh_gpu_instancing")
+            && msg.contains("SCALE")
+            && msg.contains("TRANSLATION"),
+        "{msg}"
+    );
+    // An accessor that does not exist.
+    let mut d = Doc::new();
+    instanced_quad(&mut d, json!({"TRANSLATION": 99}));
+    let msg = error_text(d.load("instancing-index"));
+    assert!(msg.contains("accessor 99"), "{msg}");
+    // A zero rotation.
+    let mut d = Doc::new();
+    let r = d.floats(&[[0.0, 0.0, 0.0, 0.0]]);
+    instanced_quad(&mut d, json!({"ROTATION": r}));
+    let msg = error_text(d.load("instancing-rotation"));
+    assert!(
+        msg.contains("instance 0") && msg.contains("rotation"),
+        "{msg}"
+    );
+    // No attributes: drawn once, with a warning.
+    let mut d = Doc::new();
+    instanced_quad(&mut d, json!({}));
+    let scene = d.load("instancing-empty").unwrap();
+    assert_eq!(scene.draws.len(), 1);
+    assert!(scene
+        .warnings
+        .iter()
+        .any(|w| w.0.contains("EXT_mesh_gpu_instancing")));
+}
+
+#[test]
+fn simple_instancing_is_a_grid_of_125_cubes() {
+    let path =
+        Path::new("../shared/realworld/khronos/SimpleInstancing/glTF-Binary/SimpleInstancing.glb");
+    if !path.exists() {
+        println!("({} not present: skipped)", path.display());
+        return;
+    }
+    let scene = scene::load(path).unwrap();
+    assert!(
+        !scene.warnings.iter().any(|w| w.0.contains("ignores")),
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(scene.instances, 125);
+    assert_eq!(scene.draws.len(), 125 * scene.meshes.len());
+}
+
+#[test]
+fn orthographic_cameras_are_read_and_chosen_like_perspective_ones() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["cameras"] = json!([
+        {"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}},
+        {"type": "orthographic", "name": "top", "orthographic": {"xmag": 2.0, "ymag": 1.5, "znear": 0.01, "zfar": 100.0}},
+    ]);
+    d.push(
+        "nodes",
+        json!({"camera": 0, "translation": [0.5, 0.5, 3.0]}),
+    );
+    d.push(
+        "nodes",
+        json!({"camera": 1, "translation": [0.5, 0.5, 4.0]}),
+    );
+    let n = d.json["nodes"].as_array().unwrap().len();
+    d.json["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .extend([json!(n - 2), json!(n - 1)]);
+    let s = d.load("ortho").unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.cameras.len(), 2);
+    assert_eq!(s.cameras[0].orthographic, None);
+    assert_eq!(s.cameras[1].orthographic, Some([2.0, 1.5]));
+    assert_eq!(s.cameras[1].zfar, Some(100.0));
+    let options = weft::render::RenderOptions {
+        camera: Some(1),
+        ..Default::default()
+    };
+    let plan = weft::render::Plan::new(&s, &options);
+    assert!(
+        plan.camera.contains("orthographic (xmag 2, ymag 1.5)"),
+        "{}",
+        plan.camera
+    );
+    // Broken ones are errors naming the camera.
+    for (bad, what) in [
+        (
+            json!({"xmag": 0.0, "ymag": 1.0, "znear": 0.0, "zfar": 1.0}),
+            "xmag",
+        ),
+        (
+            json!({"xmag": 1.0, "ymag": 1.0, "znear": 2.0, "zfar": 1.0}),
+            "zfar",
+        ),
+    ] {
+        let mut d2 = Doc::new();
+        d2.quad(true, false);
+        d2.json["cameras"] = json!([{"type": "orthographic", "orthographic": bad}]);
+        let msg = error_text(d2.load(&format!("ortho-{what}")));
+        assert!(msg.contains("camera 0") && msg.contains(what), "{msg}");
+    }
+}
+
+#[test]
+fn alpha_mask_materials_are_read_and_blend_is_drawn_opaque_with_a_warning() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["materials"] = json!([
+        {"name": "lace", "alphaMode": "MASK", "alphaCutoff": 0.3},
+        {"name": "default cutoff", "alphaMode": "MASK"},
+        {"name": "glass", "alphaMode": "BLEND"},
+        {"name": "too high", "alphaMode": "MASK", "alphaCutoff": 1.5},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load("mask").unwrap();
+    let cutoffs: Vec<Option<f32>> = s.materials.iter().map(|m| m.alpha_cutoff).collect();
+    assert_eq!(cutoffs, vec![Some(0.3), Some(0.5), None, Some(1.0)]);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("'glass'") && w.0.contains("BLEND")),
+        "{:?}",
+        s.warnings
+    );
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("'too high'") && w.0.contains("clamped")),
+        "{:?}",
+        s.warnings
+    );
+    let plan = weft::render::Plan::new(&s, &weft::render::RenderOptions::default());
+    assert_eq!((plan.mask_draws, plan.alpha_mask), (1, true));
 }

@@ -18,6 +18,9 @@ Each scene stresses one thing (docs/regression.md has the list and what each gol
   skinned_cloth a twill strip on a three-joint skin, bent up and twisted by a 2-second animation
                 (a linear and a cubic-spline rotation channel): the thread directions must follow
                 the bend (tests/animation.rs, goldens skinned-cloth-*)
+  gltf_core     glTF core features of issue 25: a triangle strip and fan, COLOR_0, an unlit
+                sphere, an alphaMode MASK card with cut-out holes (and their shadow), nine
+                EXT_mesh_gpu_instancing cubes; camera 1 orthographic (goldens gltf-core-*)
 
 Python 3 standard library only; the output is byte-for-byte deterministic. The geometry helpers
 and the glTF writer are those of tools/make_default_scene.py (imported). Y is up, units are
@@ -513,6 +516,117 @@ def skinned_cloth():
     return doc, bytes(b.bin)
 
 
+def gltf_core():
+    """glTF 2.0 core features weft used to ignore, one object each, on a grey floor under a sun
+    with a shadow map (issue 25): from left to right a blue ribbon written as a TRIANGLE_STRIP
+    (non-indexed) above an orange hexagon written as a TRIANGLE_FAN (indexed), a cube whose
+    faces are coloured by COLOR_0 (normalized unsigned bytes, VEC4) over a white material, a
+    green KHR_materials_unlit sphere (flat, no shading), a white card with alphaMode MASK whose
+    COLOR_0 alpha cuts out a grid of round holes (the holes show in its shadow too), and nine
+    small cubes placed by one node with EXT_mesh_gpu_instancing (a 3 x 3 grid, each turned and
+    scaled). Camera 0: perspective 3/4 view; camera 1: orthographic from the front (xmag 2.4,
+    ymag 1.35)."""
+    b = Builder()
+    floor = patch_mesh(-2.5, 2.5, -1.5, 1.5, 1, 1)
+    materials = [
+        pbr("grey floor", (0.5, 0.5, 0.5), 0.0, 0.8),
+        pbr("blue", (0.1, 0.25, 0.8), 0.0, 0.5),
+        pbr("orange", (0.9, 0.4, 0.05), 0.0, 0.5),
+        pbr("white", (1.0, 1.0, 1.0), 0.0, 0.5),
+        dict(pbr("unlit green", (0.2, 0.7, 0.3), 0.0, 0.5), extensions={"KHR_materials_unlit": {}}),
+        dict(pbr("lace card", (0.95, 0.92, 0.85), 0.0, 0.7), alphaMode="MASK", alphaCutoff=0.5, doubleSided=True),
+        pbr("brass", (0.9, 0.7, 0.3), 0.0, 0.35),
+    ]
+    meshes = [{"name": "floor", "primitives": [b.primitive(floor, 0)]}]
+
+    # A ribbon of three quads standing in z = 0 as a triangle strip of 8 vertices, zig-zagging
+    # top, bottom, top, ...: the first triangle counter-clockwise seen from +z.
+    strip = []
+    for k in range(4):
+        x = -2.1 + 0.2 * k
+        strip += [[x, 0.85, 0.0], [x, 0.55, 0.0]]
+    meshes.append({"name": "ribbon (TRIANGLE_STRIP)", "primitives": [{
+        "attributes": {"POSITION": b.floats(strip, "VEC3", with_bounds=True),
+                       "NORMAL": b.floats([[0.0, 0.0, 1.0]] * len(strip), "VEC3")},
+        "material": 1, "mode": 5}]})
+    # A hexagon in z = 0: centre, then the ring counter-clockwise and closed, as an indexed fan.
+    ring = [[-1.8 + 0.25 * math.cos(a * math.pi / 3), 0.28 + 0.25 * math.sin(a * math.pi / 3), 0.0] for a in range(6)]
+    hexagon = [[-1.8, 0.28, 0.0]] + ring
+    meshes.append({"name": "hexagon (TRIANGLE_FAN)", "primitives": [{
+        "attributes": {"POSITION": b.floats(hexagon, "VEC3", with_bounds=True),
+                       "NORMAL": b.floats([[0.0, 0.0, 1.0]] * len(hexagon), "VEC3")},
+        "indices": b.indices([0, 1, 2, 3, 4, 5, 6, 1]), "material": 2, "mode": 6}]})
+
+    # A cube with its faces coloured by COLOR_0 as normalized unsigned bytes.
+    cube = box_mesh(0.25)
+    prim = b.primitive(cube, 3)
+    colours = []
+    for n in cube[1]:
+        c = [int(round(255 * (0.5 + 0.5 * x))) for x in n]
+        colours.append(c + [255])
+    view = b._view(bytes(v for c in colours for v in c), 34962)
+    b.accessors.append({"bufferView": view, "componentType": 5121, "normalized": True, "count": len(colours), "type": "VEC4"})
+    prim["attributes"]["COLOR_0"] = len(b.accessors) - 1
+    meshes.append({"name": "coloured cube (COLOR_0)", "primitives": [prim]})
+
+    meshes.append({"name": "unlit sphere", "primitives": [b.primitive(sphere_mesh(), 4)]})
+
+    # The card: a 24 x 24 grid in z = 0 whose COLOR_0 alpha is 0 inside a 4 x 4 grid of round
+    # holes (float VEC4): cut out where the interpolated alpha is below 0.5.
+    n = 24
+    card = grid_mesh(lambda u, v: [0.85 + 0.8 * u, 0.2 + 0.8 * (1.0 - v), 0.0], n, n, (1.0, 1.0),
+                     normal_fn=lambda u, v: [0.0, 0.0, 1.0])
+    prim = b.primitive(card, 5)
+    alphas = []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            u, v = i / n, j / n
+            cu, cv = (u * 4) % 1.0 - 0.5, (v * 4) % 1.0 - 0.5
+            alphas.append([1.0, 1.0, 1.0, 0.0 if cu * cu + cv * cv < 0.09 else 1.0])
+    prim["attributes"]["COLOR_0"] = b.floats(alphas, "VEC4")
+    meshes.append({"name": "lace card (alphaMode MASK)", "primitives": [prim]})
+
+    meshes.append({"name": "small cube", "primitives": [b.primitive(box_mesh(0.07), 6)]})
+    translations, rotations, scales = [], [], []
+    for k in range(9):
+        i, j = k % 3, k // 3
+        translations.append([0.22 * (i - 1), 0.0, 0.22 * (j - 1)])
+        a = math.radians(15.0 * k) / 2.0
+        rotations.append([0.0, r(math.sin(a)), 0.0, r(math.cos(a))])
+        s = 0.7 + 0.1 * k / 2.0
+        scales.append([s, s, s])
+
+    sun = directional("sun", (1.0, 0.96, 0.9), 3.0)
+    sun["extras"] = {"shadows": {"resolution": 1024}}
+    lights = [sun]
+    sun_from = [0.45, 0.8, 0.55]
+    nodes = [
+        {"name": "floor", "mesh": 0},
+        {"name": "ribbon", "mesh": 1},
+        {"name": "hexagon", "mesh": 2},
+        {"name": "coloured cube", "mesh": 3, "translation": [-0.85, 0.25, 0.0],
+         "rotation": [0.0, r(math.sin(math.radians(20.0))), 0.0, r(math.cos(math.radians(20.0)))]},
+        {"name": "unlit sphere", "mesh": 4, "translation": [0.25, 0.3, 0.0], "scale": [0.3] * 3},
+        {"name": "lace card", "mesh": 5, "translation": [0.0, 0.0, -0.3]},
+        {"name": "instanced cubes", "mesh": 6, "translation": [2.0, 0.08, 0.2],
+         "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {
+             "TRANSLATION": b.floats(translations, "VEC3"),
+             "ROTATION": b.floats(rotations, "VEC4"),
+             "SCALE": b.floats(scales, "VEC3")}}}},
+        light_node("sun", 0, base.scale(sun_from, 5.0), [0.0, 0.0, 0.0]),
+        camera_node("3/4 view", [0.4, 2.0, 3.6], [0.1, 0.35, 0.0], 0),
+        {"name": "front (orthographic)", "translation": [0.0, 0.55, 5.0], "camera": 1},
+    ]
+    cameras = [
+        camera_def("3/4 view", 45.0, 0.05),
+        {"name": "front (orthographic)", "type": "orthographic",
+         "orthographic": {"xmag": r(1.35 * ASPECT), "ymag": 1.35, "znear": 0.05, "zfar": 20.0}},
+    ]
+    doc, binary = document("gltf_core", b, materials, meshes, nodes, lights, cameras)
+    doc["extensionsUsed"] = ["KHR_lights_punctual", "KHR_materials_unlit", "EXT_mesh_gpu_instancing"]
+    return doc, binary
+
+
 SCENES = {
     "closeup": closeup,
     "far": far,
@@ -523,6 +637,7 @@ SCENES = {
     "spheres": spheres,
     "shadows": shadows,
     "skinned_cloth": skinned_cloth,
+    "gltf_core": gltf_core,
 }
 
 

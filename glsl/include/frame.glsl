@@ -84,6 +84,8 @@ const uint SLOT_ANISOTROPY = 9u;
 // Material.extra.w flags.
 const uint MATERIAL_ANISOTROPY = 1u;
 const uint MATERIAL_ANISOTROPY_TEXTURE = 2u;
+const uint MATERIAL_UNLIT = 4u;  // KHR_materials_unlit
+const uint MATERIAL_MASK = 8u;   // alphaMode MASK: alpha.x is the cutoff
 
 struct Material {
     vec4 base_color;          // linear rgba factor
@@ -96,7 +98,14 @@ struct Material {
                               // strength, z: anisotropy rotation (radians), w: MATERIAL_* flags (a whole number)
     vec4 uv[20];              // per texture slot s: rows uv[2s], uv[2s+1] of its affine UV map
                               // (xyz), uv[2s].w: the UV set (0 or 1)
+    vec4 alpha;               // x: alphaCutoff of an alphaMode MASK material (flag MATERIAL_MASK)
 };
+
+// alphaMode MASK: the base colour's alpha (factor x texture x vertex colour) below the cutoff is
+// cut out. No antialiasing of the edge (one sample per pixel, as the cutoff defines it).
+bool alpha_cut(Material m, float alpha) {
+    return (uint(m.extra.w + 0.5) & MATERIAL_MASK) != 0u && alpha < m.alpha.x;
+}
 
 // Octahedral encoding of unit vectors (Cigolle et al. 2014): two values in [-1, 1].
 vec2 oct_encode(vec3 n) {

@@ -820,6 +820,7 @@ pub fn stage(
         ],
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
+        colors: Vec::new(),
     });
     scene.draws.push(Draw {
         mesh: scene.meshes.len() - 1,

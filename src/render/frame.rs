@@ -206,6 +206,8 @@ pub(crate) struct DrawRange {
     pub(crate) double_sided: bool,
     pub(crate) cast_shadows: bool,
     pub(crate) receive_shadows: bool,
+    /// The material is alphaMode MASK (the shadow pass casts it with its cut-out pipeline).
+    pub(crate) alpha_mask: bool,
     /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
     pub(crate) scene_draw: usize,
 }
@@ -213,6 +215,13 @@ pub(crate) struct DrawRange {
 /// A scene's data on the GPU.
 pub struct GpuScene {
     pub(crate) vertices: Buffer,
+    /// COLOR_0 of every vertex of `vertices` (linear RGBA, white where a mesh has none), or one
+    /// white entry when no mesh has vertex colours (the G-buffer pass then reads none).
+    pub(crate) colors: Buffer,
+    /// Whether `colors` holds one entry per vertex (some mesh has COLOR_0), and how many
+    /// vertices `vertices` holds (posed copies included).
+    pub(crate) has_colors: bool,
+    pub(crate) vertex_count: usize,
     pub(crate) indices: Buffer,
     pub(crate) materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
@@ -235,6 +244,8 @@ pub struct GpuScene {
     pub(crate) material_samplers: Vec<[usize; 10]>,
     /// The distinct samplers the materials' texture slots use (wrap modes and filters).
     pub(crate) samplers: Vec<Sampler>,
+    /// Per material: alphaMode MASK.
+    pub(crate) material_mask: Vec<bool>,
     pub(crate) textures: Vec<Image>,
     pub(crate) draws: Vec<DrawRange>,
     pub(crate) triangles: usize,
@@ -256,6 +267,12 @@ pub struct Renderer {
     lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     tonemap_pipeline: Pipeline,
     shadow_pipeline: Pipeline,
+    /// The shadow pass's cut-out pipeline for alphaMode MASK casters (shadow_mask.vert/.frag), by
+    /// VERTEX_COLORS, made when a frame first needs it; its two set layouts (materials and
+    /// vertex colours; the base colour texture).
+    shadow_mask_variants: HashMap<u32, Pipeline>,
+    shadow_mask_layout: SetLayout,
+    shadow_mask_texture_layout: SetLayout,
     linear: Sampler,
     nearest: Sampler,
     shadow_sampler: Sampler,
@@ -288,7 +305,7 @@ fn sampled(binding: u32, stages: Stages) -> Binding {
 impl Renderer {
     pub fn new(ctx: Context) -> crate::Result<Renderer> {
         // Frame, materials, fabrics, and lights (the vertex stage reads the last three only when
-        // it lights vertices for Gouraud shading).
+        // it lights vertices for Gouraud shading), and the vertex colours.
         let frame_layout = ctx.create_set_layout(&[
             Binding {
                 binding: 0,
@@ -307,6 +324,12 @@ impl Renderer {
             },
             Binding {
                 binding: 3,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::VERTEX,
+            },
+            // COLOR_0 per vertex (read only when the plan compiles vertex colours in).
+            Binding {
+                binding: 4,
                 kind: BindingKind::StorageBuffer,
                 stages: Stages::VERTEX,
             },
@@ -353,6 +376,19 @@ impl Renderer {
         lighting_bindings.extend((13..17).map(|b| sampled(b, Stages::FRAGMENT)));
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
+        let shadow_mask_layout = ctx.create_set_layout(&[
+            Binding {
+                binding: 0,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
+            Binding {
+                binding: 1,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::VERTEX,
+            },
+        ])?;
+        let shadow_mask_texture_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
         let weave_layout = ctx.create_set_layout(&[Binding {
             binding: 0,
             kind: BindingKind::StorageImage,
@@ -474,6 +510,9 @@ impl Renderer {
             lighting_variants: HashMap::new(),
             tonemap_pipeline,
             shadow_pipeline,
+            shadow_mask_variants: HashMap::new(),
+            shadow_mask_layout,
+            shadow_mask_texture_layout,
             linear,
             nearest,
             shadow_sampler,
@@ -498,16 +537,46 @@ impl Renderer {
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
+        self.shadow_mask_pipeline(false)?;
         let mut all = vec![
             &self.weave_pipeline,
             &self.tonemap_pipeline,
             &self.shadow_pipeline,
         ];
         all.extend(self.env.pipelines());
+        all.extend(self.shadow_mask_variants.values());
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
         Ok(all)
+    }
+
+    /// The shadow pass's cut-out pipeline for alphaMode MASK casters, made on first use.
+    fn shadow_mask_pipeline(&mut self, vertex_colors: bool) -> crate::Result<u32> {
+        let key = vertex_colors as u32;
+        if !self.shadow_mask_variants.contains_key(&key) {
+            let pipeline = self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!("shadow_mask[vertex_colors={key}]"),
+                vertex: &shaders::SHADOW_MASK_VERT,
+                fragment: &shaders::SHADOW_MASK_FRAG,
+                vertex_layout: Some(VertexLayout {
+                    stride: (VERTEX_FLOATS * 4) as u32,
+                    attributes: vec![
+                        (0, Format::R32G32B32_SFLOAT, 0),
+                        (1, Format::R32G32_SFLOAT, 40),
+                        (2, Format::R32G32_SFLOAT, 56),
+                    ],
+                }),
+                color_formats: &[],
+                depth_format: Some(SHADOW_FORMAT),
+                set_layouts: &[&self.shadow_mask_layout, &self.shadow_mask_texture_layout],
+                push_constant_size: std::mem::size_of::<super::gpu::ShadowMaskPush>() as u32,
+                push_stages: Stages::GRAPHICS,
+                constants: &[(0, key)],
+            })?;
+            self.shadow_mask_variants.insert(key, pipeline);
+        }
+        Ok(key)
     }
 
     /// The G-buffer and lighting pipeline variants `options` needs, made if missing; returns their
@@ -553,6 +622,8 @@ impl Renderer {
                 },
             ),
             (4, options.footprint.pieces()),
+            (5, plan.vertex_colors as u32),
+            (6, plan.alpha_mask as u32),
         ];
         let lighting_key = vec![
             (0, options.accuracy.code()),
@@ -571,6 +642,7 @@ impl Renderer {
                     .map(|e| e.level.samples())
                     .unwrap_or(1),
             ),
+            (9, plan.unlit as u32),
         ];
         let need_gbuffer = !self.gbuffer_variants.contains_key(&gbuffer_key);
         let need_lighting = !self.lighting_variants.contains_key(&lighting_key);
@@ -594,10 +666,12 @@ impl Renderer {
             };
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}]",
+                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}]",
                     options.accuracy.code(),
                     gbuffer_key[3].1,
-                    gbuffer_key[4].1
+                    gbuffer_key[4].1,
+                    gbuffer_key[5].1,
+                    gbuffer_key[6].1
                 ),
                 vertex: &shaders::GBUFFER_VERT,
                 fragment: &shaders::GBUFFER_FRAG,
@@ -620,14 +694,15 @@ impl Renderer {
         let make_lighting = || -> crate::Result<Pipeline> {
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}, ibl={}, ibl_samples={}]",
+                    "lighting[accuracy={}, samples={}, fabric_as_pbr={}, light_types={light_types}, shading={shading}, shadows={}, range_culling={}, ibl={}, ibl_samples={}, unlit={}]",
                     options.accuracy.code(),
                     options.accuracy.samples(),
                     options.fabric_as_pbr as u32,
                     plan.shadow_sampling as u32,
                     plan.range_culling as u32,
                     lighting_key[7].1,
-                    lighting_key[8].1
+                    lighting_key[8].1,
+                    lighting_key[9].1
                 ),
                 vertex: &shaders::FULLSCREEN_VERT,
                 fragment: &shaders::LIGHTING_FRAG,
@@ -729,12 +804,21 @@ impl Renderer {
                     .is_some_and(|m| m.double_sided),
                 cast_shadows: d.cast_shadows,
                 receive_shadows: d.receive_shadows,
+                alpha_mask: scene
+                    .materials
+                    .get(mesh.material)
+                    .is_some_and(|m| m.alpha_cutoff.is_some()),
                 scene_draw,
             });
         }
         // Skinned and morphed draws get posed copies of their vertices, which the skinning pass
         // writes (render::deform).
         let deform = super::deform::upload(ctx, scene, &mut vertices, &mesh_ranges, &mut draws)?;
+        let vertex_count = vertices.len();
+        let colors = vertex_colors(scene, vertex_count, &mesh_ranges, &draws);
+        let has_colors = scene.meshes.iter().any(|m| !m.colors.is_empty());
+        let colors =
+            ctx.create_buffer_with("vertex colours", BufferUsageFlags::STORAGE_BUFFER, &colors)?;
         let vertices = ctx.create_buffer_with(
             "vertices",
             BufferUsageFlags::VERTEX_BUFFER | BufferUsageFlags::STORAGE_BUFFER,
@@ -769,6 +853,11 @@ impl Renderer {
             .collect::<crate::Result<Vec<_>>>()?;
         let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
         let (material_samplers, samplers) = texture_samplers(ctx, scene)?;
+        let material_mask = scene
+            .materials
+            .iter()
+            .map(|m| m.alpha_cutoff.is_some())
+            .collect();
         let material_count = materials.len() as u32;
         let materials =
             ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
@@ -786,6 +875,9 @@ impl Renderer {
             .collect::<crate::Result<Vec<_>>>()?;
         let mut gpu = GpuScene {
             vertices,
+            colors,
+            has_colors,
+            vertex_count,
             indices,
             materials,
             fabrics,
@@ -799,6 +891,7 @@ impl Renderer {
             material_textures,
             material_samplers,
             samplers,
+            material_mask,
             textures,
             draws,
             triangles,
@@ -880,6 +973,12 @@ impl Renderer {
             _ => None,
         };
         let (gbuffer_key, lighting_key, env_index) = self.prepare(options, &plan, env)?;
+        // The cut-out shadow pipeline only when a MASK material casts into a shadow map.
+        let shadow_mask_key = if plan.mask_casters > 0 && plan.runs(Pass::Shadow) {
+            Some(self.shadow_mask_pipeline(plan.vertex_colors)?)
+        } else {
+            None
+        };
         if options.weave_precision == super::WeavePrecision::Rgba8 && gpu.weaves8.get().is_none() {
             let copies = gpu
                 .weaves
@@ -1005,11 +1104,22 @@ impl Renderer {
             _ => &self.no_shadows,
         };
 
+        // Vertex colours compiled in (forced) for a scene that has none: every vertex reads white.
+        let forced_colors = if plan.vertex_colors && !gpu.has_colors {
+            Some(self.ctx.create_buffer_with(
+                "vertex colours (white)",
+                BufferUsageFlags::STORAGE_BUFFER,
+                &vec![[1.0f32; 4]; gpu.vertex_count.max(1)],
+            )?)
+        } else {
+            None
+        };
+        let colors = forced_colors.as_ref().unwrap_or(&gpu.colors);
         let ctx = self.ctx.clone();
         let targets = self.targets.as_ref().expect("created above");
         let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
         let lighting_pipeline = &self.lighting_variants[&lighting_key];
-        let pool = ctx.create_descriptor_pool(4 + gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(5 + 2 * gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
         let (env_radiance, env_specular) = match env_index {
             Some(i) => (&self.env_cache[i].radiance, &self.env_cache[i].specular),
@@ -1076,6 +1186,7 @@ impl Renderer {
                             (1, Resource::Storage(&gpu.materials)),
                             (2, Resource::Storage(&gpu.fabrics)),
                             (3, Resource::Storage(&gpu.lights)),
+                            (4, Resource::Storage(colors)),
                         ],
                     )?;
                     let material_sets = (0..gpu.material_count as usize)
@@ -1149,17 +1260,58 @@ impl Renderer {
                         .iter()
                         .map(|(_, m, (x, y, r))| (*x, *y, *r, *m))
                         .collect();
+                    // MASK casters: the cut-out pipeline, the materials and vertex colours, and
+                    // each MASK material's base colour texture.
+                    let mask = match shadow_mask_key {
+                        Some(key) => {
+                            let set = pool.set(
+                                &self.shadow_mask_layout,
+                                &[
+                                    (0, Resource::Storage(&gpu.materials)),
+                                    (1, Resource::Storage(&gpu.colors)),
+                                ],
+                            )?;
+                            let textures = (0..gpu.material_count as usize)
+                                .map(|m| {
+                                    if !gpu.material_mask.get(m).copied().unwrap_or(false) {
+                                        return Ok(None);
+                                    }
+                                    let base = gpu
+                                        .material_textures
+                                        .get(m)
+                                        .and_then(|t| t[0])
+                                        .and_then(|i| gpu.textures.get(i))
+                                        .unwrap_or(&self.white);
+                                    pool.set(
+                                        &self.shadow_mask_texture_layout,
+                                        &[(0, Resource::Sampled(base, &self.linear))],
+                                    )
+                                    .map(Some)
+                                })
+                                .collect::<crate::Result<Vec<_>>>()?;
+                            Some(passes::shadow::MaskCasters {
+                                pipeline: &self.shadow_mask_variants[&key],
+                                set,
+                                textures,
+                            })
+                        }
+                        None => None,
+                    };
                     if !tiles.is_empty() {
                         timed_pass(&ctx, queries.as_ref(), &mut timings, "shadow", &mut |cmd| {
                             passes::shadow::shadow_pass(
                                 cmd,
                                 &self.shadow_pipeline,
+                                mask.as_ref(),
                                 gpu,
                                 atlas,
                                 &tiles,
                             )
                         })?;
                         stats.pipelines.push(self.shadow_pipeline.name.clone());
+                        if let Some(m) = &mask {
+                            stats.pipelines.push(m.pipeline.name.clone());
+                        }
                         stats.shadow_maps = tiles.len();
                         stats.shadow_draws =
                             tiles.len() * gpu.draws.iter().filter(|d| d.cast_shadows).count();
@@ -1447,6 +1599,45 @@ fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
 /// A scene's fabric records (80 bytes each; one zero record when there are none: a storage
 /// buffer cannot be empty) and the material records, which index them (one default material when
 /// the scene has none).
+/// The vertex colour buffer: one RGBA per vertex of the uploaded vertex buffer (`vertex_count`,
+/// posed copies included: a deforming draw's copy gets its mesh's colours), white where a mesh
+/// has none; a single white entry when no mesh has COLOR_0 (a storage buffer cannot be empty).
+fn vertex_colors(
+    scene: &Scene,
+    vertex_count: usize,
+    mesh_ranges: &[(u32, u32, i32)],
+    draws: &[DrawRange],
+) -> Vec<[f32; 4]> {
+    if scene.meshes.iter().all(|m| m.colors.is_empty()) {
+        return vec![[1.0; 4]];
+    }
+    let mut colors = vec![[1.0f32; 4]; vertex_count];
+    let mut copy = |mesh: &crate::scene::Mesh, at: usize| {
+        if let Some(dst) = colors.get_mut(at..) {
+            for (d, c) in dst
+                .iter_mut()
+                .zip(mesh.colors.iter().take(mesh.vertices.len()))
+            {
+                *d = *c;
+            }
+        }
+    };
+    for (mesh, range) in scene.meshes.iter().zip(mesh_ranges) {
+        copy(mesh, range.2.max(0) as usize);
+    }
+    for d in draws {
+        let Some(mesh) = scene
+            .draws
+            .get(d.scene_draw)
+            .and_then(|sd| scene.meshes.get(sd.mesh))
+        else {
+            continue;
+        };
+        copy(mesh, d.vertex_offset.max(0) as usize);
+    }
+    colors
+}
+
 fn material_records(scene: &Scene) -> (Vec<u8>, Vec<GpuMaterial>) {
     let mut fabric_bytes: Vec<u8> = Vec::new();
     let mut fabric_index = Vec::new();

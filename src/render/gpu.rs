@@ -43,11 +43,33 @@ impl FrameData {
         let aspect = width as f32 / height as f32;
         // Reversed-Z keeps D32F depth precision nearly uniform, so a cloth 1.5 cm above a ball
         // does not z-fight at 15 m. The camera's zfar is not needed.
-        let mut proj =
-            Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6));
+        let mut proj = match camera.orthographic {
+            // Orthographic (glTF xmag, ymag): ymag kept, the half-width from the image's aspect,
+            // reversed-Z between the far (0) and near (1) planes.
+            Some([_, ymag]) => {
+                let (h, w) = (ymag.abs().max(1e-6), ymag.abs().max(1e-6) * aspect);
+                let near = camera.znear.max(0.0);
+                let far = camera.zfar.filter(|f| *f > near).unwrap_or(near + 1e3);
+                Mat4::orthographic_rh(-w, w, -h, h, far, near)
+            }
+            None => {
+                Mat4::perspective_infinite_reverse_rh(camera.yfov, aspect, camera.znear.max(1e-6))
+            }
+        };
         proj.y_axis.y = -proj.y_axis.y;
         let view_proj = proj * camera.view;
-        let eye = camera.view.inverse().transform_point3(Vec3::ZERO);
+        let camera_to_world = camera.view.inverse();
+        let mut eye = camera_to_world.transform_point3(Vec3::ZERO);
+        if camera.orthographic.is_some() {
+            // Every view ray is parallel: the shaders take the direction to the viewer as
+            // normalize(eye - p), so the eye is put far back along the view axis, where that
+            // direction is the axis to within 1e-7 rad (1e6 times the far plane's distance).
+            let back = camera_to_world
+                .transform_vector3(Vec3::Z)
+                .normalize_or(Vec3::Z);
+            let far = camera.zfar.unwrap_or(1e3).abs().max(1.0);
+            eye += back * (far * 1e6).min(1e30);
+        }
         FrameData {
             view: camera.view.to_cols_array_2d(),
             proj: proj.to_cols_array_2d(),
@@ -168,12 +190,18 @@ pub struct GpuMaterial {
     pub extra: [f32; 4],
     /// Per texture slot: the two rows of its affine UV map, row 0's w the UV set.
     pub uv: [[f32; 4]; 2 * TextureSlot::COUNT],
+    /// x: the alphaCutoff of a MASK material (flag [`MATERIAL_MASK`]); y, z, w unused.
+    pub alpha: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 112 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
 const MATERIAL_ANISOTROPY_TEXTURE: u32 = 2;
+/// KHR_materials_unlit (read by lighting.frag only when the plan compiles the unlit path in).
+pub const MATERIAL_UNLIT: u32 = 4;
+/// alphaMode MASK: `alpha[0]` is the cutoff.
+pub const MATERIAL_MASK: u32 = 8;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -225,6 +253,13 @@ impl GpuMaterial {
                     ),
                     None => (0.0, 0.0, 0),
                 };
+                let flags = flags
+                    | if m.unlit { MATERIAL_UNLIT } else { 0 }
+                    | if m.alpha_cutoff.is_some() {
+                        MATERIAL_MASK
+                    } else {
+                        0
+                    };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
             uv: {
@@ -235,6 +270,7 @@ impl GpuMaterial {
                 }
                 uv
             },
+            alpha: [m.alpha_cutoff.unwrap_or(0.0), 0.0, 0.0, 0.0],
         }
     }
 }
@@ -297,6 +333,17 @@ const _: () = assert!(std::mem::size_of::<GpuShadow>() == 96);
 pub struct ShadowPush {
     pub clip_from_object: [[f32; 4]; 4],
 }
+
+/// Push constants of the shadow pass for alphaMode MASK casters (shadow_mask.vert/.frag, 80
+/// bytes): the caster's material as well.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowMaskPush {
+    pub clip_from_object: [[f32; 4]; 4],
+    pub material: u32,
+    pub pad: [u32; 3],
+}
+const _: () = assert!(std::mem::size_of::<ShadowMaskPush>() == 80);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -157,6 +157,13 @@ pub struct Force {
     pub shadows: bool,
     /// Evaluate every light at every pixel: no per-pixel range culling.
     pub no_range_culling: bool,
+    /// Compile the vertex-colour code in (gbuffer VERTEX_COLORS = 1) with no mesh that has
+    /// COLOR_0: every vertex reads white.
+    pub vertex_colors: bool,
+    /// Compile the KHR_materials_unlit path in (lighting UNLIT = 1) with no unlit material.
+    pub unlit: bool,
+    /// Compile the alphaMode MASK discard in (gbuffer ALPHA_MASK = 1) with no MASK material.
+    pub alpha_mask: bool,
 }
 
 impl Force {
@@ -164,11 +171,17 @@ impl Force {
         light_types: false,
         shadows: false,
         no_range_culling: false,
+        vertex_colors: false,
+        unlit: false,
+        alpha_mask: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
         shadows: true,
         no_range_culling: true,
+        vertex_colors: true,
+        unlit: true,
+        alpha_mask: true,
     };
 }
 

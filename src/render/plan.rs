@@ -122,6 +122,27 @@ pub struct Plan {
     pub sheen_materials: usize,
     pub specular_materials: usize,
     pub anisotropic_materials: usize,
+    /// Materials with KHR_materials_unlit, and whether lighting.frag compiles the unlit path in
+    /// (some material is unlit, or forced).
+    pub unlit_materials: usize,
+    pub unlit: bool,
+    /// Drawn meshes with vertex colours (COLOR_0), and whether the G-buffer pass reads them
+    /// (some mesh has them, or forced): without, no colour buffer is read and nothing multiplied.
+    pub vertex_color_meshes: usize,
+    pub vertex_colors: bool,
+    /// alphaMode MASK: drawn draws with a MASK material, whether gbuffer.frag compiles the
+    /// discard in (some, or forced), and the casters among them (the shadow pass then makes and
+    /// uses its cut-out pipeline for them, when it runs).
+    pub mask_draws: usize,
+    pub alpha_mask: bool,
+    pub mask_casters: usize,
+    /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
+    /// its own, counted in `draws`; no pipeline or pass of its own).
+    pub instanced_nodes: usize,
+    pub instances: usize,
+    /// The camera the frame renders with: its name and projection (an orthographic camera needs
+    /// no code of its own, only its projection matrix).
+    pub camera: String,
     /// KHR_materials_variants: the file's variants and the one loaded (None: the defaults).
     pub variants: Vec<String>,
     pub variant: Option<String>,
@@ -290,8 +311,59 @@ impl Plan {
         if environment.is_some() {
             passes.insert(0, Pass::Environment);
         }
+        let unlit_materials = scene.materials.iter().filter(|m| m.unlit).count();
+        let mut drawn = vec![false; scene.meshes.len()];
+        for d in &scene.draws {
+            if let Some(x) = drawn.get_mut(d.mesh) {
+                *x = true;
+            }
+        }
+        let vertex_color_meshes = scene
+            .meshes
+            .iter()
+            .zip(&drawn)
+            .filter(|(m, &drawn)| drawn && !m.colors.is_empty())
+            .count();
+        let is_mask = |d: &crate::scene::Draw| {
+            scene
+                .meshes
+                .get(d.mesh)
+                .and_then(|m| scene.materials.get(m.material))
+                .is_some_and(|m| m.alpha_cutoff.is_some())
+        };
+        let mask_draws = scene.draws.iter().filter(|d| is_mask(d)).count();
+        let mask_casters = scene
+            .draws
+            .iter()
+            .filter(|d| d.cast_shadows && is_mask(d))
+            .count();
         Plan {
             width: options.width,
+            mask_draws,
+            alpha_mask: mask_draws > 0 || options.force.alpha_mask,
+            mask_casters,
+            unlit_materials,
+            unlit: unlit_materials > 0 || options.force.unlit,
+            vertex_color_meshes,
+            vertex_colors: vertex_color_meshes > 0 || options.force.vertex_colors,
+            camera: match options
+                .camera_override
+                .clone()
+                .map(Ok)
+                .unwrap_or_else(|| scene.camera(options.camera))
+            {
+                Ok(c) => match c.orthographic {
+                    Some([x, y]) => format!("'{}', orthographic (xmag {x}, ymag {y})", c.name),
+                    None => format!(
+                        "'{}', perspective (yfov {:.1}°)",
+                        c.name,
+                        c.yfov.to_degrees()
+                    ),
+                },
+                Err(_) => "none (the index is out of range)".into(),
+            },
+            instanced_nodes: scene.instanced_nodes,
+            instances: scene.instances,
             height: options.height,
             passes,
             draws: scene.draws.len(),
@@ -362,6 +434,14 @@ impl fmt::Display for Plan {
             "draws       {} ({} triangles)",
             self.draws, self.triangles
         )?;
+        writeln!(f, "camera      {}", self.camera)?;
+        if self.instanced_nodes > 0 {
+            writeln!(
+                f,
+                "instancing  {} instance(s) on {} node(s) (EXT_mesh_gpu_instancing), one draw each",
+                self.instances, self.instanced_nodes
+            )?;
+        }
         writeln!(
             f,
             "lights      {} directional, {} point, {} spot",
@@ -369,11 +449,35 @@ impl fmt::Display for Plan {
         )?;
         writeln!(
             f,
-            "materials   {} fabric, {} sheen, {} specular, {} anisotropic",
+            "materials   {} fabric, {} sheen, {} specular, {} anisotropic, {} unlit (unlit code {})",
             self.fabric_materials,
             self.sheen_materials,
             self.specular_materials,
-            self.anisotropic_materials
+            self.anisotropic_materials,
+            self.unlit_materials,
+            if self.unlit { "compiled" } else { "none" }
+        )?;
+        writeln!(
+            f,
+            "alpha mask  {} draw(s) with alphaMode MASK, {} casting (cut-out code {}{})",
+            self.mask_draws,
+            self.mask_casters,
+            if self.alpha_mask { "compiled" } else { "none" },
+            if self.mask_casters > 0 && !self.shadows.is_empty() {
+                ", cut-out shadow pipeline"
+            } else {
+                ""
+            }
+        )?;
+        writeln!(
+            f,
+            "vertex col. {} drawn mesh(es) with COLOR_0 (colour code {})",
+            self.vertex_color_meshes,
+            if self.vertex_colors {
+                "compiled"
+            } else {
+                "none"
+            }
         )?;
         if !self.variants.is_empty() {
             writeln!(

@@ -35,55 +35,58 @@ pub fn tile_lights(frame: &FrameData, lights: &[GpuLight], cull: bool) -> Vec<u3
     let mut lists: Vec<Vec<u32>> = vec![Vec::new(); tiles];
     for (i, l) in lights.iter().enumerate() {
         let range = l.position_range[3];
-        let rect = if !cull || l.direction_type[3] == LIGHT_DIRECTIONAL || range <= 0.0 {
-            None
-        } else {
-            let c = view.transform_point3(Vec3::new(
-                l.position_range[0],
-                l.position_range[1],
-                l.position_range[2],
-            ));
-            if c.z - range > -near {
-                // Wholly nearer than the near plane: lights nothing on screen.
-                continue;
-            }
-            if c.z + range > -near {
-                // Crosses the near plane: its projection is unbounded.
+        // An orthographic projection (w row 0 0 0 1) gets no screen rectangles: every tile.
+        let orthographic = frame.proj[3][3] != 0.0;
+        let rect =
+            if !cull || orthographic || l.direction_type[3] == LIGHT_DIRECTIONAL || range <= 0.0 {
                 None
             } else {
-                // In front: the bounding box of the sphere's box corners on screen.
-                let (mut lo, mut hi) = (
-                    glam::Vec2::splat(f32::INFINITY),
-                    glam::Vec2::splat(f32::NEG_INFINITY),
-                );
-                for k in 0..8 {
-                    let corner = c + Vec3::new(
-                        if k & 1 == 0 { -range } else { range },
-                        if k & 2 == 0 { -range } else { range },
-                        if k & 4 == 0 { -range } else { range },
-                    );
-                    let p: Vec4 = proj * corner.extend(1.0);
-                    let ndc = p.truncate().truncate() / p.w;
-                    lo = lo.min(ndc);
-                    hi = hi.max(ndc);
+                let c = view.transform_point3(Vec3::new(
+                    l.position_range[0],
+                    l.position_range[1],
+                    l.position_range[2],
+                ));
+                if c.z - range > -near {
+                    // Wholly nearer than the near plane: lights nothing on screen.
+                    continue;
                 }
-                if !(lo.is_finite() && hi.is_finite()) {
+                if c.z + range > -near {
+                    // Crosses the near plane: its projection is unbounded.
                     None
                 } else {
-                    // NDC to pixels (Vulkan: y down; the projection already flips y).
-                    let px = |v: f32, size: u32| (v * 0.5 + 0.5) * size as f32;
-                    let x0 = px(lo.x, width).floor();
-                    let x1 = px(hi.x, width).ceil();
-                    let y0 = px(lo.y, height).floor();
-                    let y1 = px(hi.y, height).ceil();
-                    if x1 < 0.0 || y1 < 0.0 || x0 > width as f32 || y0 > height as f32 {
-                        continue;
+                    // In front: the bounding box of the sphere's box corners on screen.
+                    let (mut lo, mut hi) = (
+                        glam::Vec2::splat(f32::INFINITY),
+                        glam::Vec2::splat(f32::NEG_INFINITY),
+                    );
+                    for k in 0..8 {
+                        let corner = c + Vec3::new(
+                            if k & 1 == 0 { -range } else { range },
+                            if k & 2 == 0 { -range } else { range },
+                            if k & 4 == 0 { -range } else { range },
+                        );
+                        let p: Vec4 = proj * corner.extend(1.0);
+                        let ndc = p.truncate().truncate() / p.w;
+                        lo = lo.min(ndc);
+                        hi = hi.max(ndc);
                     }
-                    let t = |v: f32, n: u32| ((v.max(0.0) as u32) / TILE).min(n - 1);
-                    Some((t(x0, tx), t(y0, ty), t(x1, tx), t(y1, ty)))
+                    if !(lo.is_finite() && hi.is_finite()) {
+                        None
+                    } else {
+                        // NDC to pixels (Vulkan: y down; the projection already flips y).
+                        let px = |v: f32, size: u32| (v * 0.5 + 0.5) * size as f32;
+                        let x0 = px(lo.x, width).floor();
+                        let x1 = px(hi.x, width).ceil();
+                        let y0 = px(lo.y, height).floor();
+                        let y1 = px(hi.y, height).ceil();
+                        if x1 < 0.0 || y1 < 0.0 || x0 > width as f32 || y0 > height as f32 {
+                            continue;
+                        }
+                        let t = |v: f32, n: u32| ((v.max(0.0) as u32) / TILE).min(n - 1);
+                        Some((t(x0, tx), t(y0, ty), t(x1, tx), t(y1, ty)))
+                    }
                 }
-            }
-        };
+            };
         let (x0, y0, x1, y1) = rect.unwrap_or((0, 0, tx - 1, ty - 1));
         for y in y0..=y1 {
             for x in x0..=x1 {

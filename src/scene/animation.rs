@@ -372,6 +372,9 @@ pub struct DrawBinding {
     pub skin: Option<usize>,
     /// The current morph weights (one per target of the draw's mesh).
     pub weights: Vec<f32>,
+    /// The instance's transform under its node (EXT_mesh_gpu_instancing; identity otherwise):
+    /// the draw's world is the node's world times this.
+    pub instance: Mat4,
 }
 
 /// What posing needs beyond the flattened scene.
@@ -562,7 +565,7 @@ impl Scene {
                 d.world = if b.skin.is_some() {
                     Mat4::IDENTITY
                 } else {
-                    world[b.node]
+                    world[b.node] * b.instance
                 };
             }
             let w = &weights[b.node];
@@ -765,6 +768,7 @@ pub(super) fn placed_camera(
         znear,
         zfar,
         aspect_ratio,
+        orthographic: None,
     })
 }
 

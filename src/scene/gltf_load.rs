@@ -54,9 +54,21 @@ const DEFAULT_SCENE_SOURCE: &str = "built-in default scene";
 /// The fabric material extension; its parameters are parsed by [`FabricParams`].
 const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
 
+/// KHR_materials_unlit: base colour only, no lighting.
+const UNLIT: &str = "KHR_materials_unlit";
+
+/// EXT_mesh_gpu_instancing: a node places its mesh once per instance (TRANSLATION, ROTATION,
+/// SCALE accessors).
+const INSTANCING: &str = "EXT_mesh_gpu_instancing";
+
+/// Instances, summed over the scene's instanced nodes: 2^20 (each is a draw of its own).
+pub(super) const MAX_INSTANCES: usize = 1 << 20;
+
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    UNLIT,
+    INSTANCING,
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
     material_ext::SHEEN,
@@ -357,6 +369,8 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
     // which refuses unknown required extensions: take them off before it runs.
     const OWN: &[&str] = &[
         FABRIC_EXTENSION,
+        UNLIT,
+        INSTANCING,
         material_ext::SHEEN,
         material_ext::SPECULAR,
         material_ext::IOR,
@@ -469,9 +483,53 @@ fn extras_object(extras: &json::Extras) -> Option<serde_json::Map<String, serde_
     }
 }
 
-/// A perspective camera before a node places it.
+/// A primitive mode as the glTF specification names it.
+fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Points => "POINTS",
+        Mode::Lines => "LINES",
+        Mode::LineLoop => "LINE_LOOP",
+        Mode::LineStrip => "LINE_STRIP",
+        Mode::Triangles => "TRIANGLES",
+        Mode::TriangleStrip => "TRIANGLE_STRIP",
+        Mode::TriangleFan => "TRIANGLE_FAN",
+    }
+}
+
+/// A TRIANGLE_STRIP's vertex sequence as a triangle list, with the winding of glTF 2.0 §3.7.2.1:
+/// triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), so every other triangle swaps its last two
+/// corners and all face the same way. Degenerate triangles (two equal indices, which exporters
+/// use to join strips) are dropped.
+pub(super) fn strip_to_list(strip: &[u32]) -> Vec<u32> {
+    let mut list = Vec::with_capacity(strip.len().saturating_sub(2) * 3);
+    for i in 0..strip.len().saturating_sub(2) {
+        let odd = i % 2;
+        let t = [strip[i], strip[i + 1 + odd], strip[i + 2 - odd]];
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            list.extend_from_slice(&t);
+        }
+    }
+    list
+}
+
+/// A TRIANGLE_FAN's vertex sequence as a triangle list (glTF 2.0 §3.7.2.1: triangle i is
+/// (v_{i+1}, v_{i+2}, v_0)); degenerate triangles are dropped.
+pub(super) fn fan_to_list(fan: &[u32]) -> Vec<u32> {
+    let mut list = Vec::with_capacity(fan.len().saturating_sub(2) * 3);
+    for i in 0..fan.len().saturating_sub(2) {
+        let t = [fan[i + 1], fan[i + 2], fan[0]];
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            list.extend_from_slice(&t);
+        }
+    }
+    list
+}
+
+/// A camera before a node places it.
 struct CameraDef {
     name: String,
+    /// Orthographic: (xmag, ymag), and `yfov` is unused.
+    orthographic: Option<[f32; 2]>,
     yfov: f32,
     znear: f32,
     zfar: Option<f32>,
@@ -496,7 +554,7 @@ struct Loader<'a> {
     /// Per glTF mesh: the scene meshes made from its primitives, once a node used it.
     mesh_ids: Vec<Option<Vec<usize>>>,
     lights: Vec<LightDef>,
-    /// None for orthographic cameras, which are skipped.
+    /// Per glTF camera (None for none: every camera is read, or the file refused).
     cameras: Vec<Option<CameraDef>>,
     /// What the file has cost so far, against the limits above.
     vertices_read: usize,
@@ -711,12 +769,26 @@ impl<'a> Loader<'a> {
             }
             None => (None, 1.0),
         };
-        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            self.warn(format_args!(
-                "{who} has alphaMode {:?}; weft draws every material opaque",
-                m.alpha_mode()
-            ));
-        }
+        let alpha_cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => {
+                let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+                finite("alphaCutoff", &[cutoff])?;
+                if !(0.0..=1.0).contains(&cutoff) {
+                    self.warn(format_args!(
+                        "{who} has alphaCutoff {cutoff}, outside [0, 1]; clamped to {}",
+                        cutoff.clamp(0.0, 1.0)
+                    ));
+                }
+                Some(cutoff.clamp(0.0, 1.0))
+            }
+            gltf::material::AlphaMode::Blend => {
+                self.warn(format_args!(
+                    "{who} has alphaMode BLEND, which weft does not draw yet; it is drawn opaque (MASK, a cutoff, is drawn)"
+                ));
+                None
+            }
+        };
 
         // The material extensions (sheen, specular, ior, anisotropy), with their textures.
         let ext = |key: &str| m.extensions().and_then(|e| e.get(key));
@@ -869,6 +941,14 @@ impl<'a> Loader<'a> {
             None => None,
         };
 
+        let mut unlit = m.extensions().and_then(|e| e.get(UNLIT)).is_some();
+        if unlit && fabric.is_some() {
+            self.warn(format_args!(
+                "{who} has both {UNLIT} and {FABRIC_EXTENSION}; the woven model is lit, so {UNLIT} is ignored on it"
+            ));
+            unlit = false;
+        }
+
         let material = Material {
             name,
             base_color,
@@ -889,6 +969,8 @@ impl<'a> Loader<'a> {
             anisotropy,
             uv: slot_uv,
             samplers,
+            unlit,
+            alpha_cutoff,
         };
         Ok((material, uv))
     }
@@ -1053,10 +1135,15 @@ impl<'a> Loader<'a> {
         let mut ids = Vec::new();
         for prim in mesh.primitives() {
             let who = format!("mesh '{name}' primitive {}", prim.index());
-            if prim.mode() != Mode::Triangles {
+            if !matches!(
+                prim.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                // Points and lines would need pipelines of their own topology; the mesh's
+                // triangle primitives are still drawn.
                 self.warn(format_args!(
-                    "{who} has mode {:?}; weft draws only TRIANGLES, so this primitive is skipped (export it as triangles to see it)",
-                    prim.mode()
+                    "{who} has mode {}; weft draws TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN but not points or lines yet, so this primitive is skipped (the mesh's other primitives are drawn)",
+                    mode_name(prim.mode())
                 ));
                 continue;
             }
@@ -1191,11 +1278,7 @@ impl<'a> Loader<'a> {
                 }
             }
         }
-        if prim.get(&Semantic::Colors(0)).is_some() {
-            self.warn(format_args!(
-                "{who} has vertex colours (COLOR_0), which weft ignores"
-            ));
-        }
+        let mut colors = self.vertex_colors(prim, who, count)?;
         let mut deform = self.primitive_deform(prim, who, count)?;
 
         let mut indices = match prim.indices() {
@@ -1231,6 +1314,11 @@ impl<'a> Loader<'a> {
             }
             None => (0..count as u32).collect(),
         };
+        match prim.mode() {
+            Mode::TriangleStrip => indices = strip_to_list(&indices),
+            Mode::TriangleFan => indices = fan_to_list(&indices),
+            _ => {}
+        }
         if indices.len() % 3 != 0 {
             self.warn(format_args!(
                 "{who} has {} indices, not a multiple of 3; the last {} are ignored",
@@ -1360,13 +1448,13 @@ impl<'a> Loader<'a> {
         let bad_tangents = if tangents.is_some() && !uv_transform.turns_or_mirrors() {
             tangents::repair_tangents(&mut vertices)
         } else if uvs.is_some() {
-            let before = deform.as_ref().map(|_| indices.clone());
+            let before = (deform.is_some() || !colors.is_empty()).then(|| indices.clone());
             if !tangents::mikktspace_tangents(&mut vertices, &mut indices) {
                 tangents::arbitrary_tangents(&mut vertices);
             }
             // MikkTSpace splits vertices whose corners need different tangents: the copies get
-            // their original's joints and morph deltas.
-            if let (Some(d), Some(before)) = (deform.as_mut(), before) {
+            // their original's joints, morph deltas and colour.
+            if let Some(before) = before {
                 let mut origin: Vec<usize> = (0..vertices.len()).collect();
                 for (now, was) in indices.iter().zip(&before) {
                     if now != was {
@@ -1375,7 +1463,14 @@ impl<'a> Loader<'a> {
                         }
                     }
                 }
-                d.extend_to(&origin[count..]);
+                if let Some(d) = deform.as_mut() {
+                    d.extend_to(&origin[count..]);
+                }
+                if !colors.is_empty() {
+                    for &o in &origin[count..] {
+                        colors.push(colors.get(o).copied().unwrap_or([1.0; 4]));
+                    }
+                }
             }
             tangents::repair_tangents(&mut vertices)
         } else {
@@ -1400,9 +1495,93 @@ impl<'a> Loader<'a> {
                 vertices,
                 indices,
                 material,
+                colors,
             },
             deform,
         )))
+    }
+
+    /// A primitive's COLOR_0 as linear RGBA per vertex (alpha 1 for VEC3), empty when it has
+    /// none. glTF allows VEC3 or VEC4 of float, normalized unsigned byte or normalized unsigned
+    /// short; anything else is ignored with a warning. Values are clamped to [0, 1] (a non-finite
+    /// one becomes 1).
+    fn vertex_colors(
+        &mut self,
+        prim: &gltf::Primitive<'a>,
+        who: &str,
+        count: usize,
+    ) -> Result<Vec<[f32; 4]>> {
+        use gltf::accessor::DataType;
+        let Some(acc) = prim.get(&Semantic::Colors(0)) else {
+            return Ok(Vec::new());
+        };
+        let n = match acc.dimensions() {
+            Dimensions::Vec3 => 3,
+            Dimensions::Vec4 => 4,
+            other => {
+                self.warn(format_args!(
+                    "{who}: COLOR_0 (accessor {}) is {other:?}; glTF allows VEC3 or VEC4, so the vertex colours are ignored: re-export the mesh",
+                    acc.index()
+                ));
+                return Ok(Vec::new());
+            }
+        };
+        let allowed = match acc.data_type() {
+            DataType::F32 => true,
+            DataType::U8 | DataType::U16 => acc.normalized(),
+            _ => false,
+        };
+        if !allowed {
+            self.warn(format_args!(
+                "{who}: COLOR_0 (accessor {}) has component type {:?}{}; glTF allows float, normalized unsigned byte or normalized unsigned short, so the vertex colours are ignored: re-export the mesh",
+                acc.index(),
+                acc.data_type(),
+                if acc.normalized() { ", normalized" } else { "" }
+            ));
+            return Ok(Vec::new());
+        }
+        let what = format!("{who}, attribute COLOR_0");
+        let values = accessor::read_f32(
+            &acc,
+            acc.dimensions(),
+            self.buffers,
+            &Use {
+                source: &self.label,
+                what: &what,
+            },
+        )?;
+        if values.len() / n != count {
+            return Err(self.error(format_args!(
+                "{who}: attribute COLOR_0 (accessor {}) has {} elements but POSITION has {count}; all attributes of a primitive must have the same count: re-export the mesh",
+                acc.index(),
+                values.len() / n
+            )));
+        }
+        let mut out_of_range = 0usize;
+        let colors = values
+            .chunks_exact(n)
+            .map(|c| {
+                let mut rgba = [1.0f32; 4];
+                for (k, v) in c.iter().enumerate() {
+                    rgba[k] = if v.is_finite() {
+                        v.clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    if rgba[k] != *v {
+                        out_of_range += 1;
+                    }
+                }
+                rgba
+            })
+            .collect();
+        if out_of_range > 0 {
+            self.warn(format_args!(
+                "{who}: COLOR_0 (accessor {}) has {out_of_range} component(s) outside [0, 1] or not finite; clamped (a non-finite one to 1)",
+                acc.index()
+            ));
+        }
+        Ok(colors)
     }
 
     /// A primitive's joint influences (JOINTS_0 / WEIGHTS_0) and morph targets, None when it has
@@ -1721,10 +1900,37 @@ impl<'a> Loader<'a> {
             let p = match (&c.type_, &c.perspective) {
                 (Checked::Valid(json::camera::Type::Perspective), Some(p)) => p,
                 (Checked::Valid(json::camera::Type::Orthographic), _) => {
-                    self.warn(format_args!(
-                        "{who} is orthographic; weft renders perspective cameras only, so it is skipped"
-                    ));
-                    out.push(None);
+                    let Some(o) = c.orthographic.as_ref() else {
+                        return Err(self.error(format_args!(
+                            "{who} has type orthographic but no \"orthographic\" object; add one with xmag, ymag, znear and zfar"
+                        )));
+                    };
+                    if !(o.xmag.is_finite() && o.xmag != 0.0 && o.ymag.is_finite() && o.ymag != 0.0) {
+                        return Err(self.error(format_args!(
+                            "{who} has xmag {} and ymag {}; both must be finite and not zero (half the width and height of the view, in metres): fix the camera",
+                            o.xmag, o.ymag
+                        )));
+                    }
+                    if o.xmag < 0.0 || o.ymag < 0.0 {
+                        self.warn(format_args!(
+                            "{who} has a negative xmag or ymag ({}, {}); glTF asks for positive ones, so their magnitudes are used",
+                            o.xmag, o.ymag
+                        ));
+                    }
+                    if !(o.znear.is_finite() && o.znear >= 0.0 && o.zfar.is_finite() && o.zfar > o.znear) {
+                        return Err(self.error(format_args!(
+                            "{who} has znear {} and zfar {}; an orthographic camera needs 0 <= znear < zfar, both finite: fix the camera",
+                            o.znear, o.zfar
+                        )));
+                    }
+                    out.push(Some(CameraDef {
+                        name,
+                        orthographic: Some([o.xmag.abs(), o.ymag.abs()]),
+                        yfov: 45f32.to_radians(),
+                        znear: o.znear,
+                        zfar: Some(o.zfar),
+                        aspect_ratio: Some(o.xmag.abs() / o.ymag.abs()),
+                    }));
                     continue;
                 }
                 _ => {
@@ -1762,6 +1968,7 @@ impl<'a> Loader<'a> {
             }
             out.push(Some(CameraDef {
                 name,
+                orthographic: None,
                 yfov: p.yfov,
                 znear: p.znear,
                 zfar: p.zfar,
@@ -1839,6 +2046,17 @@ impl<'a> Loader<'a> {
                 )));
             }
             let flags = self.node_shadow_flags(node.index(), inherited, &who)?;
+            let instances = self.instance_transforms(&node, &who)?;
+            if instances.is_some() && node.mesh().is_none() {
+                self.warn(format_args!(
+                    "{who} has {INSTANCING} but no mesh; the instances are ignored (the extension places a node's mesh)"
+                ));
+            }
+            let instance_list = instances.clone().unwrap_or_else(|| vec![Mat4::IDENTITY]);
+            if let (Some(list), Some(_)) = (&instances, node.mesh()) {
+                self.scene.instanced_nodes += 1;
+                self.scene.instances += list.len();
+            }
 
             if let Some(mesh) = node.mesh() {
                 let skin = node.skin().map(|s| s.index());
@@ -1849,7 +2067,11 @@ impl<'a> Loader<'a> {
                     .get(node.index())
                     .map(|n| n.weights.clone())
                     .unwrap_or_default();
-                for id in self.mesh_ids(&mesh)? {
+                for (id, &instance) in self
+                    .mesh_ids(&mesh)?
+                    .into_iter()
+                    .flat_map(|id| instance_list.iter().map(move |m| (id, m)))
+                {
                     let triangles = self.scene.meshes.get(id).map_or(0, |m| m.indices.len() / 3);
                     self.triangles_drawn = self.triangles_drawn.saturating_add(triangles as u64);
                     if self.triangles_drawn > MAX_DRAWN_TRIANGLES {
@@ -1869,11 +2091,12 @@ impl<'a> Loader<'a> {
                         weights: (0..targets)
                             .map(|k| weights.get(k).copied().unwrap_or(0.0))
                             .collect(),
+                        instance,
                     });
                     self.scene.draws.push(Draw {
                         cast_shadows: flags.cast,
                         receive_shadows: flags.receive,
-                        ..Draw::new(id, world)
+                        ..Draw::new(id, world * instance)
                     });
                 }
             }
@@ -1903,6 +2126,118 @@ impl<'a> Loader<'a> {
             }
         }
         Ok(())
+    }
+
+    /// EXT_mesh_gpu_instancing: the node's instance transforms (translation × rotation × scale,
+    /// each from its accessor or the identity), None when the node has no such extension. The
+    /// accessors must have one count; rotations are normalised (a zero or non-finite one, like a
+    /// non-finite translation or scale, is an error naming the instance).
+    fn instance_transforms(
+        &mut self,
+        node: &gltf::Node<'a>,
+        who: &str,
+    ) -> Result<Option<Vec<Mat4>>> {
+        let Some(ext) = node.extension_value(INSTANCING) else {
+            return Ok(None);
+        };
+        let Some(attributes) = ext.get("attributes").and_then(|a| a.as_object()) else {
+            return Err(self.error(format_args!(
+                "{who}: {INSTANCING} has no \"attributes\" object; it needs TRANSLATION, ROTATION and/or SCALE accessors: fix or re-export the node"
+            )));
+        };
+        let mut count: Option<(usize, &str)> = None;
+        let mut columns: [Option<Vec<f32>>; 3] = [None, None, None];
+        for (k, (key, dims, n)) in [
+            ("TRANSLATION", Dimensions::Vec3, 3),
+            ("ROTATION", Dimensions::Vec4, 4),
+            ("SCALE", Dimensions::Vec3, 3),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let Some(value) = attributes.get(key) else {
+                continue;
+            };
+            let Some(index) = value.as_u64().and_then(|i| usize::try_from(i).ok()) else {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING}.attributes.{key} is {}, not an accessor index: fix the node",
+                    short_json(value)
+                )));
+            };
+            let Some(acc) = self.doc.accessors().nth(index) else {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING}.attributes.{key} names accessor {index}, but the file has only {} accessor(s): fix the index",
+                    self.doc.accessors().len()
+                )));
+            };
+            if key == "ROTATION"
+                && acc.data_type() != gltf::accessor::DataType::F32
+                && !acc.normalized()
+            {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING} ROTATION (accessor {index}) has component type {:?} without normalized; rotations are float or normalized byte or short quaternions: re-export the node",
+                    acc.data_type()
+                )));
+            }
+            let what = format!("{who}, {INSTANCING} {key}");
+            let values = accessor::read_f32(
+                &acc,
+                dims,
+                self.buffers,
+                &Use {
+                    source: &self.label,
+                    what: &what,
+                },
+            )?;
+            let c = values.len() / n;
+            match count {
+                Some((other, name)) if other != c => {
+                    return Err(self.error(format_args!(
+                        "{who}: {INSTANCING} {key} has {c} elements but {name} has {other}; every attribute has one element per instance: fix the accessors"
+                    )))
+                }
+                _ => count = Some((c, key)),
+            }
+            columns[k] = Some(values);
+        }
+        let Some((count, _)) = count else {
+            self.warn(format_args!(
+                "{who}: {INSTANCING} has none of TRANSLATION, ROTATION and SCALE; the mesh is drawn once"
+            ));
+            return Ok(None);
+        };
+        let total = self.scene.instances.saturating_add(count);
+        if total > MAX_INSTANCES {
+            return Err(self.error(format_args!(
+                "{who} brings the {INSTANCING} instances to {total}, more than weft's limit of {MAX_INSTANCES} (each is a draw of its own): use fewer instances"
+            )));
+        }
+        let [t, r, s] = &columns;
+        let mut out = Vec::with_capacity(count);
+        for i in 0..count {
+            let v3 = |c: &Option<Vec<f32>>, default: Vec3| {
+                c.as_ref()
+                    .map_or(default, |v| Vec3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2]))
+            };
+            let translation = v3(t, Vec3::ZERO);
+            let scale = v3(s, Vec3::ONE);
+            let rotation = r.as_ref().map_or(Quat::IDENTITY, |v| {
+                Quat::from_xyzw(v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3])
+            });
+            if !(translation.is_finite() && scale.is_finite() && rotation.is_finite())
+                || rotation.length_squared() < 1e-12
+            {
+                return Err(self.error(format_args!(
+                    "{who}: {INSTANCING} instance {i} has translation {translation}, rotation {rotation} and scale {scale}; each must be finite and the rotation a unit quaternion: fix the accessors"
+                )));
+            }
+            out.push(Mat4::from_scale_rotation_translation(
+                scale,
+                rotation.normalize(),
+                translation,
+            ));
+        }
+        Ok(Some(out))
     }
 
     /// The node's `extras.cast_shadows` and `extras.receive_shadows` (true or false), each
@@ -2003,7 +2338,7 @@ impl<'a> Loader<'a> {
         };
         // The view is the inverse of the node's rigid motion: scale (even mirroring) is removed,
         // keeping the view direction (-Z) and the up direction (+Y) of the node.
-        let Some(camera) = animation::placed_camera(
+        let Some(mut camera) = animation::placed_camera(
             def.name.clone(),
             world,
             def.yfov,
@@ -2017,6 +2352,7 @@ impl<'a> Loader<'a> {
             ));
             return;
         };
+        camera.orthographic = def.orthographic;
         self.scene.cameras.push(camera);
     }
 }

@@ -46,6 +46,9 @@ pub struct Mesh {
     pub vertices: Vec<Vertex>,
     pub indices: Vec<u32>,
     pub material: usize,
+    /// COLOR_0, linear RGBA per vertex (alpha 1 where the file has RGB), multiplied into the base
+    /// colour (for fabric, into the thread colours) and its alpha; empty when the mesh has none.
+    pub colors: Vec<[f32; 4]>,
 }
 
 /// An instance of a mesh in the world.
@@ -119,6 +122,13 @@ pub struct Material {
     pub uv: [SlotUv; TextureSlot::COUNT],
     /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
     pub samplers: [TextureSampler; TextureSlot::COUNT],
+    /// KHR_materials_unlit: the base colour (factor × texture × COLOR_0) is the pixel's
+    /// radiance, with no lighting (not for fabric: the loader drops it there with a warning).
+    pub unlit: bool,
+    /// alphaMode MASK: the alphaCutoff (where the base colour's alpha, factor × texture ×
+    /// COLOR_0, is below it, the surface is cut out, in the image and in shadow maps). None:
+    /// opaque (alphaMode OPAQUE, and BLEND, which weft draws opaque with a warning).
+    pub alpha_cutoff: Option<f32>,
 }
 
 impl Material {
@@ -394,6 +404,8 @@ impl Default for Material {
             anisotropy: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
+            unlit: false,
+            alpha_cutoff: None,
         }
     }
 }
@@ -447,7 +459,7 @@ impl Default for Shadow {
     }
 }
 
-/// A perspective camera in world space.
+/// A camera in world space: perspective, or orthographic when `orthographic` is set.
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub name: String,
@@ -460,6 +472,10 @@ pub struct Camera {
     pub zfar: Option<f32>,
     /// Aspect ratio stored in the file; the renderer uses the output image's.
     pub aspect_ratio: Option<f32>,
+    /// An orthographic camera's glTF (xmag, ymag): half the width and height of the view
+    /// volume. The renderer keeps ymag and takes the half-width from the output image's aspect
+    /// (as it does with a perspective camera's yfov), and needs `zfar`. None: perspective.
+    pub orthographic: Option<[f32; 2]>,
 }
 
 /// Non-fatal problems found while loading: the scene still renders, and the CLI prints these.
@@ -490,6 +506,11 @@ pub struct Scene {
     /// KHR_materials_variants: the file's variant names, and the one the scene was loaded with.
     pub variants: Vec<String>,
     pub variant: Option<String>,
+    /// EXT_mesh_gpu_instancing: the nodes that place their mesh several times, and their
+    /// instances summed (each instance is a draw of its own: a node with 125 instances of a
+    /// one-primitive mesh makes 125 draws).
+    pub instanced_nodes: usize,
+    pub instances: usize,
     /// The node hierarchy, skins, morph targets and animations ([`animation`]): what
     /// [`Scene::pose`] needs to move the draws, lights and cameras above.
     pub rig: animation::Rig,
@@ -596,6 +617,7 @@ impl Scene {
             znear,
             zfar,
             aspect_ratio: None,
+            orthographic: None,
         })
     }
 
@@ -701,6 +723,7 @@ impl Scene {
             znear: (dist - radius).max(radius * 1e-3),
             zfar: Some(dist + radius * 2.0),
             aspect_ratio: None,
+            orthographic: None,
         }
     }
 }

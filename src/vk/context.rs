@@ -372,10 +372,15 @@ impl Context {
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
+        // Demote-to-helper: what `discard` compiles to in SPIR-V 1.6 (alphaMode MASK cut-outs in
+        // gbuffer.frag and shadow_mask.frag); required of every Vulkan 1.3 device.
         let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)
-            .maintenance4(true);
+            .maintenance4(true)
+            .shader_demote_to_helper_invocation(
+                supported13.shader_demote_to_helper_invocation == vk::TRUE,
+            );
         let base_features = vk::PhysicalDeviceFeatures::default()
             .sampler_anisotropy(anisotropy)
             .shader_float64(float64);

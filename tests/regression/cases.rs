@@ -438,6 +438,52 @@ pub fn cases() -> Vec<Case> {
             ..case("far-ashikhmin-shirley", "assets/scenes/far.glb", "the far sheet with one A-S lobe (threads along u everywhere): highlights stretched one way only")
         },
     ]);
+    // glTF core features (issue 25): weft's own scene with one object per feature, from its
+    // perspective and its orthographic camera, and the Khronos samples that test each, under the
+    // default lighting (as `weft render` shows them).
+    cases.extend([
+        Case {
+            camera: Some(0),
+            ..case("gltf-core", "assets/scenes/gltf_core.glb", "left to right: a blue ribbon (TRIANGLE_STRIP) above an orange hexagon (TRIANGLE_FAN), a cube with red, green and blue faces (COLOR_0 over white), a flat green disc (the unlit sphere: no shading), a cream card with a 4 x 4 grid of round holes (alphaMode MASK) whose shadow on the floor has the holes too, nine brass-coloured cubes in a 3 x 3 grid turned and scaled one by one (EXT_mesh_gpu_instancing); sun shadows")
+        },
+        Case {
+            camera: Some(1),
+            ..case("gltf-core-ortho", "assets/scenes/gltf_core.glb", "the same scene from the front through its orthographic camera: no perspective, the floor's front and back edges one line, the holed card and the ribbon at their true proportions")
+        },
+        Case {
+            env: STUDIO,
+            warnings: &["tangent(s) were zero-length"],
+            ..case("khronos-vertex-color-test", "tests/data/khronos/VertexColorTest/glTF-Binary/VertexColorTest.glb", "two rows of check marks on blue, the top row multiplied by red, green and blue vertex colours: clean red, green and blue checks with no crossed-out X behind them, like the bottom row")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-box-vertex-colors", "tests/data/khronos/BoxVertexColors/glTF-Binary/BoxVertexColors.glb", "a cube whose corners are coloured by COLOR_0 (float VEC3): smooth rainbow gradients across its faces")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-unlit-test", "tests/data/khronos/UnlitTest/glTF-Binary/UnlitTest.glb", "an orange and a blue rounded box, each one flat colour with no shading or highlight (KHR_materials_unlit)")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-simple-instancing", "tests/data/khronos/SimpleInstancing/glTF-Binary/SimpleInstancing.glb", "125 small cubes in a 5 x 5 x 5 grid, each turned and scaled its own way (EXT_mesh_gpu_instancing)")
+        },
+        Case {
+            env: STUDIO,
+            warnings: &["has no normals"],
+            ..case("khronos-texture-encoding", "tests/data/khronos/TextureEncodingTest/glTF-Binary/TextureEncodingTest.glb", "the texture encoding test's panels, the cut-out (alphaMode MASK) ones with their background showing through the cut")
+        },
+        Case {
+            env: STUDIO,
+            warnings: &["points or lines", "has no normals", "normal(s) were zero-length"],
+            ..case("khronos-mesh-primitive-modes", "tests/data/khronos/MeshPrimitiveModes/glTF/MeshPrimitiveModes.gltf", "one row of three grey filled shapes alike: the TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN meshes (the sample's bottom row); its points and lines (the upper rows) are skipped")
+        },
+        Case {
+            camera: Some(1),
+            env: STUDIO,
+            warnings: &["has no normals"],
+            ..case("khronos-cameras-ortho", "tests/data/khronos/Cameras/glTF/Cameras.gltf", "the Cameras sample's grey square, tilted back 45 degrees, through its orthographic camera (ymag 1): 0.71 as tall as wide, centred on the camera axis, no perspective")
+        },
+    ]);
     let views: [(&'static str, DebugView, &'static str); 7] = [
         (
             "debug-albedo",
