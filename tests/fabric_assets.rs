@@ -602,3 +602,99 @@ fn render_fabric_flag_renders_the_weave() {
     );
     assert!(dir.join("r.png").exists());
 }
+
+#[test]
+fn a_weaving_draft_gives_the_weave_and_the_thread_colours() {
+    // tests/data/drafts/twill-2-2-denim.wif: a 2/2 twill, indigo warp (79,157,431 of 999), natural
+    // weft (900,880,820 of 999), the way a weaving program writes it.
+    let draft = Path::new(ROOT).join("tests/data/drafts/twill-2-2-denim.wif");
+    let dir = temp("draft");
+    let out = dir.join("out.glb");
+    let o = weft()
+        .args([
+            "fabric",
+            "--material",
+            "ball",
+            "--preset",
+            "cotton-plain",
+            "--draft",
+        ])
+        .arg(&draft)
+        .arg("-o")
+        .arg(&out)
+        .arg(asset("default.glb"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("16 warp threads x 12 picks, weave repeat 4 x 4 cells"),
+        "{stderr}"
+    );
+    let scene = scene::load(&out).unwrap();
+    let ball = scene.materials.iter().find(|m| m.name == "ball").unwrap();
+    let f = ball.fabric.as_ref().expect("fabric on the ball");
+    assert_eq!(f.pattern.to_rows(), ["||--", "-||-", "--||", "|--|"]);
+    // sRGB on the palette's 0..999 scale, decoded to linear.
+    let lin = |v: f64| {
+        let c = v / 999.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    for (got, want) in f.rd_warp.iter().zip([79.0, 157.0, 431.0].map(lin)) {
+        assert!((*got as f64 - want).abs() < 1e-4, "warp {:?}", f.rd_warp);
+    }
+    for (got, want) in f.rd_weft.iter().zip([900.0, 880.0, 820.0].map(lin)) {
+        assert!((*got as f64 - want).abs() < 1e-4, "weft {:?}", f.rd_weft);
+    }
+
+    // --pattern and --draft together are refused; a draft that does not parse names the file.
+    let o = weft()
+        .args([
+            "fabric",
+            "--material",
+            "ball",
+            "--preset",
+            "cotton-plain",
+            "--pattern",
+            "plain",
+            "--draft",
+        ])
+        .arg(&draft)
+        .arg("-o")
+        .arg(dir.join("x.glb"))
+        .arg(asset("default.glb"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let bad = dir.join("bad.wif");
+    std::fs::write(&bad, "[WIF]\nVersion=1.1\n[WEAVING]\nShafts=2\n[WARP]\nThreads=2\n[WEFT]\nThreads=2\n[THREADING]\n1=1\n2=3\n[LIFTPLAN]\n1=1\n2=2\n").unwrap();
+    let o = weft()
+        .args([
+            "fabric",
+            "--material",
+            "ball",
+            "--preset",
+            "cotton-plain",
+            "--draft",
+        ])
+        .arg(&bad)
+        .arg("-o")
+        .arg(dir.join("y.glb"))
+        .arg(asset("default.glb"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("bad.wif")
+            && stderr.contains("[THREADING] line 11")
+            && stderr.contains("shaft 3 is out of range"),
+        "{stderr}"
+    );
+    assert!(!dir.join("y.glb").exists(), "nothing written on an error");
+    let _ = std::fs::remove_dir_all(&dir);
+}

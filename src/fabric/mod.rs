@@ -12,6 +12,7 @@
 //! a shader whatever built the params.
 
 pub mod assets;
+pub mod draft;
 mod pattern;
 pub mod presets;
 mod texture;
