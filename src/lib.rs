@@ -12,6 +12,7 @@ pub mod bench;
 pub mod compare;
 pub mod env;
 pub mod fabric;
+pub mod fidelity;
 pub mod package;
 pub mod reference;
 pub mod render;

@@ -12,6 +12,7 @@ use weft::scene::{self, Scene};
 use weft::vk::{Context, ContextOptions, DeviceChoice};
 
 mod fabric_cmd;
+mod fidelity_cmd;
 
 #[derive(Parser)]
 #[command(
@@ -43,6 +44,10 @@ enum Command {
     /// Write a copy of a .gltf/.glb with the woven fabric (WEFT_materials_fabric) on chosen
     /// materials, a preset's parameters, the thread pitch in world units, and a sheen fallback.
     Fabric(fabric_cmd::FabricArgs),
+    /// weft among the glTF renderers: render Khronos' glTF-Render-Fidelity scenarios, score them
+    /// and every published engine against a path-traced reference with the comparison's metric,
+    /// and write a side-by-side sheet (docs/fidelity.md).
+    Fidelity(fidelity_cmd::FidelityArgs),
     /// An interactive window on the same renderer: orbit camera, live controls (docs/viewer.md).
     View(ViewArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
@@ -478,6 +483,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => run_compare(args),
         Command::Sheet(args) => run_sheet(args),
         Command::Fabric(args) => fabric_cmd::run(args),
+        Command::Fidelity(args) => fidelity_cmd::run(args),
         Command::View(args) => run_view(args),
     };
     match result {

@@ -1,0 +1,306 @@
+//! Side by side with the other glTF renderers: Khronos' glTF-Render-Fidelity scenarios, their
+//! published thumbnails and the comparison generator's metric (`weft fidelity`, docs/fidelity.md).
+//!
+//! A scenario is a model, a camera (eye, target, vertical field of view), an HDR environment,
+//! whether the environment is the background, and an image size, as transcribed in
+//! `../shared/fidelity/scenarios.json`. The metric is the generator's: both images blended over
+//! white by their own alpha, per pixel the YIQ colour difference of pixelmatch (`0.5053 ΔY² +
+//! 0.299 ΔI² + 0.1957 ΔQ²` on 0..255 values, the pixel's distance `d`) over the pixels where the
+//! candidate's alpha is not zero; the score is `10·log10(sqrt(mean d²) / 35215)` (35215: the
+//! largest `d`), in dB, more negative = closer. Checked against the values the shared README
+//! quotes from the published site: this form reproduces them to 0.1 dB from the thumbnails
+//! (Box: filament -31.4; SheenChair: the sample viewer -18.7; Duck -24.7; DamagedHelmet:
+//! model-viewer -17.8; TextureTransformTest -29.7), where `10·log10(sqrt(mean d) / sqrt(35215))`
+//! gives about half those figures.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::Error;
+
+/// The rasterizers among the published engines (weft is ranked among them).
+pub const RASTERIZERS: [&str; 5] = [
+    "babylon",
+    "filament",
+    "gltf-sample-viewer",
+    "model-viewer",
+    "rhodonite",
+];
+
+/// The path tracers among the published engines; `blender-cycles` is the default reference.
+pub const PATH_TRACERS: [&str; 4] = [
+    "blender-cycles",
+    "vray",
+    "dassault-stellar",
+    "three-gpu-pathtracer",
+];
+
+/// One scenario.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scenario {
+    pub name: String,
+    /// The model, relative to the folder above `fidelity/` (`realworld/khronos/...`).
+    pub model: PathBuf,
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    pub vertical_fov_deg: f32,
+    /// The scenario's own size (the goldens are rendered at twice this).
+    pub size: [u32; 2],
+    /// The environment, relative to the fidelity folder.
+    pub environment: PathBuf,
+    /// The environment is the background; otherwise the background is transparent.
+    pub skybox: bool,
+}
+
+fn bad(name: &str, key: &str, what: &str) -> Error {
+    Error::input(format!(
+        "scenario '{name}': '{key}' {what}; see ../shared/fidelity/README.md for the fields"
+    ))
+}
+
+impl Scenario {
+    /// One scenario from its JSON object (the fields of `scenarios.json`).
+    pub fn from_json(name: &str, v: &Value) -> crate::Result<Scenario> {
+        let vec3 = |key: &str| -> crate::Result<[f32; 3]> {
+            let a = v[key]
+                .as_array()
+                .filter(|a| a.len() == 3)
+                .ok_or_else(|| bad(name, key, "is not an array of three numbers"))?;
+            let mut out = [0.0f32; 3];
+            for (o, x) in out.iter_mut().zip(a) {
+                *o =
+                    x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
+                        bad(name, key, "holds something that is not a finite number")
+                    })? as f32;
+            }
+            Ok(out)
+        };
+        let text = |key: &str| -> crate::Result<PathBuf> {
+            v[key]
+                .as_str()
+                .filter(|s| !s.is_empty())
+                .map(PathBuf::from)
+                .ok_or_else(|| bad(name, key, "is not a path"))
+        };
+        let size = v["size"]
+            .as_array()
+            .filter(|a| a.len() == 2)
+            .and_then(|a| {
+                Some([
+                    u32::try_from(a[0].as_u64()?).ok()?,
+                    u32::try_from(a[1].as_u64()?).ok()?,
+                ])
+            })
+            .filter(|s| (1..=16384).contains(&s[0]) && (1..=16384).contains(&s[1]))
+            .ok_or_else(|| bad(name, "size", "is not [width, height] in 1..=16384"))?;
+        let fov = v["vertical_fov_deg"]
+            .as_f64()
+            .filter(|f| *f > 0.0 && *f < 180.0)
+            .ok_or_else(|| bad(name, "vertical_fov_deg", "is not an angle in (0, 180)"))?;
+        Ok(Scenario {
+            name: name.to_string(),
+            model: text("model")?,
+            eye: vec3("eye")?,
+            target: vec3("target")?,
+            vertical_fov_deg: fov as f32,
+            size,
+            environment: text("environment")?,
+            skybox: v["skybox"].as_bool().unwrap_or(false),
+        })
+    }
+
+    /// Every scenario of a `scenarios.json` (an object of name → scenario), in the file's order.
+    pub fn load_all(path: &Path) -> crate::Result<Vec<Scenario>> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Error::input(format!(
+                "cannot read the scenarios '{}': {e}",
+                path.display()
+            ))
+        })?;
+        let v: Value = serde_json::from_str(&text)
+            .map_err(|e| Error::input(format!("'{}' is not JSON: {e}", path.display())))?;
+        let obj = v.as_object().ok_or_else(|| {
+            Error::input(format!(
+                "'{}' should be an object of scenario name to scenario",
+                path.display()
+            ))
+        })?;
+        obj.iter()
+            .map(|(name, s)| Scenario::from_json(name, s))
+            .collect()
+    }
+
+    /// The model's name without the `khronos-` prefix the published site uses.
+    pub fn short_name(&self) -> &str {
+        self.name.strip_prefix("khronos-").unwrap_or(&self.name)
+    }
+}
+
+/// RGB of an RGBA8 pixel blended over white by its own alpha, as the generator does.
+fn over_white(p: [u8; 4]) -> [f64; 3] {
+    let a = p[3] as f64 / 255.0;
+    [0, 1, 2].map(|k| 255.0 + (p[k] as f64 - 255.0) * a)
+}
+
+/// pixelmatch's YIQ difference of two RGB colours (0..255): a squared distance, at most 35215.
+pub fn yiq_delta(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let y = |c: [f64; 3]| c[0] * 0.298_895_31 + c[1] * 0.586_622_47 + c[2] * 0.114_482_23;
+    let i = |c: [f64; 3]| c[0] * 0.595_977_99 - c[1] * 0.274_176_11 - c[2] * 0.321_801_88;
+    let q = |c: [f64; 3]| c[0] * 0.211_470_17 - c[1] * 0.522_617_24 + c[2] * 0.311_147_07;
+    let (dy, di, dq) = (y(a) - y(b), i(a) - i(b), q(a) - q(b));
+    0.5053 * dy * dy + 0.299 * di * di + 0.1957 * dq * dq
+}
+
+/// The largest value of [`yiq_delta`] (pixelmatch's constant; reached by colour pairs such as
+/// blue and yellow).
+pub const MAX_YIQ_DELTA: f64 = 35215.0;
+
+/// The generator's score of `candidate` against `reference` (both RGBA8, the same size), in dB;
+/// None when the sizes differ or the candidate has no opaque pixel. Identical images score
+/// `-inf`.
+pub fn score(reference: &image::RgbaImage, candidate: &image::RgbaImage) -> Option<f64> {
+    if reference.dimensions() != candidate.dimensions() {
+        return None;
+    }
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for (r, c) in reference.pixels().zip(candidate.pixels()) {
+        if c.0[3] == 0 {
+            continue;
+        }
+        let d = yiq_delta(over_white(r.0), over_white(c.0));
+        sum += d * d;
+        n += 1;
+    }
+    if n == 0 {
+        return None;
+    }
+    let rms = (sum / n as f64).sqrt();
+    Some(10.0 * (rms / MAX_YIQ_DELTA).log10())
+}
+
+/// Resizes an RGBA8 image with a Lanczos-3 filter on premultiplied colour, as the site made its
+/// thumbnails from the 2x goldens.
+pub fn resize_premultiplied(img: &image::RgbaImage, width: u32, height: u32) -> image::RgbaImage {
+    let (w, h) = img.dimensions();
+    let mut pre = image::Rgba32FImage::new(w, h);
+    for (x, y, p) in img.enumerate_pixels() {
+        let a = p.0[3] as f32 / 255.0;
+        pre.put_pixel(
+            x,
+            y,
+            image::Rgba([
+                p.0[0] as f32 / 255.0 * a,
+                p.0[1] as f32 / 255.0 * a,
+                p.0[2] as f32 / 255.0 * a,
+                a,
+            ]),
+        );
+    }
+    let small = image::imageops::resize(&pre, width, height, image::imageops::FilterType::Lanczos3);
+    let mut out = image::RgbaImage::new(width, height);
+    for (x, y, p) in small.enumerate_pixels() {
+        let a = p.0[3].clamp(0.0, 1.0);
+        let un = |c: f32| {
+            if a > 0.0 {
+                (c / a).clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        };
+        out.put_pixel(
+            x,
+            y,
+            image::Rgba([
+                (un(p.0[0]) * 255.0).round() as u8,
+                (un(p.0[1]) * 255.0).round() as u8,
+                (un(p.0[2]) * 255.0).round() as u8,
+                (a * 255.0).round() as u8,
+            ]),
+        );
+    }
+    out
+}
+
+/// The median of `values` (None when empty).
+pub fn median(mut values: Vec<f64>) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    Some(if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_metric_is_the_generators() {
+        // Black against white: d = 0.5053 · 255² (a grey has no I or Q), just under the largest
+        // d (35215, reached by colour pairs), so -0.30 dB.
+        assert!((yiq_delta([0.0; 3], [255.0; 3]) - 0.5053 * 255.0 * 255.0).abs() < 1.0);
+        let most = (0..8)
+            .flat_map(|a| (0..8).map(move |b| (a, b)))
+            .map(|(a, b): (u32, u32)| {
+                let c = |k: u32| [0, 1, 2].map(|i| if k >> i & 1 == 1 { 255.0 } else { 0.0 });
+                yiq_delta(c(a), c(b))
+            })
+            .fold(0.0f64, f64::max);
+        assert!(
+            most <= MAX_YIQ_DELTA + 1.0 && most > 0.99 * MAX_YIQ_DELTA,
+            "{most}"
+        );
+        let white = image::RgbaImage::from_pixel(4, 4, image::Rgba([255, 255, 255, 255]));
+        let black = image::RgbaImage::from_pixel(4, 4, image::Rgba([0, 0, 0, 255]));
+        assert!((score(&white, &black).unwrap() + 0.30).abs() < 0.01);
+        assert_eq!(score(&white, &white), Some(f64::NEG_INFINITY));
+        // A grey 10 levels off everywhere: d = 0.5053 · 100 (I and Q of a grey are zero), so
+        // 10·log10(50.53 / 35215) = -28.4 dB.
+        let g1 = image::RgbaImage::from_pixel(4, 4, image::Rgba([100, 100, 100, 255]));
+        let g2 = image::RgbaImage::from_pixel(4, 4, image::Rgba([110, 110, 110, 255]));
+        let s = score(&g1, &g2).unwrap();
+        let want = 10.0 * (0.5053f64 * 100.0 / MAX_YIQ_DELTA).log10();
+        assert!((want + 28.43).abs() < 0.01, "{want}");
+        assert!((s - want).abs() < 1e-3, "{s} vs {want}");
+        // Transparent candidate pixels do not count; transparent reference pixels are white.
+        let mut c = g1.clone();
+        c.put_pixel(0, 0, image::Rgba([0, 0, 0, 0]));
+        assert_eq!(score(&g1, &c), Some(f64::NEG_INFINITY));
+        let clear = image::RgbaImage::from_pixel(4, 4, image::Rgba([0, 0, 0, 0]));
+        assert!(score(&clear, &white).unwrap() == f64::NEG_INFINITY);
+        assert_eq!(score(&white, &clear), None);
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(vec![]), None);
+    }
+
+    #[test]
+    fn scenarios_parse_and_bad_ones_say_which_field() {
+        let v: Value = serde_json::json!({
+            "model": "realworld/khronos/Box/glTF/Box.gltf", "eye": [0, 0, 3], "target": [0, 0, 0],
+            "vertical_fov_deg": 45.0, "size": [1536, 1536],
+            "environment": "environments/lightroom_14b.hdr", "skybox": false
+        });
+        let s = Scenario::from_json("khronos-Box", &v).unwrap();
+        assert_eq!(s.short_name(), "Box");
+        assert_eq!(s.size, [1536, 1536]);
+        for (key, value) in [
+            ("eye", serde_json::json!([0, 0])),
+            ("size", serde_json::json!([0, 10])),
+            ("vertical_fov_deg", serde_json::json!(190)),
+            ("model", serde_json::json!(3)),
+        ] {
+            let mut w = v.clone();
+            w[key] = value;
+            let e = Scenario::from_json("khronos-Box", &w)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(key) && e.contains("khronos-Box"), "{e}");
+        }
+    }
+}
