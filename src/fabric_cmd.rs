@@ -104,31 +104,6 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
             }
         }),
     };
-    let mut pattern = pattern;
-    let (mut draft_warp, mut draft_weft) = (None, None);
-    if let Some(path) = &args.draft {
-        let d = Draft::load(path)?;
-        eprintln!(
-            "draft {}: {} warp threads x {} picks, weave repeat {} x {} cells ({}; '-' weft up, '|' warp up, pick 1 first)",
-            path.display(),
-            d.threads,
-            d.picks,
-            d.pattern.cols(),
-            d.pattern.rows(),
-            d.pattern.to_rows().join("/")
-        );
-        for (side, warp) in [("warp", true), ("weft", false)] {
-            let n = d.colour_count(warp);
-            if n > 1 {
-                eprintln!(
-                    "warning: the draft's {side} has {n} colours; the woven model draws one colour per thread direction, so they are averaged (linear, weighted by thread count): right from afar, not thread by thread up close"
-                );
-            }
-        }
-        pattern = Some(d.pattern);
-        draft_warp = d.mean_warp_colour().map(Colour::Rgb);
-        draft_weft = d.mean_weft_colour().map(Colour::Rgb);
-    }
     if let Some(g) = args.gap {
         if !(0.0..=1.0).contains(&g) {
             anyhow::bail!("--gap {g} is outside [0, 1] (a fraction of the thread pitch)");
@@ -141,7 +116,7 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
             }
         }
     }
-    Ok(Overrides {
+    let mut o = Overrides {
         pitch_m: args
             .pitch
             .as_deref()
@@ -155,10 +130,8 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
         shadow_strength: unit_range("--shadow-strength", args.shadow_strength)?,
         shadow_width: unit_range("--shadow-width", args.shadow_width)?,
         rd: colour("--rd", &args.rd)?,
-        rd_warp: colour("--rd-warp", &args.rd_warp)?
-            .or(if args.rd.is_none() { draft_warp } else { None }),
-        rd_weft: colour("--rd-weft", &args.rd_weft)?
-            .or(if args.rd.is_none() { draft_weft } else { None }),
+        rd_warp: colour("--rd-warp", &args.rd_warp)?,
+        rd_weft: colour("--rd-weft", &args.rd_weft)?,
         coupled_diffuse: args.coupled_diffuse.then_some(true),
         thread_texture: match &args.thread_texture {
             None => None,
@@ -169,7 +142,23 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
                 )
             })?),
         },
-    })
+    };
+    if let Some(path) = &args.draft {
+        let d = Draft::load(path)?;
+        eprintln!(
+            "draft {}: {} warp threads x {} picks, weave repeat {} x {} cells ({}; '-' weft up, '|' warp up, pick 1 first)",
+            path.display(),
+            d.threads,
+            d.picks,
+            d.pattern.cols(),
+            d.pattern.rows(),
+            d.pattern.to_rows().join("/")
+        );
+        for w in o.apply_draft(&d) {
+            eprintln!("warning: {w}");
+        }
+    }
+    Ok(o)
 }
 
 fn list_presets() {

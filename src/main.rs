@@ -178,7 +178,8 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Try the woven fabric on a material without writing a file: MATERIAL=PRESET[@PITCH]
-    /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), repeatable.
+    /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), optionally
+    /// followed by :DRAFT.wif (a weaving draft's weave and colours); repeatable.
     #[arg(long)]
     fabric: Vec<String>,
     /// Pose the scene at this time of its animation, in seconds (clamped to the animation's

@@ -696,5 +696,27 @@ fn a_weaving_draft_gives_the_weave_and_the_thread_colours() {
         "{stderr}"
     );
     assert!(!dir.join("y.glb").exists(), "nothing written on an error");
+
+    // The same draft through --fabric's MATERIAL=PRESET@PITCH:DRAFT form, in memory.
+    let spec = format!("red cloth=cotton-plain@4mm:{}", draft.display());
+    let (scene, applied) = assets::load_with_fabric(None, &[spec], &Default::default()).unwrap();
+    assert_eq!(applied[0].name, "red cloth");
+    let cloth = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "red cloth")
+        .unwrap();
+    assert_eq!(
+        cloth.fabric.as_ref().unwrap().pattern.to_rows(),
+        ["||--", "-||-", "--||", "|--|"]
+    );
+    let e = assets::load_with_fabric(
+        None,
+        &["red cloth=cotton-plain:missing.wif".to_string()],
+        &Default::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("missing.wif"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -146,6 +146,32 @@ pub struct Overrides {
     pub thread_texture: Option<ThreadTexture>,
 }
 
+impl Overrides {
+    /// A weaving draft's weave and thread colours (their mean per direction, linear) over these
+    /// overrides, where no colour override is set; returns the warnings to show (a warp or weft
+    /// of several colours is averaged: the woven model carries one colour per direction).
+    pub fn apply_draft(&mut self, d: &super::draft::Draft) -> Vec<String> {
+        self.pattern = Some(d.pattern);
+        if self.rd.is_none() {
+            if self.rd_warp.is_none() {
+                self.rd_warp = d.mean_warp_colour().map(Colour::Rgb);
+            }
+            if self.rd_weft.is_none() {
+                self.rd_weft = d.mean_weft_colour().map(Colour::Rgb);
+            }
+        }
+        [("warp", true), ("weft", false)]
+            .into_iter()
+            .filter_map(|(side, warp)| {
+                let n = d.colour_count(warp);
+                (n > 1).then(|| format!(
+                    "the draft's {side} has {n} colours; the woven model draws one colour per thread direction, so they are averaged (linear, weighted by thread count): right from afar, not thread by thread up close"
+                ))
+            })
+            .collect()
+    }
+}
+
 /// Materials and what to give them.
 #[derive(Clone, Debug)]
 pub struct Request {
@@ -160,20 +186,32 @@ impl Request {
     pub fn parse_spec(spec: &str) -> Result<Request> {
         let (material, rest) = spec.rsplit_once('=').filter(|(m, _)| !m.is_empty()).ok_or_else(|| {
             Error::input(format!(
-                "--fabric '{spec}' should be MATERIAL=PRESET or MATERIAL=PRESET@PITCH (e.g. seat=denim-twill@0.8mm, 0=from-sheen); MATERIAL is a name or an index"
+                "--fabric '{spec}' should be MATERIAL=PRESET or MATERIAL=PRESET@PITCH, optionally followed by :DRAFT.wif (e.g. seat=denim-twill@0.8mm, 0=from-sheen, 0=cotton-plain@1mm:twill.wif); MATERIAL is a name or an index"
             ))
         })?;
+        // A weaving draft after a colon: MATERIAL=PRESET[@PITCH]:DRAFT.wif.
+        let (rest, draft) = match rest.split_once(':') {
+            Some((r, d)) if !d.is_empty() => (r, Some(d)),
+            _ => (rest, None),
+        };
         let (preset, pitch) = match rest.split_once('@') {
             Some((p, pitch)) => (p, Some(parse_length(pitch)?)),
             None => (rest, None),
         };
+        let mut overrides = Overrides {
+            pitch_m: pitch,
+            ..Default::default()
+        };
+        if let Some(path) = draft {
+            let d = super::draft::Draft::load(Path::new(path))?;
+            for w in overrides.apply_draft(&d) {
+                eprintln!("warning: {path}: {w}");
+            }
+        }
         Ok(Request {
             materials: vec![MaterialRef::parse(material)],
             source: Source::parse(preset)?,
-            overrides: Overrides {
-                pitch_m: pitch,
-                ..Default::default()
-            },
+            overrides,
         })
     }
 }
