@@ -222,20 +222,6 @@ pub fn resize_premultiplied(img: &image::RgbaImage, width: u32, height: u32) -> 
     out
 }
 
-/// The median of `values` (None when empty).
-pub fn median(mut values: Vec<f64>) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    Some(if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -275,8 +261,6 @@ mod tests {
         let clear = image::RgbaImage::from_pixel(4, 4, image::Rgba([0, 0, 0, 0]));
         assert!(score(&clear, &white).unwrap() == f64::NEG_INFINITY);
         assert_eq!(score(&white, &clear), None);
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(vec![]), None);
     }
 
     #[test]

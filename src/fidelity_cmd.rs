@@ -243,7 +243,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
         anyhow::bail!("no scenario was scored (check --shared and --only)");
     }
     // Medians over the scenarios scored, each engine over those it has.
-    let weft_median = fidelity::median(rows.iter().map(|r| r.weft).collect()).unwrap_or(f64::NAN);
+    let weft_median = weft::bench::median(rows.iter().map(|r| r.weft).collect());
     let mut medians = vec![("weft".to_string(), weft_median, rows.len())];
     let mut engines: Vec<String> = rows
         .iter()
@@ -257,7 +257,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
             .filter_map(|r| r.engines.iter().find(|(n, _)| *n == e).map(|(_, s)| *s))
             .collect();
         let n = v.len();
-        medians.push((e, fidelity::median(v).unwrap_or(f64::NAN), n));
+        medians.push((e, weft::bench::median(v), n));
     }
     medians.sort_by(|a, b| a.1.total_cmp(&b.1));
     println!(
@@ -268,8 +268,8 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
         println!("  {e:<22} {m:>6.1} dB over {n} scenarios");
     }
     // The table and the sheet.
-    let mut md = format!(
-        "| scenario | weft | best rasterizer | weft's rank among the rasterizers |\n|---|---|---|---|\n"
+    let mut md = String::from(
+        "| scenario | weft | best rasterizer | weft's rank among the rasterizers |\n|---|---|---|---|\n",
     );
     for r in &rows {
         let (rank, of) = r.rank();

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 
+use weft::bench::median;
 use weft::render::{self, DebugView, Plan, RenderOptions, Renderer};
 use weft::scene::{self, Scene};
 use weft::vk::{Context, ContextOptions, DeviceChoice};
@@ -1358,11 +1359,6 @@ fn run_shaders(out: &std::path::Path) -> anyhow::Result<()> {
         out.display()
     );
     Ok(())
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 fn run_plan(args: PlanArgs) -> anyhow::Result<()> {

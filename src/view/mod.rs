@@ -20,6 +20,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
+use crate::bench::median;
 use crate::env::{EnvLighting, Environment, LightsMode};
 use crate::render::{GpuScene, PassTiming, RenderOptions, Renderer};
 use crate::scene::Scene;
@@ -574,14 +575,6 @@ fn fps(figures: &[FrameFigures]) -> f64 {
     } else {
         1e3 * recent.len() as f64 / recent.iter().sum::<f64>()
     }
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 fn bench_report(timed: &[FrameFigures], width: u32, height: u32) -> BenchReport {
