@@ -397,6 +397,7 @@ fn texture_wrap_modes_follow_the_sampler() {
                 zfar: None,
                 aspect_ratio: Some(3.0),
                 orthographic: None,
+                framing: None,
             }],
             ..Default::default()
         }
@@ -651,6 +652,7 @@ fn orthographic_cameras_keep_size_at_any_distance() {
             zfar: Some(100.0),
             aspect_ratio: None,
             orthographic: Some([2.0, 2.0]),
+            framing: None,
         });
         let options = RenderOptions {
             camera: Some(0),

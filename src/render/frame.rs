@@ -1001,7 +1001,10 @@ impl Renderer {
         }
         let camera = match &options.camera_override {
             Some(c) => c.clone(),
-            None => scene.camera(options.camera)?,
+            // An automatic framing fills this image's aspect ratio.
+            None => scene
+                .camera(options.camera)?
+                .for_aspect(width as f32 / height.max(1) as f32),
         };
         let mut frame_data = FrameData::new(&camera, width, height).jittered(options.jitter);
         if let (Some(i), Some(e)) = (env_index, &options.environment) {

@@ -769,6 +769,7 @@ pub(super) fn placed_camera(
         zfar,
         aspect_ratio,
         orthographic: None,
+        framing: None,
     })
 }
 

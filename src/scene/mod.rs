@@ -476,6 +476,36 @@ pub struct Camera {
     /// volume. The renderer keeps ymag and takes the half-width from the output image's aspect
     /// (as it does with a perspective camera's yfov), and needs `zfar`. None: perspective.
     pub orthographic: Option<[f32; 2]>,
+    /// Some for weft's automatic framing: what it frames, so that the renderer can frame it again
+    /// for the image's aspect ratio ([`Camera::for_aspect`]). None for a file's camera and
+    /// `--eye`.
+    pub framing: Option<Framing>,
+}
+
+/// What an automatic framing frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Framing {
+    pub bounds: Bounds,
+    pub azimuth_degrees: f32,
+}
+
+impl Camera {
+    /// The camera for an image of this aspect ratio (width / height): an automatic framing is
+    /// framed again to fill it; any other camera is returned as it is.
+    pub fn for_aspect(&self, aspect: f32) -> Camera {
+        match self.framing {
+            Some(f) if aspect.is_finite() && aspect > 0.0 => {
+                let c = framing(f.bounds, f.azimuth_degrees, aspect.clamp(0.05, 20.0));
+                let usable = c.view.is_finite() && c.znear.is_finite() && c.znear > 0.0;
+                if usable {
+                    c
+                } else {
+                    self.clone()
+                }
+            }
+            _ => self.clone(),
+        }
+    }
 }
 
 /// Non-fatal problems found while loading: the scene still renders, and the CLI prints these.
@@ -618,6 +648,7 @@ impl Scene {
             zfar,
             aspect_ratio: None,
             orthographic: None,
+            framing: None,
         })
     }
 
@@ -625,13 +656,15 @@ impl Scene {
     /// from the side the single-sided surfaces face when +Z sees mostly their backs
     /// ([`Scene::framing_azimuth`]). Bounds too large to frame in f32 (coordinates near +-3e38)
     /// get the framing of the unit cube.
+    /// The camera is framed for a square image; [`Camera::for_aspect`] frames it again for the
+    /// image it renders (the renderer does).
     pub fn auto_camera(&self) -> Camera {
         let unit = Bounds {
             min: Vec3::splat(-1.0),
             max: Vec3::splat(1.0),
         };
         let azimuth = self.framing_azimuth();
-        let camera = Self::framing(self.bounds().unwrap_or(unit), azimuth);
+        let camera = framing(self.bounds().unwrap_or(unit), azimuth, 1.0);
         let usable = camera.view.is_finite()
             && camera.znear.is_finite()
             && camera.znear > 0.0
@@ -641,7 +674,7 @@ impl Scene {
         if usable {
             camera
         } else {
-            Self::framing(unit, azimuth)
+            framing(unit, azimuth, 1.0)
         }
     }
 
@@ -707,23 +740,54 @@ impl Scene {
             SIDES[best]
         }
     }
+}
 
-    fn framing(b: Bounds, azimuth_degrees: f32) -> Camera {
-        let center = (b.min + b.max) * 0.5;
-        let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
-        let yfov = 45f32.to_radians();
-        let dist = radius / (yfov * 0.5).sin() * 1.05;
-        let (e, a) = (20f32.to_radians(), azimuth_degrees.to_radians());
-        let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
-        let eye = center + dir * dist;
-        Camera {
-            name: "automatic framing".into(),
-            view: Mat4::look_at_rh(eye, center, Vec3::Y),
-            yfov,
-            znear: (dist - radius).max(radius * 1e-3),
-            zfar: Some(dist + radius * 2.0),
-            aspect_ratio: None,
-            orthographic: None,
-        }
+/// Frames bounds `b` from `azimuth_degrees` (about +Y from +Z), 20 degrees above, for an image of
+/// this aspect ratio (width / height): the camera is as close as it can be with every corner of
+/// the bounds inside the view, 5 % in from its edges, so the model fills the frame along its
+/// limiting side (as model-viewer frames a model), where a bounding sphere left a long, flat
+/// model small (GlamVelvetSofa filled 40 % of a 16:9 frame's width).
+fn framing(b: Bounds, azimuth_degrees: f32, aspect: f32) -> Camera {
+    let center = (b.min + b.max) * 0.5;
+    let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
+    let yfov = 45f32.to_radians();
+    let (e, a) = (20f32.to_radians(), azimuth_degrees.to_radians());
+    // From the centre towards the eye; the view's right and up.
+    let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
+    let right = Vec3::Y.cross(dir).normalize();
+    let up = dir.cross(right).normalize();
+    // The distance at which every corner is inside the view, 5 % in from its edges: a corner
+    // `c` (from the centre) at depth `dist - c·dir` needs |c·right| <= that depth · tan of
+    // the half field of view across, and |c·up| the same with the vertical half angle.
+    let tan_v = (yfov * 0.5).tan() / 1.05;
+    let tan_h = tan_v * aspect;
+    let (mut dist, mut nearest) = (0f32, f32::MIN);
+    for k in 0..8 {
+        let corner = Vec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x },
+            if k & 2 == 0 { b.min.y } else { b.max.y },
+            if k & 4 == 0 { b.min.z } else { b.max.z },
+        ) - center;
+        let z = corner.dot(dir);
+        nearest = nearest.max(z);
+        dist = dist
+            .max(z + corner.dot(right).abs() / tan_h)
+            .max(z + corner.dot(up).abs() / tan_v);
+    }
+    // A flat or tiny bound still gets a camera in front of it.
+    let dist = dist.max(nearest + radius * 0.1).max(radius * 0.1);
+    let eye = center + dir * dist;
+    Camera {
+        name: "automatic framing".into(),
+        view: Mat4::look_at_rh(eye, center, Vec3::Y),
+        yfov,
+        znear: ((dist - nearest) * 0.5).max(radius * 1e-3),
+        zfar: Some(dist + radius * 2.0),
+        aspect_ratio: None,
+        orthographic: None,
+        framing: Some(Framing {
+            bounds: b,
+            azimuth_degrees,
+        }),
     }
 }
