@@ -21,7 +21,7 @@
 //!   errors naming the file, the material and the image, never a panic. The Avocado with UASTC
 //!   textures (avocado_ktx2.glb) renders within a stated FLIP of the original (below), and
 //!   AnisotropyBarnLamp's textures decode when ../shared is present.
-//! - Draco is refused with the reason and a way out.
+//! - Draco (KHR_draco_mesh_compression) decodes to the original mesh; damaged Draco data is an error.
 
 mod common;
 
@@ -916,18 +916,57 @@ fn encoded(rgba: [u8; 4], format: image::ImageFormat) -> Vec<u8> {
 }
 
 #[test]
-fn draco_is_refused_with_the_reason_and_a_way_out() {
-    let msg = scene::load(&data("avocado_draco.glb"))
+fn draco_avocado_matches_the_original() {
+    // avocado_draco.glb was written by gltf-transform's `draco` command, which runs Google's own
+    // Draco encoder (draco3dgltf): the decoder here (draco-core) is checked against the reference
+    // encoder's bitstream, and the mesh against the uncompressed original: every vertex within
+    // one 14-bit position step of an original one with its normal and tangent (the encoder's
+    // defaults: 14-bit positions, 10-bit normals, 12-bit UVs).
+    let want = world(&load("avocado_small.glb"));
+    let got = world(&load("avocado_draco.glb"));
+    assert_same_mesh("avocado_draco.glb", &want, &got, position_step(&want));
+}
+
+#[test]
+fn damaged_draco_is_an_error_naming_the_primitive() {
+    // The Draco bitstream's second half overwritten (the file keeps its size, so the GLB and its
+    // JSON still parse): the decoder must refuse it, naming the file and the primitive.
+    let bytes = std::fs::read(data("avocado_draco.glb")).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let view = doc["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"]
+        ["bufferView"]
+        .as_u64()
+        .unwrap() as usize;
+    let offset = doc["bufferViews"][view]["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let length = doc["bufferViews"][view]["byteLength"].as_u64().unwrap() as usize;
+    let bin = 20 + json_len + 8;
+    let mut broken = bytes.clone();
+    for b in &mut broken[bin + offset + length / 2..bin + offset + length] {
+        *b = 0xA5;
+    }
+    let msg = scene::load_slice(&broken, "broken_draco.glb", None)
         .err()
-        .expect("refused")
+        .expect("damaged Draco data is refused")
         .to_string();
     assert!(
-        msg.contains("avocado_draco.glb")
-            && msg.contains("requires the glTF extension 'KHR_draco_mesh_compression'")
-            && msg.contains("no Draco decoder")
-            && msg.contains("gltf-transform meshopt"),
+        msg.contains("broken_draco.glb")
+            && msg.contains("primitive 0")
+            && msg.contains("Draco-compressed data")
+            && msg.contains("does not decode"),
         "{msg}"
     );
+    // Cut short instead: the bufferView then lies outside the buffer.
+    let mut short = bytes[..bin + offset + length / 2].to_vec();
+    let total = short.len() as u32;
+    short[8..12].copy_from_slice(&total.to_le_bytes());
+    let bin_len = (short.len() - bin) as u32;
+    short[bin - 8..bin - 4].copy_from_slice(&bin_len.to_le_bytes());
+    let msg = scene::load_slice(&short, "short_draco.glb", None)
+        .err()
+        .expect("a truncated file is refused")
+        .to_string();
+    assert!(msg.contains("short_draco.glb"), "{msg}");
 }
 
 // --- KTX2 / KHR_texture_basisu --------------------------------------------------------------------

@@ -1193,11 +1193,11 @@ fn fabric_extension_reaches_the_material() {
 fn unsupported_required_extension_is_an_error_naming_it() {
     let mut d = Doc::new();
     d.quad(true, true);
-    d.json["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
-    d.json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
+    d.json["extensionsRequired"] = json!(["KHR_materials_iridescence"]);
     let msg = error_text(d.load("required-extension"));
     assert!(
-        msg.contains("KHR_draco_mesh_compression") && msg.contains("scene.gltf"),
+        msg.contains("KHR_materials_iridescence") && msg.contains("scene.gltf"),
         "{msg}"
     );
 }

@@ -202,8 +202,8 @@ fn readers(root: &json::Root, view: usize) -> String {
 /// than that it is unsupported.
 pub(super) fn refusal_hint(ext: &str) -> Option<&'static str> {
     match ext {
-        "KHR_draco_mesh_compression" => Some(
-            "weft has no Draco decoder; re-compress the geometry with meshopt, which weft reads and which decodes faster: `gltf-transform meshopt IN OUT` reads the Draco file and writes EXT_meshopt_compression",
+        "KHR_materials_iridescence" | "KHR_materials_clearcoat" | "KHR_materials_transmission" => Some(
+            "weft does not draw this material extension yet (docs/scene-format.md lists what it reads); re-export without it, or with it optional (in extensionsUsed only) so that the base material is drawn",
         ),
         _ => None,
     }

@@ -64,9 +64,24 @@ const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 /// Instances, summed over the scene's instanced nodes: 2^20 (each is a draw of its own).
 pub(super) const MAX_INSTANCES: usize = 1 << 20;
 
+/// KHR_draco_mesh_compression: a primitive's attributes and indices in one Draco bitstream.
+const DRACO: &str = "KHR_draco_mesh_compression";
+
+/// The attributes weft reads from a Draco bitstream; a primitive whose Draco data holds any other
+/// is refused by name rather than read as zeros (its accessors have no data of their own).
+const DRACO_SEMANTICS: [&str; 5] = ["POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1"];
+
+/// A primitive's decoded Draco data: the mesh, and which Draco attribute (unique id) holds each
+/// glTF attribute.
+struct DracoPrimitive {
+    mesh: draco_core::Mesh,
+    ids: HashMap<String, u32>,
+}
+
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    DRACO,
     UNLIT,
     INSTANCING,
     "KHR_texture_transform",
@@ -376,6 +391,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::IOR,
         material_ext::ANISOTROPY,
         material_ext::VARIANTS,
+        DRACO,
     ];
     root.extensions_required
         .retain(|e| !OWN.contains(&e.as_str()) && !compressed::EXTENSIONS.contains(&e.as_str()));
@@ -410,6 +426,15 @@ fn validate(root: &json::Root, label: &str) -> Result<()> {
         json::Path::new,
         &mut |path: &dyn Fn() -> json::Path, error| {
             use json::validation::Error as E;
+            let at = path().to_string();
+            // glTF 2.0 lets an accessor go without a bufferView (KHR_draco_mesh_compression's
+            // accessors describe data that lives in the Draco bitstream); the crate insists.
+            if matches!(error, E::Missing)
+                && at.starts_with("accessors[")
+                && at.ends_with(".bufferView")
+            {
+                return;
+            }
             let what = match error {
                 E::IndexOutOfBounds => "refers to an object that does not exist",
                 E::Invalid => "has an invalid value",
@@ -417,7 +442,7 @@ fn validate(root: &json::Root, label: &str) -> Result<()> {
                 E::Oversize => "is too large",
                 E::Unsupported => "is not supported",
             };
-            problems.push(format!("{} {what}", path()));
+            problems.push(format!("{at} {what}"));
         },
     );
     match problems.split_first() {
@@ -1200,6 +1225,71 @@ impl<'a> Loader<'a> {
         })
     }
 
+    /// Decodes a primitive's KHR_draco_mesh_compression bitstream.
+    fn draco(&self, ext: &serde_json::Value, who: &str) -> Result<DracoPrimitive> {
+        let view_index = ext
+            .get("bufferView")
+            .and_then(serde_json::Value::as_u64)
+            .ok_or_else(|| {
+                self.error(format_args!(
+                    "{who}: {DRACO} has no bufferView index; fix the file or export it without Draco compression"
+                ))
+            })? as usize;
+        let view = self.doc.views().nth(view_index).ok_or_else(|| {
+            self.error(format_args!(
+                "{who}: {DRACO} names bufferView {view_index}, but the file has {}; fix the file",
+                self.doc.views().len()
+            ))
+        })?;
+        let bytes = self
+            .buffers
+            .get(view.buffer().index())
+            .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?))
+            .ok_or_else(|| {
+                self.error(format_args!(
+                    "{who}: {DRACO}'s bufferView {view_index} (bytes {}..{} of buffer {}) lies outside its buffer; the file is truncated or broken: re-export it",
+                    view.offset(),
+                    view.offset().saturating_add(view.length()),
+                    view.buffer().index()
+                ))
+            })?;
+        let mut ids = HashMap::new();
+        if let Some(map) = ext.get("attributes").and_then(serde_json::Value::as_object) {
+            for (name, id) in map {
+                let id = id
+                    .as_u64()
+                    .and_then(|i| u32::try_from(i).ok())
+                    .ok_or_else(|| {
+                        self.error(format_args!(
+                        "{who}: {DRACO}.attributes.{name} is not a Draco attribute id; fix the file"
+                    ))
+                    })?;
+                if !DRACO_SEMANTICS.contains(&name.as_str()) {
+                    return Err(self.error(format_args!(
+                        "{who}: its {name} attribute is Draco-compressed, which weft reads for {} only; export the file without Draco compression (or without {name})",
+                        DRACO_SEMANTICS.join(", ")
+                    )));
+                }
+                ids.insert(name.clone(), id);
+            }
+        }
+        if !ids.contains_key("POSITION") {
+            return Err(self.error(format_args!(
+                "{who}: {DRACO} does not map POSITION; every primitive needs one: re-export the file"
+            )));
+        }
+        let mut mesh = draco_core::Mesh::new();
+        draco_core::MeshDecoder::new()
+            .decode(&mut draco_core::DecoderBuffer::new(bytes), &mut mesh)
+            .map_err(|e| {
+                self.error(format_args!(
+                    "{who}: its Draco-compressed data (bufferView {view_index}, {} bytes) does not decode ({e}); the file is damaged: re-export it, or export it without Draco compression",
+                    bytes.len()
+                ))
+            })?;
+        Ok(DracoPrimitive { mesh, ids })
+    }
+
     fn primitive(
         &mut self,
         prim: &gltf::Primitive<'a>,
@@ -1207,7 +1297,50 @@ impl<'a> Loader<'a> {
         name: String,
     ) -> Result<Option<(Mesh, Option<MeshDeform>)>> {
         let buffers = self.buffers;
+        let draco = match prim.extension_value(DRACO) {
+            Some(ext) => Some(self.draco(ext, who)?),
+            None => None,
+        };
+        let label = &self.label;
         let read = |semantic: &Semantic, dims: Dimensions| -> Result<Option<(usize, Vec<f32>)>> {
+            if let Some(d) = &draco {
+                if let Some(&id) = d.ids.get(&semantic.to_string()) {
+                    let att = d.mesh.attribute_by_unique_id(id).ok_or_else(|| {
+                        Error::input(format!("{label}: {}", format_args!(
+                            "{who}: {DRACO} maps {} to Draco attribute {id}, which its compressed data does not have; re-export the file",
+                            semantic.to_string()
+                        )))
+                    })?;
+                    let n = match dims {
+                        Dimensions::Scalar => 1,
+                        Dimensions::Vec2 => 2,
+                        Dimensions::Vec3 => 3,
+                        _ => 4,
+                    };
+                    let mut values = att.read_f32s(d.mesh.num_points(), n);
+                    if att.normalized() {
+                        use draco_core::DataType as T;
+                        let (scale, min) = match att.data_type() {
+                            T::Uint8 => (1.0 / 255.0, 0.0),
+                            T::Uint16 => (1.0 / 65535.0, 0.0),
+                            T::Int8 => (1.0 / 127.0, -1.0),
+                            T::Int16 => (1.0 / 32767.0, -1.0),
+                            _ => (1.0, f32::MIN),
+                        };
+                        for v in &mut values {
+                            *v = (*v * scale).max(min);
+                        }
+                    }
+                    if values.iter().any(|v| !v.is_finite()) {
+                        return Err(Error::input(format!("{label}: {}", format_args!(
+                            "{who}: the Draco-compressed {} holds values that are not finite numbers; re-export the file",
+                            semantic.to_string()
+                        ))));
+                    }
+                    let acc = prim.get(semantic).map_or(usize::MAX, |a| a.index());
+                    return Ok(Some((acc, values)));
+                }
+            }
             match prim.get(semantic) {
                 None => Ok(None),
                 Some(acc) => {
@@ -1281,8 +1414,32 @@ impl<'a> Loader<'a> {
         let mut colors = self.vertex_colors(prim, who, count)?;
         let mut deform = self.primitive_deform(prim, who, count)?;
 
-        let mut indices = match prim.indices() {
-            Some(acc) => {
+        let mut indices = match (&draco, prim.indices()) {
+            (Some(d), _) => {
+                let faces = d.mesh.num_faces();
+                self.indices_read = self.indices_read.saturating_add(faces.saturating_mul(3));
+                if self.indices_read > MAX_INDICES {
+                    return Err(self.error(format_args!(
+                        "{who} brings the indices read to {}, more than weft's limit of {MAX_INDICES} ({} million triangles) for a scene; decimate the meshes or split the scene",
+                        self.indices_read,
+                        MAX_INDICES / 3 / 1_000_000
+                    )));
+                }
+                let mut out = Vec::with_capacity(faces * 3);
+                for f in 0..faces {
+                    for p in d.mesh.face(draco_core::FaceIndex(f as u32)) {
+                        if p.0 as usize >= count {
+                            return Err(self.error(format_args!(
+                                "{who}: its Draco-compressed face {f} names point {}, but the primitive has only {count} points; re-export the file",
+                                p.0
+                            )));
+                        }
+                        out.push(p.0);
+                    }
+                }
+                out
+            }
+            (None, Some(acc)) => {
                 let what = format!("{who}, indices");
                 self.indices_read = self.indices_read.saturating_add(acc.count());
                 if self.indices_read > MAX_INDICES {
@@ -1312,7 +1469,7 @@ impl<'a> Loader<'a> {
                 }
                 indices
             }
-            None => (0..count as u32).collect(),
+            (None, None) => (0..count as u32).collect(),
         };
         match prim.mode() {
             Mode::TriangleStrip => indices = strip_to_list(&indices),
