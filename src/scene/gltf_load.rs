@@ -420,6 +420,17 @@ fn validate(root: &json::Root, label: &str) -> Result<()> {
         }
     }
 
+    // Nor does its animation hook check a channel's target path before unwrapping it.
+    for (a, anim) in root.animations.iter().enumerate() {
+        for (c, channel) in anim.channels.iter().enumerate() {
+            if matches!(channel.target.path, Checked::Invalid) {
+                return Err(Error::input(format!(
+                    "{label}: animation {a} channel {c} has a target path that is not translation, rotation, scale or weights; fix the channel or re-export the animation"
+                )));
+            }
+        }
+    }
+
     let mut problems: Vec<String> = Vec::new();
     root.validate(
         root,

@@ -95,10 +95,13 @@ pub fn check(s: &Scene) -> Result<(), String> {
         }
     }
     for c in &s.cameras {
-        if !c.view.is_finite()
-            || !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI)
-            || !(c.znear > 0.0)
-        {
+        // A perspective camera needs znear > 0; an orthographic one (glTF) znear >= 0 and a
+        // finite zfar beyond it.
+        let near_ok = match c.orthographic {
+            None => c.znear > 0.0,
+            Some(_) => c.znear >= 0.0 && c.zfar.is_some_and(|f| f.is_finite() && f > c.znear),
+        };
+        if !c.view.is_finite() || !(c.yfov > 0.0 && c.yfov < std::f32::consts::PI) || !near_ok {
             return Err(format!(
                 "camera '{}' with view {:?}, yfov {}, znear {}",
                 c.name, c.view, c.yfov, c.znear
