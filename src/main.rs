@@ -1261,9 +1261,22 @@ fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
     if args.ibl {
         let size = checked_size(&args.size)?;
         weft::env::IblLevel::parse(&format!("mc:{}", args.ibl_truth))?;
-        let env = args.ibl_env.clone().unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr")
-        });
+        let env = match args.ibl_env.clone() {
+            Some(e) => e,
+            None => {
+                // The default is a file of weft's source tree (1.4 MiB, not built in): say so
+                // where weft was installed without it.
+                let default =
+                    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/env/lebombo_1k.hdr");
+                if !default.exists() {
+                    anyhow::bail!(
+                        "weft bench --ibl needs an environment map: give --ibl-env FILE.hdr (the default, tests/data/env/lebombo_1k.hdr of weft's source tree, is not at {})",
+                        default.display()
+                    );
+                }
+                default
+            }
+        };
         let ctx = open_device(args.device.as_deref(), false)?;
         let mut renderer = Renderer::new(ctx)?;
         let report = weft::bench::ibl_bench::run(

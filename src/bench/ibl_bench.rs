@@ -91,8 +91,12 @@ pub fn run(
     let mut cloth = crate::scene::default_scene();
     let lamps = cloth.clone();
     cloth.lights.clear();
-    let spheres_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/spheres.glb");
-    let mut spheres = crate::scene::load(&spheres_path)?;
+    // In the binary: `weft bench` works wherever weft is installed, not only in its source tree.
+    let mut spheres = crate::scene::load_slice(
+        include_bytes!("../../assets/scenes/spheres.glb"),
+        "assets/scenes/spheres.glb (built in)",
+        None,
+    )?;
     spheres.lights.clear();
     // The same spheres brushed (KHR_materials_anisotropy, strength 0.8): what the fis levels'
     // sampling of the anisotropic lobe buys over the split sum's bent look-up (issue 28).

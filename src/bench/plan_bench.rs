@@ -79,8 +79,12 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         force,
         ..base.clone()
     };
-    let shadows_path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/shadows.glb");
-    let shadows = crate::scene::load(std::path::Path::new(shadows_path))?;
+    // In the binary: `weft bench` works wherever weft is installed, not only in its source tree.
+    let shadows = crate::scene::load_slice(
+        include_bytes!("../../assets/scenes/shadows.glb"),
+        "assets/scenes/shadows.glb (built in)",
+        None,
+    )?;
     let mut no_receivers = shadows.clone();
     for d in &mut no_receivers.draws {
         d.receive_shadows = false;
