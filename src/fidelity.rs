@@ -137,8 +137,9 @@ impl Scenario {
     }
 }
 
-/// RGB of an RGBA8 pixel blended over white by its own alpha, as the generator does.
-fn over_white(p: [u8; 4]) -> [f64; 3] {
+/// RGB of an RGBA8 pixel blended over white by its own alpha, as the generator does (and as the
+/// side-by-side sheet shows it).
+pub fn over_white(p: [u8; 4]) -> [f64; 3] {
     let a = p[3] as f64 / 255.0;
     [0, 1, 2].map(|k| 255.0 + (p[k] as f64 - 255.0) * a)
 }

@@ -320,8 +320,7 @@ fn write_sheet(rows: &[[image::RgbaImage; 3]], path: &Path) -> anyhow::Result<()
     for r in &scaled {
         for (k, img) in r.iter().enumerate() {
             for (x, yy, p) in img.enumerate_pixels() {
-                let a = p.0[3] as f32 / 255.0;
-                let c = [0, 1, 2].map(|i| (255.0 + (p.0[i] as f32 - 255.0) * a).round() as u8);
+                let c = fidelity::over_white(p.0).map(|v| v.round() as u8);
                 if yy + y < sheet.height() {
                     sheet.put_pixel(k as u32 * (W + 4) + x, y + yy, image::Rgb(c));
                 }

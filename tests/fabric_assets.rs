@@ -610,21 +610,20 @@ fn a_weaving_draft_gives_the_weave_and_the_thread_colours() {
     let draft = Path::new(ROOT).join("tests/data/drafts/twill-2-2-denim.wif");
     let dir = temp("draft");
     let out = dir.join("out.glb");
-    let o = weft()
-        .args([
-            "fabric",
-            "--material",
-            "ball",
-            "--preset",
-            "cotton-plain",
-            "--draft",
-        ])
-        .arg(&draft)
-        .arg("-o")
-        .arg(&out)
-        .arg(asset("default.glb"))
-        .output()
-        .unwrap();
+    // `weft fabric` on the default scene's ball with a draft, more flags, and an output.
+    let fabric = |draft: &Path, more: &[&str], out: &Path| {
+        weft()
+            .args(["fabric", "--material", "ball", "--preset", "cotton-plain"])
+            .args(more)
+            .arg("--draft")
+            .arg(draft)
+            .arg("-o")
+            .arg(out)
+            .arg(asset("default.glb"))
+            .output()
+            .unwrap()
+    };
+    let o = fabric(&draft, &[], &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(
@@ -652,41 +651,11 @@ fn a_weaving_draft_gives_the_weave_and_the_thread_colours() {
     }
 
     // --pattern and --draft together are refused; a draft that does not parse names the file.
-    let o = weft()
-        .args([
-            "fabric",
-            "--material",
-            "ball",
-            "--preset",
-            "cotton-plain",
-            "--pattern",
-            "plain",
-            "--draft",
-        ])
-        .arg(&draft)
-        .arg("-o")
-        .arg(dir.join("x.glb"))
-        .arg(asset("default.glb"))
-        .output()
-        .unwrap();
+    let o = fabric(&draft, &["--pattern", "plain"], &dir.join("x.glb"));
     assert!(!o.status.success());
     let bad = dir.join("bad.wif");
     std::fs::write(&bad, "[WIF]\nVersion=1.1\n[WEAVING]\nShafts=2\n[WARP]\nThreads=2\n[WEFT]\nThreads=2\n[THREADING]\n1=1\n2=3\n[LIFTPLAN]\n1=1\n2=2\n").unwrap();
-    let o = weft()
-        .args([
-            "fabric",
-            "--material",
-            "ball",
-            "--preset",
-            "cotton-plain",
-            "--draft",
-        ])
-        .arg(&bad)
-        .arg("-o")
-        .arg(dir.join("y.glb"))
-        .arg(asset("default.glb"))
-        .output()
-        .unwrap();
+    let o = fabric(&bad, &[], &dir.join("y.glb"));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(

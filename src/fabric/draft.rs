@@ -57,15 +57,6 @@ struct Wif<'a> {
     sections: BTreeMap<String, Vec<Entry>>,
 }
 
-fn srgb_to_linear(c: f64) -> f32 {
-    let c = c.clamp(0.0, 1.0);
-    (if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }) as f32
-}
-
 impl<'a> Wif<'a> {
     fn parse(text: &str, name: &'a str) -> crate::Result<Wif<'a>> {
         let mut sections: BTreeMap<String, Vec<Entry>> = BTreeMap::new();
@@ -258,7 +249,7 @@ impl<'a> Wif<'a> {
                         ),
                     ));
                 }
-                *out = srgb_to_linear((v - lo) / (hi - lo));
+                *out = crate::reference::shading::srgb_decode(((v - lo) / (hi - lo)) as f32);
             }
             table.insert(index, rgb);
         }

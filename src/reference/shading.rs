@@ -610,14 +610,7 @@ pub fn aces_three(c: Vec3) -> Vec3 {
     let v = mat3_mul(&M_IN, scale(c, 1.0 / 0.6));
     let v = v
         .map(|x| (x * (x + 0.0245786) - 0.000090537) / (x * (0.983729 * x + 0.4329510) + 0.238081));
-    mat3_mul(&M_OUT, v).map(|x| {
-        let g = x.clamp(0.0, 0.9999).powf(1.0 / 2.2);
-        if g < 0.04045 {
-            g / 12.92
-        } else {
-            ((g + 0.055) / 1.055).powf(2.4)
-        }
-    })
+    mat3_mul(&M_OUT, v).map(|x| srgb_decode(x.clamp(0.0, 0.9999).powf(1.0 / 2.2)))
 }
 
 /// `agx` of tonemap.frag: AgX with the default contrast, back to linear by the 2.2 EOTF.
@@ -696,6 +689,15 @@ pub fn display_rgba8(hdr: Vec3, exposure: f32) -> [u8; 4] {
 pub fn display_rgba8_with(curve: ToneCurve, hdr: Vec3, exposure: f32) -> [u8; 4] {
     let d = tonemap_with(curve, hdr, exposure);
     [srgb_encode(d[0]), srgb_encode(d[1]), srgb_encode(d[2]), 255]
+}
+
+/// The sRGB transfer function's inverse: an encoded value in [0, 1] to linear.
+pub fn srgb_decode(encoded: f32) -> f32 {
+    if encoded < 0.04045 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// Linear [0, 1] to an sRGB-encoded byte.
