@@ -29,40 +29,7 @@ layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
 
-// Per material; missing textures are bound to 1x1 defaults (white, or a flat normal).
-layout(set = 1, binding = 0) uniform sampler2D base_color_tex;
-layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;
-layout(set = 1, binding = 2) uniform sampler2D normal_tex;
-layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
-// The material's weave texture (fabric only): one pattern repeat, full mip chain, each texel the
-// exact coverage (c_warp, c_weft, s_warp, s_weft) of its footprint.
-layout(set = 1, binding = 4) uniform sampler2D weave_tex;
-// Ambient occlusion (glTF occlusionTexture, red channel; white when the material has none).
-layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;
-// KHR_materials_sheen, _specular and _anisotropy textures (white when the material has none).
-layout(set = 1, binding = 6) uniform sampler2D sheen_color_tex;
-layout(set = 1, binding = 7) uniform sampler2D sheen_roughness_tex;
-layout(set = 1, binding = 8) uniform sampler2D specular_tex;
-layout(set = 1, binding = 9) uniform sampler2D specular_color_tex;
-layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;
-
-layout(push_constant, std430) uniform Draw {
-    mat4 world;
-    vec4 normal_matrix[3];
-    uint material;
-    float tangent_sign;
-    uint flags;             // bit 0: the draw receives shadows
-    uint pad1;
-} draw;
-
-layout(location = 0) in vec3 in_world_pos;
-layout(location = 1) in vec3 in_normal;
-layout(location = 2) in vec4 in_tangent;
-layout(location = 3) in vec2 in_uv;
-layout(location = 4) in vec2 in_weave_uv;
-layout(location = 5) in vec3 in_gouraud;
-layout(location = 6) in vec2 in_uv1;
-layout(location = 7) in vec4 in_color;
+#include "surface.glsl"
 
 layout(location = 0) out vec4 gb_albedo;    // RGBA8 sRGB: base colour, a: metallic
 layout(location = 1) out uvec4 gb_frame;    // RGBA16_UINT: octahedral normal (xy), tangent (zw), frame_encode
@@ -70,198 +37,16 @@ layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material inde
 layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft and each shadow-weighted (s_warp, s_weft)
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
 layout(location = 5) out vec4 gb_specular;  // RGBA16F: the dielectric's F0 (rgb), specular weight
-// Non-fabric materials reuse two fabric channels: gb_fabric holds the sheen colour (rgb) and
-// roughness (a), gb_surface.z the anisotropy strength (and gb_frame.zw its direction).
-
-// The UVs of both sets and their screen derivatives, taken once in uniform control flow from the
-// interpolants alone (see the weave's derivatives below for why not from anything loaded).
-vec2 uv_d[6];
-
-// Samples texture slot `slot` of material m through its own UV set and transform, with the
-// derivatives carried through the transform's linear part.
-vec4 sample_slot(sampler2D tex, Material m, uint slot) {
-    vec4 r0 = m.uv[2u * slot];
-    vec4 r1 = m.uv[2u * slot + 1u];
-    uint set = r0.w > 0.5 ? 1u : 0u;
-    vec2 uv = uv_d[3u * set];
-    mat2 lin = mat2(r0.x, r1.x, r0.y, r1.y);
-    vec2 st = lin * uv + vec2(r0.z, r1.z);
-    return textureGrad(tex, st, lin * uv_d[3u * set + 1u], lin * uv_d[3u * set + 2u]);
-}
 
 void main() {
-    uv_d = vec2[6](in_uv, dFdx(in_uv), dFdy(in_uv), in_uv1, dFdx(in_uv1), dFdy(in_uv1));
-    Material m = materials[draw.material];
-
-    // Shading frame. Interpolated normals can cancel out (or be NaN from a broken file that got
-    // past the loader); fall back to the triangle's own normal.
-    vec3 geometric = cross(dFdx(in_world_pos), dFdy(in_world_pos));
-    vec3 n = in_normal;
-    if (!(dot(n, n) > 1e-20)) {
-        n = geometric;
-    }
-    n = dot(n, n) > 1e-30 ? normalize(n) : vec3(0.0, 1.0, 0.0);
-    if (!gl_FrontFacing) {
-        n = -n;
-    }
-    vec3 t = in_tangent.xyz - n * dot(n, in_tangent.xyz);
-    t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
-    float sign = in_tangent.w < 0.0 ? -1.0 : 1.0;
-    vec3 b = sign * cross(n, t);
-
-    vec3 tn = sample_slot(normal_tex, m, SLOT_NORMAL).xyz * 2.0 - 1.0;
-    tn.xy *= m.emissive_normal.a;
-    vec3 mapped = t * tn.x + b * tn.y + n * tn.z;
-    if (dot(mapped, mapped) > 1e-20) {
-        n = normalize(mapped);
-        t = in_tangent.xyz - n * dot(n, in_tangent.xyz);
-        t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
-    }
-
-    vec4 base_texel = sample_slot(base_color_tex, m, SLOT_BASE_COLOR);
-    vec4 base = m.base_color * base_texel;
-    if (VERTEX_COLORS != 0u) {
-        base *= in_color;
-    }
-    vec4 mr = sample_slot(metallic_roughness_tex, m, SLOT_METALLIC_ROUGHNESS);
-    float metallic = clamp(m.metallic_roughness.x * mr.b, 0.0, 1.0);
-    float roughness = clamp(m.metallic_roughness.y * mr.g, 0.0, 1.0);
-    vec3 emissive = m.emissive_normal.rgb * sample_slot(emissive_tex, m, SLOT_EMISSIVE).rgb;
-    uint fabric = uint(m.metallic_roughness.z + 0.5);
-
-    // KHR_materials_anisotropy: the direction in the (normal-mapped) tangent frame, rotated, and
-    // the strength; stored in place of the tangent and its sign (non-fabric only).
-    float anisotropy = 0.0;
-    vec3 frame_t = t;
-    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_ANISOTROPY) != 0u) {
-        vec2 dir = vec2(1.0, 0.0);
-        anisotropy = m.extra.y;
-        if ((uint(m.extra.w + 0.5) & MATERIAL_ANISOTROPY_TEXTURE) != 0u) {
-            vec3 a = sample_slot(anisotropy_tex, m, SLOT_ANISOTROPY).rgb;
-            dir = a.rg * 2.0 - 1.0;
-            anisotropy *= a.b;
-        }
-        float c = cos(m.extra.z);
-        float s = sin(m.extra.z);
-        dir = vec2(c * dir.x - s * dir.y, s * dir.x + c * dir.y);
-        vec3 bt = sign * cross(n, t);
-        vec3 a = t * dir.x + bt * dir.y;
-        a -= n * dot(n, a);
-        frame_t = dot(a, a) > 1e-20 ? normalize(a) : t;
-        if (!(dot(a, a) > 1e-20)) {
-            anisotropy = 0.0;
-        }
-    }
-
-    gb_albedo = vec4(clamp(base.rgb, 0.0, 1.0), metallic);
-    if (fabric > 0u) {
-        // The fabric's albedo target holds its thread texture's filtered value (white without
-        // one), which the lighting pass multiplies over the thread colours (fabric_tinted). The
-        // base colour factor is not in it: on a woven material it is the fallback's far-field
-        // albedo (docs/fabric-on-assets.md), and the thread colours replace it.
-        uint ff = fabrics[fabric - 1u].flags;
-        vec3 tint = vec3(1.0);
-        if ((ff & FABRIC_FLAG_TEXTURE_BASE_COLOR) != 0u) {
-            tint = base_texel.rgb;
-        } else if ((ff & FABRIC_FLAG_TEXTURE_SHEEN_COLOR) != 0u) {
-            tint = sample_slot(sheen_color_tex, m, SLOT_SHEEN_COLOR).rgb;
-        }
-        if (VERTEX_COLORS != 0u) {
-            tint *= in_color.rgb;
-        }
-        gb_albedo = vec4(clamp(tint, 0.0, 1.0), 0.0);
-    }
-    gb_frame = frame_encode(oct_encode(n), oct_encode(frame_t));
-    gb_surface = vec4(roughness, float(draw.material), fabric > 0u ? sign : clamp(anisotropy, 0.0, 1.0),
-                      (draw.flags & 1u) != 0u ? 1.0 : 0.0);
-    // KHR_materials_specular with KHR_materials_ior: F0 = min(F0(ior) · colour, 1), weight.
-    vec3 spec_color = m.specular.rgb * sample_slot(specular_color_tex, m, SLOT_SPECULAR_COLOR).rgb;
-    float spec_weight = clamp(m.specular.a * sample_slot(specular_tex, m, SLOT_SPECULAR).a, 0.0, 1.0);
-    gb_specular = vec4(min(vec3(m.extra.x) * spec_color, vec3(1.0)), spec_weight);
-    // The weave is sampled here, with the UV derivatives, because only this pass has them:
-    // trilinear filtering of exact coverages gives the footprint's area fractions. Derivatives are
-    // taken of the interpolated UV alone, before any branch: derivatives in non-uniform control
-    // flow are undefined, and on lavapipe buffer loads read 0 in helper invocations, so the
-    // derivative of anything loaded from a buffer is garbage in quads cut by a triangle edge.
-    GpuFabric f = fabrics[max(fabric, 1u) - 1u];
-    vec2 uv_dx = dFdx(in_weave_uv);
-    vec2 uv_dy = dFdy(in_weave_uv);
-    vec2 st_scale = f.cell_per_uv / vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
-    vec2 st = in_weave_uv * st_scale;
-    vec2 st_dx = uv_dx * st_scale;
-    vec2 st_dy = uv_dy * st_scale;
-    // KHR_materials_sheen (non-fabric): colour and roughness.
-    gb_fabric = vec4(0.0);
-    if (fabric == 0u && max(m.sheen.r, max(m.sheen.g, m.sheen.b)) > 0.0) {
-        vec3 sheen = m.sheen.rgb * sample_slot(sheen_color_tex, m, SLOT_SHEEN_COLOR).rgb;
-        float sheen_roughness = m.sheen.a * sample_slot(sheen_roughness_tex, m, SLOT_SHEEN_ROUGHNESS).a;
-        gb_fabric = vec4(clamp(sheen, 0.0, 1.0), clamp(sheen_roughness, 0.0, 1.0));
-    }
-    if (fabric > 0u) {
-        // The footprint as an axis-aligned box in st, half-extent `ext` (a repeat is 1 unit).
-        vec2 ext = 0.5 * (abs(st_dx) + abs(st_dy));
-        vec2 repeat_cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
-        if (ACCURACY == 3u) {
-            // Supersampled: the lighting pass evaluates the analytic weave at N x N points of the
-            // footprint, so it gets the footprint itself: st within its repeat, and the extent.
-            gb_fabric = vec4(fract(st), ext);
-        } else if (ACCURACY == 0u) {
-            // Nearest: one texel of level 0, no filtering.
-            ivec2 size = textureSize(weave_tex, 0);
-            ivec2 texel = clamp(ivec2(fract(st) * vec2(size)), ivec2(0), size - 1);
-            vec4 coverage = WEAVE_SOURCE == 1u
-                ? weave_point(weave_from_fabric(f), fract(st.x) * repeat_cells.x, fract(st.y) * repeat_cells.y)
-                : texelFetch(weave_tex, texel, 0);
-            gb_fabric = clamp(coverage, 0.0, 1.0);
-        } else {
-            vec4 coverage;
-            if (WEAVE_SOURCE == 1u) {
-                // The footprint parallelogram spanned by the st derivatives, in cells.
-                vec2 dx = st_dx * repeat_cells;
-                vec2 dy = st_dy * repeat_cells;
-                if (FOOTPRINT_PIECES == 0u) {
-                    vec2 lo = (fract(st) - ext) * repeat_cells;
-                    vec2 hi = (fract(st) + ext) * repeat_cells;
-                    coverage = weave_box(weave_from_fabric(f), lo.x, lo.y, hi.x, hi.y);
-                } else {
-                    coverage = weave_parallelogram(weave_from_fabric(f), fract(st) * repeat_cells, dx, dy,
-                                                   weave_pieces(dx, dy, FOOTPRINT_PIECES));
-                }
-            } else {
-                // The same pieces, each a filtered probe of its own size: the filter's footprint
-                // follows the parallelogram instead of spanning its bounding box (lavapipe has no
-                // anisotropic filtering; where a device has it, each probe also gets it).
-                uvec2 k = FOOTPRINT_PIECES == 0u ? uvec2(1u)
-                    : weave_pieces(st_dx * repeat_cells, st_dy * repeat_cells, FOOTPRINT_PIECES);
-                vec2 kf = vec2(k);
-                // Each probe's filter a level sharper where the footprint is within a cell or so
-                // (there the trilinear filter's own width, 2-3 texels of its level, would blur
-                // the threads), relaxing to none by two cells (where it would alias).
-                vec2 cells_extent = (abs(st_dx) + abs(st_dy)) * repeat_cells;
-                float sharpen = FOOTPRINT_PIECES == 0u ? 1.0
-                    : clamp(0.5 * max(cells_extent.x, cells_extent.y), 0.5, 1.0);
-                vec2 pdx = st_dx / kf.x * sharpen;
-                vec2 pdy = st_dy / kf.y * sharpen;
-                coverage = vec4(0.0);
-                for (uint j = 0u; j < k.y; j++) {
-                    for (uint i = 0u; i < k.x; i++) {
-                        vec2 p = st + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
-                        coverage += textureGrad(weave_tex, p, pdx, pdy);
-                    }
-                }
-                coverage /= kf.x * kf.y;
-            }
-            gb_fabric = clamp(coverage, 0.0, 1.0);
-        }
-    }
-    if (SHADING == SHADING_GOURAUD) {
-        emissive += in_gouraud;
-    }
-    // Occlusion = 1 + strength·(texel - 1) (glTF 2.0, occlusionTexture); the strength is in
-    // metallic_roughness.w.
-    float ao = clamp(1.0 + m.metallic_roughness.w * (sample_slot(occlusion_tex, m, SLOT_OCCLUSION).r - 1.0), 0.0, 1.0);
-    gb_emissive = vec4(max(emissive, vec3(0.0)), ao);
-    if (ALPHA_MASK != 0u && alpha_cut(m, base.a)) {
+    GSurface s = material_surface();
+    gb_albedo = s.albedo;
+    gb_frame = s.frame;
+    gb_surface = s.surface;
+    gb_fabric = s.fabric;
+    gb_emissive = s.emissive;
+    gb_specular = s.specular;
+    if (ALPHA_MASK != 0u && alpha_cut(materials[draw.material], s.alpha)) {
         discard;
     }
 }

@@ -1436,6 +1436,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             ("vertex_color_code", serde_json::json!(plan.vertex_colors)),
             ("mask_draws", serde_json::json!(plan.mask_draws)),
             ("mask_casters", serde_json::json!(plan.mask_casters)),
+            ("blend_draws", serde_json::json!(plan.blend_draws)),
             ("alpha_mask_code", serde_json::json!(plan.alpha_mask)),
             ("instanced_nodes", serde_json::json!(plan.instanced_nodes)),
             ("instances", serde_json::json!(plan.instances)),

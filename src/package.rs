@@ -42,6 +42,8 @@ pub const INCLUDES: &[(&str, &str)] = &[
     ("ibl.glsl", include_str!("../glsl/include/ibl.glsl")),
     ("lights.glsl", include_str!("../glsl/include/lights.glsl")),
     ("pbr.glsl", include_str!("../glsl/include/pbr.glsl")),
+    ("shade.glsl", include_str!("../glsl/include/shade.glsl")),
+    ("surface.glsl", include_str!("../glsl/include/surface.glsl")),
     ("weave.glsl", include_str!("../glsl/include/weave.glsl")),
 ];
 
@@ -143,6 +145,18 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          metallic-roughness BRDF (with KHR_materials_specular, _sheen and _anisotropy) or the \
          fabric BRDF per material, and writes linear HDR radiance \
          to one RGBA16F target. No push constants.",
+    ),
+    (
+        "forward.frag",
+        "Forward pass for alphaMode BLEND surfaces, fragment stage; pair it with `gbuffer.vert` \
+         (same vertex buffer and 128-byte push constants) and draw after the lighting pass into \
+         its RGBA16F target, with the G-buffer depth attached for testing (GREATER, reversed Z) \
+         but not written, back to front. Computes the surface gbuffer.frag would store \
+         (`include/surface.glsl`) and lights it as lighting.frag lights a pixel \
+         (`include/shade.glsl`); writes premultiplied radiance and alpha: blend with ONE, \
+         ONE_MINUS_SRC_ALPHA for colour and alpha. Set 0 holds gbuffer.vert's bindings 0-4 and \
+         lighting.frag's shadow and environment bindings 10-15; set 1 a material's textures as \
+         gbuffer.frag's. Rust side: `weft::render::passes::transparent`.",
     ),
     (
         "shadow.frag",
@@ -352,6 +366,27 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
     ("gbuffer.frag", 1, 9, "KHR_materials_specular colour texture (sRGB; white when none)"),
     ("gbuffer.frag", 1, 10, "KHR_materials_anisotropy texture (RG direction, B strength; any when the material has none)"),
     ("lighting.frag", 0, 16, "G-buffer specular (KHR_materials_specular: rgb F0, a weight)"),
+    ("forward.frag", 0, 0, "the frame uniform (`FrameData`, std140, include/frame.glsl)"),
+    ("forward.frag", 0, 1, "material records (`Material[]`, include/frame.glsl), as gbuffer.frag's binding 1"),
+    ("forward.frag", 0, 2, "fabric records (`GpuFabric[]`, include/fabric.glsl), as gbuffer.frag's binding 2"),
+    ("forward.frag", 0, 3, "lights (`Light[]`, include/frame.glsl), as gbuffer.vert's binding 3"),
+    ("forward.frag", 0, 10, "the shadow atlas, as lighting.frag's binding 10"),
+    ("forward.frag", 0, 11, "shadow records, as lighting.frag's binding 11"),
+    ("forward.frag", 0, 12, "per-tile light lists, as lighting.frag's binding 12"),
+    ("forward.frag", 0, 13, "the environment's radiance cube, as lighting.frag's binding 13"),
+    ("forward.frag", 0, 14, "the GGX-prefiltered specular cube, as lighting.frag's binding 14"),
+    ("forward.frag", 0, 15, "the split-sum DFG table, as lighting.frag's binding 15"),
+    ("forward.frag", 1, 0, "base colour texture (sRGB), as gbuffer.frag's"),
+    ("forward.frag", 1, 1, "metallic-roughness texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 2, "tangent-space normal texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 3, "emissive texture (sRGB), as gbuffer.frag's"),
+    ("forward.frag", 1, 4, "the material's weave texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 5, "ambient-occlusion texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 6, "KHR_materials_sheen colour texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 7, "KHR_materials_sheen roughness texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 8, "KHR_materials_specular texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 9, "KHR_materials_specular colour texture, as gbuffer.frag's"),
+    ("forward.frag", 1, 10, "KHR_materials_anisotropy texture, as gbuffer.frag's"),
     ("pbr_probe.comp", 0, 0, "the inputs: `PbrProbeInput[count]`"),
     ("pbr_probe.comp", 0, 1, "the outputs: `PbrProbeOutput[count]`, written by the shader"),
     ("env_cube.comp", 0, 0, "level 0 of the radiance cube, as a storage image2DArray (layer = face)"),
@@ -382,6 +417,19 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("gbuffer.vert", 5, "VERTEX_COLORS: 1 reads each vertex's colour (set 0, binding 4) and writes it to output location 7 for gbuffer.frag; 0 (default) reads none and writes white"),
     ("gbuffer.frag", 5, "VERTEX_COLORS: 1 multiplies the vertex colour (input location 7) into the base colour and alpha, and for fabric into the thread texture's value; 0 (default) compiles that out"),
     ("gbuffer.frag", 6, "ALPHA_MASK: 1 discards pixels of alphaMode MASK materials (`Material.extra.w` flag 8) whose base colour alpha (factor x texture x vertex colour) is below the cutoff `Material.alpha.x`, after every target is written; 0 (default) compiles the discard out"),
+    ("forward.frag", 0, "ACCURACY: as gbuffer.frag's and lighting.frag's"),
+    ("forward.frag", 1, "WEAVE_SOURCE: as gbuffer.frag's"),
+    ("forward.frag", 2, "SHADING: as gbuffer.vert's, gbuffer.frag's and lighting.frag's (its id 4)"),
+    ("forward.frag", 3, "LIGHT_TYPES: as lighting.frag's (gbuffer.vert reads the same id)"),
+    ("forward.frag", 4, "FOOTPRINT_PIECES: as gbuffer.frag's"),
+    ("forward.frag", 5, "VERTEX_COLORS: as gbuffer.frag's (gbuffer.vert reads the same id)"),
+    ("forward.frag", 11, "SAMPLES: lighting.frag's constant 1"),
+    ("forward.frag", 12, "FABRIC_AS_PBR: lighting.frag's constant 2"),
+    ("forward.frag", 15, "SHADOWS: lighting.frag's constant 5"),
+    ("forward.frag", 16, "RANGE_CULLING: lighting.frag's constant 6"),
+    ("forward.frag", 17, "IBL: lighting.frag's constant 7"),
+    ("forward.frag", 18, "IBL_SAMPLES: lighting.frag's constant 8"),
+    ("forward.frag", 19, "UNLIT: lighting.frag's constant 9"),
     ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 1) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (

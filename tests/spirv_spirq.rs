@@ -50,7 +50,8 @@ fn weft_and_spirq_agree_on_every_shipped_module() {
         {
             Ok(t) => t,
             // spirq 1.3 cannot evaluate an OpSpecConstantOp comparison (a bool result):
-            // lighting.frag has one. Only that failure is let through, for one module at most.
+            // include/shade.glsl has one, so lighting.frag and forward.frag, which include it. Only
+            // that failure is let through, for those two modules only.
             Err(e) if e.to_string().starts_with("cannot evaluate") => {
                 println!("{name}: spirq cannot read it ({e}); not compared");
                 unreadable.push(name.to_string());
@@ -132,7 +133,9 @@ fn weft_and_spirq_agree_on_every_shipped_module() {
         );
     }
     assert!(
-        unreadable.len() <= 1,
+        unreadable
+            .iter()
+            .all(|n| n == "lighting.frag.spv" || n == "forward.frag.spv"),
         "spirq read too few modules to be a check: it could not read {unreadable:?}"
     );
 }

@@ -64,6 +64,8 @@ pub struct FrameStats {
     /// Shadow maps rendered, and the caster draws into them.
     pub shadow_maps: usize,
     pub shadow_draws: usize,
+    /// alphaMode BLEND draws the transparent pass drew.
+    pub blend_draws: usize,
 }
 
 /// A rendered frame, read back.
@@ -208,6 +210,10 @@ pub(crate) struct DrawRange {
     pub(crate) receive_shadows: bool,
     /// The material is alphaMode MASK (the shadow pass casts it with its cut-out pipeline).
     pub(crate) alpha_mask: bool,
+    /// The material is alphaMode BLEND: drawn by the transparent pass, not into the G-buffer.
+    pub(crate) blend: bool,
+    /// The centre of the mesh's bounds (object space): the transparent pass sorts by it.
+    pub(crate) centre: glam::Vec3,
     /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
     pub(crate) scene_draw: usize,
 }
@@ -265,6 +271,10 @@ pub struct Renderer {
     /// a frame asks for, made on first use).
     gbuffer_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
+    /// The transparent pass's pipelines (gbuffer.vert + forward.frag) and their set 0 layout
+    /// (gbuffer.vert's bindings, then lighting.frag's shadow and environment bindings).
+    forward_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
+    forward_layout: SetLayout,
     tonemap_pipeline: Pipeline,
     shadow_pipeline: Pipeline,
     /// The shadow pass's cut-out pipeline for alphaMode MASK casters (shadow_mask.vert/.frag), by
@@ -293,6 +303,21 @@ pub struct Renderer {
 
 /// Preprocessed environments a renderer keeps.
 const ENV_CACHE: usize = 2;
+
+/// gbuffer.vert's vertex inputs: position, normal, tangent, uv, weave uv, uv1.
+fn gbuffer_vertex_layout() -> VertexLayout {
+    VertexLayout {
+        stride: (VERTEX_FLOATS * 4) as u32,
+        attributes: vec![
+            (0, Format::R32G32B32_SFLOAT, 0),
+            (1, Format::R32G32B32_SFLOAT, 12),
+            (2, Format::R32G32B32A32_SFLOAT, 24),
+            (3, Format::R32G32_SFLOAT, 40),
+            (4, Format::R32G32_SFLOAT, 48),
+            (5, Format::R32G32_SFLOAT, 56),
+        ],
+    }
+}
 
 fn sampled(binding: u32, stages: Stages) -> Binding {
     Binding {
@@ -376,6 +401,28 @@ impl Renderer {
         lighting_bindings.extend((13..17).map(|b| sampled(b, Stages::FRAGMENT)));
         let lighting_layout = ctx.create_set_layout(&lighting_bindings)?;
         let tonemap_layout = ctx.create_set_layout(&[sampled(0, Stages::FRAGMENT)])?;
+        let storage = |binding: u32, stages: Stages| Binding {
+            binding,
+            kind: BindingKind::StorageBuffer,
+            stages,
+        };
+        let forward_layout = ctx.create_set_layout(&[
+            Binding {
+                binding: 0,
+                kind: BindingKind::UniformBuffer,
+                stages: Stages::GRAPHICS,
+            },
+            storage(1, Stages::GRAPHICS),
+            storage(2, Stages::GRAPHICS),
+            storage(3, Stages::GRAPHICS),
+            storage(4, Stages::VERTEX),
+            sampled(10, Stages::FRAGMENT),
+            storage(11, Stages::FRAGMENT),
+            storage(12, Stages::FRAGMENT),
+            sampled(13, Stages::FRAGMENT),
+            sampled(14, Stages::FRAGMENT),
+            sampled(15, Stages::FRAGMENT),
+        ])?;
         let shadow_mask_layout = ctx.create_set_layout(&[
             Binding {
                 binding: 0,
@@ -418,6 +465,7 @@ impl Renderer {
                     push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
                     push_stages: Stages::FRAGMENT,
                     constants: &[],
+                    blend: false,
                 })?;
                 let shadow_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
                     name: "shadow",
@@ -433,6 +481,7 @@ impl Renderer {
                     push_constant_size: std::mem::size_of::<ShadowPush>() as u32,
                     push_stages: Stages::VERTEX,
                     constants: &[],
+                    blend: false,
                 })?;
                 let shadow_sampler = ctx.create_sampler(Filter::ShadowCompare)?;
                 let no_shadows =
@@ -508,6 +557,8 @@ impl Renderer {
             weave_pipeline,
             gbuffer_variants: HashMap::new(),
             lighting_variants: HashMap::new(),
+            forward_variants: HashMap::new(),
+            forward_layout,
             tonemap_pipeline,
             shadow_pipeline,
             shadow_mask_variants: HashMap::new(),
@@ -534,6 +585,23 @@ impl Renderer {
     pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
         let options = RenderOptions::default();
         self.variants(&options, &Plan::new(&Scene::default(), &options))?;
+        // The transparent pass's default variant: a scene with one blended draw.
+        let blended = Scene {
+            meshes: vec![crate::scene::Mesh {
+                name: "blended".into(),
+                vertices: Vec::new(),
+                indices: Vec::new(),
+                material: 0,
+                colors: Vec::new(),
+            }],
+            draws: vec![crate::scene::Draw::new(0, glam::Mat4::IDENTITY)],
+            materials: vec![crate::scene::Material {
+                blend: true,
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        self.variants(&options, &Plan::new(&blended, &options))?;
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
@@ -547,6 +615,7 @@ impl Renderer {
         all.extend(self.shadow_mask_variants.values());
         all.extend(self.gbuffer_variants.values());
         all.extend(self.lighting_variants.values());
+        all.extend(self.forward_variants.values());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
         Ok(all)
     }
@@ -573,6 +642,7 @@ impl Renderer {
                 push_constant_size: std::mem::size_of::<super::gpu::ShadowMaskPush>() as u32,
                 push_stages: Stages::GRAPHICS,
                 constants: &[(0, key)],
+                blend: false,
             })?;
             self.shadow_mask_variants.insert(key, pipeline);
         }
@@ -586,7 +656,7 @@ impl Renderer {
         options: &RenderOptions,
         plan: &Plan,
     ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
-        let (g, l, _) = self.prepare(options, plan, None)?;
+        let (g, l, _, _) = self.prepare(options, plan, None)?;
         Ok((g, l))
     }
 
@@ -600,7 +670,12 @@ impl Renderer {
         options: &RenderOptions,
         plan: &Plan,
         env: Option<(&crate::env::Environment, &mut Vec<PassTiming>)>,
-    ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>, Option<usize>)> {
+    ) -> crate::Result<(
+        Vec<(u32, u32)>,
+        Vec<(u32, u32)>,
+        Option<Vec<(u32, u32)>>,
+        Option<usize>,
+    )> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
         let light_types = if options.force.light_types {
             7
@@ -644,6 +719,22 @@ impl Renderer {
             ),
             (9, plan.unlit as u32),
         ];
+        // The transparent pass's pipeline: gbuffer.frag's constants under their ids (the vertex
+        // stage reads 2, 3 and 5, with LIGHT_TYPES the scene's), lighting.frag's others + 10.
+        let forward_key = plan.runs(Pass::Transparent).then(|| {
+            let mut key: Vec<(u32, u32)> = gbuffer_key[..6].to_vec();
+            key[3] = (3, light_types);
+            key.extend(
+                lighting_key
+                    .iter()
+                    .filter(|(id, _)| ![0, 3, 4].contains(id))
+                    .map(|&(id, value)| (id + 10, value)),
+            );
+            key
+        });
+        let need_forward = forward_key
+            .as_ref()
+            .is_some_and(|k| !self.forward_variants.contains_key(k));
         let need_gbuffer = !self.gbuffer_variants.contains_key(&gbuffer_key);
         let need_lighting = !self.lighting_variants.contains_key(&lighting_key);
         let (env, timings) = match env {
@@ -653,17 +744,7 @@ impl Renderer {
         let cached_env = env.and_then(|e| self.env_cache.iter().position(|g| g.hash == e.hash()));
         let need_env = env.filter(|_| cached_env.is_none());
         let make_gbuffer = || -> crate::Result<Pipeline> {
-            let vertex_layout = VertexLayout {
-                stride: (VERTEX_FLOATS * 4) as u32,
-                attributes: vec![
-                    (0, Format::R32G32B32_SFLOAT, 0),
-                    (1, Format::R32G32B32_SFLOAT, 12),
-                    (2, Format::R32G32B32A32_SFLOAT, 24),
-                    (3, Format::R32G32_SFLOAT, 40),
-                    (4, Format::R32G32_SFLOAT, 48),
-                    (5, Format::R32G32_SFLOAT, 56),
-                ],
-            };
+            let vertex_layout = gbuffer_vertex_layout();
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
                     "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}]",
@@ -689,6 +770,7 @@ impl Renderer {
                 push_constant_size: std::mem::size_of::<DrawPush>() as u32,
                 push_stages: Stages::GRAPHICS,
                 constants: &gbuffer_key,
+                blend: false,
             })
         };
         let make_lighting = || -> crate::Result<Pipeline> {
@@ -713,10 +795,34 @@ impl Renderer {
                 push_constant_size: 0,
                 push_stages: Stages::FRAGMENT,
                 constants: &lighting_key,
+                blend: false,
             })
         };
-        let (gbuffer, lighting, built_env) = std::thread::scope(|scope| {
+        let make_forward = || -> crate::Result<Pipeline> {
+            let key = forward_key.as_deref().unwrap_or_default();
+            self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!(
+                    "forward[{}]",
+                    key.iter()
+                        .map(|(id, v)| format!("{id}={v}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                vertex: &shaders::GBUFFER_VERT,
+                fragment: &shaders::FORWARD_FRAG,
+                vertex_layout: Some(gbuffer_vertex_layout()),
+                color_formats: &[HDR_FORMAT],
+                depth_format: Some(DEPTH_FORMAT),
+                set_layouts: &[&self.forward_layout, &self.material_layout],
+                push_constant_size: std::mem::size_of::<DrawPush>() as u32,
+                push_stages: Stages::GRAPHICS,
+                constants: key,
+                blend: true,
+            })
+        };
+        let (gbuffer, lighting, forward, built_env) = std::thread::scope(|scope| {
             let lighting = need_lighting.then(|| scope.spawn(make_lighting));
+            let forward = need_forward.then(|| scope.spawn(make_forward));
             let gbuffer = need_gbuffer.then(make_gbuffer).transpose();
             let built_env = need_env.map(|e| self.env.build(&self.ctx, e)).transpose();
             let lighting = lighting
@@ -725,8 +831,17 @@ impl Renderer {
                         .expect("the lighting pipeline's thread does not panic")
                 })
                 .transpose();
-            (gbuffer, lighting, built_env)
+            let forward = forward
+                .map(|h| {
+                    h.join()
+                        .expect("the forward pipeline's thread does not panic")
+                })
+                .transpose();
+            (gbuffer, lighting, forward, built_env)
         });
+        if let (Some(p), Some(k)) = (forward?, &forward_key) {
+            self.forward_variants.insert(k.clone(), p);
+        }
         if let Some(p) = gbuffer? {
             self.gbuffer_variants.insert(gbuffer_key.clone(), p);
         }
@@ -750,7 +865,7 @@ impl Renderer {
             }
             None => cached_env,
         };
-        Ok((gbuffer_key, lighting_key, env_index))
+        Ok((gbuffer_key, lighting_key, forward_key, env_index))
     }
 
     /// Uploads a scene: geometry, materials, lights and textures (with mip chains).
@@ -807,7 +922,11 @@ impl Renderer {
                 alpha_mask: scene
                     .materials
                     .get(mesh.material)
-                    .is_some_and(|m| m.alpha_cutoff.is_some()),
+                    .is_some_and(|m| m.alpha_cutoff.is_some() || m.blend),
+                blend: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
+                centre: passes::transparent::bounds_centre(
+                    mesh.vertices.iter().map(|v| v.position),
+                ),
                 scene_draw,
             });
         }
@@ -856,7 +975,7 @@ impl Renderer {
         let material_mask = scene
             .materials
             .iter()
-            .map(|m| m.alpha_cutoff.is_some())
+            .map(|m| m.alpha_cutoff.is_some() || m.blend)
             .collect();
         let material_count = materials.len() as u32;
         let materials =
@@ -972,7 +1091,8 @@ impl Renderer {
             (Some(_), Some(e)) => Some((e.env.as_ref(), &mut timings)),
             _ => None,
         };
-        let (gbuffer_key, lighting_key, env_index) = self.prepare(options, &plan, env)?;
+        let (gbuffer_key, lighting_key, forward_key, env_index) =
+            self.prepare(options, &plan, env)?;
         // The cut-out shadow pipeline only when a MASK material casts into a shadow map.
         let shadow_mask_key = if plan.mask_casters > 0 && plan.runs(Pass::Shadow) {
             Some(self.shadow_mask_pipeline(plan.vertex_colors)?)
@@ -1122,7 +1242,7 @@ impl Renderer {
         let targets = self.targets.as_ref().expect("created above");
         let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
         let lighting_pipeline = &self.lighting_variants[&lighting_key];
-        let pool = ctx.create_descriptor_pool(5 + 2 * gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(6 + 2 * gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
         let (env_radiance, env_specular) = match env_index {
             Some(i) => (&self.env_cache[i].radiance, &self.env_cache[i].specular),
@@ -1170,6 +1290,52 @@ impl Renderer {
             Ok(())
         }
 
+        // Each material's textures (set 1 of the G-buffer and transparent passes).
+        let material_sets = (0..gpu.material_count as usize)
+            .map(|m| {
+                let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 10]);
+                let samplers = gpu.material_samplers.get(m).copied();
+                // A slot's own sampler where it has a texture; the default
+                // (trilinear, repeat) for the 1x1 fallbacks.
+                let sampler = |slot: usize| -> &Sampler {
+                    match (tex[slot], samplers) {
+                        (Some(_), Some(s)) => gpu.samplers.get(s[slot]).unwrap_or(&self.linear),
+                        _ => &self.linear,
+                    }
+                };
+                let pick = |slot: usize, fallback: &'static str| -> &Image {
+                    match tex[slot].and_then(|i| gpu.textures.get(i)) {
+                        Some(t) => t,
+                        None if fallback == "normal" => &self.flat_normal,
+                        None => &self.white,
+                    }
+                };
+                let weave = match gpu.material_weave.get(m).copied().flatten() {
+                    Some(w) if options.weave_precision == super::WeavePrecision::Rgba8 => {
+                        &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
+                    }
+                    Some(w) => &gpu.weaves[w],
+                    None => &self.white,
+                };
+                pool.set(
+                    &self.material_layout,
+                    &[
+                        (0, Resource::Sampled(pick(0, "white"), sampler(0))),
+                        (1, Resource::Sampled(pick(1, "white"), sampler(1))),
+                        (2, Resource::Sampled(pick(2, "normal"), sampler(2))),
+                        (3, Resource::Sampled(pick(3, "white"), sampler(3))),
+                        (4, Resource::Sampled(weave, &self.linear)),
+                        (5, Resource::Sampled(pick(4, "white"), sampler(4))),
+                        (6, Resource::Sampled(pick(5, "white"), sampler(5))),
+                        (7, Resource::Sampled(pick(6, "white"), sampler(6))),
+                        (8, Resource::Sampled(pick(7, "white"), sampler(7))),
+                        (9, Resource::Sampled(pick(8, "white"), sampler(8))),
+                        (10, Resource::Sampled(pick(9, "white"), sampler(9))),
+                    ],
+                )
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
+
         for pass in &plan.passes {
             match pass {
                 Pass::Environment => {
@@ -1192,54 +1358,6 @@ impl Renderer {
                             (4, Resource::Storage(colors)),
                         ],
                     )?;
-                    let material_sets = (0..gpu.material_count as usize)
-                        .map(|m| {
-                            let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 10]);
-                            let samplers = gpu.material_samplers.get(m).copied();
-                            // A slot's own sampler where it has a texture; the default
-                            // (trilinear, repeat) for the 1x1 fallbacks.
-                            let sampler = |slot: usize| -> &Sampler {
-                                match (tex[slot], samplers) {
-                                    (Some(_), Some(s)) => {
-                                        gpu.samplers.get(s[slot]).unwrap_or(&self.linear)
-                                    }
-                                    _ => &self.linear,
-                                }
-                            };
-                            let pick = |slot: usize, fallback: &'static str| -> &Image {
-                                match tex[slot].and_then(|i| gpu.textures.get(i)) {
-                                    Some(t) => t,
-                                    None if fallback == "normal" => &self.flat_normal,
-                                    None => &self.white,
-                                }
-                            };
-                            let weave = match gpu.material_weave.get(m).copied().flatten() {
-                                Some(w)
-                                    if options.weave_precision == super::WeavePrecision::Rgba8 =>
-                                {
-                                    &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
-                                }
-                                Some(w) => &gpu.weaves[w],
-                                None => &self.white,
-                            };
-                            pool.set(
-                                &self.material_layout,
-                                &[
-                                    (0, Resource::Sampled(pick(0, "white"), sampler(0))),
-                                    (1, Resource::Sampled(pick(1, "white"), sampler(1))),
-                                    (2, Resource::Sampled(pick(2, "normal"), sampler(2))),
-                                    (3, Resource::Sampled(pick(3, "white"), sampler(3))),
-                                    (4, Resource::Sampled(weave, &self.linear)),
-                                    (5, Resource::Sampled(pick(4, "white"), sampler(4))),
-                                    (6, Resource::Sampled(pick(5, "white"), sampler(5))),
-                                    (7, Resource::Sampled(pick(6, "white"), sampler(6))),
-                                    (8, Resource::Sampled(pick(7, "white"), sampler(7))),
-                                    (9, Resource::Sampled(pick(8, "white"), sampler(8))),
-                                    (10, Resource::Sampled(pick(9, "white"), sampler(9))),
-                                ],
-                            )
-                        })
-                        .collect::<crate::Result<Vec<_>>>()?;
                     timed_pass(
                         &ctx,
                         queries.as_ref(),
@@ -1353,6 +1471,48 @@ impl Renderer {
                         },
                     )?;
                     stats.pipelines.push(lighting_pipeline.name.clone());
+                }
+                Pass::Transparent => {
+                    let key = forward_key
+                        .as_ref()
+                        .expect("prepare makes the forward pipeline when the plan has the pass");
+                    let pipeline = &self.forward_variants[key];
+                    let frame_set = pool.set(
+                        &self.forward_layout,
+                        &[
+                            (0, Resource::Uniform(&frame_buffer)),
+                            (1, Resource::Storage(&gpu.materials)),
+                            (2, Resource::Storage(&gpu.fabrics)),
+                            (3, Resource::Storage(lights_buffer)),
+                            (4, Resource::Storage(colors)),
+                            (10, Resource::Sampled(atlas, &self.shadow_sampler)),
+                            (11, Resource::Storage(&shadow_buffer)),
+                            (12, Resource::Storage(&tile_buffer)),
+                            (13, Resource::Sampled(env_radiance, &self.env.sampler)),
+                            (14, Resource::Sampled(env_specular, &self.env.sampler)),
+                            (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
+                        ],
+                    )?;
+                    let order = passes::transparent::back_to_front(gpu, camera.view);
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "transparent",
+                        &mut |cmd| {
+                            passes::transparent::transparent_pass(
+                                cmd,
+                                pipeline,
+                                gpu,
+                                frame_set,
+                                &material_sets,
+                                targets,
+                                &order,
+                            )
+                        },
+                    )?;
+                    stats.pipelines.push(pipeline.name.clone());
+                    stats.blend_draws = order.len();
                 }
                 Pass::Tonemap => {
                     let set = pool.set(

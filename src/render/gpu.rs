@@ -255,7 +255,9 @@ impl GpuMaterial {
                 };
                 let flags = flags
                     | if m.unlit { MATERIAL_UNLIT } else { 0 }
-                    | if m.alpha_cutoff.is_some() {
+                    // BLEND too: the shadow pass casts it cut out at alpha 0.5 (the G-buffer
+                    // never draws it, so the cut-out there applies only to MASK).
+                    | if m.alpha_cutoff.is_some() || m.blend {
                         MATERIAL_MASK
                     } else {
                         0
@@ -270,10 +272,20 @@ impl GpuMaterial {
                 }
                 uv
             },
-            alpha: [m.alpha_cutoff.unwrap_or(0.0), 0.0, 0.0, 0.0],
+            alpha: [
+                m.alpha_cutoff
+                    .unwrap_or(if m.blend { BLEND_SHADOW_CUTOFF } else { 0.0 }),
+                0.0,
+                0.0,
+                0.0,
+            ],
         }
     }
 }
+
+/// alphaMode BLEND surfaces cast shadows cut out where their alpha is below this (a shadow map
+/// holds no partial cover): a glass at alpha 0.2 casts none, a curtain at 0.9 a solid one.
+pub const BLEND_SHADOW_CUTOFF: f32 = 0.5;
 
 /// Push constants of the G-buffer pass, one per draw (128 bytes: the guaranteed minimum).
 #[repr(C)]

@@ -18,6 +18,9 @@ pub enum Pass {
     Shadow,
     /// Fullscreen pass: lights x materials from the G-buffer into the HDR target.
     Lighting,
+    /// Raster pass after lighting (alphaMode BLEND): the blended draws, back to front, each
+    /// fragment lit as the lighting pass lights a pixel and blended over the HDR target.
+    Transparent,
     /// Exposure, tone curve and sRGB encoding into the 8-bit target.
     Tonemap,
     /// Compute passes, once per environment (cached by content hash): the radiance cube and its
@@ -32,6 +35,7 @@ impl Pass {
             Pass::GBuffer => "gbuffer",
             Pass::Shadow => "shadow",
             Pass::Lighting => "lighting",
+            Pass::Transparent => "transparent",
             Pass::Tonemap => "tonemap",
             Pass::Environment => "environment",
         }
@@ -131,11 +135,15 @@ pub struct Plan {
     pub vertex_color_meshes: usize,
     pub vertex_colors: bool,
     /// alphaMode MASK: drawn draws with a MASK material, whether gbuffer.frag compiles the
-    /// discard in (some, or forced), and the casters among them (the shadow pass then makes and
-    /// uses its cut-out pipeline for them, when it runs).
+    /// discard in (some, or forced), and the cut-out casters: MASK and BLEND draws that cast (the
+    /// shadow pass then makes and uses its cut-out pipeline for them, when it runs; BLEND is cut
+    /// at alpha 0.5).
     pub mask_draws: usize,
     pub alpha_mask: bool,
     pub mask_casters: usize,
+    /// alphaMode BLEND: drawn draws with a BLEND material (the transparent pass runs when there
+    /// is one; they are not in the G-buffer).
+    pub blend_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
     pub instanced_nodes: usize,
@@ -272,7 +280,31 @@ impl Plan {
                     (s.resolution as u64 * cell as u64 / layout.cell as u64).max(1) as u32;
             }
         }
+        let is_mask = |d: &crate::scene::Draw| {
+            scene
+                .meshes
+                .get(d.mesh)
+                .and_then(|m| scene.materials.get(m.material))
+                .is_some_and(|m| m.alpha_cutoff.is_some())
+        };
+        let mask_draws = scene.draws.iter().filter(|d| is_mask(d)).count();
+        let is_blend = |d: &crate::scene::Draw| {
+            scene
+                .meshes
+                .get(d.mesh)
+                .and_then(|m| scene.materials.get(m.material))
+                .is_some_and(|m| m.blend)
+        };
+        let mask_casters = scene
+            .draws
+            .iter()
+            .filter(|d| d.cast_shadows && (is_mask(d) || is_blend(d)))
+            .count();
+        let blend_draws = scene.draws.iter().filter(|d| is_blend(d)).count();
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
+        if blend_draws > 0 {
+            passes.insert(2, Pass::Transparent);
+        }
         if !shadows.is_empty() {
             passes.insert(1, Pass::Shadow);
         }
@@ -324,24 +356,12 @@ impl Plan {
             .zip(&drawn)
             .filter(|(m, &drawn)| drawn && !m.colors.is_empty())
             .count();
-        let is_mask = |d: &crate::scene::Draw| {
-            scene
-                .meshes
-                .get(d.mesh)
-                .and_then(|m| scene.materials.get(m.material))
-                .is_some_and(|m| m.alpha_cutoff.is_some())
-        };
-        let mask_draws = scene.draws.iter().filter(|d| is_mask(d)).count();
-        let mask_casters = scene
-            .draws
-            .iter()
-            .filter(|d| d.cast_shadows && is_mask(d))
-            .count();
         Plan {
             width: options.width,
             mask_draws,
             alpha_mask: mask_draws > 0 || options.force.alpha_mask,
             mask_casters,
+            blend_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -459,7 +479,7 @@ impl fmt::Display for Plan {
         )?;
         writeln!(
             f,
-            "alpha mask  {} draw(s) with alphaMode MASK, {} casting (cut-out code {}{})",
+            "alpha mask  {} draw(s) with alphaMode MASK; {} cut-out caster(s) (MASK, BLEND at alpha 0.5) (cut-out code {}{})",
             self.mask_draws,
             self.mask_casters,
             if self.alpha_mask { "compiled" } else { "none" },
@@ -469,6 +489,13 @@ impl fmt::Display for Plan {
                 ""
             }
         )?;
+        if self.blend_draws > 0 {
+            writeln!(
+                f,
+                "blend       {} draw(s) with alphaMode BLEND: forward-lit after the lighting pass, sorted back to front by their bounds' centres",
+                self.blend_draws
+            )?;
+        }
         writeln!(
             f,
             "vertex col. {} drawn mesh(es) with COLOR_0 (colour code {})",

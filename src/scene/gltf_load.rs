@@ -818,13 +818,9 @@ impl<'a> Loader<'a> {
                 }
                 Some(cutoff.clamp(0.0, 1.0))
             }
-            gltf::material::AlphaMode::Blend => {
-                self.warn(format_args!(
-                    "{who} has alphaMode BLEND, which weft does not draw yet; it is drawn opaque (MASK, a cutoff, is drawn)"
-                ));
-                None
-            }
+            gltf::material::AlphaMode::Blend => None,
         };
+        let blend = m.alpha_mode() == gltf::material::AlphaMode::Blend;
 
         // The material extensions (sheen, specular, ior, anisotropy), with their textures.
         let ext = |key: &str| m.extensions().and_then(|e| e.get(key));
@@ -1007,6 +1003,7 @@ impl<'a> Loader<'a> {
             samplers,
             unlit,
             alpha_cutoff,
+            blend,
         };
         Ok((material, uv))
     }

@@ -127,8 +127,11 @@ pub struct Material {
     pub unlit: bool,
     /// alphaMode MASK: the alphaCutoff (where the base colour's alpha, factor × texture ×
     /// COLOR_0, is below it, the surface is cut out, in the image and in shadow maps). None:
-    /// opaque (alphaMode OPAQUE, and BLEND, which weft draws opaque with a warning).
+    /// opaque (alphaMode OPAQUE or BLEND).
     pub alpha_cutoff: Option<f32>,
+    /// alphaMode BLEND: the surface is drawn after the opaque ones by the forward pass
+    /// (`Pass::Transparent`), lit as they are and blended over them by its base colour's alpha.
+    pub blend: bool,
 }
 
 impl Material {
@@ -406,6 +409,7 @@ impl Default for Material {
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
             unlit: false,
             alpha_cutoff: None,
+            blend: false,
         }
     }
 }

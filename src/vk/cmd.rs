@@ -73,6 +73,7 @@ pub struct Attachment<'a> {
 pub enum Cull {
     None,
     Back,
+    Front,
 }
 
 /// A command buffer being recorded.
@@ -279,6 +280,7 @@ impl<'s> Cmd<'s> {
         let mode = match cull {
             Cull::None => vk::CullModeFlags::NONE,
             Cull::Back => vk::CullModeFlags::BACK,
+            Cull::Front => vk::CullModeFlags::FRONT,
         };
         unsafe { self.device().cmd_set_cull_mode(self.raw, mode) };
     }

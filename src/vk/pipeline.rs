@@ -120,6 +120,9 @@ pub struct GraphicsDesc<'a> {
     /// Specialization constants (id, value), given to both stages (Vulkan ignores an id a stage
     /// does not declare, so the vertex and fragment shaders share one numbering).
     pub constants: &'a [(u32, u32)],
+    /// Blending: false replaces the attachments (and writes depth); true blends premultiplied
+    /// colour over them (ONE, ONE_MINUS_SRC_ALPHA, alpha alike) and only tests depth.
+    pub blend: bool,
 }
 
 pub struct ComputeDesc<'a> {
@@ -346,14 +349,26 @@ impl Context {
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some())
-            .depth_write_enable(desc.depth_format.is_some())
+            .depth_write_enable(desc.depth_format.is_some() && !desc.blend)
             .depth_compare_op(vk::CompareOp::GREATER); // reversed-Z: near is 1, far is 0
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
             .map(|_| {
-                vk::PipelineColorBlendAttachmentState::default()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+                let state = vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA);
+                if desc.blend {
+                    state
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .alpha_blend_op(vk::BlendOp::ADD)
+                } else {
+                    state
+                }
             })
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);

@@ -478,6 +478,10 @@ pub fn cases() -> Vec<Case> {
             ..case("khronos-mesh-primitive-modes", "tests/data/khronos/MeshPrimitiveModes/glTF/MeshPrimitiveModes.gltf", "one row of three grey filled shapes alike: the TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN meshes (the sample's bottom row); its points and lines (the upper rows) are skipped")
         },
         Case {
+            env: STUDIO,
+            ..case("khronos-alpha-blend-mode", "tests/data/khronos/AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb", "five striped panels before a marble wall: Opaque solid with a black border; Blend see-through (the wall's marble shows through the stripes, its label ticked); the three cut-off panels cut at their own heights, the green arrows at the cut")
+        },
+        Case {
             camera: Some(1),
             env: STUDIO,
             warnings: &["has no normals"],

@@ -6,7 +6,8 @@
 //! 3. [`gbuffer`]: every draw into the G-buffer;
 //! 4. [`shadow`]: casters into the shadow atlas;
 //! 5. [`lighting`]: lamps and the environment from the G-buffer into HDR;
-//! 6. [`tonemap`]: exposure and tone curve into the 8-bit target.
+//! 6. [`transparent`]: alphaMode BLEND draws, forward-lit, back to front over HDR;
+//! 7. [`tonemap`]: exposure and tone curve into the 8-bit target.
 //!
 //! Each function's signature says what it reads and writes.
 
@@ -15,3 +16,4 @@ pub mod gbuffer;
 pub mod lighting;
 pub mod shadow;
 pub mod tonemap;
+pub mod transparent;

@@ -1,0 +1,136 @@
+//! The transparent pass (alphaMode BLEND): after deferred lighting, the blended draws are drawn
+//! back to front over the HDR image, depth-tested against the opaque surfaces (the G-buffer's
+//! depth) without writing depth. forward.frag computes each fragment's surface as gbuffer.frag
+//! does and lights it as lighting.frag lights a pixel (glsl/include/surface.glsl and shade.glsl),
+//! then blends it premultiplied by its base colour's alpha.
+//!
+//! Order: whole draws, by the distance along the view direction of their bounds' centres,
+//! farthest first; within a draw, its triangles in index order, except that a double-sided draw
+//! is drawn twice, back faces first, then front faces, so a closed blended mesh shows its far
+//! side through its near side. What this gets wrong: blended draws that interpenetrate, or a
+//! large one whose centre is nearer than a small one in front of it, and the back faces of a
+//! single-sided mesh (culled, as the spec says). No order-independent transparency.
+
+use glam::{Mat4, Vec3};
+
+use crate::render::frame::{GpuScene, Targets};
+use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
+use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Pipeline, Usage};
+
+/// The indices into `scene.draws` of the blended draws, farthest first from a camera with view
+/// matrix `view` (view space looks down -Z): by the view-space depth of each draw's bounds'
+/// centre; ties keep the scene's order.
+pub fn back_to_front(scene: &GpuScene, view: Mat4) -> Vec<usize> {
+    let mut order: Vec<(f32, usize)> = scene
+        .draws
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.blend)
+        .map(|(i, d)| {
+            let centre = view.transform_point3(d.world.transform_point3(d.centre));
+            // -z is the distance in front of the camera; NaN (a degenerate matrix) sorts last.
+            let depth = -centre.z;
+            (
+                if depth.is_nan() {
+                    f32::NEG_INFINITY
+                } else {
+                    depth
+                },
+                i,
+            )
+        })
+        .collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0));
+    order.into_iter().map(|(_, i)| i).collect()
+}
+
+/// The centre of the bounds of the positions `positions`; the origin when there are none.
+pub fn bounds_centre(positions: impl Iterator<Item = [f32; 3]>) -> Vec3 {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for p in positions {
+        let p = Vec3::from(p);
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if lo.cmple(hi).all() {
+        (lo + hi) * 0.5
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// Blends the draws `order` (indices into `scene.draws`, farthest first) over the HDR target.
+/// Reads: the G-buffer depth (as the depth attachment, test only), the frame set (frame,
+/// materials, fabrics, lights, vertex colours, shadows, tile light lists, environment), each
+/// draw's material set. Writes: the HDR target (left readable by fragment shaders, as the
+/// lighting pass leaves it).
+#[allow(clippy::too_many_arguments)]
+pub fn transparent_pass<'s>(
+    cmd: &mut Cmd<'s>,
+    pipeline: &'s Pipeline,
+    scene: &'s GpuScene,
+    frame_set: DescriptorSet<'s>,
+    material_sets: &[DescriptorSet<'s>],
+    targets: &'s Targets,
+    order: &[usize],
+) {
+    cmd.transition(
+        &targets.hdr,
+        Usage::FragmentRead,
+        Usage::ColorAttachment,
+        None,
+    );
+    cmd.transition(
+        &targets.depth,
+        Usage::FragmentRead,
+        Usage::DepthAttachment,
+        None,
+    );
+    cmd.begin_rendering(
+        &[Attachment {
+            image: &targets.hdr,
+            clear: None,
+        }],
+        Some(Attachment {
+            image: &targets.depth,
+            clear: None,
+        }),
+    );
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_vertex_buffer(&scene.vertices);
+    cmd.bind_index_buffer(&scene.indices);
+    cmd.bind_sets(pipeline, 0, &[frame_set]);
+    for &i in order {
+        let draw = &scene.draws[i];
+        let material = draw.material.min(scene.material_count - 1);
+        cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
+        let mut push = DrawPush::new(draw.world, material);
+        if !draw.receive_shadows {
+            push.flags &= !DRAW_RECEIVES_SHADOWS;
+        }
+        cmd.push_constants(pipeline, &push);
+        let faces: &[Cull] = if draw.double_sided {
+            &[Cull::Front, Cull::Back]
+        } else {
+            &[Cull::Back]
+        };
+        for &cull in faces {
+            cmd.set_cull(cull);
+            cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+        }
+    }
+    cmd.end_rendering();
+    cmd.transition(
+        &targets.hdr,
+        Usage::ColorAttachment,
+        Usage::FragmentRead,
+        None,
+    );
+    cmd.transition(
+        &targets.depth,
+        Usage::DepthAttachment,
+        Usage::FragmentRead,
+        None,
+    );
+}
