@@ -301,6 +301,9 @@ pub struct Renderer {
     pub(crate) skin_pass: std::sync::OnceLock<super::deform::SkinPass>,
 }
 
+/// A pipeline variant's specialization constants (id, value): its key among the variants.
+type VariantKey = Vec<(u32, u32)>;
+
 /// Preprocessed environments a renderer keeps.
 const ENV_CACHE: usize = 2;
 
@@ -655,7 +658,7 @@ impl Renderer {
         &mut self,
         options: &RenderOptions,
         plan: &Plan,
-    ) -> crate::Result<(Vec<(u32, u32)>, Vec<(u32, u32)>)> {
+    ) -> crate::Result<(VariantKey, VariantKey)> {
         let (g, l, _, _) = self.prepare(options, plan, None)?;
         Ok((g, l))
     }
@@ -670,12 +673,7 @@ impl Renderer {
         options: &RenderOptions,
         plan: &Plan,
         env: Option<(&crate::env::Environment, &mut Vec<PassTiming>)>,
-    ) -> crate::Result<(
-        Vec<(u32, u32)>,
-        Vec<(u32, u32)>,
-        Option<Vec<(u32, u32)>>,
-        Option<usize>,
-    )> {
+    ) -> crate::Result<(VariantKey, VariantKey, Option<VariantKey>, Option<usize>)> {
         let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
         let light_types = if options.force.light_types {
             7
