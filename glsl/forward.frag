@@ -4,7 +4,8 @@
 // writing it. Each fragment computes the surface gbuffer.frag would store (surface.glsl) and
 // shades it at once as the lighting pass shades a G-buffer pixel (shade.glsl): the same lights,
 // environment and shadows. Writes premultiplied radiance and the base colour's alpha, blended
-// with ONE, ONE_MINUS_SRC_ALPHA (glTF's BLEND: colour·alpha + behind·(1 - alpha)).
+// with ONE, ONE_MINUS_SRC_ALPHA (glTF's BLEND: colour·alpha + behind·(1 - alpha)). Transmissive
+// surfaces (KHR_materials_transmission, _volume) are drawn here too: they read the backdrop.
 #include "frame.glsl"
 #include "pbr.glsl"
 #include "fabric.glsl"
@@ -39,6 +40,8 @@ layout(constant_id = 17) const uint IBL = 0u;
 layout(constant_id = 18) const uint IBL_SAMPLES = 16u;
 // 1: some material is unlit.
 layout(constant_id = 19) const uint UNLIT = 0u;
+// 1: some drawn material is transmissive (KHR_materials_transmission): the backdrop is read.
+layout(constant_id = 20) const uint TRANSMISSION = 0u;
 
 // Set 0: gbuffer.vert's bindings 0-4, then lighting.frag's shadow and environment bindings.
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
@@ -51,8 +54,30 @@ layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lig
 layout(set = 0, binding = 13) uniform samplerCube env_radiance;
 layout(set = 0, binding = 14) uniform samplerCube env_specular;
 layout(set = 0, binding = 15) uniform sampler2D env_dfg;
+// The backdrop: the lit opaque image (the lighting pass's HDR target before this pass), with box-
+// filtered mips; any image when TRANSMISSION = 0.
+layout(set = 0, binding = 16) uniform sampler2D backdrop;
 
 #include "surface.glsl"
+
+// What the surface shows of the backdrop: its pixel where the refracted view ray leaves the
+// volume (transmission_exit), blurred by the lobe's roughness (transmission_lod), attenuated
+// over the path (volume_attenuation), weighted by what the specular reflection leaves
+// (transmission_weight). Nothing transmissive is in the backdrop: a transmissive surface behind
+// another is not seen through it.
+vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec3 attenuation) {
+    float ior = transmission.w;
+    vec3 exit = transmission_exit(p, n, v, transmission.y, ior);
+    vec4 clip = frame.view_proj * vec4(exit, 1.0);
+    vec2 uv = clip.w > 0.0 ? clip.xy / clip.w * 0.5 + 0.5 : gl_FragCoord.xy * frame.viewport.zw;
+    float lod = transmission_lod(s.roughness, ior, float(textureSize(backdrop, 0).x));
+    vec3 behind = textureLod(backdrop, uv, lod).rgb;
+    float nv = clamp(dot(n, v), 1e-4, 1.0);
+    vec2 ab = textureLod(env_dfg, vec2(nv, s.roughness), 0.0).rg;
+    return behind * volume_attenuation(distance(p, exit), attenuation, transmission.z)
+         * transmission_weight(s.f0, s.specular, s.base, ab);
+}
+
 #include "shade.glsl"
 
 layout(location = 0) out vec4 out_color;
@@ -65,8 +90,17 @@ void main() {
     }
     vec3 v = normalize(frame.eye.xyz - in_world_pos);
     vec3 radiance = shade_surface(in_world_pos, v, s.albedo, frame_decode(s.frame), s.surface, s.fabric,
-                                  s.emissive, s.specular);
+                                  s.emissive, s.specular, s.transmission, s.attenuation);
     radiance = all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0);
-    float alpha = clamp(s.alpha, 0.0, 1.0);
+    // alphaMode BLEND blends by the base colour's alpha; a transmissive surface that is not BLEND
+    // covers what is behind (its transmitted light is in its radiance).
+    uint flags = uint(materials[draw.material].extra.w + 0.5);
+    bool blended = (flags & MATERIAL_BLEND) != 0u;
+    // alphaMode MASK on a transmissive surface: cut out as the G-buffer pass cuts (BLEND carries
+    // the MASK flag only for its shadow).
+    if (!blended && alpha_cut(materials[draw.material], s.alpha)) {
+        discard;
+    }
+    float alpha = blended ? clamp(s.alpha, 0.0, 1.0) : 1.0;
     out_color = vec4(radiance * alpha, alpha);
 }

@@ -7,7 +7,7 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (144 bytes).
+// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (176 bytes).
 struct PbrProbeInput {
     vec4 n;              // xyz: normal (unit)
     vec4 v;              // xyz: view direction (unit)
@@ -18,12 +18,17 @@ struct PbrProbeInput {
     vec4 t_anisotropy;   // xyz anisotropy direction (unit, ⟂ n), w strength
     vec4 params;         // x roughness, y E(n·v), z E(n·l), w Ess(n·v) (energy compensation)
     vec4 terms_in;       // x n·h, y n·l, z n·v (inputs of the scalar terms), w sheen roughness
+    vec4 volume;         // transmission: x thickness, y ior, z attenuation distance, w backdrop width
+    vec4 attenuation;    // rgb attenuation colour, w the transmission factor (GltfSurface)
 };
 
-// Rust twin: PbrProbeOutput (32 bytes).
+// Rust twin: PbrProbeOutput (64 bytes).
 struct PbrProbeOutput {
     vec4 brdf;   // gltf_brdf_cos (rgb), 0
     vec4 terms;  // charlie_d, sheen_brdf_cos, ggx_aniso_d (t·h = b·h from n·h), sheen_lambda(n·v)
+    vec4 exit_lod;     // transmission_exit(l, n, v, thickness, ior), transmission_lod(roughness, ior, width)
+    vec4 transmitted;  // volume_attenuation(thickness, colour, distance) · transmission_weight(f0,
+                       // specular, base, (E(n·v), E(n·l))) (rgb), 0
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
@@ -46,13 +51,17 @@ void main() {
     PbrProbeInput p = inputs[id];
     GltfSurface s = GltfSurface(p.base_metallic.rgb, p.base_metallic.a, p.params.x, p.f0_specular.a,
                                 p.f0_specular.rgb, p.sheen.rgb, p.sheen.a, p.t_anisotropy.xyz,
-                                p.t_anisotropy.w);
+                                p.t_anisotropy.w, p.attenuation.w);
     vec3 brdf = gltf_brdf_cos(p.n.xyz, p.v.xyz, p.l.xyz, s, p.params.yz, p.params.w);
     float nh = p.terms_in.x;
     float sr = p.terms_in.w;
     float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);
     float alpha = max(p.params.x * p.params.x, 1e-3);
     outputs[id].brdf = vec4(brdf, 0.0);
+    outputs[id].exit_lod = vec4(transmission_exit(p.l.xyz, p.n.xyz, p.v.xyz, p.volume.x, p.volume.y),
+                                transmission_lod(p.params.x, p.volume.y, p.volume.w));
+    outputs[id].transmitted = vec4(volume_attenuation(p.volume.x, p.attenuation.rgb, p.volume.z)
+        * transmission_weight(p.f0_specular.rgb, p.f0_specular.a, p.base_metallic.rgb, p.params.yz), 0.0);
     outputs[id].terms = vec4(charlie_d(nh, sr), sheen_brdf_cos(p.terms_in.y, p.terms_in.z, nh, sr),
                              ggx_aniso_d(th, th, nh, mix(alpha, 1.0, 0.5), alpha),
                              sheen_lambda(p.terms_in.z, max(sr * sr, 1e-3)));

@@ -1437,6 +1437,10 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             ("mask_draws", serde_json::json!(plan.mask_draws)),
             ("mask_casters", serde_json::json!(plan.mask_casters)),
             ("blend_draws", serde_json::json!(plan.blend_draws)),
+            (
+                "transmission_draws",
+                serde_json::json!(plan.transmission_draws),
+            ),
             ("alpha_mask_code", serde_json::json!(plan.alpha_mask)),
             ("instanced_nodes", serde_json::json!(plan.instanced_nodes)),
             ("instances", serde_json::json!(plan.instances)),

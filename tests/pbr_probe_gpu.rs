@@ -16,6 +16,7 @@ mod common;
 
 use bytemuck::{Pod, Zeroable};
 use weft::reference::probe::XorShift;
+use weft::reference::shading as sh;
 use weft::reference::shading::{
     charlie_d, ggx_aniso_d, gltf_brdf_cos, sheen_brdf_cos, GltfSurface,
 };
@@ -35,6 +36,10 @@ struct PbrProbeInput {
     t_anisotropy: [f32; 4],
     params: [f32; 4],
     terms_in: [f32; 4],
+    /// Transmission: thickness, ior, attenuation distance (0: infinite), backdrop width.
+    volume: [f32; 4],
+    /// Attenuation colour (rgb), the surface's transmission factor (w).
+    attenuation: [f32; 4],
 }
 
 #[repr(C)]
@@ -42,6 +47,8 @@ struct PbrProbeInput {
 struct PbrProbeOutput {
     brdf: [f32; 4],
     terms: [f32; 4],
+    exit_lod: [f32; 4],
+    transmitted: [f32; 4],
 }
 
 fn unit(v: [f64; 3]) -> [f32; 3] {
@@ -82,11 +89,12 @@ fn surface(inp: &PbrProbeInput) -> GltfSurface {
             inp.t_anisotropy[2],
         ],
         anisotropy: inp.t_anisotropy[3],
+        transmission: inp.attenuation[3],
     }
 }
 
 /// The Rust twin of pbr_probe.comp's main().
-fn twin(inp: &PbrProbeInput) -> [f32; 8] {
+fn twin(inp: &PbrProbeInput) -> [f32; 16] {
     let s = surface(inp);
     let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
     let b = gltf_brdf_cos(
@@ -102,6 +110,16 @@ fn twin(inp: &PbrProbeInput) -> [f32; 8] {
     let th = ((1.0 - nh * nh).max(0.0) * 0.5).sqrt();
     let alpha = (inp.params[0] * inp.params[0]).max(1e-3);
     let at = alpha * 0.5 + 0.5;
+    let (thickness, ior, distance, width) =
+        (inp.volume[0], inp.volume[1], inp.volume[2], inp.volume[3]);
+    let exit = sh::transmission_exit(xyz(inp.l), xyz(inp.n), xyz(inp.v), thickness, ior);
+    let att = sh::volume_attenuation(thickness, xyz(inp.attenuation), distance);
+    let weight = sh::transmission_weight(
+        xyz(inp.f0_specular),
+        inp.f0_specular[3],
+        xyz(inp.base_metallic),
+        [inp.params[1], inp.params[2]],
+    );
     [
         b[0],
         b[1],
@@ -111,7 +129,57 @@ fn twin(inp: &PbrProbeInput) -> [f32; 8] {
         sheen_brdf_cos(inp.terms_in[1], inp.terms_in[2], nh, sr),
         ggx_aniso_d(th, th, nh, at, alpha),
         weft::reference::shading::sheen_lambda(inp.terms_in[2], (sr * sr).max(1e-3)),
+        exit[0],
+        exit[1],
+        exit[2],
+        sh::transmission_lod(inp.params[0], ior, width),
+        att[0] * weight[0],
+        att[1] * weight[1],
+        att[2] * weight[2],
+        0.0,
     ]
+}
+
+/// Absolute bounds of the transmission outputs (indices 8–14 of the twin), under the Vulkan
+/// precision rules: refract, normalize and the scaled sum inherit a few ulp per operation (64 ulp
+/// of |p| + thickness covers the dozen of them with a factor 2 to spare); log2 is 2^-21 absolute
+/// in [0.5, 2] and 3 ulp elsewhere; pow is exp2(y·log2 x) (`pow_rel`); 1 − specular·(F0·A + B)
+/// carries the absolute error of the product and sum (4 ulp of the larger term), times the base.
+fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 16]) -> [f64; 7] {
+    let p = inp.l;
+    let thickness = inp.volume[0] as f64;
+    let ior = inp.volume[1] as f64;
+    let width = (inp.volume[3] as f64).max(1.0);
+    let scale = (p[0].abs() + p[1].abs() + p[2].abs()) as f64 + thickness;
+    let e_exit = 64.0 * U * scale;
+    let c = (2.0 * ior - 2.0).clamp(0.0, 1.0);
+    let r = inp.params[0] as f64;
+    let log_err = if width <= 2.0 {
+        2f64.powi(-21)
+    } else {
+        3.0 * U * width.log2()
+    };
+    let e_lod = (log_err + 8.0 * U * width.log2()) * r * c;
+    let distance = inp.volume[2] as f64;
+    let mut out = [e_exit, e_exit, e_exit, e_lod, 0.0, 0.0, 0.0];
+    for k in 0..3 {
+        let colour = inp.attenuation[k] as f64;
+        let rel_att = if distance > 0.0 && colour > 0.0 {
+            pow_rel(colour, thickness / distance, U) + 4.0 * U
+        } else if distance > 0.0 {
+            0.0
+        } else {
+            0.0
+        };
+        let x = inp.f0_specular[3] as f64
+            * (inp.f0_specular[k] as f64 * inp.params[1] as f64 + inp.params[2] as f64);
+        let base = inp.base_metallic[k] as f64;
+        let att = want[12 + k].abs() as f64 / ((1.0 - x).max(0.0) * base).max(1e-30);
+        out[4 + k] = 2.0
+            * (base * (4.0 * U * x.max(1.0)) * att
+                + want[12 + k].abs() as f64 * (rel_att + 4.0 * U));
+    }
+    out
 }
 
 /// Relative error bound of pow(x, y) evaluated as exp2(y·log2 x) with x carrying a relative
@@ -216,6 +284,8 @@ fn case(
     s: &GltfSurface,
     e: [f32; 2],
     terms: [f32; 4],
+    volume: [f32; 4],
+    attenuation: [f32; 3],
 ) -> Case {
     Case {
         name,
@@ -235,6 +305,8 @@ fn case(
                 weft::reference::shading::ggx_albedo_lookup(v[2], s.roughness),
             ],
             terms_in: terms,
+            volume,
+            attenuation: v4(attenuation, s.transmission),
         },
     }
 }
@@ -268,6 +340,7 @@ fn cases() -> Vec<Case> {
                             sheen_roughness: sr,
                             t: unit([1.0, 0.0, 0.0]),
                             anisotropy: if tag == "side" { 0.8 } else { 0.0 },
+                            transmission: if tag == "retro" { 0.6 } else { 0.0 },
                         };
                         let e = [0.3, 0.6];
                         let h = unit([
@@ -284,6 +357,8 @@ fn cases() -> Vec<Case> {
                             &s,
                             e,
                             [nh.clamp(0.0, 1.0), cl as f32, cv as f32, sr],
+                            [0.3, 1.0 + r, if sr > 0.5 { 0.0 } else { 0.5 }, 1024.0],
+                            [0.8, 0.5, 0.1],
                         ));
                     }
                 }
@@ -310,11 +385,39 @@ fn cases() -> Vec<Case> {
             sheen_roughness: u() as f32,
             t: unit([phi.cos(), phi.sin(), 0.0]),
             anisotropy: if i % 4 == 0 { u() as f32 } else { 0.0 },
+            transmission: if i % 5 == 0 { u() as f32 } else { 0.0 },
         };
         let e = [u() as f32 * 0.8, u() as f32 * 0.8];
         let nh = u() as f32;
         let terms = [nh, u().max(1e-4) as f32, u().max(1e-4) as f32, u() as f32];
-        out.push(case(format!("random {i}"), n, v, l, &s, e, terms));
+        // Transmission: thin walls (0) and volumes, ior 1 (no refraction, no blur) to 2.5,
+        // infinite (0) and finite attenuation distances, backdrops from 1 to 1920 texels wide.
+        let volume = [
+            if i % 6 == 0 { 0.0 } else { (u() * 2.0) as f32 },
+            if i % 7 == 0 {
+                1.0
+            } else {
+                (1.0 + u() * 1.5) as f32
+            },
+            if i % 3 == 0 {
+                0.0
+            } else {
+                (u() * 2.0 + 0.01) as f32
+            },
+            [1.0f32, 2.0, 64.0, 1920.0][i % 4],
+        ];
+        let attenuation = [u() as f32, u() as f32, u() as f32];
+        out.push(case(
+            format!("random {i}"),
+            n,
+            v,
+            l,
+            &s,
+            e,
+            terms,
+            volume,
+            attenuation,
+        ));
     }
     out
 }
@@ -335,22 +438,35 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         "sheen_brdf_cos",
         "ggx_aniso_d",
         "sheen_lambda",
+        "exit.x",
+        "exit.y",
+        "exit.z",
+        "transmission_lod",
+        "transmitted.r",
+        "transmitted.g",
+        "transmitted.b",
+        "-",
     ];
-    let mut worst: [(f64, String); 8] = std::array::from_fn(|_| (0.0, String::new()));
+    let mut worst: [(f64, String); 16] = std::array::from_fn(|_| (0.0, String::new()));
     let mut failures = Vec::new();
     for (k, c) in cases.iter().enumerate() {
         let g: PbrProbeOutput = bytemuck::pod_read_unaligned(&bytes[k * size..(k + 1) * size]);
-        let got = [g.brdf, g.terms].concat();
+        let got = [g.brdf, g.terms, g.exit_lod, g.transmitted].concat();
         let want = twin(&c.input);
         let rel = bounds(&c.input);
-        for j in 0..8 {
-            if j == 3 {
+        let abs = transmission_bounds(&c.input, &want);
+        for j in 0..16 {
+            if j == 3 || j == 15 {
                 continue;
             }
             let (x, t) = (got[j] as f64, want[j] as f64);
             assert!(x.is_finite(), "{}: {} is {x} on the GPU", c.name, names[j]);
             assert!(t.is_finite(), "{}: {} is {t} in the twin", c.name, names[j]);
-            let bound = t.abs() * rel[j] + 1e-9;
+            let bound = if j < 8 {
+                t.abs() * rel[j] + 1e-9
+            } else {
+                abs[j - 8] + 1e-9
+            };
             let ratio = (x - t).abs() / bound;
             if ratio > worst[j].0 {
                 worst[j] = (ratio, c.name.clone());
@@ -363,8 +479,8 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             }
         }
     }
-    for j in 0..8 {
-        if j != 3 {
+    for j in 0..16 {
+        if j != 3 && j != 15 {
             println!(
                 "{:>15}: worst {:.3} of its bound ({})",
                 names[j], worst[j].0, worst[j].1
@@ -376,7 +492,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         failures.is_empty(),
         "{} of {} outputs outside their bound, e.g.:\n{}",
         failures.len(),
-        cases.len() * 7,
+        cases.len() * 14,
         failures
             .iter()
             .take(20)
@@ -444,6 +560,7 @@ fn sheen_albedo_scaling_conserves_energy() {
             sheen_roughness: sr,
             t: [1.0, 0.0, 0.0],
             anisotropy: 0.0,
+            transmission: 0.0,
         };
         let e = |c: f64| weft::reference::shading::sheen_albedo(c, sr, 24) as f32;
         let e_v = e(cv);

@@ -2504,3 +2504,69 @@ fn alpha_mask_and_blend_materials_are_read() {
     let plan = weft::render::Plan::new(&s, &weft::render::RenderOptions::default());
     assert_eq!((plan.mask_draws, plan.alpha_mask), (1, true));
 }
+
+#[test]
+fn transmission_and_volume_are_read_checked_and_dropped_where_they_mean_nothing() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+    d.json["materials"] = json!([
+        {"name": "glass", "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 0.9},
+            "KHR_materials_volume": {"thicknessFactor": 0.25, "attenuationColor": [0.5, 0.8, 1.0], "attenuationDistance": 0.1}
+        }},
+        {"name": "thin", "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.5}}},
+        {"name": "volume only", "extensions": {"KHR_materials_volume": {"thicknessFactor": 1.0}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load("transmission").unwrap();
+    let t = s.materials[0]
+        .transmission
+        .as_ref()
+        .expect("glass transmits");
+    assert_eq!(
+        (
+            t.factor,
+            t.thickness,
+            t.attenuation_color,
+            t.attenuation_distance
+        ),
+        (0.9, 0.25, [0.5, 0.8, 1.0], Some(0.1))
+    );
+    let thin = s.materials[1]
+        .transmission
+        .as_ref()
+        .expect("thin transmits");
+    assert_eq!(
+        (thin.factor, thin.thickness, thin.attenuation_distance),
+        (1.0, 0.0, None)
+    );
+    assert!(s.materials[2].transmission.is_none());
+    let w: Vec<&str> = s.warnings.iter().map(|w| w.0.as_str()).collect();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'thin'") && w.contains("clamped")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'volume only'") && w.contains("without")),
+        "{w:?}"
+    );
+    assert!(!w.iter().any(|w| w.contains("ignores")), "{w:?}");
+    // The glass draw lets light through: it casts no shadow.
+    assert!(!s.draws[0].cast_shadows);
+
+    let mut bad = Doc::new();
+    bad.quad(true, false);
+    bad.json["materials"] = json!([{"name": "fog", "extensions": {
+        "KHR_materials_transmission": {"transmissionFactor": 1.0},
+        "KHR_materials_volume": {"attenuationDistance": 0.0}
+    }}]);
+    bad.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let msg = error_text(bad.load("transmission-bad"));
+    assert!(
+        msg.contains("'fog'") && msg.contains("attenuationDistance") && msg.contains("positive"),
+        "{msg}"
+    );
+}

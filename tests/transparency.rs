@@ -290,3 +290,140 @@ fn a_scene_without_blend_plans_and_compiles_no_transparent_pass() {
     let names: Vec<_> = plan.passes.iter().map(|p| p.name()).collect();
     assert_eq!(names, ["gbuffer", "lighting", "transparent", "tonemap"]);
 }
+
+fn transmissive(base: [f32; 3], thickness: f32, attenuation: Option<([f32; 3], f32)>) -> Material {
+    Material {
+        base_color: [base[0], base[1], base[2], 1.0],
+        metallic: 0.0,
+        roughness: 0.3,
+        transmission: Some(scene::Transmission {
+            factor: 1.0,
+            texture: None,
+            thickness,
+            thickness_texture: None,
+            attenuation_color: attenuation.map_or([1.0; 3], |a| a.0),
+            attenuation_distance: attenuation.map(|a| a.1),
+        }),
+        ..Default::default()
+    }
+}
+
+/// KHR_materials_transmission and _volume end to end: a transmissive square in front of a large
+/// opaque one. Everything the front square shows except the transmitted backdrop is the same
+/// whatever colour the back square has, so changing that colour changes the front pixel by
+/// exactly weight × the change of the backdrop: the measured weight must be proportional to the
+/// base colour (the tint), and a volume's must be the thin wall's times the twin's Beer–Lambert
+/// attenuation over the thickness (`weft::reference::shading::volume_attenuation`).
+#[test]
+fn transmission_shows_the_backdrop_tinted_and_attenuated_as_the_twin_says() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let backs = [[0.2f32, 0.5, 0.8], [0.9, 0.3, 0.1]];
+    let back = |c: [f32; 3]| Material {
+        base_color: [c[0], c[1], c[2], 1.0],
+        metallic: 0.0,
+        roughness: 0.8,
+        ..Default::default()
+    };
+    // The weight of the backdrop in the front square's centre pixel, per channel.
+    let mut weight = |front: Option<Material>| -> [f32; 3] {
+        let px: Vec<[f32; 3]> = backs
+            .iter()
+            .map(|&c| {
+                let mut meshes = vec![square("back", -1.0, 4.0, 0, 1.0)];
+                let mut mats = vec![back(c)];
+                if let Some(f) = &front {
+                    meshes.push(square("front", 0.0, 0.6, 1, 1.0));
+                    mats.push(f.clone());
+                }
+                let frame = renderer
+                    .render(&scene_of(meshes, mats), &options(None))
+                    .expect("render");
+                if front.is_some() {
+                    assert!(
+                        frame.plan.runs(Pass::Transparent) && frame.plan.transmission_draws == 1
+                    );
+                    assert!(frame
+                        .stats
+                        .pipelines
+                        .iter()
+                        .any(|p| p.starts_with("forward[") && p.contains("20=1")));
+                }
+                pixel(&frame, 32, 24)
+            })
+            .collect();
+        [0, 1, 2].map(|k| px[0][k] - px[1][k])
+    };
+    let behind = weight(None);
+    let ratio = |front: Material, w: &mut dyn FnMut(Option<Material>) -> [f32; 3]| {
+        let d = w(Some(front));
+        [0, 1, 2].map(|k| d[k] / behind[k])
+    };
+    let (b1, b2) = ([0.8f32, 0.6, 0.3], [0.3f32, 0.7, 0.9]);
+    let w1 = ratio(transmissive(b1, 0.0, None), &mut weight);
+    let w2 = ratio(transmissive(b2, 0.0, None), &mut weight);
+    // A thin wall shows the backdrop tinted by its base colour times what the specular
+    // reflection leaves (1 − F0·A − B: the same for both, the same roughness and angle).
+    let leaves: Vec<f32> = (0..3).map(|k| w1[k] / b1[k]).collect();
+    for k in 0..3 {
+        assert!(
+            leaves[k] > 0.8 && leaves[k] < 1.0,
+            "channel {k}: the thin wall passes {} of its tint (weights {w1:?})",
+            leaves[k]
+        );
+        // Half-float backdrop and HDR target: 0.1 % each; 1 % bound.
+        assert!(
+            (w2[k] / b2[k] - leaves[k]).abs() < 0.01 * leaves[k],
+            "channel {k}: tint {b2:?} passes {w2:?}, tint {b1:?} passes {w1:?}"
+        );
+    }
+    // A volume 0.3 thick with attenuation colour c at distance 0.2: c^(0.3/0.2) more.
+    let (c, distance, thickness) = ([0.5f32, 0.8, 1.0], 0.2f32, 0.3f32);
+    let wv = ratio(
+        transmissive(b1, thickness, Some((c, distance))),
+        &mut weight,
+    );
+    let att = weft::reference::shading::volume_attenuation(thickness, c, distance);
+    println!(
+        "thin wall {w1:?} (tint {b1:?}), {w2:?} (tint {b2:?}); volume {wv:?}, attenuation {att:?}"
+    );
+    for k in 0..3 {
+        let want = w1[k] * att[k];
+        assert!(
+            (wv[k] - want).abs() < 0.01 * w1[k],
+            "channel {k}: the volume passes {}, the thin wall {} × attenuation {} = {want}",
+            wv[k],
+            w1[k],
+            att[k]
+        );
+    }
+}
+
+#[test]
+fn a_transmissive_surface_with_transmission_zero_is_lit_as_the_same_surface_opaque() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let studio = Arc::new(Environment::studio());
+    for env in [None, Some(&studio)] {
+        let opaque = Material {
+            base_color: [0.7, 0.3, 0.2, 1.0],
+            metallic: 0.0,
+            roughness: 0.6,
+            ..Default::default()
+        };
+        let mut none = transmissive([0.7, 0.3, 0.2], 0.0, None);
+        none.roughness = 0.6;
+        none.transmission.as_mut().unwrap().factor = 0.0;
+        let render = |m: Material, r: &mut Renderer| {
+            r.render(
+                &scene_of(vec![square("square", 0.0, 1.0, 0, 1.0)], vec![m]),
+                &options(env),
+            )
+            .expect("render")
+        };
+        let a = render(opaque, &mut renderer);
+        let b = render(none, &mut renderer);
+        assert!(b.plan.runs(Pass::Transparent) && b.plan.transmission_draws == 1);
+        // As for BLEND at alpha 1: the G-buffer's 8-bit base colour, 2 % bound.
+        let d = max_relative_difference(&a.hdr, &b.hdr);
+        assert!(d < 0.02, "transmission 0 differs from opaque by {d}");
+    }
+}

@@ -31,10 +31,12 @@ struct GltfSurface {
     float sheen_roughness;
     vec3 t;                // KHR_materials_anisotropy: the direction (unit, in the tangent plane)
     float anisotropy;      // and its strength (0: isotropic GGX)
+    float transmission;    // KHR_materials_transmission: the part of the diffuse lobe that is
+                           // transmitted instead (0: opaque)
 };
 
 GltfSurface gltf_surface(vec3 base, float metallic, float roughness) {
-    return GltfSurface(base, metallic, roughness, 1.0, vec3(0.04), vec3(0.0), 0.0, vec3(1.0, 0.0, 0.0), 0.0);
+    return GltfSurface(base, metallic, roughness, 1.0, vec3(0.04), vec3(0.0), 0.0, vec3(1.0, 0.0, 0.0), 0.0, 0.0);
 }
 
 // The Charlie sheen distribution (Estevez & Kulla 2017; KHR_materials_sheen), alpha = r².
@@ -130,7 +132,7 @@ vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e, float es
     }
     float w = pow(1.0 - v_h, 5.0);
     vec3 fr = s.f0 + (1.0 - s.f0) * w;
-    vec3 dielectric = (1.0 - s.specular * max3(fr)) * s.base / PI
+    vec3 dielectric = (1.0 - s.specular * max3(fr)) * (1.0 - s.transmission) * s.base / PI
         + s.specular * fr * dv * ggx_energy_compensation(s.f0, ess);
     vec3 metal = (s.base + (1.0 - s.base) * w) * dv * ggx_energy_compensation(s.base, ess);
     vec3 f = mix(dielectric, metal, s.metallic) * n_l;
@@ -141,6 +143,37 @@ vec3 gltf_brdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec2 sheen_e, float es
         f = f * scale + s.sheen * sheen_brdf_cos(n_l, n_v, n_h, s.sheen_roughness);
     }
     return f;
+}
+
+// ---- KHR_materials_transmission and KHR_materials_volume (the Khronos sample viewer's model:
+// the lit opaque image behind, the "backdrop", seen along the refracted view ray) ----
+
+// Where the view ray (v: towards the eye, unit), refracted into the surface (n: unit, facing v)
+// with index of refraction ior, leaves a volume `thickness` thick: p + thickness · the refracted
+// direction (a straight path of the thickness, not a traced one); p itself for a thin wall
+// (thickness 0). A grazing ray that cannot refract (never entering a denser medium) goes straight.
+vec3 transmission_exit(vec3 p, vec3 n, vec3 v, float thickness, float ior) {
+    vec3 r = refract(-v, n, 1.0 / max(ior, 1.0));
+    r = dot(r, r) > 0.0 ? normalize(r) : -v;
+    return p + r * thickness;
+}
+
+// The backdrop's mip level (its level 0 `width` texels wide) for a lobe of roughness r refracted
+// through ior: log2(width) · r · clamp(2·ior − 2, 0, 1) (no blur at ior 1, full at 1.5).
+float transmission_lod(float roughness, float ior, float width) {
+    return log2(max(width, 1.0)) * roughness * clamp(2.0 * ior - 2.0, 0.0, 1.0);
+}
+
+// KHR_materials_volume's Beer–Lambert attenuation over a path of length d: the attenuation colour
+// to the power d / attenuation distance (distance 0 here: infinite, no attenuation).
+vec3 volume_attenuation(float d, vec3 color, float distance) {
+    return distance > 0.0 ? pow(max(color, vec3(0.0)), vec3(max(d, 0.0) / distance)) : vec3(1.0);
+}
+
+// The transmitted light's weight: what the dielectric's specular reflection (its split-sum albedo
+// F0·A + B, weighted by KHR_materials_specular's weight) leaves, tinted by the base colour.
+vec3 transmission_weight(vec3 f0, float specular, vec3 base, vec2 ab) {
+    return max(1.0 - specular * (f0 * ab.x + ab.y), vec3(0.0)) * base;
 }
 
 // The core glTF metallic-roughness BRDF (no extensions, single scattering: what the DFG table

@@ -5,7 +5,13 @@
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
-// IBL_SAMPLES and UNLIT.
+// IBL_SAMPLES, UNLIT and TRANSMISSION, and defines `transmitted_light` (forward.frag: from the
+// backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
+
+// The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
+// with normal n towards v: transmission = (factor, thickness, attenuation distance, ior),
+// attenuation: the attenuation colour. Defined by the including shader.
+vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec3 attenuation);
 
 #include "lights.glsl"
 
@@ -266,7 +272,8 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
     vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
     vec3 prefiltered = textureLod(env_specular, d, lookup_roughness * frame.env_params.y).rgb * frame.env_params.x;
     vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
-    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric));
+    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric))
+                 * (1.0 - s.transmission);
     // fis: an anisotropic lobe is sampled (the bent normal above stays approx's).
     vec3 specular = IBL == 2u && s.anisotropy > 0.0 ? aniso_env_specular(n, v, s, ess)
                                                     : prefiltered * spec_albedo;
@@ -369,8 +376,10 @@ vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
 // emissive_ao and specular; may be any value, the caller keeps NaN and Inf out of the image.
+// transmission, attenuation: surface.glsl's GSurface fields (0 and 1 from the G-buffer, which
+// holds no transmissive surface).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
-                   vec4 emissive_ao, vec4 specular) {
+                   vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -448,7 +457,8 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         vec3 ta = oct_decode(fr.zw);
         ta -= n * dot(n, ta);
         ta = dot(ta, ta) > 1e-12 ? normalize(ta) : any_tangent(n);
-        GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z);
+        GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z,
+                                    TRANSMISSION != 0u ? transmission.x : 0.0);
         bool has_sheen = max3(s.sheen) > 0.0;
         float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;
         float ess = ggx_albedo(dot(n, v), roughness);
@@ -456,7 +466,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             radiance += pbr_env(n, v, s, ao, e_v);
         } else {
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
-            radiance += ambient * base * (1.0 - metallic) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+            radiance += ambient * base * (1.0 - metallic) * (1.0 - s.transmission) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
         }
         uvec2 list = tile_list();
     for (uint j = 0u; j < list.y; ++j) {
@@ -472,6 +482,10 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
                 continue;
             }
             radiance += e * c * shadow_factor(lights[i], p, n, receives);
+        }
+        if (TRANSMISSION != 0u && s.transmission > 0.0) {
+            // The dielectric's transmitted part replaces that much of its diffuse lobe (above).
+            radiance += (1.0 - metallic) * s.transmission * transmitted_light(p, n, v, s, transmission, attenuation.rgb);
         }
     }
     return radiance;

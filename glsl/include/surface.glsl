@@ -21,6 +21,9 @@ layout(set = 1, binding = 7) uniform sampler2D sheen_roughness_tex;
 layout(set = 1, binding = 8) uniform sampler2D specular_tex;
 layout(set = 1, binding = 9) uniform sampler2D specular_color_tex;
 layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;
+// KHR_materials_transmission's texture (R) and KHR_materials_volume's thickness texture (G).
+layout(set = 1, binding = 11) uniform sampler2D transmission_tex;
+layout(set = 1, binding = 12) uniform sampler2D thickness_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -51,6 +54,12 @@ struct GSurface {
     vec4 emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
     vec4 specular;  // RGBA16F: the dielectric's F0 (rgb), specular weight
     float alpha;
+    // Not in the G-buffer (transmissive surfaces are drawn by the transparent pass only):
+    // KHR_materials_transmission and _volume: the transmission (factor × texture), the thickness
+    // (world units: × texture × the draw's mean scale), the attenuation distance (0: infinite), the
+    // index of refraction; and the attenuation colour (rgb).
+    vec4 transmission;
+    vec4 attenuation;
 };
 // Non-fabric materials reuse two fabric channels: fabric holds the sheen colour (rgb) and
 // roughness (a), surface.z the anisotropy strength (and frame.zw its direction).
@@ -247,5 +256,14 @@ GSurface material_surface() {    GSurface s;
     float ao = clamp(1.0 + m.metallic_roughness.w * (sample_slot(occlusion_tex, m, SLOT_OCCLUSION).r - 1.0), 0.0, 1.0);
     s.emissive = vec4(max(emissive, vec3(0.0)), ao);
     s.alpha = base.a;
+    s.transmission = vec4(0.0);
+    s.attenuation = vec4(1.0, 1.0, 1.0, 0.0);
+    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_TRANSMISSION) != 0u) {
+        float amount = m.alpha.y * sample_slot(transmission_tex, m, SLOT_TRANSMISSION).r;
+        float scale = (length(draw.world[0].xyz) + length(draw.world[1].xyz) + length(draw.world[2].xyz)) / 3.0;
+        float thickness = m.alpha.z * sample_slot(thickness_tex, m, SLOT_THICKNESS).g * scale;
+        s.transmission = vec4(clamp(amount, 0.0, 1.0), max(thickness, 0.0), m.alpha.w, m.volume.a);
+        s.attenuation = vec4(m.volume.rgb, 0.0);
+    }
     return s;
 }

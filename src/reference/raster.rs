@@ -490,6 +490,9 @@ impl Raster {
                     .map_or(0.0, |s| s.roughness.clamp(0.0, 1.0)),
                 t: dir.to_array(),
                 anisotropy,
+                // The CPU reference has no backdrop: transmissive materials are not among the
+                // scenes it renders (their transmission is the forward pass's, tests/transparency.rs).
+                transmission: 0.0,
             });
         }
         if let Some((params, gpu)) = &dm.fabric {

@@ -133,6 +133,9 @@ pub struct GltfSurface {
     /// The anisotropy direction (unit, in the tangent plane) and strength (0: isotropic).
     pub t: Vec3,
     pub anisotropy: f32,
+    /// KHR_materials_transmission: the part of the dielectric's diffuse lobe transmitted instead
+    /// (0: opaque).
+    pub transmission: f32,
 }
 
 impl GltfSurface {
@@ -148,8 +151,45 @@ impl GltfSurface {
             sheen_roughness: 0.0,
             t: [1.0, 0.0, 0.0],
             anisotropy: 0.0,
+            transmission: 0.0,
         }
     }
+}
+
+/// `transmission_exit` of pbr.glsl: where the view ray `v` refracted into the surface `n` with
+/// index of refraction `ior` leaves a volume `thickness` thick (GLSL's `refract` with
+/// eta = 1/ior; straight on where it cannot refract).
+pub fn transmission_exit(p: Vec3, n: Vec3, v: Vec3, thickness: f32, ior: f32) -> Vec3 {
+    let eta = 1.0 / ior.max(1.0);
+    let i = scale(v, -1.0);
+    let ni = dot(n, i);
+    let k = 1.0 - eta * eta * (1.0 - ni * ni);
+    let r = if k < 0.0 {
+        [0.0; 3]
+    } else {
+        sub(scale(i, eta), scale(n, eta * ni + k.sqrt()))
+    };
+    let r = if dot(r, r) > 0.0 { normalize(r) } else { i };
+    add(p, scale(r, thickness))
+}
+
+/// `transmission_lod` of pbr.glsl: the backdrop's mip level for roughness r through ior.
+pub fn transmission_lod(roughness: f32, ior: f32, width: f32) -> f32 {
+    width.max(1.0).log2() * roughness * (2.0 * ior - 2.0).clamp(0.0, 1.0)
+}
+
+/// `volume_attenuation` of pbr.glsl: Beer–Lambert over d (distance 0: infinite).
+pub fn volume_attenuation(d: f32, color: Vec3, distance: f32) -> Vec3 {
+    if distance > 0.0 {
+        color.map(|c| c.max(0.0).powf(d.max(0.0) / distance))
+    } else {
+        [1.0; 3]
+    }
+}
+
+/// `transmission_weight` of pbr.glsl: (1 − specular·(F0·A + B)) · base, clamped at 0.
+pub fn transmission_weight(f0: Vec3, specular: f32, base: Vec3, ab: [f32; 2]) -> Vec3 {
+    [0, 1, 2].map(|k| (1.0 - specular * (f0[k] * ab[0] + ab[1])).max(0.0) * base[k])
 }
 
 /// `charlie_d` of pbr.glsl.
@@ -266,7 +306,10 @@ pub fn gltf_brdf_cos(
     let w = (1.0 - v_h).powf(5.0);
     let fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
     let dielectric = add(
-        scale(s.base, (1.0 - s.specular * max3(fr)) / PI),
+        scale(
+            s.base,
+            (1.0 - s.specular * max3(fr)) * (1.0 - s.transmission) / PI,
+        ),
         mul(
             scale(fr, s.specular * dv),
             ggx_energy_compensation(s.f0, ess),

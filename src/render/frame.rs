@@ -11,7 +11,7 @@ use std::time::Instant;
 use glam::Mat4;
 
 use crate::fabric::{weave_level0_size, weave_level_size, weave_mip_count, FabricParams};
-use crate::scene::{ColorSpace, Scene, Texture};
+use crate::scene::{ColorSpace, Scene, Texture, TextureSlot};
 use crate::vk::{
     shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd,
     ComputeDesc, Context, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags,
@@ -92,6 +92,9 @@ pub(crate) struct Targets {
     pub(crate) depth: Image,
     pub(crate) hdr: Image,
     pub(crate) ldr: Image,
+    /// The lit opaque image with box-filtered mips, for transmissive surfaces (made by the first
+    /// frame that has one).
+    pub(crate) backdrop: Option<Image>,
 }
 
 impl Targets {
@@ -115,6 +118,7 @@ impl Targets {
             )?,
             hdr: t("hdr", HDR_FORMAT, color | read)?,
             ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
+            backdrop: None,
         })
     }
 
@@ -210,7 +214,8 @@ pub(crate) struct DrawRange {
     pub(crate) receive_shadows: bool,
     /// The material is alphaMode MASK (the shadow pass casts it with its cut-out pipeline).
     pub(crate) alpha_mask: bool,
-    /// The material is alphaMode BLEND: drawn by the transparent pass, not into the G-buffer.
+    /// The material is alphaMode BLEND or transmissive (KHR_materials_transmission): drawn by the
+    /// transparent pass, not into the G-buffer.
     pub(crate) blend: bool,
     /// The centre of the mesh's bounds (object space): the transparent pass sorts by it.
     pub(crate) centre: glam::Vec3,
@@ -245,9 +250,9 @@ pub struct GpuScene {
     pub(crate) material_count: u32,
     /// Per material: base colour, metallic-roughness, normal, emissive and occlusion textures
     /// (indices into `textures`, None = a default).
-    pub(crate) material_textures: Vec<[Option<usize>; 10]>,
+    pub(crate) material_textures: Vec<[Option<usize>; TextureSlot::COUNT]>,
     /// Per material and slot: the index into `samplers` of the slot's glTF sampler.
-    pub(crate) material_samplers: Vec<[usize; 10]>,
+    pub(crate) material_samplers: Vec<[usize; TextureSlot::COUNT]>,
     /// The distinct samplers the materials' texture slots use (wrap modes and filters).
     pub(crate) samplers: Vec<Sampler>,
     /// Per material: alphaMode MASK.
@@ -263,6 +268,7 @@ pub struct Renderer {
     pub(crate) ctx: Context,
     frame_layout: SetLayout,
     material_layout: SetLayout,
+    forward_material_layout: SetLayout,
     lighting_layout: SetLayout,
     tonemap_layout: SetLayout,
     weave_layout: SetLayout,
@@ -362,8 +368,15 @@ impl Renderer {
                 stages: Stages::VERTEX,
             },
         ])?;
+        // A material's textures (set 1): its slots in gbuffer.frag's bindings 0-10 (the weave
+        // texture at 4); forward.frag adds transmission's and thickness's at 11 and 12.
         let material_layout = ctx.create_set_layout(
-            &(0..11)
+            &(0..TextureSlot::COUNT as u32 - 1)
+                .map(|b| sampled(b, Stages::FRAGMENT))
+                .collect::<Vec<_>>(),
+        )?;
+        let forward_material_layout = ctx.create_set_layout(
+            &(0..TextureSlot::COUNT as u32 + 1)
                 .map(|b| sampled(b, Stages::FRAGMENT))
                 .collect::<Vec<_>>(),
         )?;
@@ -425,6 +438,7 @@ impl Renderer {
             sampled(13, Stages::FRAGMENT),
             sampled(14, Stages::FRAGMENT),
             sampled(15, Stages::FRAGMENT),
+            sampled(16, Stages::FRAGMENT),
         ])?;
         let shadow_mask_layout = ctx.create_set_layout(&[
             Binding {
@@ -554,6 +568,7 @@ impl Renderer {
             ctx,
             frame_layout,
             material_layout,
+            forward_material_layout,
             lighting_layout,
             tonemap_layout,
             weave_layout,
@@ -728,6 +743,7 @@ impl Renderer {
                     .filter(|(id, _)| ![0, 3, 4].contains(id))
                     .map(|&(id, value)| (id + 10, value)),
             );
+            key.push((20, (plan.transmission_draws > 0) as u32));
             key
         });
         let need_forward = forward_key
@@ -811,7 +827,7 @@ impl Renderer {
                 vertex_layout: Some(gbuffer_vertex_layout()),
                 color_formats: &[HDR_FORMAT],
                 depth_format: Some(DEPTH_FORMAT),
-                set_layouts: &[&self.forward_layout, &self.material_layout],
+                set_layouts: &[&self.forward_layout, &self.forward_material_layout],
                 push_constant_size: std::mem::size_of::<DrawPush>() as u32,
                 push_stages: Stages::GRAPHICS,
                 constants: key,
@@ -921,7 +937,10 @@ impl Renderer {
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.alpha_cutoff.is_some() || m.blend),
-                blend: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
+                blend: scene
+                    .materials
+                    .get(mesh.material)
+                    .is_some_and(|m| m.blend || m.transmission.is_some()),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
                 ),
@@ -1117,6 +1136,22 @@ impl Renderer {
             )?;
             self.targets = Some(Targets::new(&self.ctx, width, height)?);
         }
+        if plan.transmission_draws > 0 {
+            let targets = self.targets.as_mut().expect("made above");
+            if targets.backdrop.is_none() {
+                targets.backdrop = Some(
+                    self.ctx.create_image(
+                        &ImageDesc::new_2d("backdrop", HDR_FORMAT, width, height)
+                            .full_mips()
+                            .usage(
+                                ImageUsageFlags::SAMPLED
+                                    | ImageUsageFlags::TRANSFER_DST
+                                    | ImageUsageFlags::TRANSFER_SRC,
+                            ),
+                    )?,
+                );
+            }
+        }
         let camera = match &options.camera_override {
             Some(c) => c.clone(),
             // An automatic framing fills this image's aspect ratio.
@@ -1240,7 +1275,7 @@ impl Renderer {
         let targets = self.targets.as_ref().expect("created above");
         let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
         let lighting_pipeline = &self.lighting_variants[&lighting_key];
-        let pool = ctx.create_descriptor_pool(6 + 2 * gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(6 + 3 * gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
         let (env_radiance, env_specular) = match env_index {
             Some(i) => (&self.env_cache[i].radiance, &self.env_cache[i].specular),
@@ -1288,51 +1323,68 @@ impl Renderer {
             Ok(())
         }
 
-        // Each material's textures (set 1 of the G-buffer and transparent passes).
-        let material_sets = (0..gpu.material_count as usize)
-            .map(|m| {
-                let tex = gpu.material_textures.get(m).copied().unwrap_or([None; 10]);
-                let samplers = gpu.material_samplers.get(m).copied();
-                // A slot's own sampler where it has a texture; the default
-                // (trilinear, repeat) for the 1x1 fallbacks.
-                let sampler = |slot: usize| -> &Sampler {
-                    match (tex[slot], samplers) {
-                        (Some(_), Some(s)) => gpu.samplers.get(s[slot]).unwrap_or(&self.linear),
-                        _ => &self.linear,
-                    }
-                };
-                let pick = |slot: usize, fallback: &'static str| -> &Image {
-                    match tex[slot].and_then(|i| gpu.textures.get(i)) {
-                        Some(t) => t,
-                        None if fallback == "normal" => &self.flat_normal,
-                        None => &self.white,
-                    }
-                };
-                let weave = match gpu.material_weave.get(m).copied().flatten() {
-                    Some(w) if options.weave_precision == super::WeavePrecision::Rgba8 => {
-                        &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
-                    }
-                    Some(w) => &gpu.weaves[w],
+        // Each material's textures: set 1 of the G-buffer pass (its slots but transmission's and
+        // thickness's, which only the transparent pass reads) and, when that pass runs, of it.
+        let material_set = |m: usize, forward: bool| {
+            let tex = gpu
+                .material_textures
+                .get(m)
+                .copied()
+                .unwrap_or([None; TextureSlot::COUNT]);
+            let samplers = gpu.material_samplers.get(m).copied();
+            // A slot's own sampler where it has a texture; the default
+            // (trilinear, repeat) for the 1x1 fallbacks.
+            let sampler = |slot: usize| -> &Sampler {
+                match (tex[slot], samplers) {
+                    (Some(_), Some(s)) => gpu.samplers.get(s[slot]).unwrap_or(&self.linear),
+                    _ => &self.linear,
+                }
+            };
+            let pick = |slot: usize, fallback: &'static str| -> &Image {
+                match tex[slot].and_then(|i| gpu.textures.get(i)) {
+                    Some(t) => t,
+                    None if fallback == "normal" => &self.flat_normal,
                     None => &self.white,
-                };
-                pool.set(
-                    &self.material_layout,
-                    &[
-                        (0, Resource::Sampled(pick(0, "white"), sampler(0))),
-                        (1, Resource::Sampled(pick(1, "white"), sampler(1))),
-                        (2, Resource::Sampled(pick(2, "normal"), sampler(2))),
-                        (3, Resource::Sampled(pick(3, "white"), sampler(3))),
-                        (4, Resource::Sampled(weave, &self.linear)),
-                        (5, Resource::Sampled(pick(4, "white"), sampler(4))),
-                        (6, Resource::Sampled(pick(5, "white"), sampler(5))),
-                        (7, Resource::Sampled(pick(6, "white"), sampler(6))),
-                        (8, Resource::Sampled(pick(7, "white"), sampler(7))),
-                        (9, Resource::Sampled(pick(8, "white"), sampler(8))),
-                        (10, Resource::Sampled(pick(9, "white"), sampler(9))),
-                    ],
-                )
-            })
+                }
+            };
+            let weave = match gpu.material_weave.get(m).copied().flatten() {
+                Some(w) if options.weave_precision == super::WeavePrecision::Rgba8 => {
+                    &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
+                }
+                Some(w) => &gpu.weaves[w],
+                None => &self.white,
+            };
+            let mut bindings = vec![
+                (0, Resource::Sampled(pick(0, "white"), sampler(0))),
+                (1, Resource::Sampled(pick(1, "white"), sampler(1))),
+                (2, Resource::Sampled(pick(2, "normal"), sampler(2))),
+                (3, Resource::Sampled(pick(3, "white"), sampler(3))),
+                (4, Resource::Sampled(weave, &self.linear)),
+                (5, Resource::Sampled(pick(4, "white"), sampler(4))),
+                (6, Resource::Sampled(pick(5, "white"), sampler(5))),
+                (7, Resource::Sampled(pick(6, "white"), sampler(6))),
+                (8, Resource::Sampled(pick(7, "white"), sampler(7))),
+                (9, Resource::Sampled(pick(8, "white"), sampler(8))),
+                (10, Resource::Sampled(pick(9, "white"), sampler(9))),
+            ];
+            if forward {
+                bindings.push((11, Resource::Sampled(pick(10, "white"), sampler(10))));
+                bindings.push((12, Resource::Sampled(pick(11, "white"), sampler(11))));
+                pool.set(&self.forward_material_layout, &bindings)
+            } else {
+                pool.set(&self.material_layout, &bindings)
+            }
+        };
+        let material_sets = (0..gpu.material_count as usize)
+            .map(|m| material_set(m, false))
             .collect::<crate::Result<Vec<_>>>()?;
+        let forward_material_sets = if plan.runs(Pass::Transparent) {
+            (0..gpu.material_count as usize)
+                .map(|m| material_set(m, true))
+                .collect::<crate::Result<Vec<_>>>()?
+        } else {
+            Vec::new()
+        };
 
         for pass in &plan.passes {
             match pass {
@@ -1475,6 +1527,10 @@ impl Renderer {
                         .as_ref()
                         .expect("prepare makes the forward pipeline when the plan has the pass");
                     let pipeline = &self.forward_variants[key];
+                    let backdrop = targets
+                        .backdrop
+                        .as_ref()
+                        .filter(|_| plan.transmission_draws > 0);
                     let frame_set = pool.set(
                         &self.forward_layout,
                         &[
@@ -1489,6 +1545,10 @@ impl Renderer {
                             (13, Resource::Sampled(env_radiance, &self.env.sampler)),
                             (14, Resource::Sampled(env_specular, &self.env.sampler)),
                             (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
+                            match backdrop {
+                                Some(b) => (16, Resource::Sampled(b, &self.env.sampler)),
+                                None => (16, Resource::Sampled(&self.white, &self.linear)),
+                            },
                         ],
                     )?;
                     let order = passes::transparent::back_to_front(gpu, camera.view);
@@ -1503,8 +1563,9 @@ impl Renderer {
                                 pipeline,
                                 gpu,
                                 frame_set,
-                                &material_sets,
+                                &forward_material_sets,
                                 targets,
+                                backdrop,
                                 &order,
                             )
                         },
@@ -1911,7 +1972,7 @@ mod tests {
 fn texture_samplers(
     ctx: &Context,
     scene: &Scene,
-) -> crate::Result<(Vec<[usize; 10]>, Vec<Sampler>)> {
+) -> crate::Result<(Vec<[usize; TextureSlot::COUNT]>, Vec<Sampler>)> {
     use crate::scene::{MipFilter, TexelFilter, Wrap};
     use crate::vk::{Address, TextureSamplerDesc};
     let address = |w: Wrap| match w {
@@ -1923,7 +1984,7 @@ fn texture_samplers(
     let mut samplers = Vec::new();
     let mut per_material = Vec::with_capacity(scene.materials.len());
     for m in &scene.materials {
-        let mut slots = [0usize; 10];
+        let mut slots = [0usize; TextureSlot::COUNT];
         let textures = m.textures();
         for (slot, s) in m.samplers.iter().enumerate().take(10) {
             if textures[slot].is_none() {

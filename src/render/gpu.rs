@@ -190,10 +190,14 @@ pub struct GpuMaterial {
     pub extra: [f32; 4],
     /// Per texture slot: the two rows of its affine UV map, row 0's w the UV set.
     pub uv: [[f32; 4]; 2 * TextureSlot::COUNT],
-    /// x: the alphaCutoff of a MASK material (flag [`MATERIAL_MASK`]); y, z, w unused.
+    /// x: the alphaCutoff of a MASK material (flag [`MATERIAL_MASK`]); KHR_materials_transmission
+    /// and _volume: y the transmission factor, z the thickness factor (object space), w the
+    /// attenuation distance (0: infinite).
     pub alpha: [f32; 4],
+    /// KHR_materials_volume's attenuation colour (rgb, linear), a: the index of refraction.
+    pub volume: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 112 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 128 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
@@ -202,6 +206,10 @@ const MATERIAL_ANISOTROPY_TEXTURE: u32 = 2;
 pub const MATERIAL_UNLIT: u32 = 4;
 /// alphaMode MASK: `alpha[0]` is the cutoff.
 pub const MATERIAL_MASK: u32 = 8;
+/// alphaMode BLEND: forward.frag writes the base colour's alpha (else 1).
+pub const MATERIAL_BLEND: u32 = 16;
+/// KHR_materials_transmission: drawn by the transparent pass, which has the backdrop.
+pub const MATERIAL_TRANSMISSION: u32 = 32;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -261,6 +269,12 @@ impl GpuMaterial {
                         MATERIAL_MASK
                     } else {
                         0
+                    }
+                    | if m.blend { MATERIAL_BLEND } else { 0 }
+                    | if m.transmission.is_some() {
+                        MATERIAL_TRANSMISSION
+                    } else {
+                        0
                     };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
@@ -275,10 +289,20 @@ impl GpuMaterial {
             alpha: [
                 m.alpha_cutoff
                     .unwrap_or(if m.blend { BLEND_SHADOW_CUTOFF } else { 0.0 }),
-                0.0,
-                0.0,
-                0.0,
+                m.transmission.as_ref().map_or(0.0, |t| t.factor),
+                m.transmission.as_ref().map_or(0.0, |t| t.thickness),
+                m.transmission
+                    .as_ref()
+                    .and_then(|t| t.attenuation_distance)
+                    .unwrap_or(0.0),
             ],
+            volume: {
+                let c = m
+                    .transmission
+                    .as_ref()
+                    .map_or([1.0; 3], |t| t.attenuation_color);
+                [c[0], c[1], c[2], m.specular.ior]
+            },
         }
     }
 }

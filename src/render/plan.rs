@@ -144,6 +144,9 @@ pub struct Plan {
     /// alphaMode BLEND: drawn draws with a BLEND material (the transparent pass runs when there
     /// is one; they are not in the G-buffer).
     pub blend_draws: usize,
+    /// KHR_materials_transmission: drawn draws with a transmissive material (the transparent pass
+    /// draws them too, and copies the lit opaque image into a mip-mapped backdrop for them).
+    pub transmission_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
     pub instanced_nodes: usize,
@@ -301,8 +304,19 @@ impl Plan {
             .filter(|d| d.cast_shadows && (is_mask(d) || is_blend(d)))
             .count();
         let blend_draws = scene.draws.iter().filter(|d| is_blend(d)).count();
+        let transmission_draws = scene
+            .draws
+            .iter()
+            .filter(|d| {
+                scene
+                    .meshes
+                    .get(d.mesh)
+                    .and_then(|m| scene.materials.get(m.material))
+                    .is_some_and(|m| m.transmission.is_some() && m.fabric.is_none())
+            })
+            .count();
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
-        if blend_draws > 0 {
+        if blend_draws + transmission_draws > 0 {
             passes.insert(2, Pass::Transparent);
         }
         if !shadows.is_empty() {
@@ -362,6 +376,7 @@ impl Plan {
             alpha_mask: mask_draws > 0 || options.force.alpha_mask,
             mask_casters,
             blend_draws,
+            transmission_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -494,6 +509,13 @@ impl fmt::Display for Plan {
                 f,
                 "blend       {} draw(s) with alphaMode BLEND: forward-lit after the lighting pass, sorted back to front by their bounds' centres",
                 self.blend_draws
+            )?;
+        }
+        if self.transmission_draws > 0 {
+            writeln!(
+                f,
+                "transmission {} draw(s) with KHR_materials_transmission: drawn by the transparent pass over a backdrop (the lit opaque image, RGBA16F {}x{} with mips)",
+                self.transmission_draws, self.width, self.height
             )?;
         }
         writeln!(

@@ -27,7 +27,7 @@ use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
     Anisotropy, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Sheen, SlotUv,
-    Specular, Texture, TextureSampler, TextureSlot, Vertex, Warning,
+    Specular, Texture, TextureSampler, TextureSlot, Transmission, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -91,6 +91,8 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::IOR,
     material_ext::ANISOTROPY,
     material_ext::VARIANTS,
+    material_ext::TRANSMISSION,
+    material_ext::VOLUME,
     FABRIC_EXTENSION,
     // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
@@ -848,6 +850,16 @@ impl<'a> Loader<'a> {
             .map(|v| material_ext::anisotropy(&mut ctx, v))
             .transpose()
             .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::TRANSMISSION;
+        let transmission_ext = ext(material_ext::TRANSMISSION)
+            .map(|v| material_ext::transmission(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::VOLUME;
+        let volume_ext = ext(material_ext::VOLUME)
+            .map(|v| material_ext::volume(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
         for w in std::mem::take(&mut ctx.warnings) {
             self.warn(w);
         }
@@ -939,6 +951,52 @@ impl<'a> Loader<'a> {
                 )?,
             }),
         };
+        // KHR_materials_volume only means something with transmission (its specification).
+        let transmission = match &transmission_ext {
+            None => {
+                if volume_ext.is_some() {
+                    self.warn(format_args!(
+                        "{who} has {} without {}; the volume is ignored (it only shapes transmitted light)",
+                        material_ext::VOLUME,
+                        material_ext::TRANSMISSION
+                    ));
+                }
+                None
+            }
+            Some(e) => {
+                let texture = ext_texture(
+                    self,
+                    &e.texture,
+                    (TextureSlot::Transmission, "transmission texture"),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?;
+                let (thickness, thickness_texture, attenuation_color, attenuation_distance) =
+                    match &volume_ext {
+                        None => (0.0, None, [1.0; 3], None),
+                        Some(v) => (
+                            v.thickness,
+                            ext_texture(
+                                self,
+                                &v.thickness_texture,
+                                (TextureSlot::Thickness, "thickness texture"),
+                                ColorSpace::Linear,
+                                &mut uv_transforms,
+                            )?,
+                            v.attenuation_color,
+                            v.attenuation_distance,
+                        ),
+                    };
+                Some(Transmission {
+                    factor: e.factor,
+                    texture,
+                    thickness,
+                    thickness_texture,
+                    attenuation_color,
+                    attenuation_distance,
+                })
+            }
+        };
 
         // TEXCOORD_0 carries one transform, baked into the vertices (so tangents and the weave
         // follow it): the first TEXCOORD_0 slot's. Every slot then gets its own map from the
@@ -981,6 +1039,16 @@ impl<'a> Loader<'a> {
             unlit = false;
         }
 
+        let transmission = match (transmission, &fabric) {
+            (Some(_), Some(_)) => {
+                self.warn(format_args!(
+                    "{who} has both {} and {FABRIC_EXTENSION}; light through the weave is not modelled yet, so the transmission is ignored on it",
+                    material_ext::TRANSMISSION
+                ));
+                None
+            }
+            (t, _) => t,
+        };
         let material = Material {
             name,
             base_color,
@@ -999,6 +1067,7 @@ impl<'a> Loader<'a> {
             sheen,
             specular,
             anisotropy,
+            transmission,
             uv: slot_uv,
             samplers,
             unlit,
@@ -2258,8 +2327,16 @@ impl<'a> Loader<'a> {
                             .collect(),
                         instance,
                     });
+                    // A transmissive surface lets the light through: it casts no shadow (a
+                    // shadow map holds opaque cover only).
+                    let transmissive = self
+                        .scene
+                        .meshes
+                        .get(id)
+                        .and_then(|m| self.scene.materials.get(m.material))
+                        .is_some_and(|m| m.transmission.as_ref().is_some_and(|t| t.factor > 0.0));
                     self.scene.draws.push(Draw {
-                        cast_shadows: flags.cast,
+                        cast_shadows: flags.cast && !transmissive,
                         receive_shadows: flags.receive,
                         ..Draw::new(id, world * instance)
                     });

@@ -13,6 +13,8 @@ pub const SPECULAR: &str = "KHR_materials_specular";
 pub const IOR: &str = "KHR_materials_ior";
 pub const ANISOTROPY: &str = "KHR_materials_anisotropy";
 pub const VARIANTS: &str = "KHR_materials_variants";
+pub const TRANSMISSION: &str = "KHR_materials_transmission";
+pub const VOLUME: &str = "KHR_materials_volume";
 
 /// A glTF textureInfo, unresolved: the texture index, its texCoord, and the raw
 /// KHR_texture_transform (parsed by the loader, like the core slots').
@@ -44,6 +46,21 @@ pub struct AnisotropyExt {
     pub strength: f32,
     pub rotation: f32,
     pub texture: Option<TexRef>,
+}
+
+#[derive(Clone, Debug)]
+pub struct TransmissionExt {
+    pub factor: f32,
+    pub texture: Option<TexRef>,
+}
+
+#[derive(Clone, Debug)]
+pub struct VolumeExt {
+    pub thickness: f32,
+    pub thickness_texture: Option<TexRef>,
+    pub attenuation_color: [f32; 3],
+    /// None: infinite (the default).
+    pub attenuation_distance: Option<f32>,
 }
 
 /// What a parser reports back: an error message (the loader prefixes the file), or warnings.
@@ -268,6 +285,47 @@ pub fn anisotropy(ctx: &mut Ctx, v: &Value) -> Result<AnisotropyExt, String> {
             "anisotropyStrength" => out.strength = ctx.number(key, v, 0.0, 1.0)?,
             "anisotropyRotation" => out.rotation = ctx.finite(key, v)?,
             "anisotropyTexture" => out.texture = Some(ctx.texture(key, v)?),
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+pub fn transmission(ctx: &mut Ctx, v: &Value) -> Result<TransmissionExt, String> {
+    let mut out = TransmissionExt {
+        factor: 0.0,
+        texture: None,
+    };
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            "transmissionFactor" => out.factor = ctx.number(key, v, 0.0, 1.0)?,
+            "transmissionTexture" => out.texture = Some(ctx.texture(key, v)?),
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+pub fn volume(ctx: &mut Ctx, v: &Value) -> Result<VolumeExt, String> {
+    let mut out = VolumeExt {
+        thickness: 0.0,
+        thickness_texture: None,
+        attenuation_color: [1.0; 3],
+        attenuation_distance: None,
+    };
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            // Object-space distances; 1e6 bounds what the shader's arithmetic needs.
+            "thicknessFactor" => out.thickness = ctx.number(key, v, 0.0, 1e6)?,
+            "thicknessTexture" => out.thickness_texture = Some(ctx.texture(key, v)?),
+            "attenuationColor" => out.attenuation_color = ctx.colour(key, v, 0.0, 1.0)?,
+            "attenuationDistance" => {
+                let d = ctx.finite(key, v)?;
+                if d <= 0.0 {
+                    return Err(ctx.err(key, format!("must be positive, got {d}")));
+                }
+                out.attenuation_distance = Some(d);
+            }
             other => ctx.unknown(other),
         }
     }

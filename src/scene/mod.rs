@@ -118,6 +118,8 @@ pub struct Material {
     pub specular: Specular,
     /// KHR_materials_anisotropy (None: isotropic).
     pub anisotropy: Option<Anisotropy>,
+    /// KHR_materials_transmission with KHR_materials_volume (None: opaque to light).
+    pub transmission: Option<Transmission>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
     /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
@@ -148,6 +150,8 @@ impl Material {
             self.specular.texture,
             self.specular.color_texture,
             self.anisotropy.as_ref().and_then(|a| a.texture),
+            self.transmission.as_ref().and_then(|t| t.texture),
+            self.transmission.as_ref().and_then(|t| t.thickness_texture),
         ]
     }
 }
@@ -257,10 +261,12 @@ pub enum TextureSlot {
     Specular = 7,
     SpecularColor = 8,
     Anisotropy = 9,
+    Transmission = 10,
+    Thickness = 11,
 }
 
 impl TextureSlot {
-    pub const COUNT: usize = 10;
+    pub const COUNT: usize = 12;
     /// The slots' names in messages, in slot order.
     pub const NAMES: [&'static str; TextureSlot::COUNT] = [
         "base colour",
@@ -273,6 +279,8 @@ impl TextureSlot {
         "specular",
         "specular colour",
         "anisotropy",
+        "transmission",
+        "thickness",
     ];
 }
 
@@ -336,6 +344,24 @@ pub struct Sheen {
     pub color_texture: Option<usize>,
     /// Linear; alpha multiplies `roughness`.
     pub roughness_texture: Option<usize>,
+}
+
+/// KHR_materials_transmission (the fraction of light the dielectric lets through, its diffuse
+/// lobe replaced by a refracted view of what is behind) and KHR_materials_volume (the thickness it
+/// is refracted through and the attenuation on the way; thickness 0: thin-walled).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transmission {
+    /// transmissionFactor, in [0, 1].
+    pub factor: f32,
+    /// Linear; red multiplies `factor`.
+    pub texture: Option<usize>,
+    /// thicknessFactor (object space; 0: thin-walled, no volume).
+    pub thickness: f32,
+    /// Linear; green multiplies `thickness`.
+    pub thickness_texture: Option<usize>,
+    /// attenuationColor (linear) and attenuationDistance (None: infinite, no attenuation).
+    pub attenuation_color: [f32; 3],
+    pub attenuation_distance: Option<f32>,
 }
 
 /// KHR_materials_specular (with KHR_materials_ior's index of refraction).
@@ -405,6 +431,7 @@ impl Default for Material {
             sheen: None,
             specular: Specular::default(),
             anisotropy: None,
+            transmission: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
             unlit: false,

@@ -80,6 +80,8 @@ pub fn gbuffer_surface(
             sheen_roughness: px(&g.fabric, 3),
             t: t.to_array(),
             anisotropy: px(&g.surface, 2),
+            // The G-buffer holds no transmissive surface.
+            transmission: 0.0,
         }
     });
     Some(weft::reference::shading::Surface {

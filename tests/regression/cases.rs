@@ -482,6 +482,15 @@ pub fn cases() -> Vec<Case> {
             ..case("khronos-alpha-blend-mode", "tests/data/khronos/AlphaBlendModeTest/glTF-Binary/AlphaBlendModeTest.glb", "five striped panels before a marble wall: Opaque solid with a black border; Blend see-through (the wall's marble shows through the stripes, its label ticked); the three cut-off panels cut at their own heights, the green arrows at the cut")
         },
         Case {
+            env: STUDIO,
+            warnings: &["KHR_xmp"],
+            ..case("khronos-transmission-test", "tests/data/khronos/TransmissionTest/glTF-Binary/TransmissionTest.glb", "twelve glass spheres in three rows before a draped checker cloth: yellow clear, green cut out in bands (MASK), red and blue striped by their transmission textures; the checker shows through them, inverted and bent by refraction in the smooth row, blurred in the rough row; the metallic row mirrors instead; no sphere casts a shadow")
+        },
+        Case {
+            env: STUDIO,
+            ..case("khronos-attenuation-test", "tests/data/khronos/AttenuationTest/glTF-Binary/AttenuationTest.glb", "a grid board with five rows of blue glass cubes growing left to right; the bigger or thicker the cube, the deeper its blue (Beer–Lambert over the thickness); the last row paler as its attenuation distance grows; the grid shows through every cube")
+        },
+        Case {
             camera: Some(1),
             env: STUDIO,
             warnings: &["has no normals"],

@@ -15,7 +15,7 @@ use glam::{Mat4, Vec3};
 
 use crate::render::frame::{GpuScene, Targets};
 use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
-use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Pipeline, Usage};
+use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Image, Pipeline, Usage};
 
 /// The indices into `scene.draws` of the blended draws, farthest first from a camera with view
 /// matrix `view` (view space looks down -Z): by the view-space depth of each draw's bounds'
@@ -60,7 +60,8 @@ pub fn bounds_centre(positions: impl Iterator<Item = [f32; 3]>) -> Vec3 {
     }
 }
 
-/// Blends the draws `order` (indices into `scene.draws`, farthest first) over the HDR target.
+/// Blends the draws `order` (indices into `scene.draws`, farthest first) over the HDR target,
+/// first copying it into `backdrop` (with mips) when transmissive draws need it.
 /// Reads: the G-buffer depth (as the depth attachment, test only), the frame set (frame,
 /// materials, fabrics, lights, vertex colours, shadows, tile light lists, environment), each
 /// draw's material set. Writes: the HDR target (left readable by fragment shaders, as the
@@ -73,8 +74,17 @@ pub fn transparent_pass<'s>(
     frame_set: DescriptorSet<'s>,
     material_sets: &[DescriptorSet<'s>],
     targets: &'s Targets,
+    backdrop: Option<&'s Image>,
     order: &[usize],
 ) {
+    if let Some(b) = backdrop {
+        // The lit opaque image, and its mips for rough transmission.
+        cmd.transition(&targets.hdr, Usage::FragmentRead, Usage::TransferSrc, None);
+        cmd.transition(b, Usage::Undefined, Usage::TransferDst, None);
+        cmd.copy_image(&targets.hdr, b);
+        cmd.generate_mips(b, Usage::FragmentRead);
+        cmd.transition(&targets.hdr, Usage::TransferSrc, Usage::FragmentRead, None);
+    }
     cmd.transition(
         &targets.hdr,
         Usage::FragmentRead,
