@@ -427,3 +427,47 @@ fn a_transmissive_surface_with_transmission_zero_is_lit_as_the_same_surface_opaq
         assert!(d < 0.02, "transmission 0 differs from opaque by {d}");
     }
 }
+
+/// The transparent pass's opaque draws (transmissive, not BLEND) write depth: the nearer of two
+/// hides the farther whatever their order, as in the G-buffer.
+#[test]
+fn transmissive_draws_hide_each_other_by_depth_in_any_order() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let colour = |c: [f32; 3], transmits: bool| {
+        let mut m = transmissive(c, 0.0, None);
+        if !transmits {
+            m.transmission = None;
+        }
+        m.transmission.iter_mut().for_each(|t| t.factor = 0.0);
+        m
+    };
+    let render = |transmits: bool, reversed: bool, r: &mut Renderer| {
+        let mut meshes = vec![
+            square("near", 0.0, 0.5, 0, 1.0),
+            square("far", -0.5, 1.0, 1, 1.0),
+        ];
+        let mut mats = vec![
+            colour([0.9, 0.1, 0.1], transmits),
+            colour([0.1, 0.9, 0.1], transmits),
+        ];
+        if reversed {
+            meshes.reverse();
+            mats.reverse();
+            for (k, m) in meshes.iter_mut().enumerate() {
+                m.material = k;
+            }
+        }
+        r.render(&scene_of(meshes, mats), &options(None))
+            .expect("render")
+    };
+    let reference = render(false, false, &mut renderer);
+    for reversed in [false, true] {
+        let f = render(true, reversed, &mut renderer);
+        assert_eq!(f.plan.forward_opaque_draws, 2);
+        let d = max_relative_difference(&reference.hdr, &f.hdr);
+        assert!(
+            d < 0.02,
+            "reversed {reversed}: differs from the G-buffer's order by {d}"
+        );
+    }
+}

@@ -215,8 +215,9 @@ pub(crate) struct DrawRange {
     /// The material is alphaMode MASK (the shadow pass casts it with its cut-out pipeline).
     pub(crate) alpha_mask: bool,
     /// The material is alphaMode BLEND or transmissive (KHR_materials_transmission): drawn by the
-    /// transparent pass, not into the G-buffer.
+    /// transparent pass, not into the G-buffer; `blended`: alphaMode BLEND (else opaque there).
     pub(crate) blend: bool,
+    pub(crate) blended: bool,
     /// The centre of the mesh's bounds (object space): the transparent pass sorts by it.
     pub(crate) centre: glam::Vec3,
     /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
@@ -279,7 +280,9 @@ pub struct Renderer {
     lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     /// The transparent pass's pipelines (gbuffer.vert + forward.frag) and their set 0 layout
     /// (gbuffer.vert's bindings, then lighting.frag's shadow and environment bindings).
-    forward_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
+    /// By key and blend mode (true: BLEND, blended without depth writes; false: transmissive
+    /// draws, opaque, writing depth).
+    forward_variants: HashMap<(Vec<(u32, u32)>, bool), Pipeline>,
     forward_layout: SetLayout,
     tonemap_pipeline: Pipeline,
     shadow_pipeline: Pipeline,
@@ -746,9 +749,24 @@ impl Renderer {
             key.push((20, (plan.transmission_draws > 0) as u32));
             key
         });
-        let need_forward = forward_key
-            .as_ref()
-            .is_some_and(|k| !self.forward_variants.contains_key(k));
+        // Two blend modes: opaque forward draws (transmissive, not BLEND) replace and write depth,
+        // so they hide each other; BLEND draws blend and only test it.
+        let forward_modes: Vec<bool> = [
+            (plan.forward_opaque_draws > 0, false),
+            (plan.blend_draws > 0, true),
+        ]
+        .into_iter()
+        .filter(|(needed, _)| *needed)
+        .map(|(_, blend)| blend)
+        .collect();
+        let need_forward: Vec<bool> = match &forward_key {
+            Some(k) => forward_modes
+                .iter()
+                .copied()
+                .filter(|&b| !self.forward_variants.contains_key(&(k.clone(), b)))
+                .collect(),
+            None => Vec::new(),
+        };
         let need_gbuffer = !self.gbuffer_variants.contains_key(&gbuffer_key);
         let need_lighting = !self.lighting_variants.contains_key(&lighting_key);
         let (env, timings) = match env {
@@ -812,11 +830,12 @@ impl Renderer {
                 blend: false,
             })
         };
-        let make_forward = || -> crate::Result<Pipeline> {
+        let make_forward = |blend: bool| -> crate::Result<Pipeline> {
             let key = forward_key.as_deref().unwrap_or_default();
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "forward[{}]",
+                    "forward[{}{}]",
+                    if blend { "blend, " } else { "opaque, " },
                     key.iter()
                         .map(|(id, v)| format!("{id}={v}"))
                         .collect::<Vec<_>>()
@@ -831,12 +850,19 @@ impl Renderer {
                 push_constant_size: std::mem::size_of::<DrawPush>() as u32,
                 push_stages: Stages::GRAPHICS,
                 constants: key,
-                blend: true,
+                blend,
             })
         };
         let (gbuffer, lighting, forward, built_env) = std::thread::scope(|scope| {
             let lighting = need_lighting.then(|| scope.spawn(make_lighting));
-            let forward = need_forward.then(|| scope.spawn(make_forward));
+            let forward = (!need_forward.is_empty()).then(|| {
+                scope.spawn(|| {
+                    need_forward
+                        .iter()
+                        .map(|&b| make_forward(b).map(|p| (b, p)))
+                        .collect::<crate::Result<Vec<_>>>()
+                })
+            });
             let gbuffer = need_gbuffer.then(make_gbuffer).transpose();
             let built_env = need_env.map(|e| self.env.build(&self.ctx, e)).transpose();
             let lighting = lighting
@@ -853,8 +879,10 @@ impl Renderer {
                 .transpose();
             (gbuffer, lighting, forward, built_env)
         });
-        if let (Some(p), Some(k)) = (forward?, &forward_key) {
-            self.forward_variants.insert(k.clone(), p);
+        if let (Some(made), Some(k)) = (forward?, &forward_key) {
+            for (blend, p) in made {
+                self.forward_variants.insert((k.clone(), blend), p);
+            }
         }
         if let Some(p) = gbuffer? {
             self.gbuffer_variants.insert(gbuffer_key.clone(), p);
@@ -941,6 +969,7 @@ impl Renderer {
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.blend || m.transmission.is_some()),
+                blended: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
                 ),
@@ -1526,7 +1555,8 @@ impl Renderer {
                     let key = forward_key
                         .as_ref()
                         .expect("prepare makes the forward pipeline when the plan has the pass");
-                    let pipeline = &self.forward_variants[key];
+                    let pipeline_opaque = self.forward_variants.get(&(key.clone(), false));
+                    let pipeline_blend = self.forward_variants.get(&(key.clone(), true));
                     let backdrop = targets
                         .backdrop
                         .as_ref()
@@ -1560,7 +1590,10 @@ impl Renderer {
                         &mut |cmd| {
                             passes::transparent::transparent_pass(
                                 cmd,
-                                pipeline,
+                                passes::transparent::Pipelines {
+                                    opaque: pipeline_opaque,
+                                    blend: pipeline_blend,
+                                },
                                 gpu,
                                 frame_set,
                                 &forward_material_sets,
@@ -1570,7 +1603,9 @@ impl Renderer {
                             )
                         },
                     )?;
-                    stats.pipelines.push(pipeline.name.clone());
+                    for p in [pipeline_opaque, pipeline_blend].into_iter().flatten() {
+                        stats.pipelines.push(p.name.clone());
+                    }
                     stats.blend_draws = order.len();
                 }
                 Pass::Tonemap => {

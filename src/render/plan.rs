@@ -147,6 +147,8 @@ pub struct Plan {
     /// KHR_materials_transmission: drawn draws with a transmissive material (the transparent pass
     /// draws them too, and copies the lit opaque image into a mip-mapped backdrop for them).
     pub transmission_draws: usize,
+    /// Draws the transparent pass draws opaque, writing depth: transmissive and not BLEND.
+    pub forward_opaque_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
     pub instanced_nodes: usize,
@@ -315,6 +317,17 @@ impl Plan {
                     .is_some_and(|m| m.transmission.is_some() && m.fabric.is_none())
             })
             .count();
+        let forward_opaque_draws = scene
+            .draws
+            .iter()
+            .filter(|d| {
+                scene
+                    .meshes
+                    .get(d.mesh)
+                    .and_then(|m| scene.materials.get(m.material))
+                    .is_some_and(|m| m.transmission.is_some() && !m.blend)
+            })
+            .count();
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
         if blend_draws + transmission_draws > 0 {
             passes.insert(2, Pass::Transparent);
@@ -377,6 +390,7 @@ impl Plan {
             mask_casters,
             blend_draws,
             transmission_draws,
+            forward_opaque_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,

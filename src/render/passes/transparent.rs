@@ -1,11 +1,13 @@
-//! The transparent pass (alphaMode BLEND): after deferred lighting, the blended draws are drawn
-//! back to front over the HDR image, depth-tested against the opaque surfaces (the G-buffer's
-//! depth) without writing depth. forward.frag computes each fragment's surface as gbuffer.frag
-//! does and lights it as lighting.frag lights a pixel (glsl/include/surface.glsl and shade.glsl),
-//! then blends it premultiplied by its base colour's alpha.
+//! The transparent pass: after deferred lighting, the draws the G-buffer cannot hold. First the
+//! transmissive ones (KHR_materials_transmission, not BLEND), which read a backdrop (the lit
+//! opaque image, copied with mips at the start of the pass) and are opaque here: nearest first,
+//! writing depth. Then the alphaMode BLEND ones, back to front, depth-tested against everything
+//! without writing depth, blended premultiplied by their base colour's alpha. forward.frag
+//! computes each fragment's surface as gbuffer.frag does and lights it as lighting.frag lights a
+//! pixel (glsl/include/surface.glsl and shade.glsl).
 //!
-//! Order: whole draws, by the distance along the view direction of their bounds' centres,
-//! farthest first; within a draw, its triangles in index order, except that a double-sided draw
+//! Order of the blended draws: whole draws, by the distance along the view direction of their
+//! bounds' centres, farthest first; within a draw, its triangles in index order, except that a double-sided draw
 //! is drawn twice, back faces first, then front faces, so a closed blended mesh shows its far
 //! side through its near side. What this gets wrong: blended draws that interpenetrate, or a
 //! large one whose centre is nearer than a small one in front of it, and the back faces of a
@@ -66,10 +68,18 @@ pub fn bounds_centre(positions: impl Iterator<Item = [f32; 3]>) -> Vec3 {
 /// materials, fabrics, lights, vertex colours, shadows, tile light lists, environment), each
 /// draw's material set. Writes: the HDR target (left readable by fragment shaders, as the
 /// lighting pass leaves it).
+/// The pass's two pipelines (forward.frag): for its opaque draws (transmissive, not BLEND:
+/// replacing, depth written) and for its BLEND draws (blended, depth only tested); each only when
+/// the scene has such draws.
+pub struct Pipelines<'s> {
+    pub opaque: Option<&'s Pipeline>,
+    pub blend: Option<&'s Pipeline>,
+}
+
 #[allow(clippy::too_many_arguments)]
 pub fn transparent_pass<'s>(
     cmd: &mut Cmd<'s>,
-    pipeline: &'s Pipeline,
+    pipelines: Pipelines<'s>,
     scene: &'s GpuScene,
     frame_set: DescriptorSet<'s>,
     material_sets: &[DescriptorSet<'s>],
@@ -107,11 +117,48 @@ pub fn transparent_pass<'s>(
             clear: None,
         }),
     );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_vertex_buffer(&scene.vertices);
-    cmd.bind_index_buffer(&scene.indices);
-    cmd.bind_sets(pipeline, 0, &[frame_set]);
-    for &i in order {
+    // The opaque ones first, nearest first (depth hides what is behind them, among themselves
+    // too), then the blended ones farthest first over everything.
+    let opaque = order.iter().rev().filter(|&&i| !scene.draws[i].blended);
+    let blended = order.iter().filter(|&&i| scene.draws[i].blended);
+    for (pipeline, draws) in [
+        (pipelines.opaque, opaque.copied().collect::<Vec<_>>()),
+        (pipelines.blend, blended.copied().collect::<Vec<_>>()),
+    ] {
+        let Some(pipeline) = pipeline.filter(|_| !draws.is_empty()) else {
+            continue;
+        };
+        cmd.bind_pipeline(pipeline);
+        cmd.bind_vertex_buffer(&scene.vertices);
+        cmd.bind_index_buffer(&scene.indices);
+        cmd.bind_sets(pipeline, 0, &[frame_set]);
+        draw_all(cmd, pipeline, scene, material_sets, &draws);
+    }
+    cmd.end_rendering();
+    cmd.transition(
+        &targets.hdr,
+        Usage::ColorAttachment,
+        Usage::FragmentRead,
+        None,
+    );
+    cmd.transition(
+        &targets.depth,
+        Usage::DepthAttachment,
+        Usage::FragmentRead,
+        None,
+    );
+}
+
+/// Records `draws` (indices into `scene.draws`) with `pipeline` bound: a double-sided draw twice,
+/// back faces first.
+fn draw_all<'s>(
+    cmd: &mut Cmd<'s>,
+    pipeline: &'s Pipeline,
+    scene: &'s GpuScene,
+    material_sets: &[DescriptorSet<'s>],
+    draws: &[usize],
+) {
+    for &i in draws {
         let draw = &scene.draws[i];
         let material = draw.material.min(scene.material_count - 1);
         cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
@@ -130,17 +177,4 @@ pub fn transparent_pass<'s>(
             cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
         }
     }
-    cmd.end_rendering();
-    cmd.transition(
-        &targets.hdr,
-        Usage::ColorAttachment,
-        Usage::FragmentRead,
-        None,
-    );
-    cmd.transition(
-        &targets.depth,
-        Usage::DepthAttachment,
-        Usage::FragmentRead,
-        None,
-    );
 }
