@@ -7,7 +7,7 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (176 bytes).
+// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (192 bytes).
 struct PbrProbeInput {
     vec4 n;              // xyz: normal (unit)
     vec4 v;              // xyz: view direction (unit)
@@ -20,15 +20,18 @@ struct PbrProbeInput {
     vec4 terms_in;       // x n·h, y n·l, z n·v (inputs of the scalar terms), w sheen roughness
     vec4 volume;         // transmission: x thickness, y ior, z attenuation distance, w backdrop width
     vec4 attenuation;    // rgb attenuation colour, w the transmission factor (GltfSurface)
+    vec4 coat;           // clearcoat: x factor, y roughness (its normal: n)
 };
 
-// Rust twin: PbrProbeOutput (64 bytes).
+// Rust twin: PbrProbeOutput (80 bytes).
 struct PbrProbeOutput {
     vec4 brdf;   // gltf_brdf_cos (rgb), 0
     vec4 terms;  // charlie_d, sheen_brdf_cos, ggx_aniso_d (t·h = b·h from n·h), sheen_lambda(n·v)
     vec4 exit_lod;     // transmission_exit(l, n, v, thickness, ior), transmission_lod(roughness, ior, width)
     vec4 transmitted;  // volume_attenuation(thickness, colour, distance) · transmission_weight(f0,
                        // specular, base, (E(n·v), E(n·l))) (rgb), 0
+    vec4 coated;       // clearcoat_brdf_cos(brdf, n, v, l, coat, coat roughness) (rgb),
+                       // clearcoat_fresnel(n·v)
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
@@ -58,6 +61,8 @@ void main() {
     float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);
     float alpha = max(p.params.x * p.params.x, 1e-3);
     outputs[id].brdf = vec4(brdf, 0.0);
+    outputs[id].coated = vec4(clearcoat_brdf_cos(brdf, p.n.xyz, p.v.xyz, p.l.xyz, p.coat.x, p.coat.y),
+                              clearcoat_fresnel(dot(p.n.xyz, p.v.xyz)));
     outputs[id].exit_lod = vec4(transmission_exit(p.l.xyz, p.n.xyz, p.v.xyz, p.volume.x, p.volume.y),
                                 transmission_lod(p.params.x, p.volume.y, p.volume.w));
     outputs[id].transmitted = vec4(volume_attenuation(p.volume.x, p.attenuation.rgb, p.volume.z)

@@ -1437,6 +1437,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             ("mask_draws", serde_json::json!(plan.mask_draws)),
             ("mask_casters", serde_json::json!(plan.mask_casters)),
             ("blend_draws", serde_json::json!(plan.blend_draws)),
+            ("coat_draws", serde_json::json!(plan.coat_draws)),
             (
                 "transmission_draws",
                 serde_json::json!(plan.transmission_draws),

@@ -1206,12 +1206,12 @@ fn unsupported_required_extension_is_an_error_naming_it() {
 fn unsupported_used_extension_is_a_warning() {
     let mut d = Doc::new();
     d.quad(true, true);
-    d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat"]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
     let s = d.load("used-extension").unwrap();
     assert!(
         s.warnings
             .iter()
-            .any(|w| w.0.contains("KHR_materials_clearcoat")),
+            .any(|w| w.0.contains("KHR_materials_iridescence")),
         "{:?}",
         s.warnings
     );
@@ -2567,6 +2567,45 @@ fn transmission_and_volume_are_read_checked_and_dropped_where_they_mean_nothing(
     let msg = error_text(bad.load("transmission-bad"));
     assert!(
         msg.contains("'fog'") && msg.contains("attenuationDistance") && msg.contains("positive"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn clearcoat_is_read_with_its_textures_and_dropped_on_fabric() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat"]);
+    d.json["materials"] = json!([
+        {"name": "car paint", "extensions": {"KHR_materials_clearcoat": {
+            "clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.2
+        }}},
+        {"name": "too rough", "extensions": {"KHR_materials_clearcoat": {
+            "clearcoatFactor": 1.0, "clearcoatRoughnessFactor": 2.0
+        }}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load("clearcoat").unwrap();
+    let c = s.materials[0].clearcoat.as_ref().expect("coated");
+    assert_eq!((c.factor, c.roughness, c.normal_texture), (0.8, 0.2, None));
+    assert_eq!(s.materials[1].clearcoat.as_ref().unwrap().roughness, 1.0);
+    let w: Vec<&str> = s.warnings.iter().map(|w| w.0.as_str()).collect();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'too rough'") && w.contains("clamped")),
+        "{w:?}"
+    );
+    assert!(!w.iter().any(|w| w.contains("ignores")), "{w:?}");
+
+    let mut bad = Doc::new();
+    bad.quad(true, false);
+    bad.json["materials"] = json!([{"name": "lacquer", "extensions": {
+        "KHR_materials_clearcoat": {"clearcoatFactor": "shiny"}
+    }}]);
+    bad.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let msg = error_text(bad.load("clearcoat-bad"));
+    assert!(
+        msg.contains("'lacquer'") && msg.contains("clearcoatFactor"),
         "{msg}"
     );
 }

@@ -471,3 +471,47 @@ fn transmissive_draws_hide_each_other_by_depth_in_any_order() {
         );
     }
 }
+
+/// KHR_materials_clearcoat goes through the transparent pass: a coat of factor 0 renders as the
+/// same material through the G-buffer; a full coat adds its highlight and dims the layers below
+/// (at this view, by less than it adds under the studio's bright soft boxes).
+#[test]
+fn a_clearcoat_of_factor_zero_is_the_material_alone_and_a_full_one_changes_it() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let studio = Arc::new(Environment::studio());
+    let plain = Material {
+        base_color: [0.1, 0.2, 0.6, 1.0],
+        metallic: 0.0,
+        roughness: 0.7,
+        ..Default::default()
+    };
+    let coated = |factor: f32| Material {
+        clearcoat: Some(scene::Clearcoat {
+            factor,
+            texture: None,
+            roughness: 0.05,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }),
+        ..plain.clone()
+    };
+    for env in [None, Some(&studio)] {
+        let render = |m: Material, r: &mut Renderer| {
+            r.render(
+                &scene_of(vec![square("square", 0.0, 1.0, 0, 1.0)], vec![m]),
+                &options(env),
+            )
+            .expect("render")
+        };
+        let a = render(plain.clone(), &mut renderer);
+        let zero = render(coated(0.0), &mut renderer);
+        assert!(zero.plan.runs(Pass::Transparent) && zero.plan.coat_draws == 1);
+        assert!(zero.stats.pipelines.iter().any(|p| p.contains("21=1")));
+        let d = max_relative_difference(&a.hdr, &zero.hdr);
+        assert!(d < 0.02, "a coat of factor 0 differs from none by {d}");
+        let full = render(coated(1.0), &mut renderer);
+        let d = max_relative_difference(&a.hdr, &full.hdr);
+        assert!(d > 0.05, "a full coat changes the image by only {d}");
+    }
+}

@@ -82,6 +82,9 @@ const uint SLOT_SPECULAR_COLOR = 8u;
 const uint SLOT_ANISOTROPY = 9u;
 const uint SLOT_TRANSMISSION = 10u;
 const uint SLOT_THICKNESS = 11u;
+const uint SLOT_CLEARCOAT = 12u;
+const uint SLOT_CLEARCOAT_ROUGHNESS = 13u;
+const uint SLOT_CLEARCOAT_NORMAL = 14u;
 
 // Material.extra.w flags.
 const uint MATERIAL_ANISOTROPY = 1u;
@@ -90,6 +93,7 @@ const uint MATERIAL_UNLIT = 4u;  // KHR_materials_unlit
 const uint MATERIAL_MASK = 8u;   // alphaMode MASK: alpha.x is the cutoff
 const uint MATERIAL_BLEND = 16u;  // alphaMode BLEND: the transparent pass blends by its alpha
 const uint MATERIAL_TRANSMISSION = 32u;  // KHR_materials_transmission: alpha.yzw, volume
+const uint MATERIAL_CLEARCOAT = 64u;  // KHR_materials_clearcoat: coat
 
 struct Material {
     vec4 base_color;          // linear rgba factor
@@ -100,13 +104,15 @@ struct Material {
     vec4 specular;            // KHR_materials_specular: rgb colour factor, a: specular factor
     vec4 extra;               // x: the dielectric's F0 from KHR_materials_ior, y: anisotropy
                               // strength, z: anisotropy rotation (radians), w: MATERIAL_* flags (a whole number)
-    vec4 uv[24];              // per texture slot s: rows uv[2s], uv[2s+1] of its affine UV map
+    vec4 uv[30];              // per texture slot s: rows uv[2s], uv[2s+1] of its affine UV map
                               // (xyz), uv[2s].w: the UV set (0 or 1)
     vec4 alpha;               // x: alphaCutoff of an alphaMode MASK material (flag MATERIAL_MASK);
                               // KHR_materials_transmission and _volume: y the transmission factor,
                               // z the thickness factor (object space), w the attenuation distance
                               // (0: infinite)
     vec4 volume;              // rgb: the attenuation colour (linear), a: the index of refraction
+    vec4 coat;                // KHR_materials_clearcoat: x factor, y roughness, z the coat normal
+                              // texture's scale (0: none), w unused
 };
 
 // alphaMode MASK: the base colour's alpha (factor x texture x vertex colour) below the cutoff is

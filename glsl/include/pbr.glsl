@@ -176,6 +176,30 @@ vec3 transmission_weight(vec3 f0, float specular, vec3 base, vec2 ab) {
     return max(1.0 - specular * (f0 * ab.x + ab.y), vec3(0.0)) * base;
 }
 
+// ---- KHR_materials_clearcoat: a clear coat (ior 1.5, F0 0.04) over the material ----
+
+// The coat's Fresnel at cos θ (Schlick, F0 0.04).
+float clearcoat_fresnel(float cos_theta) {
+    return 0.04 + 0.96 * pow(1.0 - clamp(cos_theta, 0.0, 1.0), 5.0);
+}
+
+// A lamp's f·cos through the coat (the specification's fresnel_coat): the material's f·cos
+// `base_cos` times 1 − coat·Fc(nc·v) (what the coat reflects of the view, as the specification
+// and the Khronos sample viewer weigh it), plus the coat's GGX lobe about its normal nc at its
+// roughness with its own Fresnel, coat·Fc(v·h)·D(nc·h)·V·(nc·l).
+vec3 clearcoat_brdf_cos(vec3 base_cos, vec3 nc, vec3 v, vec3 l, float coat, float roughness) {
+    vec3 h = normalize(l + v);
+    float fc = clearcoat_fresnel(dot(v, h));
+    float n_l = dot(nc, l);
+    float n_v = dot(nc, v);
+    float layer = 0.0;
+    if (n_l > 0.0 && n_v > 0.0) {
+        float alpha = max(roughness * roughness, 1e-3);
+        layer = ggx_d(clamp(dot(nc, h), 0.0, 1.0), alpha) * smith_v(n_l, n_v, alpha) * n_l;
+    }
+    return base_cos * (1.0 - coat * clearcoat_fresnel(dot(nc, v))) + vec3(coat * fc * layer);
+}
+
 // The core glTF metallic-roughness BRDF (no extensions, single scattering: what the DFG table
 // integrates) times n·l.
 vec3 pbr_brdf_cos(vec3 n, vec3 v, vec3 l, vec3 base, float metallic, float roughness) {

@@ -5,7 +5,7 @@
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
-// IBL_SAMPLES, UNLIT and TRANSMISSION, and defines `transmitted_light` (forward.frag: from the
+// IBL_SAMPLES, UNLIT, TRANSMISSION and COAT, and defines `transmitted_light` (forward.frag: from the
 // backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
@@ -376,10 +376,11 @@ vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
 // emissive_ao and specular; may be any value, the caller keeps NaN and Inf out of the image.
-// transmission, attenuation: surface.glsl's GSurface fields (0 and 1 from the G-buffer, which
-// holds no transmissive surface).
+// transmission, attenuation, coat_params, coat_n: surface.glsl's GSurface fields (no transmission
+// and no coat from the G-buffer, which holds neither).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
-                   vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation) {
+                   vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
+                   vec4 coat_params, vec3 coat_n) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -462,11 +463,18 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         bool has_sheen = max3(s.sheen) > 0.0;
         float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;
         float ess = ggx_albedo(dot(n, v), roughness);
+        // KHR_materials_clearcoat (forward pass only): its weight and roughness, and its normal.
+        float coat = COAT != 0u ? coat_params.x : 0.0;
+        float coat_r = coat_params.y;
+        // What the coat covers besides the lamps (each lamp's is coated in the loop): the
+        // environment or ambient, the transmitted light, and the emission.
+        vec3 under = emissive_ao.rgb;
+        radiance -= emissive_ao.rgb;
         if (IBL != 0u) {
-            radiance += pbr_env(n, v, s, ao, e_v);
+            under += pbr_env(n, v, s, ao, e_v);
         } else {
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
-            radiance += ambient * base * (1.0 - metallic) * (1.0 - s.transmission) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
+            under += ambient * base * (1.0 - metallic) * (1.0 - s.transmission) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
         }
         uvec2 list = tile_list();
     for (uint j = 0u; j < list.y; ++j) {
@@ -478,6 +486,9 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             }
             float e_l = has_sheen ? sheen_albedo(dot(n, l), s.sheen_roughness) : 0.0;
             vec3 c = gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l), ess);
+            if (COAT != 0u && coat > 0.0) {
+                c = clearcoat_brdf_cos(c, coat_n, v, l, coat, coat_r);
+            }
             if (all(equal(c, vec3(0.0)))) {
                 continue;
             }
@@ -485,8 +496,23 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         }
         if (TRANSMISSION != 0u && s.transmission > 0.0) {
             // The dielectric's transmitted part replaces that much of its diffuse lobe (above).
-            radiance += (1.0 - metallic) * s.transmission * transmitted_light(p, n, v, s, transmission, attenuation.rgb);
+            under += (1.0 - metallic) * s.transmission * transmitted_light(p, n, v, s, transmission, attenuation.rgb);
         }
+        if (COAT != 0u && coat > 0.0) {
+            // The coat reflects Fc(nc·v) of what would leave the layers below, and adds its own
+            // split-sum specular (F0 0.04) of the environment about its normal.
+            float cv = clamp(dot(coat_n, v), 1e-4, 1.0);
+            vec2 ab = textureLod(env_dfg, vec2(cv, coat_r), 0.0).rg;
+            vec3 coat_light = ambient;
+            if (IBL != 0u) {
+                vec3 r = dominant_dir(coat_n, reflect(-v, coat_n), coat_r);
+                vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
+                coat_light = textureLod(env_specular, d, coat_r * frame.env_params.y).rgb * frame.env_params.x
+                           * specular_occlusion(cv, ao, coat_r);
+            }
+            under = under * (1.0 - coat * clearcoat_fresnel(cv)) + coat * (0.04 * ab.x + ab.y) * coat_light;
+        }
+        radiance += under;
     }
     return radiance;
 }

@@ -24,6 +24,10 @@ layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;
 // KHR_materials_transmission's texture (R) and KHR_materials_volume's thickness texture (G).
 layout(set = 1, binding = 11) uniform sampler2D transmission_tex;
 layout(set = 1, binding = 12) uniform sampler2D thickness_tex;
+// KHR_materials_clearcoat's textures: the factor (R), the roughness (G), the coat's normal.
+layout(set = 1, binding = 13) uniform sampler2D clearcoat_tex;
+layout(set = 1, binding = 14) uniform sampler2D clearcoat_roughness_tex;
+layout(set = 1, binding = 15) uniform sampler2D clearcoat_normal_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -60,6 +64,10 @@ struct GSurface {
     // index of refraction; and the attenuation colour (rgb).
     vec4 transmission;
     vec4 attenuation;
+    // KHR_materials_clearcoat: the factor and roughness (× textures; 0, 0: no coat), and the
+    // coat's normal (world, unit: the geometry's with the coat's own normal map, not the base's).
+    vec4 coat;
+    vec3 coat_normal;
 };
 // Non-fabric materials reuse two fabric channels: fabric holds the sheen colour (rgb) and
 // roughness (a), surface.z the anisotropy strength (and frame.zw its direction).
@@ -102,6 +110,15 @@ GSurface material_surface() {    GSurface s;
     t = dot(t, t) > 1e-20 ? normalize(t) : any_tangent(n);
     float sign = in_tangent.w < 0.0 ? -1.0 : 1.0;
     vec3 b = sign * cross(n, t);
+
+    // The coat's normal: the geometry's, or its own normal map in the same frame.
+    vec3 coat_normal = n;
+    if (m.coat.z != 0.0) {
+        vec3 ctn = sample_slot(clearcoat_normal_tex, m, SLOT_CLEARCOAT_NORMAL).xyz * 2.0 - 1.0;
+        ctn.xy *= m.coat.z;
+        vec3 cm = t * ctn.x + b * ctn.y + n * ctn.z;
+        coat_normal = dot(cm, cm) > 1e-20 ? normalize(cm) : n;
+    }
 
     vec3 tn = sample_slot(normal_tex, m, SLOT_NORMAL).xyz * 2.0 - 1.0;
     tn.xy *= m.emissive_normal.a;
@@ -258,6 +275,13 @@ GSurface material_surface() {    GSurface s;
     s.alpha = base.a;
     s.transmission = vec4(0.0);
     s.attenuation = vec4(1.0, 1.0, 1.0, 0.0);
+    s.coat = vec4(0.0);
+    s.coat_normal = coat_normal;
+    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_CLEARCOAT) != 0u) {
+        float factor = m.coat.x * sample_slot(clearcoat_tex, m, SLOT_CLEARCOAT).r;
+        float rough = m.coat.y * sample_slot(clearcoat_roughness_tex, m, SLOT_CLEARCOAT_ROUGHNESS).g;
+        s.coat = vec4(clamp(factor, 0.0, 1.0), clamp(rough, 0.0, 1.0), 0.0, 0.0);
+    }
     if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_TRANSMISSION) != 0u) {
         float amount = m.alpha.y * sample_slot(transmission_tex, m, SLOT_TRANSMISSION).r;
         float scale = (length(draw.world[0].xyz) + length(draw.world[1].xyz) + length(draw.world[2].xyz)) / 3.0;

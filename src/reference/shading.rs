@@ -173,6 +173,35 @@ pub fn transmission_exit(p: Vec3, n: Vec3, v: Vec3, thickness: f32, ior: f32) ->
     add(p, scale(r, thickness))
 }
 
+/// `clearcoat_fresnel` of pbr.glsl: Schlick with F0 0.04.
+pub fn clearcoat_fresnel(cos_theta: f32) -> f32 {
+    0.04 + 0.96 * (1.0 - cos_theta.clamp(0.0, 1.0)).powf(5.0)
+}
+
+/// `clearcoat_brdf_cos` of pbr.glsl: `base_cos` under a coat of weight `coat` (attenuated by
+/// the coat's Fresnel at nc·v) and roughness `roughness` about `nc`, plus the coat's GGX lobe
+/// with its Fresnel at v·h.
+pub fn clearcoat_brdf_cos(
+    base_cos: Vec3,
+    nc: Vec3,
+    v: Vec3,
+    l: Vec3,
+    coat: f32,
+    roughness: f32,
+) -> Vec3 {
+    let h = normalize(add(l, v));
+    let fc = clearcoat_fresnel(dot(v, h));
+    let (n_l, n_v) = (dot(nc, l), dot(nc, v));
+    let layer = if n_l > 0.0 && n_v > 0.0 {
+        let alpha = (roughness * roughness).max(1e-3);
+        ggx_d(dot(nc, h).clamp(0.0, 1.0), alpha) * smith_v(n_l, n_v, alpha) * n_l
+    } else {
+        0.0
+    };
+    let fv = clearcoat_fresnel(n_v);
+    base_cos.map(|b| b * (1.0 - coat * fv) + coat * fc * layer)
+}
+
 /// `transmission_lod` of pbr.glsl: the backdrop's mip level for roughness r through ior.
 pub fn transmission_lod(roughness: f32, ior: f32, width: f32) -> f32 {
     width.max(1.0).log2() * roughness * (2.0 * ior - 2.0).clamp(0.0, 1.0)

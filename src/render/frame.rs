@@ -372,9 +372,10 @@ impl Renderer {
             },
         ])?;
         // A material's textures (set 1): its slots in gbuffer.frag's bindings 0-10 (the weave
-        // texture at 4); forward.frag adds transmission's and thickness's at 11 and 12.
+        // texture at 4); forward.frag adds transmission's, thickness's and the clearcoat's three
+        // at 11-15.
         let material_layout = ctx.create_set_layout(
-            &(0..TextureSlot::COUNT as u32 - 1)
+            &(0..11)
                 .map(|b| sampled(b, Stages::FRAGMENT))
                 .collect::<Vec<_>>(),
         )?;
@@ -747,6 +748,7 @@ impl Renderer {
                     .map(|&(id, value)| (id + 10, value)),
             );
             key.push((20, (plan.transmission_draws > 0) as u32));
+            key.push((21, (plan.coat_draws > 0) as u32));
             key
         });
         // Two blend modes: opaque forward draws (transmissive, not BLEND) replace and write depth,
@@ -968,7 +970,7 @@ impl Renderer {
                 blend: scene
                     .materials
                     .get(mesh.material)
-                    .is_some_and(|m| m.blend || m.transmission.is_some()),
+                    .is_some_and(|m| m.blend || m.transmission.is_some() || m.clearcoat.is_some()),
                 blended: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
@@ -1399,6 +1401,9 @@ impl Renderer {
             if forward {
                 bindings.push((11, Resource::Sampled(pick(10, "white"), sampler(10))));
                 bindings.push((12, Resource::Sampled(pick(11, "white"), sampler(11))));
+                bindings.push((13, Resource::Sampled(pick(12, "white"), sampler(12))));
+                bindings.push((14, Resource::Sampled(pick(13, "white"), sampler(13))));
+                bindings.push((15, Resource::Sampled(pick(14, "normal"), sampler(14))));
                 pool.set(&self.forward_material_layout, &bindings)
             } else {
                 pool.set(&self.material_layout, &bindings)

@@ -196,8 +196,11 @@ pub struct GpuMaterial {
     pub alpha: [f32; 4],
     /// KHR_materials_volume's attenuation colour (rgb, linear), a: the index of refraction.
     pub volume: [f32; 4],
+    /// KHR_materials_clearcoat: x the factor, y the roughness, z the coat normal texture's scale
+    /// (0 without one), w unused.
+    pub coat: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 128 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 144 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
@@ -210,6 +213,8 @@ pub const MATERIAL_MASK: u32 = 8;
 pub const MATERIAL_BLEND: u32 = 16;
 /// KHR_materials_transmission: drawn by the transparent pass, which has the backdrop.
 pub const MATERIAL_TRANSMISSION: u32 = 32;
+/// KHR_materials_clearcoat: drawn by the transparent pass (the G-buffer has no room for a coat).
+pub const MATERIAL_CLEARCOAT: u32 = 64;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -275,6 +280,11 @@ impl GpuMaterial {
                         MATERIAL_TRANSMISSION
                     } else {
                         0
+                    }
+                    | if m.clearcoat.is_some() {
+                        MATERIAL_CLEARCOAT
+                    } else {
+                        0
                     };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
@@ -302,6 +312,19 @@ impl GpuMaterial {
                     .as_ref()
                     .map_or([1.0; 3], |t| t.attenuation_color);
                 [c[0], c[1], c[2], m.specular.ior]
+            },
+            coat: match &m.clearcoat {
+                Some(c) => [
+                    c.factor,
+                    c.roughness,
+                    if c.normal_texture.is_some() {
+                        c.normal_scale
+                    } else {
+                        0.0
+                    },
+                    0.0,
+                ],
+                None => [0.0; 4],
             },
         }
     }

@@ -147,7 +147,10 @@ pub struct Plan {
     /// KHR_materials_transmission: drawn draws with a transmissive material (the transparent pass
     /// draws them too, and copies the lit opaque image into a mip-mapped backdrop for them).
     pub transmission_draws: usize,
-    /// Draws the transparent pass draws opaque, writing depth: transmissive and not BLEND.
+    /// KHR_materials_clearcoat: drawn draws with a coated material (the transparent pass draws
+    /// them: the G-buffer has no room for a coat).
+    pub coat_draws: usize,
+    /// Draws the transparent pass draws opaque, writing depth: transmissive or coated, not BLEND.
     pub forward_opaque_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
@@ -325,11 +328,24 @@ impl Plan {
                     .meshes
                     .get(d.mesh)
                     .and_then(|m| scene.materials.get(m.material))
-                    .is_some_and(|m| m.transmission.is_some() && !m.blend)
+                    .is_some_and(|m| {
+                        (m.transmission.is_some() || m.clearcoat.is_some()) && !m.blend
+                    })
+            })
+            .count();
+        let coat_draws = scene
+            .draws
+            .iter()
+            .filter(|d| {
+                scene
+                    .meshes
+                    .get(d.mesh)
+                    .and_then(|m| scene.materials.get(m.material))
+                    .is_some_and(|m| m.clearcoat.is_some())
             })
             .count();
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
-        if blend_draws + transmission_draws > 0 {
+        if blend_draws + transmission_draws + coat_draws > 0 {
             passes.insert(2, Pass::Transparent);
         }
         if !shadows.is_empty() {
@@ -391,6 +407,7 @@ impl Plan {
             blend_draws,
             transmission_draws,
             forward_opaque_draws,
+            coat_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -523,6 +540,13 @@ impl fmt::Display for Plan {
                 f,
                 "blend       {} draw(s) with alphaMode BLEND: forward-lit after the lighting pass, sorted back to front by their bounds' centres",
                 self.blend_draws
+            )?;
+        }
+        if self.coat_draws > 0 {
+            writeln!(
+                f,
+                "clearcoat   {} draw(s) with KHR_materials_clearcoat: drawn by the transparent pass (no G-buffer bytes for coats)",
+                self.coat_draws
             )?;
         }
         if self.transmission_draws > 0 {

@@ -26,8 +26,8 @@ use super::material_ext::{self, TexRef};
 use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
-    Anisotropy, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow, Sheen, SlotUv,
-    Specular, Texture, TextureSampler, TextureSlot, Transmission, Vertex, Warning,
+    Anisotropy, Clearcoat, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow,
+    Sheen, SlotUv, Specular, Texture, TextureSampler, TextureSlot, Transmission, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -93,6 +93,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::VARIANTS,
     material_ext::TRANSMISSION,
     material_ext::VOLUME,
+    material_ext::CLEARCOAT,
     FABRIC_EXTENSION,
     // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
@@ -860,6 +861,11 @@ impl<'a> Loader<'a> {
             .map(|v| material_ext::volume(&mut ctx, v))
             .transpose()
             .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::CLEARCOAT;
+        let clearcoat_ext = ext(material_ext::CLEARCOAT)
+            .map(|v| material_ext::clearcoat(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
         for w in std::mem::take(&mut ctx.warnings) {
             self.warn(w);
         }
@@ -998,6 +1004,39 @@ impl<'a> Loader<'a> {
             }
         };
 
+        let clearcoat = match &clearcoat_ext {
+            None => None,
+            Some(e) => Some(Clearcoat {
+                factor: e.factor,
+                texture: ext_texture(
+                    self,
+                    &e.texture,
+                    (TextureSlot::Clearcoat, "clearcoat texture"),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
+                roughness: e.roughness,
+                roughness_texture: ext_texture(
+                    self,
+                    &e.roughness_texture,
+                    (
+                        TextureSlot::ClearcoatRoughness,
+                        "clearcoat roughness texture",
+                    ),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
+                normal_texture: ext_texture(
+                    self,
+                    &e.normal_texture,
+                    (TextureSlot::ClearcoatNormal, "clearcoat normal texture"),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
+                normal_scale: e.normal_scale,
+            }),
+        };
+
         // TEXCOORD_0 carries one transform, baked into the vertices (so tangents and the weave
         // follow it): the first TEXCOORD_0 slot's. Every slot then gets its own map from the
         // baked coordinates (or from TEXCOORD_1) to its own.
@@ -1049,6 +1088,16 @@ impl<'a> Loader<'a> {
             }
             (t, _) => t,
         };
+        let clearcoat = match (clearcoat, &fabric) {
+            (Some(_), Some(_)) => {
+                self.warn(format_args!(
+                    "{who} has both {} and {FABRIC_EXTENSION}; the woven model has no coat yet, so the clearcoat is ignored on it",
+                    material_ext::CLEARCOAT
+                ));
+                None
+            }
+            (c, _) => c,
+        };
         let material = Material {
             name,
             base_color,
@@ -1068,6 +1117,7 @@ impl<'a> Loader<'a> {
             specular,
             anisotropy,
             transmission,
+            clearcoat,
             uv: slot_uv,
             samplers,
             unlit,

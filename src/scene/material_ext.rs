@@ -15,6 +15,7 @@ pub const ANISOTROPY: &str = "KHR_materials_anisotropy";
 pub const VARIANTS: &str = "KHR_materials_variants";
 pub const TRANSMISSION: &str = "KHR_materials_transmission";
 pub const VOLUME: &str = "KHR_materials_volume";
+pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
 
 /// A glTF textureInfo, unresolved: the texture index, its texCoord, and the raw
 /// KHR_texture_transform (parsed by the loader, like the core slots').
@@ -61,6 +62,16 @@ pub struct VolumeExt {
     pub attenuation_color: [f32; 3],
     /// None: infinite (the default).
     pub attenuation_distance: Option<f32>,
+}
+
+#[derive(Clone, Debug)]
+pub struct ClearcoatExt {
+    pub factor: f32,
+    pub texture: Option<TexRef>,
+    pub roughness: f32,
+    pub roughness_texture: Option<TexRef>,
+    pub normal_texture: Option<TexRef>,
+    pub normal_scale: f32,
 }
 
 /// What a parser reports back: an error message (the loader prefixes the file), or warnings.
@@ -300,6 +311,34 @@ pub fn transmission(ctx: &mut Ctx, v: &Value) -> Result<TransmissionExt, String>
         match key.as_str() {
             "transmissionFactor" => out.factor = ctx.number(key, v, 0.0, 1.0)?,
             "transmissionTexture" => out.texture = Some(ctx.texture(key, v)?),
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+pub fn clearcoat(ctx: &mut Ctx, v: &Value) -> Result<ClearcoatExt, String> {
+    let mut out = ClearcoatExt {
+        factor: 0.0,
+        texture: None,
+        roughness: 0.0,
+        roughness_texture: None,
+        normal_texture: None,
+        normal_scale: 1.0,
+    };
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            "clearcoatFactor" => out.factor = ctx.number(key, v, 0.0, 1.0)?,
+            "clearcoatTexture" => out.texture = Some(ctx.texture(key, v)?),
+            "clearcoatRoughnessFactor" => out.roughness = ctx.number(key, v, 0.0, 1.0)?,
+            "clearcoatRoughnessTexture" => out.roughness_texture = Some(ctx.texture(key, v)?),
+            "clearcoatNormalTexture" => {
+                out.normal_texture = Some(ctx.texture(key, v)?);
+                if let Some(s) = v.get("scale") {
+                    out.normal_scale =
+                        ctx.number("clearcoatNormalTexture.scale", s, -100.0, 100.0)?;
+                }
+            }
             other => ctx.unknown(other),
         }
     }

@@ -120,6 +120,8 @@ pub struct Material {
     pub anisotropy: Option<Anisotropy>,
     /// KHR_materials_transmission with KHR_materials_volume (None: opaque to light).
     pub transmission: Option<Transmission>,
+    /// KHR_materials_clearcoat (None: no coat).
+    pub clearcoat: Option<Clearcoat>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
     /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
@@ -152,6 +154,9 @@ impl Material {
             self.anisotropy.as_ref().and_then(|a| a.texture),
             self.transmission.as_ref().and_then(|t| t.texture),
             self.transmission.as_ref().and_then(|t| t.thickness_texture),
+            self.clearcoat.as_ref().and_then(|c| c.texture),
+            self.clearcoat.as_ref().and_then(|c| c.roughness_texture),
+            self.clearcoat.as_ref().and_then(|c| c.normal_texture),
         ]
     }
 }
@@ -263,10 +268,13 @@ pub enum TextureSlot {
     Anisotropy = 9,
     Transmission = 10,
     Thickness = 11,
+    Clearcoat = 12,
+    ClearcoatRoughness = 13,
+    ClearcoatNormal = 14,
 }
 
 impl TextureSlot {
-    pub const COUNT: usize = 12;
+    pub const COUNT: usize = 15;
     /// The slots' names in messages, in slot order.
     pub const NAMES: [&'static str; TextureSlot::COUNT] = [
         "base colour",
@@ -281,6 +289,9 @@ impl TextureSlot {
         "anisotropy",
         "transmission",
         "thickness",
+        "clearcoat",
+        "clearcoat roughness",
+        "clearcoat normal",
     ];
 }
 
@@ -364,6 +375,22 @@ pub struct Transmission {
     pub attenuation_distance: Option<f32>,
 }
 
+/// KHR_materials_clearcoat: a clear dielectric layer (ior 1.5) over the material, with its own
+/// roughness and normal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clearcoat {
+    /// clearcoatFactor, in [0, 1]; the texture's red multiplies it.
+    pub factor: f32,
+    pub texture: Option<usize>,
+    /// clearcoatRoughnessFactor, in [0, 1]; the texture's green multiplies it.
+    pub roughness: f32,
+    pub roughness_texture: Option<usize>,
+    /// The coat's own tangent-space normal texture and its scale (none: the geometry's normal,
+    /// not the base's normal map).
+    pub normal_texture: Option<usize>,
+    pub normal_scale: f32,
+}
+
 /// KHR_materials_specular (with KHR_materials_ior's index of refraction).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Specular {
@@ -432,6 +459,7 @@ impl Default for Material {
             specular: Specular::default(),
             anisotropy: None,
             transmission: None,
+            clearcoat: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
             unlit: false,

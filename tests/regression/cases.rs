@@ -491,6 +491,10 @@ pub fn cases() -> Vec<Case> {
             ..case("khronos-attenuation-test", "tests/data/khronos/AttenuationTest/glTF-Binary/AttenuationTest.glb", "a grid board with five rows of blue glass cubes growing left to right; the bigger or thicker the cube, the deeper its blue (Beer–Lambert over the thickness); the last row paler as its attenuation distance grows; the grid shows through every cube")
         },
         Case {
+            env: STUDIO,
+            ..case("khronos-clearcoat-test", "tests/data/khronos/ClearCoatTest/glTF-Binary/ClearCoatTest.glb", "six rows of three tiles with a bent tube on each: base layer, the same coated, the coat alone (black); the coated tubes carry sharp extra highlights of the studio's soft boxes that the base-layer tubes lack; the bottom row's coat has its own bumps")
+        },
+        Case {
             camera: Some(1),
             env: STUDIO,
             warnings: &["has no normals"],
