@@ -23,7 +23,7 @@ struct PbrProbeInput {
     vec4 coat;           // clearcoat: x factor, y roughness (its normal: n)
 };
 
-// Rust twin: PbrProbeOutput (80 bytes).
+// Rust twin: PbrProbeOutput (96 bytes).
 struct PbrProbeOutput {
     vec4 brdf;   // gltf_brdf_cos (rgb), 0
     vec4 terms;  // charlie_d, sheen_brdf_cos, ggx_aniso_d (t·h = b·h from n·h), sheen_lambda(n·v)
@@ -32,6 +32,7 @@ struct PbrProbeOutput {
                        // specular, base, (E(n·v), E(n·l))) (rgb), 0
     vec4 coated;       // clearcoat_brdf_cos(brdf, n, v, l, coat, coat roughness) (rgb),
                        // clearcoat_fresnel(n·v)
+    vec4 through;      // diffuse_btdf_cos(n, v, −l, surface, attenuation colour) (rgb), 0
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
@@ -61,6 +62,7 @@ void main() {
     float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);
     float alpha = max(p.params.x * p.params.x, 1e-3);
     outputs[id].brdf = vec4(brdf, 0.0);
+    outputs[id].through = vec4(diffuse_btdf_cos(p.n.xyz, p.v.xyz, -p.l.xyz, s, p.attenuation.rgb), 0.0);
     outputs[id].coated = vec4(clearcoat_brdf_cos(brdf, p.n.xyz, p.v.xyz, p.l.xyz, p.coat.x, p.coat.y),
                               clearcoat_fresnel(dot(p.n.xyz, p.v.xyz)));
     outputs[id].exit_lod = vec4(transmission_exit(p.l.xyz, p.n.xyz, p.v.xyz, p.volume.x, p.volume.y),

@@ -1439,6 +1439,10 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             ("blend_draws", serde_json::json!(plan.blend_draws)),
             ("coat_draws", serde_json::json!(plan.coat_draws)),
             (
+                "diffuse_transmission_draws",
+                serde_json::json!(plan.diffuse_transmission_draws),
+            ),
+            (
                 "transmission_draws",
                 serde_json::json!(plan.transmission_draws),
             ),

@@ -52,6 +52,7 @@ struct PbrProbeOutput {
     exit_lod: [f32; 4],
     transmitted: [f32; 4],
     coated: [f32; 4],
+    through: [f32; 4],
 }
 
 fn unit(v: [f64; 3]) -> [f32; 3] {
@@ -101,7 +102,7 @@ fn surface(inp: &PbrProbeInput) -> GltfSurface {
 }
 
 /// The Rust twin of pbr_probe.comp's main().
-fn twin(inp: &PbrProbeInput) -> [f32; 20] {
+fn twin(inp: &PbrProbeInput) -> [f32; 24] {
     let s = surface(inp);
     let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
     let b = gltf_brdf_cos(
@@ -119,6 +120,14 @@ fn twin(inp: &PbrProbeInput) -> [f32; 20] {
     let at = alpha * 0.5 + 0.5;
     let (thickness, ior, distance, width) =
         (inp.volume[0], inp.volume[1], inp.volume[2], inp.volume[3]);
+    let l = xyz(inp.l);
+    let through = sh::diffuse_btdf_cos(
+        xyz(inp.n),
+        xyz(inp.v),
+        [-l[0], -l[1], -l[2]],
+        &s,
+        xyz(inp.attenuation),
+    );
     let coated = sh::clearcoat_brdf_cos(
         b,
         xyz(inp.n),
@@ -156,6 +165,10 @@ fn twin(inp: &PbrProbeInput) -> [f32; 20] {
         coated[1],
         coated[2],
         sh::clearcoat_fresnel(inp.n[0] * inp.v[0] + inp.n[1] * inp.v[1] + inp.n[2] * inp.v[2]),
+        through[0],
+        through[1],
+        through[2],
+        0.0,
     ]
 }
 
@@ -164,7 +177,7 @@ fn twin(inp: &PbrProbeInput) -> [f32; 20] {
 /// of |p| + thickness covers the dozen of them with a factor 2 to spare); log2 is 2^-21 absolute
 /// in [0.5, 2] and 3 ulp elsewhere; pow is exp2(y·log2 x) (`pow_rel`); 1 − specular·(F0·A + B)
 /// carries the absolute error of the product and sum (4 ulp of the larger term), times the base.
-fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 20]) -> [f64; 7] {
+fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 24]) -> [f64; 7] {
     let p = inp.l;
     let thickness = inp.volume[0] as f64;
     let ior = inp.volume[1] as f64;
@@ -480,17 +493,29 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         "coated.g",
         "coated.b",
         "clearcoat_fresnel",
+        "through.r",
+        "through.g",
+        "through.b",
+        "-",
     ];
-    let mut worst: [(f64, String); 20] = std::array::from_fn(|_| (0.0, String::new()));
+    let mut worst: [(f64, String); 24] = std::array::from_fn(|_| (0.0, String::new()));
     let mut failures = Vec::new();
     for (k, c) in cases.iter().enumerate() {
         let g: PbrProbeOutput = bytemuck::pod_read_unaligned(&bytes[k * size..(k + 1) * size]);
-        let got = [g.brdf, g.terms, g.exit_lod, g.transmitted, g.coated].concat();
+        let got = [
+            g.brdf,
+            g.terms,
+            g.exit_lod,
+            g.transmitted,
+            g.coated,
+            g.through,
+        ]
+        .concat();
         let want = twin(&c.input);
         let rel = bounds(&c.input);
         let abs = transmission_bounds(&c.input, &want);
-        for j in 0..20 {
-            if j == 3 || j == 15 {
+        for j in 0..24 {
+            if j == 3 || j == 15 || j == 23 {
                 continue;
             }
             let (x, t) = (got[j] as f64, want[j] as f64);
@@ -506,6 +531,18 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
                 // mix and the coat's Fresnel at v·h.
                 let base = want[j - 16].abs() as f64;
                 2.0 * rel[0] * (base + t.abs()) + 1e-9
+            } else if j >= 20 {
+                // The Lambertian BTDF: n·l and n·v (dot products, 4 ulp absolute each), Schlick
+                // at n·v (as below) under 1 − specular·max F, the products (8 ulp).
+                let cv = dot(xyz4(c.input.n), xyz4(c.input.v)).clamp(0.0, 1.0);
+                let fresnel = 5.0 * (1.0 - cv).powi(4) * 4.0 * U
+                    + (1.0 - cv).powi(5) * pow_rel(1.0 - cv + 1e-30, 5.0, U);
+                let nl = dot(xyz4(c.input.n), xyz4(c.input.l)).abs();
+                let colour = c.input.attenuation[j - 20].abs() as f64;
+                t.abs() * 16.0 * U
+                    + colour / std::f64::consts::PI
+                        * (4.0 * U + nl * fresnel * c.input.f0_specular[3].abs() as f64)
+                    + 1e-9
             } else {
                 // Schlick: 5 (1 − c)^4 times the absolute error of c (a dot product, 4 ulp), and
                 // pow's own.
@@ -526,8 +563,8 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             }
         }
     }
-    for j in 0..20 {
-        if j != 3 && j != 15 {
+    for j in 0..24 {
+        if j != 3 && j != 15 && j != 23 {
             println!(
                 "{:>15}: worst {:.3} of its bound ({})",
                 names[j], worst[j].0, worst[j].1
@@ -539,7 +576,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         failures.is_empty(),
         "{} of {} outputs outside their bound, e.g.:\n{}",
         failures.len(),
-        cases.len() * 18,
+        cases.len() * 21,
         failures
             .iter()
             .take(20)

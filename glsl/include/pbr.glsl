@@ -31,8 +31,8 @@ struct GltfSurface {
     float sheen_roughness;
     vec3 t;                // KHR_materials_anisotropy: the direction (unit, in the tangent plane)
     float anisotropy;      // and its strength (0: isotropic GGX)
-    float transmission;    // KHR_materials_transmission: the part of the diffuse lobe that is
-                           // transmitted instead (0: opaque)
+    float transmission;    // KHR_materials_transmission and _diffuse_transmission: the part of the
+                           // diffuse lobe that is not reflected (0: opaque), 1 − (1 − t)(1 − dt)
 };
 
 GltfSurface gltf_surface(vec3 base, float metallic, float roughness) {
@@ -174,6 +174,23 @@ vec3 volume_attenuation(float d, vec3 color, float distance) {
 // F0·A + B, weighted by KHR_materials_specular's weight) leaves, tinted by the base colour.
 vec3 transmission_weight(vec3 f0, float specular, vec3 base, vec2 ab) {
     return max(1.0 - specular * (f0 * ab.x + ab.y), vec3(0.0)) * base;
+}
+
+// ---- KHR_materials_diffuse_transmission: a thin surface's diffuse lobe partly goes through ----
+
+// The Lambertian BTDF times the cosine for light l from behind a surface seen from the front
+// (n·l < 0 < n·v): colour/π·|n·l|, times what the dielectric's specular layer leaves at the view,
+// 1 − specular·max(F(n·v)); 0 for light in front (the BRDF's side). The caller weighs it by the
+// diffuse transmission and (1 − metallic)(1 − transmission).
+vec3 diffuse_btdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, vec3 color) {
+    float n_l = dot(n, l);
+    float n_v = dot(n, v);
+    if (!(n_l < 0.0) || !(n_v > 0.0)) {
+        return vec3(0.0);
+    }
+    float w = pow(1.0 - clamp(n_v, 0.0, 1.0), 5.0);
+    vec3 fr = s.f0 + (1.0 - s.f0) * w;
+    return color * (1.0 - s.specular * max3(fr)) * (-n_l / PI);
 }
 
 // ---- KHR_materials_clearcoat: a clear coat (ior 1.5, F0 0.04) over the material ----

@@ -5,7 +5,7 @@
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
-// IBL_SAMPLES, UNLIT, TRANSMISSION and COAT, and defines `transmitted_light` (forward.frag: from the
+// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT and DIFFUSE_TRANSMISSION, and defines `transmitted_light` (forward.frag: from the
 // backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
@@ -376,11 +376,11 @@ vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
 // emissive_ao and specular; may be any value, the caller keeps NaN and Inf out of the image.
-// transmission, attenuation, coat_params, coat_n: surface.glsl's GSurface fields (no transmission
-// and no coat from the G-buffer, which holds neither).
+// transmission, attenuation, coat_params, coat_n, dtrans: surface.glsl's GSurface fields (no
+// transmission, coat or diffuse transmission from the G-buffer, which holds none).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
                    vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
-                   vec4 coat_params, vec3 coat_n) {
+                   vec4 coat_params, vec3 coat_n, vec4 dtrans) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -458,8 +458,14 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         vec3 ta = oct_decode(fr.zw);
         ta -= n * dot(n, ta);
         ta = dot(ta, ta) > 1e-12 ? normalize(ta) : any_tangent(n);
+        // The diffuse lobe's parts: transmitted specularly (KHR_materials_transmission, through
+        // the backdrop), transmitted diffusely (of the rest; KHR_materials_diffuse_transmission),
+        // reflected (what remains).
+        float t_spec = TRANSMISSION != 0u ? transmission.x : 0.0;
+        float t_diff = DIFFUSE_TRANSMISSION != 0u ? dtrans.x : 0.0;
         GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z,
-                                    TRANSMISSION != 0u ? transmission.x : 0.0);
+                                    1.0 - (1.0 - t_spec) * (1.0 - t_diff));
+        float diffuse_through = (1.0 - metallic) * (1.0 - t_spec) * t_diff;
         bool has_sheen = max3(s.sheen) > 0.0;
         float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;
         float ess = ggx_albedo(dot(n, v), roughness);
@@ -489,14 +495,35 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             if (COAT != 0u && coat > 0.0) {
                 c = clearcoat_brdf_cos(c, coat_n, v, l, coat, coat_r);
             }
+            if (DIFFUSE_TRANSMISSION != 0u && diffuse_through > 0.0 && dot(n, l) < 0.0) {
+                // Light from behind, through the sheet: its shadow is looked up from the back
+                // side (the normal offset away from the light, as for a front-lit surface).
+                vec3 through = diffuse_through * diffuse_btdf_cos(n, v, l, s, dtrans.yzw);
+                if (COAT != 0u && coat > 0.0) {
+                    through *= 1.0 - coat * clearcoat_fresnel(dot(coat_n, v));
+                }
+                radiance += e * through * shadow_factor(lights[i], p, -n, receives);
+                continue;
+            }
             if (all(equal(c, vec3(0.0)))) {
                 continue;
             }
             radiance += e * c * shadow_factor(lights[i], p, n, receives);
         }
-        if (TRANSMISSION != 0u && s.transmission > 0.0) {
+        if (TRANSMISSION != 0u && t_spec > 0.0) {
             // The dielectric's transmitted part replaces that much of its diffuse lobe (above).
-            under += (1.0 - metallic) * s.transmission * transmitted_light(p, n, v, s, transmission, attenuation.rgb);
+            under += (1.0 - metallic) * t_spec * transmitted_light(p, n, v, s, transmission, attenuation.rgb);
+        }
+        if (DIFFUSE_TRANSMISSION != 0u && diffuse_through > 0.0) {
+            // The environment or ambient from behind, through the sheet: the irradiance about −n
+            // through the Lambertian BTDF, as the reflected diffuse takes it about n.
+            float nv = clamp(dot(n, v), 1e-4, 1.0);
+            vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
+            vec3 behind = IBL != 0u
+                ? sh_irradiance(frame.sh, env_dir(-n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x
+                : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, -n.y * 0.5 + 0.5);
+            under += diffuse_through * dtrans.yzw * behind * ao
+                   * (1.0 - s.specular * max3(s.f0 * ab.x + ab.y));
         }
         if (COAT != 0u && coat > 0.0) {
             // The coat reflects Fc(nc·v) of what would leave the layers below, and adds its own

@@ -28,6 +28,9 @@ layout(set = 1, binding = 12) uniform sampler2D thickness_tex;
 layout(set = 1, binding = 13) uniform sampler2D clearcoat_tex;
 layout(set = 1, binding = 14) uniform sampler2D clearcoat_roughness_tex;
 layout(set = 1, binding = 15) uniform sampler2D clearcoat_normal_tex;
+// KHR_materials_diffuse_transmission's textures: the factor (A) and the colour (RGB, sRGB).
+layout(set = 1, binding = 16) uniform sampler2D diffuse_transmission_tex;
+layout(set = 1, binding = 17) uniform sampler2D diffuse_transmission_color_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -68,6 +71,8 @@ struct GSurface {
     // coat's normal (world, unit: the geometry's with the coat's own normal map, not the base's).
     vec4 coat;
     vec3 coat_normal;
+    // KHR_materials_diffuse_transmission: the factor × texture (x; 0: none) and colour (yzw).
+    vec4 diffuse_transmission;
 };
 // Non-fabric materials reuse two fabric channels: fabric holds the sheen colour (rgb) and
 // roughness (a), surface.z the anisotropy strength (and frame.zw its direction).
@@ -277,6 +282,12 @@ GSurface material_surface() {    GSurface s;
     s.attenuation = vec4(1.0, 1.0, 1.0, 0.0);
     s.coat = vec4(0.0);
     s.coat_normal = coat_normal;
+    s.diffuse_transmission = vec4(0.0, 1.0, 1.0, 1.0);
+    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_DIFFUSE_TRANSMISSION) != 0u) {
+        float dt = m.diffuse_transmission.x * sample_slot(diffuse_transmission_tex, m, SLOT_DIFFUSE_TRANSMISSION).a;
+        vec3 dc = m.diffuse_transmission.yzw * sample_slot(diffuse_transmission_color_tex, m, SLOT_DIFFUSE_TRANSMISSION_COLOR).rgb;
+        s.diffuse_transmission = vec4(clamp(dt, 0.0, 1.0), max(dc, vec3(0.0)));
+    }
     if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_CLEARCOAT) != 0u) {
         float factor = m.coat.x * sample_slot(clearcoat_tex, m, SLOT_CLEARCOAT).r;
         float rough = m.coat.y * sample_slot(clearcoat_roughness_tex, m, SLOT_CLEARCOAT_ROUGHNESS).g;

@@ -173,6 +173,18 @@ pub fn transmission_exit(p: Vec3, n: Vec3, v: Vec3, thickness: f32, ior: f32) ->
     add(p, scale(r, thickness))
 }
 
+/// `diffuse_btdf_cos` of pbr.glsl (KHR_materials_diffuse_transmission): for light from behind
+/// (n·l < 0 < n·v), colour/π·|n·l| × (1 − specular·max(F(n·v))); else 0.
+pub fn diffuse_btdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, color: Vec3) -> Vec3 {
+    let (n_l, n_v) = (dot(n, l), dot(n, v));
+    if !(n_l < 0.0) || !(n_v > 0.0) {
+        return [0.0; 3];
+    }
+    let w = (1.0 - n_v.clamp(0.0, 1.0)).powf(5.0);
+    let fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
+    scale(color, (1.0 - s.specular * max3(fr)) * (-n_l / PI))
+}
+
 /// `clearcoat_fresnel` of pbr.glsl: Schlick with F0 0.04.
 pub fn clearcoat_fresnel(cos_theta: f32) -> f32 {
     0.04 + 0.96 * (1.0 - cos_theta.clamp(0.0, 1.0)).powf(5.0)

@@ -749,6 +749,7 @@ impl Renderer {
             );
             key.push((20, (plan.transmission_draws > 0) as u32));
             key.push((21, (plan.coat_draws > 0) as u32));
+            key.push((22, (plan.diffuse_transmission_draws > 0) as u32));
             key
         });
         // Two blend modes: opaque forward draws (transmissive, not BLEND) replace and write depth,
@@ -970,7 +971,7 @@ impl Renderer {
                 blend: scene
                     .materials
                     .get(mesh.material)
-                    .is_some_and(|m| m.blend || m.transmission.is_some() || m.clearcoat.is_some()),
+                    .is_some_and(|m| m.needs_forward()),
                 blended: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
@@ -1404,6 +1405,8 @@ impl Renderer {
                 bindings.push((13, Resource::Sampled(pick(12, "white"), sampler(12))));
                 bindings.push((14, Resource::Sampled(pick(13, "white"), sampler(13))));
                 bindings.push((15, Resource::Sampled(pick(14, "normal"), sampler(14))));
+                bindings.push((16, Resource::Sampled(pick(15, "white"), sampler(15))));
+                bindings.push((17, Resource::Sampled(pick(16, "white"), sampler(16))));
                 pool.set(&self.forward_material_layout, &bindings)
             } else {
                 pool.set(&self.material_layout, &bindings)

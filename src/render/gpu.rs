@@ -199,8 +199,10 @@ pub struct GpuMaterial {
     /// KHR_materials_clearcoat: x the factor, y the roughness, z the coat normal texture's scale
     /// (0 without one), w unused.
     pub coat: [f32; 4],
+    /// KHR_materials_diffuse_transmission: x the factor, yzw the colour (linear).
+    pub diffuse_transmission: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 144 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 160 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
@@ -215,6 +217,8 @@ pub const MATERIAL_BLEND: u32 = 16;
 pub const MATERIAL_TRANSMISSION: u32 = 32;
 /// KHR_materials_clearcoat: drawn by the transparent pass (the G-buffer has no room for a coat).
 pub const MATERIAL_CLEARCOAT: u32 = 64;
+/// KHR_materials_diffuse_transmission: drawn by the transparent pass.
+pub const MATERIAL_DIFFUSE_TRANSMISSION: u32 = 128;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -285,6 +289,11 @@ impl GpuMaterial {
                         MATERIAL_CLEARCOAT
                     } else {
                         0
+                    }
+                    | if m.diffuse_transmission.is_some() {
+                        MATERIAL_DIFFUSE_TRANSMISSION
+                    } else {
+                        0
                     };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
@@ -325,6 +334,10 @@ impl GpuMaterial {
                     0.0,
                 ],
                 None => [0.0; 4],
+            },
+            diffuse_transmission: match &m.diffuse_transmission {
+                Some(d) => [d.factor, d.color[0], d.color[1], d.color[2]],
+                None => [0.0, 1.0, 1.0, 1.0],
             },
         }
     }

@@ -150,7 +150,11 @@ pub struct Plan {
     /// KHR_materials_clearcoat: drawn draws with a coated material (the transparent pass draws
     /// them: the G-buffer has no room for a coat).
     pub coat_draws: usize,
-    /// Draws the transparent pass draws opaque, writing depth: transmissive or coated, not BLEND.
+    /// KHR_materials_diffuse_transmission: drawn draws with such a material (the transparent
+    /// pass draws them).
+    pub diffuse_transmission_draws: usize,
+    /// Draws the transparent pass draws opaque, writing depth: transmissive, coated or
+    /// diffusely transmissive, not BLEND.
     pub forward_opaque_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
@@ -328,9 +332,7 @@ impl Plan {
                     .meshes
                     .get(d.mesh)
                     .and_then(|m| scene.materials.get(m.material))
-                    .is_some_and(|m| {
-                        (m.transmission.is_some() || m.clearcoat.is_some()) && !m.blend
-                    })
+                    .is_some_and(|m| m.needs_forward() && !m.blend)
             })
             .count();
         let coat_draws = scene
@@ -344,8 +346,19 @@ impl Plan {
                     .is_some_and(|m| m.clearcoat.is_some())
             })
             .count();
+        let diffuse_transmission_draws = scene
+            .draws
+            .iter()
+            .filter(|d| {
+                scene
+                    .meshes
+                    .get(d.mesh)
+                    .and_then(|m| scene.materials.get(m.material))
+                    .is_some_and(|m| m.diffuse_transmission.is_some())
+            })
+            .count();
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
-        if blend_draws + transmission_draws + coat_draws > 0 {
+        if blend_draws + forward_opaque_draws > 0 {
             passes.insert(2, Pass::Transparent);
         }
         if !shadows.is_empty() {
@@ -408,6 +421,7 @@ impl Plan {
             transmission_draws,
             forward_opaque_draws,
             coat_draws,
+            diffuse_transmission_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -540,6 +554,13 @@ impl fmt::Display for Plan {
                 f,
                 "blend       {} draw(s) with alphaMode BLEND: forward-lit after the lighting pass, sorted back to front by their bounds' centres",
                 self.blend_draws
+            )?;
+        }
+        if self.diffuse_transmission_draws > 0 {
+            writeln!(
+                f,
+                "diff. trans. {} draw(s) with KHR_materials_diffuse_transmission: drawn by the transparent pass, lit from both sides",
+                self.diffuse_transmission_draws
             )?;
         }
         if self.coat_draws > 0 {

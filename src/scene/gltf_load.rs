@@ -26,8 +26,9 @@ use super::material_ext::{self, TexRef};
 use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
-    Anisotropy, Clearcoat, ColorSpace, Draw, Light, LightKind, Material, Mesh, Scene, Shadow,
-    Sheen, SlotUv, Specular, Texture, TextureSampler, TextureSlot, Transmission, Vertex, Warning,
+    Anisotropy, Clearcoat, ColorSpace, DiffuseTransmission, Draw, Light, LightKind, Material, Mesh,
+    Scene, Shadow, Sheen, SlotUv, Specular, Texture, TextureSampler, TextureSlot, Transmission,
+    Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -94,6 +95,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::TRANSMISSION,
     material_ext::VOLUME,
     material_ext::CLEARCOAT,
+    material_ext::DIFFUSE_TRANSMISSION,
     FABRIC_EXTENSION,
     // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
@@ -861,6 +863,11 @@ impl<'a> Loader<'a> {
             .map(|v| material_ext::volume(&mut ctx, v))
             .transpose()
             .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::DIFFUSE_TRANSMISSION;
+        let diffuse_transmission_ext = ext(material_ext::DIFFUSE_TRANSMISSION)
+            .map(|v| material_ext::diffuse_transmission(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
         ctx.extension = material_ext::CLEARCOAT;
         let clearcoat_ext = ext(material_ext::CLEARCOAT)
             .map(|v| material_ext::clearcoat(&mut ctx, v))
@@ -1037,6 +1044,34 @@ impl<'a> Loader<'a> {
             }),
         };
 
+        let diffuse_transmission = match &diffuse_transmission_ext {
+            None => None,
+            Some(e) => Some(DiffuseTransmission {
+                factor: e.factor,
+                texture: ext_texture(
+                    self,
+                    &e.texture,
+                    (
+                        TextureSlot::DiffuseTransmission,
+                        "diffuse transmission texture",
+                    ),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
+                color: e.color,
+                color_texture: ext_texture(
+                    self,
+                    &e.color_texture,
+                    (
+                        TextureSlot::DiffuseTransmissionColor,
+                        "diffuse transmission colour texture",
+                    ),
+                    ColorSpace::Srgb,
+                    &mut uv_transforms,
+                )?,
+            }),
+        };
+
         // TEXCOORD_0 carries one transform, baked into the vertices (so tangents and the weave
         // follow it): the first TEXCOORD_0 slot's. Every slot then gets its own map from the
         // baked coordinates (or from TEXCOORD_1) to its own.
@@ -1088,6 +1123,16 @@ impl<'a> Loader<'a> {
             }
             (t, _) => t,
         };
+        let diffuse_transmission = match (diffuse_transmission, &fabric) {
+            (Some(_), Some(_)) => {
+                self.warn(format_args!(
+                    "{who} has both {} and {FABRIC_EXTENSION}; light through the weave is not modelled yet, so the diffuse transmission is ignored on it",
+                    material_ext::DIFFUSE_TRANSMISSION
+                ));
+                None
+            }
+            (d, _) => d,
+        };
         let clearcoat = match (clearcoat, &fabric) {
             (Some(_), Some(_)) => {
                 self.warn(format_args!(
@@ -1118,6 +1163,7 @@ impl<'a> Loader<'a> {
             anisotropy,
             transmission,
             clearcoat,
+            diffuse_transmission,
             uv: slot_uv,
             samplers,
             unlit,

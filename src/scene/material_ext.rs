@@ -16,6 +16,7 @@ pub const VARIANTS: &str = "KHR_materials_variants";
 pub const TRANSMISSION: &str = "KHR_materials_transmission";
 pub const VOLUME: &str = "KHR_materials_volume";
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
+pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 
 /// A glTF textureInfo, unresolved: the texture index, its texCoord, and the raw
 /// KHR_texture_transform (parsed by the loader, like the core slots').
@@ -72,6 +73,14 @@ pub struct ClearcoatExt {
     pub roughness_texture: Option<TexRef>,
     pub normal_texture: Option<TexRef>,
     pub normal_scale: f32,
+}
+
+#[derive(Clone, Debug)]
+pub struct DiffuseTransmissionExt {
+    pub factor: f32,
+    pub texture: Option<TexRef>,
+    pub color: [f32; 3],
+    pub color_texture: Option<TexRef>,
 }
 
 /// What a parser reports back: an error message (the loader prefixes the file), or warnings.
@@ -339,6 +348,25 @@ pub fn clearcoat(ctx: &mut Ctx, v: &Value) -> Result<ClearcoatExt, String> {
                         ctx.number("clearcoatNormalTexture.scale", s, -100.0, 100.0)?;
                 }
             }
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+pub fn diffuse_transmission(ctx: &mut Ctx, v: &Value) -> Result<DiffuseTransmissionExt, String> {
+    let mut out = DiffuseTransmissionExt {
+        factor: 0.0,
+        texture: None,
+        color: [1.0; 3],
+        color_texture: None,
+    };
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            "diffuseTransmissionFactor" => out.factor = ctx.number(key, v, 0.0, 1.0)?,
+            "diffuseTransmissionTexture" => out.texture = Some(ctx.texture(key, v)?),
+            "diffuseTransmissionColorFactor" => out.color = ctx.colour(key, v, 0.0, 1.0)?,
+            "diffuseTransmissionColorTexture" => out.color_texture = Some(ctx.texture(key, v)?),
             other => ctx.unknown(other),
         }
     }

@@ -122,6 +122,8 @@ pub struct Material {
     pub transmission: Option<Transmission>,
     /// KHR_materials_clearcoat (None: no coat).
     pub clearcoat: Option<Clearcoat>,
+    /// KHR_materials_diffuse_transmission (None: the diffuse lobe only reflects).
+    pub diffuse_transmission: Option<DiffuseTransmission>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
     /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
@@ -139,6 +141,15 @@ pub struct Material {
 }
 
 impl Material {
+    /// Whether the G-buffer cannot hold this material, so the transparent pass draws it:
+    /// alphaMode BLEND, transmission, a clear coat, diffuse transmission.
+    pub fn needs_forward(&self) -> bool {
+        self.blend
+            || self.transmission.is_some()
+            || self.clearcoat.is_some()
+            || self.diffuse_transmission.is_some()
+    }
+
     /// The material's textures (indices into `Scene::textures`) in [`TextureSlot`] order.
     pub fn textures(&self) -> [Option<usize>; TextureSlot::COUNT] {
         [
@@ -157,6 +168,10 @@ impl Material {
             self.clearcoat.as_ref().and_then(|c| c.texture),
             self.clearcoat.as_ref().and_then(|c| c.roughness_texture),
             self.clearcoat.as_ref().and_then(|c| c.normal_texture),
+            self.diffuse_transmission.as_ref().and_then(|d| d.texture),
+            self.diffuse_transmission
+                .as_ref()
+                .and_then(|d| d.color_texture),
         ]
     }
 }
@@ -271,10 +286,12 @@ pub enum TextureSlot {
     Clearcoat = 12,
     ClearcoatRoughness = 13,
     ClearcoatNormal = 14,
+    DiffuseTransmission = 15,
+    DiffuseTransmissionColor = 16,
 }
 
 impl TextureSlot {
-    pub const COUNT: usize = 15;
+    pub const COUNT: usize = 17;
     /// The slots' names in messages, in slot order.
     pub const NAMES: [&'static str; TextureSlot::COUNT] = [
         "base colour",
@@ -292,6 +309,8 @@ impl TextureSlot {
         "clearcoat",
         "clearcoat roughness",
         "clearcoat normal",
+        "diffuse transmission",
+        "diffuse transmission colour",
     ];
 }
 
@@ -391,6 +410,18 @@ pub struct Clearcoat {
     pub normal_scale: f32,
 }
 
+/// KHR_materials_diffuse_transmission: the part of the diffuse lobe that goes through a thin
+/// surface (Lambertian, to the other side) instead of being reflected, and its colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffuseTransmission {
+    /// diffuseTransmissionFactor, in [0, 1]; the texture's alpha multiplies it.
+    pub factor: f32,
+    pub texture: Option<usize>,
+    /// diffuseTransmissionColorFactor (linear); the texture's rgb (sRGB) multiplies it.
+    pub color: [f32; 3],
+    pub color_texture: Option<usize>,
+}
+
 /// KHR_materials_specular (with KHR_materials_ior's index of refraction).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Specular {
@@ -460,6 +491,7 @@ impl Default for Material {
             anisotropy: None,
             transmission: None,
             clearcoat: None,
+            diffuse_transmission: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
             unlit: false,
