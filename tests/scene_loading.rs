@@ -2625,11 +2625,21 @@ fn diffuse_transmission_is_read_with_its_range_checked() {
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = d.load("diffuse-transmission").unwrap();
-    let p = s.materials[0].diffuse_transmission.as_ref().expect("paper transmits");
+    let p = s.materials[0]
+        .diffuse_transmission
+        .as_ref()
+        .expect("paper transmits");
     assert_eq!((p.factor, p.color), (0.4, [1.0, 0.9, 0.8]));
-    assert_eq!(s.materials[1].diffuse_transmission.as_ref().unwrap().factor, 1.0);
+    assert_eq!(
+        s.materials[1].diffuse_transmission.as_ref().unwrap().factor,
+        1.0
+    );
     let w: Vec<&str> = s.warnings.iter().map(|w| w.0.as_str()).collect();
-    assert!(w.iter().any(|w| w.contains("'too much'") && w.contains("clamped")), "{w:?}");
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'too much'") && w.contains("clamped")),
+        "{w:?}"
+    );
     assert!(!w.iter().any(|w| w.contains("ignores")), "{w:?}");
     // Paper still casts its shadow (only specular transmission lets light through unshadowed).
     assert!(s.draws[0].cast_shadows);

@@ -1423,6 +1423,18 @@ impl Renderer {
             Vec::new()
         };
 
+        // Bindings 10-15 of the lighting and transparent passes' set 0: the shadow atlas and its
+        // records, the tile light lists, the environment.
+        let shadow_and_environment = || {
+            [
+                (10, Resource::Sampled(atlas, &self.shadow_sampler)),
+                (11, Resource::Storage(&shadow_buffer)),
+                (12, Resource::Storage(&tile_buffer)),
+                (13, Resource::Sampled(env_radiance, &self.env.sampler)),
+                (14, Resource::Sampled(env_specular, &self.env.sampler)),
+                (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
+            ]
+        };
         for pass in &plan.passes {
             match pass {
                 Pass::Environment => {
@@ -1526,28 +1538,21 @@ impl Renderer {
                     }
                 }
                 Pass::Lighting => {
-                    let set = pool.set(
-                        &self.lighting_layout,
-                        &[
-                            (0, Resource::Uniform(&frame_buffer)),
-                            (1, Resource::Storage(lights_buffer)),
-                            (2, Resource::Storage(&gpu.materials)),
-                            (3, Resource::Sampled(&targets.albedo, &self.nearest)),
-                            (4, Resource::Sampled(&targets.frame, &self.nearest)),
-                            (5, Resource::Sampled(&targets.surface, &self.nearest)),
-                            (6, Resource::Sampled(&targets.fabric, &self.nearest)),
-                            (7, Resource::Sampled(&targets.emissive, &self.nearest)),
-                            (8, Resource::Sampled(&targets.depth, &self.nearest)),
-                            (9, Resource::Storage(&gpu.fabrics)),
-                            (10, Resource::Sampled(atlas, &self.shadow_sampler)),
-                            (11, Resource::Storage(&shadow_buffer)),
-                            (12, Resource::Storage(&tile_buffer)),
-                            (13, Resource::Sampled(env_radiance, &self.env.sampler)),
-                            (14, Resource::Sampled(env_specular, &self.env.sampler)),
-                            (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
-                            (16, Resource::Sampled(&targets.specular, &self.nearest)),
-                        ],
-                    )?;
+                    let mut bindings = vec![
+                        (0, Resource::Uniform(&frame_buffer)),
+                        (1, Resource::Storage(lights_buffer)),
+                        (2, Resource::Storage(&gpu.materials)),
+                        (3, Resource::Sampled(&targets.albedo, &self.nearest)),
+                        (4, Resource::Sampled(&targets.frame, &self.nearest)),
+                        (5, Resource::Sampled(&targets.surface, &self.nearest)),
+                        (6, Resource::Sampled(&targets.fabric, &self.nearest)),
+                        (7, Resource::Sampled(&targets.emissive, &self.nearest)),
+                        (8, Resource::Sampled(&targets.depth, &self.nearest)),
+                        (9, Resource::Storage(&gpu.fabrics)),
+                        (16, Resource::Sampled(&targets.specular, &self.nearest)),
+                    ];
+                    bindings.extend(shadow_and_environment());
+                    let set = pool.set(&self.lighting_layout, &bindings)?;
                     timed_pass(
                         &ctx,
                         queries.as_ref(),
@@ -1569,26 +1574,19 @@ impl Renderer {
                         .backdrop
                         .as_ref()
                         .filter(|_| plan.transmission_draws > 0);
-                    let frame_set = pool.set(
-                        &self.forward_layout,
-                        &[
-                            (0, Resource::Uniform(&frame_buffer)),
-                            (1, Resource::Storage(&gpu.materials)),
-                            (2, Resource::Storage(&gpu.fabrics)),
-                            (3, Resource::Storage(lights_buffer)),
-                            (4, Resource::Storage(colors)),
-                            (10, Resource::Sampled(atlas, &self.shadow_sampler)),
-                            (11, Resource::Storage(&shadow_buffer)),
-                            (12, Resource::Storage(&tile_buffer)),
-                            (13, Resource::Sampled(env_radiance, &self.env.sampler)),
-                            (14, Resource::Sampled(env_specular, &self.env.sampler)),
-                            (15, Resource::Sampled(&self.env.dfg, &self.env.sampler)),
-                            match backdrop {
-                                Some(b) => (16, Resource::Sampled(b, &self.env.sampler)),
-                                None => (16, Resource::Sampled(&self.white, &self.linear)),
-                            },
-                        ],
-                    )?;
+                    let mut bindings = vec![
+                        (0, Resource::Uniform(&frame_buffer)),
+                        (1, Resource::Storage(&gpu.materials)),
+                        (2, Resource::Storage(&gpu.fabrics)),
+                        (3, Resource::Storage(lights_buffer)),
+                        (4, Resource::Storage(colors)),
+                        match backdrop {
+                            Some(b) => (16, Resource::Sampled(b, &self.env.sampler)),
+                            None => (16, Resource::Sampled(&self.white, &self.linear)),
+                        },
+                    ];
+                    bindings.extend(shadow_and_environment());
+                    let frame_set = pool.set(&self.forward_layout, &bindings)?;
                     let order = passes::transparent::back_to_front(gpu, camera.view);
                     timed_pass(
                         &ctx,

@@ -292,71 +292,34 @@ impl Plan {
                     (s.resolution as u64 * cell as u64 / layout.cell as u64).max(1) as u32;
             }
         }
-        let is_mask = |d: &crate::scene::Draw| {
+        // Draws by what their material needs.
+        let material_of = |d: &crate::scene::Draw| {
             scene
                 .meshes
                 .get(d.mesh)
                 .and_then(|m| scene.materials.get(m.material))
-                .is_some_and(|m| m.alpha_cutoff.is_some())
         };
-        let mask_draws = scene.draws.iter().filter(|d| is_mask(d)).count();
-        let is_blend = |d: &crate::scene::Draw| {
+        let count = |keep: &dyn Fn(&crate::scene::Material) -> bool| {
             scene
-                .meshes
-                .get(d.mesh)
-                .and_then(|m| scene.materials.get(m.material))
-                .is_some_and(|m| m.blend)
+                .draws
+                .iter()
+                .filter(|d| material_of(d).is_some_and(keep))
+                .count()
         };
+        let mask_draws = count(&|m| m.alpha_cutoff.is_some());
         let mask_casters = scene
             .draws
             .iter()
-            .filter(|d| d.cast_shadows && (is_mask(d) || is_blend(d)))
-            .count();
-        let blend_draws = scene.draws.iter().filter(|d| is_blend(d)).count();
-        let transmission_draws = scene
-            .draws
-            .iter()
             .filter(|d| {
-                scene
-                    .meshes
-                    .get(d.mesh)
-                    .and_then(|m| scene.materials.get(m.material))
-                    .is_some_and(|m| m.transmission.is_some() && m.fabric.is_none())
+                d.cast_shadows
+                    && material_of(d).is_some_and(|m| m.alpha_cutoff.is_some() || m.blend)
             })
             .count();
-        let forward_opaque_draws = scene
-            .draws
-            .iter()
-            .filter(|d| {
-                scene
-                    .meshes
-                    .get(d.mesh)
-                    .and_then(|m| scene.materials.get(m.material))
-                    .is_some_and(|m| m.needs_forward() && !m.blend)
-            })
-            .count();
-        let coat_draws = scene
-            .draws
-            .iter()
-            .filter(|d| {
-                scene
-                    .meshes
-                    .get(d.mesh)
-                    .and_then(|m| scene.materials.get(m.material))
-                    .is_some_and(|m| m.clearcoat.is_some())
-            })
-            .count();
-        let diffuse_transmission_draws = scene
-            .draws
-            .iter()
-            .filter(|d| {
-                scene
-                    .meshes
-                    .get(d.mesh)
-                    .and_then(|m| scene.materials.get(m.material))
-                    .is_some_and(|m| m.diffuse_transmission.is_some())
-            })
-            .count();
+        let blend_draws = count(&|m| m.blend);
+        let transmission_draws = count(&|m| m.transmission.is_some() && m.fabric.is_none());
+        let forward_opaque_draws = count(&|m| m.needs_forward() && !m.blend);
+        let coat_draws = count(&|m| m.clearcoat.is_some());
+        let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
         if blend_draws + forward_opaque_draws > 0 {
             passes.insert(2, Pass::Transparent);
