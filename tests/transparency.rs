@@ -592,3 +592,73 @@ fn a_sheet_lit_from_behind_shows_the_lamp_through_its_diffuse_transmission() {
         );
     }
 }
+
+/// The woven model under both alpha modes (lace and gauze): a fabric square whose alpha (here the
+/// vertex colour's) is below a MASK cutoff is cut out, showing exactly what is behind; above it,
+/// it is the same fabric as opaque; under BLEND it composites linearly over what is behind, as
+/// the glTF materials do.
+#[test]
+fn the_woven_model_is_cut_out_by_mask_and_blended_by_blend() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let back = Material {
+        base_color: [0.2, 0.6, 0.3, 1.0],
+        metallic: 0.0,
+        roughness: 0.5,
+        ..Default::default()
+    };
+    let cloth = |alpha_cutoff: Option<f32>, blend: bool| Material {
+        metallic: 0.0,
+        alpha_cutoff,
+        blend,
+        fabric: Some(
+            weft::fabric::presets::by_name("cotton-plain")
+                .expect("preset")
+                .params(8.0),
+        ),
+        ..Default::default()
+    };
+    let mut render = |front: Option<(Material, f32)>| {
+        let mut meshes = vec![square("back", -1.0, 4.0, 0, 1.0)];
+        let mut mats = vec![back.clone()];
+        if let Some((m, alpha)) = front {
+            meshes.push(square("cloth", 0.0, 0.6, 1, alpha));
+            mats.push(m);
+        }
+        renderer
+            .render(&scene_of(meshes, mats), &options(None))
+            .expect("render")
+    };
+    let behind = render(None);
+    let opaque = render(Some((cloth(None, false), 1.0)));
+    let lace_cut = render(Some((cloth(Some(0.5), false), 0.3)));
+    let lace_kept = render(Some((cloth(Some(0.5), false), 0.8)));
+    let gauze = render(Some((cloth(None, true), 0.4)));
+    assert!(gauze.plan.runs(Pass::Transparent) && gauze.plan.fabric_materials == 1);
+    let (x, y) = (32, 24);
+    let (b, o) = (pixel(&behind, x, y), pixel(&opaque, x, y));
+    assert!(
+        (0..3).any(|k| (b[k] - o[k]).abs() > 0.02),
+        "the cloth must differ from what is behind"
+    );
+    for k in 0..3 {
+        let near = |got: f32, want: f32| (got - want).abs() <= 0.02 * want.abs().max(0.05);
+        let cut = pixel(&lace_cut, x, y)[k];
+        assert!(
+            near(cut, b[k]),
+            "channel {k}: cut lace {cut} instead of what is behind, {}",
+            b[k]
+        );
+        let kept = pixel(&lace_kept, x, y)[k];
+        assert!(
+            near(kept, o[k]),
+            "channel {k}: kept lace {kept} instead of the cloth, {}",
+            o[k]
+        );
+        let g = pixel(&gauze, x, y)[k];
+        let want = 0.4 * o[k] + 0.6 * b[k];
+        assert!(
+            near(g, want),
+            "channel {k}: gauze {g}, the linear blend {want}"
+        );
+    }
+}
