@@ -2644,3 +2644,12 @@ fn diffuse_transmission_is_read_with_its_range_checked() {
     // Paper still casts its shadow (only specular transmission lets light through unshadowed).
     assert!(s.draws[0].cast_shadows);
 }
+
+#[test]
+fn metadata_extensions_are_used_without_a_warning() {
+    let mut d = Doc::new();
+    d.quad(true, true);
+    d.json["extensionsUsed"] = json!(["KHR_xmp_json_ld", "KHR_xmp"]);
+    let s = d.load("xmp").unwrap();
+    assert!(s.warnings.iter().all(|w| !w.0.contains("xmp")), "{:?}", s.warnings);
+}

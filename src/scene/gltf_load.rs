@@ -79,6 +79,10 @@ struct DracoPrimitive {
     ids: HashMap<String, u32>,
 }
 
+/// Metadata extensions: they describe the file (authorship, licence) and never change the
+/// picture, so using them needs no warning.
+const METADATA_EXTENSIONS: &[&str] = &["KHR_xmp", "KHR_xmp_json_ld"];
+
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
@@ -379,7 +383,9 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         )));
     }
     for ext in &root.extensions_used {
-        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str())
+            && !METADATA_EXTENSIONS.contains(&ext.as_str())
+        {
             warnings.push(Warning(format!(
                 "{label} uses the glTF extension '{ext}', which weft ignores; the scene may look different than intended"
             )));

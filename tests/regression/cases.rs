@@ -483,7 +483,6 @@ pub fn cases() -> Vec<Case> {
         },
         Case {
             env: STUDIO,
-            warnings: &["KHR_xmp"],
             ..case("khronos-transmission-test", "tests/data/khronos/TransmissionTest/glTF-Binary/TransmissionTest.glb", "twelve glass spheres in three rows before a draped checker cloth: yellow clear, green cut out in bands (MASK), red and blue striped by their transmission textures; the checker shows through them, inverted and bent by refraction in the smooth row, blurred in the rough row; the metallic row mirrors instead; no sphere casts a shadow")
         },
         Case {
