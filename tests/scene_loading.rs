@@ -2651,5 +2651,9 @@ fn metadata_extensions_are_used_without_a_warning() {
     d.quad(true, true);
     d.json["extensionsUsed"] = json!(["KHR_xmp_json_ld", "KHR_xmp"]);
     let s = d.load("xmp").unwrap();
-    assert!(s.warnings.iter().all(|w| !w.0.contains("xmp")), "{:?}", s.warnings);
+    assert!(
+        s.warnings.iter().all(|w| !w.0.contains("xmp")),
+        "{:?}",
+        s.warnings
+    );
 }

@@ -662,3 +662,52 @@ fn the_woven_model_is_cut_out_by_mask_and_blended_by_blend() {
         );
     }
 }
+
+/// The opaque forward draws' face order (front faces first, so depth rejects the back faces
+/// they hide) changes the cost, not the picture: the default scene with its steel ball made of
+/// double-sided glass renders the same with the back faces forced first.
+#[test]
+fn the_front_faces_first_order_changes_nothing_in_the_image() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let mut glass = weft::scene::default_scene();
+    let mut made = 0;
+    for m in &mut glass.materials {
+        if m.metallic > 0.5 && m.fabric.is_none() {
+            m.double_sided = true;
+            m.transmission = Some(scene::Transmission {
+                factor: 1.0,
+                texture: None,
+                thickness: 0.0,
+                thickness_texture: None,
+                attenuation_color: [1.0; 3],
+                attenuation_distance: None,
+            });
+            made += 1;
+        }
+    }
+    assert_eq!(made, 1, "the default scene has one steel ball");
+    let o = RenderOptions {
+        width: 96,
+        height: 54,
+        read_hdr: true,
+        ..Default::default()
+    };
+    let front_first = renderer.render(&glass, &o).expect("render");
+    let back_first = renderer
+        .render(
+            &glass,
+            &RenderOptions {
+                force: weft::render::Force {
+                    back_faces_first: true,
+                    ..weft::render::Force::NONE
+                },
+                ..o.clone()
+            },
+        )
+        .expect("render");
+    assert!(front_first.plan.forward_opaque_draws == 1);
+    assert_eq!(
+        front_first.hdr, back_first.hdr,
+        "the face order changed the image"
+    );
+}

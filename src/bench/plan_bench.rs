@@ -96,7 +96,34 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
     let default = crate::scene::default_scene();
     let local = super::with_local_point_lights(&default, 256, 0.6);
 
-    let cases: [(&str, &str, &Scene, Force); 4] = [
+    // The transparent pass's face order: the default scene with its steel ball made of clear,
+    // double-sided glass (a transmissive draw: opaque in that pass, both faces drawn).
+    let mut glass = crate::scene::default_scene();
+    for m in &mut glass.materials {
+        if m.metallic > 0.5 && m.fabric.is_none() {
+            m.metallic = 0.0;
+            m.roughness = 0.1;
+            m.double_sided = true;
+            m.transmission = Some(crate::scene::Transmission {
+                factor: 1.0,
+                texture: None,
+                thickness: 0.0,
+                thickness_texture: None,
+                attenuation_color: [1.0; 3],
+                attenuation_distance: None,
+            });
+        }
+    }
+    let cases: [(&str, &str, &Scene, Force); 5] = [
+        (
+            "default, steel ball as 2-sided glass",
+            "glass back faces behind its front faces",
+            &glass,
+            Force {
+                back_faces_first: true,
+                ..Force::NONE
+            },
+        ),
         (
             "shadows.glb, nothing receives",
             "shadow pass (2 maps) and shadow sampling",

@@ -1606,6 +1606,7 @@ impl Renderer {
                                 targets,
                                 backdrop,
                                 &order,
+                                options.force.back_faces_first,
                             )
                         },
                     )?;

@@ -164,6 +164,9 @@ pub struct Force {
     pub unlit: bool,
     /// Compile the alphaMode MASK discard in (gbuffer ALPHA_MASK = 1) with no MASK material.
     pub alpha_mask: bool,
+    /// Draw the transparent pass's opaque double-sided draws back faces first, as its blended
+    /// ones are, instead of front faces first (whose depth rejects the back faces they hide).
+    pub back_faces_first: bool,
 }
 
 impl Force {
@@ -174,6 +177,7 @@ impl Force {
         vertex_colors: false,
         unlit: false,
         alpha_mask: false,
+        back_faces_first: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -182,6 +186,7 @@ impl Force {
         vertex_colors: true,
         unlit: true,
         alpha_mask: true,
+        back_faces_first: true,
     };
 }
 

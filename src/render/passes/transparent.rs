@@ -86,6 +86,7 @@ pub fn transparent_pass<'s>(
     targets: &'s Targets,
     backdrop: Option<&'s Image>,
     order: &[usize],
+    opaque_back_faces_first: bool,
 ) {
     if let Some(b) = backdrop {
         // The lit opaque image, and its mips for rough transmission.
@@ -123,9 +124,13 @@ pub fn transparent_pass<'s>(
     let blended = order.iter().filter(|&&i| scene.draws[i].blended);
     // Blended: a double-sided draw's back faces first, so its far side shows through its near
     // side; opaque: front faces first, so depth rejects the back faces they hide before shading
-    // them (TransmissionTest at 1280x720: 403 ms → 272 ms for the pass on lavapipe).
+    // them (`weft bench --plan` measures what that saves against `Force::back_faces_first`).
     for (pipeline, draws, back_first) in [
-        (pipelines.opaque, opaque.copied().collect::<Vec<_>>(), false),
+        (
+            pipelines.opaque,
+            opaque.copied().collect::<Vec<_>>(),
+            opaque_back_faces_first,
+        ),
         (pipelines.blend, blended.copied().collect::<Vec<_>>(), true),
     ] {
         let Some(pipeline) = pipeline.filter(|_| !draws.is_empty()) else {
