@@ -537,7 +537,7 @@ fn a_sheet_lit_from_behind_shows_the_lamp_through_its_diffuse_transmission() {
         ..Default::default()
     };
     let behind = Vec3::new(0.2, -0.3, 1.0).normalize();
-    let mut centre = |transmits: bool, intensity: f32, r: &mut Renderer| {
+    let centre = |transmits: bool, intensity: f32, r: &mut Renderer| {
         let mut s = scene_of(
             vec![square("sheet", 0.0, 1.0, 0, 1.0)],
             vec![sheet(transmits)],
@@ -669,23 +669,13 @@ fn the_woven_model_is_cut_out_by_mask_and_blended_by_blend() {
 #[test]
 fn the_front_faces_first_order_changes_nothing_in_the_image() {
     let mut renderer = Renderer::new(common::context()).expect("renderer");
-    let mut glass = weft::scene::default_scene();
-    let mut made = 0;
-    for m in &mut glass.materials {
-        if m.metallic > 0.5 && m.fabric.is_none() {
-            m.double_sided = true;
-            m.transmission = Some(scene::Transmission {
-                factor: 1.0,
-                texture: None,
-                thickness: 0.0,
-                thickness_texture: None,
-                attenuation_color: [1.0; 3],
-                attenuation_distance: None,
-            });
-            made += 1;
-        }
-    }
-    assert_eq!(made, 1, "the default scene has one steel ball");
+    let glass = weft::bench::plan_bench::default_with_glass_ball();
+    let balls = glass
+        .materials
+        .iter()
+        .filter(|m| m.transmission.is_some())
+        .count();
+    assert_eq!(balls, 1, "the default scene has one steel ball");
     let o = RenderOptions {
         width: 96,
         height: 54,

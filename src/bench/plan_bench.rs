@@ -69,6 +69,28 @@ fn interleaved(
         .collect())
 }
 
+/// The default scene with its steel ball made of clear, double-sided glass: a transmissive draw,
+/// opaque in the transparent pass with both faces drawn (what the pass's face order is about).
+pub fn default_with_glass_ball() -> Scene {
+    let mut glass = crate::scene::default_scene();
+    for m in &mut glass.materials {
+        if m.metallic > 0.5 && m.fabric.is_none() {
+            m.metallic = 0.0;
+            m.roughness = 0.1;
+            m.double_sided = true;
+            m.transmission = Some(crate::scene::Transmission {
+                factor: 1.0,
+                texture: None,
+                thickness: 0.0,
+                thickness_texture: None,
+                attenuation_color: [1.0; 3],
+                attenuation_distance: None,
+            });
+        }
+    }
+    glass
+}
+
 pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Result<PlanReport> {
     let base = RenderOptions {
         width: size.0,
@@ -96,24 +118,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
     let default = crate::scene::default_scene();
     let local = super::with_local_point_lights(&default, 256, 0.6);
 
-    // The transparent pass's face order: the default scene with its steel ball made of clear,
-    // double-sided glass (a transmissive draw: opaque in that pass, both faces drawn).
-    let mut glass = crate::scene::default_scene();
-    for m in &mut glass.materials {
-        if m.metallic > 0.5 && m.fabric.is_none() {
-            m.metallic = 0.0;
-            m.roughness = 0.1;
-            m.double_sided = true;
-            m.transmission = Some(crate::scene::Transmission {
-                factor: 1.0,
-                texture: None,
-                thickness: 0.0,
-                thickness_texture: None,
-                attenuation_color: [1.0; 3],
-                attenuation_distance: None,
-            });
-        }
-    }
+    let glass = default_with_glass_ball();
     let cases: [(&str, &str, &Scene, Force); 5] = [
         (
             "default, steel ball as 2-sided glass",

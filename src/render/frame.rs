@@ -214,9 +214,9 @@ pub(crate) struct DrawRange {
     pub(crate) receive_shadows: bool,
     /// The material is alphaMode MASK (the shadow pass casts it with its cut-out pipeline).
     pub(crate) alpha_mask: bool,
-    /// The material is alphaMode BLEND or transmissive (KHR_materials_transmission): drawn by the
-    /// transparent pass, not into the G-buffer; `blended`: alphaMode BLEND (else opaque there).
-    pub(crate) blend: bool,
+    /// The G-buffer cannot hold the material (`Material::needs_forward`): drawn by the
+    /// transparent pass instead; `blended`: alphaMode BLEND (else opaque there).
+    pub(crate) forward: bool,
     pub(crate) blended: bool,
     /// The centre of the mesh's bounds (object space): the transparent pass sorts by it.
     pub(crate) centre: glam::Vec3,
@@ -968,7 +968,7 @@ impl Renderer {
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.alpha_cutoff.is_some() || m.blend),
-                blend: scene
+                forward: scene
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.needs_forward()),

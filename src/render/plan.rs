@@ -316,7 +316,7 @@ impl Plan {
             })
             .count();
         let blend_draws = count(&|m| m.blend);
-        let transmission_draws = count(&|m| m.transmission.is_some() && m.fabric.is_none());
+        let transmission_draws = count(&|m| m.transmission.is_some());
         let forward_opaque_draws = count(&|m| m.needs_forward() && !m.blend);
         let coat_draws = count(&|m| m.clearcoat.is_some());
         let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());

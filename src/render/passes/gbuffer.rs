@@ -41,8 +41,8 @@ pub fn gbuffer_pass<'s>(
     cmd.bind_vertex_buffer(&scene.vertices);
     cmd.bind_index_buffer(&scene.indices);
     cmd.bind_sets(pipeline, 0, &[frame_set]);
-    // alphaMode BLEND draws are the transparent pass's.
-    for draw in scene.draws.iter().filter(|d| !d.blend) {
+    // Draws the G-buffer cannot hold are the transparent pass's.
+    for draw in scene.draws.iter().filter(|d| !d.forward) {
         let material = draw.material.min(scene.material_count - 1);
         cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
         cmd.set_cull(if draw.double_sided {

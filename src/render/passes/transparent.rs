@@ -19,7 +19,7 @@ use crate::render::frame::{GpuScene, Targets};
 use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
 use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Image, Pipeline, Usage};
 
-/// The indices into `scene.draws` of the blended draws, farthest first from a camera with view
+/// The indices into `scene.draws` of the transparent pass's draws, farthest first from a camera with view
 /// matrix `view` (view space looks down -Z): by the view-space depth of each draw's bounds'
 /// centre; ties keep the scene's order.
 pub fn back_to_front(scene: &GpuScene, view: Mat4) -> Vec<usize> {
@@ -27,7 +27,7 @@ pub fn back_to_front(scene: &GpuScene, view: Mat4) -> Vec<usize> {
         .draws
         .iter()
         .enumerate()
-        .filter(|(_, d)| d.blend)
+        .filter(|(_, d)| d.forward)
         .map(|(i, d)| {
             let centre = view.transform_point3(d.world.transform_point3(d.centre));
             // -z is the distance in front of the camera; NaN (a degenerate matrix) sorts last.
