@@ -46,6 +46,8 @@ layout(constant_id = 20) const uint TRANSMISSION = 0u;
 layout(constant_id = 21) const uint COAT = 0u;
 // 1: some drawn material transmits diffusely (KHR_materials_diffuse_transmission).
 layout(constant_id = 22) const uint DIFFUSE_TRANSMISSION = 0u;
+// 1: some drawn material is iridescent (KHR_materials_iridescence).
+layout(constant_id = 23) const uint IRIDESCENCE = 0u;
 
 // Set 0: gbuffer.vert's bindings 0-4, then lighting.frag's shadow and environment bindings.
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
@@ -95,7 +97,7 @@ void main() {
     vec3 v = normalize(frame.eye.xyz - in_world_pos);
     vec3 radiance = shade_surface(in_world_pos, v, s.albedo, frame_decode(s.frame), s.surface, s.fabric,
                                   s.emissive, s.specular, s.transmission, s.attenuation, s.coat,
-                                  s.coat_normal, s.diffuse_transmission);
+                                  s.coat_normal, s.diffuse_transmission, s.iridescence);
     radiance = all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0);
     // alphaMode BLEND blends by the base colour's alpha; a transmissive surface that is not BLEND
     // covers what is behind (its transmitted light is in its radiance).

@@ -67,6 +67,7 @@ layout(location = 0) out vec4 out_color;
 const uint TRANSMISSION = 0u;
 const uint COAT = 0u;
 const uint DIFFUSE_TRANSMISSION = 0u;
+const uint IRIDESCENCE = 0u;
 vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec3 attenuation) {
     return vec3(0.0);
 }
@@ -139,7 +140,8 @@ void main() {
     vec4 surface = texelFetch(gb_surface, px, 0);
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),
                                   texelFetch(gb_emissive, px, 0), texelFetch(gb_specular, px, 0),
-                                  vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0));
+                                  vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0),
+                                  vec4(0.0));
     // Never NaN or Inf into the image.
     out_color = vec4(all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0), 1.0);
 }

@@ -1,13 +1,13 @@
 #version 460
 // Evaluates the glTF BRDF of include/pbr.glsl (the core material and KHR_materials_specular,
 // _sheen and _anisotropy) on a batch of inputs, so tests can compare the GPU with the Rust twin
-// (weft::reference::shading::gltf_brdf_cos and its terms). One invocation per input.
+// (weft::reference::shading::gltf_brdf_cos and its terms; with KHR_materials_iridescence's film). One invocation per input.
 #extension GL_GOOGLE_include_directive : require
 #include "pbr.glsl"
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (192 bytes).
+// Rust twin: tests/pbr_probe_gpu.rs PbrProbeInput (208 bytes).
 struct PbrProbeInput {
     vec4 n;              // xyz: normal (unit)
     vec4 v;              // xyz: view direction (unit)
@@ -21,9 +21,10 @@ struct PbrProbeInput {
     vec4 volume;         // transmission: x thickness, y ior, z attenuation distance, w backdrop width
     vec4 attenuation;    // rgb attenuation colour, w the transmission factor (GltfSurface)
     vec4 coat;           // clearcoat: x factor, y roughness (its normal: n)
+    vec4 film;           // iridescence: x factor, y the film's ior, z its thickness (nm) (GltfSurface)
 };
 
-// Rust twin: PbrProbeOutput (96 bytes).
+// Rust twin: PbrProbeOutput (112 bytes).
 struct PbrProbeOutput {
     vec4 brdf;   // gltf_brdf_cos (rgb), 0
     vec4 terms;  // charlie_d, sheen_brdf_cos, ggx_aniso_d (t·h = b·h from n·h), sheen_lambda(n·v)
@@ -33,6 +34,7 @@ struct PbrProbeOutput {
     vec4 coated;       // clearcoat_brdf_cos(brdf, n, v, l, coat, coat roughness) (rgb),
                        // clearcoat_fresnel(n·v)
     vec4 through;      // diffuse_btdf_cos(n, v, −l, surface, attenuation colour) (rgb), 0
+    vec4 film;         // iridescence_fresnel(film ior, n·v, thickness, f0) (rgb), 0
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
@@ -55,13 +57,14 @@ void main() {
     PbrProbeInput p = inputs[id];
     GltfSurface s = GltfSurface(p.base_metallic.rgb, p.base_metallic.a, p.params.x, p.f0_specular.a,
                                 p.f0_specular.rgb, p.sheen.rgb, p.sheen.a, p.t_anisotropy.xyz,
-                                p.t_anisotropy.w, p.attenuation.w);
+                                p.t_anisotropy.w, p.attenuation.w, p.film.x, p.film.y, p.film.z);
     vec3 brdf = gltf_brdf_cos(p.n.xyz, p.v.xyz, p.l.xyz, s, p.params.yz, p.params.w);
     float nh = p.terms_in.x;
     float sr = p.terms_in.w;
     float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);
     float alpha = max(p.params.x * p.params.x, 1e-3);
     outputs[id].brdf = vec4(brdf, 0.0);
+    outputs[id].film = vec4(iridescence_fresnel(p.film.y, dot(p.n.xyz, p.v.xyz), p.film.z, p.f0_specular.rgb), 0.0);
     outputs[id].through = vec4(diffuse_btdf_cos(p.n.xyz, p.v.xyz, -p.l.xyz, s, p.attenuation.rgb), 0.0);
     outputs[id].coated = vec4(clearcoat_brdf_cos(brdf, p.n.xyz, p.v.xyz, p.l.xyz, p.coat.x, p.coat.y),
                               clearcoat_fresnel(dot(p.n.xyz, p.v.xyz)));

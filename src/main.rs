@@ -1443,6 +1443,10 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 serde_json::json!(plan.diffuse_transmission_draws),
             ),
             (
+                "iridescence_draws",
+                serde_json::json!(plan.iridescence_draws),
+            ),
+            (
                 "transmission_draws",
                 serde_json::json!(plan.transmission_draws),
             ),

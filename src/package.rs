@@ -133,19 +133,22 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          KHR_materials_specular, _sheen, _anisotropy and _transmission, and its terms `charlie_d`, \
          `sheen_brdf_cos`, `ggx_aniso_d`, `sheen_lambda`), the transmission functions \
          (`transmission_exit`, `transmission_lod`, `volume_attenuation`, `transmission_weight`) \
-         the clearcoat's (`clearcoat_brdf_cos`, `clearcoat_fresnel`) and the diffuse \
-         transmission's (`diffuse_btdf_cos`) on \
-         a batch of inputs, one invocation per input. Bind a buffer of `count` 192-byte \
-         `PbrProbeInput` records (twelve `vec4`: `n`, `v`, \
+         the clearcoat's (`clearcoat_brdf_cos`, `clearcoat_fresnel`), the diffuse \
+         transmission's (`diffuse_btdf_cos`) and the thin film's (`iridescence_fresnel`, \
+         KHR_materials_iridescence, also inside `gltf_brdf_cos`) on \
+         a batch of inputs, one invocation per input. Bind a buffer of `count` 208-byte \
+         `PbrProbeInput` records (thirteen `vec4`: `n`, `v`, \
          `l`, `base_metallic`, `f0_specular`, `sheen`, `t_anisotropy`, `params` (roughness, \
          E(n·v), E(n·l), Ess(n·v) of the energy compensation), `terms_in` (n·h, n·l, n·v, sheen \
          roughness), `volume` (thickness, ior, attenuation distance, backdrop width), \
-         `attenuation` (colour, transmission factor), `coat` (factor, roughness)) and a buffer for \
-         `count` 96-byte outputs (`vec4 brdf`, `vec4 terms`, `vec4 exit_lod`, `vec4 transmitted`, \
-         `vec4 coated`, `vec4 through`: the BTDF at −l with the attenuation colour). Push the \
+         `attenuation` (colour, transmission factor), `coat` (factor, roughness), `film` \
+         (iridescence factor, film ior, film thickness in nm)) and a buffer for \
+         `count` 112-byte outputs (`vec4 brdf`, `vec4 terms`, `vec4 exit_lod`, `vec4 transmitted`, \
+         `vec4 coated`, `vec4 through`: the BTDF at −l with the attenuation colour, `vec4 film`: \
+         the film's Fresnel at n·v over F0). Push the \
          `uint count`; dispatch `ceil(count / 64)` groups. The Rust twins: \
          `weft::reference::shading::gltf_brdf_cos`, `transmission_exit`, `transmission_lod`, \
-         `volume_attenuation`, `transmission_weight`, `clearcoat_brdf_cos`, `clearcoat_fresnel`, `diffuse_btdf_cos`.",
+         `volume_attenuation`, `transmission_weight`, `clearcoat_brdf_cos`, `clearcoat_fresnel`, `diffuse_btdf_cos`, `iridescence_fresnel`.",
     ),
     (
         "lighting.frag",
@@ -403,6 +406,8 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
     ("forward.frag", 1, 15, "KHR_materials_clearcoat normal texture (tangent space; a flat normal when none)"),
     ("forward.frag", 1, 16, "KHR_materials_diffuse_transmission texture (A: the factor; white when none)"),
     ("forward.frag", 1, 17, "KHR_materials_diffuse_transmission colour texture (RGB, sRGB; white when none)"),
+    ("forward.frag", 1, 18, "KHR_materials_iridescence texture (R: the factor; white when none)"),
+    ("forward.frag", 1, 19, "KHR_materials_iridescence thickness texture (G: from the minimum to the maximum thickness; white when none)"),
     ("forward.frag", 0, 16, "the backdrop: the lighting pass's HDR image copied before the transparent pass draws, with box-filtered mips (linear, clamp); any image when TRANSMISSION = 0"),
     ("pbr_probe.comp", 0, 0, "the inputs: `PbrProbeInput[count]`"),
     ("pbr_probe.comp", 0, 1, "the outputs: `PbrProbeOutput[count]`, written by the shader"),
@@ -447,6 +452,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 17, "IBL: lighting.frag's constant 7"),
     ("forward.frag", 18, "IBL_SAMPLES: lighting.frag's constant 8"),
     ("forward.frag", 19, "UNLIT: lighting.frag's constant 9"),
+    ("forward.frag", 23, "IRIDESCENCE: 1 shades KHR_materials_iridescence surfaces (`Material.extra.w` flag 256) with their thin film's Fresnel; 0 (default) compiles that out"),
     ("forward.frag", 22, "DIFFUSE_TRANSMISSION: 1 lights KHR_materials_diffuse_transmission surfaces (`Material.extra.w` flag 128) from behind too; 0 (default) compiles that out"),
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),
     ("forward.frag", 20, "TRANSMISSION: 1 reads the backdrop for KHR_materials_transmission surfaces (`Material.extra.w` flag 32); 0 (default) compiles that out"),

@@ -42,6 +42,8 @@ struct PbrProbeInput {
     attenuation: [f32; 4],
     /// Clearcoat factor, roughness (its normal: n), two unused.
     coat: [f32; 4],
+    /// KHR_materials_iridescence: factor, film ior, film thickness (nm), unused.
+    film: [f32; 4],
 }
 
 #[repr(C)]
@@ -53,6 +55,7 @@ struct PbrProbeOutput {
     transmitted: [f32; 4],
     coated: [f32; 4],
     through: [f32; 4],
+    film: [f32; 4],
 }
 
 fn unit(v: [f64; 3]) -> [f32; 3] {
@@ -98,11 +101,14 @@ fn surface(inp: &PbrProbeInput) -> GltfSurface {
         ],
         anisotropy: inp.t_anisotropy[3],
         transmission: inp.attenuation[3],
+        iridescence: inp.film[0],
+        film_ior: inp.film[1],
+        film_thickness: inp.film[2],
     }
 }
 
 /// The Rust twin of pbr_probe.comp's main().
-fn twin(inp: &PbrProbeInput) -> [f32; 24] {
+fn twin(inp: &PbrProbeInput) -> [f32; 28] {
     let s = surface(inp);
     let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
     let b = gltf_brdf_cos(
@@ -135,6 +141,12 @@ fn twin(inp: &PbrProbeInput) -> [f32; 24] {
         xyz(inp.l),
         inp.coat[0],
         inp.coat[1],
+    );
+    let film = sh::iridescence_fresnel(
+        inp.film[1],
+        inp.n[0] * inp.v[0] + inp.n[1] * inp.v[1] + inp.n[2] * inp.v[2],
+        inp.film[2],
+        xyz(inp.f0_specular),
     );
     let exit = sh::transmission_exit(xyz(inp.l), xyz(inp.n), xyz(inp.v), thickness, ior);
     let att = sh::volume_attenuation(thickness, xyz(inp.attenuation), distance);
@@ -169,6 +181,10 @@ fn twin(inp: &PbrProbeInput) -> [f32; 24] {
         through[1],
         through[2],
         0.0,
+        film[0],
+        film[1],
+        film[2],
+        0.0,
     ]
 }
 
@@ -177,7 +193,7 @@ fn twin(inp: &PbrProbeInput) -> [f32; 24] {
 /// of |p| + thickness covers the dozen of them with a factor 2 to spare); log2 is 2^-21 absolute
 /// in [0.5, 2] and 3 ulp elsewhere; pow is exp2(y·log2 x) (`pow_rel`); 1 − specular·(F0·A + B)
 /// carries the absolute error of the product and sum (4 ulp of the larger term), times the base.
-fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 24]) -> [f64; 7] {
+fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 28]) -> [f64; 7] {
     let p = inp.l;
     let thickness = inp.volume[0] as f64;
     let ior = inp.volume[1] as f64;
@@ -320,6 +336,7 @@ fn case(
     attenuation: [f32; 3],
     coat: [f32; 4],
 ) -> Case {
+    // No film unless the surface has one (its thickness in film[2]).
     Case {
         name,
         input: PbrProbeInput {
@@ -341,6 +358,7 @@ fn case(
             volume,
             attenuation: v4(attenuation, s.transmission),
             coat,
+            film: [s.iridescence, s.film_ior, s.film_thickness, 0.0],
         },
     }
 }
@@ -375,6 +393,7 @@ fn cases() -> Vec<Case> {
                             t: unit([1.0, 0.0, 0.0]),
                             anisotropy: if tag == "side" { 0.8 } else { 0.0 },
                             transmission: if tag == "retro" { 0.6 } else { 0.0 },
+                            ..GltfSurface::core([0.0; 3], 0.0, 0.0)
                         };
                         let e = [0.3, 0.6];
                         let h = unit([
@@ -423,6 +442,7 @@ fn cases() -> Vec<Case> {
             t: unit([phi.cos(), phi.sin(), 0.0]),
             anisotropy: if i % 4 == 0 { u() as f32 } else { 0.0 },
             transmission: if i % 5 == 0 { u() as f32 } else { 0.0 },
+            ..GltfSurface::core([0.0; 3], 0.0, 0.0)
         };
         let e = [u() as f32 * 0.8, u() as f32 * 0.8];
         let nh = u() as f32;
@@ -462,6 +482,164 @@ fn cases() -> Vec<Case> {
             ],
         ));
     }
+    // KHR_materials_iridescence: films from none to 1.5 µm, of index 1 (no film) to 2.5, over
+    // dielectric and metal bases, weighted 0 to 1; isotropic and without sheen, so the BRDF's
+    // bound is the base's plus what the film's own bound does through the lobes (film_bound).
+    for i in 0..1500 {
+        let mut u = || rng.next_f64();
+        let v = dir(u().max(1e-4), u() * 6.283);
+        let l = dir(u().max(1e-4), u() * 6.283);
+        let s = GltfSurface {
+            base: [u() as f32, u() as f32, u() as f32],
+            metallic: if i % 2 == 0 { 0.0 } else { u() as f32 },
+            roughness: u() as f32,
+            specular: u() as f32,
+            f0: [(u() * 0.3) as f32, (u() * 0.3) as f32, (u() * 0.3) as f32],
+            iridescence: if i % 7 == 0 { 1.0 } else { u() as f32 },
+            film_ior: if i % 13 == 0 {
+                1.0
+            } else {
+                (1.0 + u() * 1.5) as f32
+            },
+            film_thickness: if i % 11 == 0 {
+                0.0
+            } else {
+                (u() * 1500.0) as f32
+            },
+            ..GltfSurface::core([0.0; 3], 0.0, 0.0)
+        };
+        out.push(case(
+            format!("film {i}"),
+            n,
+            v,
+            l,
+            &s,
+            [0.0, 0.0],
+            [0.5, 0.5, 0.5, 0.5],
+            [0.0, 1.0, 0.0, 1.0],
+            [1.0; 3],
+            [0.0; 4],
+        ));
+    }
+    out
+}
+
+/// Absolute bound (rgb) of `iridescence_fresnel(film_ior, cos1, thickness, f0)` under the Vulkan
+/// precision rules. Its colour is a sum of cosines of the optical path: cos has an absolute error
+/// of 2^-11 (the rule for [−π, π]; lavapipe's range reduction keeps it beyond), and its argument
+/// carries 8 ulp of itself. Each order m adds 2|Cm| times the sensitivity's error: the Gaussian
+/// amplitudes of the XYZ fits times the rows of the XYZ to Rec. 709 matrix (absolute). n·v (a dot
+/// product, 4 ulp) moves the optical path by 2d·cos1/(η·cos2) of it. The rest (Schlick, the Airy
+/// coefficients) is a few dozen correctly rounded operations on numbers at most 1: 64 ulp of the
+/// sum of the terms' magnitudes. Counted twice, as the twin is f32 too.
+fn film_bound(film_ior: f64, cos1: f64, thickness: f64, f0: [f64; 3]) -> [f64; 3] {
+    const M: [[f64; 3]; 3] = [
+        [3.2404542, 1.5371385, 0.4985314],
+        [0.9692660, 1.8760108, 0.0415560],
+        [0.0556434, 0.2040259, 1.0572252],
+    ];
+    let val = [5.4856e-13, 4.4201e-13, 5.2481e-13];
+    let pos = [1.6810e+06, 1.7953e+06, 2.2084e+06];
+    let var = [4.3278e+09, 9.3046e+09, 6.6121e+09];
+    let tau = std::f64::consts::TAU;
+    let t = (thickness / 0.03).clamp(0.0, 1.0);
+    let eta = 1.0 + (film_ior - 1.0) * t * t * (3.0 - 2.0 * t);
+    let c1 = cos1.clamp(0.0, 1.0);
+    let cos2_sq = 1.0 - (1.0 - c1 * c1) / (eta * eta);
+    if cos2_sq < 0.0 {
+        return [0.0; 3];
+    }
+    let cos2 = cos2_sq.sqrt().max(1e-6);
+    let opd = 2.0 * eta * thickness * cos2;
+    let d_opd = 2.0 * thickness * c1 / (eta * cos2) * 4.0 * U + opd * 8.0 * U;
+    let f0_12 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    let r12 = f0_12 + (1.0 - f0_12) * (1.0 - c1).powi(5);
+    let t121 = 1.0 - r12;
+    let mut out = [0.0; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let sq = f0[k].clamp(0.0, 0.9999).sqrt();
+        let base_ior = (1.0 + sq) / (1.0 - sq);
+        let r0 = (base_ior - eta) / (base_ior + eta);
+        let r23 = r0 * r0 + (1.0 - r0 * r0) * (1.0 - cos2).powi(5);
+        let r123 = (r12 * r23).clamp(1e-5, 0.9999);
+        let rs = t121 * t121 * r23 / (1.0 - r123);
+        let mut cm = rs - t121;
+        let mut err = 0.0;
+        let mut magnitude = r12 + rs;
+        for m in 1..=2 {
+            cm *= r123.sqrt();
+            let phase = tau * m as f64 * opd * 1e-9;
+            let mut s_err = 0.0;
+            let mut s_max = 0.0;
+            for j in 0..3 {
+                let amp =
+                    val[j] * (tau * var[j]).sqrt() * (-phase * phase * var[j]).exp() / 1.0685e-7;
+                let arg = pos[j] * phase + tau;
+                let slope = pos[j] * tau * m as f64 * 1e-9 * d_opd;
+                s_err += M[k][j] * amp * (2f64.powi(-11) + arg * 8.0 * U + slope);
+                s_max += M[k][j] * amp;
+            }
+            let amp_x =
+                9.7470e-14 * (tau * 4.5282e+09f64).sqrt() * (-phase * phase * 4.5282e+09).exp()
+                    / 1.0685e-7;
+            let arg_x = 2.2399e+06 * phase + tau;
+            s_err += M[k][0]
+                * amp_x
+                * (2f64.powi(-11) + arg_x * 8.0 * U + 2.2399e+06 * tau * m as f64 * 1e-9 * d_opd);
+            s_max += M[k][0] * amp_x;
+            err += 2.0 * cm.abs() * s_err;
+            magnitude += 2.0 * cm.abs() * s_max;
+        }
+        *o = 2.0 * (err + 64.0 * U * magnitude);
+    }
+    out
+}
+
+/// What a film's error (film_bound of the dielectric's F0 and of the metal's base colour) does
+/// to gltf_brdf_cos: the Fresnel multiplies the GGX lobe (D·V times its energy compensation),
+/// and its maximum the diffuse's 1 − specular·max F; the film's weight mixes them in.
+fn film_brdf_bound(inp: &PbrProbeInput) -> [f64; 3] {
+    if inp.film[0] <= 0.0 {
+        return [0.0; 3];
+    }
+    let f = |a: [f32; 4]| [a[0] as f64, a[1] as f64, a[2] as f64];
+    let (n, v, l) = (xyz4(inp.n), xyz4(inp.v), xyz4(inp.l));
+    let (nl, nv) = (dot(n, l), dot(n, v));
+    if nl <= 0.0 || nv <= 0.0 {
+        return [0.0; 3];
+    }
+    let h = unit([
+        l[0] as f64 + v[0] as f64,
+        l[1] as f64 + v[1] as f64,
+        l[2] as f64 + v[2] as f64,
+    ]);
+    let nh = dot(n, h).clamp(0.0, 1.0);
+    let vh = dot(v, h).clamp(0.0, 1.0);
+    let r = inp.params[0] as f64;
+    let alpha = (r * r).max(1e-3);
+    let a2 = alpha * alpha;
+    let dd = nh * nh * (a2 - 1.0) + 1.0;
+    let d = a2 / (std::f64::consts::PI * dd * dd);
+    let vis =
+        0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
+    let ess = (inp.params[3] as f64).max(1e-2);
+    let (film, ior, thick) = (inp.film[0] as f64, inp.film[1] as f64, inp.film[2] as f64);
+    let f0 = f(inp.f0_specular);
+    let base = f(inp.base_metallic);
+    let e_d = film_bound(ior, vh, thick, f0);
+    let e_m = film_bound(ior, vh, thick, base);
+    let max_d = e_d[0].max(e_d[1]).max(e_d[2]);
+    let metallic = inp.base_metallic[3] as f64;
+    let spec = inp.f0_specular[3] as f64;
+    let mut out = [0.0; 3];
+    for k in 0..3 {
+        let comp_d = 1.0 + f0[k] * (1.0 / ess - 1.0);
+        let comp_m = 1.0 + base[k] * (1.0 / ess - 1.0);
+        let dielectric =
+            spec * d * vis * comp_d * e_d[k] + spec * base[k] / std::f64::consts::PI * max_d;
+        let metal = d * vis * comp_m * e_m[k];
+        out[k] = 1.5 * film * nl * ((1.0 - metallic) * dielectric + metallic * metal);
+    }
     out
 }
 
@@ -497,8 +675,12 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         "through.g",
         "through.b",
         "-",
+        "film.r",
+        "film.g",
+        "film.b",
+        "-",
     ];
-    let mut worst: [(f64, String); 24] = std::array::from_fn(|_| (0.0, String::new()));
+    let mut worst: [(f64, String); 28] = std::array::from_fn(|_| (0.0, String::new()));
     let mut failures = Vec::new();
     for (k, c) in cases.iter().enumerate() {
         let g: PbrProbeOutput = bytemuck::pod_read_unaligned(&bytes[k * size..(k + 1) * size]);
@@ -509,19 +691,36 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             g.transmitted,
             g.coated,
             g.through,
+            g.film,
         ]
         .concat();
         let want = twin(&c.input);
         let rel = bounds(&c.input);
         let abs = transmission_bounds(&c.input, &want);
-        for j in 0..24 {
-            if j == 3 || j == 15 || j == 23 {
+        let film_abs = film_brdf_bound(&c.input);
+        let i = &c.input;
+        let film_out = film_bound(
+            i.film[1] as f64,
+            dot(xyz4(i.n), xyz4(i.v)),
+            i.film[2] as f64,
+            [
+                i.f0_specular[0] as f64,
+                i.f0_specular[1] as f64,
+                i.f0_specular[2] as f64,
+            ],
+        );
+        for j in 0..28 {
+            if j == 3 || j == 15 || j == 23 || j == 27 {
                 continue;
             }
             let (x, t) = (got[j] as f64, want[j] as f64);
             assert!(x.is_finite(), "{}: {} is {x} on the GPU", c.name, names[j]);
             assert!(t.is_finite(), "{}: {} is {t} in the twin", c.name, names[j]);
-            let bound = if j < 8 {
+            let bound = if j < 3 {
+                t.abs() * rel[j] + film_abs[j] + 1e-9
+            } else if j >= 24 {
+                film_out[j - 24] + 1e-9
+            } else if j < 8 {
                 t.abs() * rel[j] + 1e-9
             } else if j < 16 {
                 abs[j - 8] + 1e-9
@@ -563,8 +762,8 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             }
         }
     }
-    for j in 0..24 {
-        if j != 3 && j != 15 && j != 23 {
+    for j in 0..28 {
+        if j != 3 && j != 15 && j != 23 && j != 27 {
             println!(
                 "{:>15}: worst {:.3} of its bound ({})",
                 names[j], worst[j].0, worst[j].1
@@ -576,7 +775,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         failures.is_empty(),
         "{} of {} outputs outside their bound, e.g.:\n{}",
         failures.len(),
-        cases.len() * 21,
+        cases.len() * 24,
         failures
             .iter()
             .take(20)
@@ -645,6 +844,7 @@ fn sheen_albedo_scaling_conserves_energy() {
             t: [1.0, 0.0, 0.0],
             anisotropy: 0.0,
             transmission: 0.0,
+            ..GltfSurface::core([0.0; 3], 0.0, 0.0)
         };
         let e = |c: f64| weft::reference::shading::sheen_albedo(c, sr, 24) as f32;
         let e_v = e(cv);
@@ -707,6 +907,7 @@ fn a_clearcoat_over_a_white_base_conserves_energy() {
         t: [1.0, 0.0, 0.0],
         anisotropy: 0.0,
         transmission: 0.0,
+        ..GltfSurface::core([0.0; 3], 0.0, 0.0)
     };
     for &cv in &[0.05f64, 0.3, 0.7, 1.0] {
         for &cr in &[0.05f32, 0.3, 0.7, 1.0] {

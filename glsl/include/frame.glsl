@@ -87,6 +87,8 @@ const uint SLOT_CLEARCOAT_ROUGHNESS = 13u;
 const uint SLOT_CLEARCOAT_NORMAL = 14u;
 const uint SLOT_DIFFUSE_TRANSMISSION = 15u;
 const uint SLOT_DIFFUSE_TRANSMISSION_COLOR = 16u;
+const uint SLOT_IRIDESCENCE = 17u;
+const uint SLOT_IRIDESCENCE_THICKNESS = 18u;
 
 // Material.extra.w flags.
 const uint MATERIAL_ANISOTROPY = 1u;
@@ -97,6 +99,7 @@ const uint MATERIAL_BLEND = 16u;  // alphaMode BLEND: the transparent pass blend
 const uint MATERIAL_TRANSMISSION = 32u;  // KHR_materials_transmission: alpha.yzw, volume
 const uint MATERIAL_CLEARCOAT = 64u;  // KHR_materials_clearcoat: coat
 const uint MATERIAL_DIFFUSE_TRANSMISSION = 128u;  // KHR_materials_diffuse_transmission
+const uint MATERIAL_IRIDESCENCE = 256u;  // KHR_materials_iridescence: iridescence
 
 struct Material {
     vec4 base_color;          // linear rgba factor
@@ -107,7 +110,7 @@ struct Material {
     vec4 specular;            // KHR_materials_specular: rgb colour factor, a: specular factor
     vec4 extra;               // x: the dielectric's F0 from KHR_materials_ior, y: anisotropy
                               // strength, z: anisotropy rotation (radians), w: MATERIAL_* flags (a whole number)
-    vec4 uv[34];              // per texture slot s: rows uv[2s], uv[2s+1] of its affine UV map
+    vec4 uv[38];              // per texture slot s: rows uv[2s], uv[2s+1] of its affine UV map
                               // (xyz), uv[2s].w: the UV set (0 or 1)
     vec4 alpha;               // x: alphaCutoff of an alphaMode MASK material (flag MATERIAL_MASK);
                               // KHR_materials_transmission and _volume: y the transmission factor,
@@ -117,6 +120,8 @@ struct Material {
     vec4 coat;                // KHR_materials_clearcoat: x factor, y roughness, z the coat normal
                               // texture's scale (0: none), w unused
     vec4 diffuse_transmission;  // KHR_materials_diffuse_transmission: x factor, yzw colour
+    vec4 iridescence;         // KHR_materials_iridescence: x factor, y the film's ior, z and w its
+                              // thickness (nm) at the thickness texture's 0 and 1
 };
 
 // alphaMode MASK: the base colour's alpha (factor x texture x vertex colour) below the cutoff is

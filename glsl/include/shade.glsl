@@ -5,7 +5,7 @@
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
-// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT and DIFFUSE_TRANSMISSION, and defines `transmitted_light` (forward.frag: from the
+// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION and IRIDESCENCE, and defines `transmitted_light` (forward.frag: from the
 // backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
@@ -195,8 +195,13 @@ vec3 aniso_env_specular(vec3 n, vec3 v, GltfSurface s, float ess) {
         float pdf = ggx_aniso_d(hl.x, hl.y, hl.z, at, alpha) * hl.z / (4.0 * vh);
         float vis = ggx_aniso_v(dot(s.t, v), dot(b, v), nv, dot(s.t, l), dot(b, l), nl, at, alpha);
         float w = pow(1.0 - vh, 5.0);
-        vec3 f = mix((s.f0 + (1.0 - s.f0) * w) * comp_d, (s.base + (1.0 - s.base) * w) * comp_m,
-                     s.metallic);
+        vec3 fd = s.f0 + (1.0 - s.f0) * w;
+        vec3 fm = s.base + (1.0 - s.base) * w;
+        if (s.iridescence > 0.0) {
+            fd = mix(fd, iridescence_fresnel(s.film_ior, vh, s.film_thickness, s.f0), s.iridescence);
+            fm = mix(fm, iridescence_fresnel(s.film_ior, vh, s.film_thickness, s.base), s.iridescence);
+        }
+        vec3 f = mix(fd * comp_d, fm * comp_m, s.metallic);
         sum += env_radiance_at(l, fis_lod(pdf, IBL_SAMPLES, frame.env_params.z)) * f
              * (4.0 * vis * nl * vh / hl.z);
     }
@@ -250,8 +255,16 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
     // still reflects exactly 1 of a white furnace.
     float ess = ab.x + ab.y;
     vec3 dielectric = (s.f0 * ab.x + ab.y) * ggx_energy_compensation(s.f0, ess);
-    vec3 spec_albedo = mix(s.specular * dielectric,
-                           (base * ab.x + ab.y) * ggx_energy_compensation(base, ess), metallic);
+    vec3 metal = (base * ab.x + ab.y) * ggx_energy_compensation(base, ess);
+    if (s.iridescence > 0.0) {
+        // KHR_materials_iridescence: the film's Fresnel at n·v times the lobe's albedo Ess
+        // stands in for the split sum's F0·A + B (as the sample viewer does), mixed by its weight.
+        vec3 fd = iridescence_fresnel(s.film_ior, nv, s.film_thickness, s.f0);
+        dielectric = mix(dielectric, fd * ess * ggx_energy_compensation(s.f0, ess), s.iridescence);
+        metal = mix(metal, iridescence_fresnel(s.film_ior, nv, s.film_thickness, base) * ess
+                               * ggx_energy_compensation(base, ess), s.iridescence);
+    }
+    vec3 spec_albedo = mix(s.specular * dielectric, metal, metallic);
     vec3 bent = n;
     float lookup_roughness = roughness;
     if (s.anisotropy > 0.0) {
@@ -376,11 +389,11 @@ vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
 // emissive_ao and specular; may be any value, the caller keeps NaN and Inf out of the image.
-// transmission, attenuation, coat_params, coat_n, dtrans: surface.glsl's GSurface fields (no
-// transmission, coat or diffuse transmission from the G-buffer, which holds none).
+// transmission, attenuation, coat_params, coat_n, dtrans, iridescence: surface.glsl's GSurface
+// fields (no transmission, coat, diffuse transmission or film from the G-buffer, which holds none).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
                    vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
-                   vec4 coat_params, vec3 coat_n, vec4 dtrans) {
+                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -464,7 +477,8 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         float t_spec = TRANSMISSION != 0u ? transmission.x : 0.0;
         float t_diff = DIFFUSE_TRANSMISSION != 0u ? dtrans.x : 0.0;
         GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z,
-                                    1.0 - (1.0 - t_spec) * (1.0 - t_diff));
+                                    1.0 - (1.0 - t_spec) * (1.0 - t_diff),
+                                    IRIDESCENCE != 0u ? iridescence.x : 0.0, iridescence.y, iridescence.z);
         float diffuse_through = (1.0 - metallic) * (1.0 - t_spec) * t_diff;
         bool has_sheen = max3(s.sheen) > 0.0;
         float e_v = has_sheen ? sheen_albedo(dot(n, v), s.sheen_roughness) : 0.0;

@@ -31,6 +31,9 @@ layout(set = 1, binding = 15) uniform sampler2D clearcoat_normal_tex;
 // KHR_materials_diffuse_transmission's textures: the factor (A) and the colour (RGB, sRGB).
 layout(set = 1, binding = 16) uniform sampler2D diffuse_transmission_tex;
 layout(set = 1, binding = 17) uniform sampler2D diffuse_transmission_color_tex;
+// KHR_materials_iridescence's textures: the factor (R) and the film's thickness (G).
+layout(set = 1, binding = 18) uniform sampler2D iridescence_tex;
+layout(set = 1, binding = 19) uniform sampler2D iridescence_thickness_tex;
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
@@ -73,6 +76,9 @@ struct GSurface {
     vec3 coat_normal;
     // KHR_materials_diffuse_transmission: the factor × texture (x; 0: none) and colour (yzw).
     vec4 diffuse_transmission;
+    // KHR_materials_iridescence: the factor × texture (x; 0: none), the film's ior (y) and
+    // thickness in nanometres (z).
+    vec4 iridescence;
 };
 // Non-fabric materials reuse two fabric channels: fabric holds the sheen colour (rgb) and
 // roughness (a), surface.z the anisotropy strength (and frame.zw its direction).
@@ -287,6 +293,14 @@ GSurface material_surface() {    GSurface s;
         float dt = m.diffuse_transmission.x * sample_slot(diffuse_transmission_tex, m, SLOT_DIFFUSE_TRANSMISSION).a;
         vec3 dc = m.diffuse_transmission.yzw * sample_slot(diffuse_transmission_color_tex, m, SLOT_DIFFUSE_TRANSMISSION_COLOR).rgb;
         s.diffuse_transmission = vec4(clamp(dt, 0.0, 1.0), max(dc, vec3(0.0)));
+    }
+    s.iridescence = vec4(0.0, 1.3, 0.0, 0.0);
+    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_IRIDESCENCE) != 0u) {
+        float factor = m.iridescence.x * sample_slot(iridescence_tex, m, SLOT_IRIDESCENCE).r;
+        // Without a thickness texture the film is the maximum thick (the texture reads white).
+        float thickness = mix(m.iridescence.z, m.iridescence.w,
+                              sample_slot(iridescence_thickness_tex, m, SLOT_IRIDESCENCE_THICKNESS).g);
+        s.iridescence = vec4(clamp(factor, 0.0, 1.0), m.iridescence.y, max(thickness, 0.0), 0.0);
     }
     if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_CLEARCOAT) != 0u) {
         float factor = m.coat.x * sample_slot(clearcoat_tex, m, SLOT_CLEARCOAT).r;

@@ -493,6 +493,17 @@ impl Raster {
                 // The CPU reference has no backdrop: transmissive materials are not among the
                 // scenes it renders (their transmission is the forward pass's, tests/transparency.rs).
                 transmission: 0.0,
+                // KHR_materials_iridescence: without a thickness texture the film is the
+                // maximum thick.
+                iridescence: m
+                    .iridescence
+                    .as_ref()
+                    .map_or(0.0, |i| i.factor.clamp(0.0, 1.0)),
+                film_ior: m.iridescence.as_ref().map_or(1.3, |i| i.ior),
+                film_thickness: m
+                    .iridescence
+                    .as_ref()
+                    .map_or(0.0, |i| i.thickness_max.max(0.0)),
             });
         }
         if let Some((params, gpu)) = &dm.fabric {

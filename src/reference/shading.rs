@@ -136,6 +136,11 @@ pub struct GltfSurface {
     /// KHR_materials_transmission: the part of the dielectric's diffuse lobe transmitted instead
     /// (0: opaque).
     pub transmission: f32,
+    /// KHR_materials_iridescence: the thin film's weight (0: none), its index of refraction and
+    /// its thickness in nanometres.
+    pub iridescence: f32,
+    pub film_ior: f32,
+    pub film_thickness: f32,
 }
 
 impl GltfSurface {
@@ -152,6 +157,9 @@ impl GltfSurface {
             t: [1.0, 0.0, 0.0],
             anisotropy: 0.0,
             transmission: 0.0,
+            iridescence: 0.0,
+            film_ior: 1.3,
+            film_thickness: 0.0,
         }
     }
 }
@@ -183,6 +191,76 @@ pub fn diffuse_btdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, color: Vec3)
     let w = (1.0 - n_v.clamp(0.0, 1.0)).powf(5.0);
     let fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
     scale(color, (1.0 - s.specular * max3(fr)) * (-n_l / PI))
+}
+
+/// `film_sensitivity` of pbr.glsl: the Fourier transform of the CIE 1931 colour matching
+/// functions (Belcour & Barla's Gaussian fits) at optical path difference `opd` (nm) and phase
+/// shift, in linear Rec. 709.
+pub fn film_sensitivity(opd: f32, shift: Vec3) -> Vec3 {
+    let phase = 2.0 * PI * opd * 1e-9;
+    let val = [5.4856e-13f32, 4.4201e-13, 5.2481e-13];
+    let pos = [1.6810e+06f32, 1.7953e+06, 2.2084e+06];
+    let var = [4.3278e+09f32, 9.3046e+09, 6.6121e+09];
+    let mut xyz = [0.0f32; 3];
+    for i in 0..3 {
+        xyz[i] = val[i]
+            * (2.0 * PI * var[i]).sqrt()
+            * (pos[i] * phase + shift[i]).cos()
+            * (-phase * phase * var[i]).exp();
+    }
+    xyz[0] += 9.7470e-14
+        * (2.0 * PI * 4.5282e+09f32).sqrt()
+        * (2.2399e+06 * phase + shift[0]).cos()
+        * (-4.5282e+09 * phase * phase).exp();
+    let xyz = xyz.map(|c| c / 1.0685e-7);
+    [
+        3.2404542 * xyz[0] - 1.5371385 * xyz[1] - 0.4985314 * xyz[2],
+        -0.9692660 * xyz[0] + 1.8760108 * xyz[1] + 0.0415560 * xyz[2],
+        0.0556434 * xyz[0] - 0.2040259 * xyz[1] + 1.0572252 * xyz[2],
+    ]
+}
+
+/// `iridescence_fresnel` of pbr.glsl (KHR_materials_iridescence): the reflectance at cos θ1
+/// (in air) of a film of index `film_ior`, `thickness` nanometres thick, over a base of normal
+/// Fresnel `base_f0` — Belcour & Barla's Airy sum with Schlick interfaces, two orders.
+pub fn iridescence_fresnel(film_ior: f32, cos1: f32, thickness: f32, base_f0: Vec3) -> Vec3 {
+    let t = (thickness / 0.03).clamp(0.0, 1.0);
+    let eta = lerp(1.0, film_ior, t * t * (3.0 - 2.0 * t));
+    let c1 = cos1.clamp(0.0, 1.0);
+    let cos2_sq = 1.0 - (1.0 - c1 * c1) / (eta * eta);
+    if cos2_sq < 0.0 {
+        return [1.0; 3];
+    }
+    let cos2 = cos2_sq.sqrt();
+    let f0_12 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    let r12 = f0_12 + (1.0 - f0_12) * (1.0 - c1).powf(5.0);
+    let t121 = 1.0 - r12;
+    let phi21 = if eta < 1.0 { 0.0 } else { PI };
+    let opd = 2.0 * eta * thickness * cos2;
+    let mut out = [0.0f32; 3];
+    let mut phi = [0.0f32; 3];
+    let mut cm = [0.0f32; 3];
+    let mut sr = [0.0f32; 3];
+    for i in 0..3 {
+        let sq = base_f0[i].clamp(0.0, 0.9999).sqrt();
+        let base_ior = (1.0 + sq) / (1.0 - sq);
+        let r0 = (base_ior - eta) / (base_ior + eta);
+        let r23 = r0 * r0 + (1.0 - r0 * r0) * (1.0 - cos2).powf(5.0);
+        phi[i] = phi21 + if base_ior < eta { PI } else { 0.0 };
+        let r123 = (r12 * r23).clamp(1e-5, 0.9999);
+        let rs = t121 * t121 * r23 / (1.0 - r123);
+        out[i] = r12 + rs;
+        cm[i] = rs - t121;
+        sr[i] = r123.sqrt();
+    }
+    for m in 1..=2 {
+        let s = film_sensitivity(m as f32 * opd, phi.map(|p| m as f32 * p));
+        for i in 0..3 {
+            cm[i] *= sr[i];
+            out[i] += cm[i] * 2.0 * s[i];
+        }
+    }
+    out.map(|c| c.max(0.0))
 }
 
 /// `clearcoat_fresnel` of pbr.glsl: Schlick with F0 0.04.
@@ -345,21 +423,30 @@ pub fn gltf_brdf_cos(
         ggx_d(n_h, alpha) * smith_v(n_l, n_v, alpha)
     };
     let w = (1.0 - v_h).powf(5.0);
-    let fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
+    let mut fr = add(s.f0, scale(sub([1.0; 3], s.f0), w));
+    let mut fm = add(s.base, scale(sub([1.0; 3], s.base), w));
+    let mut reflected = max3(fr);
+    if s.iridescence > 0.0 {
+        let fd = iridescence_fresnel(s.film_ior, v_h, s.film_thickness, s.f0);
+        reflected = lerp(reflected, max3(fd), s.iridescence);
+        fr = mix(fr, fd, s.iridescence);
+        fm = mix(
+            fm,
+            iridescence_fresnel(s.film_ior, v_h, s.film_thickness, s.base),
+            s.iridescence,
+        );
+    }
     let dielectric = add(
         scale(
             s.base,
-            (1.0 - s.specular * max3(fr)) * (1.0 - s.transmission) / PI,
+            (1.0 - s.specular * reflected) * (1.0 - s.transmission) / PI,
         ),
         mul(
             scale(fr, s.specular * dv),
             ggx_energy_compensation(s.f0, ess),
         ),
     );
-    let metal = mul(
-        scale(add(s.base, scale(sub([1.0; 3], s.base), w)), dv),
-        ggx_energy_compensation(s.base, ess),
-    );
+    let metal = mul(scale(fm, dv), ggx_energy_compensation(s.base, ess));
     let mut f = scale(mix(dielectric, metal, s.metallic), n_l);
     if max3(s.sheen) > 0.0 {
         let k = max3(s.sheen);

@@ -372,8 +372,8 @@ impl Renderer {
             },
         ])?;
         // A material's textures (set 1): its slots in gbuffer.frag's bindings 0-10 (the weave
-        // texture at 4); forward.frag adds transmission's, thickness's and the clearcoat's three
-        // at 11-15.
+        // texture at 4); forward.frag adds transmission's, thickness's, the clearcoat's three,
+        // diffuse transmission's two and iridescence's two at 11-19.
         let material_layout = ctx.create_set_layout(
             &(0..11)
                 .map(|b| sampled(b, Stages::FRAGMENT))
@@ -750,6 +750,7 @@ impl Renderer {
             key.push((20, (plan.transmission_draws > 0) as u32));
             key.push((21, (plan.coat_draws > 0) as u32));
             key.push((22, (plan.diffuse_transmission_draws > 0) as u32));
+            key.push((23, (plan.iridescence_draws > 0) as u32));
             key
         });
         // Two blend modes: opaque forward draws (transmissive, not BLEND) replace and write depth,
@@ -1407,6 +1408,8 @@ impl Renderer {
                 bindings.push((15, Resource::Sampled(pick(14, "normal"), sampler(14))));
                 bindings.push((16, Resource::Sampled(pick(15, "white"), sampler(15))));
                 bindings.push((17, Resource::Sampled(pick(16, "white"), sampler(16))));
+                bindings.push((18, Resource::Sampled(pick(17, "white"), sampler(17))));
+                bindings.push((19, Resource::Sampled(pick(18, "white"), sampler(18))));
                 pool.set(&self.forward_material_layout, &bindings)
             } else {
                 pool.set(&self.material_layout, &bindings)

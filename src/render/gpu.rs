@@ -201,8 +201,11 @@ pub struct GpuMaterial {
     pub coat: [f32; 4],
     /// KHR_materials_diffuse_transmission: x the factor, yzw the colour (linear).
     pub diffuse_transmission: [f32; 4],
+    /// KHR_materials_iridescence: x the factor, y the film's ior, z and w its thickness (nm) at
+    /// the thickness texture's 0 and 1 (the minimum and maximum).
+    pub iridescence: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 160 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 176 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
@@ -219,6 +222,8 @@ pub const MATERIAL_TRANSMISSION: u32 = 32;
 pub const MATERIAL_CLEARCOAT: u32 = 64;
 /// KHR_materials_diffuse_transmission: drawn by the transparent pass.
 pub const MATERIAL_DIFFUSE_TRANSMISSION: u32 = 128;
+/// KHR_materials_iridescence: drawn by the transparent pass.
+pub const MATERIAL_IRIDESCENCE: u32 = 256;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -294,6 +299,11 @@ impl GpuMaterial {
                         MATERIAL_DIFFUSE_TRANSMISSION
                     } else {
                         0
+                    }
+                    | if m.iridescence.is_some() {
+                        MATERIAL_IRIDESCENCE
+                    } else {
+                        0
                     };
                 [m.specular.f0_from_ior(), strength, rotation, flags as f32]
             },
@@ -338,6 +348,10 @@ impl GpuMaterial {
             diffuse_transmission: match &m.diffuse_transmission {
                 Some(d) => [d.factor, d.color[0], d.color[1], d.color[2]],
                 None => [0.0, 1.0, 1.0, 1.0],
+            },
+            iridescence: match &m.iridescence {
+                Some(i) => [i.factor, i.ior, i.thickness_min, i.thickness_max],
+                None => [0.0, 1.3, 0.0, 0.0],
             },
         }
     }

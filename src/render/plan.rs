@@ -153,8 +153,11 @@ pub struct Plan {
     /// KHR_materials_diffuse_transmission: drawn draws with such a material (the transparent
     /// pass draws them).
     pub diffuse_transmission_draws: usize,
-    /// Draws the transparent pass draws opaque, writing depth: transmissive, coated or
-    /// diffusely transmissive, not BLEND.
+    /// KHR_materials_iridescence: drawn draws with a thin film (the transparent pass draws
+    /// them: the G-buffer has no room for a film).
+    pub iridescence_draws: usize,
+    /// Draws the transparent pass draws opaque, writing depth: transmissive, coated, diffusely
+    /// transmissive or iridescent, not BLEND.
     pub forward_opaque_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
@@ -320,6 +323,7 @@ impl Plan {
         let forward_opaque_draws = count(&|m| m.needs_forward() && !m.blend);
         let coat_draws = count(&|m| m.clearcoat.is_some());
         let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());
+        let iridescence_draws = count(&|m| m.iridescence.is_some());
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
         if blend_draws + forward_opaque_draws > 0 {
             passes.insert(2, Pass::Transparent);
@@ -385,6 +389,7 @@ impl Plan {
             forward_opaque_draws,
             coat_draws,
             diffuse_transmission_draws,
+            iridescence_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -524,6 +529,13 @@ impl fmt::Display for Plan {
                 f,
                 "diff. trans. {} draw(s) with KHR_materials_diffuse_transmission: drawn by the transparent pass, lit from both sides",
                 self.diffuse_transmission_draws
+            )?;
+        }
+        if self.iridescence_draws > 0 {
+            writeln!(
+                f,
+                "iridescence {} draw(s) with KHR_materials_iridescence: thin-film Fresnel, drawn by the transparent pass",
+                self.iridescence_draws
             )?;
         }
         if self.coat_draws > 0 {

@@ -26,9 +26,9 @@ use super::material_ext::{self, TexRef};
 use super::resources;
 use super::tangents::{self, UvTransform};
 use super::{
-    Anisotropy, Clearcoat, ColorSpace, DiffuseTransmission, Draw, Light, LightKind, Material, Mesh,
-    Scene, Shadow, Sheen, SlotUv, Specular, Texture, TextureSampler, TextureSlot, Transmission,
-    Vertex, Warning,
+    Anisotropy, Clearcoat, ColorSpace, DiffuseTransmission, Draw, Iridescence, Light, LightKind,
+    Material, Mesh, Scene, Shadow, Sheen, SlotUv, Specular, Texture, TextureSampler, TextureSlot,
+    Transmission, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -100,6 +100,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::VOLUME,
     material_ext::CLEARCOAT,
     material_ext::DIFFUSE_TRANSMISSION,
+    material_ext::IRIDESCENCE,
     FABRIC_EXTENSION,
     // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
@@ -402,6 +403,11 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::IOR,
         material_ext::ANISOTROPY,
         material_ext::VARIANTS,
+        material_ext::TRANSMISSION,
+        material_ext::VOLUME,
+        material_ext::CLEARCOAT,
+        material_ext::DIFFUSE_TRANSMISSION,
+        material_ext::IRIDESCENCE,
         DRACO,
     ];
     root.extensions_required
@@ -874,6 +880,11 @@ impl<'a> Loader<'a> {
             .map(|v| material_ext::diffuse_transmission(&mut ctx, v))
             .transpose()
             .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::IRIDESCENCE;
+        let iridescence_ext = ext(material_ext::IRIDESCENCE)
+            .map(|v| material_ext::iridescence(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
         ctx.extension = material_ext::CLEARCOAT;
         let clearcoat_ext = ext(material_ext::CLEARCOAT)
             .map(|v| material_ext::clearcoat(&mut ctx, v))
@@ -1078,6 +1089,33 @@ impl<'a> Loader<'a> {
             }),
         };
 
+        let iridescence = match &iridescence_ext {
+            None => None,
+            Some(e) => Some(Iridescence {
+                factor: e.factor,
+                texture: ext_texture(
+                    self,
+                    &e.texture,
+                    (TextureSlot::Iridescence, "iridescence texture"),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
+                ior: e.ior,
+                thickness_min: e.thickness_min,
+                thickness_max: e.thickness_max,
+                thickness_texture: ext_texture(
+                    self,
+                    &e.thickness_texture,
+                    (
+                        TextureSlot::IridescenceThickness,
+                        "iridescence thickness texture",
+                    ),
+                    ColorSpace::Linear,
+                    &mut uv_transforms,
+                )?,
+            }),
+        };
+
         // TEXCOORD_0 carries one transform, baked into the vertices (so tangents and the weave
         // follow it): the first TEXCOORD_0 slot's. Every slot then gets its own map from the
         // baked coordinates (or from TEXCOORD_1) to its own.
@@ -1139,6 +1177,16 @@ impl<'a> Loader<'a> {
             }
             (d, _) => d,
         };
+        let iridescence = match (iridescence, &fabric) {
+            (Some(_), Some(_)) => {
+                self.warn(format_args!(
+                    "{who} has both {} and {FABRIC_EXTENSION}; the woven model's threads carry no thin film yet, so the iridescence is ignored on it",
+                    material_ext::IRIDESCENCE
+                ));
+                None
+            }
+            (i, _) => i,
+        };
         let clearcoat = match (clearcoat, &fabric) {
             (Some(_), Some(_)) => {
                 self.warn(format_args!(
@@ -1170,6 +1218,7 @@ impl<'a> Loader<'a> {
             transmission,
             clearcoat,
             diffuse_transmission,
+            iridescence,
             uv: slot_uv,
             samplers,
             unlit,

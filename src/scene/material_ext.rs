@@ -17,6 +17,7 @@ pub const TRANSMISSION: &str = "KHR_materials_transmission";
 pub const VOLUME: &str = "KHR_materials_volume";
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+pub const IRIDESCENCE: &str = "KHR_materials_iridescence";
 
 /// A glTF textureInfo, unresolved: the texture index, its texCoord, and the raw
 /// KHR_texture_transform (parsed by the loader, like the core slots').
@@ -73,6 +74,16 @@ pub struct ClearcoatExt {
     pub roughness_texture: Option<TexRef>,
     pub normal_texture: Option<TexRef>,
     pub normal_scale: f32,
+}
+
+#[derive(Clone, Debug)]
+pub struct IridescenceExt {
+    pub factor: f32,
+    pub texture: Option<TexRef>,
+    pub ior: f32,
+    pub thickness_min: f32,
+    pub thickness_max: f32,
+    pub thickness_texture: Option<TexRef>,
 }
 
 #[derive(Clone, Debug)]
@@ -348,6 +359,31 @@ pub fn clearcoat(ctx: &mut Ctx, v: &Value) -> Result<ClearcoatExt, String> {
                         ctx.number("clearcoatNormalTexture.scale", s, -100.0, 100.0)?;
                 }
             }
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+pub fn iridescence(ctx: &mut Ctx, v: &Value) -> Result<IridescenceExt, String> {
+    let mut out = IridescenceExt {
+        factor: 0.0,
+        texture: None,
+        ior: 1.3,
+        thickness_min: 100.0,
+        thickness_max: 400.0,
+        thickness_texture: None,
+    };
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            "iridescenceFactor" => out.factor = ctx.number(key, v, 0.0, 1.0)?,
+            "iridescenceTexture" => out.texture = Some(ctx.texture(key, v)?),
+            // The specification asks for at least 1; a film thinner than air is not a film.
+            "iridescenceIor" => out.ior = ctx.number(key, v, 1.0, 10.0)?,
+            // Nanometres; a film of over 100 µm shows no colours (its orders blur out).
+            "iridescenceThicknessMinimum" => out.thickness_min = ctx.number(key, v, 0.0, 1e5)?,
+            "iridescenceThicknessMaximum" => out.thickness_max = ctx.number(key, v, 0.0, 1e5)?,
+            "iridescenceThicknessTexture" => out.thickness_texture = Some(ctx.texture(key, v)?),
             other => ctx.unknown(other),
         }
     }

@@ -124,6 +124,8 @@ pub struct Material {
     pub clearcoat: Option<Clearcoat>,
     /// KHR_materials_diffuse_transmission (None: the diffuse lobe only reflects).
     pub diffuse_transmission: Option<DiffuseTransmission>,
+    /// KHR_materials_iridescence (None: no thin film).
+    pub iridescence: Option<Iridescence>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
     /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
@@ -142,12 +144,13 @@ pub struct Material {
 
 impl Material {
     /// Whether the G-buffer cannot hold this material, so the transparent pass draws it:
-    /// alphaMode BLEND, transmission, a clear coat, diffuse transmission.
+    /// alphaMode BLEND, transmission, a clear coat, diffuse transmission, a thin film.
     pub fn needs_forward(&self) -> bool {
         self.blend
             || self.transmission.is_some()
             || self.clearcoat.is_some()
             || self.diffuse_transmission.is_some()
+            || self.iridescence.is_some()
     }
 
     /// The material's textures (indices into `Scene::textures`) in [`TextureSlot`] order.
@@ -172,6 +175,8 @@ impl Material {
             self.diffuse_transmission
                 .as_ref()
                 .and_then(|d| d.color_texture),
+            self.iridescence.as_ref().and_then(|i| i.texture),
+            self.iridescence.as_ref().and_then(|i| i.thickness_texture),
         ]
     }
 }
@@ -288,10 +293,12 @@ pub enum TextureSlot {
     ClearcoatNormal = 14,
     DiffuseTransmission = 15,
     DiffuseTransmissionColor = 16,
+    Iridescence = 17,
+    IridescenceThickness = 18,
 }
 
 impl TextureSlot {
-    pub const COUNT: usize = 17;
+    pub const COUNT: usize = 19;
     /// The slots' names in messages, in slot order.
     pub const NAMES: [&'static str; TextureSlot::COUNT] = [
         "base colour",
@@ -311,6 +318,8 @@ impl TextureSlot {
         "clearcoat normal",
         "diffuse transmission",
         "diffuse transmission colour",
+        "iridescence",
+        "iridescence thickness",
     ];
 }
 
@@ -422,6 +431,22 @@ pub struct DiffuseTransmission {
     pub color_texture: Option<usize>,
 }
 
+/// KHR_materials_iridescence: a thin dielectric film over the material whose interference
+/// colours its Fresnel reflection (soap bubbles, oil on water, coated lenses).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Iridescence {
+    /// iridescenceFactor, in [0, 1]; the texture's red multiplies it.
+    pub factor: f32,
+    pub texture: Option<usize>,
+    /// iridescenceIor: the film's index of refraction (≥ 1).
+    pub ior: f32,
+    /// iridescenceThicknessMinimum and _Maximum (nanometres): the film's thickness where the
+    /// thickness texture's green is 0 and 1; without the texture, the maximum.
+    pub thickness_min: f32,
+    pub thickness_max: f32,
+    pub thickness_texture: Option<usize>,
+}
+
 /// KHR_materials_specular (with KHR_materials_ior's index of refraction).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Specular {
@@ -492,6 +517,7 @@ impl Default for Material {
             transmission: None,
             clearcoat: None,
             diffuse_transmission: None,
+            iridescence: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
             unlit: false,

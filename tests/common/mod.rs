@@ -82,6 +82,8 @@ pub fn gbuffer_surface(
             anisotropy: px(&g.surface, 2),
             // The G-buffer holds no transmissive surface.
             transmission: 0.0,
+            // Nor any thin film.
+            ..weft::reference::shading::GltfSurface::core([0.0; 3], 0.0, 0.0)
         }
     });
     Some(weft::reference::shading::Surface {

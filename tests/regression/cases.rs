@@ -494,6 +494,10 @@ pub fn cases() -> Vec<Case> {
             ..case("khronos-clearcoat-test", "tests/data/khronos/ClearCoatTest/glTF-Binary/ClearCoatTest.glb", "six rows of three tiles with a bent tube on each: base layer, the same coated, the coat alone (black); the coated tubes carry sharp extra highlights of the studio's soft boxes that the base-layer tubes lack; the bottom row's coat has its own bumps")
         },
         Case {
+            env: STUDIO,
+            ..case("khronos-iridescence-suzanne", "tests/data/khronos/IridescenceSuzanne/glTF-Binary/IridescenceSuzanne.glb", "three Suzanne heads under a thin film (KHR_materials_iridescence): left a grey dielectric gone pearly, pink and green at its rims; centre a metal turned dark teal with magenta and blue where the film is seen obliquely; right clear glass whose film thickness follows a noise texture, so swirls of rainbow colour float over the backdrop seen through it")
+        },
+        Case {
             camera: Some(1),
             env: STUDIO,
             warnings: &["has no normals"],
