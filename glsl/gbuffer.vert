@@ -94,4 +94,6 @@ void main() {
         }
     }
     gl_Position = frame.view_proj * world_pos;
+    // glTF POINTS are 1 pixel (the G-buffer's point-list pipeline; ignored for other topologies).
+    gl_PointSize = 1.0;
 }

@@ -1446,6 +1446,8 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "iridescence_draws",
                 serde_json::json!(plan.iridescence_draws),
             ),
+            ("line_draws", serde_json::json!(plan.line_draws)),
+            ("point_draws", serde_json::json!(plan.point_draws)),
             (
                 "transmission_draws",
                 serde_json::json!(plan.transmission_draws),

@@ -119,6 +119,7 @@ fn quad_scene(material: Material, textures: Vec<Texture>) -> Scene {
             indices: vec![0, 1, 2, 0, 2, 3],
             material: 0,
             colors: Vec::new(),
+            topology: weft::scene::Topology::Triangles,
         }],
         draws: vec![Draw::new(0, Mat4::IDENTITY)],
         materials: vec![material],

@@ -119,6 +119,7 @@ fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
             indices: vec![0, 2, 1, 0, 3, 2],
             material: 0,
             colors: Vec::new(),
+            topology: weft::scene::Topology::Triangles,
         }],
         draws: vec![Draw::new(0, Mat4::IDENTITY)],
         materials: vec![Material {

@@ -49,6 +49,7 @@ fn sphere(material: usize, r: f32) -> Mesh {
         indices,
         material,
         colors: Vec::new(),
+        topology: weft::scene::Topology::Triangles,
     }
 }
 
@@ -270,6 +271,7 @@ fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
                 indices: vec![0, 1, 2, 0, 2, 3],
                 material: 0,
                 colors: Vec::new(),
+                topology: weft::scene::Topology::Triangles,
             }],
             draws: vec![Draw::new(0, Mat4::IDENTITY)],
             materials: vec![Material {

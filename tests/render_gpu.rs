@@ -379,6 +379,7 @@ fn texture_wrap_modes_follow_the_sampler() {
                 indices: vec![0, 1, 2, 0, 2, 3],
                 material: 0,
                 colors: Vec::new(),
+                topology: weft::scene::Topology::Triangles,
             }],
             draws: vec![Draw::new(0, Mat4::IDENTITY)],
             materials: vec![material],
@@ -509,6 +510,7 @@ fn quad_scene(colors: Vec<[f32; 4]>, material: scene::Material) -> scene::Scene 
             indices: vec![0, 1, 2, 0, 2, 3],
             material: 0,
             colors,
+            topology: weft::scene::Topology::Triangles,
         }],
         draws: vec![scene::Draw::new(0, glam::Mat4::IDENTITY)],
         materials: vec![material],
@@ -732,6 +734,7 @@ fn card_over_floor(card_alpha: f32) -> scene::Scene {
         indices: vec![0, 1, 2, 0, 2, 3],
         material: 0,
         colors: Vec::new(),
+        topology: weft::scene::Topology::Triangles,
     };
     let card = scene::Mesh {
         name: "card".into(),
@@ -744,6 +747,7 @@ fn card_over_floor(card_alpha: f32) -> scene::Scene {
         indices: vec![0, 1, 2, 0, 2, 3],
         material: 1,
         colors: vec![[1.0, 1.0, 1.0, card_alpha]; 4],
+        topology: weft::scene::Topology::Triangles,
     };
     let mut floor_draw = scene::Draw::new(0, glam::Mat4::IDENTITY);
     floor_draw.cast_shadows = false;
@@ -840,4 +844,100 @@ fn alpha_mask_cut_outs_cast_cut_out_shadows() {
         (lum[1] - lit).abs() < 0.02 * lit,
         "the cut-out card casts nothing: {lum:?} vs {lit}"
     );
+}
+
+/// glTF LINES and POINTS are drawn 1 pixel wide by the G-buffer pass with pipelines of their own
+/// topology, only in a scene that has them; unlit (no normals), each shows its base colour
+/// exactly: a horizontal segment across the quad covers exactly one pixel of each column, a
+/// point exactly one pixel of the frame.
+#[test]
+fn lines_and_points_are_one_pixel_and_show_their_colour() {
+    let quad = scene::Material {
+        base_color: [0.5, 0.5, 0.5, 1.0],
+        metallic: 0.0,
+        roughness: 0.6,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let plain = renderer
+        .render(&quad_scene(Vec::new(), quad.clone()), &small())
+        .expect("render");
+    assert!(
+        !plain
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p.contains("lines,") || p.contains("points,")),
+        "a scene of triangles builds no line or point pipeline: {:?}",
+        plain.stats.pipelines
+    );
+    let mut s = quad_scene(Vec::new(), quad);
+    let green = [0.1f32, 0.8, 0.2];
+    let blue = [0.2f32, 0.3, 0.9];
+    for (name, colour, topology, positions) in [
+        (
+            "segment",
+            green,
+            scene::Topology::Lines,
+            vec![[-0.9f32, 0.0, 0.01], [0.9, 0.0, 0.01]],
+        ),
+        (
+            "point",
+            blue,
+            scene::Topology::Points,
+            vec![[0.5f32, 0.5, 0.01]],
+        ),
+    ] {
+        s.materials.push(scene::Material {
+            base_color: [colour[0], colour[1], colour[2], 1.0],
+            unlit: true,
+            ..Default::default()
+        });
+        let material = s.materials.len() - 1;
+        s.meshes.push(scene::Mesh {
+            name: name.into(),
+            vertices: positions
+                .iter()
+                .map(|&position| scene::Vertex {
+                    position,
+                    normal: [0.0, 0.0, 1.0],
+                    tangent: [1.0, 0.0, 0.0, 1.0],
+                    uv: [0.0; 2],
+                    uv1: [0.0; 2],
+                })
+                .collect(),
+            indices: (0..positions.len() as u32).collect(),
+            material,
+            colors: Vec::new(),
+            topology,
+        });
+        s.draws
+            .push(scene::Draw::new(s.meshes.len() - 1, glam::Mat4::IDENTITY));
+    }
+    let f = renderer.render(&s, &small()).expect("render");
+    assert!(f.plan.line_draws == 1 && f.plan.point_draws == 1);
+    for kind in ["gbuffer[lines,", "gbuffer[points,"] {
+        assert!(
+            f.stats.pipelines.iter().any(|p| p.starts_with(kind)),
+            "{kind}: {:?}",
+            f.stats.pipelines
+        );
+    }
+    let px = |x: u32, y: u32| {
+        let i = (y * f.width + x) as usize * 4;
+        [f.hdr[i], f.hdr[i + 1], f.hdr[i + 2]]
+    };
+    // Within half a step of the sRGB 8-bit albedo target.
+    let is = |c: [f32; 3], want: [f32; 3]| (0..3).all(|k| (c[k] - want[k]).abs() < 0.006);
+    for x in [16, 32, 48] {
+        let rows = (0..f.height).filter(|&y| is(px(x, y), green)).count();
+        assert_eq!(rows, 1, "column {x}: the segment covers {rows} pixels");
+    }
+    let points = (0..f.height)
+        .flat_map(|y| (0..f.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| is(px(x, y), blue))
+        .count();
+    assert_eq!(points, 1, "the point covers {points} pixels");
+    // The quad around them is lit as before (grey, not the primitives' colours).
+    assert!(!is(px(32, 8), green) && !is(px(32, 8), blue));
 }

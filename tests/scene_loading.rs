@@ -711,22 +711,6 @@ fn accessor_past_the_end_of_its_buffer_is_an_error() {
     );
 }
 
-#[test]
-fn non_triangle_primitives_are_skipped_with_a_warning() {
-    let mut d = Doc::new();
-    d.quad(true, true);
-    d.json["meshes"][0]["primitives"][0]["mode"] = json!(1); // LINES
-    let s = d.load("lines").unwrap();
-    assert!(s.meshes.is_empty() && s.draws.is_empty());
-    assert!(
-        s.warnings
-            .iter()
-            .any(|w| w.0.contains("mesh 'test mesh' primitive 0") && w.0.contains("TRIANGLES")),
-        "{:?}",
-        s.warnings
-    );
-}
-
 /// The geometric normal of each triangle of mesh `m` (from its positions and winding).
 fn face_normals(s: &Scene, m: usize) -> Vec<Vec3> {
     let mesh = &s.meshes[m];
@@ -807,32 +791,77 @@ fn triangle_fans_become_triangles_that_all_face_the_front() {
     }
 }
 
+/// glTF's point and line modes become point lists and segment lists (a strip's segments in
+/// order, a loop's closed back to its start), keep the mesh's triangles beside them, and without
+/// normals get an unlit copy of their material (glTF: they are drawn without lighting).
 #[test]
-fn points_and_lines_are_skipped_with_a_warning_and_the_triangles_kept() {
-    for (mode, name) in [
-        (0, "POINTS"),
-        (1, "LINES"),
-        (2, "LINE_LOOP"),
-        (3, "LINE_STRIP"),
+fn points_and_lines_are_read_as_point_and_segment_lists() {
+    use weft::scene::Topology;
+    for (mode, name, topology, want) in [
+        (0, "POINTS", Topology::Points, vec![0u32, 1, 2, 3]),
+        (1, "LINES", Topology::Lines, vec![0, 1, 2, 3]),
+        (
+            2,
+            "LINE_LOOP",
+            Topology::Lines,
+            vec![0, 1, 1, 2, 2, 3, 3, 0],
+        ),
+        (3, "LINE_STRIP", Topology::Lines, vec![0, 1, 1, 2, 2, 3]),
     ] {
         let mut d = Doc::new();
         d.quad(true, false);
-        // A second primitive of the same mesh in this mode.
+        // A second primitive of the same mesh in this mode, without normals.
         let prim = d.json["meshes"][0]["primitives"][0].clone();
         let mut lines = prim.clone();
         lines["mode"] = json!(mode);
+        lines["attributes"]
+            .as_object_mut()
+            .unwrap()
+            .remove("NORMAL");
+        lines.as_object_mut().unwrap().remove("indices");
         d.json["meshes"][0]["primitives"] = json!([lines, prim]);
         let s = d.load(&format!("mode-{mode}")).unwrap();
-        assert_eq!(s.meshes.len(), 1, "{name}: the triangles are kept");
-        assert_eq!(s.draws.len(), 1);
+        assert_eq!(s.meshes.len(), 2, "{name}: both primitives are drawn");
+        assert_eq!(s.draws.len(), 2);
+        let m = &s.meshes[0];
+        assert_eq!((m.topology, &m.indices), (topology, &want), "{name}");
+        assert_eq!(s.meshes[1].topology, Topology::Triangles);
         assert!(
-            s.warnings.iter().any(|w| w.0.contains("primitive 0")
-                && w.0.contains(name)
-                && w.0.contains("points or lines")),
-            "{name}: {:?}",
+            s.materials[m.material].unlit,
+            "{name}: points and lines without normals are unlit"
+        );
+        assert!(
+            !s.materials[s.meshes[1].material].unlit,
+            "{name}: the triangles stay lit"
+        );
+        assert!(
+            s.warnings.is_empty(),
+            "{name}: no warning for what glTF defines: {:?}",
             s.warnings
         );
+        let plan = weft::render::Plan::new(&s, &Default::default());
+        let (lines, points) = (plan.line_draws, plan.point_draws);
+        assert_eq!(
+            (lines, points),
+            if topology == Topology::Points {
+                (0, 1)
+            } else {
+                (1, 0)
+            },
+            "{name}"
+        );
+        assert_eq!(
+            plan.triangles, 2,
+            "{name}: only the triangles count as triangles"
+        );
     }
+    // With normals they are lit like any surface.
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["meshes"][0]["primitives"][0]["mode"] = json!(1);
+    let s = d.load("lines-lit").unwrap();
+    assert!(!s.materials[s.meshes[0].material].unlit);
+    assert_eq!(s.meshes[0].indices.len(), 6, "six indices: three segments");
 }
 
 /// The quad of `Doc::quad` with a COLOR_0 accessor of component type `component` (5126 float,

@@ -33,6 +33,7 @@ fn square(name: &str, z: f32, half: f32, material: usize, alpha: f32) -> Mesh {
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
         colors: vec![[1.0, 1.0, 1.0, alpha]; 4],
+        topology: weft::scene::Topology::Triangles,
     }
 }
 

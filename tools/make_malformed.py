@@ -350,7 +350,7 @@ def build():
     entry("index-count-not-multiple-of-3.gltf", gltf(quad_doc(indices=[0, 1, 2, 0, 2, 3, 0])), "7 indices: the last is not a triangle", "renders, warning: `not a multiple of 3`")
     d = quad_doc()
     d.json["meshes"][0]["primitives"][0]["mode"] = 0
-    entry("points-only.gltf", gltf(d), "the only primitive is POINTS", "renders, warning: `not points or lines`")
+    entry("points-only.gltf", gltf(d), "the only primitive is POINTS (drawn: 1-pixel points)", "renders")
 
     # --- numbers that are not numbers ----------------------------------------------------------
     entry("nan-position.gltf", gltf(quad_doc(positions=[[-1.0, -1.0, 0.0], [1.0, NAN, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])), "a vertex position is NaN", "error: `non-finite position`")

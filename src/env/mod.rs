@@ -821,6 +821,7 @@ pub fn stage(
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
         colors: Vec::new(),
+        topology: crate::scene::Topology::Triangles,
     });
     scene.draws.push(Draw {
         mesh: scene.meshes.len() - 1,

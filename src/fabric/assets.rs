@@ -283,7 +283,7 @@ pub fn uv_density(scene: &Scene, material: usize, who: &str) -> Result<UvDensity
         let Some(mesh) = scene.meshes.get(draw.mesh) else {
             continue;
         };
-        if mesh.material != material {
+        if mesh.material != material || mesh.topology != crate::scene::Topology::Triangles {
             continue;
         }
         let (mut w, mut t) = (0f64, 0f64);

@@ -193,6 +193,10 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
                 }
             })
             .collect();
+        if mesh.topology != crate::scene::Topology::Triangles {
+            // Points and lines: the CPU reference rasterizes triangles only.
+            continue;
+        }
         for tri in mesh.indices.chunks_exact(3) {
             let Some(v) = tri
                 .iter()

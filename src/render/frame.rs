@@ -15,7 +15,7 @@ use crate::scene::{ColorSpace, Scene, Texture, TextureSlot};
 use crate::vk::{
     shaders, Attachment, Binding, BindingKind, Buffer, BufferLocation, BufferUsageFlags, Cmd,
     ComputeDesc, Context, Filter, Format, GraphicsDesc, Image, ImageDesc, ImageUsageFlags,
-    Pipeline, Resource, Sampler, SetLayout, Stages, Usage, VertexLayout,
+    Pipeline, Resource, Sampler, SetLayout, Stages, Topology, Usage, VertexLayout,
 };
 use crate::Error;
 
@@ -204,6 +204,8 @@ pub fn check_target_memory(
 
 /// One draw: a mesh range in the shared buffers.
 pub(crate) struct DrawRange {
+    /// Triangles, or (drawn by the G-buffer pass only, casting no shadow) lines or points.
+    pub(crate) topology: Topology,
     pub(crate) first_index: u32,
     pub(crate) index_count: u32,
     pub(crate) vertex_offset: i32,
@@ -277,6 +279,8 @@ pub struct Renderer {
     /// Pipeline variants by their specialization constants (Filament-style: one per feature set
     /// a frame asks for, made on first use).
     gbuffer_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
+    /// The G-buffer pipeline for line and point lists (scenes with such primitives only).
+    gbuffer_primitive_variants: HashMap<(Vec<(u32, u32)>, Topology), Pipeline>,
     lighting_variants: HashMap<Vec<(u32, u32)>, Pipeline>,
     /// The transparent pass's pipelines (gbuffer.vert + forward.frag) and their set 0 layout
     /// (gbuffer.vert's bindings, then lighting.frag's shadow and environment bindings).
@@ -487,6 +491,7 @@ impl Renderer {
                     push_stages: Stages::FRAGMENT,
                     constants: &[],
                     blend: false,
+                    topology: Topology::Triangles,
                 })?;
                 let shadow_pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
                     name: "shadow",
@@ -503,6 +508,7 @@ impl Renderer {
                     push_stages: Stages::VERTEX,
                     constants: &[],
                     blend: false,
+                    topology: Topology::Triangles,
                 })?;
                 let shadow_sampler = ctx.create_sampler(Filter::ShadowCompare)?;
                 let no_shadows =
@@ -578,6 +584,7 @@ impl Renderer {
             weave_layout,
             weave_pipeline,
             gbuffer_variants: HashMap::new(),
+            gbuffer_primitive_variants: HashMap::new(),
             lighting_variants: HashMap::new(),
             forward_variants: HashMap::new(),
             forward_layout,
@@ -615,6 +622,7 @@ impl Renderer {
                 indices: Vec::new(),
                 material: 0,
                 colors: Vec::new(),
+                topology: crate::scene::Topology::Triangles,
             }],
             draws: vec![crate::scene::Draw::new(0, glam::Mat4::IDENTITY)],
             materials: vec![crate::scene::Material {
@@ -636,6 +644,7 @@ impl Renderer {
         all.extend(self.env.pipelines());
         all.extend(self.shadow_mask_variants.values());
         all.extend(self.gbuffer_variants.values());
+        all.extend(self.gbuffer_primitive_variants.values());
         all.extend(self.lighting_variants.values());
         all.extend(self.forward_variants.values());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
@@ -665,6 +674,7 @@ impl Renderer {
                 push_stages: Stages::GRAPHICS,
                 constants: &[(0, key)],
                 blend: false,
+                topology: Topology::Triangles,
             })?;
             self.shadow_mask_variants.insert(key, pipeline);
         }
@@ -772,6 +782,19 @@ impl Renderer {
             None => Vec::new(),
         };
         let need_gbuffer = !self.gbuffer_variants.contains_key(&gbuffer_key);
+        let need_primitives: Vec<Topology> = [
+            (plan.line_draws > 0, Topology::Lines),
+            (plan.point_draws > 0, Topology::Points),
+        ]
+        .into_iter()
+        .filter(|&(needed, t)| {
+            needed
+                && !self
+                    .gbuffer_primitive_variants
+                    .contains_key(&(gbuffer_key.clone(), t))
+        })
+        .map(|(_, t)| t)
+        .collect();
         let need_lighting = !self.lighting_variants.contains_key(&lighting_key);
         let (env, timings) = match env {
             Some((e, t)) => (Some(e), Some(t)),
@@ -779,11 +802,16 @@ impl Renderer {
         };
         let cached_env = env.and_then(|e| self.env_cache.iter().position(|g| g.hash == e.hash()));
         let need_env = env.filter(|_| cached_env.is_none());
-        let make_gbuffer = || -> crate::Result<Pipeline> {
+        let make_gbuffer = |topology: Topology| -> crate::Result<Pipeline> {
             let vertex_layout = gbuffer_vertex_layout();
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}]",
+                    "gbuffer[{}accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}]",
+                    match topology {
+                        Topology::Triangles => "",
+                        Topology::Lines => "lines, ",
+                        Topology::Points => "points, ",
+                    },
                     options.accuracy.code(),
                     gbuffer_key[3].1,
                     gbuffer_key[4].1,
@@ -807,6 +835,7 @@ impl Renderer {
                 push_stages: Stages::GRAPHICS,
                 constants: &gbuffer_key,
                 blend: false,
+                topology,
             })
         };
         let make_lighting = || -> crate::Result<Pipeline> {
@@ -832,6 +861,7 @@ impl Renderer {
                 push_stages: Stages::FRAGMENT,
                 constants: &lighting_key,
                 blend: false,
+                topology: Topology::Triangles,
             })
         };
         let make_forward = |blend: bool| -> crate::Result<Pipeline> {
@@ -855,9 +885,10 @@ impl Renderer {
                 push_stages: Stages::GRAPHICS,
                 constants: key,
                 blend,
+                topology: Topology::Triangles,
             })
         };
-        let (gbuffer, lighting, forward, built_env) = std::thread::scope(|scope| {
+        let (gbuffer, lighting, forward, built_env, primitives) = std::thread::scope(|scope| {
             let lighting = need_lighting.then(|| scope.spawn(make_lighting));
             let forward = (!need_forward.is_empty()).then(|| {
                 scope.spawn(|| {
@@ -867,7 +898,15 @@ impl Renderer {
                         .collect::<crate::Result<Vec<_>>>()
                 })
             });
-            let gbuffer = need_gbuffer.then(make_gbuffer).transpose();
+            let gbuffer = need_gbuffer
+                .then(|| make_gbuffer(Topology::Triangles))
+                .transpose();
+            // Points and lines (1 pixel wide): pipelines of their own topology, only for a
+            // scene that has them.
+            let primitives = need_primitives
+                .iter()
+                .map(|&t| make_gbuffer(t).map(|p| (t, p)))
+                .collect::<crate::Result<Vec<_>>>();
             let built_env = need_env.map(|e| self.env.build(&self.ctx, e)).transpose();
             let lighting = lighting
                 .map(|h| {
@@ -881,8 +920,12 @@ impl Renderer {
                         .expect("the forward pipeline's thread does not panic")
                 })
                 .transpose();
-            (gbuffer, lighting, forward, built_env)
+            (gbuffer, lighting, forward, built_env, primitives)
         });
+        for (t, p) in primitives? {
+            self.gbuffer_primitive_variants
+                .insert((gbuffer_key.clone(), t), p);
+        }
         if let (Some(made), Some(k)) = (forward?, &forward_key) {
             for (blend, p) in made {
                 self.forward_variants.insert((k.clone(), blend), p);
@@ -952,8 +995,16 @@ impl Renderer {
             if index_count == 0 {
                 continue;
             }
-            triangles += index_count as usize / 3;
+            let topology = match mesh.topology {
+                crate::scene::Topology::Triangles => Topology::Triangles,
+                crate::scene::Topology::Lines => Topology::Lines,
+                crate::scene::Topology::Points => Topology::Points,
+            };
+            if topology == Topology::Triangles {
+                triangles += index_count as usize / 3;
+            }
             draws.push(DrawRange {
+                topology,
                 first_index,
                 index_count,
                 vertex_offset,
@@ -963,16 +1014,20 @@ impl Renderer {
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.double_sided),
-                cast_shadows: d.cast_shadows,
+                // Points and lines cover no area a shadow map could hold.
+                cast_shadows: d.cast_shadows && topology == Topology::Triangles,
                 receive_shadows: d.receive_shadows,
                 alpha_mask: scene
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.alpha_cutoff.is_some() || m.blend),
-                forward: scene
-                    .materials
-                    .get(mesh.material)
-                    .is_some_and(|m| m.needs_forward()),
+                // Points and lines are the G-buffer pass's whatever their material (the loader
+                // says so).
+                forward: topology == Topology::Triangles
+                    && scene
+                        .materials
+                        .get(mesh.material)
+                        .is_some_and(|m| m.needs_forward()),
                 blended: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
@@ -1307,6 +1362,16 @@ impl Renderer {
         let ctx = self.ctx.clone();
         let targets = self.targets.as_ref().expect("created above");
         let gbuffer_pipeline = &self.gbuffer_variants[&gbuffer_key];
+        let primitive = |t: Topology| {
+            self.gbuffer_primitive_variants
+                .get(&(gbuffer_key.clone(), t))
+                .filter(|_| gpu.draws.iter().any(|d| d.topology == t))
+        };
+        let gbuffer_pipelines = passes::gbuffer::GBufferPipelines {
+            triangles: gbuffer_pipeline,
+            lines: primitive(Topology::Lines),
+            points: primitive(Topology::Points),
+        };
         let lighting_pipeline = &self.lighting_variants[&lighting_key];
         let pool = ctx.create_descriptor_pool(6 + 3 * gpu.material_count)?;
         let queries = ctx.create_query_pool(2)?;
@@ -1468,7 +1533,7 @@ impl Renderer {
                         &mut |cmd| {
                             passes::gbuffer::gbuffer_pass(
                                 cmd,
-                                gbuffer_pipeline,
+                                &gbuffer_pipelines,
                                 gpu,
                                 frame_set,
                                 &material_sets,
@@ -1477,6 +1542,12 @@ impl Renderer {
                         },
                     )?;
                     stats.pipelines.push(gbuffer_pipeline.name.clone());
+                    for p in [gbuffer_pipelines.lines, gbuffer_pipelines.points]
+                        .into_iter()
+                        .flatten()
+                    {
+                        stats.pipelines.push(p.name.clone());
+                    }
                 }
                 Pass::Shadow => {
                     let tiles: Vec<(u32, u32, u32, Mat4)> = shadow_maps

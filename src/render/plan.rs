@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use crate::scene::{LightKind, Scene};
+use crate::scene::{LightKind, Scene, Topology};
 
 use super::{Accuracy, DebugView, RenderOptions};
 
@@ -118,6 +118,10 @@ pub struct Plan {
     pub passes: Vec<Pass>,
     pub draws: usize,
     pub triangles: usize,
+    /// Draws of line and point primitives (glTF LINES, LINE_LOOP, LINE_STRIP, POINTS): drawn 1
+    /// pixel wide by the G-buffer pass with pipelines of their own topology, casting no shadow.
+    pub line_draws: usize,
+    pub point_draws: usize,
     pub lights: LightCounts,
     /// Materials that use the fabric model (the rest use glTF metallic-roughness).
     pub fabric_materials: usize,
@@ -223,11 +227,28 @@ impl Plan {
                 LightKind::Spot { .. } => lights.spot += 1,
             }
         }
+        let topology = |d: &crate::scene::Draw| {
+            scene
+                .meshes
+                .get(d.mesh)
+                .map_or(Topology::Triangles, |m| m.topology)
+        };
         let triangles = scene
             .draws
             .iter()
+            .filter(|d| topology(d) == Topology::Triangles)
             .map(|d| scene.meshes[d.mesh].indices.len() / 3)
             .sum();
+        let line_draws = scene
+            .draws
+            .iter()
+            .filter(|d| topology(d) == Topology::Lines)
+            .count();
+        let point_draws = scene
+            .draws
+            .iter()
+            .filter(|d| topology(d) == Topology::Points)
+            .count();
         let mut keys = Vec::new();
         let mut weaves: Vec<WeavePlan> = Vec::new();
         let mut features = FabricFeatures::default();
@@ -302,11 +323,12 @@ impl Plan {
                 .get(d.mesh)
                 .and_then(|m| scene.materials.get(m.material))
         };
+        // (Triangles only: points and lines are the G-buffer pass's whatever their material.)
         let count = |keep: &dyn Fn(&crate::scene::Material) -> bool| {
             scene
                 .draws
                 .iter()
-                .filter(|d| material_of(d).is_some_and(keep))
+                .filter(|d| topology(d) == Topology::Triangles && material_of(d).is_some_and(keep))
                 .count()
         };
         let mask_draws = count(&|m| m.alpha_cutoff.is_some());
@@ -416,6 +438,8 @@ impl Plan {
             passes,
             draws: scene.draws.len(),
             triangles,
+            line_draws,
+            point_draws,
             lights,
             sheen_materials: scene
                 .materials
@@ -482,6 +506,13 @@ impl fmt::Display for Plan {
             "draws       {} ({} triangles)",
             self.draws, self.triangles
         )?;
+        if self.line_draws + self.point_draws > 0 {
+            writeln!(
+                f,
+                "primitives  {} line and {} point draw(s): 1 pixel wide, G-buffer pipelines of their own topology, no shadows",
+                self.line_draws, self.point_draws
+            )?;
+        }
         writeln!(f, "camera      {}", self.camera)?;
         if self.instanced_nodes > 0 {
             writeln!(

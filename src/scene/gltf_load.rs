@@ -28,7 +28,7 @@ use super::tangents::{self, UvTransform};
 use super::{
     Anisotropy, Clearcoat, ColorSpace, DiffuseTransmission, Draw, Iridescence, Light, LightKind,
     Material, Mesh, Scene, Shadow, Sheen, SlotUv, Specular, Texture, TextureSampler, TextureSlot,
-    Transmission, Vertex, Warning,
+    Topology, Transmission, Vertex, Warning,
 };
 use crate::fabric::FabricParams;
 use crate::{Error, Result};
@@ -233,6 +233,7 @@ fn load_checked(
         textures: HashMap::new(),
         material_uv: Vec::new(),
         default_material: None,
+        unlit_copies: HashMap::new(),
         mesh_ids: vec![None; doc.meshes().len()],
         lights: Vec::new(),
         cameras: Vec::new(),
@@ -536,19 +537,6 @@ fn extras_object(extras: &json::Extras) -> Option<serde_json::Map<String, serde_
     }
 }
 
-/// A primitive mode as the glTF specification names it.
-fn mode_name(mode: Mode) -> &'static str {
-    match mode {
-        Mode::Points => "POINTS",
-        Mode::Lines => "LINES",
-        Mode::LineLoop => "LINE_LOOP",
-        Mode::LineStrip => "LINE_STRIP",
-        Mode::Triangles => "TRIANGLES",
-        Mode::TriangleStrip => "TRIANGLE_STRIP",
-        Mode::TriangleFan => "TRIANGLE_FAN",
-    }
-}
-
 /// A TRIANGLE_STRIP's vertex sequence as a triangle list, with the winding of glTF 2.0 §3.7.2.1:
 /// triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), so every other triangle swaps its last two
 /// corners and all face the same way. Degenerate triangles (two equal indices, which exporters
@@ -574,6 +562,19 @@ pub(super) fn fan_to_list(fan: &[u32]) -> Vec<u32> {
         if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
             list.extend_from_slice(&t);
         }
+    }
+    list
+}
+
+/// A LINE_STRIP's (or, closed, a LINE_LOOP's) vertex sequence as a list of segments (glTF 2.0
+/// §3.7.2.1: segment i is (v_i, v_{i+1}), and a loop adds (v_{n-1}, v_0)).
+pub(super) fn line_strip_to_list(strip: &[u32], closed: bool) -> Vec<u32> {
+    let mut list = Vec::with_capacity(strip.len() * 2);
+    for w in strip.windows(2) {
+        list.extend_from_slice(w);
+    }
+    if closed && strip.len() > 2 {
+        list.extend_from_slice(&[strip[strip.len() - 1], strip[0]]);
     }
     list
 }
@@ -604,6 +605,8 @@ struct Loader<'a> {
     variant: Option<(usize, usize)>,
     /// Index of `Material::default()` in `scene.materials`, once a primitive needed it.
     default_material: Option<usize>,
+    /// Unlit copies of materials (by index) for points and lines without normals.
+    unlit_copies: HashMap<usize, usize>,
     /// Per glTF mesh: the scene meshes made from its primitives, once a node used it.
     mesh_ids: Vec<Option<Vec<usize>>>,
     lights: Vec<LightDef>,
@@ -1388,18 +1391,6 @@ impl<'a> Loader<'a> {
         let mut ids = Vec::new();
         for prim in mesh.primitives() {
             let who = format!("mesh '{name}' primitive {}", prim.index());
-            if !matches!(
-                prim.mode(),
-                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-            ) {
-                // Points and lines would need pipelines of their own topology; the mesh's
-                // triangle primitives are still drawn.
-                self.warn(format_args!(
-                    "{who} has mode {}; weft draws TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN but not points or lines yet, so this primitive is skipped (the mesh's other primitives are drawn)",
-                    mode_name(prim.mode())
-                ));
-                continue;
-            }
             let mesh_name = if several {
                 format!("{name} (primitive {})", prim.index())
             } else {
@@ -1451,6 +1442,28 @@ impl<'a> Loader<'a> {
                 self.scene.materials.len() - 1
             }),
         })
+    }
+
+    /// An unlit copy of material `index` (made once): what points and lines without normals are
+    /// drawn with. A material that is unlit already is its own copy.
+    fn unlit_copy(&mut self, index: usize) -> usize {
+        if self.scene.materials.get(index).is_none_or(|m| m.unlit) {
+            return index;
+        }
+        if let Some(&copy) = self.unlit_copies.get(&index) {
+            return copy;
+        }
+        let m = &self.scene.materials[index];
+        let copy = Material {
+            name: format!("{} (unlit: points and lines without normals)", m.name),
+            unlit: true,
+            fabric: None,
+            ..m.clone()
+        };
+        self.scene.materials.push(copy);
+        let copy = self.scene.materials.len() - 1;
+        self.unlit_copies.insert(index, copy);
+        copy
     }
 
     /// Decodes a primitive's KHR_draco_mesh_compression bitstream.
@@ -1699,21 +1712,34 @@ impl<'a> Loader<'a> {
             }
             (None, None) => (0..count as u32).collect(),
         };
+        let topology = match prim.mode() {
+            Mode::Points => Topology::Points,
+            Mode::Lines | Mode::LineLoop | Mode::LineStrip => Topology::Lines,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => Topology::Triangles,
+        };
         match prim.mode() {
             Mode::TriangleStrip => indices = strip_to_list(&indices),
             Mode::TriangleFan => indices = fan_to_list(&indices),
+            Mode::LineStrip => indices = line_strip_to_list(&indices, false),
+            Mode::LineLoop => indices = line_strip_to_list(&indices, true),
             _ => {}
         }
-        if indices.len() % 3 != 0 {
+        let arity = topology.arity();
+        let unit = match topology {
+            Topology::Triangles => "triangles",
+            Topology::Lines => "line segments",
+            Topology::Points => "points",
+        };
+        if indices.len() % arity != 0 {
             self.warn(format_args!(
-                "{who} has {} indices, not a multiple of 3; the last {} are ignored",
+                "{who} has {} indices, not a multiple of {arity}; the last {} are ignored",
                 indices.len(),
-                indices.len() % 3
+                indices.len() % arity
             ));
-            indices.truncate(indices.len() / 3 * 3);
+            indices.truncate(indices.len() / arity * arity);
         }
         if indices.is_empty() {
-            self.warn(format_args!("{who} has no triangles; skipped"));
+            self.warn(format_args!("{who} has no {unit}; skipped"));
             return Ok(None);
         }
 
@@ -1725,8 +1751,9 @@ impl<'a> Loader<'a> {
             .find(|(_, &v)| !position(v as usize).iter().all(|c| c.is_finite()))
         {
             return Err(self.error(format_args!(
-                "{who}: vertex {v} of triangle {} has the non-finite position {:?} (POSITION accessor {pos_accessor}); fix or delete that vertex in your modelling tool and re-export",
-                corner / 3,
+                "{who}: vertex {v} of {} {} has the non-finite position {:?} (POSITION accessor {pos_accessor}); fix or delete that vertex in your modelling tool and re-export",
+                &unit[..unit.len() - 1],
+                corner / arity,
                 position(v as usize)
             )));
         }
@@ -1752,7 +1779,23 @@ impl<'a> Loader<'a> {
             })
             .collect();
 
-        let material = self.material_index(prim)?;
+        let mut material = self.material_index(prim)?;
+        if topology != Topology::Triangles && normals.is_none() {
+            // glTF: points and lines without normals are drawn without lighting (their base
+            // colour), through an unlit copy of their material.
+            material = self.unlit_copy(material);
+        }
+        if topology != Topology::Triangles
+            && self
+                .scene
+                .materials
+                .get(material)
+                .is_some_and(|m| m.needs_forward())
+        {
+            self.warn(format_args!(
+                "{who}: {unit} are drawn opaque by the G-buffer pass; their material's alphaMode BLEND, transmission, clear coat, diffuse transmission or thin film is not applied to them"
+            ));
+        }
         let uv_transform = self
             .gltf_material(prim)?
             .and_then(|m| self.material_uv.get(m))
@@ -1822,6 +1865,48 @@ impl<'a> Loader<'a> {
             }
         }
 
+        if topology != Topology::Triangles {
+            // No surface to take a normal or tangent frame from: the file's normals (repaired
+            // where degenerate) and a fallback frame; unlit without normals (above).
+            let bad = if normals.is_some() {
+                vertices
+                    .iter_mut()
+                    .filter(|v| {
+                        let n = glam::Vec3::from(v.normal);
+                        !(n.length_squared() > 1e-12 && n.is_finite())
+                    })
+                    .map(|v| v.normal = [0.0, 0.0, 1.0])
+                    .count()
+            } else {
+                for v in vertices.iter_mut() {
+                    v.normal = [0.0, 0.0, 1.0];
+                }
+                0
+            };
+            for v in vertices.iter_mut() {
+                v.normal = glam::Vec3::from(v.normal)
+                    .normalize_or(glam::Vec3::Z)
+                    .to_array();
+                v.tangent = [0.0; 4];
+            }
+            tangents::repair_tangents(&mut vertices);
+            if bad > 0 {
+                self.warn(format_args!(
+                    "{who}: {bad} normal(s) were zero-length or not finite; replaced by +Z"
+                ));
+            }
+            return Ok(Some((
+                Mesh {
+                    name,
+                    vertices,
+                    indices,
+                    material,
+                    colors,
+                    topology,
+                },
+                deform,
+            )));
+        }
         if normals.is_none() {
             tangents::generate_normals(&mut vertices, &indices);
             self.warn(format_args!(
@@ -1881,6 +1966,7 @@ impl<'a> Loader<'a> {
                 indices,
                 material,
                 colors,
+                topology: Topology::Triangles,
             },
             deform,
         )))

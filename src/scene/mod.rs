@@ -49,6 +49,32 @@ pub struct Mesh {
     /// COLOR_0, linear RGBA per vertex (alpha 1 where the file has RGB), multiplied into the base
     /// colour (for fabric, into the thread colours) and its alpha; empty when the mesh has none.
     pub colors: Vec<[f32; 4]>,
+    /// How `indices` are assembled: triangles (TRIANGLES, and strips and fans turned into
+    /// them), line segments (LINES, and loops and strips turned into them: pairs of indices) or
+    /// points (POINTS). Lines and points are drawn 1 pixel wide, cast no shadow, and are unlit
+    /// when the file gives them no normals (the loader gives them an unlit copy of their material,
+    /// as glTF asks).
+    pub topology: Topology,
+}
+
+/// The primitive assembly of a [`Mesh`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Topology {
+    #[default]
+    Triangles,
+    Lines,
+    Points,
+}
+
+impl Topology {
+    /// Indices per primitive.
+    pub fn arity(self) -> usize {
+        match self {
+            Topology::Triangles => 3,
+            Topology::Lines => 2,
+            Topology::Points => 1,
+        }
+    }
 }
 
 /// An instance of a mesh in the world.
@@ -813,6 +839,7 @@ impl Scene {
             .draws
             .iter()
             .filter_map(|d| self.meshes.get(d.mesh))
+            .filter(|m| m.topology == Topology::Triangles)
             .map(|m| m.indices.len() / 3)
             .sum();
         let stride = (triangles >> 20).max(1);
@@ -836,6 +863,9 @@ impl Scene {
                     .get(i as usize)
                     .map(|v| d.world.transform_point3(Vec3::from(v.position)))
             };
+            if mesh.topology != Topology::Triangles {
+                continue;
+            }
             for t in mesh.indices.chunks_exact(3).step_by(stride) {
                 let (Some(a), Some(b), Some(c)) = (at(t[0]), at(t[1]), at(t[2])) else {
                     continue;

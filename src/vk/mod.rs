@@ -20,7 +20,7 @@ pub use cmd::{Attachment, Cmd, Cull, Usage};
 pub use context::{Context, ContextOptions, DeviceChoice, DeviceInfo};
 pub use pipeline::{
     Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline,
-    Resource, SetLayout, Stages, VertexLayout,
+    Resource, SetLayout, Stages, Topology, VertexLayout,
 };
 pub use resources::{
     Address, Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler,

@@ -123,6 +123,17 @@ pub struct GraphicsDesc<'a> {
     /// Blending: false replaces the attachments (and writes depth); true blends premultiplied
     /// colour over them (ONE, ONE_MINUS_SRC_ALPHA, alpha alike) and only tests depth.
     pub blend: bool,
+    /// How vertices assemble: triangle, line or point lists (lines and points 1 pixel wide).
+    pub topology: Topology,
+}
+
+/// The primitive topology of a graphics pipeline.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Topology {
+    #[default]
+    Triangles,
+    Lines,
+    Points,
 }
 
 pub struct ComputeDesc<'a> {
@@ -332,8 +343,12 @@ impl Context {
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&vbind)
             .vertex_attribute_descriptions(&vattrs);
-        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(match desc.topology {
+                Topology::Triangles => vk::PrimitiveTopology::TRIANGLE_LIST,
+                Topology::Lines => vk::PrimitiveTopology::LINE_LIST,
+                Topology::Points => vk::PrimitiveTopology::POINT_LIST,
+            });
         let viewport = vk::PipelineViewportStateCreateInfo::default()
             .viewport_count(1)
             .scissor_count(1);
