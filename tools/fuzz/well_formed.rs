@@ -22,8 +22,13 @@ pub fn check(s: &Scene) -> Result<(), String> {
                 s.materials.len()
             ));
         }
-        if m.indices.len() % 3 != 0 || m.indices.is_empty() {
-            return Err(format!("mesh '{who}': {} indices", m.indices.len()));
+        // Whole primitives: triangles, segments or points.
+        if m.indices.len() % m.topology.arity() != 0 || m.indices.is_empty() {
+            return Err(format!(
+                "mesh '{who}': {} indices for {:?}",
+                m.indices.len(),
+                m.topology
+            ));
         }
         if let Some(i) = m.indices.iter().find(|&&i| i as usize >= m.vertices.len()) {
             return Err(format!(
