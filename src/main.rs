@@ -162,6 +162,10 @@ struct RenderArgs {
     /// display gamma of Khronos' render-fidelity goldens), agx, or none. Written into the PNG.
     #[arg(long, default_value = "pbr-neutral", value_parser = parse_tonemap)]
     tonemap: render::ToneCurve,
+    /// Edge anti-aliasing after tone mapping: fxaa (a post pass, glsl/fxaa.frag) or none (the
+    /// rasterizer's one-pixel staircases). Written into the PNG.
+    #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
+    aa: render::Antialias,
     /// Turn on the Vulkan validation layer; any message it reports fails the render.
     #[arg(long)]
     validate: bool,
@@ -301,6 +305,9 @@ struct ViewArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
           value_parser = |s: &str| render::parse_finite("--exposure", s))]
     exposure: f32,
+    /// Edge anti-aliasing, as for render: fxaa or none.
+    #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
+    aa: render::Antialias,
     /// Turn on the Vulkan validation layer; any message it reports ends the viewer with an error.
     #[arg(long)]
     validate: bool,
@@ -437,6 +444,9 @@ struct PlanArgs {
     /// Print the plan as JSON.
     #[arg(long)]
     json: bool,
+    /// Edge anti-aliasing, as for render (its default: fxaa).
+    #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
+    aa: render::Antialias,
 }
 
 fn main() -> ExitCode {
@@ -681,6 +691,7 @@ fn run_view(args: ViewArgs) -> anyhow::Result<()> {
         .unwrap_or_else(DeviceChoice::from_env);
     let (scene, mut options) = load_scene(&args.scene)?;
     options.exposure = args.exposure;
+    options.antialias = args.aa;
     options.validate()?;
     if let Some(shot) = &args.screenshot {
         check_outputs(
@@ -750,6 +761,7 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     let (mut renderer, setup_ms) = gpu?;
     options.exposure = args.exposure;
     options.tonemap = args.tonemap;
+    options.antialias = args.aa;
     options.read_hdr = args.exr.is_some();
     options.validate()?;
     let info = renderer.context().info().clone();
@@ -909,6 +921,7 @@ fn run_batch(args: RenderArgs) -> anyhow::Result<()> {
     let (mut scene, mut options) = loaded?;
     options.exposure = args.exposure;
     options.tonemap = args.tonemap;
+    options.antialias = args.aa;
     options.validate()?;
     // Every output of this task's jobs, against the inputs and each other (before the device's
     // error, so that bad output paths are bad input on a node without a driver too).
@@ -1375,7 +1388,8 @@ fn run_shaders(out: &std::path::Path) -> anyhow::Result<()> {
 }
 
 fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
-    let (scene, options) = load_scene(&args.scene)?;
+    let (scene, mut options) = load_scene(&args.scene)?;
+    options.antialias = args.aa;
     let plan = Plan::new(&scene, &options);
     if args.json {
         let json = serde_json::json!({
@@ -1477,6 +1491,11 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+fn parse_aa(text: &str) -> Result<render::Antialias, String> {
+    render::Antialias::by_name(text)
+        .ok_or_else(|| format!("unknown anti-aliasing '{text}': choose fxaa or none"))
 }
 
 fn parse_tonemap(text: &str) -> Result<render::ToneCurve, String> {

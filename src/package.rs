@@ -203,6 +203,14 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          linear, clamp) through the `Shadow` records of `include/frame.glsl`.",
     ),
     (
+        "fxaa.frag",
+        "Edge anti-aliasing of a tone-mapped 8-bit image (FXAA in the manner of Lottes' 3.11 \
+         quality preset): finds luma edges, their direction and their ends along a search of up to \
+         32 pixels, and samples across the edge by how far the pixel is from its middle, or by its \
+         sub-pixel aliasing. Drawn with `fullscreen.vert` after `tonemap.frag`, into the output \
+         target; no push constants, no specialization constants.",
+    ),
+    (
         "tonemap.frag",
         "Exposure and tone mapping (Khronos PBR Neutral) of the HDR target, drawn with \
          `fullscreen.vert`; write to an `R8G8B8A8_SRGB` target, which does the sRGB encoding. \
@@ -416,6 +424,7 @@ pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
     ("env_prefilter.comp", 0, 0, "the specular cube's level being written, as a storage image2DArray"),
     ("env_prefilter.comp", 0, 1, "the radiance cube with its mips, linear, clamp"),
     ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
+    ("fxaa.frag", 0, 0, "the tone-mapped image (an `R8G8B8A8_SRGB` target, linear filtering, clamp to edge)"),
     (
         "weave.comp",
         0,

@@ -556,7 +556,7 @@ fn sequence_writes_every_frame_and_resume_renders_only_what_is_missing() {
         assert!(path.ends_with(&format!("f_{frame:04}.png")), "{path}");
         assert!(m["passes"]["gbuffer"]["wall_ms"].as_f64().unwrap() > 0.0);
         assert!(m["passes"]["lighting"].is_object());
-        assert_eq!(m["display"], "tonemap pbr-neutral, exposure 0 EV");
+        assert_eq!(m["display"], "tonemap pbr-neutral, exposure 0 EV, aa fxaa");
         assert!(m["wall_ms"].as_f64().unwrap() >= m["render_ms"].as_f64().unwrap());
         assert!(m["render_ms"].as_f64().unwrap() >= m["pose_ms"].as_f64().unwrap());
         assert!(sequence::frame_done(Path::new(path), 48, 27));

@@ -118,7 +118,24 @@ fn plan_prints_the_default_scene() {
     let out = weft().args(["plan", "--json"]).output().unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    // Lit by the built-in studio by default: its preprocessing comes first.
+    // Lit by the built-in studio by default: its preprocessing comes first; edge anti-aliasing
+    // last (weft render's default), and not with --aa none.
+    assert_eq!(
+        v["passes"],
+        serde_json::json!([
+            "environment",
+            "weave",
+            "gbuffer",
+            "lighting",
+            "tonemap",
+            "antialias"
+        ])
+    );
+    let out = weft()
+        .args(["plan", "--json", "--aa", "none"])
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         v["passes"],
         serde_json::json!(["environment", "weave", "gbuffer", "lighting", "tonemap"])
@@ -135,7 +152,7 @@ fn plan_prints_the_default_scene() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         v["passes"],
-        serde_json::json!(["weave", "gbuffer", "lighting", "tonemap"])
+        serde_json::json!(["weave", "gbuffer", "lighting", "tonemap", "antialias"])
     );
     assert!(v["environment"].is_null());
 }
@@ -696,7 +713,8 @@ fn tonemap_is_chosen_and_written_into_the_png() {
             String::from_utf8_lossy(&out.stderr)
         );
         let text = text_of(&png);
-        let want = format!("tonemap {curve}, exposure {exposure} EV");
+        // (weft render anti-aliases edges unless told --aa none.)
+        let want = format!("tonemap {curve}, exposure {exposure} EV, aa fxaa");
         assert!(
             text.iter().any(|(k, v)| k == "weft:display" && *v == want),
             "{curve}: {text:?}"

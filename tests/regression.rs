@@ -395,6 +395,7 @@ fn render_case(
         accuracy: case.accuracy,
         weave_precision: case.weave_precision,
         shading: case.shading,
+        antialias: case.antialias,
         ..Default::default()
     };
     // A figure case renders weft compare's figure (four panels at the case size, labelled).

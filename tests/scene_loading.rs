@@ -2674,6 +2674,60 @@ fn diffuse_transmission_is_read_with_its_range_checked() {
     assert!(s.draws[0].cast_shadows);
 }
 
+/// KHR_materials_pbrSpecularGlossiness (archived, still required by older files) in the
+/// metallic-roughness model: a dielectric whose base colour is the diffuse, whose F0 is the
+/// specular colour (KHR_materials_specular's colour over F0(1.5) = 0.04) and whose roughness is
+/// 1 − glossiness; the one texture in the specular colour slot (RGB) and the metallic-roughness
+/// slot (its alpha, the glossiness), sRGB; the pbrMetallicRoughness fallback ignored.
+#[test]
+fn specular_glossiness_is_read_into_the_metallic_roughness_model() {
+    let mut d = Doc::new();
+    d.quad(true, true);
+    d.json["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64(&tiny_png()))}]);
+    d.json["textures"] = json!([{"source": 0}]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
+    d.json["extensionsRequired"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
+    d.json["materials"] = json!([{
+        "name": "old helmet",
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 1.0, 1.0], "metallicFactor": 1.0},
+        "extensions": {"KHR_materials_pbrSpecularGlossiness": {
+            "diffuseFactor": [0.8, 0.6, 0.4, 0.5],
+            "specularFactor": [0.2, 0.1, 0.05],
+            "glossinessFactor": 0.7,
+            "specularGlossinessTexture": {"index": 0}
+        }}
+    }]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load("spec-gloss").unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.base_color, [0.8, 0.6, 0.4, 0.5]);
+    assert_eq!(m.metallic, 0.0);
+    assert!((m.roughness - 0.3).abs() < 1e-6, "{}", m.roughness);
+    assert_eq!(m.glossiness, Some(0.7));
+    let f0: Vec<f32> = m
+        .specular
+        .color
+        .iter()
+        .map(|c| c * m.specular.f0_from_ior())
+        .collect();
+    for (got, want) in f0.iter().zip([0.2, 0.1, 0.05]) {
+        assert!((got - want).abs() < 1e-6, "F0 {f0:?}");
+    }
+    let t = m
+        .specular
+        .color_texture
+        .expect("the specular colour slot has the texture");
+    assert_eq!(
+        m.metallic_roughness_texture,
+        Some(t),
+        "one texture, both slots"
+    );
+    assert_eq!(s.textures[t].color_space, weft::scene::ColorSpace::Srgb);
+    assert!(m.base_color_texture.is_none());
+    let w: Vec<&str> = s.warnings.iter().map(|w| w.0.as_str()).collect();
+    assert!(w.is_empty(), "{w:?}");
+}
+
 #[test]
 fn iridescence_is_read_with_its_defaults_and_range_checked() {
     let mut d = Doc::new();
@@ -2745,6 +2799,7 @@ fn every_drawn_material_extension_may_be_required() {
         "KHR_materials_clearcoat",
         "KHR_materials_diffuse_transmission",
         "KHR_materials_iridescence",
+        "KHR_materials_pbrSpecularGlossiness",
         "KHR_materials_unlit",
         "KHR_materials_emissive_strength",
     ] {

@@ -100,6 +100,8 @@ const uint MATERIAL_TRANSMISSION = 32u;  // KHR_materials_transmission: alpha.yz
 const uint MATERIAL_CLEARCOAT = 64u;  // KHR_materials_clearcoat: coat
 const uint MATERIAL_DIFFUSE_TRANSMISSION = 128u;  // KHR_materials_diffuse_transmission
 const uint MATERIAL_IRIDESCENCE = 256u;  // KHR_materials_iridescence: iridescence
+const uint MATERIAL_SPEC_GLOSS = 512u;  // KHR_materials_pbrSpecularGlossiness: metallic_roughness.y is
+                                        // the glossiness, the metallic-roughness slot's A its texture
 
 struct Material {
     vec4 base_color;          // linear rgba factor

@@ -148,6 +148,10 @@ GSurface material_surface() {    GSurface s;
     vec4 mr = sample_slot(metallic_roughness_tex, m, SLOT_METALLIC_ROUGHNESS);
     float metallic = clamp(m.metallic_roughness.x * mr.b, 0.0, 1.0);
     float roughness = clamp(m.metallic_roughness.y * mr.g, 0.0, 1.0);
+    if ((uint(m.extra.w + 0.5) & MATERIAL_SPEC_GLOSS) != 0u) {
+        // KHR_materials_pbrSpecularGlossiness: roughness is 1 − glossiness × the texture's alpha.
+        roughness = clamp(1.0 - m.metallic_roughness.y * mr.a, 0.0, 1.0);
+    }
     vec3 emissive = m.emissive_normal.rgb * sample_slot(emissive_tex, m, SLOT_EMISSIVE).rgb;
     uint fabric = uint(m.metallic_roughness.z + 0.5);
 

@@ -95,6 +95,9 @@ pub(crate) struct Targets {
     /// The lit opaque image with box-filtered mips, for transmissive surfaces (made by the first
     /// frame that has one).
     pub(crate) backdrop: Option<Image>,
+    /// The tone-mapped image before edge anti-aliasing (made by the first frame that plans the
+    /// anti-aliasing pass).
+    pub(crate) tonemapped: Option<Image>,
 }
 
 impl Targets {
@@ -119,6 +122,7 @@ impl Targets {
             hdr: t("hdr", HDR_FORMAT, color | read)?,
             ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
             backdrop: None,
+            tonemapped: None,
         })
     }
 
@@ -312,6 +316,10 @@ pub struct Renderer {
     env_cache: Vec<super::environment::GpuEnvironment>,
     /// The skinning pass (render::deform), made on the first scene that deforms.
     pub(crate) skin_pass: std::sync::OnceLock<super::deform::SkinPass>,
+    /// The anti-aliasing pass's pipeline, made by the first frame that plans the pass.
+    antialias_pipeline: std::sync::OnceLock<Pipeline>,
+    /// Bilinear, clamped: the anti-aliasing pass's reads between texels.
+    linear_clamp: Sampler,
 }
 
 /// A pipeline variant's specialization constants (id, value): its key among the variants.
@@ -572,6 +580,7 @@ impl Renderer {
             white,
             flat_normal,
         ) = rest?;
+        let ctx_linear_clamp = ctx.create_sampler(Filter::LinearClamp)?;
         Ok(Renderer {
             env,
             env_cache: Vec::new(),
@@ -602,6 +611,8 @@ impl Renderer {
             shadow_atlas: None,
             targets: None,
             skin_pass: std::sync::OnceLock::new(),
+            antialias_pipeline: std::sync::OnceLock::new(),
+            linear_clamp: ctx_linear_clamp,
         })
     }
 
@@ -1224,6 +1235,35 @@ impl Renderer {
             )?;
             self.targets = Some(Targets::new(&self.ctx, width, height)?);
         }
+        if plan.runs(Pass::Antialias) {
+            let targets = self.targets.as_mut().expect("made above");
+            if targets.tonemapped.is_none() {
+                targets.tonemapped = Some(
+                    self.ctx.create_image(
+                        &ImageDesc::new_2d("tone-mapped", LDR_FORMAT, width, height)
+                            .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED),
+                    )?,
+                );
+            }
+            if self.antialias_pipeline.get().is_none() {
+                let _ = self
+                    .antialias_pipeline
+                    .set(self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                        name: "antialias[fxaa]",
+                        vertex: &shaders::FULLSCREEN_VERT,
+                        fragment: &shaders::FXAA_FRAG,
+                        vertex_layout: None,
+                        color_formats: &[LDR_FORMAT],
+                        depth_format: None,
+                        set_layouts: &[&self.tonemap_layout],
+                        push_constant_size: 0,
+                        push_stages: Stages::FRAGMENT,
+                        constants: &[],
+                        blend: false,
+                        topology: Topology::Triangles,
+                    })?);
+            }
+        }
         if plan.transmission_draws > 0 {
             let targets = self.targets.as_mut().expect("made above");
             if targets.backdrop.is_none() {
@@ -1712,10 +1752,33 @@ impl Renderer {
                                 set,
                                 &push,
                                 targets,
+                                plan.runs(Pass::Antialias),
                             )
                         },
                     )?;
                     stats.pipelines.push(self.tonemap_pipeline.name.clone());
+                }
+                Pass::Antialias => {
+                    let pipeline = self
+                        .antialias_pipeline
+                        .get()
+                        .expect("made when the plan has the pass");
+                    let source = targets
+                        .tonemapped
+                        .as_ref()
+                        .expect("made when the plan has the pass");
+                    let set = pool.set(
+                        &self.tonemap_layout,
+                        &[(0, Resource::Sampled(source, &self.linear_clamp))],
+                    )?;
+                    timed_pass(
+                        &ctx,
+                        queries.as_ref(),
+                        &mut timings,
+                        "antialias",
+                        &mut |cmd| passes::antialias::antialias_pass(cmd, pipeline, set, targets),
+                    )?;
+                    stats.pipelines.push(pipeline.name.clone());
                 }
             }
             stats.passes.push(pass.name());

@@ -224,6 +224,9 @@ pub const MATERIAL_CLEARCOAT: u32 = 64;
 pub const MATERIAL_DIFFUSE_TRANSMISSION: u32 = 128;
 /// KHR_materials_iridescence: drawn by the transparent pass.
 pub const MATERIAL_IRIDESCENCE: u32 = 256;
+/// KHR_materials_pbrSpecularGlossiness: `metallic_roughness[1]` is the glossiness and the
+/// metallic-roughness slot's alpha multiplies it (roughness = 1 − that).
+pub const MATERIAL_SPEC_GLOSS: u32 = 512;
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -243,7 +246,7 @@ impl GpuMaterial {
             ],
             metallic_roughness: [
                 m.metallic,
-                m.roughness,
+                m.glossiness.unwrap_or(m.roughness),
                 fabric_index.map(|i| i as f32 + 1.0).unwrap_or(0.0),
                 if m.occlusion_texture.is_some() {
                     m.occlusion_strength
@@ -302,6 +305,11 @@ impl GpuMaterial {
                     }
                     | if m.iridescence.is_some() {
                         MATERIAL_IRIDESCENCE
+                    } else {
+                        0
+                    }
+                    | if m.glossiness.is_some() {
+                        MATERIAL_SPEC_GLOSS
                     } else {
                         0
                     };

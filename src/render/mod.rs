@@ -401,6 +401,36 @@ pub struct RenderOptions {
     pub jitter: [f32; 2],
     /// How the weave is filtered over a pixel's footprint (the parallelogram by default).
     pub footprint: Footprint,
+    /// Edge anti-aliasing after tone mapping: none (the library's default, so images are the
+    /// shading alone) or FXAA (`weft render` and `weft view`'s default).
+    pub antialias: Antialias,
+}
+
+/// Edge anti-aliasing of the tone-mapped image (`--aa`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Antialias {
+    /// Geometry edges as the rasterizer leaves them: one-pixel staircases.
+    #[default]
+    None,
+    /// A post pass (glsl/fxaa.frag): blends across luma edges along their direction.
+    Fxaa,
+}
+
+impl Antialias {
+    pub fn by_name(name: &str) -> Option<Antialias> {
+        match name {
+            "none" => Some(Antialias::None),
+            "fxaa" => Some(Antialias::Fxaa),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Antialias::None => "none",
+            Antialias::Fxaa => "fxaa",
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -422,6 +452,7 @@ impl Default for RenderOptions {
             read_hdr: true,
             jitter: [0.0, 0.0],
             footprint: Footprint::default(),
+            antialias: Antialias::None,
         }
     }
 }

@@ -367,13 +367,18 @@ pub fn write_frame(
     commit_all(staged)
 }
 
-/// `tonemap NAME, exposure E EV` (debug views: `debug view NAME, no tone curve`).
+/// `tonemap NAME, exposure E EV`, then `, aa fxaa` with edge anti-aliasing (debug views:
+/// `debug view NAME, no tone curve`).
 pub fn display_note(options: &super::RenderOptions) -> String {
     if options.debug_view != super::DebugView::None {
         format!("debug view {}, no tone curve", options.debug_view.name())
     } else {
+        let aa = match options.antialias {
+            super::Antialias::None => String::new(),
+            a => format!(", aa {}", a.name()),
+        };
         format!(
-            "tonemap {}, exposure {} EV",
+            "tonemap {}, exposure {} EV{aa}",
             options.tonemap.name(),
             options.exposure
         )

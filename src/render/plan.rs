@@ -23,6 +23,8 @@ pub enum Pass {
     Transparent,
     /// Exposure, tone curve and sRGB encoding into the 8-bit target.
     Tonemap,
+    /// Fullscreen pass after tone mapping (`--aa fxaa`): edge anti-aliasing of the 8-bit image.
+    Antialias,
     /// Compute passes, once per environment (cached by content hash): the radiance cube and its
     /// mips, the GGX-prefiltered specular cube; the SH irradiance on the CPU.
     Environment,
@@ -37,6 +39,7 @@ impl Pass {
             Pass::Lighting => "lighting",
             Pass::Transparent => "transparent",
             Pass::Tonemap => "tonemap",
+            Pass::Antialias => "antialias",
             Pass::Environment => "environment",
         }
     }
@@ -347,6 +350,10 @@ impl Plan {
         let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());
         let iridescence_draws = count(&|m| m.iridescence.is_some());
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
+        // Edge anti-aliasing of the shaded image (debug views show the G-buffer as it is).
+        if options.antialias == super::Antialias::Fxaa && options.debug_view == DebugView::None {
+            passes.push(Pass::Antialias);
+        }
         if blend_draws + forward_opaque_draws > 0 {
             passes.insert(2, Pass::Transparent);
         }

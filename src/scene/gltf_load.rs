@@ -101,6 +101,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::CLEARCOAT,
     material_ext::DIFFUSE_TRANSMISSION,
     material_ext::IRIDESCENCE,
+    material_ext::SPEC_GLOSS,
     FABRIC_EXTENSION,
     // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
@@ -409,6 +410,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::CLEARCOAT,
         material_ext::DIFFUSE_TRANSMISSION,
         material_ext::IRIDESCENCE,
+        material_ext::SPEC_GLOSS,
         DRACO,
     ];
     root.extensions_required
@@ -741,7 +743,12 @@ impl<'a> Loader<'a> {
                 }
             };
 
-        let base_color_texture = match pbr.base_color_texture() {
+        // KHR_materials_pbrSpecularGlossiness, where present, replaces the metallic-roughness
+        // parameters (its specification: the file's fallback for viewers without it).
+        let spec_gloss_present = m
+            .extensions()
+            .is_some_and(|e| e.contains_key(material_ext::SPEC_GLOSS));
+        let base_color_texture = match pbr.base_color_texture().filter(|_| !spec_gloss_present) {
             Some(info) => Some(slot(
                 self,
                 info.texture(),
@@ -753,7 +760,10 @@ impl<'a> Loader<'a> {
             )?),
             None => None,
         };
-        let metallic_roughness_texture = match pbr.metallic_roughness_texture() {
+        let metallic_roughness_texture = match pbr
+            .metallic_roughness_texture()
+            .filter(|_| !spec_gloss_present)
+        {
             Some(info) => Some(slot(
                 self,
                 info.texture(),
@@ -888,6 +898,11 @@ impl<'a> Loader<'a> {
             .map(|v| material_ext::iridescence(&mut ctx, v))
             .transpose()
             .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::SPEC_GLOSS;
+        let spec_gloss_ext = ext(material_ext::SPEC_GLOSS)
+            .map(|v| material_ext::spec_gloss(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
         ctx.extension = material_ext::CLEARCOAT;
         let clearcoat_ext = ext(material_ext::CLEARCOAT)
             .map(|v| material_ext::clearcoat(&mut ctx, v))
@@ -970,6 +985,79 @@ impl<'a> Loader<'a> {
         if let Some(ior) = ior {
             specular.ior = ior;
         }
+        // KHR_materials_pbrSpecularGlossiness in the metallic-roughness model: a dielectric
+        // (metallic 0) whose diffuse is the base colour, whose F0 is the specular colour (through
+        // KHR_materials_specular's colour: F0(ior 1.5) = 0.04 times specular / 0.04) and whose
+        // roughness is 1 − glossiness. The one texture holds the specular colour (RGB, sRGB) and
+        // the glossiness (A, linear): bound to the specular colour slot and, for its alpha, the
+        // metallic-roughness slot (MATERIAL_SPEC_GLOSS tells the shader to read roughness from
+        // there as 1 − glossiness · A).
+        let (
+            base_color,
+            base_color_texture,
+            metallic,
+            roughness,
+            metallic_roughness_texture,
+            glossiness,
+        ) = match &spec_gloss_ext {
+            None => (
+                base_color,
+                base_color_texture,
+                metallic,
+                roughness,
+                metallic_roughness_texture,
+                None,
+            ),
+            Some(e) => {
+                if specular_ext.is_some() || ior.is_some() {
+                    self.warn(format_args!(
+                            "{who} has {} with {} or {}; the specular-glossiness model sets its own specular colour and index, so those are ignored",
+                            material_ext::SPEC_GLOSS,
+                            material_ext::SPECULAR,
+                            material_ext::IOR
+                        ));
+                }
+                let texture = ext_texture(
+                    self,
+                    &e.texture,
+                    (TextureSlot::SpecularColor, "specular-glossiness texture"),
+                    ColorSpace::Srgb,
+                    &mut uv_transforms,
+                )?;
+                let gloss_texture = ext_texture(
+                    self,
+                    &e.texture,
+                    (
+                        TextureSlot::MetallicRoughness,
+                        "specular-glossiness texture",
+                    ),
+                    ColorSpace::Srgb,
+                    &mut uv_transforms,
+                )?;
+                specular = Specular {
+                    factor: 1.0,
+                    color: e.specular.map(|c| c / 0.04),
+                    texture: None,
+                    color_texture: texture,
+                    ior: 1.5,
+                };
+                let diffuse_texture = ext_texture(
+                    self,
+                    &e.diffuse_texture,
+                    (TextureSlot::BaseColor, "diffuse texture"),
+                    ColorSpace::Srgb,
+                    &mut uv_transforms,
+                )?;
+                (
+                    e.diffuse,
+                    diffuse_texture,
+                    0.0,
+                    1.0 - e.glossiness,
+                    gloss_texture,
+                    Some(e.glossiness),
+                )
+            }
+        };
         let anisotropy = match &anisotropy_ext {
             None => None,
             Some(e) => Some(Anisotropy {
@@ -1222,6 +1310,7 @@ impl<'a> Loader<'a> {
             clearcoat,
             diffuse_transmission,
             iridescence,
+            glossiness,
             uv: slot_uv,
             samplers,
             unlit,

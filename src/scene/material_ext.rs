@@ -18,6 +18,8 @@ pub const VOLUME: &str = "KHR_materials_volume";
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 pub const IRIDESCENCE: &str = "KHR_materials_iridescence";
+/// Archived by Khronos, still required by older files (SpecGlossVsMetalRough).
+pub const SPEC_GLOSS: &str = "KHR_materials_pbrSpecularGlossiness";
 
 /// A glTF textureInfo, unresolved: the texture index, its texCoord, and the raw
 /// KHR_texture_transform (parsed by the loader, like the core slots').
@@ -74,6 +76,15 @@ pub struct ClearcoatExt {
     pub roughness_texture: Option<TexRef>,
     pub normal_texture: Option<TexRef>,
     pub normal_scale: f32,
+}
+
+#[derive(Clone, Debug)]
+pub struct SpecGlossExt {
+    pub diffuse: [f32; 4],
+    pub diffuse_texture: Option<TexRef>,
+    pub specular: [f32; 3],
+    pub glossiness: f32,
+    pub texture: Option<TexRef>,
 }
 
 #[derive(Clone, Debug)]
@@ -359,6 +370,38 @@ pub fn clearcoat(ctx: &mut Ctx, v: &Value) -> Result<ClearcoatExt, String> {
                         ctx.number("clearcoatNormalTexture.scale", s, -100.0, 100.0)?;
                 }
             }
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+pub fn spec_gloss(ctx: &mut Ctx, v: &Value) -> Result<SpecGlossExt, String> {
+    let mut out = SpecGlossExt {
+        diffuse: [1.0; 4],
+        diffuse_texture: None,
+        specular: [1.0; 3],
+        glossiness: 1.0,
+        texture: None,
+    };
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            "diffuseFactor" => {
+                // Four numbers: the colour and its alpha, each in [0, 1].
+                let a = v.as_array().filter(|a| a.len() == 4).ok_or_else(|| {
+                    ctx.err(
+                        key,
+                        format!("must be an array of 4 numbers, got {}", short(v)),
+                    )
+                })?;
+                let rgb = ctx.colour(key, &Value::Array(a[..3].to_vec()), 0.0, 1.0)?;
+                let alpha = ctx.number(key, &a[3], 0.0, 1.0)?;
+                out.diffuse = [rgb[0], rgb[1], rgb[2], alpha];
+            }
+            "diffuseTexture" => out.diffuse_texture = Some(ctx.texture(key, v)?),
+            "specularFactor" => out.specular = ctx.colour(key, v, 0.0, 1.0)?,
+            "glossinessFactor" => out.glossiness = ctx.number(key, v, 0.0, 1.0)?,
+            "specularGlossinessTexture" => out.texture = Some(ctx.texture(key, v)?),
             other => ctx.unknown(other),
         }
     }

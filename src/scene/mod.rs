@@ -152,6 +152,10 @@ pub struct Material {
     pub diffuse_transmission: Option<DiffuseTransmission>,
     /// KHR_materials_iridescence (None: no thin film).
     pub iridescence: Option<Iridescence>,
+    /// KHR_materials_pbrSpecularGlossiness: the glossiness factor (`roughness` is 1 − it, and
+    /// the metallic-roughness slot holds the specular-glossiness texture, whose alpha multiplies
+    /// it); None: the metallic-roughness model.
+    pub glossiness: Option<f32>,
     /// Where each texture slot ([`TextureSlot`]) reads its coordinates.
     pub uv: [SlotUv; TextureSlot::COUNT],
     /// How each texture slot is sampled: its glTF texture's sampler (wrap modes and filters).
@@ -544,6 +548,7 @@ impl Default for Material {
             clearcoat: None,
             diffuse_transmission: None,
             iridescence: None,
+            glossiness: None,
             uv: [SlotUv::IDENTITY; TextureSlot::COUNT],
             samplers: [TextureSampler::default(); TextureSlot::COUNT],
             unlit: false,

@@ -66,6 +66,8 @@ pub struct Case {
     /// pose).
     pub pose: Option<(usize, f32)>,
     /// Load warnings the file is known to give (a part of each message); any other fails.
+    /// Edge anti-aliasing (`--aa`; the library's default, none, for every other case).
+    pub antialias: weft::render::Antialias,
     pub warnings: &'static [&'static str],
     /// What a person should see in the golden.
     pub shows: &'static str,
@@ -98,6 +100,7 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         variant: None,
         pose: None,
         warnings: &[],
+        antialias: weft::render::Antialias::None,
         shows,
     }
 }
@@ -362,6 +365,11 @@ pub fn cases() -> Vec<Case> {
         Case {
             env: STUDIO,
             ..case("khronos-compare-sheen", "tests/data/khronos/CompareSheen/glTF-Binary/CompareSheen.glb", "two logo spheres, the right one with a red sheen (roughness 0.3) over a darker base texture: a red glow along its rim that the plain left sphere lacks, the centre of both lit alike by the key light")
+        },
+        Case {
+            env: STUDIO,
+            antialias: weft::render::Antialias::Fxaa,
+            ..case("khronos-sheen-chair-fxaa", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the chair of khronos-sheen-chair through the FXAA pass (weft render's default): the same picture, its silhouettes against the backdrop (the legs, the seat's and back's outlines) blended across instead of one-pixel staircases")
         },
         Case {
             env: STUDIO,

@@ -7,10 +7,13 @@
 //! 4. [`shadow`]: casters into the shadow atlas;
 //! 5. [`lighting`]: lamps and the environment from the G-buffer into HDR;
 //! 6. [`transparent`]: alphaMode BLEND draws, forward-lit, back to front over HDR;
-//! 7. [`tonemap`]: exposure and tone curve into the 8-bit target.
+//! 7. [`tonemap`]: exposure and tone curve into the 8-bit target;
+//! 8. [`antialias`] (`--aa fxaa`): edge anti-aliasing of the tone-mapped image into the 8-bit
+//!    target (the tone-map pass then writes an intermediate one).
 //!
 //! Each function's signature says what it reads and writes.
 
+pub mod antialias;
 pub mod environment;
 pub mod gbuffer;
 pub mod lighting;

@@ -4,18 +4,24 @@ use crate::render::frame::Targets;
 use crate::render::gpu::TonemapPush;
 use crate::vk::{Attachment, Cmd, DescriptorSet, Pipeline, Usage};
 
-/// Reads HDR, writes the display-referred 8-bit image.
+/// Reads HDR, writes the display-referred 8-bit image: the output target, or with the
+/// anti-aliasing pass planned, `targets.tonemapped` for it to read.
 pub fn tonemap_pass<'s>(
     cmd: &mut Cmd<'s>,
     pipeline: &'s Pipeline,
     set: DescriptorSet<'s>,
     push: &TonemapPush,
     targets: &'s Targets,
+    antialiased: bool,
 ) {
-    cmd.transition(&targets.ldr, Usage::Undefined, Usage::ColorAttachment, None);
+    let target = match (&targets.tonemapped, antialiased) {
+        (Some(t), true) => t,
+        _ => &targets.ldr,
+    };
+    cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
     cmd.begin_rendering(
         &[Attachment {
-            image: &targets.ldr,
+            image: target,
             clear: None,
         }],
         None,
