@@ -1248,46 +1248,28 @@ impl<'a> Loader<'a> {
             unlit = false;
         }
 
-        let transmission = match (transmission, &fabric) {
-            (Some(_), Some(_)) => {
-                self.warn(format_args!(
-                    "{who} has both {} and {FABRIC_EXTENSION}; light through the weave is not modelled yet, so the transmission is ignored on it",
-                    material_ext::TRANSMISSION
-                ));
-                None
-            }
-            (t, _) => t,
-        };
-        let diffuse_transmission = match (diffuse_transmission, &fabric) {
-            (Some(_), Some(_)) => {
-                self.warn(format_args!(
-                    "{who} has both {} and {FABRIC_EXTENSION}; light through the weave is not modelled yet, so the diffuse transmission is ignored on it",
-                    material_ext::DIFFUSE_TRANSMISSION
-                ));
-                None
-            }
-            (d, _) => d,
-        };
-        let iridescence = match (iridescence, &fabric) {
-            (Some(_), Some(_)) => {
-                self.warn(format_args!(
-                    "{who} has both {} and {FABRIC_EXTENSION}; the woven model's threads carry no thin film yet, so the iridescence is ignored on it",
-                    material_ext::IRIDESCENCE
-                ));
-                None
-            }
-            (i, _) => i,
-        };
-        let clearcoat = match (clearcoat, &fabric) {
-            (Some(_), Some(_)) => {
-                self.warn(format_args!(
-                    "{who} has both {} and {FABRIC_EXTENSION}; the woven model has no coat yet, so the clearcoat is ignored on it",
-                    material_ext::CLEARCOAT
-                ));
-                None
-            }
-            (c, _) => c,
-        };
+        let transmission = self.not_on_fabric(
+            transmission,
+            fabric.is_some(),
+            &who,
+            material_ext::TRANSMISSION,
+            "light through the weave is not modelled yet, so the transmission is ignored on it",
+        );
+        let diffuse_transmission = self.not_on_fabric(diffuse_transmission, fabric.is_some(), &who, material_ext::DIFFUSE_TRANSMISSION, "light through the weave is not modelled yet, so the diffuse transmission is ignored on it");
+        let iridescence = self.not_on_fabric(
+            iridescence,
+            fabric.is_some(),
+            &who,
+            material_ext::IRIDESCENCE,
+            "the woven model's threads carry no thin film yet, so the iridescence is ignored on it",
+        );
+        let clearcoat = self.not_on_fabric(
+            clearcoat,
+            fabric.is_some(),
+            &who,
+            material_ext::CLEARCOAT,
+            "the woven model has no coat yet, so the clearcoat is ignored on it",
+        );
         let material = Material {
             name,
             base_color,
@@ -1531,6 +1513,25 @@ impl<'a> Loader<'a> {
                 self.scene.materials.len() - 1
             }),
         })
+    }
+
+    /// `value` (a material extension), or None with a warning saying `why` where the material
+    /// is woven (`on_fabric`): the extensions the woven model does not combine with yet.
+    fn not_on_fabric<T>(
+        &mut self,
+        value: Option<T>,
+        on_fabric: bool,
+        who: &str,
+        extension: &str,
+        why: &str,
+    ) -> Option<T> {
+        if value.is_some() && on_fabric {
+            self.warn(format_args!(
+                "{who} has both {extension} and {FABRIC_EXTENSION}; {why}"
+            ));
+            return None;
+        }
+        value
     }
 
     /// An unlit copy of material `index` (made once): what points and lines without normals are

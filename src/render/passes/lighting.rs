@@ -1,7 +1,7 @@
 //! The deferred lighting pass: one fullscreen triangle from the G-buffer into HDR.
 
 use crate::render::frame::Targets;
-use crate::vk::{Attachment, Cmd, DescriptorSet, Pipeline, Usage};
+use crate::vk::{Cmd, DescriptorSet, Pipeline, Usage};
 
 /// Reads the G-buffer, writes HDR radiance.
 pub fn lighting_pass<'s>(
@@ -10,18 +10,7 @@ pub fn lighting_pass<'s>(
     set: DescriptorSet<'s>,
     targets: &'s Targets,
 ) {
-    cmd.transition(&targets.hdr, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(
-        &[Attachment {
-            image: &targets.hdr,
-            clear: None,
-        }],
-        None,
-    );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_sets(pipeline, 0, &[set]);
-    cmd.draw(3);
-    cmd.end_rendering();
+    super::fullscreen::<u32>(cmd, pipeline, set, None, &targets.hdr);
     cmd.transition(
         &targets.hdr,
         Usage::ColorAttachment,

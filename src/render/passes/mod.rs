@@ -20,3 +20,30 @@ pub mod lighting;
 pub mod shadow;
 pub mod tonemap;
 pub mod transparent;
+
+/// The body of a fullscreen pass (lighting, tone map, anti-aliasing): `target` from undefined to
+/// a colour attachment, `pipeline` with `set` (and `push`, if any) over one fullscreen triangle.
+pub(crate) fn fullscreen<'s, P: bytemuck::Pod>(
+    cmd: &mut crate::vk::Cmd<'s>,
+    pipeline: &'s crate::vk::Pipeline,
+    set: crate::vk::DescriptorSet<'s>,
+    push: Option<&P>,
+    target: &'s crate::vk::Image,
+) {
+    use crate::vk::{Attachment, Usage};
+    cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
+    cmd.begin_rendering(
+        &[Attachment {
+            image: target,
+            clear: None,
+        }],
+        None,
+    );
+    cmd.bind_pipeline(pipeline);
+    cmd.bind_sets(pipeline, 0, &[set]);
+    if let Some(push) = push {
+        cmd.push_constants(pipeline, push);
+    }
+    cmd.draw(3);
+    cmd.end_rendering();
+}

@@ -2,7 +2,7 @@
 
 use crate::render::frame::Targets;
 use crate::render::gpu::TonemapPush;
-use crate::vk::{Attachment, Cmd, DescriptorSet, Pipeline, Usage};
+use crate::vk::{Cmd, DescriptorSet, Pipeline};
 
 /// Reads HDR, writes the display-referred 8-bit image: the output target, or with the
 /// anti-aliasing pass planned, `targets.tonemapped` for it to read.
@@ -18,17 +18,5 @@ pub fn tonemap_pass<'s>(
         (Some(t), true) => t,
         _ => &targets.ldr,
     };
-    cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(
-        &[Attachment {
-            image: target,
-            clear: None,
-        }],
-        None,
-    );
-    cmd.bind_pipeline(pipeline);
-    cmd.bind_sets(pipeline, 0, &[set]);
-    cmd.push_constants(pipeline, push);
-    cmd.draw(3);
-    cmd.end_rendering();
+    super::fullscreen(cmd, pipeline, set, Some(push), target);
 }
