@@ -48,6 +48,8 @@ layout(constant_id = 21) const uint COAT = 0u;
 layout(constant_id = 22) const uint DIFFUSE_TRANSMISSION = 0u;
 // 1: some drawn material is iridescent (KHR_materials_iridescence).
 layout(constant_id = 23) const uint IRIDESCENCE = 0u;
+// 1: some drawn material disperses (KHR_materials_dispersion): three refracted rays, not one.
+layout(constant_id = 24) const uint DISPERSION = 0u;
 
 // Set 0: gbuffer.vert's bindings 0-4, then lighting.frag's shadow and environment bindings.
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
@@ -71,17 +73,31 @@ layout(set = 0, binding = 16) uniform sampler2D backdrop;
 // over the path (volume_attenuation), weighted by what the specular reflection leaves
 // (transmission_weight). Nothing transmissive is in the backdrop: a transmissive surface behind
 // another is not seen through it.
-vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec3 attenuation) {
-    float ior = transmission.w;
+// The backdrop seen through the volume along the view ray refracted with index ior, attenuated
+// over the path (rgb).
+vec3 through_volume(vec3 p, vec3 n, vec3 v, float roughness, vec4 transmission, vec3 attenuation, float ior) {
     vec3 exit = transmission_exit(p, n, v, transmission.y, ior);
     vec4 clip = frame.view_proj * vec4(exit, 1.0);
     vec2 uv = clip.w > 0.0 ? clip.xy / clip.w * 0.5 + 0.5 : gl_FragCoord.xy * frame.viewport.zw;
-    float lod = transmission_lod(s.roughness, ior, float(textureSize(backdrop, 0).x));
-    vec3 behind = textureLod(backdrop, uv, lod).rgb;
+    float lod = transmission_lod(roughness, ior, float(textureSize(backdrop, 0).x));
+    return textureLod(backdrop, uv, lod).rgb * volume_attenuation(distance(p, exit), attenuation, transmission.z);
+}
+
+vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec4 attenuation) {
+    float ior = transmission.w;
+    vec3 behind;
+    if (DISPERSION != 0u && attenuation.w > 0.0 && transmission.y > 0.0) {
+        // KHR_materials_dispersion: each colour's ray refracted with its own index.
+        vec3 iors = dispersion_iors(ior, attenuation.w);
+        behind = vec3(through_volume(p, n, v, s.roughness, transmission, attenuation.rgb, iors.r).r,
+                      through_volume(p, n, v, s.roughness, transmission, attenuation.rgb, iors.g).g,
+                      through_volume(p, n, v, s.roughness, transmission, attenuation.rgb, iors.b).b);
+    } else {
+        behind = through_volume(p, n, v, s.roughness, transmission, attenuation.rgb, ior);
+    }
     float nv = clamp(dot(n, v), 1e-4, 1.0);
     vec2 ab = textureLod(env_dfg, vec2(nv, s.roughness), 0.0).rg;
-    return behind * volume_attenuation(distance(p, exit), attenuation, transmission.z)
-         * transmission_weight(s.f0, s.specular, s.base, ab);
+    return behind * transmission_weight(s.f0, s.specular, s.base, ab);
 }
 
 #include "shade.glsl"

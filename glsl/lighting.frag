@@ -68,7 +68,7 @@ const uint TRANSMISSION = 0u;
 const uint COAT = 0u;
 const uint DIFFUSE_TRANSMISSION = 0u;
 const uint IRIDESCENCE = 0u;
-vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec3 attenuation) {
+vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec4 attenuation) {
     return vec3(0.0);
 }
 

@@ -1460,6 +1460,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "iridescence_draws",
                 serde_json::json!(plan.iridescence_draws),
             ),
+            ("dispersion_draws", serde_json::json!(plan.dispersion_draws)),
             ("line_draws", serde_json::json!(plan.line_draws)),
             ("point_draws", serde_json::json!(plan.point_draws)),
             (

@@ -142,13 +142,14 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          E(n·v), E(n·l), Ess(n·v) of the energy compensation), `terms_in` (n·h, n·l, n·v, sheen \
          roughness), `volume` (thickness, ior, attenuation distance, backdrop width), \
          `attenuation` (colour, transmission factor), `coat` (factor, roughness), `film` \
-         (iridescence factor, film ior, film thickness in nm)) and a buffer for \
-         `count` 112-byte outputs (`vec4 brdf`, `vec4 terms`, `vec4 exit_lod`, `vec4 transmitted`, \
+         (iridescence factor, film ior, film thickness in nm, and KHR_materials_dispersion's \
+         dispersion)) and a buffer for \
+         `count` 128-byte outputs (`vec4 brdf`, `vec4 terms`, `vec4 exit_lod`, `vec4 transmitted`, \
          `vec4 coated`, `vec4 through`: the BTDF at −l with the attenuation colour, `vec4 film`: \
-         the film's Fresnel at n·v over F0). Push the \
+         the film's Fresnel at n·v over F0, `vec4 dispersed`: `dispersion_iors` of the volume's ior). Push the \
          `uint count`; dispatch `ceil(count / 64)` groups. The Rust twins: \
          `weft::reference::shading::gltf_brdf_cos`, `transmission_exit`, `transmission_lod`, \
-         `volume_attenuation`, `transmission_weight`, `clearcoat_brdf_cos`, `clearcoat_fresnel`, `diffuse_btdf_cos`, `iridescence_fresnel`.",
+         `volume_attenuation`, `transmission_weight`, `clearcoat_brdf_cos`, `clearcoat_fresnel`, `diffuse_btdf_cos`, `iridescence_fresnel`, `dispersion_iors`.",
     ),
     (
         "lighting.frag",
@@ -461,6 +462,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 17, "IBL: lighting.frag's constant 7"),
     ("forward.frag", 18, "IBL_SAMPLES: lighting.frag's constant 8"),
     ("forward.frag", 19, "UNLIT: lighting.frag's constant 9"),
+    ("forward.frag", 24, "DISPERSION: 1 reads the backdrop along three refracted rays for KHR_materials_dispersion volumes (`Material.dispersion.x` > 0); 0 (default) compiles that out"),
     ("forward.frag", 23, "IRIDESCENCE: 1 shades KHR_materials_iridescence surfaces (`Material.extra.w` flag 256) with their thin film's Fresnel; 0 (default) compiles that out"),
     ("forward.frag", 22, "DIFFUSE_TRANSMISSION: 1 lights KHR_materials_diffuse_transmission surfaces (`Material.extra.w` flag 128) from behind too; 0 (default) compiles that out"),
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),

@@ -42,7 +42,7 @@ struct PbrProbeInput {
     attenuation: [f32; 4],
     /// Clearcoat factor, roughness (its normal: n), two unused.
     coat: [f32; 4],
-    /// KHR_materials_iridescence: factor, film ior, film thickness (nm), unused.
+    /// KHR_materials_iridescence: factor, film ior, film thickness (nm); w: the dispersion.
     film: [f32; 4],
 }
 
@@ -56,6 +56,7 @@ struct PbrProbeOutput {
     coated: [f32; 4],
     through: [f32; 4],
     film: [f32; 4],
+    dispersed: [f32; 4],
 }
 
 fn unit(v: [f64; 3]) -> [f32; 3] {
@@ -108,7 +109,7 @@ fn surface(inp: &PbrProbeInput) -> GltfSurface {
 }
 
 /// The Rust twin of pbr_probe.comp's main().
-fn twin(inp: &PbrProbeInput) -> [f32; 28] {
+fn twin(inp: &PbrProbeInput) -> [f32; 32] {
     let s = surface(inp);
     let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
     let b = gltf_brdf_cos(
@@ -142,6 +143,7 @@ fn twin(inp: &PbrProbeInput) -> [f32; 28] {
         inp.coat[0],
         inp.coat[1],
     );
+    let dispersed = sh::dispersion_iors(inp.volume[1], inp.film[3]);
     let film = sh::iridescence_fresnel(
         inp.film[1],
         inp.n[0] * inp.v[0] + inp.n[1] * inp.v[1] + inp.n[2] * inp.v[2],
@@ -185,6 +187,10 @@ fn twin(inp: &PbrProbeInput) -> [f32; 28] {
         film[1],
         film[2],
         0.0,
+        dispersed[0],
+        dispersed[1],
+        dispersed[2],
+        0.0,
     ]
 }
 
@@ -193,7 +199,7 @@ fn twin(inp: &PbrProbeInput) -> [f32; 28] {
 /// of |p| + thickness covers the dozen of them with a factor 2 to spare); log2 is 2^-21 absolute
 /// in [0.5, 2] and 3 ulp elsewhere; pow is exp2(y·log2 x) (`pow_rel`); 1 − specular·(F0·A + B)
 /// carries the absolute error of the product and sum (4 ulp of the larger term), times the base.
-fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 28]) -> [f64; 7] {
+fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 32]) -> [f64; 7] {
     let p = inp.l;
     let thickness = inp.volume[0] as f64;
     let ior = inp.volume[1] as f64;
@@ -521,6 +527,10 @@ fn cases() -> Vec<Case> {
             [0.0; 4],
         ));
     }
+    // KHR_materials_dispersion on every case: 0 (none) to 20 (the loader's limit).
+    for (k, c) in out.iter_mut().enumerate() {
+        c.input.film[3] = [0.0f32, 0.5, 2.0, 6.7, 20.0][k % 5];
+    }
     out
 }
 
@@ -679,8 +689,12 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         "film.g",
         "film.b",
         "-",
+        "dispersed.r",
+        "dispersed.g",
+        "dispersed.b",
+        "-",
     ];
-    let mut worst: [(f64, String); 28] = std::array::from_fn(|_| (0.0, String::new()));
+    let mut worst: [(f64, String); 32] = std::array::from_fn(|_| (0.0, String::new()));
     let mut failures = Vec::new();
     for (k, c) in cases.iter().enumerate() {
         let g: PbrProbeOutput = bytemuck::pod_read_unaligned(&bytes[k * size..(k + 1) * size]);
@@ -692,6 +706,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             g.coated,
             g.through,
             g.film,
+            g.dispersed,
         ]
         .concat();
         let want = twin(&c.input);
@@ -709,8 +724,8 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
                 i.f0_specular[2] as f64,
             ],
         );
-        for j in 0..28 {
-            if j == 3 || j == 15 || j == 23 || j == 27 {
+        for j in 0..32 {
+            if j == 3 || j == 15 || j == 23 || j == 27 || j == 31 {
                 continue;
             }
             let (x, t) = (got[j] as f64, want[j] as f64);
@@ -718,6 +733,10 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             assert!(t.is_finite(), "{}: {} is {t} in the twin", c.name, names[j]);
             let bound = if j < 3 {
                 t.abs() * rel[j] + film_abs[j] + 1e-9
+            } else if j >= 28 {
+                // ior ∓ (ior − 1)·0.025·dispersion: three products and two sums, correctly
+                // rounded, of terms at most |ior|: 8 ulp of it, both sides.
+                8.0 * U * (c.input.volume[1].abs() as f64 + 1.0) + 1e-9
             } else if j >= 24 {
                 film_out[j - 24] + 1e-9
             } else if j < 8 {
@@ -762,8 +781,8 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             }
         }
     }
-    for j in 0..28 {
-        if j != 3 && j != 15 && j != 23 && j != 27 {
+    for j in 0..32 {
+        if j != 3 && j != 15 && j != 23 && j != 27 && j != 31 {
             println!(
                 "{:>15}: worst {:.3} of its bound ({})",
                 names[j], worst[j].0, worst[j].1
@@ -775,7 +794,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         failures.is_empty(),
         "{} of {} outputs outside their bound, e.g.:\n{}",
         failures.len(),
-        cases.len() * 24,
+        cases.len() * 27,
         failures
             .iter()
             .take(20)

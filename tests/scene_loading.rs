@@ -1222,11 +1222,11 @@ fn fabric_extension_reaches_the_material() {
 fn unsupported_required_extension_is_an_error_naming_it() {
     let mut d = Doc::new();
     d.quad(true, true);
-    d.json["extensionsUsed"] = json!(["KHR_materials_dispersion"]);
-    d.json["extensionsRequired"] = json!(["KHR_materials_dispersion"]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_volume_scatter"]);
+    d.json["extensionsRequired"] = json!(["KHR_materials_volume_scatter"]);
     let msg = error_text(d.load("required-extension"));
     assert!(
-        msg.contains("KHR_materials_dispersion") && msg.contains("scene.gltf"),
+        msg.contains("KHR_materials_volume_scatter") && msg.contains("scene.gltf"),
         "{msg}"
     );
 }
@@ -1235,12 +1235,12 @@ fn unsupported_required_extension_is_an_error_naming_it() {
 fn unsupported_used_extension_is_a_warning() {
     let mut d = Doc::new();
     d.quad(true, true);
-    d.json["extensionsUsed"] = json!(["KHR_materials_dispersion"]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_volume_scatter"]);
     let s = d.load("used-extension").unwrap();
     assert!(
         s.warnings
             .iter()
-            .any(|w| w.0.contains("KHR_materials_dispersion")),
+            .any(|w| w.0.contains("KHR_materials_volume_scatter")),
         "{:?}",
         s.warnings
     );
@@ -2728,6 +2728,48 @@ fn specular_glossiness_is_read_into_the_metallic_roughness_model() {
     assert!(w.is_empty(), "{w:?}");
 }
 
+/// KHR_materials_dispersion: read onto the transmissive volume; without a volume (a thin wall
+/// does not refract) dropped with a warning; its range checked.
+#[test]
+fn dispersion_is_read_onto_the_volume() {
+    let mut d = Doc::new();
+    d.quad(true, false);
+    d.json["extensionsUsed"] = json!([
+        "KHR_materials_dispersion",
+        "KHR_materials_transmission",
+        "KHR_materials_volume"
+    ]);
+    d.json["materials"] = json!([
+        {"name": "flint", "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_volume": {"thicknessFactor": 0.5},
+            "KHR_materials_dispersion": {"dispersion": 0.5}}},
+        {"name": "thin", "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_dispersion": {"dispersion": 0.5}}},
+        {"name": "too much", "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_volume": {"thicknessFactor": 0.5},
+            "KHR_materials_dispersion": {"dispersion": 50.0}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load("dispersion").unwrap();
+    let t = |i: usize| s.materials[i].transmission.as_ref().unwrap().dispersion;
+    assert_eq!((t(0), t(1), t(2)), (0.5, 0.0, 20.0));
+    let w: Vec<&str> = s.warnings.iter().map(|w| w.0.as_str()).collect();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'thin'") && w.contains("thin wall")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'too much'") && w.contains("clamped")),
+        "{w:?}"
+    );
+    assert!(!w.iter().any(|w| w.contains("ignores")), "{w:?}");
+}
+
 #[test]
 fn iridescence_is_read_with_its_defaults_and_range_checked() {
     let mut d = Doc::new();
@@ -2800,6 +2842,7 @@ fn every_drawn_material_extension_may_be_required() {
         "KHR_materials_diffuse_transmission",
         "KHR_materials_iridescence",
         "KHR_materials_pbrSpecularGlossiness",
+        "KHR_materials_dispersion",
         "KHR_materials_unlit",
         "KHR_materials_emissive_strength",
     ] {

@@ -304,6 +304,7 @@ fn transmissive(base: [f32; 3], thickness: f32, attenuation: Option<([f32; 3], f
             thickness_texture: None,
             attenuation_color: attenuation.map_or([1.0; 3], |a| a.0),
             attenuation_distance: attenuation.map(|a| a.1),
+            dispersion: 0.0,
         }),
         ..Default::default()
     }
@@ -808,4 +809,68 @@ fn a_thin_film_colours_the_lamps_highlight_as_the_twin_says() {
             );
         }
     }
+}
+
+/// KHR_materials_dispersion: a clear volume before a white stripe on black. Without dispersion
+/// the three colours see the stripe through one refracted ray, so every pixel is grey (R = B);
+/// dispersed, the red and blue rays refract by different indices and land at different points of
+/// the backdrop, so the stripe's edges seen through the glass get colour fringes (R ≠ B).
+#[test]
+fn dispersion_splits_the_colours_of_what_is_seen_through_a_volume() {
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let unlit = |c: f32| Material {
+        base_color: [c, c, c, 1.0],
+        unlit: true,
+        ..Default::default()
+    };
+    let glass = |dispersion: f32| {
+        let mut m = transmissive([1.0; 3], 0.8, None);
+        m.roughness = 0.0;
+        if let Some(t) = m.transmission.as_mut() {
+            t.dispersion = dispersion;
+        }
+        m
+    };
+    let mut fringe = |dispersion: f32| -> f32 {
+        let meshes = vec![
+            square("black", -1.0, 4.0, 0, 1.0),
+            // A stripe: a narrow square (its own x scale) just in front of the black.
+            {
+                let mut m = square("stripe", -0.99, 1.0, 1, 1.0);
+                for v in &mut m.vertices {
+                    v.position[0] *= 0.15;
+                }
+                m
+            },
+            square("glass", 0.0, 0.8, 2, 1.0),
+        ];
+        let f = renderer
+            .render(
+                &scene_of(meshes, vec![unlit(0.0), unlit(1.0), glass(dispersion)]),
+                &options(None),
+            )
+            .expect("render");
+        assert_eq!(f.plan.dispersion_draws, (dispersion > 0.0) as usize);
+        if dispersion > 0.0 {
+            assert!(f.stats.pipelines.iter().any(|p| p.contains("24=1")));
+        }
+        // The largest red-blue difference across the rows through the glass.
+        let mut worst = 0f32;
+        for y in 14..34 {
+            for x in 14..50 {
+                let p = pixel(&f, x, y);
+                worst = worst.max((p[0] - p[2]).abs());
+            }
+        }
+        worst
+    };
+    let plain = fringe(0.0);
+    let dispersed = fringe(20.0);
+    println!("largest |R - B| through the glass: {plain} without dispersion, {dispersed} with 20");
+    // Half floats: 1e-3 of the white; a fringe is a good part of it.
+    assert!(plain < 2e-3, "no dispersion, yet |R - B| reaches {plain}");
+    assert!(
+        dispersed > 0.05,
+        "dispersion 20 leaves |R - B| at {dispersed}"
+    );
 }

@@ -427,9 +427,9 @@ def build():
 
     # --- extensions ------------------------------------------------------------------------------
     d = quad_doc()
-    d.json["extensionsRequired"] = ["KHR_materials_dispersion"]
-    d.json["extensionsUsed"].append("KHR_materials_dispersion")
-    entry("unsupported-required-extension.gltf", gltf(d), "requires KHR_materials_dispersion", "error: `requires the glTF extension 'KHR_materials_dispersion'`")
+    d.json["extensionsRequired"] = ["KHR_materials_volume_scatter"]
+    d.json["extensionsUsed"].append("KHR_materials_volume_scatter")
+    entry("unsupported-required-extension.gltf", gltf(d), "requires KHR_materials_volume_scatter", "error: `requires the glTF extension 'KHR_materials_volume_scatter'`")
     d = quad_doc()
     d.json["extensionsUsed"].append("MSFT_lod")
     entry("unsupported-used-extension.gltf", gltf(d), "uses (without requiring) an extension weft does not know", "renders, warning: `which weft ignores`")

@@ -124,6 +124,7 @@ struct Material {
     vec4 diffuse_transmission;  // KHR_materials_diffuse_transmission: x factor, yzw colour
     vec4 iridescence;         // KHR_materials_iridescence: x factor, y the film's ior, z and w its
                               // thickness (nm) at the thickness texture's 0 and 1
+    vec4 dispersion;          // KHR_materials_dispersion: x 20 / the Abbe number (0: none)
 };
 
 // alphaMode MASK: the base colour's alpha (factor x texture x vertex colour) below the cutoff is

@@ -252,6 +252,15 @@ vec3 volume_attenuation(float d, vec3 color, float distance) {
     return distance > 0.0 ? pow(max(color, vec3(0.0)), vec3(max(d, 0.0) / distance)) : vec3(1.0);
 }
 
+// KHR_materials_dispersion: the indices of refraction of the red, green and blue rays for a
+// volume of index ior and dispersion 20/V (V the Abbe number). By the Abbe number's definition
+// the blue (Fraunhofer F) and red (C) indices differ by (ior − 1)/V = (ior − 1) · 0.05 · dispersion:
+// half of that below ior for red, half above for blue, green at ior.
+vec3 dispersion_iors(float ior, float dispersion) {
+    float half_spread = (ior - 1.0) * 0.025 * dispersion;
+    return vec3(ior - half_spread, ior, ior + half_spread);
+}
+
 // The transmitted light's weight: what the dielectric's specular reflection (its split-sum albedo
 // F0·A + B, weighted by KHR_materials_specular's weight) leaves, tinted by the base colour.
 vec3 transmission_weight(vec3 f0, float specular, vec3 base, vec2 ab) {

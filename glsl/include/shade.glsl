@@ -11,7 +11,7 @@
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
 // with normal n towards v: transmission = (factor, thickness, attenuation distance, ior),
 // attenuation: the attenuation colour. Defined by the including shader.
-vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec3 attenuation);
+vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission, vec4 attenuation);
 
 #include "lights.glsl"
 
@@ -526,7 +526,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         }
         if (TRANSMISSION != 0u && t_spec > 0.0) {
             // The dielectric's transmitted part replaces that much of its diffuse lobe (above).
-            under += (1.0 - metallic) * t_spec * transmitted_light(p, n, v, s, transmission, attenuation.rgb);
+            under += (1.0 - metallic) * t_spec * transmitted_light(p, n, v, s, transmission, attenuation);
         }
         if (DIFFUSE_TRANSMISSION != 0u && diffuse_through > 0.0) {
             // The environment or ambient from behind, through the sheet: the irradiance about −n

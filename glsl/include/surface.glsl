@@ -316,7 +316,8 @@ GSurface material_surface() {    GSurface s;
         float scale = (length(draw.world[0].xyz) + length(draw.world[1].xyz) + length(draw.world[2].xyz)) / 3.0;
         float thickness = m.alpha.z * sample_slot(thickness_tex, m, SLOT_THICKNESS).g * scale;
         s.transmission = vec4(clamp(amount, 0.0, 1.0), max(thickness, 0.0), m.alpha.w, m.volume.a);
-        s.attenuation = vec4(m.volume.rgb, 0.0);
+        // w: KHR_materials_dispersion's spread of the volume's index across the rays.
+        s.attenuation = vec4(m.volume.rgb, m.dispersion.x);
     }
     return s;
 }

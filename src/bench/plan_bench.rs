@@ -85,6 +85,7 @@ pub fn default_with_glass_ball() -> Scene {
                 thickness_texture: None,
                 attenuation_color: [1.0; 3],
                 attenuation_distance: None,
+                dispersion: 0.0,
             });
         }
     }

@@ -263,6 +263,13 @@ pub fn iridescence_fresnel(film_ior: f32, cos1: f32, thickness: f32, base_f0: Ve
     out.map(|c| c.max(0.0))
 }
 
+/// `dispersion_iors` of pbr.glsl (KHR_materials_dispersion): the red, green and blue rays'
+/// indices of refraction, ior ∓ (ior − 1) · 0.025 · dispersion.
+pub fn dispersion_iors(ior: f32, dispersion: f32) -> Vec3 {
+    let half_spread = (ior - 1.0) * 0.025 * dispersion;
+    [ior - half_spread, ior, ior + half_spread]
+}
+
 /// `clearcoat_fresnel` of pbr.glsl: Schlick with F0 0.04.
 pub fn clearcoat_fresnel(cos_theta: f32) -> f32 {
     0.04 + 0.96 * (1.0 - cos_theta.clamp(0.0, 1.0)).powf(5.0)

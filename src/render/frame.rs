@@ -772,6 +772,7 @@ impl Renderer {
             key.push((21, (plan.coat_draws > 0) as u32));
             key.push((22, (plan.diffuse_transmission_draws > 0) as u32));
             key.push((23, (plan.iridescence_draws > 0) as u32));
+            key.push((24, (plan.dispersion_draws > 0) as u32));
             key
         });
         // Two blend modes: opaque forward draws (transmissive, not BLEND) replace and write depth,

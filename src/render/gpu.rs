@@ -204,8 +204,10 @@ pub struct GpuMaterial {
     /// KHR_materials_iridescence: x the factor, y the film's ior, z and w its thickness (nm) at
     /// the thickness texture's 0 and 1 (the minimum and maximum).
     pub iridescence: [f32; 4],
+    /// KHR_materials_dispersion: x 20 / the Abbe number (0: none), yzw unused.
+    pub dispersion: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 176 + 32 * TextureSlot::COUNT);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 192 + 32 * TextureSlot::COUNT);
 
 /// Material flags (frame.glsl's MATERIAL_*).
 const MATERIAL_ANISOTROPY: u32 = 1;
@@ -357,6 +359,12 @@ impl GpuMaterial {
                 Some(d) => [d.factor, d.color[0], d.color[1], d.color[2]],
                 None => [0.0, 1.0, 1.0, 1.0],
             },
+            dispersion: [
+                m.transmission.as_ref().map_or(0.0, |t| t.dispersion),
+                0.0,
+                0.0,
+                0.0,
+            ],
             iridescence: match &m.iridescence {
                 Some(i) => [i.factor, i.ior, i.thickness_min, i.thickness_max],
                 None => [0.0, 1.3, 0.0, 0.0],

@@ -163,6 +163,9 @@ pub struct Plan {
     /// KHR_materials_iridescence: drawn draws with a thin film (the transparent pass draws
     /// them: the G-buffer has no room for a film).
     pub iridescence_draws: usize,
+    /// KHR_materials_dispersion: drawn draws whose transmissive volume disperses (three refracted
+    /// rays where one would do).
+    pub dispersion_draws: usize,
     /// Draws the transparent pass draws opaque, writing depth: transmissive, coated, diffusely
     /// transmissive or iridescent, not BLEND.
     pub forward_opaque_draws: usize,
@@ -349,6 +352,8 @@ impl Plan {
         let coat_draws = count(&|m| m.clearcoat.is_some());
         let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());
         let iridescence_draws = count(&|m| m.iridescence.is_some());
+        let dispersion_draws =
+            count(&|m| m.transmission.as_ref().is_some_and(|t| t.dispersion > 0.0));
         let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
         // Edge anti-aliasing of the shaded image (debug views show the G-buffer as it is).
         if options.antialias == super::Antialias::Fxaa && options.debug_view == DebugView::None {
@@ -419,6 +424,7 @@ impl Plan {
             coat_draws,
             diffuse_transmission_draws,
             iridescence_draws,
+            dispersion_draws,
             unlit_materials,
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
@@ -567,6 +573,13 @@ impl fmt::Display for Plan {
                 f,
                 "diff. trans. {} draw(s) with KHR_materials_diffuse_transmission: drawn by the transparent pass, lit from both sides",
                 self.diffuse_transmission_draws
+            )?;
+        }
+        if self.dispersion_draws > 0 {
+            writeln!(
+                f,
+                "dispersion  {} draw(s) with KHR_materials_dispersion: the backdrop read along three refracted rays",
+                self.dispersion_draws
             )?;
         }
         if self.iridescence_draws > 0 {

@@ -202,7 +202,7 @@ fn readers(root: &json::Root, view: usize) -> String {
 /// than that it is unsupported.
 pub(super) fn refusal_hint(ext: &str) -> Option<&'static str> {
     match ext {
-        "KHR_materials_dispersion" => Some(
+        e if e.starts_with("KHR_materials_") => Some(
             "weft does not draw this material extension yet (docs/scene-format.md lists what it reads); re-export without it, or with it optional (in extensionsUsed only) so that the base material is drawn",
         ),
         _ => None,

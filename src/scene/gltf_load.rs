@@ -102,6 +102,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     material_ext::DIFFUSE_TRANSMISSION,
     material_ext::IRIDESCENCE,
     material_ext::SPEC_GLOSS,
+    material_ext::DISPERSION,
     FABRIC_EXTENSION,
     // Quantized, meshopt-compressed, WebP and KTX2 data: src/scene/compressed.rs.
     compressed::EXTENSIONS[0],
@@ -411,6 +412,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::DIFFUSE_TRANSMISSION,
         material_ext::IRIDESCENCE,
         material_ext::SPEC_GLOSS,
+        material_ext::DISPERSION,
         DRACO,
     ];
     root.extensions_required
@@ -898,6 +900,11 @@ impl<'a> Loader<'a> {
             .map(|v| material_ext::iridescence(&mut ctx, v))
             .transpose()
             .map_err(|e| self.error(e))?;
+        ctx.extension = material_ext::DISPERSION;
+        let dispersion = ext(material_ext::DISPERSION)
+            .map(|v| material_ext::dispersion(&mut ctx, v))
+            .transpose()
+            .map_err(|e| self.error(e))?;
         ctx.extension = material_ext::SPEC_GLOSS;
         let spec_gloss_ext = ext(material_ext::SPEC_GLOSS)
             .map(|v| material_ext::spec_gloss(&mut ctx, v))
@@ -1108,6 +1115,15 @@ impl<'a> Loader<'a> {
                             v.attenuation_distance,
                         ),
                     };
+                // KHR_materials_dispersion spreads the volume's refraction: meaningless
+                // without a volume (a thin wall does not refract).
+                if dispersion.is_some_and(|d| d > 0.0) && volume_ext.is_none() {
+                    self.warn(format_args!(
+                        "{who} has {} without {}; a thin wall does not refract, so the dispersion is ignored",
+                        material_ext::DISPERSION,
+                        material_ext::VOLUME
+                    ));
+                }
                 Some(Transmission {
                     factor: e.factor,
                     texture,
@@ -1115,6 +1131,11 @@ impl<'a> Loader<'a> {
                     thickness_texture,
                     attenuation_color,
                     attenuation_distance,
+                    dispersion: if volume_ext.is_some() {
+                        dispersion.unwrap_or(0.0)
+                    } else {
+                        0.0
+                    },
                 })
             }
         };

@@ -18,6 +18,7 @@ pub const VOLUME: &str = "KHR_materials_volume";
 pub const CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 pub const IRIDESCENCE: &str = "KHR_materials_iridescence";
+pub const DISPERSION: &str = "KHR_materials_dispersion";
 /// Archived by Khronos, still required by older files (SpecGlossVsMetalRough).
 pub const SPEC_GLOSS: &str = "KHR_materials_pbrSpecularGlossiness";
 
@@ -472,6 +473,19 @@ pub fn volume(ctx: &mut Ctx, v: &Value) -> Result<VolumeExt, String> {
                 }
                 out.attenuation_distance = Some(d);
             }
+            other => ctx.unknown(other),
+        }
+    }
+    Ok(out)
+}
+
+/// KHR_materials_dispersion's `dispersion` (20 / the Abbe number; 0 by default).
+pub fn dispersion(ctx: &mut Ctx, v: &Value) -> Result<f32, String> {
+    let mut out = 0.0;
+    for (key, v) in ctx.object(v)? {
+        match key.as_str() {
+            // An Abbe number below 1 (dispersion above 20) is beyond any glass or crystal.
+            "dispersion" => out = ctx.number(key, v, 0.0, 20.0)?,
             other => ctx.unknown(other),
         }
     }

@@ -431,6 +431,9 @@ pub struct Transmission {
     /// attenuationColor (linear) and attenuationDistance (None: infinite, no attenuation).
     pub attenuation_color: [f32; 3],
     pub attenuation_distance: Option<f32>,
+    /// KHR_materials_dispersion: 20 / the Abbe number (0: none); the volume's index spreads
+    /// across the red, green and blue rays by (ior − 1) · 0.025 · dispersion either way.
+    pub dispersion: f32,
 }
 
 /// KHR_materials_clearcoat: a clear dielectric layer (ior 1.5) over the material, with its own
