@@ -616,6 +616,29 @@ impl Renderer {
         })
     }
 
+    /// The anti-aliasing pass's pipeline, made once (by the first frame that plans the pass).
+    fn make_antialias_pipeline(&self) -> crate::Result<()> {
+        if self.antialias_pipeline.get().is_none() {
+            let _ = self
+                .antialias_pipeline
+                .set(self.ctx.create_graphics_pipeline(&GraphicsDesc {
+                    name: "antialias[fxaa]",
+                    vertex: &shaders::FULLSCREEN_VERT,
+                    fragment: &shaders::FXAA_FRAG,
+                    vertex_layout: None,
+                    color_formats: &[LDR_FORMAT],
+                    depth_format: None,
+                    set_layouts: &[&self.tonemap_layout],
+                    push_constant_size: 0,
+                    push_stages: Stages::FRAGMENT,
+                    constants: &[],
+                    blend: false,
+                    topology: Topology::Triangles,
+                })?);
+        }
+        Ok(())
+    }
+
     pub fn context(&self) -> &Context {
         &self.ctx
     }
@@ -646,6 +669,7 @@ impl Renderer {
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
+        self.make_antialias_pipeline()?;
         self.shadow_mask_pipeline(false)?;
         let mut all = vec![
             &self.weave_pipeline,
@@ -659,6 +683,7 @@ impl Renderer {
         all.extend(self.lighting_variants.values());
         all.extend(self.forward_variants.values());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
+        all.extend(self.antialias_pipeline.get());
         Ok(all)
     }
 
@@ -1246,24 +1271,7 @@ impl Renderer {
                     )?,
                 );
             }
-            if self.antialias_pipeline.get().is_none() {
-                let _ = self
-                    .antialias_pipeline
-                    .set(self.ctx.create_graphics_pipeline(&GraphicsDesc {
-                        name: "antialias[fxaa]",
-                        vertex: &shaders::FULLSCREEN_VERT,
-                        fragment: &shaders::FXAA_FRAG,
-                        vertex_layout: None,
-                        color_formats: &[LDR_FORMAT],
-                        depth_format: None,
-                        set_layouts: &[&self.tonemap_layout],
-                        push_constant_size: 0,
-                        push_stages: Stages::FRAGMENT,
-                        constants: &[],
-                        blend: false,
-                        topology: Topology::Triangles,
-                    })?);
-            }
+            self.make_antialias_pipeline()?;
         }
         if plan.transmission_draws > 0 {
             let targets = self.targets.as_mut().expect("made above");
