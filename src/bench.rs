@@ -48,16 +48,28 @@ pub enum View {
     Cells10,
     /// The same at a tenth of the pitch: a cell is about one pixel.
     Cells1,
+    /// The fine weave seen square-on (along its normal, no roll) from 20 cm: a cell is about one
+    /// pixel at 360 rows, its rows and columns along the pixel grid (a garment filling a 1080p
+    /// frame at a 0.5 mm pitch).
+    Cells1Square,
+    /// The same from 13.3 cm: about 1.5 pixels per cell, square-on.
+    Cells15Square,
+    /// The fine weave at 80° from its normal, unrolled: cells about one pixel across and a
+    /// sixth of a pixel deep (grazing footprints).
+    CellsGrazing,
 }
 
 impl View {
-    pub const ALL: [View; 6] = [
+    pub const ALL: [View; 9] = [
         View::CloseUp,
         View::Mid,
         View::Far,
         View::Grazing,
         View::Cells10,
         View::Cells1,
+        View::Cells1Square,
+        View::Cells15Square,
+        View::CellsGrazing,
     ];
 
     pub fn name(self) -> &'static str {
@@ -68,6 +80,9 @@ impl View {
             View::Grazing => "grazing",
             View::Cells10 => "cells-10px",
             View::Cells1 => "cells-1px",
+            View::Cells1Square => "cells-1px-square",
+            View::Cells15Square => "cells-1.5px-square",
+            View::CellsGrazing => "cells-grazing",
         }
     }
 
@@ -78,7 +93,7 @@ impl View {
             .find(|v| v.name() == text)
             .ok_or_else(|| {
                 Error::input(format!(
-                    "unknown bench view '{text}': choose close-up, mid, far, grazing, cells-10px or cells-1px"
+                    "unknown bench view '{text}': choose close-up, mid, far, grazing, cells-10px, cells-1px, cells-1px-square, cells-1.5px-square or cells-grazing"
                 ))
             })
     }
@@ -87,9 +102,23 @@ impl View {
     pub fn scene(self) -> BenchScene {
         match self {
             View::Cells10 => BenchScene::Weave,
-            View::Cells1 => BenchScene::FineWeave,
+            View::Cells1 | View::Cells1Square | View::Cells15Square | View::CellsGrazing => {
+                BenchScene::FineWeave
+            }
             _ => BenchScene::Default,
         }
+    }
+
+    /// [`View::camera`] for an image of `rows` rows instead of the bench's 360: the weave views'
+    /// fields of view narrowed (or widened) so that a cell spans the pixels it spans in the
+    /// bench; the other views unchanged.
+    pub fn camera_for_rows(self, scene: &Scene, rows: u32) -> crate::Result<Camera> {
+        let mut c = self.camera(scene)?;
+        if self.scene() != BenchScene::Default {
+            let t = (0.5 * c.yfov).tan() * rows as f32 / 360.0;
+            c.yfov = 2.0 * t.atan();
+        }
+        Ok(c)
     }
 
     /// The camera of this view on its scene ([`View::scene`]). The default scene: the cloth is
@@ -113,6 +142,18 @@ impl View {
                 let mut c = scene.look_at_camera(eye, target, 40f32.to_radians())?;
                 c.view = glam::Mat4::from_rotation_z(30f32.to_radians()) * c.view;
                 Ok(c)
+            }
+            View::Cells1Square | View::Cells15Square | View::CellsGrazing => {
+                // The patch's normal at the target is +y (it bends along x about the origin).
+                let target = Vec3::new(0.0, 0.0, -0.05);
+                let (distance, from_normal) = match self {
+                    View::Cells1Square => (0.2, 0.0f32),
+                    View::Cells15Square => (0.2 / 1.5, 0.0),
+                    _ => (0.2 * 80f32.to_radians().cos(), 80.0),
+                };
+                let a = from_normal.to_radians();
+                let eye = target + distance * Vec3::new(0.0, a.cos(), a.sin());
+                scene.look_at_camera(eye, target, 40f32.to_radians())
             }
         }
     }
@@ -244,7 +285,7 @@ impl BenchConfig {
     /// default precision, mixture also with the analytic weave, supersampled:2 and :4, growth to
     /// 1280x720 and 16 lights.
     pub fn quick() -> Self {
-        let mut variants = cross_product(&LEVELS[..3], &[WeavePrecision::Rgba16f]);
+        let mut variants = cross_product(&LEVELS[..3], &[WeavePrecision::default()]);
         variants.push((Accuracy::Mixture, WeavePrecision::Analytic));
         variants.extend(
             [Accuracy::Supersampled(2), Accuracy::Supersampled(4)]
@@ -513,7 +554,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
             &mut renderer,
             vscene,
             vgpu,
-            &at(Accuracy::Mixture, WeavePrecision::Rgba16f)?,
+            &at(Accuracy::Mixture, WeavePrecision::default())?,
             n,
             || progress.done(),
         )?;
@@ -543,7 +584,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
             progress.done()
         })?;
         for (&(level, precision), (frame, times)) in config.variants.iter().zip(measured) {
-            if (level, precision) == (Accuracy::Mixture, WeavePrecision::Rgba16f) {
+            if (level, precision) == (Accuracy::Mixture, WeavePrecision::default()) {
                 crate::render::write_png(
                     &config.out.join(format!("default-{}.png", view.name())),
                     frame.width,
@@ -650,7 +691,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
             config.frames
         };
         for &view in &config.pbr_views {
-            let fabric = at(view, Accuracy::Mixture, WeavePrecision::Rgba16f, size)?;
+            let fabric = at(view, Accuracy::Mixture, WeavePrecision::default(), size)?;
             let as_pbr = RenderOptions {
                 fabric_as_pbr: true,
                 ..fabric.clone()
@@ -723,7 +764,11 @@ pub fn footprint_bench(
         Footprint::Parallelogram(2),
         Footprint::Parallelogram(3),
     ];
-    let precisions = [WeavePrecision::Rgba16f, WeavePrecision::Analytic];
+    let precisions = [
+        WeavePrecision::Rgba16f,
+        WeavePrecision::Sat,
+        WeavePrecision::Analytic,
+    ];
     let mut table = String::new();
     let mut csv = String::from("view,precision,footprint,gbuffer_ms,lighting_ms,total_ms,psnr_db,flip_mean,cost_vs_box,truth_psnr_db\n");
     let _ = writeln!(
@@ -1577,7 +1622,7 @@ impl BenchReport {
             r.set("pareto", a.pareto as u8);
             r.push(&mut t);
         }
-        let default = (Accuracy::Mixture, WeavePrecision::Rgba16f);
+        let default = (Accuracy::Mixture, WeavePrecision::default());
         for g in &self.resolutions {
             let mut r = base(
                 "resolution",

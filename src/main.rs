@@ -86,8 +86,9 @@ struct SceneArgs {
         &["nearest", "filtered-params", "mixture", "supersampled:N"],
     ))]
     accuracy: render::Accuracy,
-    /// Where coverages come from: rgba8 or rgba16f weave texture, or analytic (no texture).
-    #[arg(long, default_value = "rgba16f", value_parser = Choice::new(
+    /// Where coverages come from: sat (the weave's summed-area table: each footprint box
+    /// exactly), rgba8 or rgba16f weave texture (mip chain, trilinear), or analytic (no texture).
+    #[arg(long, default_value = "sat", value_parser = Choice::new(
         render::WeavePrecision::parse,
         &render::WeavePrecision::ALL.map(render::WeavePrecision::name),
     ))]
@@ -418,7 +419,8 @@ struct BenchArgs {
     #[arg(long)]
     device: Option<String>,
     /// Only these views of the accuracy sweep (comma-separated: close-up, mid, far, grazing,
-    /// cells-10px, cells-1px).
+    /// cells-10px, cells-1px, cells-1px-square, cells-1.5px-square,
+    /// cells-grazing).
     #[arg(long, value_delimiter = ',', value_parser = parse_bench_view)]
     views: Option<Vec<weft::bench::View>>,
     /// Jittered point samples per pixel side of the ground truth (N x N frames per view).
@@ -1322,6 +1324,9 @@ fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
             vec![
                 weft::bench::View::Cells10,
                 weft::bench::View::Cells1,
+                weft::bench::View::Cells1Square,
+                weft::bench::View::Cells15Square,
+                weft::bench::View::CellsGrazing,
                 weft::bench::View::Far,
             ]
         });
@@ -1409,7 +1414,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "name": a.name, "duration": a.duration,
             })).collect::<Vec<_>>(),
             "weaves": plan.weaves.iter().map(|w| serde_json::json!({
-                "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "materials": w.materials,
+                "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "lookup": w.lookup, "materials": w.materials,
             })).collect::<Vec<_>>(),
             "features": {
                 "gaps": plan.features.gaps,

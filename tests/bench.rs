@@ -127,7 +127,7 @@ fn presets_are_consistent() {
         assert!(config.truth_samples >= 6);
     }
     let full = BenchConfig::default();
-    assert_eq!(full.views.len(), 6);
+    assert_eq!(full.views, View::ALL.to_vec());
     // nearest, filtered-params and mixture at every precision; supersampled:2/4/8 analytic only.
     assert_eq!(full.variants, bench::default_variants());
     assert_eq!(full.variants.len(), 3 * WeavePrecision::ALL.len() + 3);

@@ -328,7 +328,7 @@ fn help_lists_the_values_of_every_choice() {
     let help = String::from_utf8_lossy(&out.stdout);
     for values in [
         "[possible values: nearest, filtered-params, mixture, supersampled:N]",
-        "[possible values: rgba8, rgba16f, analytic]",
+        "[possible values: rgba8, rgba16f, analytic, sat]",
         "[possible values: none, albedo, normals, tangents, roughness-metallic, coverage, thread-dir, depth]",
         "[possible values: gouraud, phong, ashikhmin-shirley, fabric]",
     ] {

@@ -641,6 +641,83 @@ fn box_coverage_is_the_mean_of_point_samples() {
     println!("box coverage vs {n}x{n} point samples: worst error / bound = {worst:.3}");
 }
 
+// The summed-area table (`--weave-precision sat`) against the exact f64 box coverage: boxes whose
+// corners lie on the table's texel grid are exact (f32 rounding only), at any size and place,
+// across repeat borders and over many repeats; any other box is off by at most the texels its
+// border cuts (the table is exact for the texel-averaged weave), measured and bounded by that band.
+#[test]
+fn summed_area_table_gives_box_coverage() {
+    use weft::fabric::{weave_level0_size, WeaveSat};
+    let mut rng = weft::reference::probe::XorShift::new(1234);
+    let (mut worst_aligned, mut worst_band) = (0.0f64, 0.0f64);
+    for case in 0..90 {
+        let pattern = [
+            WeavePattern::plain(),
+            WeavePattern::twill(),
+            WeavePattern::satin(),
+        ][case % 3];
+        let p = FabricParams {
+            pattern,
+            repeat: 0.05,
+            gap: rng.range(0.0, 0.025) as f32,
+            shadow_width: rng.next_f64() as f32,
+            shadow_strength: rng.next_f64() as f32,
+            ..Default::default()
+        };
+        let (nw, nh) = weave_level0_size(&p.pattern);
+        let push = p.weave_push(nw, nh);
+        let sat = WeaveSat::new(&push);
+        let w = wd::Weave::from_push(&push);
+        let (cols, rows) = (push.cols as f64, push.rows as f64);
+        let exact = |lo: [f64; 2], hi: [f64; 2]| {
+            wd::weave_box(&w, lo[0] * cols, lo[1] * rows, hi[0] * cols, hi[1] * rows)
+        };
+        // Texel-aligned boxes, from one texel to three repeats, anywhere in [-4, 4] repeats.
+        for _ in 0..20 {
+            let snap = |x: f64, n: u32| (x * n as f64).round() / n as f64;
+            let lo = [snap(rng.range(-4.0, 4.0), nw), snap(rng.range(-4.0, 4.0), nh)];
+            let ext = [
+                snap(rng.log_range(1.0 / nw as f64, 3.0), nw).max(1.0 / nw as f64),
+                snap(rng.log_range(1.0 / nh as f64, 3.0), nh).max(1.0 / nh as f64),
+            ];
+            let hi = [lo[0] + ext[0], lo[1] + ext[1]];
+            let got = sat.box_mean([lo[0] as f32, lo[1] as f32], [hi[0] as f32, hi[1] as f32]);
+            let want = exact(lo, hi);
+            for k in 0..4 {
+                let err = (got[k] as f64 - want[k]).abs();
+                worst_aligned = worst_aligned.max(err);
+                // f32: table values of order a cell's area, a one-texel box 1/(nw nh) of a repeat.
+                assert!(
+                    err < 2e-3,
+                    "aligned box {lo:?}+{ext:?} of {}: table {got:?} vs exact {want:?}",
+                    p.pattern.name()
+                );
+            }
+        }
+        // Any box: within the band of texels its border cuts.
+        for _ in 0..20 {
+            let lo = [rng.range(-4.0, 4.0), rng.range(-4.0, 4.0)];
+            let ext = [rng.log_range(0.02, 3.0), rng.log_range(0.02, 3.0)];
+            let hi = [lo[0] + ext[0], lo[1] + ext[1]];
+            let got = sat.box_mean([lo[0] as f32, lo[1] as f32], [hi[0] as f32, hi[1] as f32]);
+            let want = exact(lo, hi);
+            let band = (2.0 * ext[1] / nw as f64 + 2.0 * ext[0] / nh as f64) / (ext[0] * ext[1]);
+            for k in 0..4 {
+                let err = (got[k] as f64 - want[k]).abs();
+                worst_band = worst_band.max(err / band);
+                assert!(
+                    err <= band + 2e-3,
+                    "box {lo:?}+{ext:?} of {}: table {got:?} vs exact {want:?} (band {band})",
+                    p.pattern.name()
+                );
+            }
+        }
+    }
+    println!(
+        "summed-area table: texel-aligned boxes worst error {worst_aligned:.2e}; other boxes worst error / border band {worst_band:.3}"
+    );
+}
+
 #[test]
 fn gap_limits() {
     // s_g = 0: no gap anywhere but on borders; a whole repeat has no gap.

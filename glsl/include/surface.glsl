@@ -11,7 +11,8 @@ layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;
 layout(set = 1, binding = 2) uniform sampler2D normal_tex;
 layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
 // The material's weave texture (fabric only): one pattern repeat, full mip chain, each texel the
-// exact coverage (c_warp, c_weft, s_warp, s_weft) of its footprint.
+// exact coverage (c_warp, c_weft, s_warp, s_weft) of its footprint; with WEAVE_SOURCE 2 or 3 its
+// summed-area table instead (weave_sat_box below).
 layout(set = 1, binding = 4) uniform sampler2D weave_tex;
 // Ambient occlusion (glTF occlusionTexture, red channel; white when the material has none).
 layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;
@@ -97,6 +98,52 @@ vec4 sample_slot(sampler2D tex, Material m, uint slot) {
     mat2 lin = mat2(r0.x, r1.x, r0.y, r1.y);
     vec2 st = lin * uv + vec2(r0.z, r1.z);
     return textureGrad(tex, st, lin * uv_d[3u * set + 1u], lin * uv_d[3u * set + 2u]);
+}
+
+// The weave's summed-area table (WEAVE_SOURCE 2 filtered, 3 fetched; Rust twin
+// weft::fabric::WeaveSat, which builds it): it spans 2 x 2 repeats (a box up to a repeat wide,
+// its corner in the first repeat, lies inside). With W x H texels per repeat, texel (i, j), i <= 2W, j <= 2H, is the integral over
+// [0, i/W] x [0, j/H] (a repeat has area 1) of the coverage minus its mean; texel (2W + 1, 0) the
+// mean. The table at q in texel-corner units, bilinear between the four corners around it (exact
+// for the texel-averaged coverage): by the sampler, or where the device cannot filter RGBA32F
+// (Vulkan makes it optional) by four texel fetches.
+vec4 weave_sat_corner(ivec2 size, vec2 q) {
+    if (WEAVE_SOURCE == 2u) {
+        // The device filters RGBA32F: the sampler's bilinear filter between texel centres.
+        return textureLod(weave_tex, (q + 0.5) / vec2(size), 0.0);
+    }
+    ivec2 n = size - ivec2(2, 1);
+    ivec2 i = clamp(ivec2(floor(q)), ivec2(0), n - 1);
+    vec2 f = clamp(q - vec2(i), 0.0, 1.0);
+    vec4 a = texelFetch(weave_tex, i, 0);
+    vec4 b = texelFetch(weave_tex, i + ivec2(1, 0), 0);
+    vec4 c = texelFetch(weave_tex, i + ivec2(0, 1), 0);
+    vec4 d = texelFetch(weave_tex, i + ivec2(1, 1), 0);
+    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+}
+
+// The mean coverage over the box [lo, hi] of st (a repeat is 1 unit; any size and place): with lo
+// reduced into the first repeat and hi = 2X + u1 (X whole tables), the integral of coverage minus
+// mean is T(u1,v1) - T(u1,v0) - T(u0,v1) + T(u0,v0) + X (T(2,v1) - T(2,v0)) + Y (T(u1,2) - T(u0,2));
+// X and Y are 0 for boxes up to a repeat.
+vec4 weave_sat_box(vec2 lo, vec2 hi) {
+    ivec2 size = textureSize(weave_tex, 0);
+    vec2 n = vec2(size - ivec2(2, 1));
+    vec2 ext = hi - lo;
+    vec2 l = lo - floor(lo);
+    vec2 h = l + ext;
+    vec2 whole = floor(h / 2.0);
+    vec2 q0 = l * n / 2.0;
+    vec2 q1 = (h - 2.0 * whole) * n / 2.0;
+    vec4 sum = weave_sat_corner(size, q1) - weave_sat_corner(size, vec2(q1.x, q0.y))
+             - weave_sat_corner(size, vec2(q0.x, q1.y)) + weave_sat_corner(size, q0);
+    if (whole.x > 0.0) {
+        sum += whole.x * (weave_sat_corner(size, vec2(n.x, q1.y)) - weave_sat_corner(size, vec2(n.x, q0.y)));
+    }
+    if (whole.y > 0.0) {
+        sum += whole.y * (weave_sat_corner(size, vec2(q1.x, n.y)) - weave_sat_corner(size, vec2(q0.x, n.y)));
+    }
+    return texelFetch(weave_tex, ivec2(size.x - 1, 0), 0) + sum / max(ext.x * ext.y, 1e-30);
 }
 
 // The surface at this fragment. Call it first in main, in uniform control flow: it takes the
@@ -232,11 +279,14 @@ GSurface material_surface() {    GSurface s;
             // footprint, so it gets the footprint itself: st within its repeat, and the extent.
             s.fabric = vec4(fract(st), ext);
         } else if (ACCURACY == 0u) {
-            // Nearest: one texel of level 0, no filtering.
+            // Nearest: one texel of level 0, no filtering (the summed-area table's box of it).
             ivec2 size = textureSize(weave_tex, 0);
             ivec2 texel = clamp(ivec2(fract(st) * vec2(size)), ivec2(0), size - 1);
+            vec2 sat_n = vec2(size - ivec2(2, 1)) / 2.0;
+            vec2 sat_lo = floor(fract(st) * sat_n) / sat_n;
             vec4 coverage = WEAVE_SOURCE == 1u
                 ? weave_point(weave_from_fabric(f), fract(st.x) * repeat_cells.x, fract(st.y) * repeat_cells.y)
+                : WEAVE_SOURCE >= 2u ? weave_sat_box(sat_lo, sat_lo + 1.0 / sat_n)
                 : texelFetch(weave_tex, texel, 0);
             s.fabric = clamp(coverage, 0.0, 1.0);
         } else {
@@ -253,6 +303,24 @@ GSurface material_surface() {    GSurface s;
                     coverage = weave_parallelogram(weave_from_fabric(f), fract(st) * repeat_cells, dx, dy,
                                                    weave_pieces(dx, dy, FOOTPRINT_PIECES));
                 }
+            } else if (WEAVE_SOURCE >= 2u) {
+                // The summed-area table: the footprint's box (or the same pieces as the analytic
+                // weave's, each its own box), each box at least one texel of level 0 (there the
+                // table's box is the texture's bilinear filter).
+                vec2 c = fract(st);
+                vec2 least = 1.0 / vec2(textureSize(weave_tex, 0) - ivec2(2, 1));
+                uvec2 k = FOOTPRINT_PIECES == 0u ? uvec2(1u)
+                    : weave_pieces(st_dx * repeat_cells, st_dy * repeat_cells, FOOTPRINT_PIECES);
+                vec2 half_box = max(FOOTPRINT_PIECES == 0u ? ext : weave_piece_half(st_dx, st_dy, k), least);
+                vec2 kf = vec2(k);
+                coverage = vec4(0.0);
+                for (uint j = 0u; j < k.y; j++) {
+                    for (uint i = 0u; i < k.x; i++) {
+                        vec2 p = c + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
+                        coverage += weave_sat_box(p - half_box, p + half_box);
+                    }
+                }
+                coverage /= kf.x * kf.y;
             } else {
                 // The same pieces, each a filtered probe of its own size: the filter's footprint
                 // follows the parallelogram instead of spanning its bounding box (lavapipe has no

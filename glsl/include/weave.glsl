@@ -20,6 +20,8 @@
 // Boxes narrower than this (cells) are their centre point: below it an f32 box is rounding noise
 // (ulp(8) = 1e-6), and 1/(wx·wy) stays far from overflow.
 #define WEAVE_MIN_BOX 1e-6
+// The most pieces along a footprint's longer edge (weave_pieces; Rust: Footprint::MAX_PIECES).
+#define WEAVE_MAX_PIECES 4u
 
 
 // Rust twin: weft::reference::weave::single::Weave. Built from a GpuFabric or from WeavePush.
@@ -208,9 +210,10 @@ vec4 weave_box(Weave w, float x0, float y0, float x1, float y1) {
 // Pieces for weave_parallelogram, along dx and along dy: the footprint's bounding box is exact
 // when the footprint is aligned with the weave (its box is itself) and harmless when it spans
 // many cells (the weave is averaged away either way); in between, the box's shape differs from
-// the parallelogram's and blurs the weave. Cutting the footprint into pieces (`most` along its
-// longer edge, proportionally fewer along the shorter, at least one) makes each piece's box fit
-// it better. dx, dy: the footprint's edges, in cells. Rust twin:
+// the parallelogram's and blurs the weave. Cutting the footprint into pieces (`most` times the
+// shorter edge's share of the longer along the shorter, at least one, and along the longer as
+// many as keep the pieces about as long as wide, `most` to WEAVE_MAX_PIECES: a grazing footprint
+// six times longer than wide is cut 4 x 1) makes each piece's box fit it better. dx, dy: the footprint's edges, in cells. Rust twin:
 // reference::weave::single::weave_pieces.
 uvec2 weave_pieces(vec2 dx, vec2 dy, uint most) {
     float box_area = (abs(dx.x) + abs(dy.x)) * (abs(dx.y) + abs(dy.y));
@@ -221,8 +224,21 @@ uvec2 weave_pieces(vec2 dx, vec2 dy, uint most) {
     }
     float lx = length(dx);
     float ly = length(dy);
-    uint shorter = uint(clamp(floor(float(most) * min(lx, ly) / max(lx, ly) + 0.5), 1.0, float(most)));
-    return lx >= ly ? uvec2(most, shorter) : uvec2(shorter, most);
+    float ratio = max(lx, ly) / min(lx, ly);
+    float shorter = clamp(floor(float(most) / ratio + 0.5), 1.0, float(most));
+    uint longer = uint(clamp(floor(shorter * ratio + 0.5), float(most), float(max(most, WEAVE_MAX_PIECES))));
+    return lx >= ly ? uvec2(longer, uint(shorter)) : uvec2(uint(shorter), longer);
+}
+
+// The half-extent of each piece's box when the parallelogram spanned by dx, dy is cut into
+// k.x x k.y equal pieces: the piece's bounding box shrunk about its centre to the piece's area.
+// Scale-free per axis (cells or repeats alike). Rust twin: reference::weave::single::weave_piece_half.
+vec2 weave_piece_half(vec2 dx, vec2 dy, uvec2 k) {
+    vec2 kf = vec2(max(k, uvec2(1u)));
+    vec2 half_box = (abs(dx) / kf.x + abs(dy) / kf.y) * 0.5;
+    float box_area = 4.0 * half_box.x * half_box.y;
+    float area = abs(dx.x * dy.y - dx.y * dy.x) / (kf.x * kf.y);
+    return half_box * (box_area > area && area > 0.0 ? sqrt(area / box_area) : 1.0);
 }
 
 // The coverage of the parallelogram {c + a·dx + b·dy : a, b in [-1/2, 1/2]} (cells; c reduced to
@@ -232,10 +248,7 @@ uvec2 weave_pieces(vec2 dx, vec2 dy, uint most) {
 // reference::weave::single::weave_parallelogram.
 vec4 weave_parallelogram(Weave w, vec2 c, vec2 dx, vec2 dy, uvec2 k) {
     vec2 kf = vec2(max(k, uvec2(1u)));
-    vec2 half_box = (abs(dx) / kf.x + abs(dy) / kf.y) * 0.5;
-    float box_area = 4.0 * half_box.x * half_box.y;
-    float area = abs(dx.x * dy.y - dx.y * dy.x) / (kf.x * kf.y);
-    half_box *= box_area > area && area > 0.0 ? sqrt(area / box_area) : 1.0;
+    vec2 half_box = weave_piece_half(dx, dy, k);
     vec4 sum = vec4(0.0);
     for (uint j = 0u; j < k.y; j++) {
         for (uint i = 0u; i < k.x; i++) {

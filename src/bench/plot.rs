@@ -25,6 +25,9 @@ fn view_color(view: View) -> Rgb {
         View::Grazing => [214, 39, 40],
         View::Cells10 => [148, 103, 189],
         View::Cells1 => [140, 86, 75],
+        View::Cells1Square => [227, 119, 194],
+        View::Cells15Square => [127, 127, 127],
+        View::CellsGrazing => [188, 189, 34],
     };
     [
         c[0] as f32 / 255.0,
@@ -38,6 +41,7 @@ enum Shape {
     Circle,
     Square,
     Diamond,
+    Triangle,
 }
 
 fn precision_shape(p: WeavePrecision) -> Shape {
@@ -45,6 +49,7 @@ fn precision_shape(p: WeavePrecision) -> Shape {
         WeavePrecision::Rgba16f => Shape::Circle,
         WeavePrecision::Rgba8 => Shape::Square,
         WeavePrecision::Analytic => Shape::Diamond,
+        WeavePrecision::Sat => Shape::Triangle,
     }
 }
 
@@ -168,6 +173,11 @@ impl Canvas {
                     Shape::Circle => (dx * dx + dy * dy).sqrt() - r,
                     Shape::Square => dx.max(dy) - r * 0.85,
                     Shape::Diamond => (dx + dy) * std::f32::consts::FRAC_1_SQRT_2 - r * 0.85,
+                    // Pointing up: the bottom edge and the two slanted sides.
+                    Shape::Triangle => {
+                        let y = y - cy;
+                        (y - r * 0.7).max(dx * 0.866 - y * 0.5 - r * 0.5)
+                    }
                 }
             }
         };
@@ -504,7 +514,7 @@ pub fn plot(report: &BenchReport) -> (u32, u32, Vec<u8>) {
             levels.push(r.level);
         }
     }
-    // Each view's curve runs through its levels in order, at the default precision (rgba16f)
+    // Each view's curve runs through its levels in order, at the default precision (sat)
     // where the level was measured with it, else at the first precision it was measured with
     // (the supersampled levels: analytic). Those points carry the level labels.
     let on_curve = |r: &super::AccuracyRow| {
@@ -515,7 +525,7 @@ pub fn plot(report: &BenchReport) -> (u32, u32, Vec<u8>) {
             .collect();
         let pick = same
             .iter()
-            .find(|o| o.precision == WeavePrecision::Rgba16f)
+            .find(|o| o.precision == WeavePrecision::default())
             .or(same.first());
         pick.is_some_and(|o| o.precision == r.precision)
     };

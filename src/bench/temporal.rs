@@ -56,7 +56,7 @@ impl Default for TemporalConfig {
     /// a fraction of a pixel a frame, docs/performance.md), every level and supersampled:16, ground truth
     /// supersampled:32. About 1.5 minutes on lavapipe with 2 cores.
     fn default() -> Self {
-        let mut variants = super::cross_product(&super::LEVELS[..3], &[WeavePrecision::Rgba16f]);
+        let mut variants = super::cross_product(&super::LEVELS[..3], &[WeavePrecision::default()]);
         variants.push((Accuracy::Mixture, WeavePrecision::Analytic));
         variants.extend(
             super::LEVELS[3..]

@@ -19,7 +19,7 @@ mod texture;
 
 pub use pattern::{WeavePattern, MAX_CELLS};
 pub use texture::{
-    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, WeavePush,
+    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, WeavePush, WeaveSat,
     WEAVE_TEXELS_PER_CELL, WEAVE_TEXEL_TOLERANCE,
 };
 

@@ -146,3 +146,121 @@ mod tests {
         );
     }
 }
+
+/// The weave as a summed-area table (`--weave-precision sat`, `WEAVE_SOURCE` 2 of the G-buffer
+/// pass): the mean coverage of any axis-aligned box of the weave in four corner look-ups,
+/// exact for the coverage averaged over cells of `1/WEAVE_TEXELS_PER_CELL` (the texture's level 0),
+/// where a trilinear probe of the mip chain spreads a footprint of about one cell over a tent
+/// twice its width.
+///
+/// The table spans [`WeaveSat::REPEATS`]² repeats, so that any box up to a repeat wide, its
+/// corner reduced into the first repeat, lies inside it (no whole-table terms, no branch in the
+/// shader for footprints up to a repeat). With `W × H` the level-0 size of one repeat, texel
+/// `(i, j)`, `i ≤ 2W`, `j ≤ 2H`, holds the integral over `[0, i/W] × [0, j/H]` (in repeats: a
+/// repeat has area 1) of the coverage *minus its mean*: the mean's share is added back exactly,
+/// so the table's values stay of the order of one cell's area whatever the box (no cancellation
+/// of large sums in f32). Texel `(2W + 1, 0)` holds the mean. Computed here in f64 from the
+/// exact box coverages ([`crate::reference::weave::double::weave_box`]), stored RGBA32F.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeaveSat {
+    /// `2W + 2` texels.
+    pub width: u32,
+    /// `2H + 1` texels.
+    pub height: u32,
+    /// Row `j` after row `j - 1`.
+    pub texels: Vec<[f32; 4]>,
+}
+
+impl WeaveSat {
+    /// Repeats the table spans along each axis.
+    pub const REPEATS: u32 = 2;
+
+    /// The table of the weave of `push` at `push.width × push.height` cells per repeat (the
+    /// weave texture's level 0, [`weave_level0_size`]).
+    pub fn new(push: &WeavePush) -> WeaveSat {
+        use crate::reference::weave::double;
+        let w = double::Weave::from_push(push);
+        let (cols, rows) = (push.cols.max(1) as f64, push.rows.max(1) as f64);
+        let (nw, nh) = (push.width.max(1), push.height.max(1));
+        let (tw, th) = (Self::REPEATS * nw, Self::REPEATS * nh);
+        let mean = double::weave_box(&w, 0.0, 0.0, cols, rows);
+        let (width, height) = (tw + 2, th + 1);
+        let mut texels = vec![[0f32; 4]; (width * height) as usize];
+        for j in 1..=th {
+            let y = j as f64 / nh as f64;
+            for i in 1..=tw {
+                let x = i as f64 / nw as f64;
+                let c = double::weave_box(&w, 0.0, 0.0, x * cols, y * rows);
+                texels[(j * width + i) as usize] =
+                    std::array::from_fn(|k| ((c[k] - mean[k]) * x * y) as f32);
+            }
+        }
+        texels[tw as usize + 1] = mean.map(|m| m as f32);
+        WeaveSat {
+            width,
+            height,
+            texels,
+        }
+    }
+
+    fn texel(&self, i: i32, j: i32) -> [f32; 4] {
+        let i = i.clamp(0, self.width as i32 - 1) as u32;
+        let j = j.clamp(0, self.height as i32 - 1) as u32;
+        self.texels[(j * self.width + i) as usize]
+    }
+
+    /// The table at `q` in texel-corner units (`[0, 2W] × [0, 2H]`): bilinear between the four
+    /// corners around it, exact for the texel-averaged coverage (`weave_sat_corner` of
+    /// surface.glsl, f32 as there).
+    pub fn corner(&self, q: [f32; 2]) -> [f32; 4] {
+        let n = [self.width as i32 - 2, self.height as i32 - 1];
+        let i = [
+            (q[0].floor() as i32).clamp(0, n[0] - 1),
+            (q[1].floor() as i32).clamp(0, n[1] - 1),
+        ];
+        let f = [
+            (q[0] - i[0] as f32).clamp(0.0, 1.0),
+            (q[1] - i[1] as f32).clamp(0.0, 1.0),
+        ];
+        let (a, b) = (self.texel(i[0], i[1]), self.texel(i[0] + 1, i[1]));
+        let (c, d) = (self.texel(i[0], i[1] + 1), self.texel(i[0] + 1, i[1] + 1));
+        let mix = |x: f32, y: f32, t: f32| x * (1.0 - t) + y * t;
+        std::array::from_fn(|k| mix(mix(a[k], b[k], f[0]), mix(c[k], d[k], f[0]), f[1]))
+    }
+
+    /// The mean coverage over the box `[lo, hi]` of st (a repeat is 1 unit; any size and place,
+    /// `hi > lo`): `weave_sat_box` of surface.glsl. With `lo` reduced into the first repeat and
+    /// `hi = 2X + u1` (X whole tables), the integral of coverage minus mean is
+    /// `T(u1,v1) − T(u1,v0) − T(u0,v1) + T(u0,v0) + X·(T(2,v1) − T(2,v0)) + Y·(T(u1,2) − T(u0,2))`
+    /// (a whole table of it is 0); X and Y are 0 for boxes up to a repeat.
+    pub fn box_mean(&self, lo: [f32; 2], hi: [f32; 2]) -> [f32; 4] {
+        let n = [(self.width - 2) as f32, (self.height - 1) as f32];
+        let r = Self::REPEATS as f32;
+        let ext = [hi[0] - lo[0], hi[1] - lo[1]];
+        let l = [lo[0] - lo[0].floor(), lo[1] - lo[1].floor()];
+        let h = [l[0] + ext[0], l[1] + ext[1]];
+        let whole = [(h[0] / r).floor(), (h[1] / r).floor()];
+        let q0 = [l[0] * n[0] / r, l[1] * n[1] / r];
+        let q1 = [(h[0] - r * whole[0]) * n[0] / r, (h[1] - r * whole[1]) * n[1] / r];
+        let t11 = self.corner(q1);
+        let t10 = self.corner([q1[0], q0[1]]);
+        let t01 = self.corner([q0[0], q1[1]]);
+        let t00 = self.corner(q0);
+        let mut sum: [f32; 4] = std::array::from_fn(|k| t11[k] - t10[k] - t01[k] + t00[k]);
+        if whole[0] > 0.0 {
+            let (a, b) = (self.corner([n[0], q1[1]]), self.corner([n[0], q0[1]]));
+            for k in 0..4 {
+                sum[k] += whole[0] * (a[k] - b[k]);
+            }
+        }
+        if whole[1] > 0.0 {
+            let (a, b) = (self.corner([q1[0], n[1]]), self.corner([q0[0], n[1]]));
+            for k in 0..4 {
+                sum[k] += whole[1] * (a[k] - b[k]);
+            }
+        }
+        let area = (ext[0] * ext[1]).max(1e-30);
+        let mean = self.texel(self.width as i32 - 1, 0);
+        std::array::from_fn(|k| mean[k] + sum[k] / area)
+    }
+}

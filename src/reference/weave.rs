@@ -43,6 +43,9 @@ macro_rules! weave_precision {
             /// box is rounding noise (ulp(8) = 1e-6), and `1/(wx·wy)` stays far from overflow.
             pub const WEAVE_MIN_BOX: $t = 1e-6;
 
+            /// The most pieces along a footprint's longer edge ([`weave_pieces`]).
+            pub const WEAVE_MAX_PIECES: u32 = 4;
+
             /// What the weave functions need: the GPU's weave fields (of `GpuFabric` or `WeavePush`).
             #[derive(Clone, Copy, Debug, PartialEq)]
             pub struct Weave {
@@ -268,8 +271,9 @@ macro_rules! weave_precision {
             /// Pieces for [`weave_parallelogram`] along `dx` and along `dy` (`weave_pieces` of
             /// weave.glsl): 1 x 1 when the footprint's bounding box is within 2 % of its area
             /// (aligned with the weave), spans 4 cells or more (the weave averages out) or
-            /// `most` <= 1; else `most` along the longer edge and proportionally fewer (at least
-            /// one) along the shorter.
+            /// `most` <= 1; else `most` times the shorter edge's share of the longer (at least
+            /// one) along the shorter, and along the longer as many as keep the pieces about
+            /// as long as wide, from `most` to [`WEAVE_MAX_PIECES`].
             pub fn weave_pieces(dx: [$t; 2], dy: [$t; 2], most: u32) -> [u32; 2] {
                 let box_area = (dx[0].abs() + dy[0].abs()) * (dx[1].abs() + dy[1].abs());
                 let area = (dx[0] * dy[1] - dx[1] * dy[0]).abs();
@@ -279,14 +283,38 @@ macro_rules! weave_precision {
                 }
                 let lx = (dx[0] * dx[0] + dx[1] * dx[1]).sqrt();
                 let ly = (dy[0] * dy[0] + dy[1] * dy[1]).sqrt();
-                let shorter = (most as $t * lx.min(ly) / lx.max(ly) + 0.5)
+                let ratio = lx.max(ly) / lx.min(ly);
+                let shorter = (most as $t / ratio + 0.5).floor().clamp(1.0, most as $t);
+                let longer = (shorter * ratio + 0.5)
                     .floor()
-                    .clamp(1.0, most as $t) as u32;
+                    .clamp(most as $t, most.max(WEAVE_MAX_PIECES) as $t) as u32;
+                let shorter = shorter as u32;
                 if lx >= ly {
-                    [most, shorter]
+                    [longer, shorter]
                 } else {
-                    [shorter, most]
+                    [shorter, longer]
                 }
+            }
+
+            /// The half-extent of each piece's box when the parallelogram spanned by `dx`, `dy`
+            /// is cut into `k[0] × k[1]` equal pieces: the piece's bounding box shrunk about its
+            /// centre to the piece's area (`weave_piece_half` of weave.glsl). Scale-free per
+            /// axis: the same in cells or in repeats.
+            pub fn weave_piece_half(dx: [$t; 2], dy: [$t; 2], k: [u32; 2]) -> [$t; 2] {
+                let kx = k[0].max(1) as $t;
+                let ky = k[1].max(1) as $t;
+                let half = [
+                    (dx[0].abs() / kx + dy[0].abs() / ky) * 0.5,
+                    (dx[1].abs() / kx + dy[1].abs() / ky) * 0.5,
+                ];
+                let box_area = 4.0 * half[0] * half[1];
+                let area = (dx[0] * dy[1] - dx[1] * dy[0]).abs() / (kx * ky);
+                let shrink = if box_area > area && area > 0.0 {
+                    (area / box_area).sqrt()
+                } else {
+                    1.0
+                };
+                [half[0] * shrink, half[1] * shrink]
             }
 
             /// The coverage of the parallelogram `{c + a·dx + b·dy : a, b in [-1/2, 1/2]}` (cells,
@@ -302,18 +330,7 @@ macro_rules! weave_precision {
             ) -> Coverage {
                 let kx = k[0].max(1) as $t;
                 let ky = k[1].max(1) as $t;
-                let mut half = [
-                    (dx[0].abs() / kx + dy[0].abs() / ky) * 0.5,
-                    (dx[1].abs() / kx + dy[1].abs() / ky) * 0.5,
-                ];
-                let box_area = 4.0 * half[0] * half[1];
-                let area = (dx[0] * dy[1] - dx[1] * dy[0]).abs() / (kx * ky);
-                let shrink = if box_area > area && area > 0.0 {
-                    (area / box_area).sqrt()
-                } else {
-                    1.0
-                };
-                half = [half[0] * shrink, half[1] * shrink];
+                let half = weave_piece_half(dx, dy, k);
                 let mut sum = [0.0; 4];
                 for j in 0..k[1].max(1) {
                     for i in 0..k[0].max(1) {

@@ -35,6 +35,8 @@ pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
 pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
 pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// The weave's summed-area table (`--weave-precision sat`): f32, fetched (never filtered).
+pub const WEAVE_SAT_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
 pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
 
@@ -248,6 +250,10 @@ pub struct GpuScene {
     /// frame that asks for that precision), and per material the weave it uses.
     pub(crate) weaves: Vec<Image>,
     pub(crate) weaves8: std::sync::OnceLock<Vec<Image>>,
+    /// The summed-area tables of the weaves (made by the first frame that asks for them).
+    pub(crate) weaves_sat: std::sync::OnceLock<Vec<Image>>,
+    /// The fabric parameters each weave was built from.
+    pub(crate) weave_params: Vec<FabricParams>,
     pub(crate) material_weave: Vec<Option<usize>>,
     pub(crate) lights: Buffer,
     /// The light records as uploaded (no shadow maps): a frame with shadows uploads a copy with
@@ -739,7 +745,18 @@ impl Renderer {
         plan: &Plan,
         env: Option<(&crate::env::Environment, &mut Vec<PassTiming>)>,
     ) -> crate::Result<(VariantKey, VariantKey, Option<VariantKey>, Option<usize>)> {
-        let source = (options.weave_precision == super::WeavePrecision::Analytic) as u32;
+        let source = match options.weave_precision {
+            super::WeavePrecision::Analytic => 1,
+            // The summed-area table, filtered by the sampler where the device can filter RGBA32F
+            // (2), else fetched (3).
+            super::WeavePrecision::Sat
+                if self.ctx.info().rgba32f_linear && !options.force.sat_fetch =>
+            {
+                2
+            }
+            super::WeavePrecision::Sat => 3,
+            _ => 0,
+        };
         let light_types = if options.force.light_types {
             7
         } else {
@@ -1144,6 +1161,8 @@ impl Renderer {
             fabrics,
             weaves,
             weaves8: std::sync::OnceLock::new(),
+            weaves_sat: std::sync::OnceLock::new(),
+            weave_params,
             material_weave,
             lights,
             light_records,
@@ -1248,6 +1267,14 @@ impl Renderer {
                 .map(|w| self.weave_rgba8(w))
                 .collect::<crate::Result<Vec<_>>>()?;
             let _ = gpu.weaves8.set(copies);
+        }
+        if options.weave_precision == super::WeavePrecision::Sat && gpu.weaves_sat.get().is_none() {
+            let tables = gpu
+                .weave_params
+                .iter()
+                .map(|f| self.weave_sat(f))
+                .collect::<crate::Result<Vec<_>>>()?;
+            let _ = gpu.weaves_sat.set(tables);
         }
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
@@ -1497,6 +1524,9 @@ impl Renderer {
             let weave = match gpu.material_weave.get(m).copied().flatten() {
                 Some(w) if options.weave_precision == super::WeavePrecision::Rgba8 => {
                     &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
+                }
+                Some(w) if options.weave_precision == super::WeavePrecision::Sat => {
+                    &gpu.weaves_sat.get().expect("made above for summed-area frames")[w]
                 }
                 Some(w) => &gpu.weaves[w],
                 None => &self.white,
@@ -1859,6 +1889,33 @@ impl Renderer {
                 cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             }
             cmd.transition(&image, Usage::ComputeWrite, Usage::FragmentRead, None);
+        })?;
+        Ok(image)
+    }
+
+    /// The summed-area table of a weave ([`crate::fabric::WeaveSat`], computed on the
+    /// CPU in f64), uploaded as one RGBA32F level.
+    pub fn weave_sat(&self, fabric: &FabricParams) -> crate::Result<Image> {
+        let level0 = weave_level0_size(&fabric.pattern);
+        let sat = crate::fabric::WeaveSat::new(&fabric.weave_push(level0.0, level0.1));
+        let desc = ImageDesc::new_2d(
+            "weave summed-area table",
+            WEAVE_SAT_FORMAT,
+            sat.width,
+            sat.height,
+        )
+        .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST);
+        let image = self.ctx.create_image(&desc)?;
+        let bytes: Vec<u8> = sat.texels.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        let staging = self.ctx.create_buffer_with(
+            "weave summed-area staging",
+            BufferUsageFlags::TRANSFER_SRC,
+            &bytes,
+        )?;
+        self.ctx.submit(|cmd| {
+            cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
+            cmd.copy_buffer_to_image_level(&staging, &image, 0);
+            cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
         })?;
         Ok(image)
     }

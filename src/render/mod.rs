@@ -167,6 +167,9 @@ pub struct Force {
     /// Draw the transparent pass's opaque double-sided draws back faces first, as its blended
     /// ones are, instead of front faces first (whose depth rejects the back faces they hide).
     pub back_faces_first: bool,
+    /// Fetch the weave's summed-area table texel by texel (WEAVE_SOURCE 3, what a device that
+    /// cannot filter RGBA32F runs) even where the device can filter it.
+    pub sat_fetch: bool,
 }
 
 impl Force {
@@ -178,6 +181,7 @@ impl Force {
         unlit: false,
         alpha_mask: false,
         back_faces_first: false,
+        sat_fetch: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -187,6 +191,8 @@ impl Force {
         unlit: true,
         alpha_mask: true,
         back_faces_first: true,
+        // Not a feature compiled in: the table's other reading, with the same values.
+        sat_fetch: false,
     };
 }
 
@@ -267,8 +273,10 @@ pub enum Footprint {
     /// The footprint's axis-aligned bounding box: exact for a footprint aligned with the weave,
     /// blurred by the box's excess area where it is oblique.
     Box,
-    /// An oblique footprint near or below a few cells is cut into up to N x N pieces, each
-    /// filtered by its own bounding box (texture probes or exact boxes): the excess shrinks N-fold.
+    /// An oblique footprint near or below a few cells is cut into pieces, N along its longer
+    /// edge (more, up to [`Footprint::MAX_PIECES`], where it is more than N times longer than
+    /// wide) and proportionally fewer along the shorter, each filtered by its own bounding box
+    /// (texture probes or exact boxes): the excess shrinks N-fold.
     Parallelogram(u32),
 }
 
@@ -280,7 +288,7 @@ impl Default for Footprint {
 
 impl Footprint {
     pub const DEFAULT_PIECES: u32 = 2;
-    pub const MAX_PIECES: u32 = 4;
+    pub const MAX_PIECES: u32 = crate::reference::weave::single::WEAVE_MAX_PIECES;
 
     /// The most pieces per side (the G-buffer pass's FOOTPRINT_PIECES; 0: the box).
     pub fn pieces(self) -> u32 {
@@ -327,18 +335,24 @@ impl Footprint {
 pub enum WeavePrecision {
     /// The weave texture in RGBA8 UNORM.
     Rgba8,
-    /// The weave texture in RGBA16F (the default).
-    #[default]
+    /// The weave texture in RGBA16F.
     Rgba16f,
     /// No texture: the exact coverage of the pixel's footprint box, evaluated in the shader.
     Analytic,
+    /// The weave's summed-area table (RGBA32F, [`crate::fabric::WeaveSat`]): each
+    /// footprint box's mean coverage exactly, at the texture's resolution, in four corner
+    /// look-ups, where the mip chain's trilinear probe blurs a footprint of about a cell (the
+    /// default: 56 against 40 dB at one pixel per cell square-on, `weft bench --footprint`).
+    #[default]
+    Sat,
 }
 
 impl WeavePrecision {
-    pub const ALL: [WeavePrecision; 3] = [
+    pub const ALL: [WeavePrecision; 4] = [
         WeavePrecision::Rgba8,
         WeavePrecision::Rgba16f,
         WeavePrecision::Analytic,
+        WeavePrecision::Sat,
     ];
 
     pub fn name(self) -> &'static str {
@@ -346,6 +360,7 @@ impl WeavePrecision {
             WeavePrecision::Rgba8 => "rgba8",
             WeavePrecision::Rgba16f => "rgba16f",
             WeavePrecision::Analytic => "analytic",
+            WeavePrecision::Sat => "sat",
         }
     }
 
@@ -356,7 +371,7 @@ impl WeavePrecision {
             .find(|p| p.name() == text)
             .ok_or_else(|| {
                 Error::input(format!(
-                    "unknown weave precision '{text}': choose rgba8, rgba16f or analytic"
+                    "unknown weave precision '{text}': choose rgba8, rgba16f, analytic or sat"
                 ))
             })
     }
@@ -444,7 +459,7 @@ impl Default for RenderOptions {
             tonemap: ToneCurve::PbrNeutral,
             debug_view: DebugView::None,
             accuracy: Accuracy::Mixture,
-            weave_precision: WeavePrecision::Rgba16f,
+            weave_precision: WeavePrecision::Sat,
             fabric_as_pbr: false,
             shading: Shading::Fabric,
             force: Force::NONE,

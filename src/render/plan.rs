@@ -60,6 +60,9 @@ pub struct WeavePlan {
     pub width: u32,
     pub height: u32,
     pub levels: u32,
+    /// How the G-buffer pass reads it (`--weave-precision`): "summed-area table WxH RGBA32F",
+    /// "texture RGBA16F", "texture RGBA8" or "analytic (not read)".
+    pub lookup: String,
     /// The fabric materials that share it.
     pub materials: Vec<String>,
 }
@@ -283,6 +286,15 @@ impl Plan {
                         width,
                         height,
                         levels: crate::fabric::weave_mip_count((width, height)),
+                        lookup: match options.weave_precision {
+                            super::WeavePrecision::Sat => {
+                                let r = crate::fabric::WeaveSat::REPEATS;
+                                format!("summed-area table {}x{} RGBA32F", r * width + 2, r * height + 1)
+                            }
+                            super::WeavePrecision::Rgba16f => "texture RGBA16F".into(),
+                            super::WeavePrecision::Rgba8 => "texture RGBA8".into(),
+                            super::WeavePrecision::Analytic => "analytic (not read)".into(),
+                        },
                         materials: vec![m.name.clone()],
                     });
                 }
@@ -625,8 +637,8 @@ impl fmt::Display for Plan {
             let materials = w.materials.join(", ");
             writeln!(
                 f,
-                "weave       {} {}x{}, {} levels, for {materials}",
-                w.pattern, w.width, w.height, w.levels
+                "weave       {} {}x{}, {} levels, read as {}, for {materials}",
+                w.pattern, w.width, w.height, w.levels, w.lookup
             )?;
         }
         let ft = &self.features;

@@ -66,6 +66,9 @@ pub struct DeviceInfo {
     pub device_local_heap_bytes: u64,
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
+    /// Whether RGBA32F images can be sampled with linear filtering (optional in Vulkan; the
+    /// weave's summed-area table is filtered where it can be, fetched where not).
+    pub rgba32f_linear: bool,
 }
 
 impl DeviceInfo {
@@ -567,6 +570,16 @@ fn choose_device(
             timestamp_period_ns: props.limits.timestamp_period,
             timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE
                 && family.is_some_and(|f| families[f].timestamp_valid_bits > 0),
+            rgba32f_linear: {
+                let f = unsafe {
+                    instance.get_physical_device_format_properties(
+                        pd,
+                        vk::Format::R32G32B32A32_SFLOAT,
+                    )
+                };
+                f.optimal_tiling_features
+                    .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+            },
         };
         let usable = family.is_some() && v >= vk::API_VERSION_1_3;
         candidates.push((

@@ -90,7 +90,7 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         camera: None,
         debug_view: DebugView::None,
         accuracy: Accuracy::Mixture,
-        weave_precision: WeavePrecision::Rgba16f,
+        weave_precision: WeavePrecision::Sat,
         shading: Shading::Fabric,
         figure: false,
         golden: GOLDEN,
@@ -408,6 +408,10 @@ pub fn cases() -> Vec<Case> {
             weave_precision: WeavePrecision::Analytic,
             cpu: Some(CPU_ANALYTIC),
             ..case("closeup-analytic", "assets/scenes/closeup.glb", "the close-up with the weave's exact box coverage computed in the shader (no texture): gap dots and thread edges as sharp as the CPU reference")
+        },
+        Case {
+            weave_precision: WeavePrecision::Rgba16f,
+            ..case("closeup-rgba16f", "assets/scenes/closeup.glb", "the close-up through the weave texture's mip chain (RGBA16F, trilinear probes of the footprint's pieces), the default before the summed-area table: the same weave, thread edges a little softer")
         },
         Case {
             accuracy: Accuracy::Supersampled(4),
