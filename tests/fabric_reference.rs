@@ -587,6 +587,23 @@ fn whole_repeat_coverage_is_analytic() {
     }
 }
 
+/// Case `case` of the weave tests: plain, twill and satin in turn, with a random gap and
+/// thread shadow.
+fn random_weave(rng: &mut weft::reference::probe::XorShift, case: usize) -> FabricParams {
+    FabricParams {
+        pattern: [
+            WeavePattern::plain(),
+            WeavePattern::twill(),
+            WeavePattern::satin(),
+        ][case % 3],
+        repeat: 0.05,
+        gap: rng.range(0.0, 0.025) as f32,
+        shadow_width: rng.next_f64() as f32,
+        shadow_strength: rng.next_f64() as f32,
+        ..Default::default()
+    }
+}
+
 // Coverage over a box equals the mean of point samples: on an N × N midpoint grid the integrand
 // is constant in every grid cell that no region border crosses, so the error is at most
 // (number of border lines crossing the box) / N.
@@ -596,19 +613,7 @@ fn box_coverage_is_the_mean_of_point_samples() {
     let n = 400usize;
     let mut worst = 0.0f64;
     for case in 0..60 {
-        let pattern = [
-            WeavePattern::plain(),
-            WeavePattern::twill(),
-            WeavePattern::satin(),
-        ][case % 3];
-        let p = FabricParams {
-            pattern,
-            repeat: 0.05,
-            gap: rng.range(0.0, 0.025) as f32,
-            shadow_width: rng.next_f64() as f32,
-            shadow_strength: rng.next_f64() as f32,
-            ..Default::default()
-        };
+        let p = random_weave(&mut rng, case);
         let w = weave_ref::weave_of(&p);
         let x0 = rng.range(-20.0, 20.0);
         let y0 = rng.range(-20.0, 20.0);
@@ -651,19 +656,7 @@ fn summed_area_table_gives_box_coverage() {
     let mut rng = weft::reference::probe::XorShift::new(1234);
     let (mut worst_aligned, mut worst_band) = (0.0f64, 0.0f64);
     for case in 0..90 {
-        let pattern = [
-            WeavePattern::plain(),
-            WeavePattern::twill(),
-            WeavePattern::satin(),
-        ][case % 3];
-        let p = FabricParams {
-            pattern,
-            repeat: 0.05,
-            gap: rng.range(0.0, 0.025) as f32,
-            shadow_width: rng.next_f64() as f32,
-            shadow_strength: rng.next_f64() as f32,
-            ..Default::default()
-        };
+        let p = random_weave(&mut rng, case);
         let (nw, nh) = weave_level0_size(&p.pattern);
         let push = p.weave_push(nw, nh);
         let sat = WeaveSat::new(&push);
@@ -675,7 +668,10 @@ fn summed_area_table_gives_box_coverage() {
         // Texel-aligned boxes, from one texel to three repeats, anywhere in [-4, 4] repeats.
         for _ in 0..20 {
             let snap = |x: f64, n: u32| (x * n as f64).round() / n as f64;
-            let lo = [snap(rng.range(-4.0, 4.0), nw), snap(rng.range(-4.0, 4.0), nh)];
+            let lo = [
+                snap(rng.range(-4.0, 4.0), nw),
+                snap(rng.range(-4.0, 4.0), nh),
+            ];
             let ext = [
                 snap(rng.log_range(1.0 / nw as f64, 3.0), nw).max(1.0 / nw as f64),
                 snap(rng.log_range(1.0 / nh as f64, 3.0), nh).max(1.0 / nh as f64),

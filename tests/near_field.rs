@@ -123,7 +123,11 @@ fn near_field_views_against_the_pixel_integral() {
         let mask = vec![true; (WIDTH * HEIGHT) as usize];
         let same = weft::bench::psnr_linear(&filtered.hdr, &fetched.hdr, &mask);
         println!("  sat filtered against fetched: PSNR {same:.1} dB");
-        assert!(same >= 70.0, "{}: the fetched table differs from the filtered one ({same:.1} dB)", view.name());
+        assert!(
+            same >= 70.0,
+            "{}: the fetched table differs from the filtered one ({same:.1} dB)",
+            view.name()
+        );
     }
     let get = |v: View, p: WeavePrecision, f: Footprint| {
         report
@@ -145,7 +149,10 @@ fn near_field_views_against_the_pixel_integral() {
     }
     for view in [View::Cells10, View::Cells1] {
         // Oblique: the parallelogram is what earns it: each beats the bounding box it replaced.
-        for p in WeavePrecision::ALL.into_iter().filter(|p| *p != WeavePrecision::Rgba8) {
+        for p in WeavePrecision::ALL
+            .into_iter()
+            .filter(|p| *p != WeavePrecision::Rgba8)
+        {
             let b = get(view, p, Footprint::Box);
             let q = get(view, p, par);
             assert!(

@@ -241,7 +241,10 @@ impl WeaveSat {
         let h = [l[0] + ext[0], l[1] + ext[1]];
         let whole = [(h[0] / r).floor(), (h[1] / r).floor()];
         let q0 = [l[0] * n[0] / r, l[1] * n[1] / r];
-        let q1 = [(h[0] - r * whole[0]) * n[0] / r, (h[1] - r * whole[1]) * n[1] / r];
+        let q1 = [
+            (h[0] - r * whole[0]) * n[0] / r,
+            (h[1] - r * whole[1]) * n[1] / r,
+        ];
         let t11 = self.corner(q1);
         let t10 = self.corner([q1[0], q0[1]]);
         let t01 = self.corner([q0[0], q1[1]]);

@@ -287,7 +287,8 @@ macro_rules! weave_precision {
                 let shorter = (most as $t / ratio + 0.5).floor().clamp(1.0, most as $t);
                 let longer = (shorter * ratio + 0.5)
                     .floor()
-                    .clamp(most as $t, most.max(WEAVE_MAX_PIECES) as $t) as u32;
+                    .clamp(most as $t, most.max(WEAVE_MAX_PIECES) as $t)
+                    as u32;
                 let shorter = shorter as u32;
                 if lx >= ly {
                     [longer, shorter]

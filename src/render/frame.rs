@@ -1525,9 +1525,10 @@ impl Renderer {
                 Some(w) if options.weave_precision == super::WeavePrecision::Rgba8 => {
                     &gpu.weaves8.get().expect("made above for RGBA8 frames")[w]
                 }
-                Some(w) if options.weave_precision == super::WeavePrecision::Sat => {
-                    &gpu.weaves_sat.get().expect("made above for summed-area frames")[w]
-                }
+                Some(w) if options.weave_precision == super::WeavePrecision::Sat => &gpu
+                    .weaves_sat
+                    .get()
+                    .expect("made above for summed-area frames")[w],
                 Some(w) => &gpu.weaves[w],
                 None => &self.white,
             };
@@ -1906,7 +1907,12 @@ impl Renderer {
         )
         .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST);
         let image = self.ctx.create_image(&desc)?;
-        let bytes: Vec<u8> = sat.texels.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        let bytes: Vec<u8> = sat
+            .texels
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         let staging = self.ctx.create_buffer_with(
             "weave summed-area staging",
             BufferUsageFlags::TRANSFER_SRC,

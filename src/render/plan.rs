@@ -289,7 +289,11 @@ impl Plan {
                         lookup: match options.weave_precision {
                             super::WeavePrecision::Sat => {
                                 let r = crate::fabric::WeaveSat::REPEATS;
-                                format!("summed-area table {}x{} RGBA32F", r * width + 2, r * height + 1)
+                                format!(
+                                    "summed-area table {}x{} RGBA32F",
+                                    r * width + 2,
+                                    r * height + 1
+                                )
                             }
                             super::WeavePrecision::Rgba16f => "texture RGBA16F".into(),
                             super::WeavePrecision::Rgba8 => "texture RGBA8".into(),

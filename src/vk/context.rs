@@ -572,10 +572,8 @@ fn choose_device(
                 && family.is_some_and(|f| families[f].timestamp_valid_bits > 0),
             rgba32f_linear: {
                 let f = unsafe {
-                    instance.get_physical_device_format_properties(
-                        pd,
-                        vk::Format::R32G32B32A32_SFLOAT,
-                    )
+                    instance
+                        .get_physical_device_format_properties(pd, vk::Format::R32G32B32A32_SFLOAT)
                 };
                 f.optimal_tiling_features
                     .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
