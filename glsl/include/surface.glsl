@@ -286,7 +286,7 @@ GSurface material_surface() {    GSurface s;
             vec2 sat_lo = floor(fract(st) * sat_n) / sat_n;
             vec4 coverage = WEAVE_SOURCE == 1u
                 ? weave_point(weave_from_fabric(f), fract(st.x) * repeat_cells.x, fract(st.y) * repeat_cells.y)
-                : WEAVE_SOURCE >= 2u ? weave_sat_box(sat_lo, sat_lo + 1.0 / sat_n)
+                : (WEAVE_SOURCE & 2u) != 0u ? weave_sat_box(sat_lo, sat_lo + 1.0 / sat_n)
                 : texelFetch(weave_tex, texel, 0);
             s.fabric = clamp(coverage, 0.0, 1.0);
         } else {
@@ -303,7 +303,7 @@ GSurface material_surface() {    GSurface s;
                     coverage = weave_parallelogram(weave_from_fabric(f), fract(st) * repeat_cells, dx, dy,
                                                    weave_pieces(dx, dy, FOOTPRINT_PIECES));
                 }
-            } else if (WEAVE_SOURCE >= 2u) {
+            } else if ((WEAVE_SOURCE & 2u) != 0u) { // 2 or 3 (a bit test: spirq evaluates no ordering of spec constants)
                 // The summed-area table: the footprint's box (or the same pieces as the analytic
                 // weave's, each its own box), each box at least one texel of level 0 (there the
                 // table's box is the texture's bilinear filter).
