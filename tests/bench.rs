@@ -173,3 +173,18 @@ fn views_are_deterministic_and_distinct() {
         .iter()
         .all(|l| l.range.is_some() && l.position.is_finite()));
 }
+
+/// The equal-error interpolation of `weft bench --ibl`: log-log between the measured points.
+#[test]
+fn equal_error_samples_interpolate_in_log_log() {
+    use weft::bench::ibl_bench::equal_error_samples;
+    // The error halves for every 4x the samples (Monte Carlo's 1/sqrt(N)).
+    let curve = [(4, 0.2), (16, 0.1), (64, 0.05)];
+    let n = equal_error_samples(&curve, 0.1).unwrap();
+    assert!((n - 16.0).abs() < 1e-9, "{n}");
+    let n = equal_error_samples(&curve, 0.1 / 2f64.sqrt()).unwrap();
+    assert!((n - 32.0).abs() < 1e-9, "{n}");
+    // Outside the measured range: no answer (the table says on which side).
+    assert_eq!(equal_error_samples(&curve, 0.3), None);
+    assert_eq!(equal_error_samples(&curve, 0.01), None);
+}

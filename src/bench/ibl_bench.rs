@@ -30,7 +30,25 @@ pub struct IblRow {
     pub flip_mean: f64,
     /// Mean |HDR - truth| / mean truth over covered pixels (luminance).
     pub rel_error: f64,
+    /// PSNR (dB) of the linear HDR over the covered pixels (`bench::psnr_linear`).
+    pub psnr: f64,
     pub pareto: bool,
+}
+
+/// What an unbiased estimator needs to match the default level: brute-force Monte Carlo
+/// (`mc:N`, unfiltered, per-pixel random rotation) at [`MC_LEVELS`] against the same truth, and
+/// the samples per pixel at which its error equals the default's (log-log interpolation).
+#[derive(Clone, Debug)]
+pub struct EqualErrorRow {
+    pub view: String,
+    /// The default level's relative error and lighting ms.
+    pub default_error: f64,
+    pub default_ms: f64,
+    /// (N, relative error, lighting ms) of each `mc:N`.
+    pub mc: Vec<(u32, f64, f64)>,
+    /// Samples per pixel at which mc's error equals the default's; None outside the measured
+    /// range (then `mc` says on which side).
+    pub samples: Option<f64>,
 }
 
 /// The lighting pass with the environment against lamps only.
@@ -47,7 +65,27 @@ pub struct IblReport {
     pub truth: IblLevel,
     pub truth_ms: Vec<(String, f64)>,
     pub rows: Vec<IblRow>,
+    pub equal_error: Vec<EqualErrorRow>,
     pub cost: Vec<EnvCostRow>,
+}
+
+/// The brute-force levels of the equal-error comparison.
+pub const MC_LEVELS: [u32; 5] = [4, 16, 64, 256, 1024];
+
+/// Where the error curve `(n, error)` (errors falling with n) crosses `target`: log-log
+/// interpolation between the two measured points around it; None if it does not cross.
+pub fn equal_error_samples(curve: &[(u32, f64)], target: f64) -> Option<f64> {
+    curve.windows(2).find_map(|w| {
+        let ((n0, e0), (n1, e1)) = (w[0], w[1]);
+        if !(e0 >= target && target >= e1 && e0 > 0.0 && e1 > 0.0) {
+            return None;
+        }
+        if e0 == e1 {
+            return Some(n0 as f64);
+        }
+        let t = (e0.ln() - target.ln()) / (e0.ln() - e1.ln());
+        Some(((n0 as f64).ln() + t * ((n1 as f64).ln() - (n0 as f64).ln())).exp())
+    })
 }
 
 /// The levels measured, fastest first.
@@ -127,6 +165,7 @@ pub fn run(
     };
     let truth = IblLevel::MonteCarlo(truth_samples);
     let mut rows = Vec::new();
+    let mut equal_error = Vec::new();
     let mut truth_ms = Vec::new();
     let views: Vec<(String, &Scene, Option<crate::scene::Camera>)> = vec![
         (
@@ -169,8 +208,37 @@ pub fn run(
                 lighting_ms: super::median(times[i].clone()),
                 flip_mean: super::flip_mean(&truth_frame, f),
                 rel_error: rel_error(&truth_frame, f, &covered),
+                psnr: super::psnr_linear(&truth_frame.hdr, &f.hdr, &covered),
                 pareto: false,
             });
+        }
+        // The cloth only: the spheres take the split sum at every level.
+        if name.starts_with("cloth") {
+            let default = rows
+                .iter()
+                .find(|r| r.view == *name && r.level == crate::env::DEFAULT_IBL)
+                .cloned();
+            if let Some(d) = default {
+                let mut mc = Vec::new();
+                for n in MC_LEVELS {
+                    let o = options(scene, camera.clone(), Some(IblLevel::MonteCarlo(n)));
+                    renderer.render_frame(scene, &gpu, &o)?; // warm-up (each N is a pipeline)
+                    let f = renderer.render_frame(scene, &gpu, &o)?;
+                    mc.push((
+                        n,
+                        rel_error(&truth_frame, &f, &covered),
+                        super::pass_ms(&f, "lighting"),
+                    ));
+                }
+                let curve: Vec<(u32, f64)> = mc.iter().map(|m| (m.0, m.1)).collect();
+                equal_error.push(EqualErrorRow {
+                    view: name.clone(),
+                    default_error: d.rel_error,
+                    default_ms: d.lighting_ms,
+                    samples: equal_error_samples(&curve, d.rel_error),
+                    mc,
+                });
+            }
         }
     }
     // Pareto front per view: nothing faster is also closer.
@@ -221,6 +289,7 @@ pub fn run(
         truth,
         truth_ms,
         rows,
+        equal_error,
         cost,
     })
 }
@@ -237,18 +306,19 @@ impl IblReport {
         );
         let _ = writeln!(
             s,
-            "{:<16} {:<8} {:>10} {:>10} {:>10} {:>7}",
-            "view", "level", "light ms", "FLIP mean", "rel error", "pareto"
+            "{:<16} {:<8} {:>10} {:>10} {:>10} {:>8} {:>7}",
+            "view", "level", "light ms", "FLIP mean", "rel error", "PSNR dB", "pareto"
         );
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "{:<16} {:<8} {:>10.2} {:>10.4} {:>10.4} {:>7}",
+                "{:<16} {:<8} {:>10.2} {:>10.4} {:>10.4} {:>8.2} {:>7}",
                 r.view,
                 r.level.name(),
                 r.lighting_ms,
                 r.flip_mean,
                 r.rel_error,
+                r.psnr,
                 if r.pareto { "*" } else { "" }
             );
         }
@@ -260,6 +330,41 @@ impl IblReport {
                 self.truth.name(),
                 ms
             );
+        }
+        if !self.equal_error.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nEqual error: brute-force Monte Carlo (mc:N, unfiltered) against the same truth; the samples per pixel at which it matches {}",
+                crate::env::DEFAULT_IBL.name()
+            );
+            let _ = writeln!(
+                s,
+                "{:<16} {:>13} {:>10} {:>13}   mc:N: rel error/lighting ms",
+                "view", "default error", "default ms", "equal at N ="
+            );
+            for e in &self.equal_error {
+                let mc: Vec<String> = e
+                    .mc
+                    .iter()
+                    .map(|(n, err, ms)| format!("{n}: {err:.4}/{ms:.0}"))
+                    .collect();
+                let at = match e.samples {
+                    Some(n) => format!("~{n:.0}"),
+                    None if e.mc.last().is_some_and(|m| m.1 > e.default_error) => {
+                        format!("> {}", MC_LEVELS[MC_LEVELS.len() - 1])
+                    }
+                    None => format!("< {}", MC_LEVELS[0]),
+                };
+                let _ = writeln!(
+                    s,
+                    "{:<16} {:>13.4} {:>10.2} {:>13}   {}",
+                    e.view,
+                    e.default_error,
+                    e.default_ms,
+                    at,
+                    mc.join(", ")
+                );
+            }
         }
         let _ = writeln!(
             s,
