@@ -102,11 +102,16 @@ vec4 sample_slot(sampler2D tex, Material m, uint slot) {
 
 // The weave's summed-area table (WEAVE_SOURCE 2 filtered, 3 fetched; Rust twin
 // weft::fabric::WeaveSat, which builds it): it spans 2 x 2 repeats (a box up to a repeat wide,
-// its corner in the first repeat, lies inside). With W x H texels per repeat, texel (i, j), i <= 2W, j <= 2H, is the integral over
-// [0, i/W] x [0, j/H] (a repeat has area 1) of the coverage minus its mean; texel (2W + 1, 0) the
-// mean. The table at q in texel-corner units, bilinear between the four corners around it (exact
+// its corner in the first repeat, lies inside). With W x H texels per repeat, texel (i, j),
+// i <= 2W, j <= 2H, is the integral over [0, i/W] x [0, j/H] (a repeat has area 1) of the
+// coverage minus its mean; texel (2W + 1, 0) the mean. The table at q in texel-corner units, bilinear between the four corners around it (exact
 // for the texel-averaged coverage): by the sampler, or where the device cannot filter RGBA32F
 // (Vulkan makes it optional) by four texel fetches.
+// W x H: the table's texels per repeat (level 0 of the weave texture).
+vec2 weave_sat_repeat_texels() {
+    return vec2(textureSize(weave_tex, 0) - ivec2(2, 1)) / 2.0;
+}
+
 vec4 weave_sat_corner(ivec2 size, vec2 q) {
     if (WEAVE_SOURCE == 2u) {
         // The device filters RGBA32F: the sampler's bilinear filter between texel centres.
@@ -282,7 +287,7 @@ GSurface material_surface() {    GSurface s;
             // Nearest: one texel of level 0, no filtering (the summed-area table's box of it).
             ivec2 size = textureSize(weave_tex, 0);
             ivec2 texel = clamp(ivec2(fract(st) * vec2(size)), ivec2(0), size - 1);
-            vec2 sat_n = vec2(size - ivec2(2, 1)) / 2.0;
+            vec2 sat_n = weave_sat_repeat_texels();
             vec2 sat_lo = floor(fract(st) * sat_n) / sat_n;
             vec4 coverage = WEAVE_SOURCE == 1u
                 ? weave_point(weave_from_fabric(f), fract(st.x) * repeat_cells.x, fract(st.y) * repeat_cells.y)
@@ -308,7 +313,7 @@ GSurface material_surface() {    GSurface s;
                 // weave's, each its own box), each box at least one texel of level 0 (there the
                 // table's box is the texture's bilinear filter).
                 vec2 c = fract(st);
-                vec2 least = 1.0 / vec2(textureSize(weave_tex, 0) - ivec2(2, 1));
+                vec2 least = 0.5 / weave_sat_repeat_texels();
                 uvec2 k = FOOTPRINT_PIECES == 0u ? uvec2(1u)
                     : weave_pieces(st_dx * repeat_cells, st_dy * repeat_cells, FOOTPRINT_PIECES);
                 vec2 half_box = max(FOOTPRINT_PIECES == 0u ? ext : weave_piece_half(st_dx, st_dy, k), least);

@@ -213,7 +213,8 @@ vec4 weave_box(Weave w, float x0, float y0, float x1, float y1) {
 // the parallelogram's and blurs the weave. Cutting the footprint into pieces (`most` times the
 // shorter edge's share of the longer along the shorter, at least one, and along the longer as
 // many as keep the pieces about as long as wide, `most` to WEAVE_MAX_PIECES: a grazing footprint
-// six times longer than wide is cut 4 x 1) makes each piece's box fit it better. dx, dy: the footprint's edges, in cells. Rust twin:
+// six times longer than wide is cut 4 x 1) makes each piece's box fit it better. dx, dy: the
+// footprint's edges, in cells. Rust twin:
 // reference::weave::single::weave_pieces.
 uvec2 weave_pieces(vec2 dx, vec2 dy, uint most) {
     float box_area = (abs(dx.x) + abs(dy.x)) * (abs(dx.y) + abs(dy.y));

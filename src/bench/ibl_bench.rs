@@ -343,11 +343,10 @@ impl IblReport {
                 "view", "default error", "default ms", "equal at N ="
             );
             for e in &self.equal_error {
-                let mc: Vec<String> = e
-                    .mc
-                    .iter()
-                    .map(|(n, err, ms)| format!("{n}: {err:.4}/{ms:.0}"))
-                    .collect();
+                let mc: Vec<String> =
+                    e.mc.iter()
+                        .map(|(n, err, ms)| format!("{n}: {err:.4}/{ms:.0}"))
+                        .collect();
                 let at = match e.samples {
                     Some(n) => format!("~{n:.0}"),
                     None if e.mc.last().is_some_and(|m| m.1 > e.default_error) => {

@@ -118,35 +118,6 @@ pub fn weave_texels_cpu(push: &WeavePush) -> Vec<[f32; 4]> {
     out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::fabric::{FabricParams, WeavePattern};
-
-    #[test]
-    fn sizes() {
-        assert_eq!(weave_level0_size(&WeavePattern::plain()), (64, 64));
-        assert_eq!(weave_level0_size(&WeavePattern::satin()), (160, 160));
-        assert_eq!(weave_mip_count((160, 160)), 8);
-        assert_eq!(weave_mip_count((64, 64)), 7);
-        assert_eq!(weave_mip_count((1, 1)), 1);
-        assert_eq!(weave_level_size((160, 160), 6), (2, 2));
-        assert_eq!(weave_level_size((64, 128), 7), (1, 1));
-    }
-
-    #[test]
-    fn the_last_level_is_the_repeat_average() {
-        let p = FabricParams::default();
-        let t = weave_texels_cpu(&p.weave_push(1, 1));
-        let g = (p.gap / p.repeat) as f64;
-        let cw = (1.0 - 4.0 * g * g) / 2.0;
-        assert!(
-            (t[0][0] as f64 - cw).abs() < 1e-6 && (t[0][1] as f64 - cw).abs() < 1e-6,
-            "{t:?}"
-        );
-    }
-}
-
 /// The weave as a summed-area table (`--weave-precision sat`, `WEAVE_SOURCE` 2 of the G-buffer
 /// pass): the mean coverage of any axis-aligned box of the weave in four corner look-ups,
 /// exact for the coverage averaged over cells of `1/WEAVE_TEXELS_PER_CELL` (the texture's level 0),
@@ -265,5 +236,34 @@ impl WeaveSat {
         let area = (ext[0] * ext[1]).max(1e-30);
         let mean = self.texel(self.width as i32 - 1, 0);
         std::array::from_fn(|k| mean[k] + sum[k] / area)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fabric::{FabricParams, WeavePattern};
+
+    #[test]
+    fn sizes() {
+        assert_eq!(weave_level0_size(&WeavePattern::plain()), (64, 64));
+        assert_eq!(weave_level0_size(&WeavePattern::satin()), (160, 160));
+        assert_eq!(weave_mip_count((160, 160)), 8);
+        assert_eq!(weave_mip_count((64, 64)), 7);
+        assert_eq!(weave_mip_count((1, 1)), 1);
+        assert_eq!(weave_level_size((160, 160), 6), (2, 2));
+        assert_eq!(weave_level_size((64, 128), 7), (1, 1));
+    }
+
+    #[test]
+    fn the_last_level_is_the_repeat_average() {
+        let p = FabricParams::default();
+        let t = weave_texels_cpu(&p.weave_push(1, 1));
+        let g = (p.gap / p.repeat) as f64;
+        let cw = (1.0 - 4.0 * g * g) / 2.0;
+        assert!(
+            (t[0][0] as f64 - cw).abs() < 1e-6 && (t[0][1] as f64 - cw).abs() < 1e-6,
+            "{t:?}"
+        );
     }
 }
