@@ -25,7 +25,7 @@ struct PbrProbeInput {
                          // w: KHR_materials_dispersion's dispersion (with volume.y's ior)
 };
 
-// Rust twin: PbrProbeOutput (128 bytes).
+// Rust twin: PbrProbeOutput (144 bytes).
 struct PbrProbeOutput {
     vec4 brdf;   // gltf_brdf_cos (rgb), 0
     vec4 terms;  // charlie_d, sheen_brdf_cos, ggx_aniso_d (t·h = b·h from n·h), sheen_lambda(n·v)
@@ -37,6 +37,8 @@ struct PbrProbeOutput {
     vec4 through;      // diffuse_btdf_cos(n, v, −l, surface, attenuation colour) (rgb), 0
     vec4 film;         // iridescence_fresnel(film ior, n·v, thickness, f0) (rgb), 0
     vec4 dispersed;    // dispersion_iors(volume ior, dispersion) (rgb), 0
+    vec4 lamp_through; // specular_btdf_cos(n, v, −l, surface, volume ior) (rgb),
+                       // transmission_alpha(roughness, volume ior)
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
@@ -66,6 +68,8 @@ void main() {
     float th = sqrt(max(1.0 - nh * nh, 0.0) * 0.5);
     float alpha = max(p.params.x * p.params.x, 1e-3);
     outputs[id].brdf = vec4(brdf, 0.0);
+    outputs[id].lamp_through = vec4(specular_btdf_cos(p.n.xyz, p.v.xyz, -p.l.xyz, s, p.volume.y),
+                                    transmission_alpha(p.params.x, p.volume.y));
     outputs[id].dispersed = vec4(dispersion_iors(p.volume.y, p.film.w), 0.0);
     outputs[id].film = vec4(iridescence_fresnel(p.film.y, dot(p.n.xyz, p.v.xyz), p.film.z, p.f0_specular.rgb), 0.0);
     outputs[id].through = vec4(diffuse_btdf_cos(p.n.xyz, p.v.xyz, -p.l.xyz, s, p.attenuation.rgb), 0.0);

@@ -134,7 +134,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          `sheen_brdf_cos`, `ggx_aniso_d`, `sheen_lambda`), the transmission functions \
          (`transmission_exit`, `transmission_lod`, `volume_attenuation`, `transmission_weight`) \
          the clearcoat's (`clearcoat_brdf_cos`, `clearcoat_fresnel`), the diffuse \
-         transmission's (`diffuse_btdf_cos`) and the thin film's (`iridescence_fresnel`, \
+         transmission's (`diffuse_btdf_cos`), a lamp's transmitted lobe (`specular_btdf_cos`, \
+         `transmission_alpha`) and the thin film's (`iridescence_fresnel`, \
          KHR_materials_iridescence, also inside `gltf_brdf_cos`) on \
          a batch of inputs, one invocation per input. Bind a buffer of `count` 208-byte \
          `PbrProbeInput` records (thirteen `vec4`: `n`, `v`, \
@@ -144,12 +145,14 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          `attenuation` (colour, transmission factor), `coat` (factor, roughness), `film` \
          (iridescence factor, film ior, film thickness in nm, and KHR_materials_dispersion's \
          dispersion)) and a buffer for \
-         `count` 128-byte outputs (`vec4 brdf`, `vec4 terms`, `vec4 exit_lod`, `vec4 transmitted`, \
+         `count` 144-byte outputs (`vec4 brdf`, `vec4 terms`, `vec4 exit_lod`, `vec4 transmitted`, \
          `vec4 coated`, `vec4 through`: the BTDF at −l with the attenuation colour, `vec4 film`: \
-         the film's Fresnel at n·v over F0, `vec4 dispersed`: `dispersion_iors` of the volume's ior). Push the \
+         the film's Fresnel at n·v over F0, `vec4 dispersed`: `dispersion_iors` of the volume's ior, \
+         `vec4 lamp_through`: `specular_btdf_cos` at −l with the volume's ior and \
+         `transmission_alpha`). Push the \
          `uint count`; dispatch `ceil(count / 64)` groups. The Rust twins: \
          `weft::reference::shading::gltf_brdf_cos`, `transmission_exit`, `transmission_lod`, \
-         `volume_attenuation`, `transmission_weight`, `clearcoat_brdf_cos`, `clearcoat_fresnel`, `diffuse_btdf_cos`, `iridescence_fresnel`, `dispersion_iors`.",
+         `volume_attenuation`, `transmission_weight`, `clearcoat_brdf_cos`, `clearcoat_fresnel`, `diffuse_btdf_cos`, `specular_btdf_cos`, `transmission_alpha`, `iridescence_fresnel`, `dispersion_iors`.",
     ),
     (
         "lighting.frag",

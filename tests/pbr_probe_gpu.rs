@@ -57,6 +57,7 @@ struct PbrProbeOutput {
     through: [f32; 4],
     film: [f32; 4],
     dispersed: [f32; 4],
+    lamp_through: [f32; 4],
 }
 
 fn unit(v: [f64; 3]) -> [f32; 3] {
@@ -109,7 +110,7 @@ fn surface(inp: &PbrProbeInput) -> GltfSurface {
 }
 
 /// The Rust twin of pbr_probe.comp's main().
-fn twin(inp: &PbrProbeInput) -> [f32; 32] {
+fn twin(inp: &PbrProbeInput) -> [f32; 36] {
     let s = surface(inp);
     let xyz = |a: [f32; 4]| [a[0], a[1], a[2]];
     let b = gltf_brdf_cos(
@@ -144,6 +145,13 @@ fn twin(inp: &PbrProbeInput) -> [f32; 32] {
         inp.coat[1],
     );
     let dispersed = sh::dispersion_iors(inp.volume[1], inp.film[3]);
+    let lamp_through = sh::specular_btdf_cos(
+        xyz(inp.n),
+        xyz(inp.v),
+        [-l[0], -l[1], -l[2]],
+        &s,
+        inp.volume[1],
+    );
     let film = sh::iridescence_fresnel(
         inp.film[1],
         inp.n[0] * inp.v[0] + inp.n[1] * inp.v[1] + inp.n[2] * inp.v[2],
@@ -191,7 +199,56 @@ fn twin(inp: &PbrProbeInput) -> [f32; 32] {
         dispersed[1],
         dispersed[2],
         0.0,
+        lamp_through[0],
+        lamp_through[1],
+        lamp_through[2],
+        sh::transmission_alpha(inp.params[0], inp.volume[1]),
     ]
+}
+
+/// Absolute bound (rgb) of `specular_btdf_cos(n, v, −l, …)`: the GGX terms of the reflected
+/// lobe's bound (`bounds`) at the mirrored light direction and the transmitted alpha, plus
+/// what an absolute error of the Schlick weight at v·h does to 1 − specular·F (the factor can
+/// cancel), times D·V·|n·l| (f64) and the base colour.
+fn lamp_through_bound(inp: &PbrProbeInput, want: &[f32; 36]) -> [f64; 3] {
+    let l = xyz4(inp.l);
+    let mut m = *inp;
+    let (n, v) = (xyz4(inp.n), xyz4(inp.v));
+    let nl = dot(n, l);
+    // The light from behind, −l, mirrored through the plane: −l + 2(n·l)n.
+    m.l = v4(
+        unit([
+            2.0 * nl * n[0] as f64 - l[0] as f64,
+            2.0 * nl * n[1] as f64 - l[1] as f64,
+            2.0 * nl * n[2] as f64 - l[2] as f64,
+        ]),
+        0.0,
+    );
+    let alpha = want[35] as f64;
+    m.params[0] = alpha.sqrt() as f32;
+    m.sheen = [0.0; 4];
+    m.t_anisotropy[3] = 0.0;
+    let rel = bounds(&m)[0];
+    let (ml, nv) = (xyz4(m.l), dot(n, v));
+    let h = unit([
+        ml[0] as f64 + v[0] as f64,
+        ml[1] as f64 + v[1] as f64,
+        ml[2] as f64 + v[2] as f64,
+    ]);
+    let (nh, vh) = (dot(n, h).clamp(0.0, 1.0), dot(v, h).clamp(0.0, 1.0));
+    let a2 = alpha * alpha;
+    let dd = nh * nh * (a2 - 1.0) + 1.0;
+    let d = a2 / (std::f64::consts::PI * dd * dd);
+    let vis =
+        0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
+    let dv_cos = d * vis * nl;
+    let schlick =
+        5.0 * (1.0 - vh).powi(4) * 6.0 * U + (1.0 - vh).powi(5) * pow_rel(1.0 - vh + 1e-30, 5.0, U);
+    let spec = inp.f0_specular[3].abs() as f64;
+    [0, 1, 2].map(|k| {
+        let base = inp.base_metallic[k].abs() as f64;
+        2.0 * (want[32 + k].abs() as f64 * rel + base * dv_cos * (spec * schlick + 8.0 * U))
+    })
 }
 
 /// Absolute bounds of the transmission outputs (indices 8–14 of the twin), under the Vulkan
@@ -199,7 +256,7 @@ fn twin(inp: &PbrProbeInput) -> [f32; 32] {
 /// of |p| + thickness covers the dozen of them with a factor 2 to spare); log2 is 2^-21 absolute
 /// in [0.5, 2] and 3 ulp elsewhere; pow is exp2(y·log2 x) (`pow_rel`); 1 − specular·(F0·A + B)
 /// carries the absolute error of the product and sum (4 ulp of the larger term), times the base.
-fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 32]) -> [f64; 7] {
+fn transmission_bounds(inp: &PbrProbeInput, want: &[f32; 36]) -> [f64; 7] {
     let p = inp.l;
     let thickness = inp.volume[0] as f64;
     let ior = inp.volume[1] as f64;
@@ -693,8 +750,12 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         "dispersed.g",
         "dispersed.b",
         "-",
+        "lamp_through.r",
+        "lamp_through.g",
+        "lamp_through.b",
+        "trans_alpha",
     ];
-    let mut worst: [(f64, String); 32] = std::array::from_fn(|_| (0.0, String::new()));
+    let mut worst: [(f64, String); 36] = std::array::from_fn(|_| (0.0, String::new()));
     let mut failures = Vec::new();
     for (k, c) in cases.iter().enumerate() {
         let g: PbrProbeOutput = bytemuck::pod_read_unaligned(&bytes[k * size..(k + 1) * size]);
@@ -707,12 +768,14 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             g.through,
             g.film,
             g.dispersed,
+            g.lamp_through,
         ]
         .concat();
         let want = twin(&c.input);
         let rel = bounds(&c.input);
         let abs = transmission_bounds(&c.input, &want);
         let film_abs = film_brdf_bound(&c.input);
+        let lamp_abs = lamp_through_bound(&c.input, &want);
         let i = &c.input;
         let film_out = film_bound(
             i.film[1] as f64,
@@ -724,14 +787,19 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
                 i.f0_specular[2] as f64,
             ],
         );
-        for j in 0..32 {
+        for j in 0..36 {
             if j == 3 || j == 15 || j == 23 || j == 27 || j == 31 {
                 continue;
             }
             let (x, t) = (got[j] as f64, want[j] as f64);
             assert!(x.is_finite(), "{}: {} is {x} on the GPU", c.name, names[j]);
             assert!(t.is_finite(), "{}: {} is {t} in the twin", c.name, names[j]);
-            let bound = if j < 3 {
+            let bound = if j == 35 {
+                // roughness² × clamp(2·ior − 2, 0, 1): four correctly rounded operations.
+                8.0 * U * t.abs() + 1e-9
+            } else if j >= 32 {
+                lamp_abs[j - 32] + 1e-9
+            } else if j < 3 {
                 t.abs() * rel[j] + film_abs[j] + 1e-9
             } else if j >= 28 {
                 // ior ∓ (ior − 1)·0.025·dispersion: three products and two sums, correctly
@@ -781,7 +849,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
             }
         }
     }
-    for j in 0..32 {
+    for j in 0..36 {
         if j != 3 && j != 15 && j != 23 && j != 27 && j != 31 {
             println!(
                 "{:>15}: worst {:.3} of its bound ({})",
@@ -794,7 +862,7 @@ fn pbr_probe_matches_the_twin_within_the_derived_bounds() {
         failures.is_empty(),
         "{} of {} outputs outside their bound, e.g.:\n{}",
         failures.len(),
-        cases.len() * 27,
+        cases.len() * 31,
         failures
             .iter()
             .take(20)

@@ -2729,7 +2729,7 @@ fn specular_glossiness_is_read_into_the_metallic_roughness_model() {
 }
 
 /// KHR_materials_dispersion: read onto the transmissive volume; without a volume (a thin wall
-/// does not refract) dropped with a warning; its range checked.
+/// does not refract) or without transmission at all dropped with a warning; its range checked.
 #[test]
 fn dispersion_is_read_onto_the_volume() {
     let mut d = Doc::new();
@@ -2751,6 +2751,8 @@ fn dispersion_is_read_onto_the_volume() {
             "KHR_materials_transmission": {"transmissionFactor": 1.0},
             "KHR_materials_volume": {"thicknessFactor": 0.5},
             "KHR_materials_dispersion": {"dispersion": 50.0}}},
+        {"name": "opaque", "extensions": {
+            "KHR_materials_dispersion": {"dispersion": 0.5}}},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = d.load("dispersion").unwrap();
@@ -2765,6 +2767,13 @@ fn dispersion_is_read_onto_the_volume() {
     assert!(
         w.iter()
             .any(|w| w.contains("'too much'") && w.contains("clamped")),
+        "{w:?}"
+    );
+    // Without transmission there is no refracted light to spread: said, not silently dropped.
+    assert!(s.materials[3].transmission.is_none());
+    assert!(
+        w.iter().any(|w| w.contains("'opaque'")
+            && w.contains("KHR_materials_dispersion without KHR_materials_transmission")),
         "{w:?}"
     );
     assert!(!w.iter().any(|w| w.contains("ignores")), "{w:?}");

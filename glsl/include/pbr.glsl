@@ -267,6 +267,35 @@ vec3 transmission_weight(vec3 f0, float specular, vec3 base, vec2 ab) {
     return max(1.0 - specular * (f0 * ab.x + ab.y), vec3(0.0)) * base;
 }
 
+// The roughness of the transmitted lobe: the surface's roughness widened by the index as the
+// Khronos sample viewer widens it (applyIorToRoughness): alpha = roughness² · clamp(2·ior − 2, 0, 1),
+// so no spread at ior 1 and the reflected lobe's at 1.5 and above.
+float transmission_alpha(float roughness, float ior) {
+    return max(roughness * roughness * clamp(2.0 * ior - 2.0, 0.0, 1.0), 1e-3);
+}
+
+// KHR_materials_transmission under a lamp: the BTDF times |n·l| for light l from behind a surface
+// seen from the front (n·l < 0 < n·v), in the sample viewer's thin-surface form: l mirrored through
+// the surface's plane (l_m = l − 2(n·l)n), the GGX lobe of transmission_alpha about the mirrored
+// direction, (1 − specular·F(v·h)) of the base colour. The sample viewer leaves out the cosine;
+// here D·V·|n·l| over the lower hemisphere integrates to the lobe's albedo Ess(n·v), as the
+// reflected lobe's does (tests/transparency.rs checks it by quadrature). 0 for light in front.
+// The caller weighs it by the transmission and (1 − metallic).
+vec3 specular_btdf_cos(vec3 n, vec3 v, vec3 l, GltfSurface s, float ior) {
+    float n_l = dot(n, l);
+    float n_v = dot(n, v);
+    if (!(n_l < 0.0) || !(n_v > 0.0)) {
+        return vec3(0.0);
+    }
+    vec3 h = normalize(l - 2.0 * n_l * n + v);
+    float n_h = clamp(dot(n, h), 0.0, 1.0);
+    float v_h = clamp(dot(v, h), 0.0, 1.0);
+    float alpha = transmission_alpha(s.roughness, ior);
+    float dv = ggx_d(n_h, alpha) * smith_v(-n_l, n_v, alpha);
+    vec3 fr = s.f0 + (1.0 - s.f0) * pow(1.0 - v_h, 5.0);
+    return max(1.0 - s.specular * fr, vec3(0.0)) * s.base * (dv * -n_l);
+}
+
 // ---- KHR_materials_diffuse_transmission: a thin surface's diffuse lobe partly goes through ----
 
 // The Lambertian BTDF times the cosine for light l from behind a surface seen from the front

@@ -501,6 +501,23 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         uint i = tile_lights[list.x + j];
             vec3 l;
             vec3 e = light_incoming(lights[i], p, l);
+            if (TRANSMISSION != 0u && t_spec > 0.0) {
+                // KHR_materials_transmission: a lamp behind, seen through the surface (the
+                // sample viewer's model: its light as seen from where the refracted view ray
+                // leaves the volume, attenuated over that path; its shadow looked up there from
+                // the back side).
+                vec3 q = transmission_exit(p, n, v, transmission.y, transmission.w);
+                vec3 lq;
+                vec3 eq = light_incoming(lights[i], q, lq);
+                vec3 through = (1.0 - metallic) * t_spec * specular_btdf_cos(n, v, lq, s, transmission.w);
+                if (any(greaterThan(eq * through, vec3(0.0)))) {
+                    through *= volume_attenuation(distance(p, q), attenuation.rgb, transmission.z);
+                    if (COAT != 0u && coat > 0.0) {
+                        through *= 1.0 - coat * clearcoat_fresnel(dot(coat_n, v));
+                    }
+                    radiance += eq * through * shadow_factor(lights[i], q, -n, receives);
+                }
+            }
             if (all(equal(e, vec3(0.0)))) {
                 continue;
             }

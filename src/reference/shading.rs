@@ -193,6 +193,32 @@ pub fn diffuse_btdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, color: Vec3)
     scale(color, (1.0 - s.specular * max3(fr)) * (-n_l / PI))
 }
 
+/// `transmission_alpha` of pbr.glsl: the transmitted lobe's GGX alpha, roughness² widened by the
+/// index as the Khronos sample viewer does (× clamp(2·ior − 2, 0, 1)), at least 1e-3.
+pub fn transmission_alpha(roughness: f32, ior: f32) -> f32 {
+    (roughness * roughness * (2.0 * ior - 2.0).clamp(0.0, 1.0)).max(1e-3)
+}
+
+/// `specular_btdf_cos` of pbr.glsl (KHR_materials_transmission under a lamp): for light from
+/// behind (n·l < 0 < n·v), the GGX lobe about l mirrored through the surface's plane,
+/// D·V·|n·l| × (1 − specular·F(v·h)) × base; else 0.
+pub fn specular_btdf_cos(n: Vec3, v: Vec3, l: Vec3, s: &GltfSurface, ior: f32) -> Vec3 {
+    let (n_l, n_v) = (dot(n, l), dot(n, v));
+    if !(n_l < 0.0) || !(n_v > 0.0) {
+        return [0.0; 3];
+    }
+    let h = normalize(add(sub(l, scale(n, 2.0 * n_l)), v));
+    let n_h = dot(n, h).clamp(0.0, 1.0);
+    let v_h = dot(v, h).clamp(0.0, 1.0);
+    let alpha = transmission_alpha(s.roughness, ior);
+    let dv = ggx_d(n_h, alpha) * smith_v(-n_l, n_v, alpha);
+    let w = (1.0 - v_h).powf(5.0);
+    [0, 1, 2].map(|k| {
+        let fr = s.f0[k] + (1.0 - s.f0[k]) * w;
+        (1.0 - s.specular * fr).max(0.0) * s.base[k] * (dv * -n_l)
+    })
+}
+
 /// `film_sensitivity` of pbr.glsl: the Fourier transform of the CIE 1931 colour matching
 /// functions (Belcour & Barla's Gaussian fits) at optical path difference `opd` (nm) and phase
 /// shift, in linear Rec. 709.

@@ -1089,6 +1089,13 @@ impl<'a> Loader<'a> {
                         material_ext::TRANSMISSION
                     ));
                 }
+                if dispersion.is_some_and(|d| d > 0.0) {
+                    self.warn(format_args!(
+                        "{who} has {} without {}; the dispersion is ignored (it only spreads refracted light)",
+                        material_ext::DISPERSION,
+                        material_ext::TRANSMISSION
+                    ));
+                }
                 None
             }
             Some(e) => {
