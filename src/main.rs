@@ -163,8 +163,10 @@ struct RenderArgs {
     /// display gamma of Khronos' render-fidelity goldens), agx, or none. Written into the PNG.
     #[arg(long, default_value = "pbr-neutral", value_parser = parse_tonemap)]
     tonemap: render::ToneCurve,
-    /// Edge anti-aliasing after tone mapping: fxaa (a post pass, glsl/fxaa.frag) or none (the
-    /// rasterizer's one-pixel staircases). Written into the PNG.
+    /// Anti-aliasing: fxaa (a post pass after tone mapping, glsl/fxaa.frag), none (the
+    /// rasterizer's one-pixel staircases), or ssN (N x N frames at sub-pixel offsets averaged,
+    /// N from 2 to 8: N² times the time, for stills; it resolves wires and detail thinner than a
+    /// pixel, which FXAA cannot). Written into the PNG.
     #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
     aa: render::Antialias,
     /// Turn on the Vulkan validation layer; any message it reports fails the render.
@@ -306,7 +308,7 @@ struct ViewArgs {
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
           value_parser = |s: &str| render::parse_finite("--exposure", s))]
     exposure: f32,
-    /// Edge anti-aliasing, as for render: fxaa or none.
+    /// Edge anti-aliasing, as for render: fxaa or none (ssN is for still renders).
     #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
     aa: render::Antialias,
     /// Turn on the Vulkan validation layer; any message it reports ends the viewer with an error.
@@ -446,7 +448,7 @@ struct PlanArgs {
     /// Print the plan as JSON.
     #[arg(long)]
     json: bool,
-    /// Edge anti-aliasing, as for render (its default: fxaa).
+    /// Anti-aliasing, as for render (its default: fxaa; ssN: the plan of each of its N² frames).
     #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
     aa: render::Antialias,
 }
@@ -695,6 +697,12 @@ fn run_view(args: ViewArgs) -> anyhow::Result<()> {
     options.exposure = args.exposure;
     options.antialias = args.aa;
     options.validate()?;
+    if let render::Antialias::Supersample(n) = args.aa {
+        anyhow::bail!(
+            "weft view --aa ss{n}: supersampling renders {} frames per image, which is for still renders (weft render --aa ss{n}); the live view takes --aa fxaa or none",
+            n * n
+        );
+    }
     if let Some(shot) = &args.screenshot {
         check_outputs(
             &inputs_of(&args.scene, &scene),
@@ -821,6 +829,13 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             );
         } else {
             println!("one cold frame (includes shader JIT); --frames 10 gives warm medians");
+        }
+        if options.supersample() > 1 {
+            println!(
+                "each pass's time is the sum over the {} frames of --aa {}",
+                options.supersample().pow(2),
+                options.antialias.name()
+            );
         }
         println!("{:<12} {:>10} {:>10}", "pass", "gpu ms", "wall ms");
         println!("{:<12} {:>10} {:>10.2}", "load", "-", load_ms);
@@ -1401,6 +1416,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
             "width": plan.width,
             "height": plan.height,
             "passes": plan.passes.iter().map(|p| p.name()).collect::<Vec<_>>(),
+            "supersample": plan.supersample,
             "draws": plan.draws,
             "triangles": plan.triangles,
             "lights": {"directional": plan.lights.directional, "point": plan.lights.point, "spot": plan.lights.spot},
@@ -1501,7 +1517,12 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
 
 fn parse_aa(text: &str) -> Result<render::Antialias, String> {
     render::Antialias::by_name(text)
-        .ok_or_else(|| format!("unknown anti-aliasing '{text}': choose fxaa or none"))
+        .ok_or_else(|| {
+            format!(
+                "unknown anti-aliasing '{text}': choose fxaa, none or ssN (N x N supersampled frames, N from 2 to {})",
+                render::Antialias::MAX_SUPERSAMPLE
+            )
+        })
 }
 
 fn parse_tonemap(text: &str) -> Result<render::ToneCurve, String> {

@@ -140,6 +140,19 @@ fn plan_prints_the_default_scene() {
         v["passes"],
         serde_json::json!(["environment", "weave", "gbuffer", "lighting", "tonemap"])
     );
+    assert_eq!(v["supersample"], 1);
+    // --aa ss3: nine frames of the same passes, without the FXAA pass.
+    let out = weft()
+        .args(["plan", "--json", "--aa", "ss3"])
+        .output()
+        .unwrap();
+    let v3: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v3["passes"], v["passes"]);
+    assert_eq!(v3["supersample"], 3);
+    let out = weft().args(["plan", "--aa", "ss9"]).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("ssN") && err.contains("from 2 to 8"), "{err}");
     assert_eq!(v["environment"]["name"], "built-in studio");
     assert_eq!(v["environment"]["ibl"], "fis:8");
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);

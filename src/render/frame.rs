@@ -1196,7 +1196,75 @@ impl Renderer {
         gpu: &GpuScene,
         options: &RenderOptions,
     ) -> crate::Result<Frame> {
+        let n = options.supersample();
+        if n > 1 {
+            return self.render_supersampled(scene, gpu, options, n);
+        }
         self.render_frame_impl(scene, gpu, options, true)
+    }
+
+    /// `--aa ssN`: N x N frames, each at the centre of its cell of an N x N grid over the pixel
+    /// and without FXAA, averaged: the 8-bit images in linear display light (decoded from sRGB,
+    /// averaged, encoded: a multisampled target's resolve after tone mapping, so a bright edge
+    /// blends as the eye sees it), the HDR in radiance. The timings are the frames' sums; the
+    /// plan is the one asked for.
+    fn render_supersampled(
+        &mut self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: &RenderOptions,
+        n: u32,
+    ) -> crate::Result<Frame> {
+        use crate::reference::shading::{srgb_decode, srgb_encode};
+        options.validate()?;
+        let pixels = options.width as usize * options.height as usize;
+        let mut ldr = vec![0f64; pixels * 4];
+        let mut hdr = vec![0f64; if options.read_hdr { pixels * 4 } else { 0 }];
+        let mut timings: Vec<PassTiming> = Vec::new();
+        let mut last = None;
+        for j in 0..n {
+            for i in 0..n {
+                let offset = |k: u32| (k as f32 + 0.5) / n as f32 - 0.5;
+                let o = RenderOptions {
+                    antialias: super::Antialias::None,
+                    jitter: [offset(i), offset(j)],
+                    ..options.clone()
+                };
+                let f = self.render_frame_impl(scene, gpu, &o, true)?;
+                for (acc, px) in ldr.chunks_exact_mut(4).zip(f.ldr.chunks_exact(4)) {
+                    for c in 0..3 {
+                        acc[c] += srgb_decode(px[c] as f32 / 255.0) as f64;
+                    }
+                    acc[3] += px[3] as f64 / 255.0;
+                }
+                for (acc, v) in hdr.iter_mut().zip(&f.hdr) {
+                    *acc += *v as f64;
+                }
+                for t in &f.timings {
+                    match timings.iter_mut().find(|s| s.name == t.name) {
+                        Some(s) => {
+                            s.wall_ms += t.wall_ms;
+                            s.gpu_ms = s.gpu_ms.zip(t.gpu_ms).map(|(a, b)| a + b);
+                        }
+                        None => timings.push(t.clone()),
+                    }
+                }
+                last = Some(f);
+            }
+        }
+        let mut frame = last.expect("n >= 2 frames");
+        let scale = 1.0 / (n * n) as f64;
+        frame.ldr = ldr
+            .chunks_exact(4)
+            .flat_map(|p| {
+                let rgb = |c: usize| srgb_encode((p[c] * scale) as f32);
+                [rgb(0), rgb(1), rgb(2), (p[3] * scale * 255.0 + 0.5) as u8]
+            })
+            .collect();
+        frame.hdr = hdr.iter().map(|v| (v * scale) as f32).collect();
+        frame.timings = timings;
+        frame.plan = Plan::new(scene, options);
+        Ok(frame)
     }
 
     /// As [`Renderer::render_frame`], without the readback: the tonemapped image stays on the
@@ -1208,6 +1276,13 @@ impl Renderer {
         gpu: &GpuScene,
         options: &RenderOptions,
     ) -> crate::Result<(Frame, &Image)> {
+        if options.supersample() > 1 {
+            return Err(crate::Error::input(format!(
+                "--aa {} renders {} frames per image, for still renders (weft render); a live view takes fxaa or none",
+                options.antialias.name(),
+                options.antialias.frames_per_side().pow(2)
+            )));
+        }
         let frame = self.render_frame_impl(scene, gpu, options, false)?;
         let ldr = &self
             .targets

@@ -421,7 +421,7 @@ pub struct RenderOptions {
     pub antialias: Antialias,
 }
 
-/// Edge anti-aliasing of the tone-mapped image (`--aa`).
+/// Anti-aliasing of the image (`--aa`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Antialias {
     /// Geometry edges as the rasterizer leaves them: one-pixel staircases.
@@ -429,21 +429,43 @@ pub enum Antialias {
     None,
     /// A post pass (glsl/fxaa.frag): blends across luma edges along their direction.
     Fxaa,
+    /// `ssN`: N x N frames at the centres of an N x N grid of sub-pixel offsets, each without
+    /// FXAA, averaged: the tone-mapped images in linear display light (as a multisampled target
+    /// is resolved), the HDR in linear radiance. Costs N² frames; integrates everything a pixel
+    /// covers (edges, wires thinner than a pixel, texture and weave detail), so it is for still
+    /// renders (N from 2 to [`Antialias::MAX_SUPERSAMPLE`]).
+    Supersample(u32),
 }
 
 impl Antialias {
+    /// The largest N of `ssN` (64 frames).
+    pub const MAX_SUPERSAMPLE: u32 = 8;
+
     pub fn by_name(name: &str) -> Option<Antialias> {
         match name {
             "none" => Some(Antialias::None),
             "fxaa" => Some(Antialias::Fxaa),
-            _ => None,
+            _ => name
+                .strip_prefix("ss")
+                .and_then(|n| n.parse::<u32>().ok())
+                .filter(|n| (2..=Self::MAX_SUPERSAMPLE).contains(n))
+                .map(Antialias::Supersample),
         }
     }
 
-    pub fn name(self) -> &'static str {
+    pub fn name(self) -> String {
         match self {
-            Antialias::None => "none",
-            Antialias::Fxaa => "fxaa",
+            Antialias::None => "none".into(),
+            Antialias::Fxaa => "fxaa".into(),
+            Antialias::Supersample(n) => format!("ss{n}"),
+        }
+    }
+
+    /// Frames per image side (1 unless supersampled).
+    pub fn frames_per_side(self) -> u32 {
+        match self {
+            Antialias::Supersample(n) => n.clamp(1, Self::MAX_SUPERSAMPLE),
+            _ => 1,
         }
     }
 }
@@ -473,12 +495,35 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
+    /// Frames per image side: N for `--aa ssN` (debug views show the G-buffer of one frame), else 1.
+    pub fn supersample(&self) -> u32 {
+        if self.debug_view == DebugView::None {
+            self.antialias.frames_per_side()
+        } else {
+            1
+        }
+    }
+
     pub fn validate(&self) -> crate::Result<()> {
         if self.width == 0 || self.height == 0 || self.width > MAX_SIZE || self.height > MAX_SIZE {
             return Err(Error::input(format!(
                 "output size {}x{} is out of range: each side must be between 1 and {MAX_SIZE} (e.g. --size 1920x1080)",
                 self.width, self.height
             )));
+        }
+        if let Antialias::Supersample(n) = self.antialias {
+            if !(2..=Antialias::MAX_SUPERSAMPLE).contains(&n) {
+                return Err(Error::input(format!(
+                    "ss{n} is out of range: N must be between 2 and {}",
+                    Antialias::MAX_SUPERSAMPLE
+                )));
+            }
+            if self.jitter != [0.0, 0.0] {
+                return Err(Error::input(format!(
+                    "ss{n} places its own sub-pixel offsets; a jitter {:?} as well is a contradiction (use one or the other)",
+                    self.jitter
+                )));
+            }
         }
         if let Accuracy::Supersampled(n) = self.accuracy {
             if !(1..=Accuracy::MAX_SAMPLES).contains(&n) {

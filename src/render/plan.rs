@@ -121,7 +121,11 @@ pub const MAX_ATLAS: u32 = 8192;
 pub struct Plan {
     pub width: u32,
     pub height: u32,
+    /// The passes of one frame.
     pub passes: Vec<Pass>,
+    /// Frames per image side (`--aa ssN`: N, the image the mean of N² frames at sub-pixel
+    /// offsets, each running `passes`; 1 otherwise).
+    pub supersample: u32,
     pub draws: usize,
     pub triangles: usize,
     /// Draws of line and point primitives (glTF LINES, LINE_LOOP, LINE_STRIP, POINTS): drawn 1
@@ -501,6 +505,7 @@ impl Plan {
             range_culling: !options.force.no_range_culling,
             textures: scene.textures.len(),
             debug_view: options.debug_view,
+            supersample: options.supersample(),
             environment,
         }
     }
@@ -697,6 +702,14 @@ impl fmt::Display for Plan {
             )?,
         }
         writeln!(f, "textures    {}", self.textures)?;
+        if self.supersample > 1 {
+            let n = self.supersample;
+            writeln!(
+                f,
+                "supersample ss{n}: {} frames at the centres of a {n}x{n} grid of sub-pixel offsets, averaged (tone-mapped in linear display light, HDR in radiance)",
+                n * n
+            )?;
+        }
         write!(f, "debug view  {}", self.debug_view.name())
     }
 }
