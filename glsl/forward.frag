@@ -50,12 +50,17 @@ layout(constant_id = 22) const uint DIFFUSE_TRANSMISSION = 0u;
 layout(constant_id = 23) const uint IRIDESCENCE = 0u;
 // 1: some drawn material disperses (KHR_materials_dispersion): three refracted rays, not one.
 layout(constant_id = 24) const uint DISPERSION = 0u;
+// 1: some fabric has thread-by-thread colours (the ThreadColours buffer is read).
+layout(constant_id = 25) const uint THREAD_COLOURS = 0u;
 
 // Set 0: gbuffer.vert's bindings 0-4, then lighting.frag's shadow and environment bindings.
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
+// Thread-by-thread colours of the fabrics that have them (weft::fabric::ThreadColourTable; one
+// vec4 of zeros when none has).
+layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };
 layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;
 layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };
 layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };

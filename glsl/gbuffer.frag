@@ -24,10 +24,15 @@ layout(constant_id = 5) const uint VERTEX_COLORS = 0u;
 // are discarded (at the end, after every derivative); 0: no discard is compiled in, so early
 // depth testing stays possible.
 layout(constant_id = 6) const uint ALPHA_MASK = 0u;
+// 1: some fabric has thread-by-thread colours (the ThreadColours buffer is read).
+layout(constant_id = 7) const uint THREAD_COLOURS = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
+// Thread-by-thread colours of the fabrics that have them (weft::fabric::ThreadColourTable; one
+// vec4 of zeros when none has).
+layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };
 
 #include "surface.glsl"
 

@@ -33,8 +33,9 @@ pub struct FabricArgs {
     #[arg(long)]
     pub pattern: Option<String>,
     /// A weaving draft (WIF, the Weaving Information File of weaving programs): its weave instead
-    /// of the preset's pattern, and its thread colours (their mean per direction, linear) unless
-    /// --rd, --rd-warp or --rd-weft say otherwise.
+    /// of the preset's pattern, and its thread colours, thread by thread where a warp or weft
+    /// changes colour (stripes, checks, tartans), unless --rd, --rd-warp or --rd-weft say
+    /// otherwise.
     #[arg(long, conflicts_with = "pattern")]
     pub draft: Option<PathBuf>,
     /// Gap between threads as a fraction of the pitch, 0..1.
@@ -142,6 +143,8 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
                 )
             })?),
         },
+        warp_colours: None,
+        weft_colours: None,
     };
     if let Some(path) = &args.draft {
         let d = Draft::load(path)?;

@@ -1437,6 +1437,7 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
                 "thread_shadowing": plan.features.thread_shadowing,
                 "fresnel": plan.features.fresnel,
                 "coupled_diffuse": plan.features.coupled_diffuse,
+                "thread_colours": plan.features.thread_colours,
                 "far_field_mixture": plan.features.far_field_mixture,
                 "thread_texture": plan.features.thread_texture,
             },

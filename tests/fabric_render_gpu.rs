@@ -49,16 +49,25 @@ fn compare_lighting(
                 // Bound: the HDR target is f16 (relative rounding 2^-11); both sides read the same
                 // G-buffer values, so what is left is f32 evaluation order, the Vulkan precision of
                 // pow/exp/log/inversesqrt, and the sRGB decode of the albedo target (the GPU's
-                // table vs the formula here, < 1e-3 relative).
-                let bound = 2e-3 * cpu[c].abs() + 2e-4;
+                // table vs the formula here, < 1e-3 relative at the bright bytes of these
+                // scenes' plain materials; a plain fabric's albedo target is white, 255, exact).
+                // A fabric with thread-by-thread colours stores mid-grey bytes there, which
+                // lavapipe decodes up to 0.74 % off the formula (measured with the albedo debug
+                // view over this close-up, bytes 84-99): 1 % more, on the whole value.
+                let threads = s
+                    .fabric
+                    .is_some_and(|f| f.flags & weft::fabric::FLAG_THREAD_COLOURS != 0);
+                let bound = (if threads { 1.2e-2 } else { 2e-3 }) * cpu[c].abs() + 2e-4;
                 let err = (hdr[i * 4 + c] - cpu[c]).abs();
                 worst = worst.max(err / bound);
                 assert!(
                     err <= bound,
-                    "pixel ({x}, {y}) channel {c}: GPU {} vs CPU {} (material {material}, fabric {})",
+                    "pixel ({x}, {y}) channel {c}: GPU {} vs CPU {} (material {material}, fabric {}, albedo {:?}, coverage {:?})",
                     hdr[i * 4 + c],
                     cpu[c],
-                    s.fabric.is_some()
+                    s.fabric.is_some(),
+                    &g.albedo[i * 4..i * 4 + 4],
+                    s.coverage
                 );
             }
             compared += 1;
@@ -79,7 +88,20 @@ fn lighting_pass_matches_cpu_shading_of_the_gbuffer() {
             30f32.to_radians(),
         )
         .unwrap();
-    for (name, camera) in [("scene camera", None), ("close-up", Some(close))] {
+    // And the cloth with thread-by-thread colours (the lighting pass takes the G-buffer's
+    // thread colour as both threads' albedo).
+    let mut striped = scene.clone();
+    for m in striped.materials.iter_mut() {
+        if let Some(f) = m.fabric.as_mut() {
+            f.warp_colours = vec![[0.8, 0.1, 0.1], [0.1, 0.6, 0.2], [0.9, 0.9, 0.8]];
+            f.weft_colours = vec![[0.1, 0.1, 0.6], [0.05, 0.05, 0.05]];
+        }
+    }
+    for (name, camera, scene) in [
+        ("scene camera", None, &scene),
+        ("close-up", Some(close.clone()), &scene),
+        ("close-up, thread colours", Some(close), &striped),
+    ] {
         let options = RenderOptions {
             width: 192,
             height: 108,

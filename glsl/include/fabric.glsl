@@ -20,6 +20,9 @@
 // "thread_texture", docs/fabric-model.md §4): its base colour texture, or its sheen colour texture.
 #define FABRIC_FLAG_TEXTURE_BASE_COLOR 2u
 #define FABRIC_FLAG_TEXTURE_SHEEN_COLOR 4u
+// Thread-by-thread colours (surface.glsl's thread_colour): the G-buffer's albedo holds the
+// footprint's thread colour, the lighting pass takes it as both threads' albedo.
+#define FABRIC_FLAG_THREAD_COLOURS 8u
 
 // One material (std430, 80 bytes). Rust twin: weft::fabric::GpuFabric.
 struct GpuFabric {
@@ -37,7 +40,7 @@ struct GpuFabric {
     uint rows;             // 60: along v
     float gap;             // 64: s_g/s_p: half the gap, in cells
     float shadow_dist;     // 68: shadow_width/2, in cells
-    uint _pad0;            // 72
+    uint colours;          // 72: with flag bit 3, the thread colours' record in ThreadColours (vec4s)
     uint _pad1;            // 76
 };
 
@@ -177,10 +180,14 @@ float coupled_diffuse(float rs, float nk1, float nk2) {
 
 // The material with both threads' colours multiplied by `tint` (the thread texture's filtered
 // value at the pixel, rgb in [0, 1]; white without one). The BRDF is linear in the colours, so
-// this is the texture multiplied over the diffuse term wherever the model uses them.
+// this is the texture multiplied over the diffuse term wherever the model uses them. With
+// thread-by-thread colours (flag bit 3) `tint` already holds the footprint's shadow-weighted
+// thread colour times the texture, and is both threads' colour: s_warp·t + s_weft·t is then the
+// footprint's Σ s·colour exactly.
 GpuFabric fabric_tinted(GpuFabric m, vec3 tint) {
-    m.rd_warp = m.rd_warp * tint;
-    m.rd_weft = m.rd_weft * tint;
+    bool threads = (m.flags & FABRIC_FLAG_THREAD_COLOURS) != 0u;
+    m.rd_warp = threads ? tint : m.rd_warp * tint;
+    m.rd_weft = threads ? tint : m.rd_weft * tint;
     return m;
 }
 

@@ -112,27 +112,33 @@ vec2 weave_sat_repeat_texels() {
     return vec2(textureSize(weave_tex, 0) - ivec2(2, 1)) / 2.0;
 }
 
-vec4 weave_sat_corner(ivec2 size, vec2 q) {
-    if (WEAVE_SOURCE == 2u) {
+// A summed-area table's texel: the weave texture's (src = SAT_WEAVE) or, from the thread-colour
+// buffer, that of the table starting at vec4 `src` (a row of `size.x` texels after another).
+#define SAT_WEAVE 0xffffffffu
+vec4 sat_texel(uint src, ivec2 size, ivec2 i) {
+    return src == SAT_WEAVE ? texelFetch(weave_tex, i, 0) : thread_colours[src + uint(i.y * size.x + i.x)];
+}
+
+vec4 sat_corner(uint src, ivec2 size, vec2 q) {
+    if (WEAVE_SOURCE == 2u && src == SAT_WEAVE) {
         // The device filters RGBA32F: the sampler's bilinear filter between texel centres.
         return textureLod(weave_tex, (q + 0.5) / vec2(size), 0.0);
     }
     ivec2 n = size - ivec2(2, 1);
     ivec2 i = clamp(ivec2(floor(q)), ivec2(0), n - 1);
     vec2 f = clamp(q - vec2(i), 0.0, 1.0);
-    vec4 a = texelFetch(weave_tex, i, 0);
-    vec4 b = texelFetch(weave_tex, i + ivec2(1, 0), 0);
-    vec4 c = texelFetch(weave_tex, i + ivec2(0, 1), 0);
-    vec4 d = texelFetch(weave_tex, i + ivec2(1, 1), 0);
+    vec4 a = sat_texel(src, size, i);
+    vec4 b = sat_texel(src, size, i + ivec2(1, 0));
+    vec4 c = sat_texel(src, size, i + ivec2(0, 1));
+    vec4 d = sat_texel(src, size, i + ivec2(1, 1));
     return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
 }
 
-// The mean coverage over the box [lo, hi] of st (a repeat is 1 unit; any size and place): with lo
-// reduced into the first repeat and hi = 2X + u1 (X whole tables), the integral of coverage minus
-// mean is T(u1,v1) - T(u1,v0) - T(u0,v1) + T(u0,v0) + X (T(2,v1) - T(2,v0)) + Y (T(u1,2) - T(u0,2));
-// X and Y are 0 for boxes up to a repeat.
-vec4 weave_sat_box(vec2 lo, vec2 hi) {
-    ivec2 size = textureSize(weave_tex, 0);
+// The mean over the box [lo, hi] of st (a repeat is 1 unit; any size and place): with lo
+// reduced into the first repeat and hi = 2X + u1 (X whole tables), the integral of the value minus
+// its mean is T(u1,v1) - T(u1,v0) - T(u0,v1) + T(u0,v0) + X (T(2,v1) - T(2,v0)) + Y (T(u1,2) - T(u0,2));
+// X and Y are 0 for boxes up to a repeat. Rust twin: weft::fabric::WeaveSat::box_mean.
+vec4 sat_box(uint src, ivec2 size, vec2 lo, vec2 hi) {
     vec2 n = vec2(size - ivec2(2, 1));
     vec2 ext = hi - lo;
     vec2 l = lo - floor(lo);
@@ -140,15 +146,80 @@ vec4 weave_sat_box(vec2 lo, vec2 hi) {
     vec2 whole = floor(h / 2.0);
     vec2 q0 = l * n / 2.0;
     vec2 q1 = (h - 2.0 * whole) * n / 2.0;
-    vec4 sum = weave_sat_corner(size, q1) - weave_sat_corner(size, vec2(q1.x, q0.y))
-             - weave_sat_corner(size, vec2(q0.x, q1.y)) + weave_sat_corner(size, q0);
+    vec4 sum = sat_corner(src, size, q1) - sat_corner(src, size, vec2(q1.x, q0.y))
+             - sat_corner(src, size, vec2(q0.x, q1.y)) + sat_corner(src, size, q0);
     if (whole.x > 0.0) {
-        sum += whole.x * (weave_sat_corner(size, vec2(n.x, q1.y)) - weave_sat_corner(size, vec2(n.x, q0.y)));
+        sum += whole.x * (sat_corner(src, size, vec2(n.x, q1.y)) - sat_corner(src, size, vec2(n.x, q0.y)));
     }
     if (whole.y > 0.0) {
-        sum += whole.y * (weave_sat_corner(size, vec2(q1.x, n.y)) - weave_sat_corner(size, vec2(q0.x, n.y)));
+        sum += whole.y * (sat_corner(src, size, vec2(q1.x, n.y)) - sat_corner(src, size, vec2(q0.x, n.y)));
     }
-    return texelFetch(weave_tex, ivec2(size.x - 1, 0), 0) + sum / max(ext.x * ext.y, 1e-30);
+    return sat_texel(src, size, ivec2(size.x - 1, 0)) + sum / max(ext.x * ext.y, 1e-30);
+}
+
+// The weave's mean coverage over the box [lo, hi] of st.
+vec4 weave_sat_box(vec2 lo, vec2 hi) {
+    return sat_box(SAT_WEAVE, textureSize(weave_tex, 0), lo, hi);
+}
+
+// Thread-by-thread colours (FABRIC_FLAG_THREAD_COLOURS; weft::fabric::ThreadColourTable builds
+// the record at f.colours): vec4 0 = (warp colours, weft colours, the colour repeat's cells along
+// u and v), 1 = (texels per cell, the table's width and height, 0), then the warp and the weft
+// colours, then a summed-area table (the weave's layout) over 2 x 2 colour repeats of
+// (s_warp·warp colour + s_weft·weft colour, s_warp + s_weft). thread_box: the mean of
+// (s·colour, s) over the box [lo, hi] of st (weave repeats, reduced into the colour repeat):
+// within one cell from the coverage `cov` of the box and the cell's two thread colours; over two
+// to four cells from each cell's part of the box, its own coverage (weave_cells_coverage) and
+// colours (both exact: the near field); over more, the table's mean over the box (the far field;
+// its texels are 1/texels-per-cell of a cell).
+vec4 weave_cells_coverage(GpuFabric f, vec2 a, vec2 b) {
+    vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+    return (WEAVE_SOURCE & 2u) != 0u ? weave_sat_box(a, b)
+        : weave_box(weave_from_fabric(f), a.x * cells.x, a.y * cells.y, b.x * cells.x, b.y * cells.y);
+}
+
+vec4 thread_mix(uint base, uint nw, uint nf, vec2 cell, vec4 c) {
+    vec3 cw = thread_colours[base + 2u + uint(mod(cell.x, float(nw)))].rgb;
+    vec3 cf = thread_colours[base + 2u + nw + uint(mod(cell.y, float(nf)))].rgb;
+    return vec4(c.z * cw + c.w * cf, c.z + c.w);
+}
+
+vec4 thread_box(GpuFabric f, vec2 lo, vec2 hi, vec4 cov) {
+    uint base = f.colours;
+    vec4 head = thread_colours[base];
+    vec4 dims = thread_colours[base + 1u];
+    uint nw = uint(head.x + 0.5);
+    uint nf = uint(head.y + 0.5);
+    vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+    vec2 c0 = floor(lo * cells);
+    vec2 span = max(ceil(hi * cells) - 1.0 - c0, vec2(0.0));
+    vec4 mixed = vec4(0.0);
+    if (all(equal(span, vec2(0.0)))) {
+        mixed = thread_mix(base, nw, nf, c0, cov);
+    } else if (all(lessThanEqual(span, vec2(1.0)))) {
+        for (uint j = 0u; j <= uint(span.y); ++j) {
+            for (uint i = 0u; i <= uint(span.x); ++i) {
+                vec2 cell = c0 + vec2(float(i), float(j));
+                vec2 a = max(lo, cell / cells);
+                vec2 b = min(hi, (cell + 1.0) / cells);
+                if (all(greaterThan(b, a))) {
+                    mixed += (b.x - a.x) * (b.y - a.y) * thread_mix(base, nw, nf, cell, weave_cells_coverage(f, a, b));
+                }
+            }
+        }
+        mixed /= max((hi.x - lo.x) * (hi.y - lo.y), 1e-30);
+    } else {
+        // The table's box, in colour repeats (head.zw cells each).
+        vec2 scale = cells / head.zw;
+        mixed = sat_box(base + 2u + nw + nf, ivec2(dims.yz + 0.5), lo * scale, hi * scale);
+    }
+    return mixed;
+}
+
+// The thread colour of a footprint from its thread_box means: Σ s·colour / Σ s, `fallback` where
+// no thread shows (the footprint in a gap).
+vec3 thread_colour(vec4 mixed, vec3 fallback) {
+    return mixed.a > 1e-4 ? clamp(mixed.rgb / mixed.a, 0.0, 1.0) : fallback;
 }
 
 // The surface at this fragment. Call it first in main, in uniform control flow: it takes the
@@ -279,6 +350,12 @@ GSurface material_surface() {    GSurface s;
         // The footprint as an axis-aligned box in st, half-extent `ext` (a repeat is 1 unit).
         vec2 ext = 0.5 * (abs(st_dx) + abs(st_dy));
         vec2 repeat_cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+        // Thread-by-thread colours: st reduced into its colour repeat (a whole number of weave
+        // repeats), and what takes fract(st) there; `mixed` the footprint's thread_box means.
+        bool threads = THREAD_COLOURS != 0u && (f.flags & FABRIC_FLAG_THREAD_COLOURS) != 0u;
+        vec2 colour_rep = threads ? thread_colours[f.colours].zw / repeat_cells : vec2(1.0);
+        vec2 colour_shift = st - colour_rep * floor(st / colour_rep) - fract(st);
+        vec4 mixed = vec4(-1.0);
         if (ACCURACY == 3u) {
             // Supersampled: the lighting pass evaluates the analytic weave at N x N points of the
             // footprint, so it gets the footprint itself: st within its repeat, and the extent.
@@ -319,13 +396,21 @@ GSurface material_surface() {    GSurface s;
                 vec2 half_box = max(FOOTPRINT_PIECES == 0u ? ext : weave_piece_half(st_dx, st_dy, k), least);
                 vec2 kf = vec2(k);
                 coverage = vec4(0.0);
+                vec4 pieces_mixed = vec4(0.0);
                 for (uint j = 0u; j < k.y; j++) {
                     for (uint i = 0u; i < k.x; i++) {
                         vec2 p = c + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
-                        coverage += weave_sat_box(p - half_box, p + half_box);
+                        vec4 piece = weave_sat_box(p - half_box, p + half_box);
+                        coverage += piece;
+                        if (threads) {
+                            // Each piece's colour over the piece itself, with its coverage: the
+                            // mean's Σ s equals the coverage's, so the lighting gets Σ s·colour.
+                            pieces_mixed += thread_box(f, p - half_box + colour_shift, p + half_box + colour_shift, piece);
+                        }
                     }
                 }
                 coverage /= kf.x * kf.y;
+                mixed = pieces_mixed / (kf.x * kf.y);
             } else {
                 // The same pieces, each a filtered probe of its own size: the filter's footprint
                 // follows the parallelogram instead of spanning its bounding box (lavapipe has no
@@ -351,6 +436,21 @@ GSurface material_surface() {    GSurface s;
                 coverage /= kf.x * kf.y;
             }
             s.fabric = clamp(coverage, 0.0, 1.0);
+        }
+        if (threads) {
+            if (mixed.a < 0.0) {
+                // Not the summed-area table's pieces: the footprint's bounding box (a point for
+                // nearest) and its coverage, of the exact weave.
+                vec2 sc = fract(st) + colour_shift;
+                vec2 half_ext = ACCURACY == 0u ? vec2(0.0) : ext;
+                vec2 lo = sc - half_ext;
+                vec2 hi = sc + half_ext;
+                vec4 cov = ACCURACY == 0u ? s.fabric
+                    : weave_box(weave_from_fabric(f), lo.x * repeat_cells.x, lo.y * repeat_cells.y,
+                                hi.x * repeat_cells.x, hi.y * repeat_cells.y);
+                mixed = thread_box(f, lo, hi, cov);
+            }
+            s.albedo.rgb *= thread_colour(mixed, vec3(1.0));
         }
     }
     if (SHADING == SHADING_GOURAUD) {

@@ -144,31 +144,33 @@ pub struct Overrides {
     pub coupled_diffuse: Option<bool>,
     /// The texture multiplied over the thread colours (default: the source's choice).
     pub thread_texture: Option<ThreadTexture>,
+    /// Thread-by-thread colour sequences (a draft's `[WARP COLORS]`, `[WEFT COLORS]`).
+    pub warp_colours: Option<Vec<[f32; 3]>>,
+    pub weft_colours: Option<Vec<[f32; 3]>>,
 }
 
 impl Overrides {
-    /// A weaving draft's weave and thread colours (their mean per direction, linear) over these
-    /// overrides, where no colour override is set; returns the warnings to show (a warp or weft
-    /// of several colours is averaged: the woven model carries one colour per direction).
+    /// A weaving draft's weave and thread colours over these overrides, where no colour
+    /// override is set: a warp or weft of several colours becomes its colour sequence, thread by
+    /// thread (and its mean the thread colour of the far-field fallback); of one colour, that
+    /// colour. Returns the warnings to show (none so far).
     pub fn apply_draft(&mut self, d: &super::draft::Draft) -> Vec<String> {
         self.pattern = Some(d.pattern);
         if self.rd.is_none() {
             if self.rd_warp.is_none() {
                 self.rd_warp = d.mean_warp_colour().map(Colour::Rgb);
+                if d.colour_count(true) > 1 {
+                    self.warp_colours = Some(d.warp_colours.clone());
+                }
             }
             if self.rd_weft.is_none() {
                 self.rd_weft = d.mean_weft_colour().map(Colour::Rgb);
+                if d.colour_count(false) > 1 {
+                    self.weft_colours = Some(d.weft_colours.clone());
+                }
             }
         }
-        [("warp", true), ("weft", false)]
-            .into_iter()
-            .filter_map(|(side, warp)| {
-                let n = d.colour_count(warp);
-                (n > 1).then(|| format!(
-                    "the draft's {side} has {n} colours; the woven model draws one colour per thread direction, so they are averaged (linear, weighted by thread count): right from afar, not thread by thread up close"
-                ))
-            })
-            .collect()
+        Vec::new()
     }
 }
 
@@ -625,6 +627,14 @@ pub fn extension_json(p: &FabricParams) -> Value {
         o["coupled_diffuse"] = json!(true);
     }
     o["thread_texture"] = json!(p.thread_texture.name());
+    for (key, list) in [
+        ("warp_colours", &p.warp_colours),
+        ("weft_colours", &p.weft_colours),
+    ] {
+        if !list.is_empty() {
+            o[key] = json!(list.iter().map(|&x| c(x)).collect::<Vec<_>>());
+        }
+    }
     o
 }
 
@@ -632,6 +642,11 @@ pub fn extension_json(p: &FabricParams) -> Value {
 /// one whole repeat (exact, `weave_box` over the repeat). This is
 /// what the fabric's Lambert term averages to where the weave is too small to see.
 pub fn far_field_albedo(p: &FabricParams) -> [f64; 3] {
+    // Thread by thread: the colour table's mean over its repeat (Σ s·colour per unit area).
+    if let Ok(Some(t)) = super::ThreadColourTable::new(p) {
+        let mean = t.table.texels[t.table.width as usize - 1];
+        return [mean[0] as f64, mean[1] as f64, mean[2] as f64];
+    }
     let [ru, rv] = p.repeat_uv();
     let [_, _, s_warp, s_weft] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
     let mut out = [0.0; 3];
@@ -991,6 +1006,23 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
             }
             if let Some(t) = o.thread_texture {
                 params.thread_texture = t;
+            }
+            if let Some(c) = &o.warp_colours {
+                params.warp_colours = c.clone();
+            }
+            if let Some(c) = &o.weft_colours {
+                params.weft_colours = c.clone();
+            }
+            if params.has_thread_colours() {
+                super::ThreadColourTable::check(&params)
+                    .map_err(|e| Error::input(format!("{who}: {e}")))?;
+                notes.push(format!(
+                    "thread by thread: {} warp and {} weft colours (repeat {} x {} cells)",
+                    params.warp_colours.len().max(1),
+                    params.weft_colours.len().max(1),
+                    super::ThreadColourTable::repeat_cells(&params)[0],
+                    super::ThreadColourTable::repeat_cells(&params)[1]
+                ));
             }
             texture_notes(&original, &params, &mut notes);
             let sane = params.sanitized();

@@ -19,8 +19,8 @@ mod texture;
 
 pub use pattern::{WeavePattern, MAX_CELLS};
 pub use texture::{
-    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, WeavePush, WeaveSat,
-    WEAVE_TEXELS_PER_CELL, WEAVE_TEXEL_TOLERANCE,
+    weave_level0_size, weave_level_size, weave_mip_count, weave_texels_cpu, ThreadColourTable,
+    WeavePush, WeaveSat, WEAVE_TEXELS_PER_CELL, WEAVE_TEXEL_TOLERANCE,
 };
 
 use crate::scene::Warning;
@@ -36,6 +36,12 @@ pub const FLAG_COUPLED_DIFFUSE: u32 = 1;
 pub const FLAG_TEXTURE_BASE_COLOR: u32 = 2;
 /// `GpuFabric::flags` bit: the thread colours are multiplied by the material's sheen colour texture.
 pub const FLAG_TEXTURE_SHEEN_COLOR: u32 = 4;
+/// `GpuFabric::flags` bit 3: thread-by-thread colours (`warp_colours`, `weft_colours`); the
+/// G-buffer pass reads them from the thread-colour buffer at `GpuFabric::colours` and writes the
+/// footprint's shadow-weighted thread colour, which the lighting pass takes as both threads' albedo.
+pub const FLAG_THREAD_COLOURS: u32 = 8;
+/// The longest colour sequence of a warp or a weft (a tartan's sett is rarely over 200 threads).
+pub const MAX_THREAD_COLOURS: usize = 256;
 
 /// Which texture of the material, if any, is multiplied over the thread colours (the extension's
 /// `thread_texture`): a print, a dye, a damask over the weave.
@@ -116,6 +122,12 @@ pub struct FabricParams {
     pub coupled_diffuse: bool,
     /// The material's texture multiplied over the thread colours.
     pub thread_texture: ThreadTexture,
+    /// Thread-by-thread colours of the warp (yarn-dyed stripes, checks, tartans): warp thread
+    /// `i` (cell column `i`, counted from u = 0) has `warp_colours[i % len]`, linear RGB in
+    /// [0, 1]; empty: every warp thread has `rd_warp`. At most [`MAX_THREAD_COLOURS`].
+    pub warp_colours: Vec<[f32; 3]>,
+    /// The same for the weft (pick `j`, cell row `j`, counted from v = 0).
+    pub weft_colours: Vec<[f32; 3]>,
 }
 
 impl Default for FabricParams {
@@ -133,6 +145,8 @@ impl Default for FabricParams {
             shadow_width: 0.25,
             coupled_diffuse: false,
             thread_texture: ThreadTexture::BaseColor,
+            warp_colours: Vec::new(),
+            weft_colours: Vec::new(),
         }
     }
 }
@@ -148,7 +162,7 @@ impl Default for FabricParams {
 /// | 48 | `pattern_lo`, `pattern_hi: uint` | bit `8j+i` = cell (i, j) weft-up |
 /// | 56 | `cols`, `rows: uint` | pattern size in cells (1..8) |
 /// | 64 | `gap`, `shadow_dist` | `s_g/s_p` and `shadow_width/2`, in cells |
-/// | 72 | `_pad0`, `_pad1` | 0 |
+/// | 72 | `colours`, `_pad1` | with flag bit 3: where the material's record starts in the thread-colour buffer (vec4s; [`ThreadColourTable`]); 0 |
 ///
 /// The weave texture covers one repeat: sample it at `st = (u, v)·cell_per_uv / (cols, rows)`.
 #[repr(C)]
@@ -168,7 +182,7 @@ pub struct GpuFabric {
     pub rows: u32,
     pub gap: f32,
     pub shadow_dist: f32,
-    pub _pad0: u32,
+    pub colours: u32,
     pub _pad1: u32,
 }
 
@@ -191,6 +205,19 @@ impl GpuFabric {
             .try_into()
             .expect("the size is asserted at compile time")
     }
+}
+
+/// The mean of `colours` (linear), or `fallback` when there are none: what a NaN entry of a
+/// colour sequence becomes.
+fn p_mean(colours: &[[f32; 3]], fallback: [f32; 3]) -> [f32; 3] {
+    let ok: Vec<&[f32; 3]> = colours
+        .iter()
+        .filter(|c| c.iter().all(|x| x.is_finite()))
+        .collect();
+    if ok.is_empty() {
+        return fallback;
+    }
+    std::array::from_fn(|k| ok.iter().map(|c| c[k]).sum::<f32>() / ok.len() as f32)
 }
 
 /// Clamps `x` into `[lo, hi]`; NaN becomes `fallback`.
@@ -239,6 +266,37 @@ impl FabricParams {
             shadow_width: clamp_or(self.shadow_width, 0.0, 1.0, d.shadow_width),
             coupled_diffuse: self.coupled_diffuse,
             thread_texture: self.thread_texture,
+            warp_colours: self
+                .warp_colours
+                .iter()
+                .take(MAX_THREAD_COLOURS)
+                .map(|&c| rgb(c, p_mean(&self.warp_colours, d.rd_warp)))
+                .collect(),
+            weft_colours: self
+                .weft_colours
+                .iter()
+                .take(MAX_THREAD_COLOURS)
+                .map(|&c| rgb(c, p_mean(&self.weft_colours, d.rd_weft)))
+                .collect(),
+        }
+    }
+
+    /// Whether the threads carry colour sequences (either side).
+    pub fn has_thread_colours(&self) -> bool {
+        !self.warp_colours.is_empty() || !self.weft_colours.is_empty()
+    }
+
+    /// The colour of warp thread `i` and of pick `j` (the sequences, else `rd_warp`, `rd_weft`).
+    pub fn thread_colour(&self, warp: bool, index: usize) -> [f32; 3] {
+        let (list, rd) = if warp {
+            (&self.warp_colours, self.rd_warp)
+        } else {
+            (&self.weft_colours, self.rd_weft)
+        };
+        if list.is_empty() {
+            rd
+        } else {
+            list[index % list.len()]
         }
     }
 
@@ -256,7 +314,12 @@ impl FabricParams {
                 FLAG_COUPLED_DIFFUSE
             } else {
                 0
-            } | p.thread_texture.flag(),
+            } | p.thread_texture.flag()
+                | if p.has_thread_colours() {
+                    FLAG_THREAD_COLOURS
+                } else {
+                    0
+                },
             shadow_strength: p.shadow_strength,
             pattern_lo: p.pattern.bits_lo(),
             pattern_hi: p.pattern.bits_hi(),
@@ -264,7 +327,8 @@ impl FabricParams {
             rows: p.pattern.rows() as u32,
             gap: ((p.gap as f64 / p.repeat as f64) as f32).clamp(0.0, 0.5),
             shadow_dist: 0.5 * p.shadow_width,
-            _pad0: 0,
+            // Set by the renderer, which lays out the thread-colour buffer.
+            colours: 0,
             _pad1: 0,
         }
     }
@@ -324,6 +388,8 @@ impl FabricParams {
                 "rd" => rd = Some(ctx.colour(key, v, warnings)?),
                 "rd_warp" => rd_warp = Some(ctx.colour(key, v, warnings)?),
                 "rd_weft" => rd_weft = Some(ctx.colour(key, v, warnings)?),
+                "warp_colours" => p.warp_colours = ctx.colours(key, v, warnings)?,
+                "weft_colours" => p.weft_colours = ctx.colours(key, v, warnings)?,
                 "rs" => p.rs = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
                 "shadow_strength" => p.shadow_strength = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
                 "shadow_width" => p.shadow_width = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
@@ -347,8 +413,9 @@ impl FabricParams {
                 "extensions" | "extras" => {}
                 other => warnings.push(Warning(format!(
                     "material '{material_name}': {EXTENSION_NAME} has unknown field '{other}' (ignored); \
-                     known fields: pattern, repeat, gap, e_along, e_across, rd, rd_warp, rd_weft, rs, \
-                     shadow_strength, shadow_width, coupled_diffuse, thread_texture"
+                     known fields: pattern, repeat, gap, e_along, e_across, rd, rd_warp, rd_weft, \
+                     warp_colours, weft_colours, rs, shadow_strength, shadow_width, coupled_diffuse, \
+                     thread_texture"
                 ))),
             }
         }
@@ -367,6 +434,13 @@ impl FabricParams {
         let base = rd.unwrap_or(d.rd_warp);
         p.rd_warp = rd_warp.unwrap_or(base);
         p.rd_weft = rd_weft.unwrap_or(base);
+        if p.has_thread_colours() {
+            ThreadColourTable::check(&p).map_err(|e| {
+                Error::input(format!(
+                    "material '{material_name}': {EXTENSION_NAME}.warp_colours/weft_colours: {e}"
+                ))
+            })?;
+        }
         Ok(p)
     }
 }
@@ -446,6 +520,31 @@ impl Ctx<'_> {
             c[k] = self.number(&format!("{field}[{k}]"), x, 0.0, 1.0, "", warnings)?;
         }
         Ok(c)
+    }
+
+    /// A colour sequence: an array of 1 to [`MAX_THREAD_COLOURS`] colours, each as `colour`.
+    fn colours(
+        &self,
+        field: &str,
+        v: &serde_json::Value,
+        warnings: &mut Vec<Warning>,
+    ) -> crate::Result<Vec<[f32; 3]>> {
+        let a = v
+            .as_array()
+            .filter(|a| (1..=MAX_THREAD_COLOURS).contains(&a.len()))
+            .ok_or_else(|| {
+                self.err(
+                    field,
+                    format!(
+                        "must be an array of 1 to {MAX_THREAD_COLOURS} colours (each [r, g, b] in [0, 1] or one number), one per thread of the sequence, got {}",
+                        short(v)
+                    ),
+                )
+            })?;
+        a.iter()
+            .enumerate()
+            .map(|(i, c)| self.colour(&format!("{field}[{i}]"), c, warnings))
+            .collect()
     }
 
     fn pattern(&self, v: &serde_json::Value) -> crate::Result<WeavePattern> {

@@ -154,6 +154,8 @@ impl Preset {
             shadow_width: self.shadow_width,
             coupled_diffuse: false,
             thread_texture: crate::fabric::ThreadTexture::BaseColor,
+            warp_colours: Vec::new(),
+            weft_colours: Vec::new(),
         }
     }
 }

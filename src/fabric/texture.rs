@@ -239,6 +239,246 @@ impl WeaveSat {
     }
 }
 
+/// Thread-by-thread colours as the G-buffer pass reads them (`thread_colour` of surface.glsl):
+/// the material's record in the thread-colour buffer, vec4s:
+///
+/// | vec4 | holds |
+/// |---|---|
+/// | 0 | warp colours, weft colours, the colour repeat in cells along u and v |
+/// | 1 | texels per cell, the table's width and height, 0 |
+/// | 2.. | the warp colours, then the weft colours (linear rgb, 0) |
+/// | then | the table, row after row |
+///
+/// The colour repeat is the least common multiple of the weave's repeat and each sequence's
+/// length. The table is a [`WeaveSat`] (same layout, same reader: `sat_box` of surface.glsl, twin
+/// [`WeaveSat::box_mean`] with st in colour repeats) of `(s_warp·c_warp + s_weft·c_weft, s_warp +
+/// s_weft)`, each thread's shadow-weighted area times its colour, built in f64 from the exact
+/// box coverages of its texels (a texel lies in one cell, so in one warp and one weft thread).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThreadColourTable {
+    pub warp: Vec<[f32; 3]>,
+    pub weft: Vec<[f32; 3]>,
+    /// The colour repeat, cells along u and v.
+    pub repeat_cells: [u32; 2],
+    pub texels_per_cell: u32,
+    pub table: WeaveSat,
+}
+
+impl ThreadColourTable {
+    /// The longest colour repeat (cells along either side) weft builds a table for: a table of
+    /// `(2·512 + 2) × (2·512 + 1)` texels (16 MiB) at one texel per cell.
+    pub const MAX_REPEAT_CELLS: u32 = 512;
+    /// Texels per cell, at most: a quarter of a thread's width at the gaps of the presets.
+    pub const MAX_TEXELS_PER_CELL: u32 = 8;
+
+    /// The colour repeat of `params` in cells (along u, along v).
+    pub fn repeat_cells(params: &super::FabricParams) -> [u32; 2] {
+        fn gcd(a: u32, b: u32) -> u32 {
+            if b == 0 {
+                a
+            } else {
+                gcd(b, a % b)
+            }
+        }
+        let lcm = |a: u32, b: u32| a / gcd(a, b) * b;
+        [
+            lcm(
+                params.pattern.cols() as u32,
+                params.warp_colours.len().max(1) as u32,
+            ),
+            lcm(
+                params.pattern.rows() as u32,
+                params.weft_colours.len().max(1) as u32,
+            ),
+        ]
+    }
+
+    /// An error when the colour repeat of `params` is longer than [`Self::MAX_REPEAT_CELLS`].
+    pub fn check(params: &super::FabricParams) -> crate::Result<()> {
+        let p = params;
+        let [wc, hc] = Self::repeat_cells(p);
+        if wc.max(hc) > Self::MAX_REPEAT_CELLS {
+            return Err(crate::Error::input(format!(
+                "the thread colours repeat every {wc} x {hc} cells (the least common multiple of the weave's {} x {} and the sequences' {} warp and {} weft colours), longer than {} cells: make each sequence's length a multiple or a divisor of the weave's repeat, or shorten it",
+                p.pattern.cols(),
+                p.pattern.rows(),
+                p.warp_colours.len(),
+                p.weft_colours.len(),
+                Self::MAX_REPEAT_CELLS
+            )));
+        }
+        Ok(())
+    }
+
+    /// The table of `params` (None without colour sequences); an error when the colour repeat
+    /// is longer than [`Self::MAX_REPEAT_CELLS`].
+    pub fn new(params: &super::FabricParams) -> crate::Result<Option<ThreadColourTable>> {
+        use crate::reference::weave::double;
+        let p = params.sanitized();
+        if !p.has_thread_colours() {
+            return Ok(None);
+        }
+        Self::check(&p)?;
+        let [wc, hc] = Self::repeat_cells(&p);
+        let c = (Self::MAX_REPEAT_CELLS / wc.max(hc)).clamp(1, Self::MAX_TEXELS_PER_CELL);
+        let w = double::Weave::from_push(&p.weave_push(1, 1));
+        let r = WeaveSat::REPEATS;
+        let (nw, nh) = (wc * c, hc * c);
+        let (tw, th) = (r * nw, r * nh);
+        let (width, height) = (tw + 2, th + 1);
+        // Each texel's integral (in colour repeats², a repeat has area 1), then the prefix sums.
+        let area = 1.0 / (nw as f64 * nh as f64);
+        let mut sums = vec![[0f64; 4]; ((tw + 1) * (th + 1)) as usize];
+        let at = |i: u32, j: u32| (j * (tw + 1) + i) as usize;
+        for j in 0..th {
+            let pick = (j / c) as usize;
+            let cf = p.thread_colour(false, pick);
+            for i in 0..tw {
+                let thread = (i / c) as usize;
+                let cw = p.thread_colour(true, thread);
+                let (x0, y0) = (i as f64 / c as f64, j as f64 / c as f64);
+                let b = double::weave_box(&w, x0, y0, x0 + 1.0 / c as f64, y0 + 1.0 / c as f64);
+                let v: [f64; 4] = std::array::from_fn(|k| {
+                    if k < 3 {
+                        (b[2] * cw[k] as f64 + b[3] * cf[k] as f64) * area
+                    } else {
+                        (b[2] + b[3]) * area
+                    }
+                });
+                let (left, down, diag) = (sums[at(i, j + 1)], sums[at(i + 1, j)], sums[at(i, j)]);
+                sums[at(i + 1, j + 1)] =
+                    std::array::from_fn(|k| v[k] + left[k] + down[k] - diag[k]);
+            }
+        }
+        let mean = sums[at(nw, nh)];
+        let mut texels = vec![[0f32; 4]; (width * height) as usize];
+        for j in 1..=th {
+            let y = j as f64 / nh as f64;
+            for i in 1..=tw {
+                let x = i as f64 / nw as f64;
+                let s = sums[at(i, j)];
+                texels[(j * width + i) as usize] =
+                    std::array::from_fn(|k| (s[k] - mean[k] * x * y) as f32);
+            }
+        }
+        texels[tw as usize + 1] = mean.map(|m| m as f32);
+        Ok(Some(ThreadColourTable {
+            warp: (0..p.warp_colours.len().max(1))
+                .map(|i| p.thread_colour(true, i))
+                .collect(),
+            weft: (0..p.weft_colours.len().max(1))
+                .map(|j| p.thread_colour(false, j))
+                .collect(),
+            repeat_cells: [wc, hc],
+            texels_per_cell: c,
+            table: WeaveSat {
+                width,
+                height,
+                texels,
+            },
+        }))
+    }
+
+    /// The record as the buffer holds it (see the type's docs).
+    pub fn record(&self) -> Vec<[f32; 4]> {
+        let mut out =
+            Vec::with_capacity(2 + self.warp.len() + self.weft.len() + self.table.texels.len());
+        out.push([
+            self.warp.len() as f32,
+            self.weft.len() as f32,
+            self.repeat_cells[0] as f32,
+            self.repeat_cells[1] as f32,
+        ]);
+        out.push([
+            self.texels_per_cell as f32,
+            self.table.width as f32,
+            self.table.height as f32,
+            0.0,
+        ]);
+        out.extend(
+            self.warp
+                .iter()
+                .chain(&self.weft)
+                .map(|c| [c[0], c[1], c[2], 0.0]),
+        );
+        out.extend_from_slice(&self.table.texels);
+        out
+    }
+
+    /// The footprint's shadow-weighted thread colour over the box `[lo, hi]` of st (weave
+    /// repeats, reduced into the colour repeat): `thread_colour` of surface.glsl (f32, as
+    /// there), for `cols x rows` weave cells. `cov`: the box's coverage (used within one cell);
+    /// `coverage(a, b)`: the weave's mean coverage over a box of st (`weave_cells_coverage`: the
+    /// weave's table or the analytic weave), used per cell over two to four cells.
+    #[allow(clippy::too_many_arguments)]
+    pub fn colour(
+        &self,
+        cols: u32,
+        rows: u32,
+        lo: [f32; 2],
+        hi: [f32; 2],
+        cov: [f32; 4],
+        coverage: &dyn Fn([f32; 2], [f32; 2]) -> [f32; 4],
+        fallback: [f32; 3],
+    ) -> [f32; 3] {
+        let cells = [cols.max(1) as f32, rows.max(1) as f32];
+        let c0 = [(lo[0] * cells[0]).floor(), (lo[1] * cells[1]).floor()];
+        let span = [
+            ((hi[0] * cells[0]).ceil() - 1.0 - c0[0]).max(0.0),
+            ((hi[1] * cells[1]).ceil() - 1.0 - c0[1]).max(0.0),
+        ];
+        let mix = |cell: [f32; 2], c: [f32; 4]| -> [f32; 4] {
+            let wrap = |x: f32, n: usize| (x - n as f32 * (x / n as f32).floor()) as usize % n;
+            let cw = self.warp[wrap(cell[0], self.warp.len())];
+            let cf = self.weft[wrap(cell[1], self.weft.len())];
+            [
+                c[2] * cw[0] + c[3] * cf[0],
+                c[2] * cw[1] + c[3] * cf[1],
+                c[2] * cw[2] + c[3] * cf[2],
+                c[2] + c[3],
+            ]
+        };
+        let mixed: [f32; 4] = if span == [0.0, 0.0] {
+            mix(c0, cov)
+        } else if span[0] <= 1.0 && span[1] <= 1.0 {
+            let mut m = [0f32; 4];
+            for j in 0..=span[1] as u32 {
+                for i in 0..=span[0] as u32 {
+                    let cell = [c0[0] + i as f32, c0[1] + j as f32];
+                    let a = [lo[0].max(cell[0] / cells[0]), lo[1].max(cell[1] / cells[1])];
+                    let b = [
+                        hi[0].min((cell[0] + 1.0) / cells[0]),
+                        hi[1].min((cell[1] + 1.0) / cells[1]),
+                    ];
+                    if b[0] > a[0] && b[1] > a[1] {
+                        let v = mix(cell, coverage(a, b));
+                        let area = (b[0] - a[0]) * (b[1] - a[1]);
+                        for k in 0..4 {
+                            m[k] += area * v[k];
+                        }
+                    }
+                }
+            }
+            let area = ((hi[0] - lo[0]) * (hi[1] - lo[1])).max(1e-30);
+            m.map(|x| x / area)
+        } else {
+            let scale = [
+                cells[0] / self.repeat_cells[0] as f32,
+                cells[1] / self.repeat_cells[1] as f32,
+            ];
+            self.table.box_mean(
+                [lo[0] * scale[0], lo[1] * scale[1]],
+                [hi[0] * scale[0], hi[1] * scale[1]],
+            )
+        };
+        if mixed[3] > 1e-4 {
+            std::array::from_fn(|k| (mixed[k] / mixed[3]).clamp(0.0, 1.0))
+        } else {
+            fallback
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -76,6 +76,9 @@ macro_rules! fabric_brdf_precision {
                 pub e_across: $t,
                 /// A–S eq. 5 instead of Lambert.
                 pub coupled: bool,
+                /// Thread-by-thread colours (`FLAG_THREAD_COLOURS`): the tint is both threads'
+                /// colour (see `fabric_tinted`).
+                pub threads: bool,
             }
 
             impl FabricMaterial {
@@ -88,6 +91,7 @@ macro_rules! fabric_brdf_precision {
                         e_along: g.e_along as $t,
                         e_across: g.e_across as $t,
                         coupled: g.flags & crate::fabric::FLAG_COUPLED_DIFFUSE != 0,
+                        threads: g.flags & crate::fabric::FLAG_THREAD_COLOURS != 0,
                     }
                 }
             }
@@ -234,9 +238,15 @@ macro_rules! fabric_brdf_precision {
             /// The material with both threads' colours multiplied by `tint` (the thread
             /// texture's filtered value at the pixel, white without one): `fabric_tinted` of
             /// fabric.glsl. The BRDF is linear in the colours, so this multiplies the texture
-            /// over the diffuse term wherever the model uses them.
+            /// over the diffuse term wherever the model uses them. With thread-by-thread colours
+            /// the tint (the footprint's thread colour times the texture) is both threads' colour.
             pub fn fabric_tinted(m: &FabricMaterial, tint: Vec3) -> FabricMaterial {
                 let mut t = *m;
+                if m.threads {
+                    t.rd_warp = tint;
+                    t.rd_weft = tint;
+                    return t;
+                }
                 t.rd_warp = [
                     m.rd_warp[0] * tint[0],
                     m.rd_warp[1] * tint[1],

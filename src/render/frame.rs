@@ -246,6 +246,8 @@ pub struct GpuScene {
     pub(crate) materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
     pub(crate) fabrics: Buffer,
+    /// Thread-by-thread colours (set 0 binding 5 of the G-buffer and transparent passes).
+    pub(crate) thread_colours: Buffer,
     /// One weave texture per distinct weave (RGBA16F; the RGBA8 copies are made by the first
     /// frame that asks for that precision), and per material the weave it uses.
     pub(crate) weaves: Vec<Image>,
@@ -388,6 +390,12 @@ impl Renderer {
                 kind: BindingKind::StorageBuffer,
                 stages: Stages::VERTEX,
             },
+            // The fabrics' thread-by-thread colours.
+            Binding {
+                binding: 5,
+                kind: BindingKind::StorageBuffer,
+                stages: Stages::FRAGMENT,
+            },
         ])?;
         // A material's textures (set 1): its slots in gbuffer.frag's bindings 0-10 (the weave
         // texture at 4); forward.frag adds transmission's, thickness's, the clearcoat's three,
@@ -454,6 +462,7 @@ impl Renderer {
             storage(2, Stages::GRAPHICS),
             storage(3, Stages::GRAPHICS),
             storage(4, Stages::VERTEX),
+            storage(5, Stages::FRAGMENT),
             sampled(10, Stages::FRAGMENT),
             storage(11, Stages::FRAGMENT),
             storage(12, Stages::FRAGMENT),
@@ -779,6 +788,7 @@ impl Renderer {
             (4, options.footprint.pieces()),
             (5, plan.vertex_colors as u32),
             (6, plan.alpha_mask as u32),
+            (7, plan.features.thread_colours as u32),
         ];
         let lighting_key = vec![
             (0, options.accuracy.code()),
@@ -815,6 +825,7 @@ impl Renderer {
             key.push((22, (plan.diffuse_transmission_draws > 0) as u32));
             key.push((23, (plan.iridescence_draws > 0) as u32));
             key.push((24, (plan.dispersion_draws > 0) as u32));
+            key.push((25, plan.features.thread_colours as u32));
             key
         });
         // Two blend modes: opaque forward draws (transmissive, not BLEND) replace and write depth,
@@ -860,7 +871,7 @@ impl Renderer {
             let vertex_layout = gbuffer_vertex_layout();
             self.ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: &format!(
-                    "gbuffer[{}accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}]",
+                    "gbuffer[{}accuracy={}, weave={source}, shading={shading}, light_types={}, footprint={}, vertex_colors={}, alpha_mask={}, thread_colours={}]",
                     match topology {
                         Topology::Triangles => "",
                         Topology::Lines => "lines, ",
@@ -870,7 +881,8 @@ impl Renderer {
                     gbuffer_key[3].1,
                     gbuffer_key[4].1,
                     gbuffer_key[5].1,
-                    gbuffer_key[6].1
+                    gbuffer_key[6].1,
+                    gbuffer_key[7].1
                 ),
                 vertex: &shaders::GBUFFER_VERT,
                 fragment: &shaders::GBUFFER_FRAG,
@@ -1106,7 +1118,7 @@ impl Renderer {
             ctx.create_buffer_with("indices", BufferUsageFlags::INDEX_BUFFER, &indices)?;
         // Fabric records, and one weave texture per distinct weave (materials that differ only in
         // colour or exponents share one).
-        let (fabric_bytes, materials) = material_records(scene);
+        let (fabric_bytes, materials, thread_colours) = material_records(scene)?;
         let mut weave_keys: Vec<[u32; 7]> = Vec::new();
         let mut weave_params: Vec<FabricParams> = Vec::new();
         let mut material_weave = Vec::new();
@@ -1125,6 +1137,11 @@ impl Renderer {
         }
         let fabrics =
             ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+        let thread_colours = ctx.create_buffer_with(
+            "thread colours",
+            BufferUsageFlags::STORAGE_BUFFER,
+            &thread_colours,
+        )?;
         let weaves = weave_params
             .iter()
             .map(|f| self.build_weave(f))
@@ -1159,6 +1176,7 @@ impl Renderer {
             indices,
             materials,
             fabrics,
+            thread_colours,
             weaves,
             weaves8: std::sync::OnceLock::new(),
             weaves_sat: std::sync::OnceLock::new(),
@@ -1297,7 +1315,7 @@ impl Renderer {
     /// textures or weave textures. Only for changes that keep every material's weave (its
     /// `weave_key`) and repeat: anything else needs [`Renderer::upload`] again.
     pub fn update_material_records(&self, scene: &Scene, gpu: &mut GpuScene) -> crate::Result<()> {
-        let (fabric_bytes, materials) = material_records(scene);
+        let (fabric_bytes, materials, thread_colours) = material_records(scene)?;
         if materials.len() as u32 != gpu.material_count {
             return Err(Error::input(
                 "update_material_records: the scene has a different number of materials than was uploaded",
@@ -1306,6 +1324,11 @@ impl Renderer {
         let ctx = &self.ctx;
         gpu.fabrics =
             ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+        gpu.thread_colours = ctx.create_buffer_with(
+            "thread colours",
+            BufferUsageFlags::STORAGE_BUFFER,
+            &thread_colours,
+        )?;
         gpu.materials =
             ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
         Ok(())
@@ -1678,6 +1701,7 @@ impl Renderer {
                             (2, Resource::Storage(&gpu.fabrics)),
                             (3, Resource::Storage(&gpu.lights)),
                             (4, Resource::Storage(colors)),
+                            (5, Resource::Storage(&gpu.thread_colours)),
                         ],
                     )?;
                     timed_pass(
@@ -1809,6 +1833,7 @@ impl Renderer {
                         (2, Resource::Storage(&gpu.fabrics)),
                         (3, Resource::Storage(lights_buffer)),
                         (4, Resource::Storage(colors)),
+                        (5, Resource::Storage(&gpu.thread_colours)),
                         match backdrop {
                             Some(b) => (16, Resource::Sampled(b, &self.env.sampler)),
                             None => (16, Resource::Sampled(&self.white, &self.linear)),
@@ -2186,14 +2211,30 @@ fn vertex_colors(
     colors
 }
 
-fn material_records(scene: &Scene) -> (Vec<u8>, Vec<GpuMaterial>) {
+/// And the thread-colour buffer (`ThreadColours` of gbuffer.frag and forward.frag): each
+/// fabric's [`crate::fabric::ThreadColourTable`] record where it has colour sequences, its fabric
+/// record pointing at it; one zero vec4 when none has.
+#[allow(clippy::type_complexity)]
+fn material_records(scene: &Scene) -> crate::Result<(Vec<u8>, Vec<GpuMaterial>, Vec<[f32; 4]>)> {
     let mut fabric_bytes: Vec<u8> = Vec::new();
     let mut fabric_index = Vec::new();
+    let mut thread_colours: Vec<[f32; 4]> = vec![[0.0; 4]];
     for m in &scene.materials {
-        fabric_index.push(m.fabric.as_ref().map(|f| {
-            fabric_bytes.extend_from_slice(&f.to_gpu().to_bytes());
-            fabric_bytes.len() / 80 - 1
-        }));
+        let index = match &m.fabric {
+            None => None,
+            Some(f) => {
+                let mut g = f.to_gpu();
+                if let Some(t) = crate::fabric::ThreadColourTable::new(f)
+                    .map_err(|e| Error::input(format!("material '{}': {e}", m.name)))?
+                {
+                    g.colours = thread_colours.len() as u32;
+                    thread_colours.extend(t.record());
+                }
+                fabric_bytes.extend_from_slice(&g.to_bytes());
+                Some(fabric_bytes.len() / 80 - 1)
+            }
+        };
+        fabric_index.push(index);
     }
     if fabric_bytes.is_empty() {
         fabric_bytes = vec![0; 80];
@@ -2208,7 +2249,7 @@ fn material_records(scene: &Scene) -> (Vec<u8>, Vec<GpuMaterial>) {
             .map(|(m, f)| GpuMaterial::new(m, *f))
             .collect()
     };
-    (fabric_bytes, materials)
+    Ok((fabric_bytes, materials, thread_colours))
 }
 
 /// Values in [0, 1] as UNORM8 bytes, rounded to nearest (NaN to 0).
@@ -2225,7 +2266,14 @@ pub fn unorm8_round(values: &[f32]) -> Vec<u8> {
 /// The whole number of weave repeats to take off a fabric mesh's UVs, per axis, computed in f64
 /// so that huge coordinates keep the pattern once they are f32 again (model page, hard case 8).
 fn weave_uv_offset(fabric: &FabricParams, mesh: &crate::scene::Mesh) -> [f64; 2] {
-    let repeat = fabric.repeat_uv();
+    // Whole repeats of the weave, or of its thread colours where they repeat more slowly (the
+    // thread index must survive the offset).
+    let mut repeat = fabric.repeat_uv();
+    if fabric.has_thread_colours() {
+        let cells = crate::fabric::ThreadColourTable::repeat_cells(&fabric.sanitized());
+        repeat[0] *= cells[0] as f64 / fabric.pattern.cols() as f64;
+        repeat[1] *= cells[1] as f64 / fabric.pattern.rows() as f64;
+    }
     let mut min = [f64::INFINITY; 2];
     for v in &mesh.vertices {
         for a in 0..2 {

@@ -83,6 +83,9 @@ pub struct FabricFeatures {
     /// Some material's thread colours are multiplied by one of its textures (`thread_texture`
     /// naming a texture the material has).
     pub thread_texture: bool,
+    /// Some material has thread-by-thread colours (stripes, checks, tartans): the G-buffer pass
+    /// reads the thread-colour buffer for it.
+    pub thread_colours: bool,
 }
 
 /// What makes two weave textures identical: pattern, gap and shadow (not colour or exponents).
@@ -272,6 +275,7 @@ impl Plan {
             features.thread_shadowing |= g.shadow_strength > 0.0 && g.shadow_dist > 0.0;
             features.fresnel |= g.rs > 0.0;
             features.coupled_diffuse |= f.coupled_diffuse;
+            features.thread_colours |= f.has_thread_colours();
             features.thread_texture |= match f.thread_texture {
                 crate::fabric::ThreadTexture::BaseColor => m.base_color_texture.is_some(),
                 crate::fabric::ThreadTexture::SheenColor => {
@@ -653,8 +657,8 @@ impl fmt::Display for Plan {
         let ft = &self.features;
         writeln!(
             f,
-            "features    gaps {}, thread shadowing {}, fresnel {}, coupled diffuse {}, far-field mixture {}, thread texture {}",
-            ft.gaps, ft.thread_shadowing, ft.fresnel, ft.coupled_diffuse, ft.far_field_mixture, ft.thread_texture
+            "features    gaps {}, thread shadowing {}, fresnel {}, coupled diffuse {}, far-field mixture {}, thread texture {}, thread colours {}",
+            ft.gaps, ft.thread_shadowing, ft.fresnel, ft.coupled_diffuse, ft.far_field_mixture, ft.thread_texture, ft.thread_colours
         )?;
         writeln!(
             f,

@@ -413,6 +413,8 @@ pub fn cases() -> Vec<Case> {
             weave_precision: WeavePrecision::Rgba16f,
             ..case("closeup-rgba16f", "assets/scenes/closeup.glb", "the close-up through the weave texture's mip chain (RGBA16F, trilinear probes of the footprint's pieces), the default before the summed-area table: the same weave, thread edges a little softer")
         },
+        case("tartan-closeup", "assets/scenes/tartan_closeup.glb", "the close-up woven from tests/data/drafts/tartan-twill.wif (weft fabric --draft, cotton-plain at 2 mm): a 2/2 twill, thread by thread in the draft's sett, 6 green, 2 black, 2 red, 2 black each way; red and black bands cross the green as steps of the twill"),
+        case("tartan-far", "assets/scenes/tartan_far.glb", "the pleated far view woven from the same draft at 6 mm: the sett as a small green check with red lines, threads no longer resolved, the same mean colour"),
         Case {
             accuracy: Accuracy::Supersampled(4),
             cpu: Some(CPU_SUPERSAMPLED),
