@@ -14,6 +14,7 @@
 //! axis at the level of its short one; `gauss KxM` is a deterministic quadrature on a Gaussian
 //! approximation of the lobe (K x M quantile points, `s1`: weighted by the true lobe).
 #![allow(
+    dead_code,
     clippy::needless_range_loop,
     clippy::type_complexity,
     clippy::too_many_arguments
