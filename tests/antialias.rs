@@ -42,13 +42,17 @@ fn error_against(ldr: &[u8], truth: &[f64]) -> (f64, f64) {
     (far as f64 / pixels as f64, sum / pixels as f64)
 }
 
-#[test]
-fn fxaa_and_supersampling_bring_the_sheen_chair_closer_to_the_pixel_truth() {
-    let scene = weft::scene::load(std::path::Path::new(concat!(
+fn sheen_chair() -> weft::scene::Scene {
+    weft::scene::load(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/khronos/SheenChair/glTF/SheenChair.gltf"
     )))
-    .expect("SheenChair loads");
+    .expect("SheenChair loads")
+}
+
+#[test]
+fn fxaa_and_supersampling_bring_the_sheen_chair_closer_to_the_pixel_truth() {
+    let scene = sheen_chair();
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     // As `weft render` shows it: under the studio environment.
     let base = RenderOptions {
@@ -171,11 +175,7 @@ fn fxaa_and_supersampling_bring_the_sheen_chair_closer_to_the_pixel_truth() {
 /// one by one), and its 8-bit image their mean in linear display light; a jitter as well is refused.
 #[test]
 fn supersampling_averages_its_frames() {
-    let scene = weft::scene::load(std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/khronos/SheenChair/glTF/SheenChair.gltf"
-    )))
-    .expect("SheenChair loads");
+    let scene = sheen_chair();
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let base = RenderOptions {
         width: 96,

@@ -12,7 +12,7 @@ use weft::fabric::{FabricParams, WeavePattern};
 use weft::reference::shading::shade;
 use weft::render::gpu::{FrameData, GpuLight};
 use weft::render::{DebugView, RenderOptions, Renderer};
-use weft::scene::{self, Draw, Light, LightKind, Material, Mesh, Scene, Vertex};
+use weft::scene::{self, Light, LightKind, Scene};
 
 /// Shades every covered pixel of the last frame's G-buffer on the CPU and compares with the HDR
 /// output. Returns (pixels compared, fabric pixels, worst error relative to the bound).
@@ -120,38 +120,12 @@ fn lighting_pass_matches_cpu_shading_of_the_gbuffer() {
     }
 }
 
-/// A flat 2 m fabric patch in the XZ plane (normal +Y), u along +X, v along -Z so that the
-/// bitangent n × t = +Y × +X = -Z is +v.
+/// `common::fabric_patch` lit by a point lamp half a metre above its centre.
 fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
-    let mut vertices = Vec::new();
-    for (x, z) in [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-        vertices.push(Vertex {
-            position: [x, 0.0, z],
-            normal: [0.0, 1.0, 0.0],
-            tangent: [1.0, 0.0, 0.0, 1.0],
-            uv: [uv_origin[0] + x, uv_origin[1] - z],
-            uv1: [0.0; 2],
-        });
-    }
-    Scene {
-        source: "test patch".into(),
-        meshes: vec![Mesh {
-            name: "patch".into(),
-            vertices,
-            indices: vec![0, 2, 1, 0, 3, 2],
-            material: 0,
-            colors: Vec::new(),
-            topology: weft::scene::Topology::Triangles,
-        }],
-        draws: vec![Draw::new(0, Mat4::IDENTITY)],
-        materials: vec![Material {
-            name: "cloth".into(),
-            metallic: 0.0,
-            double_sided: true,
-            fabric: Some(fabric),
-            ..Default::default()
-        }],
-        lights: vec![Light {
+    common::fabric_patch(
+        fabric,
+        uv_origin,
+        Light {
             name: "lamp".into(),
             kind: LightKind::Point,
             color: [1.0; 3],
@@ -160,9 +134,8 @@ fn patch_scene(fabric: FabricParams, uv_origin: [f32; 2]) -> Scene {
             position: Vec3::new(0.0, 0.5, 0.0),
             direction: Vec3::NEG_Y,
             shadow: None,
-        }],
-        ..Default::default()
-    }
+        },
+    )
 }
 
 #[test]

@@ -5,11 +5,11 @@
 
 mod common;
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use weft::fabric::{FabricParams, ThreadColourTable, WeavePattern};
 use weft::reference::weave::{double, weave_of};
 use weft::render::{RenderOptions, Renderer};
-use weft::scene::{Draw, Light, LightKind, Material, Mesh, Scene, Vertex};
+use weft::scene::{Light, LightKind, Scene};
 
 const RED: [f32; 3] = [0.8, 0.05, 0.05];
 const GREEN: [f32; 3] = [0.05, 0.6, 0.1];
@@ -203,36 +203,12 @@ fn a_tartan_draft_gives_its_colour_sequences() {
     assert!(warp[8][0] > 0.5 && warp[0][1] > warp[0][0], "{warp:?}");
 }
 
-/// A flat 2 m fabric patch in the XZ plane (normal +Y), u along +X, v along -Z.
+/// `common::fabric_patch` under a lamp straight above.
 fn patch(fabric: FabricParams) -> Scene {
-    let vertices = [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-        .map(|(x, z)| Vertex {
-            position: [x, 0.0, z],
-            normal: [0.0, 1.0, 0.0],
-            tangent: [1.0, 0.0, 0.0, 1.0],
-            uv: [x, -z],
-            uv1: [0.0; 2],
-        })
-        .to_vec();
-    Scene {
-        source: "striped patch".into(),
-        meshes: vec![Mesh {
-            name: "patch".into(),
-            vertices,
-            indices: vec![0, 2, 1, 0, 3, 2],
-            material: 0,
-            colors: Vec::new(),
-            topology: weft::scene::Topology::Triangles,
-        }],
-        draws: vec![Draw::new(0, Mat4::IDENTITY)],
-        materials: vec![Material {
-            name: "plaid".into(),
-            metallic: 0.0,
-            double_sided: true,
-            fabric: Some(fabric),
-            ..Default::default()
-        }],
-        lights: vec![Light {
+    common::fabric_patch(
+        fabric,
+        [0.0, 0.0],
+        Light {
             name: "lamp".into(),
             kind: LightKind::Directional,
             color: [1.0; 3],
@@ -241,9 +217,8 @@ fn patch(fabric: FabricParams) -> Scene {
             position: Vec3::ZERO,
             direction: Vec3::NEG_Y,
             shadow: None,
-        }],
-        ..Default::default()
-    }
+        },
+    )
 }
 
 /// Renders the patch from straight above at `height` (90° field of view, 128 x 128: the image

@@ -190,3 +190,43 @@ impl Rng {
         self.below(one_in) == 0
     }
 }
+
+/// A flat 2 m fabric patch in the XZ plane (normal +Y), u along +X, v along -Z so that the
+/// bitangent n × t = +Y × +X = -Z is +v.
+pub fn fabric_patch(
+    fabric: weft::fabric::FabricParams,
+    uv_origin: [f32; 2],
+    lamp: weft::scene::Light,
+) -> weft::scene::Scene {
+    let mut vertices = Vec::new();
+    for (x, z) in [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+        vertices.push(weft::scene::Vertex {
+            position: [x, 0.0, z],
+            normal: [0.0, 1.0, 0.0],
+            tangent: [1.0, 0.0, 0.0, 1.0],
+            uv: [uv_origin[0] + x, uv_origin[1] - z],
+            uv1: [0.0; 2],
+        });
+    }
+    weft::scene::Scene {
+        source: "test patch".into(),
+        meshes: vec![weft::scene::Mesh {
+            name: "patch".into(),
+            vertices,
+            indices: vec![0, 2, 1, 0, 3, 2],
+            material: 0,
+            colors: Vec::new(),
+            topology: weft::scene::Topology::Triangles,
+        }],
+        draws: vec![weft::scene::Draw::new(0, glam::Mat4::IDENTITY)],
+        materials: vec![weft::scene::Material {
+            name: "cloth".into(),
+            metallic: 0.0,
+            double_sided: true,
+            fabric: Some(fabric),
+            ..Default::default()
+        }],
+        lights: vec![lamp],
+        ..Default::default()
+    }
+}
