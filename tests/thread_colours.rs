@@ -434,10 +434,16 @@ fn blended_striped_fabric_is_drawn_as_the_opaque_one() {
             }
         }
     }
-    println!("blended against opaque: {covered} pixels, worst {:.3} %", 100.0 * worst);
+    println!(
+        "blended against opaque: {covered} pixels, worst {:.3} %",
+        100.0 * worst
+    );
     // The same shading code on the same surface values; the G-buffer's targets round what the
     // forward pass keeps in registers: the 8-bit sRGB albedo (half a step, 1.9 % at the 0.05
     // channels) and lavapipe's decode of it (0.74 %), half-float coverage and normals (< 0.5 %):
     // 3.2 % at most; measured 2.9 %. Bound 5 %; a wrong thread's colour is off by tens of %.
-    assert!(covered > 96 * 96 / 2 && worst < 0.05, "{covered} pixels, worst {worst}");
+    assert!(
+        covered > 96 * 96 / 2 && worst < 0.05,
+        "{covered} pixels, worst {worst}"
+    );
 }
