@@ -451,6 +451,10 @@ struct PlanArgs {
     /// Anti-aliasing, as for render (its default: fxaa; ssN: the plan of each of its N² frames).
     #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
     aa: render::Antialias,
+    /// The woven fabric tried on a material, as for render: MATERIAL=PRESET[@PITCH][:DRAFT.wif];
+    /// repeatable.
+    #[arg(long)]
+    fabric: Vec<String>,
 }
 
 fn main() -> ExitCode {
@@ -1408,7 +1412,7 @@ fn run_shaders(out: &std::path::Path) -> anyhow::Result<()> {
 }
 
 fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
-    let (scene, mut options) = load_scene(&args.scene)?;
+    let (scene, mut options) = load_scene_fabric(&args.scene, &args.fabric)?;
     options.antialias = args.aa;
     let plan = Plan::new(&scene, &options);
     if args.json {

@@ -153,6 +153,27 @@ fn plan_prints_the_default_scene() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("ssN") && err.contains("from 2 to 8"), "{err}");
+    // A draft tried on the cloth: its thread colours are planned.
+    assert_eq!(v["features"]["thread_colours"], false);
+    let out = weft()
+        .args([
+            "plan",
+            "--json",
+            "--fabric",
+            &format!(
+                "red cloth=cotton-plain@8mm:{}/tests/data/drafts/tartan-twill.wif",
+                env!("CARGO_MANIFEST_DIR")
+            ),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let vt: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(vt["features"]["thread_colours"], true);
     assert_eq!(v["environment"]["name"], "built-in studio");
     assert_eq!(v["environment"]["ibl"], "fis:8");
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
