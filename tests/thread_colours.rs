@@ -118,6 +118,16 @@ fn the_colour_table_gives_the_footprint_colour() {
     println!(
         "up to 2 x 2 cells: worst {worst_in_cell:.2e}; larger boxes: worst {worst_ratio:.3} of the border-band bound"
     );
+    // The far field's albedo (`weft fabric`'s fallback colour), summed cell by cell, is the
+    // table's mean.
+    let far = weft::fabric::assets::far_field_albedo(&p);
+    let mean = t.table.texels[t.table.width as usize - 1];
+    for k in 0..3 {
+        assert!(
+            (far[k] - mean[k] as f64).abs() < 1e-6,
+            "{far:?} against {mean:?}"
+        );
+    }
     // Whole colour repeats: the table's mean is the far field's colour.
     let want = exact_colour(&p, 0.0, 0.0, 12.0, 4.0);
     let none = |_: [f32; 2], _: [f32; 2]| [0.0f32; 4];
@@ -194,12 +204,14 @@ fn a_tartan_draft_gives_its_colour_sequences() {
     assert!(warnings.is_empty(), "{warnings:?}");
     let warp = o.warp_colours.expect("the warp is striped");
     let weft = o.weft_colours.expect("the weft is striped");
-    assert_eq!((warp.len(), weft.len()), (24, 24));
-    // The sett: 6 green, 2 black, 2 red, 2 black, twice.
+    // The draft spells the sett out twice; the sequence is the sett once: 6 green, 2 black,
+    // 2 red, 2 black.
+    assert_eq!((warp.len(), weft.len()), (12, 12));
     assert_eq!(warp[0], warp[5]);
     assert_ne!(warp[5], warp[6]);
     assert_eq!(warp[8], warp[9]);
-    assert_eq!(warp[0], warp[12]);
+    assert_eq!(warp[6], warp[10]);
+    assert_eq!(warp, weft);
     assert!(warp[8][0] > 0.5 && warp[0][1] > warp[0][0], "{warp:?}");
 }
 

@@ -152,26 +152,55 @@ pub struct Overrides {
 impl Overrides {
     /// A weaving draft's weave and thread colours over these overrides, where no colour
     /// override is set: a warp or weft of several colours becomes its colour sequence, thread by
-    /// thread (and its mean the thread colour of the far-field fallback); of one colour, that
-    /// colour. Returns the warnings to show (none so far).
+    /// thread, reduced to its shortest period (a draft usually spells out several setts), and its
+    /// mean the thread colour of the far-field fallback; of one colour, that colour. Returns the
+    /// warnings to show: a period longer than [`super::MAX_THREAD_COLOURS`] threads is drawn as
+    /// its mean.
     pub fn apply_draft(&mut self, d: &super::draft::Draft) -> Vec<String> {
         self.pattern = Some(d.pattern);
-        if self.rd.is_none() {
-            if self.rd_warp.is_none() {
-                self.rd_warp = d.mean_warp_colour().map(Colour::Rgb);
-                if d.colour_count(true) > 1 {
-                    self.warp_colours = Some(d.warp_colours.clone());
-                }
+        let mut warnings = Vec::new();
+        if self.rd.is_some() {
+            return warnings;
+        }
+        for (side, warp) in [("warp", true), ("weft", false)] {
+            let (rd, sequence) = if warp {
+                (&mut self.rd_warp, &mut self.warp_colours)
+            } else {
+                (&mut self.rd_weft, &mut self.weft_colours)
+            };
+            if rd.is_some() {
+                continue;
             }
-            if self.rd_weft.is_none() {
-                self.rd_weft = d.mean_weft_colour().map(Colour::Rgb);
-                if d.colour_count(false) > 1 {
-                    self.weft_colours = Some(d.weft_colours.clone());
+            let (colours, mean) = if warp {
+                (&d.warp_colours, d.mean_warp_colour())
+            } else {
+                (&d.weft_colours, d.mean_weft_colour())
+            };
+            *rd = mean.map(Colour::Rgb);
+            if d.colour_count(warp) > 1 {
+                let period = shortest_period(colours);
+                if period.len() <= super::MAX_THREAD_COLOURS {
+                    *sequence = Some(period.to_vec());
+                } else {
+                    warnings.push(format!(
+                        "the draft's {side} repeats its colours every {} threads, more than the {} a colour sequence holds: drawn as their mean (linear, weighted by thread count), right from afar, not thread by thread up close",
+                        period.len(),
+                        super::MAX_THREAD_COLOURS
+                    ));
                 }
             }
         }
-        Vec::new()
+        warnings
     }
+}
+
+/// The shortest prefix of `colours` that repeats to all of it (`colours` itself when none does).
+fn shortest_period(colours: &[[f32; 3]]) -> &[[f32; 3]] {
+    let n = colours.len();
+    (1..n)
+        .filter(|p| n % p == 0)
+        .find(|&p| (p..n).all(|i| colours[i] == colours[i % p]))
+        .map_or(colours, |p| &colours[..p])
 }
 
 /// Materials and what to give them.
@@ -642,10 +671,23 @@ pub fn extension_json(p: &FabricParams) -> Value {
 /// one whole repeat (exact, `weave_box` over the repeat). This is
 /// what the fabric's Lambert term averages to where the weave is too small to see.
 pub fn far_field_albedo(p: &FabricParams) -> [f64; 3] {
-    // Thread by thread: the colour table's mean over its repeat (Σ s·colour per unit area).
-    if let Ok(Some(t)) = super::ThreadColourTable::new(p) {
-        let mean = t.table.texels[t.table.width as usize - 1];
-        return [mean[0] as f64, mean[1] as f64, mean[2] as f64];
+    // Thread by thread: Σ s·colour over the colour repeat, per unit area, cell by cell.
+    if p.has_thread_colours() {
+        let w = crate::reference::weave::weave_of(p);
+        let [wc, hc] = super::ThreadColourTable::repeat_cells(p);
+        let mut out = [0.0; 3];
+        for j in 0..hc as usize {
+            let cf = p.thread_colour(false, j);
+            for i in 0..wc as usize {
+                let cw = p.thread_colour(true, i);
+                let (x, y) = (i as f64, j as f64);
+                let c = crate::reference::weave::double::weave_box(&w, x, y, x + 1.0, y + 1.0);
+                for k in 0..3 {
+                    out[k] += (c[2] * cw[k] as f64 + c[3] * cf[k] as f64) / (wc * hc) as f64;
+                }
+            }
+        }
+        return out;
     }
     let [ru, rv] = p.repeat_uv();
     let [_, _, s_warp, s_weft] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
@@ -1387,6 +1429,16 @@ mod tests {
             e.contains("material 0 'x'") && e.contains("sheenRoughnessFactor"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_colour_sequence_reduces_to_its_shortest_period() {
+        let (a, b, c) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+        assert_eq!(shortest_period(&[a, b, a, b, a, b]), &[a, b]);
+        assert_eq!(shortest_period(&[a, a, b, a, a, b]), &[a, a, b]);
+        assert_eq!(shortest_period(&[a, b, c, a, b]), &[a, b, c, a, b]);
+        assert_eq!(shortest_period(&[a, b, a, c]), &[a, b, a, c]);
+        assert_eq!(shortest_period(&[c]), &[c]);
     }
 
     #[test]
