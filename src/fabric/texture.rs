@@ -293,9 +293,18 @@ impl ThreadColourTable {
         ]
     }
 
-    /// An error when the colour repeat of `params` is longer than [`Self::MAX_REPEAT_CELLS`].
+    /// An error when a sequence of `params` is longer than [`super::MAX_THREAD_COLOURS`] or its
+    /// colour repeat longer than [`Self::MAX_REPEAT_CELLS`] (instead of [`super::FabricParams::sanitized`]
+    /// cutting the sequence short).
     pub fn check(params: &super::FabricParams) -> crate::Result<()> {
         let p = params;
+        let longest = p.warp_colours.len().max(p.weft_colours.len());
+        if longest > super::MAX_THREAD_COLOURS {
+            return Err(crate::Error::input(format!(
+                "a colour sequence has {longest} colours, more than {}: give one period of it",
+                super::MAX_THREAD_COLOURS
+            )));
+        }
         let [wc, hc] = Self::repeat_cells(p);
         if wc.max(hc) > Self::MAX_REPEAT_CELLS {
             return Err(crate::Error::input(format!(
