@@ -106,7 +106,7 @@ fn main() {
         let ident = name.replace('.', "_").to_uppercase();
         writeln!(
             table,
-            "pub const {ident}: Shader = Shader {{ name: \"{name}\", stage: Stage::{stage}, spirv: include_bytes!({copy:?}) }};",
+            "pub const {ident}: Shader = Shader {{ name: \"{name}\", stage: Stage::{stage}, spirv: include_bytes!({copy:?}), source: include_str!({src:?}) }};",
             stage = match ext(src) { "vert" => "Vertex", "frag" => "Fragment", _ => "Compute" },
         )
         .unwrap();

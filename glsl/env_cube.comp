@@ -9,8 +9,8 @@
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
-layout(set = 0, binding = 0, rgba32f) uniform writeonly image2DArray cube_level;
-layout(set = 0, binding = 1) uniform sampler2D equirect;
+layout(set = 0, binding = 0, rgba32f) uniform writeonly image2DArray cube_level;  // level 0 of the radiance cube, as a storage image2DArray (layer = face)
+layout(set = 0, binding = 1) uniform sampler2D equirect;  // the equirectangular environment map (RGBA16F), linear, REPEAT
 
 layout(push_constant) uniform CubePush {
     uint size;        // this level's face size in texels

@@ -12,8 +12,8 @@
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
-layout(set = 0, binding = 0, rgba32f) uniform writeonly image2DArray cube_level;
-layout(set = 0, binding = 1) uniform samplerCube radiance;
+layout(set = 0, binding = 0, rgba32f) uniform writeonly image2DArray cube_level;  // the specular cube's level being written, as a storage image2DArray
+layout(set = 0, binding = 1) uniform samplerCube radiance;  // the radiance cube with its mips, linear, clamp
 
 layout(push_constant) uniform CubePush {
     uint size;          // this level's face size in texels

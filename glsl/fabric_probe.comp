@@ -38,12 +38,12 @@ struct ProbeOutput {
 
 // set 0, binding 0: the inputs.
 layout(std430, set = 0, binding = 0) readonly buffer ProbeInputs {
-    ProbeInput inputs[];
+    ProbeInput inputs[];  // the inputs: `ProbeInput[count]`
 };
 
 // set 0, binding 1: the outputs, one per input.
 layout(std430, set = 0, binding = 1) writeonly buffer ProbeOutputs {
-    ProbeOutput outputs[];
+    ProbeOutput outputs[];  // the outputs: `ProbeOutput[count]`, written by the shader
 };
 
 layout(push_constant) uniform ProbePush {

@@ -53,23 +53,24 @@ layout(constant_id = 24) const uint DISPERSION = 0u;
 // 1: some fabric has thread-by-thread colours (the ThreadColours buffer is read).
 layout(constant_id = 25) const uint THREAD_COLOURS = 0u;
 
-// Set 0: gbuffer.vert's bindings 0-4, then lighting.frag's shadow and environment bindings.
-layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
-layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
+// Set 0: gbuffer.vert's bindings 0-5, then lighting.frag's shadow and environment bindings (one
+// number per resource in every shader).
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`, include/frame.glsl), as gbuffer.frag's binding 1
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };  // fabric records (`GpuFabric[]`, include/fabric.glsl), as gbuffer.frag's binding 2
+layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };  // lights (`Light[]`, include/frame.glsl), as gbuffer.vert's binding 3
 // Thread-by-thread colours of the fabrics that have them (weft::fabric::ThreadColourTable; one
 // vec4 of zeros when none has).
-layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };
-layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;
-layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };
-layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };
-layout(set = 0, binding = 13) uniform samplerCube env_radiance;
-layout(set = 0, binding = 14) uniform samplerCube env_specular;
-layout(set = 0, binding = 15) uniform sampler2D env_dfg;
+layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };  // thread-by-thread colours, as gbuffer.frag's binding 5
+layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;  // the shadow atlas, as lighting.frag's binding 10
+layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };  // shadow records, as lighting.frag's binding 11
+layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };  // per-tile light lists, as lighting.frag's binding 12
+layout(set = 0, binding = 13) uniform samplerCube env_radiance;  // the environment's radiance cube, as lighting.frag's binding 13
+layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube, as lighting.frag's binding 14
+layout(set = 0, binding = 15) uniform sampler2D env_dfg;  // the split-sum DFG table, as lighting.frag's binding 15
 // The backdrop: the lit opaque image (the lighting pass's HDR target before this pass), with box-
 // filtered mips; any image when TRANSMISSION = 0.
-layout(set = 0, binding = 16) uniform sampler2D backdrop;
+layout(set = 0, binding = 16) uniform sampler2D backdrop;  // the backdrop: the lighting pass's HDR image copied before the transparent pass draws, with box-filtered mips (linear, clamp); any image when TRANSMISSION = 0
 
 #include "surface.glsl"
 

@@ -7,7 +7,7 @@
 // less than its sub-pixel aliasing (a lone bright or dark pixel is blended with its neighbours).
 // The image is an sRGB target: sampling returns linear colour, luma is taken on its square root
 // (close to the display encoding), the blend itself is linear.
-layout(set = 0, binding = 0) uniform sampler2D image;  // linear filtering, clamped
+layout(set = 0, binding = 0) uniform sampler2D image;  // the tone-mapped image (an `R8G8B8A8_SRGB` target, linear filtering, clamp to edge)
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;

@@ -28,11 +28,11 @@ layout(constant_id = 6) const uint ALPHA_MASK = 0u;
 layout(constant_id = 7) const uint THREAD_COLOURS = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
-layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`, include/frame.glsl)
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };  // fabric records (`GpuFabric[]`, include/fabric.glsl)
 // Thread-by-thread colours of the fabrics that have them (weft::fabric::ThreadColourTable; one
 // vec4 of zeros when none has).
-layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };
+layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };  // thread-by-thread colours (`vec4 thread_colours[]`; weft::fabric::ThreadColourTable records, one per striped fabric, at `GpuFabric.colours`; read only when THREAD_COLOURS = 1)
 
 #include "surface.glsl"
 

@@ -17,13 +17,13 @@ const uint RANGE_CULLING = 1u;
 #include "fabric.glsl"
 #include "lights.glsl"
 
-layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
-layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`; read only when SHADING = 1, Gouraud)
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };  // fabric records (`GpuFabric[]`; read only when SHADING = 1, Gouraud)
+layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };  // lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)
 // COLOR_0, linear RGBA, one per vertex of the vertex buffer (indexed like it, by gl_VertexIndex,
 // which includes the draw's vertex offset); white where a mesh has none.
-layout(set = 0, binding = 4, std430) readonly buffer Colors { vec4 colors[]; };
+layout(set = 0, binding = 4, std430) readonly buffer Colors { vec4 colors[]; };  // vertex colours (`vec4[]`, linear RGBA, glTF COLOR_0): one per vertex of the vertex buffer, indexed by `gl_VertexIndex` (vertex offset included), white for vertices without; read only when VERTEX_COLORS = 1
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;

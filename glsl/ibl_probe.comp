@@ -39,12 +39,12 @@ struct IblProbeOutput {
 
 // set 0, binding 0: the inputs.
 layout(std430, set = 0, binding = 0) readonly buffer IblProbeInputs {
-    IblProbeInput inputs[];
+    IblProbeInput inputs[];  // the inputs: `IblProbeInput[count]`
 };
 
 // set 0, binding 1: the outputs, one per input.
 layout(std430, set = 0, binding = 1) writeonly buffer IblProbeOutputs {
-    IblProbeOutput outputs[];
+    IblProbeOutput outputs[];  // the outputs: `IblProbeOutput[count]`, written by the shader
 };
 
 layout(push_constant) uniform IblProbePush {

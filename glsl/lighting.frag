@@ -36,29 +36,32 @@ layout(constant_id = 8) const uint IBL_SAMPLES = 16u;
 layout(constant_id = 9) const uint UNLIT = 0u;
 
 
-layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
-layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
-layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 3) uniform sampler2D gb_albedo;
-layout(set = 0, binding = 4) uniform usampler2D gb_frame;
-layout(set = 0, binding = 5) uniform sampler2D gb_surface;
-layout(set = 0, binding = 6) uniform sampler2D gb_fabric;
-layout(set = 0, binding = 7) uniform sampler2D gb_emissive;
-layout(set = 0, binding = 8) uniform sampler2D gb_depth;
-layout(set = 0, binding = 9, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };
+// Set 0 numbers every resource as gbuffer.vert, gbuffer.frag and forward.frag do (one number per
+// resource in every shader): 0-5 the scene's buffers, 10-16 shadows and environment, 20-26 the
+// G-buffer this pass reads.
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`)
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };  // fabric records (`GpuFabric[]`)
+layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };  // lights (`Light[]`, include/frame.glsl), with each shadow caster's map index in `spot.z`
 // The shadow atlas (D32, one square tile per shadow-casting light) and its tiles.
-layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;
-layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };
+layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;  // the shadow atlas (D32) with a comparison sampler (GREATER_OR_EQUAL, linear, clamp); any depth image when SHADOWS = 0
+layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };  // shadow records (`Shadow[]`, include/frame.glsl), indexed by `Light.spot.z - 1`
 // Per 16 x 16-pixel tile (row-major): (offset, count) of its light list, then the lists' light
 // indices (src/render/tiles.rs): the lights whose range can reach the tile.
-layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };
+layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };  // per-tile light lists (uint[]): for each 16 x 16-pixel tile, row-major over `frame.tile_columns` tiles per row, (offset, count) of its list, then the lists of light indices; one tile listing every light works
 // The environment (env space; 1 x 1 black cubes when there is none): radiance with box-filtered
 // mips, the GGX-prefiltered specular levels of the split sum, and the DFG table (n·v, roughness).
-layout(set = 0, binding = 13) uniform samplerCube env_radiance;
-layout(set = 0, binding = 14) uniform samplerCube env_specular;
-layout(set = 0, binding = 15) uniform sampler2D env_dfg;
-// The dielectric specular layer (KHR_materials_specular): rgb F0, a: its weight.
-layout(set = 0, binding = 16) uniform sampler2D gb_specular;
+layout(set = 0, binding = 13) uniform samplerCube env_radiance;  // the environment's radiance cube (RGBA16F, env space, box-filtered mips: env_cube.comp); any cube when IBL = 0
+layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube (level i: roughness i/(levels-1); env_prefilter.comp); any cube when IBL = 0
+layout(set = 0, binding = 15) uniform sampler2D env_dfg;  // the split-sum DFG table (x: n·v, y: roughness; rg = A, B, b = the sheen albedo E; weft::env::dfg_table), linear, clamp
+// The G-buffer (gbuffer.frag's outputs at the same locations, fetched per pixel).
+layout(set = 0, binding = 20) uniform sampler2D gb_albedo;  // G-buffer albedo (RGBA8 sRGB): base colour, a: metallic
+layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl
+layout(set = 0, binding = 22) uniform sampler2D gb_surface;  // G-buffer surface (RGBA16F): roughness, material index, tangent sign, 1 if it receives shadows
+layout(set = 0, binding = 23) uniform sampler2D gb_fabric;  // G-buffer fabric coverage (RGBA16F): c_warp, c_weft and each shadow-weighted (s_warp, s_weft)
+layout(set = 0, binding = 24) uniform sampler2D gb_emissive;  // G-buffer emissive (RGBA16F): emitted radiance, a: ambient occlusion
+layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
+layout(set = 0, binding = 26) uniform sampler2D gb_specular;  // G-buffer specular (KHR_materials_specular: rgb F0, a weight)
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;

@@ -42,11 +42,11 @@ struct PbrProbeOutput {
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer PbrProbeInputs {
-    PbrProbeInput inputs[];
+    PbrProbeInput inputs[];  // the inputs: `PbrProbeInput[count]`
 };
 
 layout(std430, set = 0, binding = 1) writeonly buffer PbrProbeOutputs {
-    PbrProbeOutput outputs[];
+    PbrProbeOutput outputs[];  // the outputs: `PbrProbeOutput[count]`, written by the shader
 };
 
 layout(push_constant) uniform PbrProbePush {

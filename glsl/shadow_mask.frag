@@ -5,9 +5,10 @@
 // by the fixed function elsewhere.
 #include "frame.glsl"
 
-layout(set = 0, binding = 0, std430) readonly buffer Materials { Material materials[]; };
+// Material records, gbuffer.frag's binding 1.
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`, include/frame.glsl): the base colour factor, its texture's UV map and the MASK cutoff
 // The material's base colour texture (white when it has none).
-layout(set = 1, binding = 0) uniform sampler2D base_color_tex;
+layout(set = 1, binding = 0) uniform sampler2D base_color_tex;  // the caster material's base colour texture (sRGB; white when none): its alpha
 
 layout(push_constant, std430) uniform ShadowMaskDraw {
     mat4 clip_from_object;

@@ -6,8 +6,8 @@
 // 1: the scene has vertex colours (their alpha is part of the base colour's); 0: none is read.
 layout(constant_id = 0) const uint VERTEX_COLORS = 0u;
 
-// COLOR_0 per vertex, as gbuffer.vert's binding 4 (indexed by gl_VertexIndex).
-layout(set = 0, binding = 1, std430) readonly buffer Colors { vec4 colors[]; };
+// COLOR_0 per vertex, gbuffer.vert's binding 4 (indexed by gl_VertexIndex).
+layout(set = 0, binding = 4, std430) readonly buffer Colors { vec4 colors[]; };  // vertex colours (`vec4[]`, gbuffer.vert's set 0 binding 4; read only when VERTEX_COLORS = 1)
 
 layout(push_constant, std430) uniform ShadowMaskDraw {
     mat4 clip_from_object;  // the light's projection x view x the draw's world matrix

@@ -20,13 +20,13 @@ struct VertexSkin {
     vec4 weights;   // normalised at load
 };
 
-layout(set = 0, binding = 0, std430) buffer Vertices { float vertices[]; };
-layout(set = 0, binding = 1, std430) readonly buffer Skins { VertexSkin skins[]; };
+layout(set = 0, binding = 0, std430) buffer Vertices { float vertices[]; };  // the vertex buffer (16 floats per vertex): rest vertices read at `src`, the posed copy written at `dst`
+layout(set = 0, binding = 1, std430) readonly buffer Skins { VertexSkin skins[]; };  // per vertex of the mesh: `uvec4 joints` (indices into this skin's joints) and `vec4 weights` (normalised)
 // Per mesh, target-major: (target t, vertex v) at morph + 3 (t count + v): position, normal and
 // tangent deltas (w unused).
-layout(set = 0, binding = 2, std430) readonly buffer Morphs { vec4 morphs[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Joints { mat4 joints[]; };
-layout(set = 0, binding = 4, std430) readonly buffer Weights { float weights[]; };
+layout(set = 0, binding = 2, std430) readonly buffer Morphs { vec4 morphs[]; };  // morph deltas, target-major: (target t, vertex v) at `morph + 3 (t count + v)`: position, normal, tangent (w unused)
+layout(set = 0, binding = 3, std430) readonly buffer Joints { mat4 joints[]; };  // joint matrices (`mat4`, world from bind pose), the skin's from `joint`
+layout(set = 0, binding = 4, std430) readonly buffer Weights { float weights[]; };  // morph weights (`float`), the draw's from `weight`
 
 // Rust twin: weft::render::deform::SkinPush (48 bytes).
 layout(push_constant, std430) uniform SkinPush {

@@ -2,7 +2,7 @@
 // Exposure and tone mapping of the HDR target (--tonemap: Khronos PBR Neutral by default, three.js'
 // ACES fit, AgX, or none); the sRGB encoding is done by the RGBA8_SRGB output target. Debug views
 // pass through unmapped. Rust twins: weft::reference::shading::{pbr_neutral, aces_three, agx}.
-layout(set = 0, binding = 0) uniform sampler2D hdr;
+layout(set = 0, binding = 0) uniform sampler2D hdr;  // the HDR image from lighting.frag
 
 layout(push_constant, std430) uniform Tonemap {
     float exposure;   // linear scale, 2^EV

@@ -14,7 +14,7 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 // set 0, binding 0: the mip level being written (one-level view of an RGBA16F image).
-layout(set = 0, binding = 0, rgba16f) uniform writeonly image2D weave_level;
+layout(set = 0, binding = 0, rgba16f) uniform writeonly image2D weave_level;  // the mip level being written: a one-level view of the RGBA16F weave texture
 
 // Rust twin: weft::fabric::WeavePush (36 bytes).
 layout(push_constant) uniform WeavePush {

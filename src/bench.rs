@@ -19,6 +19,7 @@
 pub mod ibl_bench;
 pub mod plan_bench;
 pub mod plot;
+pub mod submission;
 pub mod temporal;
 
 use std::path::{Path, PathBuf};
@@ -542,7 +543,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
                 camera_override: Some(view.camera(vscene)?),
                 accuracy,
                 weave_precision: precision,
-                ..Default::default()
+                ..crate::bench::timed_options()
             })
         };
         let n = config.truth_samples;
@@ -613,7 +614,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
                 camera_override: Some(view.camera(&scene)?),
                 accuracy,
                 weave_precision: precision,
-                ..Default::default()
+                ..crate::bench::timed_options()
             })
         };
     mark_pareto_front(&mut accuracy);
@@ -626,7 +627,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
         let options = RenderOptions {
             width: w,
             height: h,
-            ..Default::default()
+            ..crate::bench::timed_options()
         };
         let frames = if w as u64 * h as u64 > 2_000_000 {
             config.large_frames
@@ -657,7 +658,7 @@ pub fn run(ctx: Context, config: &BenchConfig) -> crate::Result<BenchReport> {
     let options = RenderOptions {
         width: lw,
         height: lh,
-        ..Default::default()
+        ..crate::bench::timed_options()
     };
     let jobs: Vec<_> = lit
         .iter()
@@ -795,7 +796,7 @@ pub fn footprint_bench(
             width,
             height,
             camera_override: Some(view.camera(&scene)?),
-            ..Default::default()
+            ..crate::bench::timed_options()
         };
         let truth = pixel_truth(&mut renderer, &scene, &gpu, &base, truth_samples, || {})?;
         let mask = truth.fabric_everywhere();
@@ -1081,13 +1082,23 @@ fn mark_pareto_front(rows: &mut [AccuracyRow]) {
     }
 }
 
+/// The options every bench measurement starts from: the defaults, with each pass submitted alone
+/// between two timestamps (`Submission::PerPass`), since the tables report passes and lavapipe's
+/// timestamps between render passes in one submission read short.
+pub(crate) fn timed_options() -> RenderOptions {
+    RenderOptions {
+        submission: crate::render::Submission::PerPass,
+        ..Default::default()
+    }
+}
+
 /// The GPU time of a pass (its wall time where the device has no timestamps), 0 if it did not run.
 pub(crate) fn pass_ms(frame: &Frame, name: &str) -> f64 {
     frame
         .timings
         .iter()
         .find(|t| t.name == name)
-        .map(|t| t.gpu_ms.unwrap_or(t.wall_ms))
+        .map(|t| t.gpu_ms.or(t.wall_ms).unwrap_or(0.0))
         .unwrap_or(0.0)
 }
 

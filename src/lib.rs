@@ -1,6 +1,7 @@
 //! weft: a deferred Vulkan renderer for woven fabric.
 //!
-//! Layers, bottom up: `vk` (every `unsafe` Vulkan call), `scene` (glTF into plain data),
+//! Layers, bottom up: `reflect` (a SPIR-V reader), `vk` (every `unsafe` Vulkan call; its set
+//! layouts are reflected from the shaders), `scene` (glTF into plain data),
 //! `fabric` (the cloth material's parameters and weave patterns), `reference` (the CPU twin of
 //! every shader function), `render` (the plan and the passes of a frame).
 //!
@@ -15,6 +16,7 @@ pub mod fabric;
 pub mod fidelity;
 pub mod package;
 pub mod reference;
+pub mod reflect;
 pub mod render;
 pub mod scene;
 pub mod sheet;

@@ -175,10 +175,15 @@ struct RenderArgs {
     /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name. Also WEFT_DEVICE.
     #[arg(long)]
     device: Option<String>,
-    /// Print the GPU and wall time of each pass.
+    /// Print the GPU and wall time of each pass (each pass then goes to the queue on its own, for
+    /// honest per-pass times: see --submit).
     #[arg(long)]
     timings: bool,
-    /// Print what the frame ran: passes, draws, pipelines.
+    /// How a frame reaches the queue: frame (one submission, timestamps between the passes; the
+    /// default without --timings) or pass (one submission per pass; the default with --timings).
+    #[arg(long, value_parser = parse_submission)]
+    submit: Option<render::Submission>,
+    /// Print what the frame ran: passes, draws, pipelines, queue submissions.
     #[arg(long)]
     stats: bool,
     /// Render this many frames of the scene in one process (uploaded once); --timings then
@@ -393,6 +398,11 @@ struct BenchArgs {
     /// ratio.
     #[arg(long)]
     startup: bool,
+    /// Instead: the default scene's frame (--size, default 1920x1080) as one queue submission, the
+    /// normal path, against one submission per pass (what --timings and the other benches use),
+    /// frames interleaved in one process (--frames, default 5).
+    #[arg(long)]
+    submission: bool,
     /// Instead: temporal stability: the camera turning slowly at the mid and far views, the
     /// consecutive-frame change on fabric of every level against the supersampled ground truth's
     /// (ratio = how much more it flickers). --size (default 320x180), --frames (default 9).
@@ -777,6 +787,11 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     options.tonemap = args.tonemap;
     options.antialias = args.aa;
     options.read_hdr = args.exr.is_some();
+    options.submission = args.submit.unwrap_or(if args.timings {
+        render::Submission::PerPass
+    } else {
+        render::Submission::Frame
+    });
     options.validate()?;
     let info = renderer.context().info().clone();
     eprintln!(
@@ -799,7 +814,9 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         history.remove(0);
         render_ms.remove(0);
         for (i, t) in frame.timings.iter_mut().enumerate() {
-            t.wall_ms = median(history.iter().map(|h| h[i].wall_ms).collect());
+            t.wall_ms = t
+                .wall_ms
+                .map(|_| median(history.iter().filter_map(|h| h[i].wall_ms).collect()));
             t.gpu_ms = t
                 .gpu_ms
                 .map(|_| median(history.iter().filter_map(|h| h[i].gpu_ms).collect()));
@@ -841,6 +858,14 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
                 options.antialias.name()
             );
         }
+        match options.submission {
+            render::Submission::PerPass => {
+                println!("one queue submission per pass, each timed alone (--submit frame: one per frame)")
+            }
+            render::Submission::Frame => println!(
+                "one queue submission per frame; a pass's gpu ms is between the timestamps around it, where passes may overlap (--submit pass times each alone)"
+            ),
+        }
         println!("{:<12} {:>10} {:>10}", "pass", "gpu ms", "wall ms");
         println!("{:<12} {:>10} {:>10.2}", "load", "-", load_ms);
         println!(
@@ -852,7 +877,11 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
                 .gpu_ms
                 .map(|g| format!("{g:.2}"))
                 .unwrap_or_else(|| "-".into());
-            println!("{:<12} {:>10} {:>10.2}", t.name, gpu, t.wall_ms);
+            let wall = t
+                .wall_ms
+                .map(|w| format!("{w:.2}"))
+                .unwrap_or_else(|| "-".into());
+            println!("{:<12} {:>10} {:>10}", t.name, gpu, wall);
         }
         println!("{:<12} {:>10} {:>10.2}", "frame", "-", render_ms);
     }
@@ -863,6 +892,11 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             frame.stats.draws, frame.stats.triangles
         );
         println!("pipelines  {}", frame.stats.pipelines.join(", "));
+        println!(
+            "submits    {} queue submission(s) ({})",
+            frame.stats.submissions,
+            options.submission.name()
+        );
         println!(
             "weave      {} texture(s), {} dispatch(es) at upload",
             frame.stats.weave_textures, frame.stats.weave_dispatches
@@ -1151,7 +1185,7 @@ fn run_startup_bench(args: &BenchArgs) -> anyhow::Result<()> {
         whole.push(run(&[])?.0);
     }
     // The warm frame: `--frames 6 --timings` prints the median of the 5 frames after the first.
-    let (_, text) = run(&["--frames", "6", "--timings"])?;
+    let (_, text) = run(&["--frames", "6", "--timings", "--submit", "frame"])?;
     let warm = text
         .lines()
         .find_map(|l| {
@@ -1167,6 +1201,35 @@ fn run_startup_bench(args: &BenchArgs) -> anyhow::Result<()> {
     println!("{:<32} {:>10.1}", "whole process (median)", whole);
     println!("{:<32} {:>10.1}", "warm frame (median of 5)", warm);
     println!("{:<32} {:>10.2}", "ratio", whole / warm);
+    Ok(())
+}
+
+/// `weft bench --submission`: the default render's frame submitted whole against pass by pass.
+fn run_submission_bench(args: &BenchArgs) -> anyhow::Result<()> {
+    /// The scene and options `weft render` starts from (the default scene, the studio).
+    #[derive(Parser)]
+    struct Defaults {
+        #[command(flatten)]
+        scene: SceneArgs,
+    }
+    let size = if args.size == "960x540" {
+        "1920x1080".to_string()
+    } else {
+        args.size.clone()
+    };
+    let frames = args.frames.unwrap_or(5).max(1);
+    let defaults = Defaults::try_parse_from(["weft", "--size", size.as_str()])?;
+    let (scene, mut options) = load_scene_quiet(&defaults.scene)?;
+    options.read_hdr = false;
+    options.antialias = render::Antialias::Fxaa;
+    let ctx = open_device(args.device.as_deref(), false)?;
+    let mut renderer = Renderer::new(ctx)?;
+    let gpu = renderer.upload(&scene)?;
+    let rows = weft::bench::submission::run(&mut renderer, &scene, &gpu, &options, frames)?;
+    print!(
+        "{}",
+        weft::bench::submission::table(&rows, options.width, options.height, frames)
+    );
     Ok(())
 }
 
@@ -1265,6 +1328,9 @@ fn checked_size(text: &str) -> anyhow::Result<(u32, u32)> {
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
     if args.startup {
         return run_startup_bench(&args);
+    }
+    if args.submission {
+        return run_submission_bench(&args);
     }
     if args.temporal {
         let mut config = if args.quick {
@@ -1416,90 +1482,13 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
     options.antialias = args.aa;
     let plan = Plan::new(&scene, &options);
     if args.json {
-        let json = serde_json::json!({
-            "width": plan.width,
-            "height": plan.height,
-            "passes": plan.passes.iter().map(|p| p.name()).collect::<Vec<_>>(),
-            "supersample": plan.supersample,
-            "draws": plan.draws,
-            "triangles": plan.triangles,
-            "lights": {"directional": plan.lights.directional, "point": plan.lights.point, "spot": plan.lights.spot},
-            "fabric_materials": plan.fabric_materials,
-            "sheen_materials": plan.sheen_materials,
-            "specular_materials": plan.specular_materials,
-            "anisotropic_materials": plan.anisotropic_materials,
-            "variants": plan.variants,
-            "variant": plan.variant,
-            "animations": scene.animations().iter().map(|a| serde_json::json!({
-                "name": a.name, "duration": a.duration,
-            })).collect::<Vec<_>>(),
-            "weaves": plan.weaves.iter().map(|w| serde_json::json!({
-                "pattern": w.pattern, "width": w.width, "height": w.height, "levels": w.levels, "lookup": w.lookup, "materials": w.materials,
-            })).collect::<Vec<_>>(),
-            "features": {
-                "gaps": plan.features.gaps,
-                "thread_shadowing": plan.features.thread_shadowing,
-                "fresnel": plan.features.fresnel,
-                "coupled_diffuse": plan.features.coupled_diffuse,
-                "thread_colours": plan.features.thread_colours,
-                "far_field_mixture": plan.features.far_field_mixture,
-                "thread_texture": plan.features.thread_texture,
-            },
-            "light_types_mask": plan.light_types_mask(),
-            "shadows": plan.shadows.iter().map(|s| serde_json::json!({
-                "light": s.name, "resolution": s.resolution, "filter_radius": s.filter_radius, "bias": s.bias,
-            })).collect::<Vec<_>>(),
-            "shadow_casters": plan.shadow_casters,
-            "shadow_receivers": plan.shadow_receivers,
-            "shadow_sampling": plan.shadow_sampling,
-            "range_culling": plan.range_culling,
-            "textures": plan.textures,
-            "debug_view": plan.debug_view.name(),
-            "environment": plan.environment.as_ref().map(|e| serde_json::json!({
-                "name": e.name, "width": e.width, "height": e.height,
-                "radiance_cube": e.radiance_size, "radiance_levels": e.radiance_levels,
-                "specular_cube": e.specular_size, "specular_levels": e.specular_levels,
-                "ibl": e.level, "rotation": e.rotation, "intensity": e.intensity,
-                "background": e.background,
-            })),
-        });
-        // The glTF core features (issue 25), added after: one json! call this long overflows
-        // the macro's recursion limit.
-        let mut json = json;
-        for (key, value) in [
-            ("unlit_materials", serde_json::json!(plan.unlit_materials)),
-            ("unlit_code", serde_json::json!(plan.unlit)),
-            (
-                "vertex_color_meshes",
-                serde_json::json!(plan.vertex_color_meshes),
-            ),
-            ("vertex_color_code", serde_json::json!(plan.vertex_colors)),
-            ("mask_draws", serde_json::json!(plan.mask_draws)),
-            ("mask_casters", serde_json::json!(plan.mask_casters)),
-            ("blend_draws", serde_json::json!(plan.blend_draws)),
-            ("coat_draws", serde_json::json!(plan.coat_draws)),
-            (
-                "diffuse_transmission_draws",
-                serde_json::json!(plan.diffuse_transmission_draws),
-            ),
-            (
-                "iridescence_draws",
-                serde_json::json!(plan.iridescence_draws),
-            ),
-            ("dispersion_draws", serde_json::json!(plan.dispersion_draws)),
-            ("line_draws", serde_json::json!(plan.line_draws)),
-            ("point_draws", serde_json::json!(plan.point_draws)),
-            (
-                "transmission_draws",
-                serde_json::json!(plan.transmission_draws),
-            ),
-            ("alpha_mask_code", serde_json::json!(plan.alpha_mask)),
-            ("instanced_nodes", serde_json::json!(plan.instanced_nodes)),
-            ("instances", serde_json::json!(plan.instances)),
-            ("camera", serde_json::json!(plan.camera)),
-        ] {
-            json[key] = value;
-        }
+        let mut json = serde_json::to_value(&plan)?;
+        json["animations"] = scene
+            .animations()
+            .iter()
+            .map(|a| serde_json::json!({"name": a.name, "duration": a.duration}))
+            .collect();
+        json["light_types_mask"] = plan.light_types_mask().into();
         println!("{}", serde_json::to_string_pretty(&json)?);
     } else {
         println!("scene       {}", scene.source);
@@ -1518,6 +1507,11 @@ fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+fn parse_submission(text: &str) -> Result<render::Submission, String> {
+    render::Submission::by_name(text)
+        .ok_or_else(|| format!("unknown submission '{text}': choose frame or pass"))
 }
 
 fn parse_aa(text: &str) -> Result<render::Antialias, String> {

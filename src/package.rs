@@ -4,15 +4,16 @@
 //! code (`tests/package_consumer.rs` does exactly that).
 //!
 //! The manifest is reflected from the SPIR-V words ([`spirv`]), never typed by hand; only the
-//! prose is: what each module is for ([`MODULE_NOTES`]), what each binding holds
-//! ([`BINDING_MEANINGS`]) and what each specialization constant means ([`SPEC_MEANINGS`]). The
-//! package tests fail when a module, binding or constant lacks its prose, or prose names one that
-//! is gone.
+//! prose is: what each module is for ([`MODULE_NOTES`]), what each binding holds (the comment at
+//! its GLSL declaration: [`binding_comment`]) and what each specialization constant means
+//! ([`SPEC_MEANINGS`]). The package tests fail when a module, binding or constant lacks its
+//! prose, or prose names one that is gone.
 //!
 //! The output is reproducible: modules sorted by name, JSON keys sorted, no timestamps, so two
 //! writes of the same build are byte-identical.
 
-pub mod spirv;
+/// The SPIR-V reader (`crate::reflect`), under the name the package has always given it.
+pub use crate::reflect as spirv;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -170,8 +171,9 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          but not written, back to front. Computes the surface gbuffer.frag would store \
          (`include/surface.glsl`) and lights it as lighting.frag lights a pixel \
          (`include/shade.glsl`); writes premultiplied radiance and alpha: blend with ONE, \
-         ONE_MINUS_SRC_ALPHA for colour and alpha. Set 0 holds gbuffer.vert's bindings 0-4 and \
-         lighting.frag's shadow and environment bindings 10-15; set 1 a material's textures as \
+         ONE_MINUS_SRC_ALPHA for colour and alpha. Set 0 holds gbuffer.vert's bindings 0-5 and \
+         lighting.frag's shadow and environment bindings 10-15 (one number per resource in every \
+         shader), the backdrop at 16; set 1 a material's textures as \
          gbuffer.frag's. Rust side: `weft::render::passes::transparent`.",
     ),
     (
@@ -184,15 +186,15 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          alpha (`Material.base_color.a` x the base colour texture's alpha through the slot's UV \
          set and map x the vertex colour alpha) is below the material's cutoff \
          (`Material.alpha.x`, flag 8 in `Material.extra.w`), so cut-outs cast cut-out shadows. \
-         Pair it with `shadow_mask.vert`; set 0 binding 0 the material records, set 1 binding 0 \
+         Pair it with `shadow_mask.vert`; set 0 binding 1 the material records (gbuffer.frag's number), set 1 binding 0 \
          the caster material's base colour texture.",
     ),
     (
         "shadow_mask.vert",
         "Shadow pass for alphaMode MASK casters, vertex stage: as `shadow.vert`, with the G-buffer \
          pass's vertex buffer read at position (location 0, offset 0), uv (1, offset 40) and uv1 \
-         (2, offset 56), and each vertex's colour alpha from set 0 binding 1 when VERTEX_COLORS = \
-         1. Push `mat4 clip_from_object`, `uint material` and three pad words (80 bytes, vertex \
+         (2, offset 56), and each vertex's colour alpha from set 0 binding 4 (gbuffer.vert's number) when \
+         VERTEX_COLORS = 1. Push `mat4 clip_from_object`, `uint material` and three pad words (80 bytes, vertex \
          and fragment stages) per draw. weft makes this pipeline only for a frame with a shadow \
          map and a MASK material that casts.",
     ),
@@ -241,208 +243,65 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
     ),
 ];
 
-/// What each descriptor binding holds: (module, set, binding, meaning).
-pub const BINDING_MEANINGS: &[(&str, u32, u32, &str)] = &[
-    ("skin.comp", 0, 0, "the vertex buffer (16 floats per vertex): rest vertices read at `src`, the posed copy written at `dst`"),
-    ("skin.comp", 0, 1, "per vertex of the mesh: `uvec4 joints` (indices into this skin's joints) and `vec4 weights` (normalised)"),
-    ("skin.comp", 0, 2, "morph deltas, target-major: (target t, vertex v) at `morph + 3 (t count + v)`: position, normal, tangent (w unused)"),
-    ("skin.comp", 0, 3, "joint matrices (`mat4`, world from bind pose), the skin's from `joint`"),
-    ("skin.comp", 0, 4, "morph weights (`float`), the draw's from `weight`"),
-    ("fabric_probe.comp", 0, 0, "the inputs: `ProbeInput[count]`"),
-    (
-        "fabric_probe.comp",
-        0,
-        1,
-        "the outputs: `ProbeOutput[count]`, written by the shader",
-    ),
-    (
-        "gbuffer.frag",
-        0,
-        1,
-        "material records (`Material[]`, include/frame.glsl)",
-    ),
-    (
-        "gbuffer.frag",
-        0,
-        2,
-        "fabric records (`GpuFabric[]`, include/fabric.glsl)",
-    ),
-    (
-        "gbuffer.frag",
-        0,
-        5,
-        "thread-by-thread colours (`vec4 thread_colours[]`; weft::fabric::ThreadColourTable records, one per striped fabric, at `GpuFabric.colours`; read only when THREAD_COLOURS = 1)",
-    ),
-    ("gbuffer.frag", 1, 0, "base colour texture (sRGB)"),
-    (
-        "gbuffer.frag",
-        1,
-        1,
-        "metallic-roughness texture (glTF: B metallic, G roughness)",
-    ),
-    ("gbuffer.frag", 1, 2, "tangent-space normal texture"),
-    ("gbuffer.frag", 1, 3, "emissive texture (sRGB)"),
-    (
-        "gbuffer.frag",
-        1,
-        4,
-        "the material's weave texture (from weave.comp), trilinear, REPEAT",
-    ),
-    (
-        "gbuffer.vert",
-        0,
-        0,
-        "the frame uniform (`FrameData`, std140, include/frame.glsl)",
-    ),
-    (
-        "gbuffer.vert",
-        0,
-        1,
-        "material records (`Material[]`; read only when SHADING = 1, Gouraud)",
-    ),
-    (
-        "gbuffer.vert",
-        0,
-        2,
-        "fabric records (`GpuFabric[]`; read only when SHADING = 1, Gouraud)",
-    ),
-    (
-        "gbuffer.vert",
-        0,
-        3,
-        "lights (`Light[]`, include/frame.glsl; read only when SHADING = 1, Gouraud)",
-    ),
-    ("shadow_mask.frag", 0, 0, "material records (`Material[]`, include/frame.glsl): the base colour factor, its texture's UV map and the MASK cutoff"),
-    ("shadow_mask.vert", 0, 1, "vertex colours (`vec4[]`, as gbuffer.vert's set 0 binding 4; read only when VERTEX_COLORS = 1)"),
-    ("shadow_mask.frag", 1, 0, "the caster material's base colour texture (sRGB; white when none): its alpha"),
-    (
-        "gbuffer.vert",
-        0,
-        4,
-        "vertex colours (`vec4[]`, linear RGBA, glTF COLOR_0): one per vertex of the vertex buffer, indexed by `gl_VertexIndex` (vertex offset included), white for vertices without; read only when VERTEX_COLORS = 1",
-    ),
-    (
-        "ibl_probe.comp",
-        0,
-        0,
-        "the inputs: `IblProbeInput[count]`",
-    ),
-    (
-        "ibl_probe.comp",
-        0,
-        1,
-        "the outputs: `IblProbeOutput[count]`, written by the shader",
-    ),
-    (
-        "lighting.frag",
-        0,
-        0,
-        "the frame uniform (`FrameData`, std140, include/frame.glsl)",
-    ),
-    (
-        "lighting.frag",
-        0,
-        1,
-        "lights (`Light[]`, include/frame.glsl)",
-    ),
-    ("lighting.frag", 0, 2, "material records (`Material[]`)"),
-    ("lighting.frag", 0, 3, "G-buffer albedo"),
-    ("lighting.frag", 0, 4, "G-buffer normal + tangent"),
-    ("lighting.frag", 0, 5, "G-buffer surface"),
-    ("lighting.frag", 0, 6, "G-buffer fabric coverage"),
-    ("lighting.frag", 0, 7, "G-buffer emissive"),
-    ("lighting.frag", 0, 8, "G-buffer depth (D32)"),
-    ("lighting.frag", 0, 9, "fabric records (`GpuFabric[]`)"),
-    (
-        "lighting.frag",
-        0,
-        10,
-        "the shadow atlas (D32) with a comparison sampler (GREATER_OR_EQUAL, linear, clamp); any depth image when SHADOWS = 0",
-    ),
-    (
-        "lighting.frag",
-        0,
-        11,
-        "shadow records (`Shadow[]`, include/frame.glsl), indexed by `Light.spot.z - 1`",
-    ),
-    (
-        "lighting.frag",
-        0,
-        12,
-        "per-tile light lists (uint[]): for each 16 x 16-pixel tile, row-major over `frame.tile_columns` tiles per row, (offset, count) of its list, then the lists of light indices; one tile listing every light works",
-    ),
-    (
-        "lighting.frag",
-        0,
-        13,
-        "the environment's radiance cube (RGBA16F, env space, box-filtered mips: env_cube.comp); any cube when IBL = 0",
-    ),
-    (
-        "lighting.frag",
-        0,
-        14,
-        "the GGX-prefiltered specular cube (level i: roughness i/(levels-1); env_prefilter.comp); any cube when IBL = 0",
-    ),
-    (
-        "lighting.frag",
-        0,
-        15,
-        "the split-sum DFG table (x: n·v, y: roughness; rg = A, B, b = the sheen albedo E; weft::env::dfg_table), linear, clamp",
-    ),
-    ("gbuffer.frag", 1, 5, "ambient-occlusion texture (glTF occlusionTexture, R; white when none)"),
-    ("gbuffer.frag", 1, 6, "KHR_materials_sheen colour texture (sRGB; white when none)"),
-    ("gbuffer.frag", 1, 7, "KHR_materials_sheen roughness texture (A; white when none)"),
-    ("gbuffer.frag", 1, 8, "KHR_materials_specular texture (A; white when none)"),
-    ("gbuffer.frag", 1, 9, "KHR_materials_specular colour texture (sRGB; white when none)"),
-    ("gbuffer.frag", 1, 10, "KHR_materials_anisotropy texture (RG direction, B strength; any when the material has none)"),
-    ("lighting.frag", 0, 16, "G-buffer specular (KHR_materials_specular: rgb F0, a weight)"),
-    ("forward.frag", 0, 0, "the frame uniform (`FrameData`, std140, include/frame.glsl)"),
-    ("forward.frag", 0, 1, "material records (`Material[]`, include/frame.glsl), as gbuffer.frag's binding 1"),
-    ("forward.frag", 0, 2, "fabric records (`GpuFabric[]`, include/fabric.glsl), as gbuffer.frag's binding 2"),
-    ("forward.frag", 0, 3, "lights (`Light[]`, include/frame.glsl), as gbuffer.vert's binding 3"),
-    ("forward.frag", 0, 5, "thread-by-thread colours, as gbuffer.frag's binding 5"),
-    ("forward.frag", 0, 10, "the shadow atlas, as lighting.frag's binding 10"),
-    ("forward.frag", 0, 11, "shadow records, as lighting.frag's binding 11"),
-    ("forward.frag", 0, 12, "per-tile light lists, as lighting.frag's binding 12"),
-    ("forward.frag", 0, 13, "the environment's radiance cube, as lighting.frag's binding 13"),
-    ("forward.frag", 0, 14, "the GGX-prefiltered specular cube, as lighting.frag's binding 14"),
-    ("forward.frag", 0, 15, "the split-sum DFG table, as lighting.frag's binding 15"),
-    ("forward.frag", 1, 0, "base colour texture (sRGB), as gbuffer.frag's"),
-    ("forward.frag", 1, 1, "metallic-roughness texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 2, "tangent-space normal texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 3, "emissive texture (sRGB), as gbuffer.frag's"),
-    ("forward.frag", 1, 4, "the material's weave texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 5, "ambient-occlusion texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 6, "KHR_materials_sheen colour texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 7, "KHR_materials_sheen roughness texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 8, "KHR_materials_specular texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 9, "KHR_materials_specular colour texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 10, "KHR_materials_anisotropy texture, as gbuffer.frag's"),
-    ("forward.frag", 1, 11, "KHR_materials_transmission texture (R; white when none), as gbuffer.frag's"),
-    ("forward.frag", 1, 12, "KHR_materials_volume thickness texture (G; white when none), as gbuffer.frag's"),
-    ("forward.frag", 1, 13, "KHR_materials_clearcoat texture (R: the factor; white when none)"),
-    ("forward.frag", 1, 14, "KHR_materials_clearcoat roughness texture (G; white when none)"),
-    ("forward.frag", 1, 15, "KHR_materials_clearcoat normal texture (tangent space; a flat normal when none)"),
-    ("forward.frag", 1, 16, "KHR_materials_diffuse_transmission texture (A: the factor; white when none)"),
-    ("forward.frag", 1, 17, "KHR_materials_diffuse_transmission colour texture (RGB, sRGB; white when none)"),
-    ("forward.frag", 1, 18, "KHR_materials_iridescence texture (R: the factor; white when none)"),
-    ("forward.frag", 1, 19, "KHR_materials_iridescence thickness texture (G: from the minimum to the maximum thickness; white when none)"),
-    ("forward.frag", 0, 16, "the backdrop: the lighting pass's HDR image copied before the transparent pass draws, with box-filtered mips (linear, clamp); any image when TRANSMISSION = 0"),
-    ("pbr_probe.comp", 0, 0, "the inputs: `PbrProbeInput[count]`"),
-    ("pbr_probe.comp", 0, 1, "the outputs: `PbrProbeOutput[count]`, written by the shader"),
-    ("env_cube.comp", 0, 0, "level 0 of the radiance cube, as a storage image2DArray (layer = face)"),
-    ("env_cube.comp", 0, 1, "the equirectangular environment map (RGBA16F), linear, REPEAT"),
-    ("env_prefilter.comp", 0, 0, "the specular cube's level being written, as a storage image2DArray"),
-    ("env_prefilter.comp", 0, 1, "the radiance cube with its mips, linear, clamp"),
-    ("tonemap.frag", 0, 0, "the HDR image from lighting.frag"),
-    ("fxaa.frag", 0, 0, "the tone-mapped image (an `R8G8B8A8_SRGB` target, linear filtering, clamp to edge)"),
-    (
-        "weave.comp",
-        0,
-        0,
-        "the mip level being written: a one-level view of the RGBA16F weave texture",
-    ),
-];
+/// The prose of set `set` binding `binding` of `shader`: the comment that ends the line of its
+/// declaration (`layout(set = S, binding = B ...) ...;  // prose`) in the shader's GLSL or one of
+/// its `#include`s, the one place a binding is described (Sascha Willems' samples comment every
+/// binding where it is declared). None when the declaration has no comment or is not found.
+pub fn binding_comment(shader: &Shader, set: u32, binding: u32) -> Option<String> {
+    fn search(source: &str, set: u32, binding: u32, seen: &mut Vec<String>) -> Option<String> {
+        let lines: Vec<&str> = source.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            let code = line.trim_start();
+            if let Some(name) = code
+                .strip_prefix("#include \"")
+                .and_then(|r| r.strip_suffix('"'))
+            {
+                if seen.iter().any(|s| s == name) {
+                    continue;
+                }
+                seen.push(name.to_string());
+                let text = INCLUDES.iter().find(|(n, _)| *n == name)?.1;
+                if let Some(found) = search(text, set, binding, seen) {
+                    return Some(found);
+                }
+                continue;
+            }
+            if code.starts_with("//") || !declares(code, set, binding) {
+                continue;
+            }
+            // The declaration ends on the line whose code has its ';'; the comment after that
+            // is the prose.
+            let end = lines[i..]
+                .iter()
+                .find(|l| l.split("//").next().unwrap_or("").contains(';'))?;
+            let prose = end.split_once("//")?.1.trim();
+            return (!prose.is_empty()).then(|| prose.to_string());
+        }
+        None
+    }
+    search(shader.source, set, binding, &mut Vec::new())
+}
+
+/// Whether a GLSL line starts a `layout(...)` declaration with `set = S` and `binding = B`.
+fn declares(code: &str, set: u32, binding: u32) -> bool {
+    let Some(rest) = code.strip_prefix("layout") else {
+        return false;
+    };
+    let Some(open) = rest.find('(') else {
+        return false;
+    };
+    let Some(close) = rest.find(')') else {
+        return false;
+    };
+    let qualifiers = &rest[open + 1..close];
+    let value = |key: &str| {
+        qualifiers.split(',').find_map(|q| {
+            let (k, v) = q.split_once('=')?;
+            (k.trim() == key).then(|| v.trim().parse::<u32>().ok())?
+        })
+    };
+    value("set") == Some(set) && value("binding") == Some(binding)
+}
 
 /// What each specialization constant means: (module, constant id, meaning).
 pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
@@ -479,7 +338,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 22, "DIFFUSE_TRANSMISSION: 1 lights KHR_materials_diffuse_transmission surfaces (`Material.extra.w` flag 128) from behind too; 0 (default) compiles that out"),
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),
     ("forward.frag", 20, "TRANSMISSION: 1 reads the backdrop for KHR_materials_transmission surfaces (`Material.extra.w` flag 32); 0 (default) compiles that out"),
-    ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 1) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
+    ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 4) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",
@@ -546,8 +405,8 @@ pub struct BindingEntry {
     pub image_format: Option<&'static str>,
     pub block_size: Option<u32>,
     pub runtime_array_stride: Option<u32>,
-    /// From [`BINDING_MEANINGS`]; None when the table has no entry.
-    pub meaning: Option<&'static str>,
+    /// The comment at the binding's GLSL declaration ([`binding_comment`]); None when it has none.
+    pub meaning: Option<String>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -625,10 +484,7 @@ pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
         .bindings
         .into_iter()
         .map(|b| BindingEntry {
-            meaning: BINDING_MEANINGS
-                .iter()
-                .find(|(m, s, n, _)| *m == name && *s == b.set && *n == b.binding)
-                .map(|e| e.3),
+            meaning: binding_comment(shader, b.set, b.binding),
             set: b.set,
             binding: b.binding,
             kind: b.kind,
@@ -1010,7 +866,7 @@ impl Manifest {
                         kind,
                         b.count,
                         b.access.name(),
-                        b.meaning.unwrap_or("")
+                        b.meaning.as_deref().unwrap_or("")
                     );
                 }
             }

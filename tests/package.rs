@@ -374,7 +374,7 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
         for b in &m.bindings {
             assert!(
                 b.meaning.is_some(),
-                "{} set {} binding {}: no entry in package::BINDING_MEANINGS",
+                "{} set {} binding {}: no comment at its GLSL declaration (package::binding_comment)",
                 m.name,
                 b.set,
                 b.binding
@@ -486,15 +486,23 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
             "MODULE_NOTES names {name}, which is not a module"
         );
     }
-    for (name, set, binding, _) in package::BINDING_MEANINGS {
-        let m = manifest
-            .module(name)
-            .unwrap_or_else(|| panic!("BINDING_MEANINGS names {name}, which is not a module"));
-        assert!(
-            m.bindings.iter().any(|b| b.set == *set && b.binding == *binding),
-            "BINDING_MEANINGS names {name} set {set} binding {binding}, which the module does not use"
-        );
-    }
+    // Binding prose comes from the comment at each GLSL declaration: the module's own (lighting.frag
+    // declares its G-buffer reads) and an include's (surface.glsl declares the material textures
+    // gbuffer.frag and forward.frag both bind).
+    let meaning = |module: &str, set: u32, binding: u32| {
+        manifest
+            .module(module)
+            .and_then(|m| {
+                m.bindings
+                    .iter()
+                    .find(|b| b.set == set && b.binding == binding)
+            })
+            .and_then(|b| b.meaning.clone())
+            .unwrap_or_default()
+    };
+    assert!(meaning("lighting.frag", 0, 25).contains("depth (D32)"));
+    assert!(meaning("gbuffer.frag", 1, 0).contains("base colour texture"));
+    assert_eq!(meaning("gbuffer.frag", 1, 4), meaning("forward.frag", 1, 4));
     for (name, id, _) in package::SPEC_MEANINGS {
         let m = manifest
             .module(name)
@@ -562,4 +570,70 @@ fn rewriting_removes_modules_an_older_package_listed_and_nothing_else() {
         dir.path().join("outside.spv").exists(),
         "a path outside the package was removed"
     );
+}
+
+/// The frame's shaders give each resource of set 0 one number (issue 24): a block or sampler of
+/// the same name has the same binding in every shader that declares it, and no binding holds two
+/// different resources.
+#[test]
+fn one_number_per_resource_in_the_frames_shaders() {
+    let frame_shaders = [
+        &shaders::GBUFFER_VERT,
+        &shaders::GBUFFER_FRAG,
+        &shaders::FORWARD_FRAG,
+        &shaders::LIGHTING_FRAG,
+        &shaders::SHADOW_MASK_VERT,
+        &shaders::SHADOW_MASK_FRAG,
+    ];
+    let mut by_name: BTreeMap<String, (u32, &str)> = BTreeMap::new();
+    let mut by_number: BTreeMap<u32, (String, &str)> = BTreeMap::new();
+    let mut declarations = 0;
+    for shader in frame_shaders {
+        for line in shader.source.lines() {
+            let code = line.split("//").next().unwrap_or("").trim();
+            let Some(rest) = code.strip_prefix("layout(set = 0, binding = ") else {
+                continue;
+            };
+            let number: u32 = rest
+                .split(|c: char| !c.is_ascii_digit())
+                .next()
+                .and_then(|n| n.parse().ok())
+                .unwrap_or_else(|| panic!("{}: unreadable binding in `{code}`", shader.name));
+            // The block's name (`buffer Lights {`), else the variable's (`sampler2D gb_depth;`).
+            let after = &rest[rest.find(')').expect("layout(...)") + 1..];
+            let words: Vec<&str> = after
+                .split(|c: char| c.is_whitespace() || c == ';')
+                .filter(|w| !w.is_empty())
+                .collect();
+            let name = match words.iter().position(|w| *w == "{") {
+                Some(brace) => words[brace - 1],
+                None => words[words.len() - 1],
+            }
+            .to_string();
+            declarations += 1;
+            if let Some((n, other)) = by_name.get(&name) {
+                assert_eq!(
+                    *n, number,
+                    "{name} is binding {n} in {other} and {number} in {}",
+                    shader.name
+                );
+            }
+            if let Some((other_name, other)) = by_number.get(&number) {
+                assert_eq!(
+                    *other_name, name,
+                    "set 0 binding {number} is {other_name} in {other} and {name} in {}",
+                    shader.name
+                );
+            }
+            by_name.insert(name.clone(), (number, shader.name));
+            by_number.insert(number, (name, shader.name));
+        }
+    }
+    assert!(
+        declarations >= 30,
+        "only {declarations} set-0 declarations read"
+    );
+    assert_eq!(by_name["Lights"].0, 3);
+    assert_eq!(by_name["Materials"].0, 1);
+    assert_eq!(by_name["Fabrics"].0, 2);
 }

@@ -430,7 +430,7 @@ fn blended_striped_fabric_is_drawn_as_the_opaque_one() {
                 f.stats
                     .pipelines
                     .iter()
-                    .any(|n| n.starts_with("forward[blend") && n.contains("25=1")),
+                    .any(|n| n.starts_with("forward[blend") && n.contains("thread_colours=1")),
                 "{:?}",
                 f.stats.pipelines
             );

@@ -6,35 +6,35 @@
 // specialization constants ACCURACY, WEAVE_SOURCE, SHADING, FOOTPRINT_PIECES and VERTEX_COLORS.
 
 // Per material; missing textures are bound to 1x1 defaults (white, or a flat normal).
-layout(set = 1, binding = 0) uniform sampler2D base_color_tex;
-layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;
-layout(set = 1, binding = 2) uniform sampler2D normal_tex;
-layout(set = 1, binding = 3) uniform sampler2D emissive_tex;
+layout(set = 1, binding = 0) uniform sampler2D base_color_tex;  // base colour texture (sRGB)
+layout(set = 1, binding = 1) uniform sampler2D metallic_roughness_tex;  // metallic-roughness texture (glTF: B metallic, G roughness)
+layout(set = 1, binding = 2) uniform sampler2D normal_tex;  // tangent-space normal texture
+layout(set = 1, binding = 3) uniform sampler2D emissive_tex;  // emissive texture (sRGB)
 // The material's weave texture (fabric only): one pattern repeat, full mip chain, each texel the
 // exact coverage (c_warp, c_weft, s_warp, s_weft) of its footprint; with WEAVE_SOURCE 2 or 3 its
 // summed-area table instead (weave_sat_box below).
-layout(set = 1, binding = 4) uniform sampler2D weave_tex;
+layout(set = 1, binding = 4) uniform sampler2D weave_tex;  // the material's weave texture (from weave.comp), trilinear, REPEAT
 // Ambient occlusion (glTF occlusionTexture, red channel; white when the material has none).
-layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;
+layout(set = 1, binding = 5) uniform sampler2D occlusion_tex;  // ambient-occlusion texture (glTF occlusionTexture, R; white when none)
 // KHR_materials_sheen, _specular and _anisotropy textures (white when the material has none).
-layout(set = 1, binding = 6) uniform sampler2D sheen_color_tex;
-layout(set = 1, binding = 7) uniform sampler2D sheen_roughness_tex;
-layout(set = 1, binding = 8) uniform sampler2D specular_tex;
-layout(set = 1, binding = 9) uniform sampler2D specular_color_tex;
-layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;
+layout(set = 1, binding = 6) uniform sampler2D sheen_color_tex;  // KHR_materials_sheen colour texture (sRGB; white when none)
+layout(set = 1, binding = 7) uniform sampler2D sheen_roughness_tex;  // KHR_materials_sheen roughness texture (A; white when none)
+layout(set = 1, binding = 8) uniform sampler2D specular_tex;  // KHR_materials_specular texture (A; white when none)
+layout(set = 1, binding = 9) uniform sampler2D specular_color_tex;  // KHR_materials_specular colour texture (sRGB; white when none)
+layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;  // KHR_materials_anisotropy texture (RG direction, B strength; any when the material has none)
 // KHR_materials_transmission's texture (R) and KHR_materials_volume's thickness texture (G).
-layout(set = 1, binding = 11) uniform sampler2D transmission_tex;
-layout(set = 1, binding = 12) uniform sampler2D thickness_tex;
+layout(set = 1, binding = 11) uniform sampler2D transmission_tex;  // KHR_materials_transmission texture (R; white when none), as gbuffer.frag's
+layout(set = 1, binding = 12) uniform sampler2D thickness_tex;  // KHR_materials_volume thickness texture (G; white when none), as gbuffer.frag's
 // KHR_materials_clearcoat's textures: the factor (R), the roughness (G), the coat's normal.
-layout(set = 1, binding = 13) uniform sampler2D clearcoat_tex;
-layout(set = 1, binding = 14) uniform sampler2D clearcoat_roughness_tex;
-layout(set = 1, binding = 15) uniform sampler2D clearcoat_normal_tex;
+layout(set = 1, binding = 13) uniform sampler2D clearcoat_tex;  // KHR_materials_clearcoat texture (R: the factor; white when none)
+layout(set = 1, binding = 14) uniform sampler2D clearcoat_roughness_tex;  // KHR_materials_clearcoat roughness texture (G; white when none)
+layout(set = 1, binding = 15) uniform sampler2D clearcoat_normal_tex;  // KHR_materials_clearcoat normal texture (tangent space; a flat normal when none)
 // KHR_materials_diffuse_transmission's textures: the factor (A) and the colour (RGB, sRGB).
-layout(set = 1, binding = 16) uniform sampler2D diffuse_transmission_tex;
-layout(set = 1, binding = 17) uniform sampler2D diffuse_transmission_color_tex;
+layout(set = 1, binding = 16) uniform sampler2D diffuse_transmission_tex;  // KHR_materials_diffuse_transmission texture (A: the factor; white when none)
+layout(set = 1, binding = 17) uniform sampler2D diffuse_transmission_color_tex;  // KHR_materials_diffuse_transmission colour texture (RGB, sRGB; white when none)
 // KHR_materials_iridescence's textures: the factor (R) and the film's thickness (G).
-layout(set = 1, binding = 18) uniform sampler2D iridescence_tex;
-layout(set = 1, binding = 19) uniform sampler2D iridescence_thickness_tex;
+layout(set = 1, binding = 18) uniform sampler2D iridescence_tex;  // KHR_materials_iridescence texture (R: the factor; white when none)
+layout(set = 1, binding = 19) uniform sampler2D iridescence_thickness_tex;  // KHR_materials_iridescence thickness texture (G: from the minimum to the maximum thickness; white when none)
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;

@@ -231,7 +231,7 @@ pub struct JobReport {
     /// Already there (--resume): not rendered.
     pub skipped: bool,
     /// Per pass: (name, GPU ms when the device has timestamps, wall ms).
-    pub passes: Vec<(&'static str, Option<f64>, f64)>,
+    pub passes: Vec<(&'static str, Option<f64>, Option<f64>)>,
     /// Posing (the animation sampled and its pose sent to the GPU, the camera moved).
     pub pose_ms: f64,
     /// Posing, rendering and reading back.

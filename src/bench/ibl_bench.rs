@@ -160,7 +160,7 @@ pub fn run(
                 e.background = crate::env::Background::None;
                 e
             }),
-            ..Default::default()
+            ..crate::bench::timed_options()
         }
     };
     let truth = IblLevel::MonteCarlo(truth_samples);
@@ -258,7 +258,7 @@ pub fn run(
             width: size.0,
             height: size.1,
             camera_override: camera,
-            ..Default::default()
+            ..crate::bench::timed_options()
         };
         let lit = RenderOptions {
             environment: Some(EnvLighting::new(studio.clone())),

@@ -39,8 +39,8 @@ fn frame_ms(frame: &Frame) -> f64 {
     frame
         .timings
         .iter()
-        .filter(|t| t.name != "readback")
-        .map(|t| t.gpu_ms.unwrap_or(t.wall_ms))
+        .filter(|t| t.name != "readback" && t.name != "submission")
+        .map(|t| t.gpu_ms.or(t.wall_ms).unwrap_or(0.0))
         .sum()
 }
 
@@ -96,7 +96,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
     let base = RenderOptions {
         width: size.0,
         height: size.1,
-        ..Default::default()
+        ..crate::bench::timed_options()
     };
     let forced = |force: Force| RenderOptions {
         force,

@@ -113,7 +113,7 @@ impl TemporalConfig {
             width: self.size.0,
             height: self.size.1,
             accuracy: self.ground_truth,
-            ..Default::default()
+            ..crate::bench::timed_options()
         }
         .validate()
     }
@@ -211,7 +211,7 @@ fn render_sequence(
             camera_override: Some(motion.camera_at(&base, k as f32)?),
             accuracy,
             weave_precision: precision,
-            ..Default::default()
+            ..crate::bench::timed_options()
         };
         let frame = renderer.render_frame(scene, gpu, &options)?;
         if mask.is_some() {

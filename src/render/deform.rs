@@ -21,8 +21,9 @@ use crate::vk::{
 };
 use crate::Error;
 
-use super::frame::{DrawRange, GpuScene, Renderer};
+use super::frame::Renderer;
 use super::gpu::GpuLight;
+use super::upload::{DrawRange, GpuScene};
 
 /// Push constants of glsl/skin.comp (48 bytes).
 #[repr(C)]

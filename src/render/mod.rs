@@ -3,6 +3,9 @@
 pub mod deform;
 mod frame;
 mod passes;
+mod readback;
+mod targets;
+mod upload;
 pub use passes::environment;
 pub mod gpu;
 mod output;
@@ -11,15 +14,17 @@ pub mod shadow;
 pub mod tiles;
 
 pub use deform::SkinPush;
-pub use frame::{
-    check_target_memory, f16_to_f32, host_available_bytes, readback_bytes_per_pixel, Frame,
-    FrameStats, GBufferReadback, GpuScene, PassTiming, Renderer, TARGET_BYTES_PER_PIXEL,
-};
+pub use frame::{Frame, FrameStats, PassTiming, Renderer};
 pub use output::{
     check_outputs, commit_all, display_note, stage_exr, stage_png, stage_png_with_text, temp_name,
     write_exr, write_file, write_frame, write_png, OutputPath, Staged, NAME_MAX, PATH_MAX,
 };
 pub use plan::{EnvPlan, FabricFeatures, Pass, Plan, ShadowPlan, WeavePlan};
+pub use readback::{f16_to_f32, GBufferReadback};
+pub use targets::{
+    check_target_memory, host_available_bytes, readback_bytes_per_pixel, TARGET_BYTES_PER_PIXEL,
+};
+pub use upload::GpuScene;
 
 use crate::Error;
 
@@ -419,6 +424,38 @@ pub struct RenderOptions {
     /// Edge anti-aliasing after tone mapping: none (the library's default, so images are the
     /// shading alone) or FXAA (`weft render` and `weft view`'s default).
     pub antialias: Antialias,
+    /// How the frame's passes reach the queue: one submission (the normal path), or one per
+    /// pass with its own timestamps (`weft render --timings`, `weft bench`: each pass's time its
+    /// own, with nothing overlapping it).
+    pub submission: Submission,
+}
+
+/// How a frame is submitted ([`RenderOptions::submission`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Submission {
+    /// One submission: every pass, with a timestamp between each two, and the readback copies.
+    #[default]
+    Frame,
+    /// One submission per pass, each between two timestamps, waited for before the next; the
+    /// readback its own.
+    PerPass,
+}
+
+impl Submission {
+    pub fn by_name(name: &str) -> Option<Submission> {
+        match name {
+            "frame" => Some(Submission::Frame),
+            "pass" => Some(Submission::PerPass),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Submission::Frame => "frame",
+            Submission::PerPass => "pass",
+        }
+    }
 }
 
 /// Anti-aliasing of the image (`--aa`).
@@ -490,6 +527,7 @@ impl Default for RenderOptions {
             jitter: [0.0, 0.0],
             footprint: Footprint::default(),
             antialias: Antialias::None,
+            submission: Submission::Frame,
         }
     }
 }

@@ -4,11 +4,14 @@
 
 use std::fmt;
 
+use serde::Serialize;
+
 use crate::scene::{LightKind, Scene, Topology};
 
 use super::{Accuracy, DebugView, RenderOptions};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(into = "&'static str")]
 pub enum Pass {
     /// Compute pass, once per distinct weave, when the scene is uploaded: the coverage textures.
     Weave,
@@ -30,6 +33,12 @@ pub enum Pass {
     Environment,
 }
 
+impl From<Pass> for &'static str {
+    fn from(pass: Pass) -> &'static str {
+        pass.name()
+    }
+}
+
 impl Pass {
     pub fn name(self) -> &'static str {
         match self {
@@ -46,7 +55,7 @@ impl Pass {
 }
 
 /// How many lights of each kind the scene has.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct LightCounts {
     pub directional: usize,
     pub point: usize,
@@ -54,7 +63,7 @@ pub struct LightCounts {
 }
 
 /// One weave texture to build.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct WeavePlan {
     pub pattern: String,
     pub width: u32,
@@ -68,7 +77,7 @@ pub struct WeavePlan {
 }
 
 /// Which parts of the fabric model any material needs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct FabricFeatures {
     /// Some weave has gaps between threads (s_g > 0).
     pub gaps: bool,
@@ -104,10 +113,13 @@ pub(crate) fn weave_key(fabric: &crate::fabric::FabricParams) -> [u32; 7] {
 
 /// One shadow map to render: a light that asks for shadows (directional or spot), when something
 /// casts and something receives.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ShadowPlan {
     /// Index into the scene's lights.
+    #[serde(skip)]
     pub light: usize,
+    /// The light's name (`light` in `weft plan --json`).
+    #[serde(rename = "light")]
     pub name: String,
     /// Tile size in texels (the light's request, shrunk if the atlas would exceed
     /// [`MAX_ATLAS`]).
@@ -120,7 +132,9 @@ pub struct ShadowPlan {
 /// desktop GPUs 16384).
 pub const MAX_ATLAS: u32 = 8192;
 
-#[derive(Clone, Debug, PartialEq)]
+/// `weft plan --json` is this struct serialised (`serde_json::to_value(&plan)`), with the
+/// scene's animations and the LIGHT_TYPES mask added by the command.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Plan {
     pub width: u32,
     pub height: u32,
@@ -146,16 +160,19 @@ pub struct Plan {
     /// Materials with KHR_materials_unlit, and whether lighting.frag compiles the unlit path in
     /// (some material is unlit, or forced).
     pub unlit_materials: usize,
+    #[serde(rename = "unlit_code")]
     pub unlit: bool,
     /// Drawn meshes with vertex colours (COLOR_0), and whether the G-buffer pass reads them
     /// (some mesh has them, or forced): without, no colour buffer is read and nothing multiplied.
     pub vertex_color_meshes: usize,
+    #[serde(rename = "vertex_color_code")]
     pub vertex_colors: bool,
     /// alphaMode MASK: drawn draws with a MASK material, whether gbuffer.frag compiles the
     /// discard in (some, or forced), and the cut-out casters: MASK and BLEND draws that cast (the
     /// shadow pass then makes and uses its cut-out pipeline for them, when it runs; BLEND is cut
     /// at alpha 0.5).
     pub mask_draws: usize,
+    #[serde(rename = "alpha_mask_code")]
     pub alpha_mask: bool,
     pub mask_casters: usize,
     /// alphaMode BLEND: drawn draws with a BLEND material (the transparent pass runs when there
@@ -202,23 +219,31 @@ pub struct Plan {
     /// Whether point and spot lights out of range are skipped per pixel (on unless forced off).
     pub range_culling: bool,
     pub textures: usize,
+    #[serde(serialize_with = "debug_view_name")]
     pub debug_view: DebugView,
     /// The environment that lights the scene, if any.
     pub environment: Option<EnvPlan>,
 }
 
+fn debug_view_name<S: serde::Serializer>(view: &DebugView, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(view.name())
+}
+
 /// Environment lighting of a frame.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct EnvPlan {
     pub name: String,
     pub width: u32,
     pub height: u32,
     /// Face size of the radiance cube (and its levels), of the specular cube (and its levels).
+    #[serde(rename = "radiance_cube")]
     pub radiance_size: u32,
     pub radiance_levels: u32,
+    #[serde(rename = "specular_cube")]
     pub specular_size: u32,
     pub specular_levels: u32,
     /// The IBL level (approx, fis:N, mc:N).
+    #[serde(rename = "ibl")]
     pub level: String,
     pub rotation: f32,
     pub intensity: f32,
@@ -378,20 +403,6 @@ impl Plan {
         let iridescence_draws = count(&|m| m.iridescence.is_some());
         let dispersion_draws =
             count(&|m| m.transmission.as_ref().is_some_and(|t| t.dispersion > 0.0));
-        let mut passes = vec![Pass::GBuffer, Pass::Lighting, Pass::Tonemap];
-        // Edge anti-aliasing of the shaded image (debug views show the G-buffer as it is).
-        if options.antialias == super::Antialias::Fxaa && options.debug_view == DebugView::None {
-            passes.push(Pass::Antialias);
-        }
-        if blend_draws + forward_opaque_draws > 0 {
-            passes.insert(2, Pass::Transparent);
-        }
-        if !shadows.is_empty() {
-            passes.insert(1, Pass::Shadow);
-        }
-        if !weaves.is_empty() {
-            passes.insert(0, Pass::Weave);
-        }
         // Environment preprocessing only when an environment lights the scene (debug views show
         // no lighting, so they need none either).
         let environment = options
@@ -421,9 +432,30 @@ impl Plan {
                     },
                 }
             });
-        if environment.is_some() {
-            passes.insert(0, Pass::Environment);
-        }
+        // The passes in the order a frame runs them, each only when the scene needs it.
+        let passes: Vec<Pass> = [
+            // Environment preprocessing when an environment lights the scene.
+            (Pass::Environment, environment.is_some()),
+            // The weave textures, with fabric.
+            (Pass::Weave, !weaves.is_empty()),
+            (Pass::GBuffer, true),
+            // Shadow maps when a light asks, something casts and something receives.
+            (Pass::Shadow, !shadows.is_empty()),
+            (Pass::Lighting, true),
+            // What the G-buffer cannot hold: BLEND and transmissive draws.
+            (Pass::Transparent, blend_draws + forward_opaque_draws > 0),
+            (Pass::Tonemap, true),
+            // Edge anti-aliasing of the shaded image (debug views show the G-buffer as it is).
+            (
+                Pass::Antialias,
+                options.antialias == super::Antialias::Fxaa
+                    && options.debug_view == DebugView::None,
+            ),
+        ]
+        .into_iter()
+        .filter(|(_, runs)| *runs)
+        .map(|(pass, _)| pass)
+        .collect();
         let unlit_materials = scene.materials.iter().filter(|m| m.unlit).count();
         let mut drawn = vec![false; scene.meshes.len()];
         for d in &scene.draws {

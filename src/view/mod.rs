@@ -602,7 +602,7 @@ fn bench_report(timed: &[FrameFigures], width: u32, height: u32) -> BenchReport 
             (*n, median(v))
         })
         .collect();
-    let wall = |f: &FrameFigures| f.passes.iter().map(|p| p.wall_ms).sum::<f64>();
+    let wall = |f: &FrameFigures| f.passes.iter().filter_map(|p| p.wall_ms).sum::<f64>();
     BenchReport {
         width,
         height,

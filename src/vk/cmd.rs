@@ -680,6 +680,9 @@ impl Context {
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos)];
         unsafe { device.queue_submit2(self.shared.queue, &submit, fence) }
             .map_err(vkerr("vkQueueSubmit2"))?;
+        self.shared
+            .submissions
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }
             .map_err(vkerr("vkWaitForFences"))?;
         Ok(result)

@@ -87,6 +87,8 @@ pub(crate) struct Shared {
     /// Held while the command pool or the queue is used (Vulkan requires both to be externally
     /// synchronized): `Context` is `Sync`, so two threads may submit at once.
     pub(crate) queue_lock: Mutex<()>,
+    /// Queue submissions made so far (`Context::submissions`).
+    pub(crate) submissions: std::sync::atomic::AtomicU64,
     pub(crate) allocator: Mutex<Option<Allocator>>,
     pub(crate) info: DeviceInfo,
     /// The physical device and the queue's family (a window's surface is checked against them).
@@ -441,6 +443,7 @@ impl Context {
                 queue,
                 command_pool,
                 queue_lock: Mutex::new(()),
+                submissions: std::sync::atomic::AtomicU64::new(0),
                 allocator: Mutex::new(Some(allocator)),
                 info,
                 physical,
@@ -493,6 +496,14 @@ impl Context {
         if let Ok(b) = unsafe { self.shared.device.create_buffer(&info, None) } {
             unsafe { self.shared.device.destroy_buffer(b, None) };
         }
+    }
+
+    /// How many queue submissions this context (and its clones) has made: `weft render --stats`
+    /// reports a frame's.
+    pub fn submissions(&self) -> u64 {
+        self.shared
+            .submissions
+            .load(std::sync::atomic::Ordering::Relaxed)
     }
 
     pub fn wait_idle(&self) -> crate::Result<()> {

@@ -44,6 +44,9 @@ pub struct Shader {
     pub stage: Stage,
     /// SPIR-V bytes (little-endian words).
     pub spirv: &'static [u8],
+    /// The GLSL it was compiled from (its `#include`s are `weft::package::INCLUDES`): the
+    /// package reads each binding's prose from the comment at its declaration.
+    pub source: &'static str,
 }
 
 /// Every shader module, by source file name (constants such as `shaders::LIGHTING_FRAG`).

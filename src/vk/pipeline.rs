@@ -256,7 +256,61 @@ fn specialization(constants: &[(u32, u32)]) -> Specialization {
     Specialization { entries, data }
 }
 
+/// The bindings of descriptor set `set` as `shaders` declare them (reflected from their SPIR-V):
+/// each binding once, visible to every stage that declares it. A binding two stages declare with
+/// different kinds, or a kind weft does not bind, is an error naming both.
+pub fn reflected_bindings(shaders: &[&Shader], set: u32) -> crate::Result<Vec<Binding>> {
+    use crate::reflect::DescriptorKind as K;
+    let mut out: Vec<Binding> = Vec::new();
+    for shader in shaders {
+        let stage = match shader.stage {
+            Stage::Vertex => vk::ShaderStageFlags::VERTEX,
+            Stage::Fragment => vk::ShaderStageFlags::FRAGMENT,
+            Stage::Compute => vk::ShaderStageFlags::COMPUTE,
+        };
+        let reflection = crate::reflect::reflect(shader.spirv)?;
+        for b in reflection.bindings.iter().filter(|b| b.set == set) {
+            let kind = match b.kind {
+                K::UniformBuffer => BindingKind::UniformBuffer,
+                K::StorageBuffer => BindingKind::StorageBuffer,
+                K::CombinedImageSampler => BindingKind::SampledImage,
+                K::StorageImage => BindingKind::StorageImage,
+                other => {
+                    return Err(Error::device(format!(
+                        "{} declares set {set} binding {} as {}, which weft does not bind",
+                        shader.name,
+                        b.binding,
+                        other.name()
+                    )))
+                }
+            };
+            match out.iter_mut().find(|o| o.binding == b.binding) {
+                Some(o) if o.kind != kind => {
+                    return Err(Error::device(format!(
+                        "set {set} binding {} is a {:?} in one stage and a {kind:?} in {}",
+                        b.binding, o.kind, shader.name
+                    )))
+                }
+                Some(o) => o.stages = Stages(o.stages.0 | stage),
+                None => out.push(Binding {
+                    binding: b.binding,
+                    kind,
+                    stages: Stages(stage),
+                }),
+            }
+        }
+    }
+    out.sort_by_key(|b| b.binding);
+    Ok(out)
+}
+
 impl Context {
+    /// The layout of descriptor set `set` of a pipeline made of `shaders`, from their reflection
+    /// ([`reflected_bindings`]): the GLSL declaration is the one place a binding is written.
+    pub fn reflected_set_layout(&self, shaders: &[&Shader], set: u32) -> crate::Result<SetLayout> {
+        self.create_set_layout(&reflected_bindings(shaders, set)?)
+    }
+
     pub fn create_set_layout(&self, bindings: &[Binding]) -> crate::Result<SetLayout> {
         let vk_bindings: Vec<_> = bindings
             .iter()

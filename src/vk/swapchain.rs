@@ -641,6 +641,8 @@ impl Presenter {
             unsafe { dev.reset_fences(&[slot.fence]) }.map_err(vkerr("vkResetFences"))?;
             unsafe { dev.queue_submit2(sh.queue, &submit, slot.fence) }
                 .map_err(vkerr("vkQueueSubmit2"))?;
+            sh.submissions
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             let wait = [self.rendered[i]];
             let swapchains = [self.swapchain];
             let indices = [image_index];

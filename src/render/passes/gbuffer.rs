@@ -1,93 +1,242 @@
-//! The G-buffer pass: every draw into the five colour targets and depth.
+//! The G-buffer pass: every draw the G-buffer can hold into the six colour targets and depth
+//! (gbuffer.vert, gbuffer.frag).
 
-use crate::render::frame::{GpuScene, Targets};
+use std::collections::HashMap;
+
+use super::{Recorded, VariantKey};
 use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
-use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Pipeline, Topology, Usage};
+use crate::render::plan::Plan;
+use crate::render::targets::{
+    Targets, ALBEDO_FORMAT, DEPTH_FORMAT, EMISSIVE_FORMAT, FABRIC_FORMAT, FRAME_FORMAT,
+    SPECULAR_FORMAT, SURFACE_FORMAT,
+};
+use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
+use crate::render::{RenderOptions, Shading};
+use crate::vk::{
+    shaders, Attachment, Buffer, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc,
+    Pipeline, Resource, SetLayout, Stages, Topology, Usage,
+};
 
-/// The G-buffer pass's pipelines: triangles, and (in scenes that have them) lines and points.
-pub struct GBufferPipelines<'s> {
-    pub triangles: &'s Pipeline,
-    pub lines: Option<&'s Pipeline>,
-    pub points: Option<&'s Pipeline>,
+/// The pass's pipelines (one per variant and topology) and its two set layouts: set 0 (frame,
+/// materials, fabrics, lights, vertex colours, thread colours) and set 1 (a material's textures).
+pub struct GBufferPass {
+    frame_layout: SetLayout,
+    pub(crate) material_layout: SetLayout,
+    variants: HashMap<(VariantKey, Topology), Pipeline>,
 }
 
-/// Writes every G-buffer target and depth. Reads: scene geometry, materials, frame uniform.
-pub fn gbuffer_pass<'s>(
-    cmd: &mut Cmd<'s>,
-    pipelines: &GBufferPipelines<'s>,
-    scene: &'s GpuScene,
-    frame_set: DescriptorSet<'s>,
-    material_sets: &[DescriptorSet<'s>],
-    targets: &'s Targets,
-) {
-    for img in targets.gbuffer_colors() {
-        cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
-    }
-    cmd.transition(
-        &targets.depth,
-        Usage::Undefined,
-        Usage::DepthAttachment,
-        None,
-    );
-    let colors: Vec<Attachment> = targets
-        .gbuffer_colors()
-        .into_iter()
-        .map(|image| Attachment {
-            image,
-            clear: Some([0.0; 4]),
+/// What the pass reads; it writes every G-buffer target and depth.
+pub struct GBufferInputs<'s> {
+    pub scene: &'s GpuScene,
+    /// The frame's uniform (camera, environment, counts).
+    pub frame: &'s Buffer,
+    /// The lamps (read by the vertex stage for Gouraud shading only).
+    pub lights: &'s Buffer,
+    /// Vertex colours: the scene's, or white per vertex when the plan compiles them in for a
+    /// scene without any.
+    pub colors: &'s Buffer,
+    /// Per material, the set of its textures (`material_layout`).
+    pub material_sets: Vec<DescriptorSet<'s>>,
+    pub targets: &'s Targets,
+}
+
+impl GBufferPass {
+    pub fn new(ctx: &Context) -> crate::Result<GBufferPass> {
+        let shaders = [&shaders::GBUFFER_VERT, &shaders::GBUFFER_FRAG];
+        Ok(GBufferPass {
+            frame_layout: ctx.reflected_set_layout(&shaders, 0)?,
+            material_layout: ctx.reflected_set_layout(&shaders, 1)?,
+            variants: HashMap::new(),
         })
-        .collect();
-    cmd.begin_rendering(
-        &colors,
-        Some(Attachment {
-            image: &targets.depth,
-            clear: Some([0.0; 4]),
-        }),
-    );
-    cmd.bind_vertex_buffer(&scene.vertices);
-    cmd.bind_index_buffer(&scene.indices);
-    // Each topology with its pipeline (the same layout and shaders); depth makes the order moot.
-    for (topology, pipeline) in [
-        (Topology::Triangles, Some(pipelines.triangles)),
-        (Topology::Lines, pipelines.lines),
-        (Topology::Points, pipelines.points),
-    ] {
-        let Some(pipeline) = pipeline else { continue };
-        // Draws the G-buffer cannot hold are the transparent pass's.
-        let mut draws = scene
-            .draws
-            .iter()
-            .filter(|d| !d.forward && d.topology == topology)
-            .peekable();
-        if draws.peek().is_none() {
-            continue;
-        }
-        cmd.bind_pipeline(pipeline);
-        cmd.bind_sets(pipeline, 0, &[frame_set]);
-        for draw in draws {
-            let material = draw.material.min(scene.material_count - 1);
-            cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
-            cmd.set_cull(if draw.double_sided {
-                Cull::None
-            } else {
-                Cull::Back
-            });
-            let mut push = DrawPush::new(draw.world, material);
-            if !draw.receive_shadows {
-                push.flags &= !DRAW_RECEIVES_SHADOWS;
+    }
+
+    /// The variant `options` and `plan` ask for (gbuffer.frag's constants by id). `weave_source`:
+    /// 0 the RGBA16F/RGBA8 mip chain, 1 analytic, 2 the summed-area table filtered, 3 fetched;
+    /// `light_types`: the scene's lamp types (the vertex stage's, for Gouraud shading only).
+    pub fn key(
+        options: &RenderOptions,
+        plan: &Plan,
+        weave_source: u32,
+        light_types: u32,
+    ) -> VariantKey {
+        VariantKey(vec![
+            (0, "accuracy", options.accuracy.code()),
+            (1, "weave", weave_source),
+            (2, "shading", options.shading as u32),
+            // Gouraud lights vertices: only then does the pass depend on the light types.
+            (
+                3,
+                "light_types",
+                if options.shading == Shading::Gouraud {
+                    light_types
+                } else {
+                    7
+                },
+            ),
+            (4, "footprint", options.footprint.pieces()),
+            (5, "vertex_colors", plan.vertex_colors as u32),
+            (6, "alpha_mask", plan.alpha_mask as u32),
+            (7, "thread_colours", plan.features.thread_colours as u32),
+        ])
+    }
+
+    /// The topologies of `key` the plan draws whose pipeline is not made yet.
+    pub fn missing(&self, key: &VariantKey, plan: &Plan) -> Vec<Topology> {
+        [
+            (true, Topology::Triangles),
+            (plan.line_draws > 0, Topology::Lines),
+            (plan.point_draws > 0, Topology::Points),
+        ]
+        .into_iter()
+        .filter(|&(needed, t)| needed && !self.variants.contains_key(&(key.clone(), t)))
+        .map(|(_, t)| t)
+        .collect()
+    }
+
+    /// Makes the pipeline of variant `key` for `topology` (not kept: see [`GBufferPass::insert`]).
+    pub fn make(
+        &self,
+        ctx: &Context,
+        key: &VariantKey,
+        topology: Topology,
+    ) -> crate::Result<Pipeline> {
+        ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: &format!(
+                "gbuffer[{}{}]",
+                match topology {
+                    Topology::Triangles => "",
+                    Topology::Lines => "lines, ",
+                    Topology::Points => "points, ",
+                },
+                key.describe()
+            ),
+            vertex: &shaders::GBUFFER_VERT,
+            fragment: &shaders::GBUFFER_FRAG,
+            vertex_layout: Some(gbuffer_vertex_layout()),
+            color_formats: &[
+                ALBEDO_FORMAT,
+                FRAME_FORMAT,
+                SURFACE_FORMAT,
+                FABRIC_FORMAT,
+                EMISSIVE_FORMAT,
+                SPECULAR_FORMAT,
+            ],
+            depth_format: Some(DEPTH_FORMAT),
+            set_layouts: &[&self.frame_layout, &self.material_layout],
+            push_constant_size: std::mem::size_of::<DrawPush>() as u32,
+            push_stages: Stages::GRAPHICS,
+            constants: &key.constants(),
+            blend: false,
+            topology,
+        })
+    }
+
+    pub fn insert(&mut self, key: VariantKey, topology: Topology, pipeline: Pipeline) {
+        self.variants.insert((key, topology), pipeline);
+    }
+
+    pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
+        self.variants.values()
+    }
+
+    /// Records the pass with variant `key` (made by [`GBufferPass::make`] for every topology
+    /// the scene draws).
+    pub fn record<'s>(
+        &'s self,
+        pool: &'s DescriptorPool,
+        key: &VariantKey,
+        inputs: GBufferInputs<'s>,
+    ) -> crate::Result<Recorded<'s>> {
+        let scene = inputs.scene;
+        let frame_set = pool.set(
+            &self.frame_layout,
+            &[
+                (0, Resource::Uniform(inputs.frame)),
+                (1, Resource::Storage(&scene.materials)),
+                (2, Resource::Storage(&scene.fabrics)),
+                (3, Resource::Storage(inputs.lights)),
+                (4, Resource::Storage(inputs.colors)),
+                (5, Resource::Storage(&scene.thread_colours)),
+            ],
+        )?;
+        let pipelines: Vec<(Topology, &'s Pipeline)> =
+            [Topology::Triangles, Topology::Lines, Topology::Points]
+                .into_iter()
+                .filter(|&t| {
+                    t == Topology::Triangles || scene.draws.iter().any(|d| d.topology == t)
+                })
+                .filter_map(|t| self.variants.get(&(key.clone(), t)).map(|p| (t, p)))
+                .collect();
+        let names = pipelines.iter().map(|(_, p)| p.name.clone()).collect();
+        let targets = inputs.targets;
+        let material_sets = inputs.material_sets;
+        Ok(Recorded::new("gbuffer", names, move |cmd| {
+            for img in targets.gbuffer_colors() {
+                cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
             }
-            cmd.push_constants(pipeline, &push);
-            cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
-        }
+            cmd.transition(
+                &targets.depth,
+                Usage::Undefined,
+                Usage::DepthAttachment,
+                None,
+            );
+            let colors: Vec<Attachment> = targets
+                .gbuffer_colors()
+                .into_iter()
+                .map(|image| Attachment {
+                    image,
+                    clear: Some([0.0; 4]),
+                })
+                .collect();
+            cmd.begin_rendering(
+                &colors,
+                Some(Attachment {
+                    image: &targets.depth,
+                    clear: Some([0.0; 4]),
+                }),
+            );
+            cmd.bind_vertex_buffer(&scene.vertices);
+            cmd.bind_index_buffer(&scene.indices);
+            // Each topology with its pipeline (the same layout and shaders); depth makes the
+            // order moot.
+            for (topology, pipeline) in pipelines {
+                // Draws the G-buffer cannot hold are the transparent pass's.
+                let mut draws = scene
+                    .draws
+                    .iter()
+                    .filter(|d| !d.forward && d.topology == topology)
+                    .peekable();
+                if draws.peek().is_none() {
+                    continue;
+                }
+                cmd.bind_pipeline(pipeline);
+                cmd.bind_sets(pipeline, 0, &[frame_set]);
+                for draw in draws {
+                    let material = draw.material.min(scene.material_count - 1);
+                    cmd.bind_sets(pipeline, 1, &[material_sets[material as usize]]);
+                    cmd.set_cull(if draw.double_sided {
+                        Cull::None
+                    } else {
+                        Cull::Back
+                    });
+                    let mut push = DrawPush::new(draw.world, material);
+                    if !draw.receive_shadows {
+                        push.flags &= !DRAW_RECEIVES_SHADOWS;
+                    }
+                    cmd.push_constants(pipeline, &push);
+                    cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+                }
+            }
+            cmd.end_rendering();
+            for img in targets.gbuffer_colors() {
+                cmd.transition(img, Usage::ColorAttachment, Usage::FragmentRead, None);
+            }
+            cmd.transition(
+                &targets.depth,
+                Usage::DepthAttachment,
+                Usage::FragmentRead,
+                None,
+            );
+        }))
     }
-    cmd.end_rendering();
-    for img in targets.gbuffer_colors() {
-        cmd.transition(img, Usage::ColorAttachment, Usage::FragmentRead, None);
-    }
-    cmd.transition(
-        &targets.depth,
-        Usage::DepthAttachment,
-        Usage::FragmentRead,
-        None,
-    );
 }

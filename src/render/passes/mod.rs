@@ -1,5 +1,8 @@
 //! The passes of a frame, one file each, in the order a frame runs them (the plan's
-//! [`crate::render::Pass`] list; `Renderer::render_frame` in frame.rs records them in this order):
+//! [`crate::render::Pass`] list; `Renderer::render_frame` in frame.rs records them in this order).
+//! Each pass is a struct that owns its pipelines and set layouts (`XPass::new(ctx)`, the layouts
+//! reflected from its shaders' SPIR-V) and records itself from named inputs
+//! (`record(pool, XInputs { .. })`), returning a [`Recorded`] the frame submits:
 //!
 //! 1. [`environment`]: once per environment, cached: radiance cube, GGX-prefiltered cube, SH;
 //! 2. weave (at upload, `Renderer::build_weave`): the coverage textures of each distinct weave;
@@ -11,7 +14,8 @@
 //! 8. [`antialias`] (`--aa fxaa`): edge anti-aliasing of the tone-mapped image into the 8-bit
 //!    target (the tone-map pass then writes an intermediate one).
 //!
-//! Each function's signature says what it reads and writes.
+//! Adding a pass: its GLSL, one file here, one line in the plan's pass list, one call in the
+//! frame (docs/architecture.md, "Adding a pass").
 
 pub mod antialias;
 pub mod environment;
@@ -20,6 +24,7 @@ pub mod lighting;
 pub mod shadow;
 pub mod tonemap;
 pub mod transparent;
+pub mod weave;
 
 /// The body of a fullscreen pass (lighting, tone map, anti-aliasing): `target` from undefined to
 /// a colour attachment, `pipeline` with `set` (and `push`, if any) over one fullscreen triangle.
@@ -46,4 +51,89 @@ pub(crate) fn fullscreen<'s, P: bytemuck::Pod>(
     }
     cmd.draw(3);
     cmd.end_rendering();
+}
+
+/// A pipeline variant's specialization constants, each with its id, its name and its value, in id
+/// order: its key among the variants of one pass, and (as `name=value` pairs) its pipeline's name.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash)]
+pub(crate) struct VariantKey(pub Vec<(u32, &'static str, u32)>);
+
+impl VariantKey {
+    /// (id, value) pairs, as the pipeline is specialized.
+    pub fn constants(&self) -> Vec<(u32, u32)> {
+        self.0.iter().map(|&(id, _, v)| (id, v)).collect()
+    }
+
+    /// `name=value, ...` (pipeline names, `--stats`).
+    pub fn describe(&self) -> String {
+        self.0
+            .iter()
+            .map(|(_, n, v)| format!("{n}={v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// One pass of a frame, recorded and waiting for the frame's submission: its name (the
+/// timings' and `--stats`' name), the pipelines it binds, and its commands.
+pub(crate) struct Recorded<'s> {
+    pub name: &'static str,
+    pub pipelines: Vec<String>,
+    pub commands: Box<dyn FnOnce(&mut crate::vk::Cmd<'s>) + 's>,
+}
+
+impl<'s> Recorded<'s> {
+    pub fn new(
+        name: &'static str,
+        pipelines: Vec<String>,
+        commands: impl FnOnce(&mut crate::vk::Cmd<'s>) + 's,
+    ) -> Recorded<'s> {
+        Recorded {
+            name,
+            pipelines,
+            commands: Box::new(commands),
+        }
+    }
+}
+
+/// What the lighting and transparent passes both read to light a surface, at the set-0 bindings
+/// every shader gives them (one number per resource: glsl/lighting.frag, glsl/forward.frag).
+pub(crate) struct SceneLighting<'s> {
+    /// The frame's uniform (camera, environment rotation and SH, counts).
+    pub frame: &'s crate::vk::Buffer,
+    /// The lamps, with each shadow caster's map index.
+    pub lights: &'s crate::vk::Buffer,
+    /// The shadow atlas (a 1 x 1 lit one when no map is rendered), its comparison sampler, and
+    /// one record per map.
+    pub shadow_atlas: &'s crate::vk::Image,
+    pub shadow_sampler: &'s crate::vk::Sampler,
+    pub shadows: &'s crate::vk::Buffer,
+    /// Per screen tile, the lamps whose range reaches it (render::tiles).
+    pub tile_lights: &'s crate::vk::Buffer,
+    /// The environment: radiance cube, GGX-prefiltered cube, DFG table (1 x 1 black cubes when
+    /// there is none), and their sampler.
+    pub env_radiance: &'s crate::vk::Image,
+    pub env_specular: &'s crate::vk::Image,
+    pub env_dfg: &'s crate::vk::Image,
+    pub env_sampler: &'s crate::vk::Sampler,
+}
+
+impl<'s> SceneLighting<'s> {
+    /// The bindings of set 0 these resources have in every shader that reads them.
+    pub fn bindings(&self) -> [(u32, crate::vk::Resource<'s>); 8] {
+        use crate::vk::Resource;
+        [
+            (0, Resource::Uniform(self.frame)),
+            (3, Resource::Storage(self.lights)),
+            (
+                10,
+                Resource::Sampled(self.shadow_atlas, self.shadow_sampler),
+            ),
+            (11, Resource::Storage(self.shadows)),
+            (12, Resource::Storage(self.tile_lights)),
+            (13, Resource::Sampled(self.env_radiance, self.env_sampler)),
+            (14, Resource::Sampled(self.env_specular, self.env_sampler)),
+            (15, Resource::Sampled(self.env_dfg, self.env_sampler)),
+        ]
+    }
 }

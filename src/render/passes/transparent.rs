@@ -13,11 +13,187 @@
 //! large one whose centre is nearer than a small one in front of it, and the back faces of a
 //! single-sided mesh (culled, as the spec says). No order-independent transparency.
 
+use std::collections::HashMap;
+
 use glam::{Mat4, Vec3};
 
-use crate::render::frame::{GpuScene, Targets};
+use super::{Recorded, SceneLighting, VariantKey};
 use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
-use crate::vk::{Attachment, Cmd, Cull, DescriptorSet, Image, Pipeline, Usage};
+use crate::render::plan::Plan;
+use crate::render::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
+use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
+use crate::vk::{
+    shaders, Attachment, Buffer, Cmd, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc,
+    Image, Pipeline, Resource, Sampler, SetLayout, Stages, Topology, Usage,
+};
+
+/// The pass's pipelines by variant and blend mode (true: BLEND, blended without depth writes;
+/// false: transmissive draws, opaque, writing depth), and its two set layouts (reflected from
+/// gbuffer.vert and forward.frag: set 0 the G-buffer pass's buffers and the lighting pass's
+/// shadow and environment bindings, set 1 a material's textures, every slot).
+pub struct TransparentPass {
+    layout: SetLayout,
+    pub(crate) material_layout: SetLayout,
+    variants: HashMap<(VariantKey, bool), Pipeline>,
+}
+
+/// What the pass reads (see [`TransparentPass::record`]).
+pub struct TransparentInputs<'s> {
+    pub scene: &'s GpuScene,
+    pub lighting: SceneLighting<'s>,
+    /// Vertex colours (the G-buffer pass's).
+    pub colors: &'s Buffer,
+    /// Per material, the set of its textures (`material_layout`).
+    pub material_sets: Vec<DescriptorSet<'s>>,
+    pub targets: &'s Targets,
+    /// The backdrop for transmissive draws (the lit opaque image with mips, made by the frame
+    /// when the plan has transmissive draws) and its sampler; else `white` is bound.
+    pub backdrop: Option<(&'s Image, &'s Sampler)>,
+    pub white: (&'s Image, &'s Sampler),
+    /// The camera's view matrix (the blended draws' order).
+    pub view: Mat4,
+    /// `Force::back_faces_first` for the opaque forward draws (a bench comparison).
+    pub opaque_back_faces_first: bool,
+}
+
+impl TransparentPass {
+    pub fn new(ctx: &Context) -> crate::Result<TransparentPass> {
+        let shaders = [&shaders::GBUFFER_VERT, &shaders::FORWARD_FRAG];
+        Ok(TransparentPass {
+            layout: ctx.reflected_set_layout(&shaders, 0)?,
+            material_layout: ctx.reflected_set_layout(&shaders, 1)?,
+            variants: HashMap::new(),
+        })
+    }
+
+    /// The variant for `plan`: gbuffer.frag's constants under their ids (the vertex stage reads
+    /// 2, 3 and 5, with LIGHT_TYPES the scene's), lighting.frag's others + 10, then the
+    /// forward-only features.
+    pub fn key(
+        gbuffer: &VariantKey,
+        lighting: &VariantKey,
+        light_types: u32,
+        plan: &Plan,
+    ) -> VariantKey {
+        let mut key: Vec<(u32, &'static str, u32)> = gbuffer.0[..6].to_vec();
+        key[3].2 = light_types;
+        key.extend(
+            lighting
+                .0
+                .iter()
+                .filter(|(id, _, _)| ![0, 3, 4].contains(id))
+                .map(|&(id, name, value)| (id + 10, name, value)),
+        );
+        key.extend([
+            (20, "transmission", (plan.transmission_draws > 0) as u32),
+            (21, "coat", (plan.coat_draws > 0) as u32),
+            (
+                22,
+                "diffuse_transmission",
+                (plan.diffuse_transmission_draws > 0) as u32,
+            ),
+            (23, "iridescence", (plan.iridescence_draws > 0) as u32),
+            (24, "dispersion", (plan.dispersion_draws > 0) as u32),
+            (25, "thread_colours", plan.features.thread_colours as u32),
+        ]);
+        VariantKey(key)
+    }
+
+    /// The blend modes of `key` the plan draws whose pipeline is not made yet.
+    pub fn missing(&self, key: &VariantKey, plan: &Plan) -> Vec<bool> {
+        [
+            (plan.forward_opaque_draws > 0, false),
+            (plan.blend_draws > 0, true),
+        ]
+        .into_iter()
+        .filter(|&(needed, b)| needed && !self.variants.contains_key(&(key.clone(), b)))
+        .map(|(_, b)| b)
+        .collect()
+    }
+
+    /// Makes the pipeline of variant `key` and blend mode `blend` (not kept: see
+    /// [`TransparentPass::insert`]).
+    pub fn make(&self, ctx: &Context, key: &VariantKey, blend: bool) -> crate::Result<Pipeline> {
+        ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: &format!(
+                "forward[{}{}]",
+                if blend { "blend, " } else { "opaque, " },
+                key.describe()
+            ),
+            vertex: &shaders::GBUFFER_VERT,
+            fragment: &shaders::FORWARD_FRAG,
+            vertex_layout: Some(gbuffer_vertex_layout()),
+            color_formats: &[HDR_FORMAT],
+            depth_format: Some(DEPTH_FORMAT),
+            set_layouts: &[&self.layout, &self.material_layout],
+            push_constant_size: std::mem::size_of::<DrawPush>() as u32,
+            push_stages: Stages::GRAPHICS,
+            constants: &key.constants(),
+            blend,
+            topology: Topology::Triangles,
+        })
+    }
+
+    pub fn insert(&mut self, key: VariantKey, blend: bool, pipeline: Pipeline) {
+        self.variants.insert((key, blend), pipeline);
+    }
+
+    pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
+        self.variants.values()
+    }
+
+    /// Records the pass with variant `key`: the transmissive draws, then the blended ones, over
+    /// the HDR target (see [`transparent_pass`]). Returns also how many draws it blends.
+    pub fn record<'s>(
+        &'s self,
+        pool: &'s DescriptorPool,
+        key: &VariantKey,
+        inputs: TransparentInputs<'s>,
+    ) -> crate::Result<(Recorded<'s>, usize)> {
+        let scene = inputs.scene;
+        let pipelines = Pipelines {
+            opaque: self.variants.get(&(key.clone(), false)),
+            blend: self.variants.get(&(key.clone(), true)),
+        };
+        let (backdrop_image, backdrop_sampler) = inputs.backdrop.unwrap_or(inputs.white);
+        let mut bindings = vec![
+            (1, Resource::Storage(&scene.materials)),
+            (2, Resource::Storage(&scene.fabrics)),
+            (4, Resource::Storage(inputs.colors)),
+            (5, Resource::Storage(&scene.thread_colours)),
+            (16, Resource::Sampled(backdrop_image, backdrop_sampler)),
+        ];
+        bindings.extend(inputs.lighting.bindings());
+        let frame_set = pool.set(&self.layout, &bindings)?;
+        let order = back_to_front(scene, inputs.view);
+        let blended = order.len();
+        let names = [pipelines.opaque, pipelines.blend]
+            .into_iter()
+            .flatten()
+            .map(|p| p.name.clone())
+            .collect();
+        let targets = inputs.targets;
+        let backdrop = inputs.backdrop.map(|(b, _)| b);
+        let material_sets = inputs.material_sets;
+        let back_first = inputs.opaque_back_faces_first;
+        Ok((
+            Recorded::new("transparent", names, move |cmd| {
+                transparent_pass(
+                    cmd,
+                    pipelines,
+                    scene,
+                    frame_set,
+                    &material_sets,
+                    targets,
+                    backdrop,
+                    &order,
+                    back_first,
+                )
+            }),
+            blended,
+        ))
+    }
+}
 
 /// The indices into `scene.draws` of the transparent pass's draws, farthest first from a camera with view
 /// matrix `view` (view space looks down -Z): by the view-space depth of each draw's bounds'
@@ -71,13 +247,13 @@ pub fn bounds_centre(positions: impl Iterator<Item = [f32; 3]>) -> Vec3 {
 /// The pass's two pipelines (forward.frag): for its opaque draws (transmissive, not BLEND:
 /// replacing, depth written) and for its BLEND draws (blended, depth only tested); each only when
 /// the scene has such draws.
-pub struct Pipelines<'s> {
-    pub opaque: Option<&'s Pipeline>,
-    pub blend: Option<&'s Pipeline>,
+struct Pipelines<'s> {
+    opaque: Option<&'s Pipeline>,
+    blend: Option<&'s Pipeline>,
 }
 
 #[allow(clippy::too_many_arguments)]
-pub fn transparent_pass<'s>(
+fn transparent_pass<'s>(
     cmd: &mut Cmd<'s>,
     pipelines: Pipelines<'s>,
     scene: &'s GpuScene,

@@ -1,0 +1,147 @@
+//! The render targets of one resolution (the G-buffer, depth, HDR and 8-bit output, and the
+//! intermediates some passes add), their formats, and the memory check made before they exist.
+
+use crate::vk::{Context, Format, Image, ImageDesc, ImageUsageFlags};
+use crate::Error;
+
+pub const ALBEDO_FORMAT: Format = Format::R8G8B8A8_SRGB;
+/// Normal + tangent, octahedral, explicitly rounded 16-bit integers (frame.glsl's frame_encode).
+pub const FRAME_FORMAT: Format = Format::R16G16B16A16_UINT;
+pub const SURFACE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const FABRIC_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const EMISSIVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// The dielectric specular layer (KHR_materials_specular): rgb F0, a: specular weight.
+pub const SPECULAR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
+pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
+pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
+/// The weave's summed-area table (`--weave-precision sat`): f32, fetched (never filtered).
+pub const WEAVE_SAT_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
+pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
+pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
+
+/// The G-buffer and output targets of one resolution.
+pub(crate) struct Targets {
+    pub(crate) albedo: Image,
+    pub(crate) frame: Image,
+    pub(crate) surface: Image,
+    pub(crate) fabric: Image,
+    pub(crate) emissive: Image,
+    pub(crate) specular: Image,
+    pub(crate) depth: Image,
+    pub(crate) hdr: Image,
+    pub(crate) ldr: Image,
+    /// The lit opaque image with box-filtered mips, for transmissive surfaces (made by the first
+    /// frame that has one).
+    pub(crate) backdrop: Option<Image>,
+    /// The tone-mapped image before edge anti-aliasing (made by the first frame that plans the
+    /// anti-aliasing pass).
+    pub(crate) tonemapped: Option<Image>,
+}
+
+impl Targets {
+    pub(crate) fn new(ctx: &Context, width: u32, height: u32) -> crate::Result<Targets> {
+        let color = ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED;
+        let read = ImageUsageFlags::TRANSFER_SRC;
+        let t = |name: &str, format: Format, usage: ImageUsageFlags| {
+            ctx.create_image(&ImageDesc::new_2d(name, format, width, height).usage(usage))
+        };
+        Ok(Targets {
+            albedo: t("gbuffer albedo", ALBEDO_FORMAT, color | read)?,
+            frame: t("gbuffer normal+tangent", FRAME_FORMAT, color | read)?,
+            surface: t("gbuffer surface", SURFACE_FORMAT, color | read)?,
+            fabric: t("gbuffer fabric coverage", FABRIC_FORMAT, color | read)?,
+            emissive: t("gbuffer emissive", EMISSIVE_FORMAT, color | read)?,
+            specular: t("gbuffer specular", SPECULAR_FORMAT, color | read)?,
+            depth: t(
+                "gbuffer depth",
+                DEPTH_FORMAT,
+                ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED | read,
+            )?,
+            hdr: t("hdr", HDR_FORMAT, color | read)?,
+            ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
+            backdrop: None,
+            tonemapped: None,
+        })
+    }
+
+    pub(crate) fn gbuffer_colors(&self) -> [&Image; 6] {
+        [
+            &self.albedo,
+            &self.frame,
+            &self.surface,
+            &self.fabric,
+            &self.emissive,
+            &self.specular,
+        ]
+    }
+}
+
+/// Bytes a pixel of the render targets takes on the device (six G-buffer targets, depth, HDR,
+/// LDR: 60).
+pub const TARGET_BYTES_PER_PIXEL: u64 = 4 + 8 + 8 + 8 + 8 + 8 + 4 + 8 + 4;
+
+/// Bytes a pixel of the readback takes in host memory: the LDR buffer and its copy (4 + 4), and
+/// with `read_hdr` the half-float buffer and the f32 image (8 + 16).
+pub fn readback_bytes_per_pixel(read_hdr: bool) -> u64 {
+    8 + if read_hdr { 24 } else { 0 }
+}
+
+/// The memory the host can still give (MemAvailable of /proc/meminfo), where known.
+pub fn host_available_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// Refuses, before any target is created, a frame size the device cannot hold: a side beyond
+/// maxImageDimension2D, render targets beyond the device's largest device-local heap, or, on a
+/// CPU device, targets and readback beyond 90 % of the memory the host has available. A CPU device's
+/// "device memory" is system memory: its heap size is nominal (lavapipe reports 2 GiB and
+/// allocates beyond it), and an allocation too large is met by the kernel's OOM killer rather
+/// than an error, so there the host's available memory is the bound.
+pub fn check_target_memory(
+    info: &crate::vk::DeviceInfo,
+    host_available: Option<u64>,
+    width: u32,
+    height: u32,
+    read_hdr: bool,
+) -> crate::Result<()> {
+    let max = info.max_image_dimension_2d;
+    if width > max || height > max {
+        return Err(Error::device(format!(
+            "--size {width}x{height} is larger than the device '{}' supports ({max} pixels a side): choose a smaller --size",
+            info.name
+        )));
+    }
+    let gib = |b: u64| b as f64 / f64::from(1u32 << 30);
+    let pixels = u64::from(width) * u64::from(height);
+    let targets = pixels * TARGET_BYTES_PER_PIXEL;
+    let heap = info.device_local_heap_bytes;
+    if !info.is_cpu() && heap > 0 && targets > heap {
+        return Err(Error::device(format!(
+            "--size {width}x{height} needs {:.1} GiB of device memory for its render targets ({TARGET_BYTES_PER_PIXEL} bytes a pixel); the device '{}' has {:.1} GiB: choose a smaller --size",
+            gib(targets),
+            info.name,
+            gib(heap)
+        )));
+    }
+    if info.is_cpu() {
+        if let Some(available) = host_available {
+            let total = targets + pixels * readback_bytes_per_pixel(read_hdr);
+            // A tenth kept back for what the estimate leaves out: the scene, its textures and
+            // buffers, pipelines, the allocator's slack, the rest of the process.
+            if total > available / 10 * 9 {
+                return Err(Error::device(format!(
+                    "--size {width}x{height} needs {:.1} GiB of memory for its render targets and readback on the CPU device '{}'; the system has {:.1} GiB available (weft plans for at most 90 % of it): choose a smaller --size, or close other programs",
+                    gib(total),
+                    info.name,
+                    gib(available)
+                )));
+            }
+        }
+    }
+    Ok(())
+}
