@@ -297,44 +297,16 @@ pub fn dir_to_uv(d: [f64; 3]) -> (f64, f64) {
     (u.rem_euclid(1.0), v)
 }
 
-/// The nine real SH basis functions at unit direction d (bands 0..2).
+/// The nine real SH basis functions at unit direction d (bands 0..2), in f64: the one Rust copy
+/// of the basis is [`crate::reference::ibl_twin::formula::sh_basis`].
 pub fn sh_basis(d: [f64; 3]) -> [f64; 9] {
-    let [x, y, z] = d;
-    [
-        0.282_094_791_773_878_1,
-        0.488_602_511_902_919_9 * y,
-        0.488_602_511_902_919_9 * z,
-        0.488_602_511_902_919_9 * x,
-        1.092_548_430_592_079_2 * x * y,
-        1.092_548_430_592_079_2 * y * z,
-        0.315_391_565_252_520_0 * (3.0 * z * z - 1.0),
-        1.092_548_430_592_079_2 * x * z,
-        0.546_274_215_296_039_6 * (x * x - y * y),
-    ]
+    crate::reference::ibl_twin::formula::sh_basis(d)
 }
 
 /// `sh_irradiance` of glsl/include/ibl.glsl: irradiance/π at env-space normal n from
 /// [`Environment::sh9`], clamped at 0 (order-2 SH ring below zero opposite a sun).
 pub fn sh_eval(sh: &[[f32; 3]; 9], n: [f32; 3]) -> [f32; 3] {
-    let [x, y, z] = n;
-    let b = [
-        0.282_094_8f32,
-        0.488_602_5 * y,
-        0.488_602_5 * z,
-        0.488_602_5 * x,
-        1.092_548_4 * x * y,
-        1.092_548_4 * y * z,
-        0.315_391_6 * (3.0 * z * z - 1.0),
-        1.092_548_4 * x * z,
-        0.546_274_2 * (x * x - y * y),
-    ];
-    let mut e = [0f32; 3];
-    for k in 0..9 {
-        for c in 0..3 {
-            e[c] += sh[k][c] * b[k];
-        }
-    }
-    e.map(|v| v.max(0.0))
+    crate::reference::ibl_twin::formula::sh_irradiance(sh, n)
 }
 
 /// The world direction of env-space direction `e` under `--env-rotation degrees` (the transpose
@@ -550,17 +522,14 @@ pub fn dfg(nv: f64, roughness: f64, samples: u32) -> [f64; 2] {
     use crate::reference::shading::{ggx_d, pbr_brdf_cos};
     let r = roughness as f32;
     let alpha = (roughness * roughness).max(1e-3);
-    let a2 = alpha * alpha;
     let v = [(1.0 - nv * nv).max(0.0).sqrt(), 0.0, nv];
     let vf = v.map(|x| x as f32);
     let (mut ab, mut b) = (0.0, 0.0);
     for s in 0..samples {
         let (x1, x2) = hammersley(s, samples);
-        // GGX half vector: pdf D(h)·(n·h).
-        let phi = 2.0 * PI * x1;
-        let cos_t = ((1.0 - x2) / (1.0 + (a2 - 1.0) * x2)).sqrt();
-        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let h = [sin_t * phi.cos(), sin_t * phi.sin(), cos_t];
+        // GGX half vector (ibl.glsl's ggx_sample_h): pdf D(h)·(n·h).
+        let h = crate::reference::ibl_twin::formula::ggx_sample_h::<f64>([x1, x2], alpha);
+        let cos_t = h[2];
         let vh = v[0] * h[0] + v[2] * h[2];
         let l = [
             2.0 * vh * h[0] - v[0],
@@ -583,10 +552,8 @@ pub fn dfg(nv: f64, roughness: f64, samples: u32) -> [f64; 2] {
 
 /// The Hammersley point i of n in [0, 1)²: (i/n, radical inverse of i in base 2).
 pub fn hammersley(i: u32, n: u32) -> (f64, f64) {
-    (
-        i as f64 / n as f64,
-        i.reverse_bits() as f64 / 4_294_967_296.0,
-    )
+    let [x, y] = crate::reference::ibl_twin::formula::hammersley::<f64>(i, n);
+    (x, y)
 }
 
 #[cfg(test)]

@@ -11,11 +11,12 @@
 //! - at [`Iv`] (interval arithmetic) it is the error analysis: an enclosure of every value a
 //!   conforming implementation may return for that input (see below).
 //!
-//! The functions that already had a Rust twin keep it: [`crate::env::sh_eval`],
-//! [`crate::env::hammersley`], [`crate::render::environment::cube_texel_dir`] (and
-//! [`crate::env::env_from_world`] makes `env_dir`'s rows). Their generic copies in [`formula`]
-//! exist only for the error analysis; `tests/ibl_probe_gpu.rs` checks that at f32 they compute
-//! exactly what the existing twins compute, bit for bit.
+//! The functions the rest of weft calls by other names are these, instantiated:
+//! [`crate::env::sh_eval`] is `sh_irradiance` at f32, [`crate::env::sh_basis`] `sh_basis` at f64,
+//! [`crate::env::hammersley`] `hammersley` at f64, [`crate::render::environment::cube_texel_dir`]
+//! `cube_texel_dir` at f32, and the DFG table samples with `ggx_sample_h` at f64: one Rust copy
+//! of each formula (issue 24 found four of the SH basis). [`crate::env::env_from_world`] makes
+//! `env_dir`'s rows.
 //!
 //! # Error bounds
 //! For each input and output, [`ibl_probe_bounds`] evaluates the formula in interval arithmetic
@@ -926,21 +927,27 @@ pub mod formula {
         [T::dot3(r0, w), T::dot3(r1, w), T::dot3(r2, w)]
     }
 
-    /// `sh_irradiance` (ibl.glsl); its twin is [`crate::env::sh_eval`].
-    pub fn sh_irradiance<T: Real>(sh: &[[T; 3]; 9], n: [T; 3]) -> [T; 3] {
-        let [x, y, z] = n;
+    /// The nine real SH basis functions (bands 0..2) at unit direction `d`, as `sh_irradiance`
+    /// (ibl.glsl) weighs them; [`crate::env::sh_basis`] is this at f64.
+    pub fn sh_basis<T: Real>(d: [T; 3]) -> [T; 9] {
+        let [x, y, z] = d;
         let c = |glsl: f32, ideal: f64| T::ideal(glsl, ideal);
-        let b = [
+        [
             c(0.282_094_8, 0.282_094_791_773_878_1),
             c(0.488_602_5, 0.488_602_511_902_919_9) * y,
             c(0.488_602_5, 0.488_602_511_902_919_9) * z,
             c(0.488_602_5, 0.488_602_511_902_919_9) * x,
             c(1.092_548_4, 1.092_548_430_592_079_2) * x * y,
             c(1.092_548_4, 1.092_548_430_592_079_2) * y * z,
-            c(0.315_391_6, 0.315_391_565_252_52) * (T::lit(3.0) * z * z - T::lit(1.0)),
+            c(0.315_391_6, 0.315_391_565_252_520_0) * (T::lit(3.0) * z * z - T::lit(1.0)),
             c(1.092_548_4, 1.092_548_430_592_079_2) * x * z,
             c(0.546_274_2, 0.546_274_215_296_039_6) * (x * x - y * y),
-        ];
+        ]
+    }
+
+    /// `sh_irradiance` (ibl.glsl); [`crate::env::sh_eval`] is this at f32.
+    pub fn sh_irradiance<T: Real>(sh: &[[T; 3]; 9], n: [T; 3]) -> [T; 3] {
+        let b = sh_basis(n);
         let mut e = [T::lit(0.0); 3];
         for (ch, out) in e.iter_mut().enumerate() {
             let terms: Vec<T> = (0..9).map(|k| sh[k][ch] * b[k]).collect();
@@ -949,7 +956,7 @@ pub mod formula {
         e
     }
 
-    /// `hammersley` (ibl.glsl); its twin is [`crate::env::hammersley`] (f64).
+    /// `hammersley` (ibl.glsl); [`crate::env::hammersley`] is this at f64.
     pub fn hammersley<T: Real>(i: u32, n: u32) -> [T; 2] {
         [
             T::from_u32(i) / T::from_u32(n),
@@ -1029,8 +1036,8 @@ pub mod formula {
         (one - rs) * (one - b2 * b2 * b)
     }
 
-    /// `cube_texel_dir` (cube.glsl); its twin is
-    /// [`crate::render::environment::cube_texel_dir`].
+    /// `cube_texel_dir` (cube.glsl); [`crate::render::environment::cube_texel_dir`] is this at
+    /// f32.
     pub fn cube_texel_dir<T: Real>(face: u32, x: u32, y: u32, size: u32) -> [T; 3] {
         let st =
             |t: u32| (T::from_u32(t) + T::lit(0.5)) / T::from_u32(size) * T::lit(2.0) - T::lit(1.0);
@@ -1128,10 +1135,7 @@ pub fn ibl_probe_cpu(inp: &IblProbeInput) -> IblProbeOutput {
         ggx: v4(ggx_sample_h(xi, inp.lobe[0]), 0.0),
         as_h: v4(as_sample_h(xi, inp.lobe[1], inp.lobe[2]), 0.0),
         cosine: v4(cosine_sample(xi), 0.0),
-        cube: v4(
-            crate::render::environment::cube_texel_dir(c[0], c[1], c[2], c[3]),
-            0.0,
-        ),
+        cube: v4(formula::cube_texel_dir::<f32>(c[0], c[1], c[2], c[3]), 0.0),
         uv: [hx as f32, hy as f32, uv[0], uv[1]],
         scalars: [
             fis_lod(inp.lod[0], inp.counts[2], inp.lod[1]),

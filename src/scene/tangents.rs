@@ -77,8 +77,11 @@ pub(super) fn repair_normals(vertices: &mut [Vertex], indices: &[u32]) -> usize 
 
 /// A unit vector perpendicular to the unit vector `n` (Duff et al. 2017, "Building an orthonormal
 /// basis, revisited"): continuous except across n.z = 0's sign change, and never degenerate.
+/// The same formula and sign rule (n.z = -0.0 counts as positive) as `any_perpendicular` of
+/// glsl/include/fabric.glsl and its twin in `reference::brdf`; this copy repairs meshes at load,
+/// a layer below the reference (src/lib.rs), in glam's types.
 pub(super) fn any_perpendicular(n: Vec3) -> Vec3 {
-    let sign = 1f32.copysign(n.z);
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
     Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x)

@@ -48,18 +48,7 @@ pub fn radiance_size(width: u32) -> u32 {
 /// `cube_texel_dir` of glsl/include/cube.glsl: the unit direction through the centre of texel
 /// (x, y) of face `face` (+x, -x, +y, -y, +z, -z) of a `size` cube.
 pub fn cube_texel_dir(face: u32, x: u32, y: u32, size: u32) -> [f32; 3] {
-    let s = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
-    let t = (y as f32 + 0.5) / size as f32 * 2.0 - 1.0;
-    let d = match face {
-        0 => [1.0, -t, -s],
-        1 => [-1.0, -t, s],
-        2 => [s, 1.0, t],
-        3 => [s, -1.0, -t],
-        4 => [s, -t, 1.0],
-        _ => [-s, -t, -1.0],
-    };
-    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    [d[0] / l, d[1] / l, d[2] / l]
+    crate::reference::ibl_twin::formula::cube_texel_dir::<f32>(face, x, y, size)
 }
 
 /// A preprocessed environment.
