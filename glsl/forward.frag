@@ -53,7 +53,7 @@ layout(constant_id = 24) const uint DISPERSION = 0u;
 // 1: some fabric has thread-by-thread colours (the ThreadColours buffer is read).
 layout(constant_id = 25) const uint THREAD_COLOURS = 0u;
 
-// Set 0: gbuffer.vert's bindings 0-5, then lighting.frag's shadow and environment bindings (one
+// Set 0: gbuffer.vert's and gbuffer.frag's bindings 0-5, then lighting.frag's shadow and environment bindings (one
 // number per resource in every shader).
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`, include/frame.glsl), as gbuffer.frag's binding 1

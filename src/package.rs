@@ -260,22 +260,45 @@ pub fn binding_comment(shader: &Shader, set: u32, binding: u32) -> Option<String
                     continue;
                 }
                 seen.push(name.to_string());
-                let text = INCLUDES.iter().find(|(n, _)| *n == name)?.1;
-                if let Some(found) = search(text, set, binding, seen) {
-                    return Some(found);
+                let found = INCLUDES
+                    .iter()
+                    .find(|(n, _)| *n == name)
+                    .and_then(|(_, text)| search(text, set, binding, seen));
+                if found.is_some() {
+                    return found;
                 }
                 continue;
             }
             if code.starts_with("//") || !declares(code, set, binding) {
                 continue;
             }
-            // The declaration ends on the line whose code has its ';'; the comment after that
-            // is the prose.
-            let end = lines[i..]
-                .iter()
-                .find(|l| l.split("//").next().unwrap_or("").contains(';'))?;
-            let prose = end.split_once("//")?.1.trim();
-            return (!prose.is_empty()).then(|| prose.to_string());
+            // The declaration runs to the ';' outside its braces (a block may span lines); its
+            // prose is the first comment on those lines (after the declaration on one line, on
+            // the member line or the closing line of a block).
+            let mut depth = 0i32;
+            let mut prose = None;
+            for line in &lines[i..] {
+                let (code, comment) = match line.split_once("//") {
+                    Some((code, comment)) => (code, comment.trim()),
+                    None => (*line, ""),
+                };
+                if prose.is_none() && !comment.is_empty() {
+                    prose = Some(comment.to_string());
+                }
+                let mut ended = false;
+                for c in code.chars() {
+                    match c {
+                        '{' => depth += 1,
+                        '}' => depth -= 1,
+                        ';' if depth == 0 => ended = true,
+                        _ => {}
+                    }
+                }
+                if ended {
+                    break;
+                }
+            }
+            return prose;
         }
         None
     }

@@ -503,6 +503,8 @@ fn manifest_lists_every_module_with_correct_hashes_and_sizes() {
     assert!(meaning("lighting.frag", 0, 25).contains("depth (D32)"));
     assert!(meaning("gbuffer.frag", 1, 0).contains("base colour texture"));
     assert_eq!(meaning("gbuffer.frag", 1, 4), meaning("forward.frag", 1, 4));
+    // A block over several lines: the comment on its member line.
+    assert!(meaning("fabric_probe.comp", 0, 1).starts_with("the outputs"));
     for (name, id, _) in package::SPEC_MEANINGS {
         let m = manifest
             .module(name)

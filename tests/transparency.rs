@@ -348,7 +348,7 @@ fn transmission_shows_the_backdrop_tinted_and_attenuated_as_the_twin_says() {
                         .stats
                         .pipelines
                         .iter()
-                        .any(|p| p.starts_with("forward[") && p.contains("transmission=1")));
+                        .any(|p| p.starts_with("forward[") && p.contains(", transmission=1")));
                 }
                 pixel(&frame, 32, 24)
             })

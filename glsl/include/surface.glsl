@@ -23,8 +23,8 @@ layout(set = 1, binding = 8) uniform sampler2D specular_tex;  // KHR_materials_s
 layout(set = 1, binding = 9) uniform sampler2D specular_color_tex;  // KHR_materials_specular colour texture (sRGB; white when none)
 layout(set = 1, binding = 10) uniform sampler2D anisotropy_tex;  // KHR_materials_anisotropy texture (RG direction, B strength; any when the material has none)
 // KHR_materials_transmission's texture (R) and KHR_materials_volume's thickness texture (G).
-layout(set = 1, binding = 11) uniform sampler2D transmission_tex;  // KHR_materials_transmission texture (R; white when none), as gbuffer.frag's
-layout(set = 1, binding = 12) uniform sampler2D thickness_tex;  // KHR_materials_volume thickness texture (G; white when none), as gbuffer.frag's
+layout(set = 1, binding = 11) uniform sampler2D transmission_tex;  // KHR_materials_transmission texture (R; white when none)
+layout(set = 1, binding = 12) uniform sampler2D thickness_tex;  // KHR_materials_volume thickness texture (G; white when none)
 // KHR_materials_clearcoat's textures: the factor (R), the roughness (G), the coat's normal.
 layout(set = 1, binding = 13) uniform sampler2D clearcoat_tex;  // KHR_materials_clearcoat texture (R: the factor; white when none)
 layout(set = 1, binding = 14) uniform sampler2D clearcoat_roughness_tex;  // KHR_materials_clearcoat roughness texture (G; white when none)

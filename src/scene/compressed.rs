@@ -37,7 +37,7 @@ pub(super) const BASISU: &str = "KHR_texture_basisu";
 pub(super) const EXTENSIONS: [&str; 5] = [QUANTIZATION, WEBP, MESHOPT_EXT, MESHOPT_KHR, BASISU];
 
 /// Decoded bytes of all of a scene's compressed buffer views together: 2 GiB, past the vertex and
-/// index limits of src/scene/gltf_load.rs for any layout. Checked from the JSON before decoding, so
+/// index limits of src/scene/gltf_load/ for any layout. Checked from the JSON before decoding, so
 /// a few bytes of stream cannot make weft allocate without bound.
 pub(super) const MAX_DECODED_BYTES: u64 = 1 << 31;
 
