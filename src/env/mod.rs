@@ -359,7 +359,7 @@ impl Background {
                     return Err(bad());
                 }
                 if let Some(c) = text.strip_prefix("color:") {
-                    let v = crate::render::parse_vec3("background colour", c)?;
+                    let v = crate::parse::parse_vec3("background colour", c)?;
                     if v.min_element() < 0.0 || v.max_element() > 1e4 {
                         return Err(bad());
                     }
@@ -502,7 +502,7 @@ pub fn dfg_table(size: u32) -> Vec<[f32; 3]> {
     out
 }
 
-/// [`dfg_table`] at `crate::render::environment::DFG_SIZE`, as f16 (A, B, E), kept in the
+/// [`dfg_table`] at [`DFG_SIZE`], as f16 (A, B, E), kept in the
 /// repository (`src/env/dfg_table.f16`, 6 KiB) because computing it costs ~280 ms of the first
 /// picture's time. A test recomputes it and compares; `WEFT_WRITE_DFG=1 cargo test --release --lib
 /// kept_dfg_table` rewrites the file after a change of the BRDF.
@@ -514,6 +514,9 @@ pub fn dfg_table_kept() -> Vec<[half::f16; 3]> {
         })
         .collect()
 }
+
+/// Side of the DFG table (n·v by roughness) the renderer samples.
+pub const DFG_SIZE: u32 = 32;
 
 /// The DFG integral at one (n·v, roughness): see [`dfg_table`]. The BRDF is the project's one
 /// Rust copy of the glTF BRDF ([`crate::reference::shading::pbr_brdf_cos`], f32, accumulated in
@@ -562,7 +565,7 @@ mod kept_dfg {
 
     #[test]
     fn kept_dfg_table_matches_a_fresh_computation() {
-        let size = crate::render::environment::DFG_SIZE;
+        let size = DFG_SIZE;
         let fresh: Vec<[half::f16; 3]> = dfg_table(size)
             .iter()
             .map(|t| t.map(half::f16::from_f32))

@@ -534,7 +534,7 @@ fn dfg_lookup(cos_theta: f32, roughness: f32) -> [f32; 3] {
 }
 
 fn bilinear(table: &[[f32; 3]], c: usize, cos_theta: f32, roughness: f32) -> f32 {
-    use crate::render::environment::DFG_SIZE;
+    use crate::env::DFG_SIZE;
     let table = |k: usize| table[k][c];
     let n = DFG_SIZE as i32;
     let at = |i: i32, j: i32| table((j.clamp(0, n - 1) * n + i.clamp(0, n - 1)) as usize);

@@ -25,8 +25,8 @@ pub const SPECULAR_SIZE: u32 = 128;
 pub const SPECULAR_LEVELS: u32 = 6;
 /// Samples per texel of the prefiltering (filtered importance sampling needs few).
 pub const PREFILTER_SAMPLES: u32 = 32;
-/// Side of the DFG table.
-pub const DFG_SIZE: u32 = 32;
+/// Side of the DFG table (the environment module's, where the table is computed).
+pub use crate::env::DFG_SIZE;
 
 /// Push constants of env_cube.comp and env_prefilter.comp (16 bytes).
 #[repr(C)]
