@@ -256,12 +256,13 @@ fn specialization(constants: &[(u32, u32)]) -> Specialization {
     Specialization { entries, data }
 }
 
-/// The bindings of descriptor set `set` as `shaders` declare them (reflected from their SPIR-V):
-/// each binding once, visible to every stage that declares it. A binding two stages declare with
-/// different kinds, or a kind weft does not bind, is an error naming both.
-pub fn reflected_bindings(shaders: &[&Shader], set: u32) -> crate::Result<Vec<Binding>> {
+/// The bindings of each descriptor set `shaders` declare (index: the set number), reflected from
+/// their SPIR-V, each shader read once: each binding once, visible to every stage that declares
+/// it. A binding two stages declare with different kinds, or a kind weft does not bind, is an
+/// error naming both.
+pub fn reflected_bindings(shaders: &[&Shader]) -> crate::Result<Vec<Vec<Binding>>> {
     use crate::reflect::DescriptorKind as K;
-    let mut out: Vec<Binding> = Vec::new();
+    let mut sets: Vec<Vec<Binding>> = Vec::new();
     for shader in shaders {
         let stage = match shader.stage {
             Stage::Vertex => vk::ShaderStageFlags::VERTEX,
@@ -269,7 +270,8 @@ pub fn reflected_bindings(shaders: &[&Shader], set: u32) -> crate::Result<Vec<Bi
             Stage::Compute => vk::ShaderStageFlags::COMPUTE,
         };
         let reflection = crate::reflect::reflect(shader.spirv)?;
-        for b in reflection.bindings.iter().filter(|b| b.set == set) {
+        for b in &reflection.bindings {
+            let set = b.set;
             let kind = match b.kind {
                 K::UniformBuffer => BindingKind::UniformBuffer,
                 K::StorageBuffer => BindingKind::StorageBuffer,
@@ -284,6 +286,10 @@ pub fn reflected_bindings(shaders: &[&Shader], set: u32) -> crate::Result<Vec<Bi
                     )))
                 }
             };
+            if sets.len() <= set as usize {
+                sets.resize_with(set as usize + 1, Vec::new);
+            }
+            let out = &mut sets[set as usize];
             match out.iter_mut().find(|o| o.binding == b.binding) {
                 Some(o) if o.kind != kind => {
                     return Err(Error::device(format!(
@@ -300,15 +306,35 @@ pub fn reflected_bindings(shaders: &[&Shader], set: u32) -> crate::Result<Vec<Bi
             }
         }
     }
-    out.sort_by_key(|b| b.binding);
-    Ok(out)
+    for set in &mut sets {
+        set.sort_by_key(|b| b.binding);
+    }
+    Ok(sets)
 }
 
 impl Context {
-    /// The layout of descriptor set `set` of a pipeline made of `shaders`, from their reflection
-    /// ([`reflected_bindings`]): the GLSL declaration is the one place a binding is written.
-    pub fn reflected_set_layout(&self, shaders: &[&Shader], set: u32) -> crate::Result<SetLayout> {
-        self.create_set_layout(&reflected_bindings(shaders, set)?)
+    /// The `N` descriptor set layouts of a pipeline made of `shaders` (sets 0 to N - 1), from
+    /// their reflection ([`reflected_bindings`]): the GLSL declaration is the one place a binding
+    /// is written. Shaders that declare another number of sets are an error.
+    pub fn reflected_set_layouts<const N: usize>(
+        &self,
+        shaders: &[&Shader],
+    ) -> crate::Result<[SetLayout; N]> {
+        let sets = reflected_bindings(shaders)?;
+        if sets.len() != N {
+            let names: Vec<&str> = shaders.iter().map(|s| s.name).collect();
+            return Err(Error::device(format!(
+                "{names:?} declare {} descriptor set(s), the pass expects {N}",
+                sets.len()
+            )));
+        }
+        let layouts = sets
+            .iter()
+            .map(|b| self.create_set_layout(b))
+            .collect::<crate::Result<Vec<_>>>()?;
+        Ok(layouts
+            .try_into()
+            .unwrap_or_else(|_| unreachable!("N layouts for N sets")))
     }
 
     pub fn create_set_layout(&self, bindings: &[Binding]) -> crate::Result<SetLayout> {

@@ -27,9 +27,10 @@ pub struct AntialiasInputs<'s> {
 
 impl AntialiasPass {
     pub fn new(ctx: &Context) -> crate::Result<AntialiasPass> {
+        let [layout] =
+            ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::FXAA_FRAG])?;
         Ok(AntialiasPass {
-            layout: ctx
-                .reflected_set_layout(&[&shaders::FULLSCREEN_VERT, &shaders::FXAA_FRAG], 0)?,
+            layout,
             pipeline: OnceLock::new(),
         })
     }

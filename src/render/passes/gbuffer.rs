@@ -43,9 +43,10 @@ pub struct GBufferInputs<'s> {
 impl GBufferPass {
     pub fn new(ctx: &Context) -> crate::Result<GBufferPass> {
         let shaders = [&shaders::GBUFFER_VERT, &shaders::GBUFFER_FRAG];
+        let [frame_layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
         Ok(GBufferPass {
-            frame_layout: ctx.reflected_set_layout(&shaders, 0)?,
-            material_layout: ctx.reflected_set_layout(&shaders, 1)?,
+            frame_layout,
+            material_layout,
             variants: HashMap::new(),
         })
     }

@@ -31,9 +31,10 @@ pub struct LightingInputs<'s> {
 
 impl LightingPass {
     pub fn new(ctx: &Context) -> crate::Result<LightingPass> {
+        let [layout] =
+            ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::LIGHTING_FRAG])?;
         Ok(LightingPass {
-            layout: ctx
-                .reflected_set_layout(&[&shaders::FULLSCREEN_VERT, &shaders::LIGHTING_FRAG], 0)?,
+            layout,
             variants: HashMap::new(),
         })
     }

@@ -43,6 +43,7 @@ pub struct ShadowInputs<'s> {
 impl ShadowPass {
     pub fn new(ctx: &Context) -> crate::Result<ShadowPass> {
         let mask = [&shaders::SHADOW_MASK_VERT, &shaders::SHADOW_MASK_FRAG];
+        let [mask_layout, mask_texture_layout] = ctx.reflected_set_layouts(&mask)?;
         Ok(ShadowPass {
             pipeline: ctx.create_graphics_pipeline(&GraphicsDesc {
                 name: "shadow",
@@ -62,8 +63,8 @@ impl ShadowPass {
                 topology: Topology::Triangles,
             })?,
             mask_variants: HashMap::new(),
-            mask_layout: ctx.reflected_set_layout(&mask, 0)?,
-            mask_texture_layout: ctx.reflected_set_layout(&mask, 1)?,
+            mask_layout,
+            mask_texture_layout,
         })
     }
 

@@ -27,8 +27,8 @@ pub struct TonemapInputs<'s> {
 
 impl TonemapPass {
     pub fn new(ctx: &Context) -> crate::Result<TonemapPass> {
-        let layout =
-            ctx.reflected_set_layout(&[&shaders::FULLSCREEN_VERT, &shaders::TONEMAP_FRAG], 0)?;
+        let [layout] =
+            ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::TONEMAP_FRAG])?;
         let pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
             name: "tonemap",
             vertex: &shaders::FULLSCREEN_VERT,

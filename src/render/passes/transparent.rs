@@ -59,9 +59,10 @@ pub struct TransparentInputs<'s> {
 impl TransparentPass {
     pub fn new(ctx: &Context) -> crate::Result<TransparentPass> {
         let shaders = [&shaders::GBUFFER_VERT, &shaders::FORWARD_FRAG];
+        let [layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
         Ok(TransparentPass {
-            layout: ctx.reflected_set_layout(&shaders, 0)?,
-            material_layout: ctx.reflected_set_layout(&shaders, 1)?,
+            layout,
+            material_layout,
             variants: HashMap::new(),
         })
     }

@@ -20,7 +20,7 @@ pub struct WeavePass {
 
 impl WeavePass {
     pub fn new(ctx: &Context) -> crate::Result<WeavePass> {
-        let layout = ctx.reflected_set_layout(&[&shaders::WEAVE_COMP], 0)?;
+        let [layout] = ctx.reflected_set_layouts(&[&shaders::WEAVE_COMP])?;
         let pipeline = ctx.create_compute_pipeline(&ComputeDesc {
             name: "weave",
             shader: &shaders::WEAVE_COMP,
