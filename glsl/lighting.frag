@@ -6,6 +6,7 @@
 #include "fabric.glsl"
 #include "weave.glsl"
 #include "ibl.glsl"
+#include "occlusion.glsl"
 
 // Accuracy level (model page §4): 0 nearest, 1 filtered-params, 2 mixture, 3 supersampled.
 layout(constant_id = 0) const uint ACCURACY = 2u;
@@ -34,6 +35,10 @@ layout(constant_id = 8) const uint IBL_SAMPLES = 16u;
 // 1: some material is unlit (KHR_materials_unlit, MATERIAL_UNLIT): its pixels show the base colour
 // from the albedo target as their radiance, unlit; 0: the check is compiled out.
 layout(constant_id = 9) const uint UNLIT = 0u;
+// 1: the occlusion pass ran (an environment lights the scene, --occlusion gtao): its visibility,
+// raised for light bounced between occluders, multiplies the material's occlusion texture in the
+// environment's light; 0: it is not read.
+layout(constant_id = 10) const uint OCCLUSION = 0u;
 
 
 // Set 0 numbers every resource as gbuffer.vert, gbuffer.frag and forward.frag do (one number per
@@ -62,6 +67,7 @@ layout(set = 0, binding = 23) uniform sampler2D gb_fabric;  // G-buffer fabric c
 layout(set = 0, binding = 24) uniform sampler2D gb_emissive;  // G-buffer emissive (RGBA16F): emitted radiance, a: ambient occlusion
 layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
 layout(set = 0, binding = 26) uniform sampler2D gb_specular;  // G-buffer specular (KHR_materials_specular: rgb F0, a weight)
+layout(set = 0, binding = 27) uniform sampler2D screen_occlusion;  // the occlusion pass's visibility of the environment and view distance per 2 x 2 pixels (RG16F, half resolution, occlusion_blur.frag); any image when OCCLUSION = 0
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
@@ -76,6 +82,37 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 }
 
 #include "shade.glsl"
+
+// The occlusion pass's visibility at pixel px, whose view distance is `dist`: the half-resolution
+// estimates around it (each made at the top-left pixel of its 2 x 2 block), bilinearly, each
+// weighted by how close its distance is to the pixel's (an edge does not take the visibility of
+// what is behind it); 1 where no estimate lies on the pixel's surface.
+float screen_visibility(ivec2 px, float dist) {
+    ivec2 size = textureSize(screen_occlusion, 0);
+    ivec2 c = px / 2;
+    vec2 f = vec2(px & 1) * 0.5;
+    float sum = 0.0;
+    float weights = 0.0;
+    for (int y = 0; y < 2; ++y) {
+        for (int x = 0; x < 2; ++x) {
+            float bilinear = (x == 0 ? 1.0 - f.x : f.x) * (y == 0 ? 1.0 - f.y : f.y);
+            if (bilinear <= 0.0) {
+                continue;
+            }
+            vec2 s = texelFetch(screen_occlusion, min(c + ivec2(x, y), size - 1), 0).rg;
+            float w = s.y > 0.0 ? bilinear * clamp(1.0 - abs(s.y - dist) / (0.05 * dist), 0.0, 1.0) : 0.0;
+            sum += w * s.x;
+            weights += w;
+        }
+    }
+    return weights > 1e-6 ? sum / weights : 1.0;
+}
+
+// The view distance occlusion.frag measures: from the eye, or along the view axis when
+// orthographic.
+float view_distance(vec3 p) {
+    return frame.proj[2][3] == 0.0 ? -(frame.view * vec4(p, 1.0)).z : length(p - frame.eye.xyz);
+}
 
 vec3 debug_color(uint view, ivec2 px, float depth) {
     vec4 albedo = texelFetch(gb_albedo, px, 0);
@@ -98,6 +135,14 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
         vec3 b = (surface.z < 0.0 ? -1.0 : 1.0) * cross(n, t);
         vec3 dir = fabric.y * t + fabric.x * b;
         return dot(dir, dir) > 0.0 ? normalize(dir) * 0.5 + 0.5 : vec3(0.0);
+    }
+    if (view == DEBUG_OCCLUSION) {
+        // The environment's visibility: the occlusion pass's (when it ran) times the material's
+        // occlusion texture, before the multi-bounce correction.
+        vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+        vec4 hp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
+        float screen = OCCLUSION != 0u ? screen_visibility(px, view_distance(hp.xyz / hp.w)) : 1.0;
+        return vec3(screen * texelFetch(gb_emissive, px, 0).a);
     }
     if (view == DEBUG_DEPTH) {
         vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
@@ -141,8 +186,13 @@ void main() {
     vec4 albedo = texelFetch(gb_albedo, px, 0);
     vec4 fr = frame_decode(texelFetch(gb_frame, px, 0));
     vec4 surface = texelFetch(gb_surface, px, 0);
+    vec4 emissive_ao = texelFetch(gb_emissive, px, 0);
+    if (OCCLUSION != 0u) {
+        float albedo_luminance = dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722));
+        emissive_ao.a *= gtao_multibounce(screen_visibility(px, view_distance(p)), albedo_luminance);
+    }
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),
-                                  texelFetch(gb_emissive, px, 0), texelFetch(gb_specular, px, 0),
+                                  emissive_ao, texelFetch(gb_specular, px, 0),
                                   vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0),
                                   vec4(0.0));
     // Never NaN or Inf into the image.

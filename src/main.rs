@@ -136,6 +136,14 @@ struct SceneArgs {
     /// and error of each.
     #[arg(long, default_value = "fis:8")]
     ibl: String,
+    /// Occlusion of the environment's light: gtao (screen-space ground-truth ambient occlusion
+    /// from the depth buffer, out to 0.3 of the scene's size), gtao:R (out to R world units),
+    /// or none (occlusion textures only). Runs only when an environment lights the scene.
+    #[arg(long, default_value = "gtao", value_parser = Choice::new(
+        render::Occlusion::parse,
+        &["gtao", "gtao:R", "none"],
+    ))]
+    occlusion: render::Occlusion,
     /// Punctual lights: auto (the file's; a default key light with a shadow and a ground when it
     /// has none and no --env FILE is given), none, file, default.
     #[arg(long, default_value = "auto")]
@@ -653,6 +661,7 @@ fn load_scene_impl(
         footprint: args.footprint,
         shading: args.shading,
         environment,
+        occlusion: args.occlusion,
         ..Default::default()
     };
     options.validate()?;
@@ -1107,6 +1116,7 @@ fn run_sheet(args: SheetArgs) -> anyhow::Result<()> {
             env_intensity: 1.0,
             background: "env".into(),
             ibl: weft::env::DEFAULT_IBL.name(),
+            occlusion: render::Occlusion::Gtao { radius: None },
             lights: "auto".into(),
             variant: None,
         };

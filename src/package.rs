@@ -117,14 +117,16 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "ibl_probe.comp",
         "Evaluates every function of image-based lighting (`include/ibl.glsl`: `env_dir`, \
          `sh_irradiance`, `hammersley`, `ggx_sample_h`, `as_sample_h`, `cosine_sample`, `fis_lod`, \
-         `specular_occlusion`, `fabric_diffuse_albedo`) and of `include/cube.glsl` \
-         (`cube_texel_dir`, `equirect_uv`) on a batch of inputs, one invocation per input: the way \
+         `specular_occlusion`, `fabric_diffuse_albedo`), of `include/cube.glsl` \
+         (`cube_texel_dir`, `equirect_uv`) and of `include/occlusion.glsl` (`gtao_arc`, \
+         `gtao_multibounce`) on a batch of inputs, one invocation per input: the way \
          to check that a driver computes them as weft's Rust twins do. Bind a buffer of `count` \
-         416-byte `IblProbeInput` records (std430: `vec4 world, rot[3], normal, sh[9], xi, lobe, \
-         lod, misc`, `uvec4 counts, cube`, `vec4 dir`, then the 80-byte `GpuFabric` of \
-         `include/fabric.glsl`) and a buffer for `count` 128-byte `IblProbeOutput` records (eight \
-         `vec4`: `env_dir`, `irradiance`, `ggx`, `as_h`, `cosine`, `cube`, `uv` (hammersley xy, \
-         equirect uv), `scalars` (fis_lod, specular_occlusion, fabric_diffuse_albedo)). Push the \
+         432-byte `IblProbeInput` records (std430: `vec4 world, rot[3], normal, sh[9], xi, lobe, \
+         lod, misc`, `uvec4 counts, cube`, `vec4 dir`, the 80-byte `GpuFabric` of \
+         `include/fabric.glsl`, then `vec4 arc`) and a buffer for `count` 144-byte `IblProbeOutput` \
+         records (nine `vec4`: `env_dir`, `irradiance`, `ggx`, `as_h`, `cosine`, `cube`, `uv` \
+         (hammersley xy, equirect uv), `scalars` (fis_lod, specular_occlusion, \
+         fabric_diffuse_albedo), `occlusion` (gtao_arc, gtao_multibounce)). Push the \
          `uint count`; dispatch `ceil(count / 64)` groups. weft's Rust twins and the interval \
          bound of each output under the Vulkan precision rules: `weft::reference::ibl_twin`.",
     ),
@@ -207,6 +209,28 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          matrix, 64 bytes, vertex stage) per draw, viewport and scissor on the light's tile, no \
          culling. `lighting.frag` samples the atlas with a comparison sampler (GREATER_OR_EQUAL, \
          linear, clamp) through the `Shadow` records of `include/frame.glsl`.",
+    ),
+    (
+        "occlusion.frag",
+        "Screen-space occlusion of the environment, step 1 of 2 (ground-truth ambient occlusion, \
+         GTAO, `include/occlusion.glsl`), drawn with `fullscreen.vert` after the G-buffer pass: \
+         at half resolution (one estimate per 2 x 2 pixels, at its top-left pixel; draw it into \
+         a target of half the size, rounded up), SLICES planes through the view vector turned by \
+         a 4 x 4 pattern of estimates, the \
+         highest horizon on each side among STEPS depth samples out to a world radius, and the \
+         cosine-weighted visible arc between them. Reads the frame uniform (set 0 binding 0), the \
+         G-buffer normal (21) and depth (25); push `mat4 view_from_clip` (the inverse projection) \
+         and `vec4 params` (radius, falloff scale and offset; 80 bytes, fragment stage); writes \
+         visibility and view distance to an `R16G16_SFLOAT` target for `occlusion_blur.frag`.",
+    ),
+    (
+        "occlusion_blur.frag",
+        "Screen-space occlusion of the environment, step 2 of 2, at half resolution: the mean \
+         of the 4 x 4 estimates of `occlusion.frag` (set 0 binding 28) around each, weighted by \
+         how close their view distances lie to its surface so that edges stay sharp, into an \
+         `R16G16_SFLOAT` target (visibility, view distance) that `lighting.frag` reads at binding \
+         27 when OCCLUSION = 1, bringing it to full resolution. Drawn with `fullscreen.vert`; no \
+         push constants.",
     ),
     (
         "fxaa.frag",
@@ -362,6 +386,9 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),
     ("forward.frag", 20, "TRANSMISSION: 1 reads the backdrop for KHR_materials_transmission surfaces (`Material.extra.w` flag 32); 0 (default) compiles that out"),
     ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 4) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
+    ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 0 (default) uses the texture alone and reads nothing at binding 27"),
+    ("occlusion.frag", 0, "SLICES: slices per pixel (default 2; the blur averages 16 x SLICES directions)"),
+    ("occlusion.frag", 1, "STEPS: depth samples per side of a slice (default 6)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",

@@ -147,6 +147,29 @@ fn hard_cases() -> Vec<Case> {
     let roughs = [0.0, 0.5, 1.0];
     let nk2s = [-0.5, 0.0, 1e-7, 0.3, 1.0, 1.5];
     let rss = [0.0, 0.04, 1.0];
+    // gtao_arc: (n, h0, h1) at the limits the occlusion pass keeps them in (h0 in
+    // [n - π/2, 0], h1 in [0, n + π/2], n in [-π/2, π/2]); gtao_multibounce: v and albedo.
+    let half = std::f32::consts::FRAC_PI_2;
+    let arcs: [[f32; 4]; 9] = [
+        [-half, half, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [-half, 0.0, 0.0, 0.0],
+        [-std::f32::consts::PI, 0.0, -half, 0.0],
+        [0.0, std::f32::consts::PI, half, 0.0],
+        [-0.3, 0.2, 0.1, 0.0],
+        [-1.0, below(1.0), -0.5, 0.0],
+        [-1e-7, 1e-7, 1e-7, 0.0],
+        [-0.9, 1.8, 0.4, 0.0],
+    ];
+    let bounces: [(f32, f32); 7] = [
+        (0.0, 0.0),
+        (1.0, 1.0),
+        (0.5, 0.5),
+        (1.0, 0.0),
+        (0.0, 1.0),
+        (0.2, 0.9),
+        (below(1.0), 0.04),
+    ];
     let hams: [(u32, u32); 11] = [
         (0, 1),
         (0, 16),
@@ -223,12 +246,15 @@ fn hard_cases() -> Vec<Case> {
                 let world = unit(axes[c(axes.len())]);
                 let deg = degrees[d(degrees.len(), axes.len())];
                 let normal = unit(axes[d(axes.len(), 3)]);
+                let arc = arcs[c(arcs.len())];
+                let (vis, albedo) = bounces[d(bounces.len(), arcs.len())];
                 cases.push(Case {
                     name: format!(
                         "hard {k}: xi ({x:e}, {y:e}) eu {eu} ev {ev} alpha {alpha}; world {world:?} rot {deg}°; \
                          normal {normal:?} sh {sh_name}; pdf {pdf:e} n {n_fis} size {size}; nv {nv} ao {ao} \
                          roughness {rough}; nk2 {nk2} rs {rs} coupled {coupled}; hammersley ({hi}, {hn}); \
-                         cube face {face} ({tx}, {ty}) of {ts}; dir {dir:?}"
+                         cube face {face} ({tx}, {ty}) of {ts}; dir {dir:?}; arc {arc:?}; \
+                         multibounce ({vis}, {albedo})"
                     ),
                     input: IblProbeInput {
                         world,
@@ -238,11 +264,12 @@ fn hard_cases() -> Vec<Case> {
                         xi: [x, y, 0.0, 0.0],
                         lobe: [alpha, eu, ev, 0.0],
                         lod: [pdf, size, nv, ao],
-                        misc: [rough, nk2, 0.0, 0.0],
+                        misc: [rough, nk2, vis, albedo],
                         counts: [hi, hn, n_fis, 0],
                         cube: [face, tx, ty, ts],
                         dir,
                         fabric: fabric(rs, coupled),
+                        arc,
                     },
                 });
                 k += 1;
@@ -298,7 +325,12 @@ fn random_cases(seed: u64, count: usize) -> Vec<Case> {
                 f(&mut rng),
                 f(&mut rng),
             ],
-            misc: [f(&mut rng), rng.range(-0.2, 1.2) as f32, 0.0, 0.0],
+            misc: [
+                f(&mut rng),
+                rng.range(-0.2, 1.2) as f32,
+                f(&mut rng),
+                f(&mut rng),
+            ],
             counts: [(rng.next_u64() % n as u64) as u32, n, n, 0],
             cube: [
                 (rng.next_u64() % 6) as u32,
@@ -308,6 +340,16 @@ fn random_cases(seed: u64, count: usize) -> Vec<Case> {
             ],
             dir: unit(rng.unit()),
             fabric: fabric(f(&mut rng), rng.next_f64() < 0.5),
+            arc: {
+                let half = std::f64::consts::FRAC_PI_2;
+                let n = rng.range(-half, half);
+                [
+                    rng.range(n - half, 0.0) as f32,
+                    rng.range(0.0, n + half) as f32,
+                    n as f32,
+                    0.0,
+                ]
+            },
         };
         out.push(Case {
             name: format!("random {i} (seed {seed:#x})"),
@@ -337,6 +379,11 @@ fn describe(inp: &IblProbeInput, k: usize) -> String {
         5 => format!("cube {:?}", inp.cube),
         6 if k % 4 < 2 => format!("hammersley ({}, {})", inp.counts[0], inp.counts[1]),
         6 => format!("dir {:?}", inp.dir),
+        8 if k % 4 == 0 => format!(
+            "arc h0 {:e} h1 {:e} n {:e}",
+            inp.arc[0], inp.arc[1], inp.arc[2]
+        ),
+        8 => format!("multibounce v {:e} albedo {:e}", inp.misc[2], inp.misc[3]),
         _ => match k % 4 {
             0 => format!(
                 "pdf {:e} n {} size {}",

@@ -396,6 +396,12 @@ fn render_case(
         weave_precision: case.weave_precision,
         shading: case.shading,
         antialias: case.antialias,
+        occlusion: case.occlusion,
+        camera_override: case.look.map(|(eye, target, fov)| {
+            scene
+                .look_at_camera(eye.into(), target.into(), fov.to_radians())
+                .unwrap_or_else(|e| panic!("case {}: {e}", case.name))
+        }),
         ..Default::default()
     };
     // A figure case renders weft compare's figure (four panels at the case size, labelled).

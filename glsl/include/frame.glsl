@@ -16,6 +16,7 @@ const uint DEBUG_COVERAGE = 5u;
 const uint DEBUG_THREAD_DIR = 6u;
 const uint DEBUG_DEPTH = 7u;
 const uint DEBUG_UV = 8u;
+const uint DEBUG_OCCLUSION = 9u;
 
 // How fabric materials are shaded (the SHADING specialization constant; `weft compare`).
 const uint SHADING_FABRIC = 0u;    // the fabric model (the default)

@@ -1,4 +1,5 @@
-//! The Rust twins of `glsl/include/ibl.glsl` and `glsl/include/cube.glsl`, the std430 records of
+//! The Rust twins of `glsl/include/ibl.glsl`, `glsl/include/cube.glsl` and
+//! `glsl/include/occlusion.glsl`, the std430 records of
 //! their probe `glsl/ibl_probe.comp`, and the error each output may have.
 //!
 //! # The twins
@@ -6,7 +7,8 @@
 //! writes it (same operations in the same order, same clamps, the same f32 literals), and used
 //! three ways:
 //! - at `f32` it is the twin ([`ggx_sample_h`], [`as_sample_h`], [`cosine_sample`], [`fis_lod`],
-//!   [`specular_occlusion`], [`fabric_diffuse_albedo`], [`equirect_uv`], [`env_dir`]);
+//!   [`specular_occlusion`], [`fabric_diffuse_albedo`], [`equirect_uv`], [`env_dir`],
+//!   [`gtao_arc`], [`gtao_multibounce`]);
 //! - at `f64` (with the ideal constants: π, not its f32 rounding) it is the exact formula;
 //! - at [`Iv`] (interval arithmetic) it is the error analysis: an enclosure of every value a
 //!   conforming implementation may return for that input (see below).
@@ -64,6 +66,9 @@
 //! - `specular_occlusion`: `pow` as `exp2(y·log2 x)` with x = n·v + ao in [0, 2] (2^-21 absolute
 //!   in log2) and `exp2(-16r-1)`'s 3 + 2|x| ulp, then the cancellation in `pow - 1 + ao`.
 //! - `fabric_diffuse_albedo`: a handful of roundings of numbers ≤ 1.
+//! - `gtao_arc`: `sin`/`cos`'s 2^-11 absolute, times the angles (≤ π) that multiply them, in a
+//!   sum of terms ≤ 1: absolute, a few 2^-11.
+//! - `gtao_multibounce`: a cubic's few roundings of numbers ≤ 3, then `max` and `clamp`.
 //! - `cube_texel_dir`: the division in `(t + ½)/size`, then `normalize` (2 + 2.5 + 2.5 ulp).
 //! - `equirect_uv`: `atan`'s and `acos`'s (inherited from `atan`) 4096 ulp; u is compared modulo
 //!   1 (the map wraps; at the seam u = 0 and u = 1 are the same column, and whether `atan(±0, x<0)`
@@ -81,7 +86,7 @@ use crate::fabric::GpuFabric;
 // The probe's records.
 // ---------------------------------------------------------------------------------------------
 
-/// One input of `glsl/ibl_probe.comp` (std430, 416 bytes; `IblProbeInput` there).
+/// One input of `glsl/ibl_probe.comp` (std430, 432 bytes; `IblProbeInput` there).
 ///
 /// | offset | field | meaning |
 /// |---|---|---|
@@ -92,11 +97,12 @@ use crate::fabric::GpuFabric;
 /// | 224 | `xi: vec4` | xy: the xi of `ggx_sample_h`, `as_sample_h`, `cosine_sample` |
 /// | 240 | `lobe: vec4` | x: GGX alpha, y: A–S eu, z: A–S ev |
 /// | 256 | `lod: vec4` | x: pdf, y: face size (`fis_lod`); z: n·v, w: ao (`specular_occlusion`) |
-/// | 272 | `misc: vec4` | x: roughness (`specular_occlusion`), y: n·k2 (`fabric_diffuse_albedo`) |
+/// | 272 | `misc: vec4` | x: roughness (`specular_occlusion`), y: n·k2 (`fabric_diffuse_albedo`), z: visibility, w: albedo (`gtao_multibounce`) |
 /// | 288 | `counts: uvec4` | x: `hammersley` i, y: `hammersley` n, z: `fis_lod` n |
 /// | 304 | `cube: uvec4` | `cube_texel_dir`: face, texel x, texel y, size |
 /// | 320 | `dir: vec4` | `equirect_uv`: direction (xyz) |
 /// | 336 | `fabric: GpuFabric` | `fabric_diffuse_albedo`: the material (80 bytes) |
+/// | 416 | `arc: vec4` | `gtao_arc`: h0, h1, n |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct IblProbeInput {
@@ -112,9 +118,10 @@ pub struct IblProbeInput {
     pub cube: [u32; 4],
     pub dir: [f32; 4],
     pub fabric: GpuFabric,
+    pub arc: [f32; 4],
 }
 
-/// One output of `glsl/ibl_probe.comp` (std430, 128 bytes; `IblProbeOutput` there).
+/// One output of `glsl/ibl_probe.comp` (std430, 144 bytes; `IblProbeOutput` there).
 ///
 /// | offset | field | x | y | z | w |
 /// |---|---|---|---|---|---|
@@ -126,6 +133,7 @@ pub struct IblProbeInput {
 /// | 80  | `cube` | `cube_texel_dir` x | y | z | 0 |
 /// | 96  | `uv` | `hammersley` x | y | `equirect_uv` u | v |
 /// | 112 | `scalars` | `fis_lod` | `specular_occlusion` | `fabric_diffuse_albedo` | 0 |
+/// | 128 | `occlusion` | `gtao_arc` | `gtao_multibounce` | 0 | 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct IblProbeOutput {
@@ -137,19 +145,21 @@ pub struct IblProbeOutput {
     pub cube: [f32; 4],
     pub uv: [f32; 4],
     pub scalars: [f32; 4],
+    pub occlusion: [f32; 4],
 }
 
 const _: () = {
-    assert!(std::mem::size_of::<IblProbeInput>() == 416);
+    assert!(std::mem::size_of::<IblProbeInput>() == 432);
+    assert!(std::mem::offset_of!(IblProbeInput, arc) == 416);
     assert!(std::mem::offset_of!(IblProbeInput, sh) == 80);
     assert!(std::mem::offset_of!(IblProbeInput, counts) == 288);
     assert!(std::mem::offset_of!(IblProbeInput, fabric) == 336);
-    assert!(std::mem::size_of::<IblProbeOutput>() == 128);
+    assert!(std::mem::size_of::<IblProbeOutput>() == 144);
     assert!(std::mem::offset_of!(IblProbeOutput, uv) == 96);
 };
 
 /// Number of f32 components of an [`IblProbeOutput`].
-pub const IBL_PROBE_OUTPUTS: usize = 32;
+pub const IBL_PROBE_OUTPUTS: usize = 36;
 
 /// Names of the output components, in memory order.
 #[rustfmt::skip]
@@ -162,6 +172,7 @@ pub const IBL_PROBE_OUTPUT_NAMES: [&str; IBL_PROBE_OUTPUTS] = [
     "cube_texel_dir.x", "cube_texel_dir.y", "cube_texel_dir.z", "cube_texel_dir.w",
     "hammersley.x", "hammersley.y", "equirect_uv.u", "equirect_uv.v",
     "fis_lod", "specular_occlusion", "fabric_diffuse_albedo", "scalars.w",
+    "gtao_arc", "gtao_multibounce", "occlusion.z", "occlusion.w",
 ];
 
 /// The component compared modulo 1 (`equirect_uv`'s u: the map wraps).
@@ -179,11 +190,12 @@ impl IblProbeOutput {
             self.cube,
             self.uv,
             self.scalars,
+            self.occlusion,
         ]));
         a
     }
 
-    /// Reads one output from the shader's buffer bytes (little-endian, 128 bytes).
+    /// Reads one output from the shader's buffer bytes (little-endian, 144 bytes).
     pub fn from_bytes(b: &[u8]) -> Self {
         let v = |k: usize| {
             let mut out = [0f32; 4];
@@ -202,6 +214,7 @@ impl IblProbeOutput {
             cube: v(5),
             uv: v(6),
             scalars: v(7),
+            occlusion: v(8),
         }
     }
 }
@@ -1036,6 +1049,24 @@ pub mod formula {
         (one - rs) * (one - b2 * b2 * b)
     }
 
+    /// `gtao_arc` (occlusion.glsl).
+    pub fn gtao_arc<T: Real>(h0: T, h1: T, n: T) -> T {
+        let quarter = T::lit(0.25);
+        let two = T::lit(2.0);
+        let (cn, sn) = (n.cos(), n.sin());
+        quarter * (cn + two * h0 * sn - (two * h0 - n).cos())
+            + quarter * (cn + two * h1 * sn - (two * h1 - n).cos())
+    }
+
+    /// `gtao_multibounce` (occlusion.glsl).
+    pub fn gtao_multibounce<T: Real>(v: T, albedo: T) -> T {
+        let a = T::lit(2.0404) * albedo - T::lit(0.3324);
+        let b = T::lit(-4.7951) * albedo + T::lit(0.6417);
+        let c = T::lit(2.7552) * albedo + T::lit(0.6903);
+        v.max(((v * a + b) * v + c) * v)
+            .clamp(T::lit(0.0), T::lit(1.0))
+    }
+
     /// `cube_texel_dir` (cube.glsl); [`crate::render::environment::cube_texel_dir`] is this at
     /// f32.
     pub fn cube_texel_dir<T: Real>(face: u32, x: u32, y: u32, size: u32) -> [T; 3] {
@@ -1106,6 +1137,18 @@ pub fn fabric_diffuse_albedo(f: &GpuFabric, nk2: f32) -> f32 {
     formula::fabric_diffuse_albedo(f.rs, f.flags, nk2)
 }
 
+/// `gtao_arc` of occlusion.glsl: the cosine-weighted visible arc of a slice between horizons
+/// `h0 ≤ 0 ≤ h1`, the normal's projection at angle `n` (radians from the view vector).
+pub fn gtao_arc(h0: f32, h1: f32, n: f32) -> f32 {
+    formula::gtao_arc(h0, h1, n)
+}
+
+/// `gtao_multibounce` of occlusion.glsl: visibility `v` raised for light bounced between
+/// occluders of albedo `albedo`.
+pub fn gtao_multibounce(v: f32, albedo: f32) -> f32 {
+    formula::gtao_multibounce(v, albedo)
+}
+
 /// `equirect_uv` of cube.glsl.
 pub fn equirect_uv(d: [f32; 3]) -> [f32; 2] {
     formula::equirect_uv(d)
@@ -1141,6 +1184,12 @@ pub fn ibl_probe_cpu(inp: &IblProbeInput) -> IblProbeOutput {
             fis_lod(inp.lod[0], inp.counts[2], inp.lod[1]),
             specular_occlusion(inp.lod[2], inp.lod[3], inp.misc[0]),
             fabric_diffuse_albedo(&inp.fabric, inp.misc[1]),
+            0.0,
+        ],
+        occlusion: [
+            gtao_arc(inp.arc[0], inp.arc[1], inp.arc[2]),
+            gtao_multibounce(inp.misc[2], inp.misc[3]),
+            0.0,
             0.0,
         ],
     }
@@ -1200,6 +1249,10 @@ pub fn ibl_probe_eval<T: Real>(inp: &IblProbeInput) -> [T; IBL_PROBE_OUTPUTS] {
         formula::fis_lod(l(inp.lod[0]), inp.counts[2], l(inp.lod[1])),
         formula::specular_occlusion(l(inp.lod[2]), l(inp.lod[3]), l(inp.misc[0])),
         formula::fabric_diffuse_albedo(l(inp.fabric.rs), inp.fabric.flags, l(inp.misc[1])),
+        zero,
+        formula::gtao_arc(l(inp.arc[0]), l(inp.arc[1]), l(inp.arc[2])),
+        formula::gtao_multibounce(l(inp.misc[2]), l(inp.misc[3])),
+        zero,
         zero,
     ]
 }

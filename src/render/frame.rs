@@ -25,6 +25,7 @@ use super::passes::antialias::{AntialiasInputs, AntialiasPass};
 use super::passes::environment::{EnvPasses, GpuEnvironment};
 use super::passes::gbuffer::{GBufferInputs, GBufferPass};
 use super::passes::lighting::{LightingInputs, LightingPass};
+use super::passes::occlusion::{OcclusionInputs, OcclusionPass, OcclusionPush};
 use super::passes::shadow::{ShadowInputs, ShadowPass};
 use super::passes::tonemap::{TonemapInputs, TonemapPass};
 use super::passes::transparent::{TransparentInputs, TransparentPass};
@@ -87,6 +88,7 @@ pub struct Renderer {
     pub(crate) ctx: Context,
     gbuffer: GBufferPass,
     shadow: ShadowPass,
+    occlusion: OcclusionPass,
     lighting: LightingPass,
     transparent: TransparentPass,
     tonemap: TonemapPass,
@@ -174,6 +176,8 @@ struct FrameKeys {
 /// tiles, the lamps with their maps' indices, and white vertex colours when forced.
 struct FrameBuffers {
     frame: Buffer,
+    /// The projection the frame uniform holds (jittered if the frame is).
+    proj: Mat4,
     tile_lights: Buffer,
     shadows: Buffer,
     /// Per map: its tile (x, y, side) in the atlas and the light's clip-from-world.
@@ -210,6 +214,7 @@ impl Renderer {
             env: env?,
             env_cache: Vec::new(),
             gbuffer: GBufferPass::new(&ctx)?,
+            occlusion: OcclusionPass::new(&ctx)?,
             lighting: LightingPass::new(&ctx)?,
             transparent: TransparentPass::new(&ctx)?,
             antialias: AntialiasPass::new(&ctx)?,
@@ -255,6 +260,7 @@ impl Renderer {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
         self.antialias.make(&self.ctx)?;
+        self.occlusion.make(&self.ctx)?;
         self.shadow.make_mask(&self.ctx, false)?;
         let mut all = vec![self.weave.pipeline(), self.tonemap.pipeline()];
         all.extend(self.shadow.pipelines());
@@ -264,6 +270,7 @@ impl Renderer {
         all.extend(self.transparent.pipelines());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
         all.extend(self.antialias.pipeline());
+        all.extend(self.occlusion.pipelines());
         Ok(all)
     }
 
@@ -381,6 +388,9 @@ impl Renderer {
         }
         if plan.runs(Pass::Antialias) {
             self.antialias.make(&self.ctx)?;
+        }
+        if plan.runs(Pass::Occlusion) {
+            self.occlusion.make(&self.ctx)?;
         }
         Ok(FrameKeys {
             gbuffer: gbuffer_key,
@@ -546,6 +556,9 @@ impl Renderer {
                 )?,
             );
         }
+        if plan.runs(Pass::Occlusion) && targets.occlusion.is_none() {
+            targets.occlusion = Some(OcclusionTargets::new(&self.ctx, width, height)?);
+        }
         if plan.transmission_draws > 0 && targets.backdrop.is_none() {
             targets.backdrop = Some(
                 self.ctx.create_image(
@@ -674,6 +687,7 @@ impl Renderer {
         };
         Ok(FrameBuffers {
             frame,
+            proj: Mat4::from_cols_array_2d(&frame_data.proj),
             tile_lights,
             shadows,
             shadow_tiles: maps.into_iter().map(|(_, tile)| tile).collect(),
@@ -774,7 +788,7 @@ impl Renderer {
         // The passes, in the plan's order, each from its named inputs.
         let ctx = self.ctx.clone();
         let submissions = ctx.submissions();
-        let pool = ctx.create_descriptor_pool(8 + 3 * gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(10 + 3 * gpu.material_count)?;
         let targets = self.targets.as_ref().expect("made by prepare_targets");
         let d = &self.defaults;
         let colors = buffers.forced_colors.as_ref().unwrap_or(&gpu.colors);
@@ -855,6 +869,18 @@ impl Renderer {
                     stats.shadow_draws = draws;
                     recorded.push(pass);
                 }
+                Pass::Occlusion => recorded.push(self.occlusion.record(
+                    &pool,
+                    OcclusionInputs {
+                        frame: &buffers.frame,
+                        push: OcclusionPush::new(
+                            buffers.proj,
+                            plan.occlusion.as_ref().map_or(1.0, |o| o.radius),
+                        ),
+                        targets,
+                        nearest: &d.nearest,
+                    },
+                )?),
                 Pass::Lighting => recorded.push(self.lighting.record(
                     &pool,
                     &keys.lighting,
@@ -863,6 +889,10 @@ impl Renderer {
                         lighting: lighting(),
                         targets,
                         nearest: &d.nearest,
+                        occlusion: match &targets.occlusion {
+                            Some(o) if plan.runs(Pass::Occlusion) => &o.visibility,
+                            _ => &d.white,
+                        },
                     },
                 )?),
                 Pass::Transparent => {

@@ -45,10 +45,13 @@ pub enum DebugView {
     Coverage = 5,
     ThreadDir = 6,
     Depth = 7,
+    /// The environment's visibility: the occlusion pass's times the material's occlusion
+    /// texture (white: open; the pass runs for this view whenever `--occlusion` is not none).
+    Occlusion = 9,
 }
 
 impl DebugView {
-    pub const ALL: [DebugView; 8] = [
+    pub const ALL: [DebugView; 9] = [
         DebugView::None,
         DebugView::Albedo,
         DebugView::Normals,
@@ -57,6 +60,7 @@ impl DebugView {
         DebugView::Coverage,
         DebugView::ThreadDir,
         DebugView::Depth,
+        DebugView::Occlusion,
     ];
 
     pub fn name(self) -> &'static str {
@@ -69,6 +73,7 @@ impl DebugView {
             DebugView::Coverage => "coverage",
             DebugView::ThreadDir => "thread-dir",
             DebugView::Depth => "depth",
+            DebugView::Occlusion => "occlusion",
         }
     }
 
@@ -425,6 +430,10 @@ pub struct RenderOptions {
     /// Edge anti-aliasing after tone mapping: none (the library's default, so images are the
     /// shading alone) or FXAA (`weft render` and `weft view`'s default).
     pub antialias: Antialias,
+    /// Screen-space occlusion of the environment's light (`--occlusion`): none (the library's
+    /// default, so images are the shading alone) or GTAO (`weft render` and `weft view`'s
+    /// default). Planned only when an environment lights the scene.
+    pub occlusion: Occlusion,
     /// How the frame's passes reach the queue: one submission (the normal path), or one per
     /// pass with its own timestamps (`weft render --timings`, `weft bench`: each pass's time its
     /// own, with nothing overlapping it).
@@ -455,6 +464,55 @@ impl Submission {
         match self {
             Submission::Frame => "frame",
             Submission::PerPass => "pass",
+        }
+    }
+}
+
+/// Screen-space occlusion of the environment (`--occlusion`; the occlusion pass,
+/// render/passes/occlusion.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Occlusion {
+    /// The environment lights every point as if nothing stood around it (the material's
+    /// occlusion texture alone darkens it).
+    #[default]
+    None,
+    /// Ground-truth ambient occlusion from the depth buffer (glsl/occlusion.frag) out to
+    /// `radius` world units; None: 0.3 of the diagonal of what casts shadows (of the whole
+    /// scene when nothing casts).
+    Gtao { radius: Option<f32> },
+}
+
+impl Occlusion {
+    /// The radius of `Gtao { radius: None }`, as a fraction of the scene's diagonal.
+    pub const RADIUS_OF_DIAGONAL: f32 = 0.3;
+
+    /// `none`, `gtao` or `gtao:R` (R > 0, world units).
+    pub fn parse(text: &str) -> crate::Result<Occlusion> {
+        let bad = || {
+            Error::input(format!(
+                "unknown occlusion '{text}': choose none, gtao (radius 0.3 of the scene's size) or gtao:R (R world units, R > 0, e.g. gtao:0.5)"
+            ))
+        };
+        match text {
+            "none" => Ok(Occlusion::None),
+            "gtao" => Ok(Occlusion::Gtao { radius: None }),
+            _ => {
+                let r = text.strip_prefix("gtao:").ok_or_else(bad)?;
+                let r: f32 = r.parse().map_err(|_| bad())?;
+                if r.is_finite() && r > 0.0 {
+                    Ok(Occlusion::Gtao { radius: Some(r) })
+                } else {
+                    Err(bad())
+                }
+            }
+        }
+    }
+
+    pub fn name(self) -> String {
+        match self {
+            Occlusion::None => "none".into(),
+            Occlusion::Gtao { radius: None } => "gtao".into(),
+            Occlusion::Gtao { radius: Some(r) } => format!("gtao:{r}"),
         }
     }
 }
@@ -528,6 +586,7 @@ impl Default for RenderOptions {
             jitter: [0.0, 0.0],
             footprint: Footprint::default(),
             antialias: Antialias::None,
+            occlusion: Occlusion::None,
             submission: Submission::Frame,
         }
     }
@@ -574,6 +633,13 @@ impl RenderOptions {
         }
         if let Some(e) = &self.environment {
             e.validate()?;
+        }
+        if let Occlusion::Gtao { radius: Some(r) } = self.occlusion {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::input(format!(
+                    "occlusion radius {r} is out of range: it must be a finite number of world units above 0 (e.g. --occlusion gtao:0.5)"
+                )));
+            }
         }
         if let Footprint::Parallelogram(n) = self.footprint {
             if !(1..=Footprint::MAX_PIECES).contains(&n) {

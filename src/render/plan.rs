@@ -19,6 +19,10 @@ pub enum Pass {
     GBuffer,
     /// Depth-only raster pass: every shadow-casting light's map, one tile each of the atlas.
     Shadow,
+    /// Fullscreen passes after the G-buffer (`--occlusion gtao`, when an environment lights the
+    /// scene): how open each pixel's hemisphere is, from the depth buffer, for the environment's
+    /// light.
+    Occlusion,
     /// Fullscreen pass: lights x materials from the G-buffer into the HDR target.
     Lighting,
     /// Raster pass after lighting (alphaMode BLEND): the blended draws, back to front, each
@@ -45,6 +49,7 @@ impl Pass {
             Pass::Weave => "weave",
             Pass::GBuffer => "gbuffer",
             Pass::Shadow => "shadow",
+            Pass::Occlusion => "occlusion",
             Pass::Lighting => "lighting",
             Pass::Transparent => "transparent",
             Pass::Tonemap => "tonemap",
@@ -223,10 +228,32 @@ pub struct Plan {
     pub debug_view: DebugView,
     /// The environment that lights the scene, if any.
     pub environment: Option<EnvPlan>,
+    /// Screen-space occlusion of the environment's light (with an environment and
+    /// `--occlusion gtao`, or for the occlusion debug view).
+    pub occlusion: Option<OcclusionPlan>,
 }
 
 fn debug_view_name<S: serde::Serializer>(view: &DebugView, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(view.name())
+}
+
+/// Screen-space occlusion of the environment in a frame (the occlusion pass).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OcclusionPlan {
+    /// "gtao".
+    pub method: &'static str,
+    /// How far occluders count, in world units (the last 60 % falling off), and whether it is
+    /// the scene's (0.3 of its diagonal) or `--occlusion gtao:R`'s.
+    pub radius: f32,
+    pub radius_from: &'static str,
+    /// Slices per pixel and depth samples per side of each (occlusion.frag's SLICES and STEPS).
+    pub slices: u32,
+    pub steps: u32,
+}
+
+impl OcclusionPlan {
+    pub const SLICES: u32 = 2;
+    pub const STEPS: u32 = 6;
 }
 
 /// Environment lighting of a frame.
@@ -432,6 +459,33 @@ impl Plan {
                     },
                 }
             });
+        // Occlusion of the environment's light, when there is one (or the debug view shows it).
+        let occlusion = match options.occlusion {
+            super::Occlusion::Gtao { radius }
+                if environment.is_some() || options.debug_view == DebugView::Occlusion =>
+            {
+                let scene_radius = || {
+                    scene
+                        .caster_bounds()
+                        .or_else(|| scene.bounds())
+                        .map(|b| (b.max - b.min).length() * super::Occlusion::RADIUS_OF_DIAGONAL)
+                        .filter(|r| r.is_finite() && *r > 0.0)
+                        .unwrap_or(1.0)
+                };
+                Some(OcclusionPlan {
+                    method: "gtao",
+                    radius: radius.unwrap_or_else(scene_radius),
+                    radius_from: if radius.is_some() {
+                        "--occlusion"
+                    } else {
+                        "0.3 of the scene's diagonal"
+                    },
+                    slices: OcclusionPlan::SLICES,
+                    steps: OcclusionPlan::STEPS,
+                })
+            }
+            _ => None,
+        };
         // The passes in the order a frame runs them, each only when the scene needs it.
         let passes: Vec<Pass> = [
             // Environment preprocessing when an environment lights the scene.
@@ -441,6 +495,8 @@ impl Plan {
             (Pass::GBuffer, true),
             // Shadow maps when a light asks, something casts and something receives.
             (Pass::Shadow, !shadows.is_empty()),
+            // Occlusion of the environment's light from the depth buffer.
+            (Pass::Occlusion, occlusion.is_some()),
             (Pass::Lighting, true),
             // What the G-buffer cannot hold: BLEND and transmissive draws.
             (Pass::Transparent, blend_draws + forward_opaque_draws > 0),
@@ -543,6 +599,7 @@ impl Plan {
             debug_view: options.debug_view,
             supersample: options.supersample(),
             environment,
+            occlusion,
         }
     }
 
@@ -735,6 +792,17 @@ impl fmt::Display for Plan {
                 e.rotation,
                 e.intensity,
                 e.background
+            )?,
+        }
+        match &self.occlusion {
+            None => writeln!(
+                f,
+                "occlusion   none (the environment's light is darkened by occlusion textures only)"
+            )?,
+            Some(o) => writeln!(
+                f,
+                "occlusion   {} of the environment's light, radius {} ({}), {} slices x {} steps per side per pixel, 4x4 blur",
+                o.method, o.radius, o.radius_from, o.slices, o.steps
             )?,
         }
         writeln!(f, "textures    {}", self.textures)?;

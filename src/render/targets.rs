@@ -20,6 +20,8 @@ pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const WEAVE_SAT_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
 pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
+/// The occlusion pass's estimates and their blur (visibility, view distance; half resolution).
+pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
 
 /// The G-buffer and output targets of one resolution.
 pub(crate) struct Targets {
@@ -38,6 +40,33 @@ pub(crate) struct Targets {
     /// The tone-mapped image before edge anti-aliasing (made by the first frame that plans the
     /// anti-aliasing pass).
     pub(crate) tonemapped: Option<Image>,
+    /// The occlusion pass's per-pixel estimates and their blur (made by the first frame that
+    /// plans the pass).
+    pub(crate) occlusion: Option<OcclusionTargets>,
+}
+
+/// The occlusion pass's two targets.
+pub(crate) struct OcclusionTargets {
+    /// Visibility and view distance per 2 x 2 pixels (`OCCLUSION_FORMAT`, half the resolution
+    /// rounded up).
+    pub(crate) raw: Image,
+    /// The same blurred, which the lighting pass reads.
+    pub(crate) visibility: Image,
+}
+
+impl OcclusionTargets {
+    pub(crate) fn new(ctx: &Context, width: u32, height: u32) -> crate::Result<OcclusionTargets> {
+        let usage = ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED;
+        let (w, h) = (width.div_ceil(2), height.div_ceil(2));
+        Ok(OcclusionTargets {
+            raw: ctx.create_image(
+                &ImageDesc::new_2d("occlusion estimates", OCCLUSION_FORMAT, w, h).usage(usage),
+            )?,
+            visibility: ctx.create_image(
+                &ImageDesc::new_2d("occlusion", OCCLUSION_FORMAT, w, h).usage(usage),
+            )?,
+        })
+    }
 }
 
 impl Targets {
@@ -63,6 +92,7 @@ impl Targets {
             ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
             backdrop: None,
             tonemapped: None,
+            occlusion: None,
         })
     }
 

@@ -68,6 +68,12 @@ pub struct Case {
     /// Load warnings the file is known to give (a part of each message); any other fails.
     /// Edge anti-aliasing (`--aa`; the library's default, none, for every other case).
     pub antialias: weft::render::Antialias,
+    /// Occlusion of the environment's light (`--occlusion`; the library's default, none, for
+    /// every other case).
+    pub occlusion: weft::render::Occlusion,
+    /// A camera at `eye` looking at `target` with this vertical field of view in degrees
+    /// (`--eye`, `--target`, `--fov`) instead of the file's or the automatic one.
+    pub look: Option<([f32; 3], [f32; 3], f32)>,
     pub warnings: &'static [&'static str],
     /// What a person should see in the golden.
     pub shows: &'static str,
@@ -101,6 +107,8 @@ const fn case(name: &'static str, scene: &'static str, shows: &'static str) -> C
         pose: None,
         warnings: &[],
         antialias: weft::render::Antialias::None,
+        occlusion: weft::render::Occlusion::None,
+        look: None,
         shows,
     }
 }
@@ -370,6 +378,19 @@ pub fn cases() -> Vec<Case> {
             env: STUDIO,
             antialias: weft::render::Antialias::Fxaa,
             ..case("khronos-sheen-chair-fxaa", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the chair of khronos-sheen-chair through the FXAA pass (weft render's default): the same picture, its silhouettes against the backdrop (the legs, the seat's and back's outlines) blended across instead of one-pixel staircases")
+        },
+        Case {
+            env: STUDIO,
+            occlusion: weft::render::Occlusion::Gtao { radius: None },
+            look: Some(([0.5, 0.12, 1.0], [0.0, 0.22, 0.0], 40.0)),
+            ..case("khronos-sheen-chair-underside", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the chair seen from just above the ground, as weft render shows it with the occlusion pass (its default): the key light's shadow of the chair on the ground, and the ground a little darker under the seat and at the feet of the legs; the velvet, wood and studio walls as in khronos-sheen-chair")
+        },
+        Case {
+            env: STUDIO,
+            occlusion: weft::render::Occlusion::Gtao { radius: None },
+            look: Some(([0.5, 0.12, 1.0], [0.0, 0.22, 0.0], 40.0)),
+            debug_view: DebugView::Occlusion,
+            ..case("khronos-sheen-chair-underside-occlusion", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the occlusion debug view of khronos-sheen-chair-underside: white where the environment is open, a soft grey patch on the ground under the seat, darkest beside the right front leg, light grey along the seat's piping and the rail under it, the background black")
         },
         Case {
             env: STUDIO,

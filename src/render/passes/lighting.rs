@@ -9,8 +9,8 @@ use crate::render::targets::{Targets, HDR_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
-    shaders, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout, Stages,
-    Topology, Usage,
+    shaders, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler, SetLayout,
+    Stages, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and its set layout (reflected from lighting.frag).
@@ -27,6 +27,9 @@ pub struct LightingInputs<'s> {
     /// The G-buffer, fetched per pixel with `nearest`.
     pub targets: &'s Targets,
     pub nearest: &'s Sampler,
+    /// The occlusion pass's visibility when the plan has the pass (any image otherwise: the
+    /// variant without OCCLUSION does not read it).
+    pub occlusion: &'s Image,
 }
 
 impl LightingPass {
@@ -60,6 +63,7 @@ impl LightingPass {
                     .unwrap_or(1),
             ),
             (9, "unlit", plan.unlit as u32),
+            (10, "occlusion", plan.occlusion.is_some() as u32),
         ])
     }
 
@@ -116,6 +120,7 @@ impl LightingPass {
             (24, g(&t.emissive)),
             (25, g(&t.depth)),
             (26, g(&t.specular)),
+            (27, g(inputs.occlusion)),
         ];
         bindings.extend(inputs.lighting.bindings());
         let set = pool.set(&self.layout, &bindings)?;

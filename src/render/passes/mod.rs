@@ -8,10 +8,12 @@
 //! 2. weave (at upload, `Renderer::build_weave`): the coverage textures of each distinct weave;
 //! 3. [`gbuffer`]: every draw into the G-buffer;
 //! 4. [`shadow`]: casters into the shadow atlas;
-//! 5. [`lighting`]: lamps and the environment from the G-buffer into HDR;
-//! 6. [`transparent`]: alphaMode BLEND draws, forward-lit, back to front over HDR;
-//! 7. [`tonemap`]: exposure and tone curve into the 8-bit target;
-//! 8. [`antialias`] (`--aa fxaa`): edge anti-aliasing of the tone-mapped image into the 8-bit
+//! 5. [`occlusion`] (with an environment, `--occlusion gtao`): how open each pixel's hemisphere
+//!    is, from the depth buffer, for the environment's light;
+//! 6. [`lighting`]: lamps and the environment from the G-buffer into HDR;
+//! 7. [`transparent`]: alphaMode BLEND draws, forward-lit, back to front over HDR;
+//! 8. [`tonemap`]: exposure and tone curve into the 8-bit target;
+//! 9. [`antialias`] (`--aa fxaa`): edge anti-aliasing of the tone-mapped image into the 8-bit
 //!    target (the tone-map pass then writes an intermediate one).
 //!
 //! Adding a pass: its GLSL, one file here, one line in the plan's pass list, one call in the
@@ -21,6 +23,7 @@ pub mod antialias;
 pub mod environment;
 pub mod gbuffer;
 pub mod lighting;
+pub mod occlusion;
 pub mod shadow;
 pub mod tonemap;
 pub mod transparent;

@@ -68,7 +68,8 @@ impl TransparentPass {
     }
 
     /// The variant for `plan`: gbuffer.frag's constants under their ids (the vertex stage reads
-    /// 2, 3 and 5, with LIGHT_TYPES the scene's), lighting.frag's others + 10, then the
+    /// 2, 3 and 5, with LIGHT_TYPES the scene's), lighting.frag's others + 10 (but OCCLUSION: the
+    /// occlusion pass's visibility is not read here), then the
     /// forward-only features.
     pub fn key(
         gbuffer: &VariantKey,
@@ -82,7 +83,7 @@ impl TransparentPass {
             lighting
                 .0
                 .iter()
-                .filter(|(id, _, _)| ![0, 3, 4].contains(id))
+                .filter(|(id, _, _)| ![0, 3, 4, 10].contains(id))
                 .map(|&(id, name, value)| (id + 10, name, value)),
         );
         key.extend([

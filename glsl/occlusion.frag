@@ -1,0 +1,139 @@
+#version 460
+// The occlusion pass, step 1 of 2 (`--occlusion gtao`, planned when an environment lights the
+// scene): how much of each pixel's cosine-weighted hemisphere is open to the environment, by
+// ground-truth ambient occlusion (GTAO, include/occlusion.glsl) over the depth buffer, at half
+// resolution (one estimate per 2 x 2 pixels, at its top-left pixel). Per estimate,
+// SLICES planes through the view vector at angles that a 4 x 4 pattern of estimates turns (so the
+// 4 x 4 blur of step 2, occlusion_blur.frag, averages 16 x SLICES evenly spaced directions); in
+// each, the highest horizon on either side among STEPS depth samples out to the world radius,
+// falling off to none over its outer 60 %; the visible arc between the horizons, weighted by the
+// normal's projection into the plane, over the same with nothing in the way. Written with the
+// pixel's view distance for the blur.
+#include "frame.glsl"
+#include "occlusion.glsl"
+
+// Slices per pixel and depth samples per side of a slice.
+layout(constant_id = 0) const uint SLICES = 2u;
+layout(constant_id = 1) const uint STEPS = 6u;
+
+layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
+layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl
+layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
+
+layout(push_constant) uniform OcclusionPush {
+    mat4 view_from_clip;  // the inverse of frame.proj (view space from clip space)
+    vec4 params;          // x: the radius (world units), y, z: the falloff's scale and offset
+                          // (weight = clamp(distance·y + z, 0, 1)), w: unused
+} pc;
+
+layout(location = 0) in vec2 in_uv;
+layout(location = 0) out vec2 out_occlusion;  // x: visibility (1: open), y: view distance (0: empty); half resolution
+
+vec3 view_position(vec2 pixel, float depth) {
+    vec2 ndc = pixel * frame.viewport.zw * 2.0 - 1.0;
+    vec4 p = pc.view_from_clip * vec4(ndc, depth, 1.0);
+    return p.xyz / p.w;
+}
+
+void main() {
+    // This estimate's pixel of the full-resolution G-buffer, and its place in the pattern.
+    ivec2 half_px = ivec2(gl_FragCoord.xy);
+    ivec2 px = min(2 * half_px, ivec2(frame.viewport.xy) - 1);
+    float depth = texelFetch(gb_depth, px, 0).r;
+    if (depth <= 0.0) {
+        out_occlusion = vec2(1.0, 0.0);
+        return;
+    }
+    vec2 centre = vec2(px) + 0.5;
+    vec3 p = view_position(centre, depth);
+    bool orthographic = frame.proj[2][3] == 0.0;
+    vec3 v = orthographic ? vec3(0.0, 0.0, 1.0) : normalize(-p);
+    vec3 n = normalize(mat3(frame.view) * oct_decode(frame_decode(texelFetch(gb_frame, px, 0)).xy));
+    // The radius in pixels at this depth (w of the clip position: -z in perspective, 1 otherwise).
+    float w = frame.proj[2][3] * p.z + frame.proj[3][3];
+    float radius_px = pc.params.x * 0.5 * frame.viewport.y * abs(frame.proj[1][1]) / max(w, 1e-30);
+    // The 4 x 4 pattern: the slices' turn in sixteenths, and the steps' offset.
+    uint k = uint(half_px.x & 3) + 4u * uint(half_px.y & 3);
+    const uint TURN[16] = uint[16](0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
+    float turn = float(TURN[k]) / 16.0;
+    float jitter = (float((k * 7u) & 15u) + 0.5) / 16.0;
+    vec2 size = frame.viewport.xy;
+
+    // The visible arcs, and what they would be with nothing in the way: their ratio is 1 on an
+    // open surface whatever the slices' turn (each estimate unbiased on its own, so the blur's
+    // unequal weights do not bias the mean).
+    float visibility = 0.0;
+    float open = 0.0;
+    for (uint slice = 0u; slice < SLICES; ++slice) {
+        float phi = (float(slice) + turn) / float(SLICES) * PI;
+        vec3 dir = vec3(cos(phi), sin(phi), 0.0);
+        // The slice's direction on screen (x right, y down, as the projection maps view space).
+        vec2 dir_px = vec2(dir.x * frame.proj[0][0] * size.x, dir.y * frame.proj[1][1] * size.y);
+        dir_px /= max(length(dir_px), 1e-30);
+        vec3 ortho = dir - dot(dir, v) * v;
+        vec3 axis = normalize(cross(ortho, v));
+        vec3 pn = n - axis * dot(n, axis);
+        float pn_len = length(pn);
+        if (pn_len < 1e-6) {
+            continue;  // the normal is perpendicular to this slice: it adds nothing
+        }
+        float cos_n = clamp(dot(pn, v) / pn_len, 0.0, 1.0);
+        float angle_n = (dot(ortho, pn) < 0.0 ? -1.0 : 1.0) * acos(cos_n);
+        // The lowest horizons: the tangent plane's, where nothing occludes.
+        float low_pos = cos(angle_n + 0.5 * PI);
+        float low_neg = cos(angle_n - 0.5 * PI);
+        float horizon_pos = low_pos;
+        float horizon_neg = low_neg;
+        for (uint step = 0u; step < STEPS; ++step) {
+            float s = (float(step) + jitter) / float(STEPS);
+            float t = s * s * radius_px + 1.0;
+            for (int side = 0; side < 2; ++side) {
+                vec2 q = centre + (side == 0 ? t : -t) * dir_px;
+                if (any(lessThan(q, vec2(0.5))) || any(greaterThan(q, size - 0.5))) {
+                    continue;
+                }
+                // The depth at q itself, bilinear between the four texels around it where they
+                // lie on one surface (depth is affine in screen space over a plane, so the point
+                // is on the surface and in the slice's plane: a plane seen obliquely does not
+                // occlude itself); the nearest texel's, at its centre, across an edge.
+                vec2 tq = q - 0.5;
+                vec2 base = floor(tq);
+                vec2 f = tq - base;
+                vec4 g = textureGather(gb_depth, (base + 1.0) * frame.viewport.zw, 0);
+                float lo = min(min(g.x, g.y), min(g.z, g.w));
+                float hi = max(max(g.x, g.y), max(g.z, g.w));
+                float d;
+                if (lo > 0.0 && hi <= lo * 1.02) {
+                    d = mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
+                } else {
+                    q = floor(q) + 0.5;
+                    d = texelFetch(gb_depth, ivec2(q), 0).r;
+                }
+                if (d <= 0.0) {
+                    continue;  // empty: the environment itself
+                }
+                vec3 delta = view_position(q, d) - p;
+                float dist = length(delta);
+                if (dist < 1e-30) {
+                    continue;
+                }
+                float weight = clamp(dist * pc.params.y + pc.params.z, 0.0, 1.0);
+                float h = dot(delta / dist, v);
+                if (side == 0) {
+                    horizon_pos = max(horizon_pos, mix(low_pos, h, weight));
+                } else {
+                    horizon_neg = max(horizon_neg, mix(low_neg, h, weight));
+                }
+            }
+        }
+        float h0 = -acos(clamp(horizon_neg, -1.0, 1.0));
+        float h1 = acos(clamp(horizon_pos, -1.0, 1.0));
+        h0 = angle_n + max(h0 - angle_n, -0.5 * PI);
+        h1 = angle_n + min(h1 - angle_n, 0.5 * PI);
+        visibility += pn_len * gtao_arc(h0, h1, angle_n);
+        open += pn_len * gtao_arc(angle_n - 0.5 * PI, angle_n + 0.5 * PI, angle_n);
+    }
+    visibility = open > 0.0 ? visibility / open : 1.0;
+    float distance = orthographic ? -p.z : length(p);
+    out_occlusion = vec2(clamp(visibility, 0.0, 1.0), max(distance, 1e-30));
+}

@@ -1,0 +1,168 @@
+//! The occlusion pass (`--occlusion gtao`, planned when an environment lights the scene): how
+//! open each pixel's hemisphere is, for the environment's light. Two fullscreen draws: the
+//! ground-truth ambient occlusion estimate from the depth buffer and the G-buffer normal at half
+//! resolution (fullscreen.vert, occlusion.frag, turned per estimate by a 4 x 4 pattern), then
+//! the mean of the 4 x 4 estimates around each on its own surface (occlusion_blur.frag), which
+//! the lighting pass reads, bringing it to full resolution (lighting.frag's OCCLUSION and
+//! screen_visibility).
+
+use std::sync::OnceLock;
+
+use glam::{DMat4, Mat4};
+
+use super::Recorded;
+use crate::render::plan::OcclusionPlan;
+use crate::render::targets::{Targets, OCCLUSION_FORMAT};
+use crate::vk::{
+    shaders, Buffer, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout,
+    Stages, Topology, Usage,
+};
+
+/// occlusion.frag's push constants (80 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct OcclusionPush {
+    /// The inverse of the frame's projection: view space from clip space.
+    pub view_from_clip: [[f32; 4]; 4],
+    /// x: the radius (world units), y and z: the falloff's scale and offset (the weight of an
+    /// occluder at distance d is clamp(d·y + z, 0, 1): 1 to 40 % of the radius, 0 at it), w: 0.
+    pub params: [f32; 4],
+}
+
+impl OcclusionPush {
+    /// The share of the radius over which an occluder's weight falls from 1 to 0.
+    pub const FALLOFF: f32 = 0.6;
+
+    /// For a frame with projection `proj` (the frame uniform's, jittered if the frame is).
+    pub fn new(proj: Mat4, radius: f32) -> OcclusionPush {
+        // Inverted in f64: a reversed-Z infinite projection is badly conditioned in f32.
+        let p = DMat4::from_cols_array(&proj.to_cols_array().map(f64::from));
+        let inv = p.inverse().to_cols_array().map(|x| x as f32);
+        let range = Self::FALLOFF * radius;
+        let from = radius - range;
+        OcclusionPush {
+            view_from_clip: bytemuck::cast(inv),
+            params: [radius, -1.0 / range, from / range + 1.0, 0.0],
+        }
+    }
+}
+
+/// The pass's two set layouts (reflected from occlusion.frag and occlusion_blur.frag) and its
+/// two pipelines, made by the first frame that plans the pass.
+pub struct OcclusionPass {
+    layout: SetLayout,
+    blur_layout: SetLayout,
+    pipelines: OnceLock<(Pipeline, Pipeline)>,
+}
+
+/// What the pass reads; it writes `targets.occlusion` (left readable by fragment shaders).
+pub struct OcclusionInputs<'s> {
+    /// The frame uniform (the projection, the view matrix for the normals, the viewport).
+    pub frame: &'s Buffer,
+    pub push: OcclusionPush,
+    /// The G-buffer's depth and normals, fetched per pixel with `nearest`.
+    pub targets: &'s Targets,
+    pub nearest: &'s Sampler,
+}
+
+impl OcclusionPass {
+    pub fn new(ctx: &Context) -> crate::Result<OcclusionPass> {
+        let [layout] =
+            ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::OCCLUSION_FRAG])?;
+        let [blur_layout] =
+            ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::OCCLUSION_BLUR_FRAG])?;
+        Ok(OcclusionPass {
+            layout,
+            blur_layout,
+            pipelines: OnceLock::new(),
+        })
+    }
+
+    /// Makes the two pipelines once.
+    pub fn make(&self, ctx: &Context) -> crate::Result<()> {
+        if self.pipelines.get().is_none() {
+            let estimate = ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!(
+                    "occlusion[slices={}, steps={}]",
+                    OcclusionPlan::SLICES,
+                    OcclusionPlan::STEPS
+                ),
+                vertex: &shaders::FULLSCREEN_VERT,
+                fragment: &shaders::OCCLUSION_FRAG,
+                vertex_layout: None,
+                color_formats: &[OCCLUSION_FORMAT],
+                depth_format: None,
+                set_layouts: &[&self.layout],
+                push_constant_size: std::mem::size_of::<OcclusionPush>() as u32,
+                push_stages: Stages::FRAGMENT,
+                constants: &[(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)],
+                blend: false,
+                topology: Topology::Triangles,
+            })?;
+            let blur = ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: "occlusion blur",
+                vertex: &shaders::FULLSCREEN_VERT,
+                fragment: &shaders::OCCLUSION_BLUR_FRAG,
+                vertex_layout: None,
+                color_formats: &[OCCLUSION_FORMAT],
+                depth_format: None,
+                set_layouts: &[&self.blur_layout],
+                push_constant_size: 0,
+                push_stages: Stages::FRAGMENT,
+                constants: &[],
+                blend: false,
+                topology: Topology::Triangles,
+            })?;
+            let _ = self.pipelines.set((estimate, blur));
+        }
+        Ok(())
+    }
+
+    pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
+        self.pipelines.get().into_iter().flat_map(|(a, b)| [a, b])
+    }
+
+    pub fn record<'s>(
+        &'s self,
+        pool: &'s DescriptorPool,
+        inputs: OcclusionInputs<'s>,
+    ) -> crate::Result<Recorded<'s>> {
+        let (estimate, blur) = self
+            .pipelines
+            .get()
+            .expect("the frame makes the pipelines when it plans the pass");
+        let t = inputs.targets;
+        let o = t
+            .occlusion
+            .as_ref()
+            .expect("the frame makes the occlusion targets when it plans the pass");
+        let set = pool.set(
+            &self.layout,
+            &[
+                (0, Resource::Uniform(inputs.frame)),
+                (21, Resource::Sampled(&t.frame, inputs.nearest)),
+                (25, Resource::Sampled(&t.depth, inputs.nearest)),
+            ],
+        )?;
+        let blur_set = pool.set(
+            &self.blur_layout,
+            &[(28, Resource::Sampled(&o.raw, inputs.nearest))],
+        )?;
+        let push = inputs.push;
+        Ok(Recorded::new(
+            "occlusion",
+            vec![estimate.name.clone(), blur.name.clone()],
+            move |cmd| {
+                super::fullscreen(cmd, estimate, set, Some(&push), &o.raw);
+                cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
+                super::fullscreen::<u32>(cmd, blur, blur_set, None, &o.visibility);
+                cmd.transition(
+                    &o.visibility,
+                    Usage::ColorAttachment,
+                    Usage::FragmentRead,
+                    None,
+                );
+            },
+        ))
+    }
+}

@@ -1,0 +1,259 @@
+//! The occlusion pass (issue 28 item 4): screen-space occlusion of the environment's light.
+//!
+//! - Against an independent truth: a floor before a wall of height H, whose visibility at
+//!   distance d from the wall is computed here by f64 quadrature of the cosine-weighted
+//!   hemisphere, ray by ray against the wall's rectangle (no horizon, slice or screen in it), and
+//!   cross-checked with the infinite strip's form factor ½(1 − d/√(d² + H²)).
+//! - Nothing to occlude changes nothing: a lone floor under the environment renders as without
+//!   the pass.
+//! - The plan runs the pass only with an environment (or for its debug view), and
+//!   `--occlusion none` compiles its read out of the lighting pass.
+
+mod common;
+
+use glam::{Mat4, Vec3, Vec4};
+use weft::render::{DebugView, Occlusion, Pass, Plan, RenderOptions, Renderer};
+use weft::scene::{Draw, Material, Mesh, Scene, Topology, Vertex};
+
+/// A quad with corners `c` (counter-clockwise seen from where `normal` points).
+fn quad(name: &str, c: [[f32; 3]; 4], normal: [f32; 3]) -> Mesh {
+    let tangent = Vec3::from(c[1]) - Vec3::from(c[0]);
+    let t = tangent.normalize();
+    Mesh {
+        name: name.into(),
+        vertices: c
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Vertex {
+                position: *p,
+                normal,
+                tangent: [t.x, t.y, t.z, 1.0],
+                uv: [(i == 1 || i == 2) as u32 as f32, (i >= 2) as u32 as f32],
+                uv1: [0.0; 2],
+            })
+            .collect(),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+        colors: Vec::new(),
+        topology: Topology::Triangles,
+    }
+}
+
+const WALL_HALF_WIDTH: f32 = 10.0;
+const WALL_HEIGHT: f32 = 1.0;
+
+/// A floor (y = 0, z from 0 to 6, facing +y) and, when `wall`, a wall standing on its edge
+/// (z = 0, y from 0 to WALL_HEIGHT, facing +z); both grey and rough.
+fn wall_scene(wall: bool) -> Scene {
+    let w = WALL_HALF_WIDTH;
+    let mut meshes = vec![quad(
+        "floor",
+        [[-w, 0.0, 6.0], [w, 0.0, 6.0], [w, 0.0, 0.0], [-w, 0.0, 0.0]],
+        [0.0, 1.0, 0.0],
+    )];
+    if wall {
+        meshes.push(quad(
+            "wall",
+            [
+                [-w, 0.0, 0.0],
+                [w, 0.0, 0.0],
+                [w, WALL_HEIGHT, 0.0],
+                [-w, WALL_HEIGHT, 0.0],
+            ],
+            [0.0, 0.0, 1.0],
+        ));
+    }
+    let draws = (0..meshes.len())
+        .map(|m| Draw::new(m, Mat4::IDENTITY))
+        .collect();
+    Scene {
+        source: "occlusion test".into(),
+        meshes,
+        draws,
+        materials: vec![Material {
+            name: "grey".into(),
+            base_color: [0.5, 0.5, 0.5, 1.0],
+            metallic: 0.0,
+            roughness: 1.0,
+            double_sided: true,
+            ..Default::default()
+        }],
+        ..Default::default()
+    }
+}
+
+/// The cosine-weighted visibility of the sky from the floor point (0, 0, d) past the wall's
+/// rectangle, by an n x n midpoint quadrature of the cosine-weighted hemisphere (f64).
+fn wall_visibility_truth(d: f64, n: usize) -> f64 {
+    let (w, h) = (WALL_HALF_WIDTH as f64, WALL_HEIGHT as f64);
+    let mut open = 0usize;
+    for i in 0..n {
+        for j in 0..n {
+            // Malley's method: a uniform point of the unit disc lifted onto the hemisphere.
+            let r = ((i as f64 + 0.5) / n as f64).sqrt();
+            let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n as f64;
+            let (x, z) = (r * phi.cos(), r * phi.sin());
+            let y = (1.0 - r * r).max(0.0).sqrt();
+            // The wall's plane z = 0 lies behind (-z) the point.
+            let hit = z < 0.0 && {
+                let t = -d / z;
+                let (hx, hy) = (t * x, t * y);
+                hx.abs() <= w && (0.0..=h).contains(&hy)
+            };
+            open += (!hit) as usize;
+        }
+    }
+    open as f64 / (n * n) as f64
+}
+
+fn options(width: u32, height: u32, scene: &Scene, occlusion: Occlusion) -> RenderOptions {
+    let camera = scene
+        .look_at_camera(
+            Vec3::new(0.0, 2.2, 4.2),
+            Vec3::new(0.0, 0.3, 0.9),
+            50f32.to_radians(),
+        )
+        .expect("a valid camera");
+    RenderOptions {
+        width,
+        height,
+        camera_override: Some(camera),
+        debug_view: DebugView::Occlusion,
+        occlusion,
+        ..Default::default()
+    }
+}
+
+/// The pixel (x, y) a world point lands on.
+fn pixel_of(o: &RenderOptions, p: Vec3) -> (usize, usize) {
+    let camera = o.camera_override.as_ref().expect("set");
+    let data = weft::render::gpu::FrameData::new(camera, o.width, o.height);
+    let clip = Mat4::from_cols_array_2d(&data.view_proj) * Vec4::new(p.x, p.y, p.z, 1.0);
+    let ndc = clip.truncate() / clip.w;
+    (
+        ((ndc.x * 0.5 + 0.5) * o.width as f32) as usize,
+        ((ndc.y * 0.5 + 0.5) * o.height as f32) as usize,
+    )
+}
+
+#[test]
+fn the_infinite_strip_form_factor_agrees_with_the_quadrature() {
+    // The truth's own check: a wall 10 heights wide to each side is an infinite strip to
+    // within the quadrature's resolution near its middle.
+    for d in [0.25f64, 0.5, 1.0, 2.0] {
+        let strip = 1.0 - 0.5 * (1.0 - d / (d * d + 1.0).sqrt());
+        let quad = wall_visibility_truth(d, 1000);
+        assert!(
+            (quad - strip).abs() < 0.01,
+            "d = {d}: quadrature {quad:.4}, strip {strip:.4}"
+        );
+    }
+}
+
+#[test]
+fn a_wall_occludes_the_floor_as_the_truth_says() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(ctx).expect("renderer");
+    let scene = wall_scene(true);
+    let o = options(320, 240, &scene, Occlusion::Gtao { radius: Some(4.0) });
+    let plan = Plan::new(&scene, &o);
+    assert!(plan.runs(Pass::Occlusion), "{plan}");
+    let frame = renderer.render(&scene, &o).expect("render");
+    let at = |p: Vec3| {
+        let (x, y) = pixel_of(&o, p);
+        frame.hdr[(y * o.width as usize + x) * 4]
+    };
+    println!("| d / H | truth (f64 quadrature) | occlusion pass | difference |");
+    println!("|---|---|---|---|");
+    let (mut worst, mut lowest) = (0f64, 0f64);
+    for d in [0.25f32, 0.5, 1.0, 1.5] {
+        let truth = wall_visibility_truth(d as f64, 1000);
+        let got = at(Vec3::new(0.0, 0.0, d)) as f64;
+        println!("| {d} | {truth:.4} | {got:.4} | {:+.4} |", got - truth);
+        worst = worst.max((got - truth).abs());
+        lowest = lowest.min(got - truth);
+    }
+    // Far from the wall, open.
+    let far = at(Vec3::new(0.0, 0.0, 3.0)) as f64;
+    let far_truth = wall_visibility_truth(3.0, 1000);
+    println!(
+        "| 3 | {far_truth:.4} | {far:.4} | {:+.4} |",
+        far - far_truth
+    );
+    worst = worst.max((far - far_truth).abs());
+    // Measured on lavapipe (2 slices x 6 steps, radius 4 H): +0.035, +0.057, +0.071, +0.057,
+    // always short of the truth: the steps land below the wall's top (the highest sample on the
+    // wall is the horizon), and occluders beyond 40 % of the radius fade (the truth cut at that
+    // distance is 0.007-0.033 more open at these d). The bound keeps 0.02 beyond the worst, for
+    // another CPU's rounding, and fails on a pass that finds a third less occlusion or none
+    // (the truth's occlusion here is 0.08-0.38).
+    assert!(worst < 0.09, "worst difference {worst:.4}");
+    assert!(lowest > -0.02, "darker than the truth by {lowest:.4}");
+}
+
+#[test]
+fn nothing_to_occlude_leaves_the_image_as_it_was() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(ctx).expect("renderer");
+    let scene = wall_scene(false);
+    let env = weft::env::EnvLighting::new(std::sync::Arc::new(weft::env::Environment::studio()));
+    let lit = |occlusion| {
+        let mut o = options(320, 240, &scene, occlusion);
+        o.debug_view = DebugView::None;
+        o.environment = Some(env.clone());
+        o
+    };
+    let with = lit(Occlusion::Gtao { radius: None });
+    let without = lit(Occlusion::None);
+    assert!(Plan::new(&scene, &with).runs(Pass::Occlusion));
+    assert!(!Plan::new(&scene, &without).runs(Pass::Occlusion));
+    let a = renderer.render(&scene, &with).expect("render");
+    let b = renderer.render(&scene, &without).expect("render");
+    let worst = a
+        .hdr
+        .iter()
+        .zip(&b.hdr)
+        .map(|(x, y)| ((x - y) / y.abs().max(1e-3)).abs())
+        .fold(0f32, f32::max);
+    println!("largest relative difference of a lone floor with and without the pass: {worst:e}");
+    // Measured: 0.0047 (the open floor's visibility is 0.993-1 where the floor ends against the
+    // empty background).
+    assert!(worst < 0.01, "{worst}");
+}
+
+#[test]
+fn the_plan_runs_the_pass_only_where_it_is_read() {
+    let scene = wall_scene(true);
+    let env = weft::env::EnvLighting::new(std::sync::Arc::new(weft::env::Environment::studio()));
+    let mut o = options(64, 48, &scene, Occlusion::Gtao { radius: None });
+    o.debug_view = DebugView::None;
+    // No environment: nothing to occlude.
+    let plan = Plan::new(&scene, &o);
+    assert!(
+        !plan.runs(Pass::Occlusion) && plan.occlusion.is_none(),
+        "{plan}"
+    );
+    // With one: planned, its radius 0.3 of the diagonal of what casts.
+    o.environment = Some(env);
+    let plan = Plan::new(&scene, &o);
+    assert!(plan.runs(Pass::Occlusion), "{plan}");
+    let b = scene.caster_bounds().expect("bounds");
+    let expected = (b.max - b.min).length() * Occlusion::RADIUS_OF_DIAGONAL;
+    let radius = plan.occlusion.as_ref().expect("planned").radius;
+    assert!((radius - expected).abs() < 1e-5, "{radius} vs {expected}");
+    let order: Vec<_> = plan.passes.iter().map(|p| p.name()).collect();
+    let at = |n: &str| order.iter().position(|p| *p == n).expect(n);
+    assert!(at("gbuffer") < at("occlusion") && at("occlusion") < at("lighting"));
+    // Turned off: not planned.
+    o.occlusion = Occlusion::None;
+    assert!(!Plan::new(&scene, &o).runs(Pass::Occlusion));
+    // Bad radii are refused with the flag's own words.
+    for bad in ["gtao:0", "gtao:-1", "gtao:nan", "gtao:x", "ssao"] {
+        let e = Occlusion::parse(bad).expect_err(bad).to_string();
+        assert!(e.contains("gtao:R"), "{bad}: {e}");
+    }
+    assert_eq!(
+        Occlusion::parse("gtao:0.5").unwrap(),
+        Occlusion::Gtao { radius: Some(0.5) }
+    );
+}
