@@ -42,6 +42,10 @@ pub const INCLUDES: &[(&str, &str)] = &[
     ("frame.glsl", include_str!("../glsl/include/frame.glsl")),
     ("ibl.glsl", include_str!("../glsl/include/ibl.glsl")),
     ("lights.glsl", include_str!("../glsl/include/lights.glsl")),
+    (
+        "occlusion.glsl",
+        include_str!("../glsl/include/occlusion.glsl"),
+    ),
     ("pbr.glsl", include_str!("../glsl/include/pbr.glsl")),
     ("shade.glsl", include_str!("../glsl/include/shade.glsl")),
     ("surface.glsl", include_str!("../glsl/include/surface.glsl")),

@@ -103,7 +103,8 @@ fn render_writes_png_and_exr() {
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("lighting") && stdout.contains("weave -> gbuffer -> lighting -> tonemap"),
+        stdout.contains("lighting")
+            && stdout.contains("weave -> gbuffer -> occlusion -> lighting -> tonemap"),
         "{stdout}"
     );
     let img = image::open(&png).unwrap().to_rgba8();
@@ -118,14 +119,16 @@ fn plan_prints_the_default_scene() {
     let out = weft().args(["plan", "--json"]).output().unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    // Lit by the built-in studio by default: its preprocessing comes first; edge anti-aliasing
-    // last (weft render's default), and not with --aa none.
+    // Lit by the built-in studio by default: its preprocessing comes first, the occlusion of its
+    // light before the lighting; edge anti-aliasing last (weft render's default), and not with
+    // --aa none.
     assert_eq!(
         v["passes"],
         serde_json::json!([
             "environment",
             "weave",
             "gbuffer",
+            "occlusion",
             "lighting",
             "tonemap",
             "antialias"
@@ -138,9 +141,31 @@ fn plan_prints_the_default_scene() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         v["passes"],
-        serde_json::json!(["environment", "weave", "gbuffer", "lighting", "tonemap"])
+        serde_json::json!([
+            "environment",
+            "weave",
+            "gbuffer",
+            "occlusion",
+            "lighting",
+            "tonemap"
+        ])
     );
     assert_eq!(v["supersample"], 1);
+    assert!(
+        v["occlusion"]["radius"].as_f64().is_some_and(|r| r > 0.0),
+        "{v}"
+    );
+    // --occlusion none, or no environment: no occlusion pass.
+    for args in [["--occlusion", "none"], ["--env", "none"]] {
+        let out = weft().args(["plan", "--json"]).args(args).output().unwrap();
+        let n: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let passes = n["passes"].as_array().expect("a list");
+        assert!(
+            !passes.contains(&serde_json::json!("occlusion")),
+            "{args:?}: {n}"
+        );
+        assert!(n["occlusion"].is_null(), "{args:?}: {n}");
+    }
     // --aa ss3: nine frames of the same passes, without the FXAA pass.
     let out = weft()
         .args(["plan", "--json", "--aa", "ss3"])
@@ -363,7 +388,8 @@ fn help_lists_the_values_of_every_choice() {
     for values in [
         "[possible values: nearest, filtered-params, mixture, supersampled:N]",
         "[possible values: rgba8, rgba16f, analytic, sat]",
-        "[possible values: none, albedo, normals, tangents, roughness-metallic, coverage, thread-dir, depth]",
+        "[possible values: none, albedo, normals, tangents, roughness-metallic, coverage, thread-dir, depth, occlusion]",
+        "[possible values: gtao, gtao:R, none]",
         "[possible values: gouraud, phong, ashikhmin-shirley, fabric]",
     ] {
         assert!(help.contains(values), "{values} missing from:\n{help}");
@@ -374,6 +400,9 @@ fn help_lists_the_values_of_every_choice() {
         ("--accuracy", "filtered-params"),
         ("--weave-precision", "analytic"),
         ("--debug-view", "thread-dir"),
+        ("--debug-view", "occlusion"),
+        ("--occlusion", "gtao:0.25"),
+        ("--occlusion", "none"),
         ("--shading", "ashikhmin-shirley"),
     ] {
         let out = weft().args(["plan", flag, value]).output().unwrap();
