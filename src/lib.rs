@@ -1,8 +1,8 @@
 //! weft: a deferred Vulkan renderer for woven fabric.
 //!
-//! Layers, bottom up: `parse` (values as they enter), `reflect` (a SPIR-V reader), `vk` (every
-//! `unsafe` Vulkan call; its set layouts are reflected from the shaders), `fabric` (the cloth
-//! material's parameters and weave patterns), `scene` (glTF into plain data), `reference` (the CPU
+//! Layers, bottom up: `parse` (values as they enter), `cache` (weft's cache on disk), `reflect` (a
+//! SPIR-V reader), `vk` (every `unsafe` Vulkan call; its set layouts are reflected from the
+//! shaders), `fabric` (the cloth material's parameters and weave patterns), `scene` (glTF into plain data), `reference` (the CPU
 //! twin of every shader function), `env` (environment maps and their preprocessing), `render` (the
 //! plan and the passes of a frame), then the commands' libraries (`package`, `batch`, `bench`,
 //! `compare`, `fidelity`, `sheet`, `view`). A module uses only lower ones; tests/module_layers.rs
@@ -13,6 +13,7 @@
 
 pub mod batch;
 pub mod bench;
+pub mod cache;
 pub mod compare;
 pub mod env;
 pub mod fabric;

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&str] = &[
     "error",
     "parse",
+    "cache",
     "reflect",
     "vk",
     "fabric",

@@ -67,6 +67,9 @@ pub struct FrameStats {
     /// Queue submissions the frame made (the passes and the readback; not the environment's
     /// preprocessing or other work done once before the first frame that needs it).
     pub submissions: u64,
+    /// This frame prepared its environment from weft's cache on disk (crate::cache) instead of
+    /// preprocessing it.
+    pub environment_from_disk: bool,
 }
 
 /// A rendered frame, read back.
@@ -170,6 +173,8 @@ struct FrameKeys {
     lighting: VariantKey,
     forward: Option<VariantKey>,
     env: Option<usize>,
+    /// The environment was prepared for this frame, from the cache on disk.
+    env_from_disk: bool,
 }
 
 /// The frame's own buffers: its uniform, the tile light lists, the shadow maps' records and
@@ -365,8 +370,10 @@ impl Renderer {
                 self.transparent.insert(k.clone(), blend, p);
             }
         }
+        let mut env_from_disk = false;
         let env_index = match built_env? {
             Some(built) => {
+                env_from_disk = built.from_cache;
                 if let Some(t) = timings {
                     t.push(PassTiming {
                         name: "environment",
@@ -397,6 +404,7 @@ impl Renderer {
             lighting: lighting_key,
             forward: forward_key,
             env: env_index,
+            env_from_disk,
         })
     }
 
@@ -815,6 +823,7 @@ impl Renderer {
         let mut stats = FrameStats {
             draws: gpu.draws.len(),
             triangles: gpu.triangles,
+            environment_from_disk: keys.env_from_disk,
             ..Default::default()
         };
         // Where the output goes, and a timestamp before and after each pass.

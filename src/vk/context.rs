@@ -98,6 +98,43 @@ pub(crate) struct Shared {
     /// Boxed so the debug callback's user pointer stays valid for the instance's whole life.
     messages: Box<Mutex<Vec<String>>>,
     pub(crate) anisotropy: bool,
+    /// The driver's pipeline cache (null when the driver refused one), loaded from weft's cache
+    /// on disk (crate::cache) and written back when the context ends if it changed.
+    pub(crate) pipeline_cache: vk::PipelineCache,
+    /// The size of what was loaded, and the entry's key (device, driver, weft).
+    pipeline_cache_loaded: usize,
+    pipeline_cache_key: Vec<u8>,
+}
+
+/// The cache entry's key for a device: what a pipeline cache is valid for (the vendor, device,
+/// driver version and the driver's cache UUID, as its header says), and this weft.
+fn pipeline_cache_key(props: &vk::PhysicalDeviceProperties) -> Vec<u8> {
+    let mut key = b"VkPipelineCache v1 ".to_vec();
+    key.extend_from_slice(&props.vendor_id.to_le_bytes());
+    key.extend_from_slice(&props.device_id.to_le_bytes());
+    key.extend_from_slice(&props.driver_version.to_le_bytes());
+    key.extend_from_slice(&props.pipeline_cache_uuid);
+    key.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
+    key
+}
+
+/// Whether `data` begins with the header Vulkan defines for a pipeline cache of this device
+/// (`VkPipelineCacheHeaderVersionOne`: header size ≥ 32, version 1, vendor, device, UUID); a
+/// driver is then the one to judge the rest.
+pub(crate) fn pipeline_cache_header_matches(
+    data: &[u8],
+    props: &vk::PhysicalDeviceProperties,
+) -> bool {
+    let word = |i: usize| {
+        data.get(4 * i..4 * i + 4)
+            .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+    };
+    data.len() >= 32
+        && word(0).is_some_and(|n| n >= 32 && n as usize <= data.len())
+        && word(1) == Some(vk::PipelineCacheHeaderVersion::ONE.as_raw() as u32)
+        && word(2) == Some(props.vendor_id)
+        && word(3) == Some(props.device_id)
+        && data[16..32] == props.pipeline_cache_uuid
 }
 
 impl Shared {
@@ -129,6 +166,16 @@ impl Drop for Shared {
         // Reverse order of creation. Every resource holding an Arc<Shared> is gone by now.
         unsafe {
             let _ = self.device.device_wait_idle();
+            if self.pipeline_cache != vk::PipelineCache::null() {
+                // Best effort: a cache that cannot be read back or written is no cache.
+                if let Ok(data) = self.device.get_pipeline_cache_data(self.pipeline_cache) {
+                    if data.len() != self.pipeline_cache_loaded {
+                        crate::cache::write("pipelines", &self.pipeline_cache_key, &data);
+                    }
+                }
+                self.device
+                    .destroy_pipeline_cache(self.pipeline_cache, None);
+            }
             self.device.destroy_command_pool(self.command_pool, None);
             drop(self.allocator.lock().map(|mut a| a.take()));
             self.device.destroy_device(None);
@@ -433,6 +480,25 @@ impl Context {
             }
         };
 
+        // The pipeline cache: what an earlier run compiled for this device and driver, if weft's
+        // cache holds it and its header is this device's; empty otherwise, none if the driver
+        // refuses even that.
+        let props = unsafe { instance.get_physical_device_properties(physical) };
+        let pipeline_cache_key = pipeline_cache_key(&props);
+        let initial = crate::cache::read("pipelines", &pipeline_cache_key)
+            .filter(|d| pipeline_cache_header_matches(d, &props))
+            .unwrap_or_default();
+        let create = |data: &[u8]| unsafe {
+            device.create_pipeline_cache(
+                &vk::PipelineCacheCreateInfo::default().initial_data(data),
+                None,
+            )
+        };
+        let (pipeline_cache, pipeline_cache_loaded) = match create(&initial) {
+            Ok(c) => (c, initial.len()),
+            Err(_) => (create(&[]).unwrap_or(vk::PipelineCache::null()), 0),
+        };
+
         let (instance, debug) = guard.0.take().expect("guard holds the instance until here");
         Ok(Context {
             shared: Arc::new(Shared {
@@ -451,6 +517,9 @@ impl Context {
                 limits,
                 messages,
                 anisotropy,
+                pipeline_cache,
+                pipeline_cache_loaded,
+                pipeline_cache_key,
             }),
         })
     }
@@ -647,5 +716,49 @@ fn choose_device(
             },
             list()
         ))),
+    }
+}
+
+#[cfg(test)]
+mod pipeline_cache_tests {
+    use super::*;
+
+    #[test]
+    fn only_this_devices_header_is_handed_to_the_driver() {
+        let mut props = vk::PhysicalDeviceProperties {
+            vendor_id: 0x10de,
+            device_id: 0x2330,
+            ..Default::default()
+        };
+        props.pipeline_cache_uuid = [7; 16];
+        let mut good = Vec::new();
+        for w in [32u32, 1, 0x10de, 0x2330] {
+            good.extend_from_slice(&w.to_le_bytes());
+        }
+        good.extend_from_slice(&[7; 16]);
+        good.extend_from_slice(b"driver data");
+        assert!(pipeline_cache_header_matches(&good, &props));
+        let changed = |at: usize| {
+            let mut d = good.clone();
+            d[at] ^= 1;
+            d
+        };
+        // A header smaller than Vulkan's, another version, vendor, device or UUID: not for this
+        // device.
+        let mut small = good.clone();
+        small[0..4].copy_from_slice(&16u32.to_le_bytes());
+        assert!(!pipeline_cache_header_matches(&small, &props));
+        for at in [4, 8, 12, 16, 31] {
+            assert!(
+                !pipeline_cache_header_matches(&changed(at), &props),
+                "byte {at}"
+            );
+        }
+        // Too short, or a header size past the end.
+        assert!(!pipeline_cache_header_matches(&good[..31], &props));
+        let mut big = good.clone();
+        big[0..4].copy_from_slice(&1000u32.to_le_bytes());
+        assert!(!pipeline_cache_header_matches(&big, &props));
+        assert!(!pipeline_cache_header_matches(&[], &props));
     }
 }

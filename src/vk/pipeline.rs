@@ -494,7 +494,7 @@ impl Context {
             .layout(layout)
             .push_next(&mut rendering);
         let raw = match unsafe {
-            device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+            device.create_graphics_pipelines(self.shared.pipeline_cache, &[info], None)
         } {
             Ok(p) => p[0],
             Err((_, e)) => {
@@ -542,7 +542,7 @@ impl Context {
             .stage(stage)
             .layout(layout);
         let raw = match unsafe {
-            device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+            device.create_compute_pipelines(self.shared.pipeline_cache, &[info], None)
         } {
             Ok(p) => p[0],
             Err((_, e)) => {

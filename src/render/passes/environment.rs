@@ -12,11 +12,18 @@
 //!
 //! The DFG table of the split sum does not depend on the environment: it is computed once per
 //! renderer on the CPU ([`crate::env::dfg_table`]) and uploaded.
+//!
+//! What preprocessing makes (both cubes with every level, and the SH) is kept in weft's cache on
+//! disk ([`crate::cache`], kind `environment`), keyed by the map's content hash, the cubes' sizes,
+//! the two shaders' SPIR-V, the device, its driver and weft's version: a later run with the same
+//! environment uploads it instead (issue 29 item 4: the built-in studio's 190 ms at start-up).
+
+use sha2::{Digest, Sha256};
 
 use crate::env::Environment;
 use crate::vk::{
-    shaders, Binding, BindingKind, BufferUsageFlags, ComputeDesc, Context, Format, Image,
-    ImageDesc, ImageUsageFlags, Pipeline, Resource, Sampler, SetLayout, Stages, Usage,
+    shaders, Binding, BindingKind, BufferLocation, BufferUsageFlags, ComputeDesc, Context, Format,
+    Image, ImageDesc, ImageUsageFlags, Pipeline, Resource, Sampler, SetLayout, Stages, Usage,
 };
 
 pub const ENV_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
@@ -57,8 +64,21 @@ pub struct GpuEnvironment {
     pub radiance: Image,
     pub specular: Image,
     pub sh: [[f32; 3]; 9],
-    /// Wall time of the preprocessing, ms.
+    /// Wall time of the preprocessing (or of the upload from the cache on disk), ms.
     pub build_ms: f64,
+    /// Whether it came from the cache on disk.
+    pub from_cache: bool,
+}
+
+/// Bytes of one level of a cube of face size `size` in [`ENV_FORMAT`].
+fn level_bytes(size: u32, level: u32) -> usize {
+    let s = (size >> level).max(1) as usize;
+    s * s * 6 * 8
+}
+
+/// The levels of the radiance cube of face size `size` (a full chain).
+fn radiance_levels(size: u32) -> u32 {
+    32 - size.leading_zeros()
 }
 
 impl GpuEnvironment {
@@ -151,9 +171,187 @@ impl EnvPasses {
         [&self.cube, &self.prefilter]
     }
 
-    /// Preprocesses `env`: the radiance cube with its mips, the specular cube, the SH.
+    /// The key of `env`'s entry in the cache on disk.
+    fn cache_key(ctx: &Context, env: &Environment) -> Vec<u8> {
+        let mut key = b"environment v1 ".to_vec();
+        key.extend_from_slice(&env.hash());
+        let mut shaders = Sha256::new();
+        shaders.update(shaders::ENV_CUBE_COMP.spirv);
+        shaders.update(shaders::ENV_PREFILTER_COMP.spirv);
+        key.extend_from_slice(&shaders.finalize());
+        for v in [
+            radiance_size(env.width),
+            SPECULAR_SIZE,
+            SPECULAR_LEVELS,
+            PREFILTER_SAMPLES,
+        ] {
+            key.extend_from_slice(&v.to_le_bytes());
+        }
+        for text in [
+            &ctx.info().name,
+            &ctx.info().driver_name,
+            &ctx.info().driver_info,
+        ] {
+            key.extend_from_slice(text.as_bytes());
+            key.push(0);
+        }
+        key.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
+        key
+    }
+
+    /// The cache entry's payload: the SH (27 f32), then each level of the radiance cube, then
+    /// of the specular cube, as the images hold them. Its length for a radiance cube of `size`.
+    fn payload_len(size: u32) -> usize {
+        27 * 4
+            + (0..radiance_levels(size))
+                .map(|l| level_bytes(size, l))
+                .sum::<usize>()
+            + (0..SPECULAR_LEVELS)
+                .map(|l| level_bytes(SPECULAR_SIZE, l))
+                .sum::<usize>()
+    }
+
+    /// `env` preprocessed: from the cache on disk when it holds it, else computed (and then
+    /// stored there, best effort).
     pub fn build(&self, ctx: &Context, env: &Environment) -> crate::Result<GpuEnvironment> {
         let start = std::time::Instant::now();
+        let key = Self::cache_key(ctx, env);
+        if let Some(payload) = crate::cache::read("environment", &key) {
+            if let Some(mut g) = Self::upload_cached(ctx, env, &payload)? {
+                g.build_ms = start.elapsed().as_secs_f64() * 1e3;
+                return Ok(g);
+            }
+        }
+        let mut g = self.compute(ctx, env)?;
+        g.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        if crate::cache::dir().is_some() {
+            if let Ok(payload) = Self::read_back(ctx, &g) {
+                crate::cache::write("environment", &key, &payload);
+            }
+        }
+        Ok(g)
+    }
+
+    /// The cubes' images of an environment with a radiance cube of face `size`.
+    fn cube_images(ctx: &Context, size: u32) -> crate::Result<(Image, Image)> {
+        let radiance = ctx.create_image(
+            &ImageDesc::new_cube("environment radiance cube", ENV_FORMAT, size)
+                .usage(
+                    ImageUsageFlags::STORAGE
+                        | ImageUsageFlags::SAMPLED
+                        | ImageUsageFlags::TRANSFER_SRC
+                        | ImageUsageFlags::TRANSFER_DST,
+                )
+                .full_mips(),
+        )?;
+        let mut desc = ImageDesc::new_cube("environment specular cube", ENV_FORMAT, SPECULAR_SIZE)
+            .usage(
+                ImageUsageFlags::STORAGE
+                    | ImageUsageFlags::SAMPLED
+                    | ImageUsageFlags::TRANSFER_SRC
+                    | ImageUsageFlags::TRANSFER_DST,
+            );
+        desc.mip_levels = SPECULAR_LEVELS;
+        let specular = ctx.create_image(&desc)?;
+        Ok((radiance, specular))
+    }
+
+    /// The environment from a cache entry's payload (None: not a payload for this environment).
+    fn upload_cached(
+        ctx: &Context,
+        env: &Environment,
+        payload: &[u8],
+    ) -> crate::Result<Option<GpuEnvironment>> {
+        let size = radiance_size(env.width);
+        if payload.len() != Self::payload_len(size) {
+            return Ok(None);
+        }
+        let mut sh = [[0f32; 3]; 9];
+        for (k, v) in sh.iter_mut().flatten().enumerate() {
+            let b = &payload[4 * k..4 * k + 4];
+            *v = f32::from_le_bytes(b.try_into().expect("4 bytes"));
+        }
+        if !sh.iter().flatten().all(|v| v.is_finite()) {
+            return Ok(None);
+        }
+        let (radiance, specular) = Self::cube_images(ctx, size)?;
+        let mut at = 27 * 4;
+        let mut staged = Vec::new();
+        for (image, cube, levels) in [
+            (&radiance, size, radiance.desc.mip_levels),
+            (&specular, SPECULAR_SIZE, SPECULAR_LEVELS),
+        ] {
+            for level in 0..levels {
+                let n = level_bytes(cube, level);
+                let buffer = ctx.create_buffer_with(
+                    "environment cache staging",
+                    BufferUsageFlags::TRANSFER_SRC,
+                    &payload[at..at + n],
+                )?;
+                at += n;
+                staged.push((image, level, buffer));
+            }
+        }
+        ctx.submit(|cmd| {
+            cmd.transition(&radiance, Usage::Undefined, Usage::TransferDst, None);
+            cmd.transition(&specular, Usage::Undefined, Usage::TransferDst, None);
+            for (image, level, buffer) in &staged {
+                cmd.copy_buffer_to_image_level(buffer, image, *level);
+            }
+            cmd.transition(&radiance, Usage::TransferDst, Usage::FragmentRead, None);
+            cmd.transition(&specular, Usage::TransferDst, Usage::FragmentRead, None);
+        })?;
+        drop(staged);
+        Ok(Some(GpuEnvironment {
+            hash: env.hash(),
+            radiance,
+            specular,
+            sh,
+            build_ms: 0.0,
+            from_cache: true,
+        }))
+    }
+
+    /// A cache entry's payload of a preprocessed environment (its cubes read back).
+    fn read_back(ctx: &Context, g: &GpuEnvironment) -> crate::Result<Vec<u8>> {
+        let mut buffers = Vec::new();
+        for (image, cube) in [
+            (&g.radiance, g.radiance_size()),
+            (&g.specular, SPECULAR_SIZE),
+        ] {
+            for level in 0..image.desc.mip_levels {
+                let buffer = ctx.create_buffer(
+                    "environment cache readback",
+                    level_bytes(cube, level) as u64,
+                    BufferUsageFlags::TRANSFER_DST,
+                    BufferLocation::Readback,
+                )?;
+                buffers.push((image, level, buffer));
+            }
+        }
+        ctx.submit(|cmd| {
+            cmd.transition(&g.radiance, Usage::FragmentRead, Usage::TransferSrc, None);
+            cmd.transition(&g.specular, Usage::FragmentRead, Usage::TransferSrc, None);
+            for (image, level, buffer) in &buffers {
+                cmd.copy_image_to_buffer(image, *level, buffer);
+            }
+            cmd.transition(&g.radiance, Usage::TransferSrc, Usage::FragmentRead, None);
+            cmd.transition(&g.specular, Usage::TransferSrc, Usage::FragmentRead, None);
+        })?;
+        let mut payload: Vec<u8> =
+            g.sh.iter()
+                .flatten()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+        for (_, _, buffer) in &buffers {
+            payload.extend_from_slice(buffer.read()?);
+        }
+        Ok(payload)
+    }
+
+    /// Preprocesses `env` on the device: the radiance cube with its mips, the specular cube, the
+    /// SH.
+    fn compute(&self, ctx: &Context, env: &Environment) -> crate::Result<GpuEnvironment> {
         let texels: Vec<u16> = env
             .rgb
             .chunks_exact(3)
@@ -174,22 +372,7 @@ impl EnvPasses {
             &texels,
         )?;
         let size = radiance_size(env.width);
-        let radiance = ctx.create_image(
-            &ImageDesc::new_cube("environment radiance cube", ENV_FORMAT, size)
-                .usage(
-                    ImageUsageFlags::STORAGE
-                        | ImageUsageFlags::SAMPLED
-                        | ImageUsageFlags::TRANSFER_SRC
-                        | ImageUsageFlags::TRANSFER_DST,
-                )
-                .full_mips(),
-        )?;
-        let mut desc = ImageDesc::new_cube("environment specular cube", ENV_FORMAT, SPECULAR_SIZE)
-            .usage(
-                ImageUsageFlags::STORAGE | ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_SRC,
-            );
-        desc.mip_levels = SPECULAR_LEVELS;
-        let specular = ctx.create_image(&desc)?;
+        let (radiance, specular) = Self::cube_images(ctx, size)?;
         let pool = ctx.create_descriptor_pool(1 + SPECULAR_LEVELS)?;
         let cube_set = pool.set(
             &self.layout,
@@ -263,7 +446,8 @@ impl EnvPasses {
             radiance,
             specular,
             sh,
-            build_ms: start.elapsed().as_secs_f64() * 1e3,
+            build_ms: 0.0,
+            from_cache: false,
         })
     }
 }
