@@ -28,6 +28,10 @@ pub struct FidelityArgs {
     /// rendered at twice the scenario's size, as the goldens are.
     #[arg(long, conflicts_with_all = ["only"])]
     pub scenario: Option<String>,
+    /// Occlusion of the environment's light in weft's renders, as `weft render --occlusion`
+    /// takes it (gtao, gtao:R, none): to see what it changes in the comparison.
+    #[arg(long, default_value = "gtao", value_parser = |s: &str| crate::render::Occlusion::parse(s).map(|_| s.to_string()))]
+    pub occlusion: String,
 }
 
 fn shared_dir(arg: &Option<PathBuf>) -> anyhow::Result<PathBuf> {
@@ -87,7 +91,14 @@ fn model_path(named: &Path) -> PathBuf {
 
 /// `weft render` of `s` at `width` x `height` into `out` (a child process: one scenario's failure
 /// is its own, and every scene starts from the same state a user's render does).
-fn render(s: &Scenario, shared: &Path, width: u32, height: u32, out: &Path) -> anyhow::Result<()> {
+fn render(
+    s: &Scenario,
+    shared: &Path,
+    width: u32,
+    height: u32,
+    occlusion: &str,
+    out: &Path,
+) -> anyhow::Result<()> {
     let exe = std::env::current_exe()?;
     let model = model_path(&shared.join(&s.model));
     let v3 = |v: [f32; 3]| format!("{},{},{}", v[0], v[1], v[2]);
@@ -103,6 +114,7 @@ fn render(s: &Scenario, shared: &Path, width: u32, height: u32, out: &Path) -> a
         .args(["--env-rotation", "-90"])
         .args(["--background", if s.skybox { "env" } else { "none" }])
         .args(["--tonemap", "aces"])
+        .args(["--occlusion", occlusion])
         .arg("-o")
         .arg(out)
         .output()?;
@@ -163,7 +175,14 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
         let out = v["outputFile"]
             .as_str()
             .ok_or_else(|| anyhow::anyhow!("--scenario has no \"outputFile\" string"))?;
-        return render(&s, &shared, 2 * s.size[0], 2 * s.size[1], Path::new(out));
+        return render(
+            &s,
+            &shared,
+            2 * s.size[0],
+            2 * s.size[1],
+            &args.occlusion,
+            Path::new(out),
+        );
     }
     let root = shared.join("fidelity");
     let scenarios = Scenario::load_all(&root.join("scenarios.json"))?;
@@ -189,7 +208,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
         let reference = load_rgba(&reference_path)?;
         let (tw, th) = reference.dimensions();
         let full = renders.join(format!("{}.png", s.short_name()));
-        if let Err(e) = render(s, &shared, 2 * tw, 2 * th, &full) {
+        if let Err(e) = render(s, &shared, 2 * tw, 2 * th, &args.occlusion, &full) {
             eprintln!("{e}");
             continue;
         }
