@@ -2,7 +2,9 @@
 //! that the viewer applies through the same functions the tests call (`controls`).
 
 use crate::fabric::{FabricParams, WeavePattern};
-use crate::render::{Accuracy, DebugView, Footprint, RenderOptions, Shading, WeavePrecision};
+use crate::render::{
+    Accuracy, DebugView, Footprint, Occlusion, RenderOptions, Shading, WeavePrecision,
+};
 use crate::scene::Scene;
 
 use super::FrameFigures;
@@ -284,6 +286,15 @@ fn environment(
     if let Some(e) = o.environment.as_mut() {
         ui.add(egui::Slider::new(&mut e.rotation, 0.0..=360.0).text("rotation (°)"));
         ui.add(egui::Slider::new(&mut e.intensity, 0.0..=4.0).text("intensity"));
+        // The occlusion pass (`--occlusion`): on with GTAO's default radius, or off.
+        let mut on = o.occlusion != Occlusion::None;
+        if ui.checkbox(&mut on, "occlusion (GTAO)").changed() {
+            o.occlusion = if on {
+                Occlusion::Gtao { radius: None }
+            } else {
+                Occlusion::None
+            };
+        }
     }
 }
 
