@@ -30,7 +30,7 @@ pub struct FidelityArgs {
     pub scenario: Option<String>,
     /// Occlusion of the environment's light in weft's renders, as `weft render --occlusion`
     /// takes it (gtao, gtao:R, none): to see what it changes in the comparison.
-    #[arg(long, default_value = "gtao", value_parser = |s: &str| crate::render::Occlusion::parse(s).map(|_| s.to_string()))]
+    #[arg(long, default_value = "gtao", value_parser = |s: &str| weft::render::Occlusion::parse(s).map(|_| s.to_string()))]
     pub occlusion: String,
 }
 
