@@ -638,8 +638,7 @@ impl Renderer {
 
         // Shadow maps: the atlas, one record per map, and the lights with their map's index.
         // The maps cover what casts (a ground that only receives does not thin them out).
-        let bounds = scene.caster_bounds().or_else(|| scene.bounds());
-        let maps = match &bounds {
+        let maps = match &plan.caster_bounds {
             Some(b) if !plan.shadows.is_empty() => {
                 let layout = super::shadow::AtlasLayout::new(&plan.shadows);
                 let size = layout.size();

@@ -231,6 +231,11 @@ pub struct Plan {
     /// Screen-space occlusion of the environment's light (with an environment and
     /// `--occlusion gtao`, or for the occlusion debug view).
     pub occlusion: Option<OcclusionPlan>,
+    /// World bounds of what casts shadows (of the whole scene when nothing casts): what the
+    /// shadow maps cover and what the default occlusion radius is a share of. Computed only
+    /// when one of them needs it (None otherwise, and for a scene with nothing to draw).
+    #[serde(skip)]
+    pub caster_bounds: Option<crate::scene::Bounds>,
 }
 
 fn debug_view_name<S: serde::Serializer>(view: &DebugView, s: S) -> Result<S::Ok, S::Error> {
@@ -460,14 +465,25 @@ impl Plan {
                 }
             });
         // Occlusion of the environment's light, when there is one (or the debug view shows it).
-        let occlusion = match options.occlusion {
+        let occlusion_radius = match options.occlusion {
             super::Occlusion::Gtao { radius }
                 if environment.is_some() || options.debug_view == DebugView::Occlusion =>
             {
+                Some(radius)
+            }
+            _ => None,
+        };
+        // What casts (the whole scene when nothing does), once per frame, only when shadow maps
+        // must cover it or the occlusion radius is a share of it.
+        let caster_bounds = if !shadows.is_empty() || occlusion_radius == Some(None) {
+            scene.caster_bounds().or_else(|| scene.bounds())
+        } else {
+            None
+        };
+        let occlusion = match occlusion_radius {
+            Some(radius) => {
                 let scene_radius = || {
-                    scene
-                        .caster_bounds()
-                        .or_else(|| scene.bounds())
+                    caster_bounds
                         .map(|b| (b.max - b.min).length() * super::Occlusion::RADIUS_OF_DIAGONAL)
                         .filter(|r| r.is_finite() && *r > 0.0)
                         .unwrap_or(1.0)
@@ -600,6 +616,7 @@ impl Plan {
             supersample: options.supersample(),
             environment,
             occlusion,
+            caster_bounds,
         }
     }
 

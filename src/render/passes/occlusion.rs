@@ -81,38 +81,41 @@ impl OcclusionPass {
     /// Makes the two pipelines once.
     pub fn make(&self, ctx: &Context) -> crate::Result<()> {
         if self.pipelines.get().is_none() {
-            let estimate = ctx.create_graphics_pipeline(&GraphicsDesc {
-                name: &format!(
+            // Both draw one fullscreen triangle into an OCCLUSION_FORMAT target.
+            let make = |name: &str, fragment, layout, push: u32, constants: &[(u32, u32)]| {
+                ctx.create_graphics_pipeline(&GraphicsDesc {
+                    name,
+                    vertex: &shaders::FULLSCREEN_VERT,
+                    fragment,
+                    vertex_layout: None,
+                    color_formats: &[OCCLUSION_FORMAT],
+                    depth_format: None,
+                    set_layouts: &[layout],
+                    push_constant_size: push,
+                    push_stages: Stages::FRAGMENT,
+                    constants,
+                    blend: false,
+                    topology: Topology::Triangles,
+                })
+            };
+            let estimate = make(
+                &format!(
                     "occlusion[slices={}, steps={}]",
                     OcclusionPlan::SLICES,
                     OcclusionPlan::STEPS
                 ),
-                vertex: &shaders::FULLSCREEN_VERT,
-                fragment: &shaders::OCCLUSION_FRAG,
-                vertex_layout: None,
-                color_formats: &[OCCLUSION_FORMAT],
-                depth_format: None,
-                set_layouts: &[&self.layout],
-                push_constant_size: std::mem::size_of::<OcclusionPush>() as u32,
-                push_stages: Stages::FRAGMENT,
-                constants: &[(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)],
-                blend: false,
-                topology: Topology::Triangles,
-            })?;
-            let blur = ctx.create_graphics_pipeline(&GraphicsDesc {
-                name: "occlusion blur",
-                vertex: &shaders::FULLSCREEN_VERT,
-                fragment: &shaders::OCCLUSION_BLUR_FRAG,
-                vertex_layout: None,
-                color_formats: &[OCCLUSION_FORMAT],
-                depth_format: None,
-                set_layouts: &[&self.blur_layout],
-                push_constant_size: 0,
-                push_stages: Stages::FRAGMENT,
-                constants: &[],
-                blend: false,
-                topology: Topology::Triangles,
-            })?;
+                &shaders::OCCLUSION_FRAG,
+                &self.layout,
+                std::mem::size_of::<OcclusionPush>() as u32,
+                &[(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)],
+            )?;
+            let blur = make(
+                "occlusion blur",
+                &shaders::OCCLUSION_BLUR_FRAG,
+                &self.blur_layout,
+                0,
+                &[],
+            )?;
             let _ = self.pipelines.set((estimate, blur));
         }
         Ok(())
