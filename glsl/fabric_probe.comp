@@ -21,7 +21,7 @@ struct ProbeInput {
     GpuFabric fabric;
 };
 
-// Rust twin: weft::reference::probe::ProbeOutput (176 bytes).
+// Rust twin: weft::reference::probe::ProbeOutput (208 bytes).
 struct ProbeOutput {
     vec4 lobe;       // ρs weft-oriented, ρs warp-oriented, D(h) weft-oriented, F(h·k)
     vec4 expo;       // E(h) weft, E(h) warp, h·n, h·k
@@ -34,6 +34,8 @@ struct ProbeOutput {
     vec4 phong;      // phong_brdf (rgb), phong_lobe with fabric_phong_exponent
     vec4 plain_as;   // plain_as_brdf (rgb), 0
     vec4 f_tint;     // fabric_brdf of fabric_tinted(m, tint) with the input coverage (rgb), 0
+    vec4 sheet;      // fabric_btdf with k1 mirrored to the far side (rgb), fabric_thread_cover
+    vec4 f_sheet;    // fabric_brdf of fabric_reflecting(m) with the input coverage (rgb), 0
 };
 
 // set 0, binding 0: the inputs.
@@ -73,6 +75,9 @@ void main() {
     vec3 phong = phong_brdf(k1, k2, m);
     vec3 plain_as = plain_as_brdf(k1, k2, m);
     vec3 f_tint = fabric_brdf(k1, k2, cov, fabric_tinted(m, inp.tint.rgb));
+    // The sheet's terms, with the light mirrored to the far side.
+    vec3 btdf = fabric_btdf(vec3(k1.xy, -k1.z), k2, cov, m);
+    vec3 f_sheet = fabric_brdf(k1, k2, cov, fabric_reflecting(m));
 
     ProbeOutput o;
     o.lobe = vec4(
@@ -98,5 +103,7 @@ void main() {
     o.phong = vec4(phong, phong_lobe(k1, k2, fabric_phong_exponent(m)));
     o.plain_as = vec4(plain_as, 0.0);
     o.f_tint = vec4(f_tint, 0.0);
+    o.sheet = vec4(btdf, fabric_thread_cover(cov));
+    o.f_sheet = vec4(f_sheet, 0.0);
     outputs[id] = o;
 }

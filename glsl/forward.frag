@@ -52,6 +52,9 @@ layout(constant_id = 23) const uint IRIDESCENCE = 0u;
 layout(constant_id = 24) const uint DISPERSION = 0u;
 // 1: some fabric has thread-by-thread colours (the ThreadColours buffer is read).
 layout(constant_id = 25) const uint THREAD_COLOURS = 0u;
+// 1: some drawn fabric is a single sheet (WEFT_materials_fabric "transmission"): light through
+// its gaps (blended by its thread coverage) and its threads (lit from both sides).
+layout(constant_id = 26) const uint FABRIC_SHEETS = 0u;
 
 // Set 0: gbuffer.vert's and gbuffer.frag's bindings 0-5, then lighting.frag's shadow and environment bindings (one
 // number per resource in every shader).
@@ -131,5 +134,13 @@ void main() {
         discard;
     }
     float alpha = blended ? clamp(s.alpha, 0.0, 1.0) : 1.0;
+    // A fabric sheet covers what is behind it by its threads only: its radiance is already the
+    // coverage-weighted light of its threads (dark gaps), so it is premultiplied by the coverage,
+    // and the gaps pass the light behind them (1 − coverage).
+    float cover = fabric_sheet_cover(s.surface, s.fabric);
+    if (cover >= 0.0) {
+        out_color = vec4(radiance * alpha, cover * alpha);
+        return;
+    }
     out_color = vec4(radiance * alpha, alpha);
 }

@@ -39,6 +39,8 @@ layout(constant_id = 9) const uint UNLIT = 0u;
 // raised for light bounced between occluders, multiplies the material's occlusion texture in the
 // environment's light; 0: it is not read.
 layout(constant_id = 10) const uint OCCLUSION = 0u;
+// Fabric sheets are drawn by the transparent pass (forward.frag), never deferred.
+const uint FABRIC_SHEETS = 0u;
 
 
 // Set 0 numbers every resource as gbuffer.vert, gbuffer.frag and forward.frag do (one number per

@@ -73,6 +73,14 @@ pub struct FabricArgs {
     /// sheen_color or none.
     #[arg(long)]
     pub thread_texture: Option<String>,
+    /// The cloth is a single sheet (a curtain, a veil): its gaps let light straight through and
+    /// its threads pass the preset's thread transmittance of their diffuse light to the other
+    /// side. A material with KHR_materials_diffuse_transmission is a sheet without it.
+    #[arg(long)]
+    pub sheet: bool,
+    /// A single sheet whose threads pass this share of their diffuse light through, 0..1.
+    #[arg(long)]
+    pub transmission: Option<f32>,
 }
 
 fn unit_range(flag: &str, x: Option<f32>) -> anyhow::Result<Option<f32>> {
@@ -145,6 +153,8 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
         },
         warp_colours: None,
         weft_colours: None,
+        sheet: args.sheet,
+        transmission: unit_range("--transmission", args.transmission)?,
     };
     if let Some(path) = &args.draft {
         let d = Draft::load(path)?;

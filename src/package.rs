@@ -81,9 +81,9 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          208-byte `ProbeInput` records (std430: `vec4 n, t, k1, k2, point, footprint, coverage, \
          tint` then the 80-byte `GpuFabric` of `include/fabric.glsl`; `t.w` is the tangent's \
          handedness, `k1`/`k2` the unit directions to the light and the viewer, `tint.rgb` the \
-         thread texture's value) and a buffer for `count` 176-byte `ProbeOutput` records (eleven \
+         thread texture's value) and a buffer for `count` 208-byte `ProbeOutput` records (thirteen \
          `vec4`: `lobe`, `expo`, `diffuse`, `f`, `point`, `footprint`, `f_point`, `f_avg`, \
-         `phong`, `plain_as`, `f_tint`). Push the `uint count`; dispatch \
+         `phong`, `plain_as`, `f_tint`, `sheet`, `f_sheet`). Push the `uint count`; dispatch \
          `ceil(count / 64)` groups. weft's Rust twins and error bounds: \
          `weft::reference::probe`.",
     ),
@@ -385,6 +385,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 19, "UNLIT: lighting.frag's constant 9"),
     ("forward.frag", 24, "DISPERSION: 1 reads the backdrop along three refracted rays for KHR_materials_dispersion volumes (`Material.dispersion.x` > 0); 0 (default) compiles that out"),
     ("forward.frag", 25, "THREAD_COLOURS: as gbuffer.frag's 7"),
+    ("forward.frag", 26, "FABRIC_SHEETS: 1 draws fabric sheets (`GpuFabric.flags` bit 4, WEFT_materials_fabric `transmission`): opacity = their thread coverage, so the gaps let the light behind through, and their threads lit from both sides by `transmission` of their diffuse light; 0 (default) compiles that out"),
     ("forward.frag", 23, "IRIDESCENCE: 1 shades KHR_materials_iridescence surfaces (`Material.extra.w` flag 256) with their thin film's Fresnel; 0 (default) compiles that out"),
     ("forward.frag", 22, "DIFFUSE_TRANSMISSION: 1 lights KHR_materials_diffuse_transmission surfaces (`Material.extra.w` flag 128) from behind too; 0 (default) compiles that out"),
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),

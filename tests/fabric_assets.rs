@@ -689,3 +689,60 @@ fn a_weaving_draft_gives_the_weave_and_the_thread_colours() {
     assert!(e.contains("missing.wif"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_sheet_from_the_flag_or_from_khr_materials_diffuse_transmission() {
+    let path = asset("default.gltf");
+    let mut doc: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    doc["materials"][0]["extensions"] =
+        json!({"KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 0.35}});
+    let bytes = serde_json::to_vec(&doc).unwrap();
+    let run = |request: Request| {
+        let (out, applied) =
+            assets::transform(&bytes, "sheet.gltf", path.parent(), &[request]).unwrap();
+        let after: Value = serde_json::from_slice(&out).unwrap();
+        let written = after["materials"][0]["extensions"][EXTENSION_NAME]["transmission"].clone();
+        (
+            applied[0].params.transmission,
+            written,
+            applied[0].to_string(),
+        )
+    };
+    // The file says its surface lets diffuse light through: a sheet with that factor.
+    let (t, written, text) = run(request(&["floor"], "cotton-plain", None));
+    assert_eq!(t, Some(0.35));
+    assert_eq!(written, json!(0.35));
+    assert!(
+        text.contains("KHR_materials_diffuse_transmission"),
+        "{text}"
+    );
+    // Without it: not a sheet, unless --sheet (the preset's τ) or --transmission.
+    doc["materials"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("extensions");
+    let bytes = serde_json::to_vec(&doc).unwrap();
+    let run = |request: Request| {
+        let (out, applied) =
+            assets::transform(&bytes, "plain.gltf", path.parent(), &[request]).unwrap();
+        let after: Value = serde_json::from_slice(&out).unwrap();
+        let written = after["materials"][0]["extensions"][EXTENSION_NAME]
+            .get("transmission")
+            .cloned();
+        (applied[0].params.transmission, written)
+    };
+    assert_eq!(run(request(&["floor"], "silk-satin", None)), (None, None));
+    let mut sheet = request(&["floor"], "silk-satin", None);
+    sheet.overrides.sheet = true;
+    assert_eq!(run(sheet), (Some(0.45), Some(json!(0.45))));
+    let mut given = request(&["floor"], "silk-satin", None);
+    given.overrides.transmission = Some(0.1);
+    assert_eq!(run(given).0, Some(0.1));
+    // And the written file loads back as a sheet.
+    let mut sheet = request(&["floor"], "denim-twill", None);
+    sheet.overrides.sheet = true;
+    let (out, _) = assets::transform(&bytes, "plain.gltf", path.parent(), &[sheet]).unwrap();
+    let scene = scene::load_slice(&out, "sheet.gltf", path.parent()).expect("loads back");
+    let m = &scene.materials[0];
+    assert!(m.is_sheet() && m.blended(), "{:?}", m.fabric);
+}

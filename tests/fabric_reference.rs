@@ -35,6 +35,7 @@ fn mat(e_along: f64, e_across: f64, rs: f64, coupled: bool) -> double::FabricMat
         e_across,
         coupled,
         threads: false,
+        sheet: None,
     }
 }
 
@@ -218,11 +219,11 @@ proptest! {
             1 => k2[2] = -k2[2].abs(),
             _ => { k1[2] = -k1[2].abs(); k2[2] = -k2[2].abs(); }
         }
-        let m = double::FabricMaterial { rd_warp: [0.5; 3], rd_weft: [0.5; 3], rs, e_along: eu, e_across: ev, coupled: which == 1, threads: false };
+        let m = double::FabricMaterial { rd_warp: [0.5; 3], rd_weft: [0.5; 3], rs, e_along: eu, e_across: ev, coupled: which == 1, threads: false, sheet: None };
         prop_assert_eq!(double::as_lobe(k1, k2, eu, ev, rs), 0.0);
         prop_assert_eq!(double::fabric_brdf(k1, k2, [0.5, 0.5, 0.3, 0.4], &m), [0.0; 3]);
         prop_assert_eq!(single::as_lobe(to32(k1), to32(k2), eu as f32, ev as f32, rs as f32), 0.0);
-        let m32 = single::FabricMaterial { rd_warp: [0.5; 3], rd_weft: [0.5; 3], rs: rs as f32, e_along: eu as f32, e_across: ev as f32, coupled: which == 1, threads: false };
+        let m32 = single::FabricMaterial { rd_warp: [0.5; 3], rd_weft: [0.5; 3], rs: rs as f32, e_along: eu as f32, e_across: ev as f32, coupled: which == 1, threads: false, sheet: None };
         prop_assert_eq!(single::fabric_brdf(to32(k1), to32(k2), [0.5, 0.5, 0.3, 0.4], &m32), [0.0; 3]);
         // Grazing exactly: n·k = 0.
         let g = unit([a[0] + 1e-9, a[1], 0.0]);
@@ -244,7 +245,7 @@ proptest! {
     ) {
         let k1 = unit([a[0], a[1], a[2].abs() + 0.05]);
         let k2 = unit([b[0], b[1], b[2].abs() + 0.05]);
-        let m = double::FabricMaterial { rd_warp: [0.2, 0.5, 0.9], rd_weft: [0.7, 0.1, 0.3], rs, e_along: eu, e_across: ev, coupled, threads: false };
+        let m = double::FabricMaterial { rd_warp: [0.2, 0.5, 0.9], rd_weft: [0.7, 0.1, 0.3], rs, e_along: eu, e_across: ev, coupled, threads: false, sheet: None };
         let cov = [cov[0], cov[1], cov[2].min(cov[0]), cov[3].min(cov[1])];
         // Reciprocity, exact in both precisions.
         prop_assert_eq!(double::as_lobe(k1, k2, eu, ev, rs), double::as_lobe(k2, k1, eu, ev, rs));
@@ -896,7 +897,7 @@ proptest! {
     ) {
         let k1 = [a[0] * scale, a[1] * scale, a[2]];
         let k2 = [b[0], b[1] * scale, b[2] * scale];
-        let m = single::FabricMaterial { rd_warp: [1.0; 3], rd_weft: [0.5; 3], rs, e_along: eu, e_across: ev, coupled, threads: false };
+        let m = single::FabricMaterial { rd_warp: [1.0; 3], rd_weft: [0.5; 3], rs, e_along: eu, e_across: ev, coupled, threads: false, sheet: None };
         let f = single::fabric_brdf(k1, k2, cov, &m);
         prop_assert!(f.iter().all(|v| v.is_finite() && *v >= 0.0), "{:?}", f);
         let (h, kh) = single::fabric_half(k1, k2);

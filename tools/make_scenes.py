@@ -18,6 +18,10 @@ Each scene stresses one thing (docs/regression.md has the list and what each gol
   skinned_cloth a twill strip on a three-joint skin, bent up and twisted by a 2-second animation
                 (a linear and a cubic-spline rotation channel): the thread directions must follow
                 the bend (tests/animation.rs, goldens skinned-cloth-*)
+  curtain       a sheer curtain (WEFT_materials_fabric "transmission": a single sheet) hanging in
+                folds before a bright window and lit from behind by a low sun; camera 0 the whole
+                curtain from the room (weave below a pixel), camera 1 a close-up (threads and gaps
+                resolved)
   gltf_core     glTF core features of issue 25: a triangle strip and fan, COLOR_0, an unlit
                 sphere, an alphaMode MASK card with cut-out holes (and their shadow), nine
                 EXT_mesh_gpu_instancing cubes; camera 1 orthographic (goldens gltf-core-*)
@@ -627,6 +631,40 @@ def gltf_core():
     return doc, binary
 
 
+def curtain():
+    """A 2 m x 2 m voile (plain weave, 4 mm repeat, wide gaps) hanging in folds 5 cm deep at z = 0,
+    facing the room (+z); 60 cm behind it a window, an emissive panel (radiance 1); a directional
+    sun from behind and above the window shining through the curtain into the room; a dim point
+    light on the room side. The curtain is a single sheet: its gaps show the window, its threads
+    pass 0.4 of their diffuse light (the sun from behind)."""
+    b = Builder()
+    fold = lambda x, z: 0.05 * math.sin(2.0 * math.pi * x / 0.4)
+    # Horizontal patches turned upright by a quarter turn about +x (+y to +z): (x, y, z) -> (x, -z, y).
+    upright = [r(math.sin(math.radians(45.0))), 0.0, 0.0, r(math.cos(math.radians(45.0)))]
+    sheet = patch_mesh(-1.0, 1.0, -2.2, -0.2, 48, 24, y=fold, uv_per_m=1.0)
+    window = patch_mesh(-1.4, 1.4, -2.6, 0.0, 2, 2)
+    voile = fabric("voile", repeat=0.004, gap=0.0007, rd_warp=(0.80, 0.76, 0.66), rd_weft=(0.74, 0.70, 0.62),
+                   e_along=300.0, e_across=12.0, base_color=(0.78, 0.74, 0.64))
+    voile["extensions"]["WEFT_materials_fabric"]["transmission"] = 0.4
+    window_mat = {"name": "window", "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0],
+                                                             "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                  "emissiveFactor": [1.0, 0.97, 0.9]}
+    materials = [voile, window_mat]
+    meshes = [{"name": "curtain", "primitives": [b.primitive(sheet, 0)]},
+              {"name": "window", "primitives": [b.primitive(window, 1)]}]
+    lights = [directional("sun", (1.0, 0.92, 0.8), 3.0), point("room lamp", (1.0, 0.85, 0.7), 1.5, rng=8.0)]
+    nodes = [
+        {"name": "curtain", "mesh": 0, "rotation": upright},
+        {"name": "window", "mesh": 1, "rotation": upright, "translation": [0.0, 0.0, -0.6]},
+        light_node("sun", 0, [0.8, 3.0, -3.0], [0.0, 1.0, 0.5]),
+        light_node("room lamp", 1, [-1.2, 2.0, 2.0]),
+        camera_node("room", [0.3, 1.2, 2.7], [0.0, 1.2, 0.0], 0),
+        camera_node("close", [0.08, 1.25, 0.22], [0.0, 1.2, 0.0], 1),
+    ]
+    return document("curtain", b, materials, meshes, nodes, lights,
+                    [camera_def("room", 45.0, 0.1), camera_def("close", 30.0, 0.01)])
+
+
 SCENES = {
     "closeup": closeup,
     "far": far,
@@ -638,6 +676,7 @@ SCENES = {
     "shadows": shadows,
     "skinned_cloth": skinned_cloth,
     "gltf_core": gltf_core,
+    "curtain": curtain,
 }
 
 

@@ -23,6 +23,10 @@
 // Thread-by-thread colours (surface.glsl's thread_colour): the G-buffer's albedo holds the
 // footprint's thread colour, the lighting pass takes it as both threads' albedo.
 #define FABRIC_FLAG_THREAD_COLOURS 8u
+// A single sheet of cloth (WEFT_materials_fabric "transmission"): the gaps let light straight
+// through (the transparent pass blends the cloth over what is behind it by its thread coverage)
+// and each thread passes `transmission` of its diffuse light to its other side.
+#define FABRIC_FLAG_SHEET 16u
 
 // One material (std430, 80 bytes). Rust twin: weft::fabric::GpuFabric.
 struct GpuFabric {
@@ -41,7 +45,7 @@ struct GpuFabric {
     float gap;             // 64: s_g/s_p: half the gap, in cells
     float shadow_dist;     // 68: shadow_width/2, in cells
     uint colours;          // 72: with flag bit 3, the thread colours' record in ThreadColours (vec4s)
-    uint _pad1;            // 76
+    float transmission;    // 76: with flag bit 4 (a sheet), the threads' diffuse transmittance τ
 };
 
 // Any unit vector perpendicular to unit n (Duff et al. 2017, branchless ONB).
@@ -196,6 +200,35 @@ GpuFabric fabric_tinted(GpuFabric m, vec3 tint) {
 // footprint average of the weave gives the footprint average of the diffuse term exactly).
 vec3 fabric_albedo(vec4 coverage, GpuFabric m) {
     return coverage.z * m.rd_warp + coverage.w * m.rd_weft;
+}
+
+// ---- A sheet of cloth (flag bit 4; docs/fabric-model.md §9): light through the weave. ----
+
+// The material whose threads reflect what they do not pass through: a sheet's thread colours
+// times 1 − τ (KHR_materials_diffuse_transmission's split of a diffuse lobe), any other cloth
+// unchanged. The lobes are the fibres' surface reflection and keep their strength.
+GpuFabric fabric_reflecting(GpuFabric m) {
+    float keep = (m.flags & FABRIC_FLAG_SHEET) != 0u ? 1.0 - clamp(m.transmission, 0.0, 1.0) : 1.0;
+    m.rd_warp *= keep;
+    m.rd_weft *= keep;
+    return m;
+}
+
+// The light a sheet's threads pass through, for light from k1 on the far side (n·k1 < 0) seen
+// from k2 on the near side (n·k2 > 0): τ/π times the threads' albedo of the coverage (each
+// thread's colour times its shadow-weighted area, as the diffuse reflection). 0 for light on the
+// viewer's side, and for a cloth that is not a sheet. What the gaps pass is not here: it is the
+// light behind the sheet, blended by 1 − c_warp − c_weft.
+vec3 fabric_btdf(vec3 k1, vec3 k2, vec4 coverage, GpuFabric m) {
+    if ((m.flags & FABRIC_FLAG_SHEET) == 0u || !(k1.z < 0.0 && k2.z > 0.0)) {
+        return vec3(0.0);
+    }
+    return clamp(m.transmission, 0.0, 1.0) / FABRIC_PI * fabric_albedo(coverage, m);
+}
+
+// The share of a coverage that is thread (c_warp + c_weft, clamped to [0, 1]): a sheet's opacity.
+float fabric_thread_cover(vec4 coverage) {
+    return clamp(coverage.x + coverage.y, 0.0, 1.0);
 }
 
 // The fabric model (§3) at one shading point. coverage = (c_warp, c_weft, s_warp, s_weft): area

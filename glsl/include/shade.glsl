@@ -5,7 +5,7 @@
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
-// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION and IRIDESCENCE, and defines `transmitted_light` (forward.frag: from the
+// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION, IRIDESCENCE and FABRIC_SHEETS, and defines `transmitted_light` (forward.frag: from the
 // backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
@@ -82,21 +82,33 @@ vec3 fabric_eval(vec3 k1, vec3 k2, vec4 coverage, GpuFabric f) {
     return fabric_brdf(k1, k2, coverage, f);
 }
 
-// Ambient plus every light reflected by the fabric with the given coverage.
-vec3 fabric_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, float receives) {
-    vec3 rd = fabric_albedo(coverage, f);
+// Ambient plus every light reflected by the fabric with the given coverage; a sheet's threads
+// also pass on the ambient and the lights behind it (ambient_back: the ambient on its far side).
+vec3 fabric_radiance(vec3 p, vec3 ambient, vec3 ambient_back, mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, float receives) {
+    // A sheet's threads reflect the 1 − τ of their diffuse light that they do not pass through.
+    GpuFabric fr = FABRIC_SHEETS != 0u ? fabric_reflecting(f) : f;
     // Ambient: the threads' diffuse albedo under the hemispherical ambient.
-    vec3 radiance = ambient * rd;
+    vec3 radiance = ambient * fabric_albedo(coverage, fr);
+    bool sheet = FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u;
+    if (sheet) {
+        radiance += ambient_back * (clamp(f.transmission, 0.0, 1.0) * fabric_albedo(coverage, f));
+    }
     uvec2 list = tile_list();
     for (uint j = 0u; j < list.y; ++j) {
         uint i = tile_lights[list.x + j];
         vec3 l;
         vec3 e = light_incoming(lights[i], p, l);
         vec3 k1 = fabric_local(l, tbn);
-        if (k1.z <= 0.0 || all(equal(e, vec3(0.0)))) {
+        if (all(equal(e, vec3(0.0)))) {
             continue;
         }
-        radiance += e * (fabric_eval(k1, k2, coverage, f) * k1.z * shadow_factor(lights[i], p, tbn[2], receives));
+        if (k1.z > 0.0) {
+            radiance += e * (fabric_eval(k1, k2, coverage, fr) * k1.z * shadow_factor(lights[i], p, tbn[2], receives));
+        } else if (sheet && k1.z < 0.0) {
+            // A lamp behind the sheet, through its threads (its shadow map looked up from the
+            // far side).
+            radiance += e * (fabric_btdf(k1, k2, coverage, f) * -k1.z * shadow_factor(lights[i], p, -tbn[2], receives));
+        }
     }
     return radiance;
 }
@@ -377,13 +389,63 @@ vec3 fabric_env_diffuse(mat3 tbn, vec3 k2, GpuFabric f) {
         * fabric_diffuse_albedo(f, k2.z);
 }
 
+// The irradiance/π on a sheet's far side from the environment (SH; mc: cosine-sampled over the
+// far hemisphere, unfiltered): what its threads pass through, times τ and their albedo.
+vec3 fabric_env_back(mat3 tbn) {
+    if (IBL == 3u) {
+        vec2 rot = pixel_random();
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < IBL_SAMPLES; ++i) {
+            vec3 k = cosine_sample(ibl_sample(i, IBL_SAMPLES, rot));
+            sum += env_radiance_at(tbn * vec3(k.xy, -k.z), 0.0);
+        }
+        return sum / float(IBL_SAMPLES);
+    }
+    return sh_irradiance(frame.sh, env_dir(-tbn[2], frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
+}
+
 // The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
-// thread shadowing (as for lamps), and each lobe weighted by its thread's coverage.
-vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, float ao, float nv) {
-    vec3 rd = fabric_albedo(coverage, f);
+// thread shadowing (as for lamps), each lobe weighted by its thread's coverage, and for a sheet
+// the light its threads pass from its far side (back: fabric_env_back; 0 for any other cloth).
+vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, vec3 back, float ao, float nv) {
+    vec3 rd = fabric_albedo(coverage, FABRIC_SHEETS != 0u ? fabric_reflecting(f) : f);
     // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
     // averaged exponents would need a sampler of its own.)
-    return rd * diffuse * ao + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
+    vec3 radiance = rd * diffuse * ao + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
+    if (FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u) {
+        radiance += back * (clamp(f.transmission, 0.0, 1.0) * fabric_albedo(coverage, f));
+    }
+    return radiance;
+}
+
+// A fabric sheet's thread coverage over the pixel (its opacity: the gaps let the light behind it
+// straight through), or -1 when the surface is not a sheet shaded by the woven model. surface and
+// fabric_texel as shade_surface takes them.
+float fabric_sheet_cover(vec4 surface, vec4 fabric_texel) {
+    if (FABRIC_SHEETS == 0u || FABRIC_AS_PBR != 0u || SHADING != SHADING_FABRIC) {
+        return -1.0;
+    }
+    uint material = uint(surface.y + 0.5);
+    uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
+    if (fabric == 0u || (fabrics[fabric - 1u].flags & FABRIC_FLAG_SHEET) == 0u) {
+        return -1.0;
+    }
+    if (ACCURACY == 3u) {
+        // Supersampled: the same N x N points of the footprint as the shading.
+        GpuFabric f = fabrics[fabric - 1u];
+        Weave w = weave_from_fabric(f);
+        vec2 cells = vec2(float(max(f.cols, 1u)), float(max(f.rows, 1u)));
+        float sum = 0.0;
+        for (uint j = 0u; j < SAMPLES; ++j) {
+            for (uint i = 0u; i < SAMPLES; ++i) {
+                vec2 o = (vec2(float(i), float(j)) + 0.5) / float(SAMPLES) * 2.0 - 1.0;
+                vec2 st = (fabric_texel.xy + o * fabric_texel.zw) * cells;
+                sum += fabric_thread_cover(weave_point(w, st.x, st.y));
+            }
+        }
+        return sum / float(SAMPLES * SAMPLES);
+    }
+    return fabric_thread_cover(fabric_texel);
 }
 
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
@@ -405,6 +467,8 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
     // Without an environment: a fixed hemispherical ambient, so surfaces facing away from every
     // light are not pure black. With one, the environment replaces it.
     vec3 ambient = IBL != 0u ? vec3(0.0) : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, n.y * 0.5 + 0.5);
+    // On the far side (what a fabric sheet's threads pass through).
+    vec3 ambient_back = IBL != 0u ? vec3(0.0) : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, -n.y * 0.5 + 0.5);
     uint material = uint(surface.y + 0.5);
     uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
     if (UNLIT != 0u && (uint(materials[min(material, frame.material_count - 1u)].extra.w + 0.5) & MATERIAL_UNLIT) != 0u) {
@@ -427,10 +491,14 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         vec3 env_diffuse = vec3(0.0);
         vec3 env_weft = vec3(0.0);
         vec3 env_warp = vec3(0.0);
+        vec3 env_back = vec3(0.0);
         if (IBL != 0u && SHADING == SHADING_FABRIC) {
             vec4 mean_cov = ACCURACY == 3u ? vec4(0.5, 0.5, 0.5, 0.5) : g;
             env_diffuse = fabric_env_diffuse(tbn, k2, f);
             fabric_env_lobes(tbn, k2, mean_cov, f, env_weft, env_warp);
+            if (FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u) {
+                env_back = fabric_env_back(tbn);
+            }
         }
         float nv = clamp(k2.z, 0.0, 1.0);
         if (SHADING == SHADING_GOURAUD) {
@@ -450,17 +518,17 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
                     vec2 o = (vec2(float(i), float(j)) + 0.5) / float(SAMPLES) * 2.0 - 1.0;
                     vec2 s = (g.xy + o * g.zw) * cells;
                     vec4 c = weave_point(w, s.x, s.y);
-                    sum += fabric_radiance(p, ambient, tbn, k2, c, f, receives);
+                    sum += fabric_radiance(p, ambient, ambient_back, tbn, k2, c, f, receives);
                     if (IBL != 0u) {
-                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, ao, nv);
+                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, env_back, ao, nv);
                     }
                 }
             }
             radiance += sum / float(SAMPLES * SAMPLES);
         } else {
-            radiance += fabric_radiance(p, ambient, tbn, k2, g, f, receives);
+            radiance += fabric_radiance(p, ambient, ambient_back, tbn, k2, g, f, receives);
             if (IBL != 0u) {
-                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, ao, nv);
+                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, env_back, ao, nv);
             }
         }
     } else {

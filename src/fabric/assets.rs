@@ -147,6 +147,10 @@ pub struct Overrides {
     /// Thread-by-thread colour sequences (a draft's `[WARP COLORS]`, `[WEFT COLORS]`).
     pub warp_colours: Option<Vec<[f32; 3]>>,
     pub weft_colours: Option<Vec<[f32; 3]>>,
+    /// A single sheet (`--sheet`): the preset's thread transmittance, or `transmission`.
+    pub sheet: bool,
+    /// The threads' diffuse transmittance (`--transmission`, implies a sheet).
+    pub transmission: Option<f32>,
 }
 
 impl Overrides {
@@ -664,7 +668,58 @@ pub fn extension_json(p: &FabricParams) -> Value {
             o[key] = json!(list.iter().map(|&x| c(x)).collect::<Vec<_>>());
         }
     }
+    if let Some(t) = p.transmission {
+        o["transmission"] = num(t as f64);
+    }
     o
+}
+
+/// Whether the fabric is a single sheet, and its threads' diffuse transmittance: `--transmission`;
+/// else the material's own `KHR_materials_diffuse_transmission` factor (a file that says its
+/// surface lets diffuse light through is a sheet); else, with `--sheet`, the preset's
+/// [`Preset::thread_transmittance`] (cotton-plain's for from-sheen); else not a sheet.
+fn sheet_transmission(
+    material: &Value,
+    who: &str,
+    o: &Overrides,
+    source: &Source,
+    notes: &mut Vec<String>,
+) -> Result<Option<f32>> {
+    if let Some(t) = o.transmission {
+        notes.push(format!(
+            "a single sheet: its gaps let light through, its threads {t} of their diffuse light"
+        ));
+        return Ok(Some(t));
+    }
+    if let Some(dt) = material
+        .get("extensions")
+        .and_then(|e| e.get("KHR_materials_diffuse_transmission"))
+    {
+        let factor = match dt.get("diffuseTransmissionFactor") {
+            None => 0.0,
+            Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
+                Error::input(format!(
+                    "{who}: extensions.KHR_materials_diffuse_transmission.diffuseTransmissionFactor must be a number, got {v}; fix the material or give --transmission"
+                ))
+            })?,
+        }
+        .clamp(0.0, 1.0) as f32;
+        notes.push(format!(
+            "a single sheet, from KHR_materials_diffuse_transmission: its threads pass {factor} of their diffuse light (diffuseTransmissionFactor; its colour and textures are not mapped), its gaps let light through"
+        ));
+        return Ok(Some(factor));
+    }
+    if o.sheet {
+        let t = match source {
+            Source::Preset(p) => p.thread_transmittance,
+            Source::FromSheen => {
+                presets::by_name("cotton-plain").map_or(0.3, |p| p.thread_transmittance)
+            }
+        };
+        notes.push(format!("a single sheet: its gaps let light through, its threads {t} of their diffuse light (the preset's)"));
+        return Ok(Some(t));
+    }
+    Ok(None)
 }
 
 /// The weave's far-field diffuse albedo: each thread's colour times its shadow-weighted area over
@@ -1055,6 +1110,8 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
             if let Some(c) = &o.weft_colours {
                 params.weft_colours = c.clone();
             }
+            params.transmission =
+                sheet_transmission(&original, &who, o, &request.source, &mut notes)?;
             if params.has_thread_colours() {
                 super::ThreadColourTable::check(&params)
                     .map_err(|e| Error::input(format!("{who}: {e}")))?;

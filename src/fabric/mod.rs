@@ -40,6 +40,11 @@ pub const FLAG_TEXTURE_SHEEN_COLOR: u32 = 4;
 /// G-buffer pass reads them from the thread-colour buffer at `GpuFabric::colours` and writes the
 /// footprint's shadow-weighted thread colour, which the lighting pass takes as both threads' albedo.
 pub const FLAG_THREAD_COLOURS: u32 = 8;
+/// `GpuFabric::flags` bit 4: a sheet of cloth (the extension's `transmission`): its gaps let
+/// light straight through (the transparent pass blends it over what is behind by its thread
+/// coverage) and each thread passes `GpuFabric::transmission` of its diffuse light through to
+/// the other side (docs/fabric-model.md §9).
+pub const FLAG_SHEET: u32 = 16;
 /// The longest colour sequence of a warp or a weft (a tartan's sett is rarely over 200 threads).
 pub const MAX_THREAD_COLOURS: usize = 256;
 
@@ -128,6 +133,13 @@ pub struct FabricParams {
     pub warp_colours: Vec<[f32; 3]>,
     /// The same for the weft (pick `j`, cell row `j`, counted from v = 0).
     pub weft_colours: Vec<[f32; 3]>,
+    /// A single sheet of cloth with nothing behind it (a curtain, a veil, a shirt held to the
+    /// light): `Some(τ)`, the threads' diffuse transmittance in [0, 1], the share of a thread's
+    /// diffuse light that leaves through its other side (as KHR_materials_diffuse_transmission
+    /// splits a diffuse lobe: τ·albedo/π through, (1 − τ)·albedo/π reflected); its gaps let light
+    /// straight through. `None` (the default): the cloth covers something (upholstery, a lined
+    /// garment): its gaps are dark and nothing goes through.
+    pub transmission: Option<f32>,
 }
 
 impl Default for FabricParams {
@@ -147,6 +159,7 @@ impl Default for FabricParams {
             thread_texture: ThreadTexture::BaseColor,
             warp_colours: Vec::new(),
             weft_colours: Vec::new(),
+            transmission: None,
         }
     }
 }
@@ -162,7 +175,7 @@ impl Default for FabricParams {
 /// | 48 | `pattern_lo`, `pattern_hi: uint` | bit `8j+i` = cell (i, j) weft-up |
 /// | 56 | `cols`, `rows: uint` | pattern size in cells (1..8) |
 /// | 64 | `gap`, `shadow_dist` | `s_g/s_p` and `shadow_width/2`, in cells |
-/// | 72 | `colours`, `_pad1` | with flag bit 3: where the material's record starts in the thread-colour buffer (vec4s; [`ThreadColourTable`]); 0 |
+/// | 72 | `colours`, `transmission` | with flag bit 3: where the material's record starts in the thread-colour buffer (vec4s; [`ThreadColourTable`]); with flag bit 4 (a sheet), the threads' diffuse transmittance τ, else 0 |
 ///
 /// The weave texture covers one repeat: sample it at `st = (u, v)·cell_per_uv / (cols, rows)`.
 #[repr(C)]
@@ -183,7 +196,7 @@ pub struct GpuFabric {
     pub gap: f32,
     pub shadow_dist: f32,
     pub colours: u32,
-    pub _pad1: u32,
+    pub transmission: f32,
 }
 
 const _: () = {
@@ -278,6 +291,7 @@ impl FabricParams {
                 .take(MAX_THREAD_COLOURS)
                 .map(|&c| rgb(c, p_mean(&self.weft_colours, d.rd_weft)))
                 .collect(),
+            transmission: self.transmission.map(|t| clamp_or(t, 0.0, 1.0, 0.0)),
         }
     }
 
@@ -319,6 +333,11 @@ impl FabricParams {
                     FLAG_THREAD_COLOURS
                 } else {
                     0
+                }
+                | if p.transmission.is_some() {
+                    FLAG_SHEET
+                } else {
+                    0
                 },
             shadow_strength: p.shadow_strength,
             pattern_lo: p.pattern.bits_lo(),
@@ -329,7 +348,7 @@ impl FabricParams {
             shadow_dist: 0.5 * p.shadow_width,
             // Set by the renderer, which lays out the thread-colour buffer.
             colours: 0,
-            _pad1: 0,
+            transmission: p.transmission.unwrap_or(0.0),
         }
     }
 
@@ -393,6 +412,9 @@ impl FabricParams {
                 "rs" => p.rs = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
                 "shadow_strength" => p.shadow_strength = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
                 "shadow_width" => p.shadow_width = ctx.number(key, v, 0.0, 1.0, "", warnings)?,
+                "transmission" => {
+                    p.transmission = Some(ctx.number(key, v, 0.0, 1.0, "the threads' diffuse transmittance", warnings)?)
+                }
                 "thread_texture" => {
                     let name = v.as_str().ok_or_else(|| {
                         ctx.err(key, format!("must be one of {:?}, got {}", ThreadTexture::NAMES, short(v)))
@@ -415,7 +437,7 @@ impl FabricParams {
                     "material '{material_name}': {EXTENSION_NAME} has unknown field '{other}' (ignored); \
                      known fields: pattern, repeat, gap, e_along, e_across, rd, rd_warp, rd_weft, \
                      warp_colours, weft_colours, rs, shadow_strength, shadow_width, coupled_diffuse, \
-                     thread_texture"
+                     thread_texture, transmission"
                 ))),
             }
         }
@@ -678,6 +700,33 @@ mod tests {
         }
         let (r, _) = parse(json!([1, 2]));
         assert!(r.is_err());
+    }
+
+    #[test]
+    fn transmission_makes_a_sheet() {
+        let (p, w) = parse(json!({"transmission": 0.4}));
+        let p = p.unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(p.transmission, Some(0.4));
+        let g = p.to_gpu();
+        assert_eq!((g.flags & FLAG_SHEET, g.transmission), (FLAG_SHEET, 0.4));
+        // Absent: not a sheet; out of range: clamped with a warning; not a number: an error.
+        let g = parse(json!({})).0.unwrap().to_gpu();
+        assert_eq!((g.flags & FLAG_SHEET, g.transmission), (0, 0.0));
+        let (p, w) = parse(json!({"transmission": 1.5}));
+        assert_eq!(p.unwrap().transmission, Some(1.0));
+        assert!(w.len() == 1 && w[0].0.contains("transmission"), "{w:?}");
+        let e = parse(json!({"transmission": "sheer"}))
+            .0
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'cloth'") && e.contains("transmission"), "{e}");
+        // NaN never reaches the GPU.
+        let p = FabricParams {
+            transmission: Some(f32::NAN),
+            ..Default::default()
+        };
+        assert_eq!(p.to_gpu().transmission, 0.0);
     }
 
     #[test]

@@ -22,6 +22,9 @@
 //!   their lobes are wide (low exponents); continuous filaments (silk, polyester) are smooth and
 //!   narrow (high exponents); satin floats are long and flat, hence the highest `e_along`. Gaps
 //!   are a fraction of the pitch: tight weaves (denim, satin) small, poplin larger.
+//! - **Thread transmittance** (used only for a single sheet, `--sheet`): by eye, ordered by
+//!   yarn: a fine continuous filament (silk, polyester) passes more of its diffuse light than a
+//!   spun cotton thread, and a thick indigo-dyed denim yarn little. Not measured.
 //! - Denim: warp indigo, weft undyed ecru (the defining feature of denim); the other colours are
 //!   neutral mid-tones meant to be overridden (`--rd`, or `--rd base` for the material's own
 //!   base colour).
@@ -50,6 +53,9 @@ pub struct Preset {
     pub rs: f32,
     pub shadow_strength: f32,
     pub shadow_width: f32,
+    /// The threads' diffuse transmittance when the cloth is a single sheet (`weft fabric
+    /// --sheet`): the share of a thread's diffuse light that leaves through its other side.
+    pub thread_transmittance: f32,
     /// Where the numbers come from, for `--list-presets`.
     pub sources: &'static str,
 }
@@ -69,6 +75,7 @@ pub const PRESETS: &[Preset] = &[
         rs: 0.045,
         shadow_strength: 0.5,
         shadow_width: 0.25,
+        thread_transmittance: 0.3,
         sources: "pitch: ~68x68 threads/inch retail quilting cotton; rs: cellulose n~1.55; \
                   exponents, gap, colour: by eye",
     },
@@ -85,6 +92,7 @@ pub const PRESETS: &[Preset] = &[
         rs: 0.045,
         shadow_strength: 0.6,
         shadow_width: 0.3,
+        thread_transmittance: 0.08,
         sources:
             "pattern: denim is a 3/1 warp-faced twill; pitch: ~60-70 ends x 40-50 picks/inch; \
                   rs: cellulose n~1.55; exponents, gap, shadow, colours: by eye",
@@ -102,6 +110,7 @@ pub const PRESETS: &[Preset] = &[
         rs: 0.047,
         shadow_strength: 0.4,
         shadow_width: 0.2,
+        thread_transmittance: 0.45,
         sources: "pattern: satin weave; pitch: order of 100+ ends/cm for silk satin; \
                   rs: silk fibroin n~1.56; exponents (smooth filament), gap, colour: by eye",
     },
@@ -118,6 +127,7 @@ pub const PRESETS: &[Preset] = &[
         rs: 0.053,
         shadow_strength: 0.45,
         shadow_width: 0.25,
+        thread_transmittance: 0.4,
         sources: "pitch: 190T-210T taffeta = warp+weft threads/inch; rs: PET n~1.60 (mean of \
                   1.53 and 1.72); exponents, gap, colour: by eye",
     },
@@ -156,6 +166,7 @@ impl Preset {
             thread_texture: crate::fabric::ThreadTexture::BaseColor,
             warp_colours: Vec::new(),
             weft_colours: Vec::new(),
+            transmission: None,
         }
     }
 }

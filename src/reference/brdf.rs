@@ -79,6 +79,8 @@ macro_rules! fabric_brdf_precision {
                 /// Thread-by-thread colours (`FLAG_THREAD_COLOURS`): the tint is both threads'
                 /// colour (see `fabric_tinted`).
                 pub threads: bool,
+                /// A single sheet (`FLAG_SHEET`): its threads' diffuse transmittance τ.
+                pub sheet: Option<$t>,
             }
 
             impl FabricMaterial {
@@ -92,6 +94,8 @@ macro_rules! fabric_brdf_precision {
                         e_across: g.e_across as $t,
                         coupled: g.flags & crate::fabric::FLAG_COUPLED_DIFFUSE != 0,
                         threads: g.flags & crate::fabric::FLAG_THREAD_COLOURS != 0,
+                        sheet: (g.flags & crate::fabric::FLAG_SHEET != 0)
+                            .then_some(g.transmission as $t),
                     }
                 }
             }
@@ -268,6 +272,38 @@ macro_rules! fabric_brdf_precision {
                     coverage[2] * m.rd_warp[1] + coverage[3] * m.rd_weft[1],
                     coverage[2] * m.rd_warp[2] + coverage[3] * m.rd_weft[2],
                 ]
+            }
+
+            /// The material whose threads reflect what they do not pass through: a sheet's
+            /// thread colours times `1 − τ`, any other cloth unchanged (`fabric_reflecting`).
+            pub fn fabric_reflecting(m: &FabricMaterial) -> FabricMaterial {
+                let keep = match m.sheet {
+                    Some(t) => 1.0 - t.clamp(0.0, 1.0),
+                    None => 1.0,
+                };
+                let mut r = *m;
+                r.rd_warp = m.rd_warp.map(|x| x * keep);
+                r.rd_weft = m.rd_weft.map(|x| x * keep);
+                r
+            }
+
+            /// The light a sheet's threads pass through, for light from `k1` on the far side
+            /// (`n·k1 < 0`) seen from `k2` on the near side: `τ/π` times [`fabric_albedo`]; 0
+            /// otherwise and for a cloth that is not a sheet (`fabric_btdf`).
+            pub fn fabric_btdf(k1: Vec3, k2: Vec3, coverage: Coverage, m: &FabricMaterial) -> Vec3 {
+                let Some(t) = m.sheet else {
+                    return [0.0; 3];
+                };
+                if !(k1[2] < 0.0 && k2[2] > 0.0) {
+                    return [0.0; 3];
+                }
+                let w = t.clamp(0.0, 1.0) / PI;
+                fabric_albedo(coverage, m).map(|x| w * x)
+            }
+
+            /// A sheet's opacity: `c_warp + c_weft` clamped to [0, 1] (`fabric_thread_cover`).
+            pub fn fabric_thread_cover(coverage: Coverage) -> $t {
+                (coverage[0] + coverage[1]).clamp(0.0, 1.0)
             }
 
             /// The fabric model of §3 at one shading point. `coverage = (c_warp, c_weft, s_warp,

@@ -82,7 +82,7 @@ pub struct ProbeInput {
     pub fabric: GpuFabric,
 }
 
-/// One probe output (std430, 176 bytes; `ProbeOutput` in `glsl/fabric_probe.comp`).
+/// One probe output (std430, 208 bytes; `ProbeOutput` in `glsl/fabric_probe.comp`).
 ///
 /// | offset | field | x | y | z | w |
 /// |---|---|---|---|---|---|
@@ -111,17 +111,19 @@ pub struct ProbeOutput {
     pub phong: [f32; 4],
     pub plain_as: [f32; 4],
     pub f_tint: [f32; 4],
+    pub sheet: [f32; 4],
+    pub f_sheet: [f32; 4],
 }
 
 const _: () = {
     assert!(std::mem::size_of::<ProbeInput>() == 208);
     assert!(std::mem::offset_of!(ProbeInput, coverage) == 96);
     assert!(std::mem::offset_of!(ProbeInput, fabric) == 128);
-    assert!(std::mem::size_of::<ProbeOutput>() == 176);
+    assert!(std::mem::size_of::<ProbeOutput>() == 208);
     assert!(std::mem::offset_of!(ProbeOutput, f_point) == 96);
 };
 
-/// Names of the 44 output components, in memory order (for messages).
+/// Names of the 52 output components, in memory order (for messages).
 #[rustfmt::skip]
 pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "rho_weft", "rho_warp", "d_weft", "fresnel",
@@ -135,10 +137,12 @@ pub const PROBE_OUTPUT_NAMES: [&str; PROBE_OUTPUTS] = [
     "phong.r", "phong.g", "phong.b", "phong_lobe",
     "plain_as.r", "plain_as.g", "plain_as.b", "plain_as.w",
     "f_tint.r", "f_tint.g", "f_tint.b", "f_tint.w",
+    "btdf.r", "btdf.g", "btdf.b", "thread_cover",
+    "f_sheet.r", "f_sheet.g", "f_sheet.b", "f_sheet.w",
 ];
 
 /// Number of f32 components of a [`ProbeOutput`].
-pub const PROBE_OUTPUTS: usize = 44;
+pub const PROBE_OUTPUTS: usize = 52;
 
 impl ProbeOutput {
     pub fn to_array(&self) -> [f32; PROBE_OUTPUTS] {
@@ -155,6 +159,8 @@ impl ProbeOutput {
             self.phong,
             self.plain_as,
             self.f_tint,
+            self.sheet,
+            self.f_sheet,
         ]
         .iter()
         .enumerate()
@@ -178,10 +184,12 @@ impl ProbeOutput {
             phong: v(8),
             plain_as: v(9),
             f_tint: v(10),
+            sheet: v(11),
+            f_sheet: v(12),
         }
     }
 
-    /// Reads one output from the shader's buffer bytes (little-endian, 176 bytes).
+    /// Reads one output from the shader's buffer bytes (little-endian, 208 bytes).
     pub fn from_bytes(b: &[u8]) -> Self {
         let mut a = [0.0f32; PROBE_OUTPUTS];
         for (k, x) in a.iter_mut().enumerate() {
@@ -244,6 +252,9 @@ macro_rules! probe_eval {
                 input.tint[2] as $t,
             ];
             let f_tint = fabric_brdf(k1, k2, cov, &fabric_tinted(&m, tint));
+            // The sheet's terms, with the light mirrored to the far side.
+            let btdf = fabric_btdf([k1[0], k1[1], -k1[2]], k2, cov, &m);
+            let f_sheet = fabric_brdf(k1, k2, cov, &fabric_reflecting(&m));
             let out: [$t; PROBE_OUTPUTS] = [
                 as_lobe(k1, k2, m.e_along, m.e_across, m.rs),
                 as_lobe(k1, k2, m.e_across, m.e_along, m.rs),
@@ -288,6 +299,14 @@ macro_rules! probe_eval {
                 f_tint[0],
                 f_tint[1],
                 f_tint[2],
+                0.0,
+                btdf[0],
+                btdf[1],
+                btdf[2],
+                fabric_thread_cover(cov),
+                f_sheet[0],
+                f_sheet[1],
+                f_sheet[2],
                 0.0,
             ];
             ProbeOutput::from_array(&out.map(|x| x as f32))
@@ -506,6 +525,17 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         1e-30
     };
 
+    let btdf_tol = match m.sheet {
+        Some(t) if nk2 > 0.0 => {
+            let rd_max = m
+                .rd_warp
+                .iter()
+                .chain(m.rd_weft.iter())
+                .fold(0.0f64, |a, &x| a.max(x));
+            b.rel * t * rd_max * (cov[2].abs() + cov[3].abs()) / std::f64::consts::PI + 1e-30
+        }
+        _ => 1e-30,
+    };
     #[rustfmt::skip]
     let out = [
         rho_weft, rho_warp, d_weft, b.rel + 5.0 * b.dir,
@@ -521,6 +551,11 @@ pub fn probe_tolerance(input: &ProbeInput, bound: &ProbeBound) -> ProbeOutput {
         plain_tol, plain_tol, plain_tol, 0.0,
         // f_tint: the tint (each in [0, 1]) scales the diffuse term down, with one more
         // rounding, well within `rel`: f's bound holds.
+        f_tol, f_tol, f_tol, 0.0,
+        // The sheet's transmitted light: τ/π times the albedo, a few roundings (`rel`); the
+        // thread cover: one addition and a clamp. f_sheet: f's bound (the colours scaled by
+        // 1 − τ ≤ 1, one more rounding).
+        btdf_tol, btdf_tol, btdf_tol, b.rel,
         f_tol, f_tol, f_tol, 0.0,
     ];
     ProbeOutput::from_array(&out.map(|x| x as f32))
@@ -991,6 +1026,11 @@ pub fn probe_random(seed: u64, count: usize) -> Vec<ProbeCase> {
             shadow_strength: rng.next_f64() as f32,
             shadow_width: rng.next_f64() as f32,
             coupled_diffuse: rng.next_f64() < 0.5,
+            // Half the materials are sheets (light through the weave), τ anywhere in [0, 1].
+            transmission: {
+                let t = rng.next_f64();
+                (t < 0.5).then_some((2.0 * t) as f32)
+            },
             ..Default::default()
         };
         let fabric = params.to_gpu();

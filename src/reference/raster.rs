@@ -145,6 +145,10 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
     };
 
     let mut fragments: Vec<Option<Fragment>> = vec![None; (width * height) as usize];
+    // Fabric sheets (light through the weave) are kept apart, the nearest per pixel, and put
+    // over the opaque surface behind them by their thread coverage, as the transparent pass
+    // blends them (one sheet deep: a sheet behind another is not seen through it).
+    let mut sheets: Vec<Option<Fragment>> = vec![None; (width * height) as usize];
     let raster = Raster {
         width,
         height,
@@ -213,12 +217,17 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
                 continue;
             }
             let polygon = clip_near(&[v[0], v[1], v[2]]);
+            let target = if dm.material.is_sheet() {
+                &mut sheets
+            } else {
+                &mut fragments
+            };
             for k in 1..polygon.len().saturating_sub(1) {
                 raster.triangle(
                     [&polygon[0], &polygon[k], &polygon[k + 1]],
                     front,
                     dm,
-                    &mut fragments,
+                    target,
                 );
             }
         }
@@ -235,12 +244,28 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
         height,
         ldr: Vec::with_capacity(fragments.len() * 4),
         hdr: Vec::with_capacity(fragments.len() * 4),
-        covered: fragments.iter().map(Option::is_some).collect(),
+        covered: fragments
+            .iter()
+            .zip(&sheets)
+            .map(|(f, s)| f.is_some() || s.is_some())
+            .collect(),
     };
-    for fragment in &fragments {
-        let hdr = match fragment {
+    for (fragment, sheet) in fragments.iter().zip(&sheets) {
+        let behind = match fragment {
             Some(f) => shading::shade_with(&frame, &lights, &f.surface, options.shading),
             None => background,
+        };
+        let hdr = match sheet {
+            Some(s) if fragment.is_none_or(|f| s.depth > f.depth) => {
+                // The sheet's threads (their light already weighted by their coverage), and the
+                // light behind through its gaps. At a sample of render_pixel_integrated the
+                // coverage is the weave's at that point: thread or gap, 1 or 0.
+                let front = shading::shade_with(&frame, &lights, &s.surface, options.shading);
+                let open =
+                    1.0 - crate::reference::brdf::single::fabric_thread_cover(s.surface.coverage);
+                std::array::from_fn(|c| front[c] + open * behind[c])
+            }
+            _ => behind,
         };
         image.hdr.extend_from_slice(&[hdr[0], hdr[1], hdr[2], 1.0]);
         image

@@ -678,18 +678,37 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
                 }
                 return radiance;
             }
-            let rd = fb::fabric_albedo(cov, &m);
+            // A sheet's threads reflect the 1 − τ they do not pass through (identity otherwise).
+            let mr = fb::fabric_reflecting(&m);
+            let rd = fb::fabric_albedo(cov, &mr);
             radiance = add(radiance, mul(ambient, rd));
+            if let Some(t) = m.sheet {
+                let ambient_back = mix(
+                    xyz(frame.ambient_ground),
+                    xyz(frame.ambient_sky),
+                    -n[1] * 0.5 + 0.5,
+                );
+                let through = scale(fb::fabric_albedo(cov, &m), t.clamp(0.0, 1.0));
+                radiance = add(radiance, mul(ambient_back, through));
+            }
             for light in &lights[..count] {
                 let (l, e) = light_incoming(light, s.position);
                 let k1 = fb::fabric_local(l, tbn);
-                if k1[2] <= 0.0 || e == [0.0; 3] {
+                if e == [0.0; 3] {
                     continue;
                 }
-                radiance = add(
-                    radiance,
-                    scale(mul(e, fb::fabric_brdf(k1, k2, cov, &m)), k1[2]),
-                );
+                if k1[2] > 0.0 {
+                    radiance = add(
+                        radiance,
+                        scale(mul(e, fb::fabric_brdf(k1, k2, cov, &mr)), k1[2]),
+                    );
+                } else if m.sheet.is_some() && k1[2] < 0.0 {
+                    // A lamp behind the sheet, through its threads.
+                    radiance = add(
+                        radiance,
+                        scale(mul(e, fb::fabric_btdf(k1, k2, cov, &m)), -k1[2]),
+                    );
+                }
             }
         }
         None => {

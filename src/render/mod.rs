@@ -181,6 +181,9 @@ pub struct Force {
     /// Fetch the weave's summed-area table texel by texel (WEAVE_SOURCE 3, what a device that
     /// cannot filter RGBA32F runs) even where the device can filter it.
     pub sat_fetch: bool,
+    /// Compile the fabric-sheet code in (forward FABRIC_SHEETS = 1: light through the weave)
+    /// with no sheet in the scene.
+    pub fabric_sheets: bool,
 }
 
 impl Force {
@@ -193,6 +196,7 @@ impl Force {
         alpha_mask: false,
         back_faces_first: false,
         sat_fetch: false,
+        fabric_sheets: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -204,6 +208,7 @@ impl Force {
         back_faces_first: true,
         // Not a feature compiled in: the table's other reading, with the same values.
         sat_fetch: false,
+        fabric_sheets: true,
     };
 }
 

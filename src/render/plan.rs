@@ -192,6 +192,11 @@ pub struct Plan {
     /// KHR_materials_diffuse_transmission: drawn draws with such a material (the transparent
     /// pass draws them).
     pub diffuse_transmission_draws: usize,
+    /// Fabric sheets (`WEFT_materials_fabric` `transmission`): drawn draws whose cloth lets light
+    /// through its gaps and threads (the transparent pass blends them by their thread coverage).
+    pub sheet_draws: usize,
+    /// Whether the forward pass compiles the sheets' code (FABRIC_SHEETS).
+    pub fabric_sheets: bool,
     /// KHR_materials_iridescence: drawn draws with a thin film (the transparent pass draws
     /// them: the G-buffer has no room for a film).
     pub iridescence_draws: usize,
@@ -427,9 +432,10 @@ impl Plan {
                     && material_of(d).is_some_and(|m| m.alpha_cutoff.is_some() || m.blend)
             })
             .count();
-        let blend_draws = count(&|m| m.blend);
+        let blend_draws = count(&|m| m.blended());
+        let sheet_draws = count(&|m| m.is_sheet());
         let transmission_draws = count(&|m| m.transmission.is_some());
-        let forward_opaque_draws = count(&|m| m.needs_forward() && !m.blend);
+        let forward_opaque_draws = count(&|m| m.needs_forward() && !m.blended());
         let coat_draws = count(&|m| m.clearcoat.is_some());
         let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());
         let iridescence_draws = count(&|m| m.iridescence.is_some());
@@ -551,6 +557,8 @@ impl Plan {
             forward_opaque_draws,
             coat_draws,
             diffuse_transmission_draws,
+            sheet_draws,
+            fabric_sheets: sheet_draws > 0 || options.force.fabric_sheets,
             iridescence_draws,
             dispersion_draws,
             unlit_materials,
@@ -695,7 +703,7 @@ impl fmt::Display for Plan {
         if self.blend_draws > 0 {
             writeln!(
                 f,
-                "blend       {} draw(s) with alphaMode BLEND: forward-lit after the lighting pass, sorted back to front by their bounds' centres",
+                "blend       {} draw(s) blended over what is behind (alphaMode BLEND, fabric sheets): forward-lit after the lighting pass, sorted back to front by their bounds' centres",
                 self.blend_draws
             )?;
         }
@@ -704,6 +712,13 @@ impl fmt::Display for Plan {
                 f,
                 "diff. trans. {} draw(s) with KHR_materials_diffuse_transmission: drawn by the transparent pass, lit from both sides",
                 self.diffuse_transmission_draws
+            )?;
+        }
+        if self.sheet_draws > 0 {
+            writeln!(
+                f,
+                "fabric sheet {} draw(s) of cloth with nothing behind it: blended by the thread coverage (the gaps let light straight through), the threads lit from both sides",
+                self.sheet_draws
             )?;
         }
         if self.dispersion_draws > 0 {

@@ -177,7 +177,10 @@ impl Renderer {
                         .materials
                         .get(mesh.material)
                         .is_some_and(|m| m.needs_forward()),
-                blended: scene.materials.get(mesh.material).is_some_and(|m| m.blend),
+                blended: scene
+                    .materials
+                    .get(mesh.material)
+                    .is_some_and(|m| m.blended()),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
                 ),

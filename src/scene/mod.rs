@@ -176,11 +176,24 @@ impl Material {
     /// Whether the G-buffer cannot hold this material, so the transparent pass draws it:
     /// alphaMode BLEND, transmission, a clear coat, diffuse transmission, a thin film.
     pub fn needs_forward(&self) -> bool {
-        self.blend
+        self.blended()
             || self.transmission.is_some()
             || self.clearcoat.is_some()
             || self.diffuse_transmission.is_some()
             || self.iridescence.is_some()
+    }
+
+    /// Whether the transparent pass blends the surface over what is behind it: alphaMode BLEND,
+    /// or a fabric that is a single sheet (its gaps let light through: `FabricParams::transmission`).
+    pub fn blended(&self) -> bool {
+        self.blend || self.is_sheet()
+    }
+
+    /// Whether the material is a fabric sheet (`FabricParams::transmission`).
+    pub fn is_sheet(&self) -> bool {
+        self.fabric
+            .as_ref()
+            .is_some_and(|f| f.transmission.is_some())
     }
 
     /// The material's textures (indices into `Scene::textures`) in [`TextureSlot`] order.

@@ -437,6 +437,14 @@ pub fn cases() -> Vec<Case> {
         case("tartan-closeup", "assets/scenes/tartan_closeup.glb", "the close-up woven from tests/data/drafts/tartan-twill.wif (weft fabric --draft, cotton-plain at 2 mm): a 2/2 twill, thread by thread in the draft's sett, 6 green, 2 black, 2 red, 2 black each way; red and black bands cross the green as steps of the twill"),
         case("tartan-far", "assets/scenes/tartan_far.glb", "the pleated far view woven from the same draft at 6 mm: the sett as a small green check with red lines, threads no longer resolved, the same mean colour"),
         Case {
+            camera: Some(0),
+            ..case("curtain-backlit", "assets/scenes/curtain.glb", "a cream voile hanging in folds before a white window, lit from behind by a low sun and from the room by a dim lamp (a single sheet, WEFT_materials_fabric transmission 0.4): the weave below a pixel, the curtain a translucent cream through which the window glows, brighter where the folds face the sun; the window's edges visible beside and above it")
+        },
+        Case {
+            camera: Some(1),
+            ..case("curtain-backlit-close", "assets/scenes/curtain.glb", "the same voile from 22 cm: threads and gaps resolved, every gap a bright point of the window between cream threads lit through from behind, the fold curving the grid")
+        },
+        Case {
             accuracy: Accuracy::Supersampled(4),
             cpu: Some(CPU_SUPERSAMPLED),
             ..case("closeup-supersampled", "assets/scenes/closeup.glb", "the close-up with 4 x 4 analytic weave samples per pixel, two lobes each")

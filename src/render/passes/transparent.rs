@@ -97,6 +97,7 @@ impl TransparentPass {
             (23, "iridescence", (plan.iridescence_draws > 0) as u32),
             (24, "dispersion", (plan.dispersion_draws > 0) as u32),
             (25, "thread_colours", plan.features.thread_colours as u32),
+            (26, "fabric_sheets", plan.fabric_sheets as u32),
         ]);
         VariantKey(key)
     }
