@@ -153,7 +153,7 @@ fn overrides(args: &FabricArgs) -> anyhow::Result<Overrides> {
         },
         warp_colours: None,
         weft_colours: None,
-        sheet: args.sheet,
+        sheet: args.sheet.then_some(true),
         transmission: unit_range("--transmission", args.transmission)?,
     };
     if let Some(path) = &args.draft {

@@ -733,14 +733,14 @@ fn a_sheet_from_the_flag_or_from_khr_materials_diffuse_transmission() {
     };
     assert_eq!(run(request(&["floor"], "silk-satin", None)), (None, None));
     let mut sheet = request(&["floor"], "silk-satin", None);
-    sheet.overrides.sheet = true;
+    sheet.overrides.sheet = Some(true);
     assert_eq!(run(sheet), (Some(0.45), Some(json!(0.45))));
     let mut given = request(&["floor"], "silk-satin", None);
     given.overrides.transmission = Some(0.1);
     assert_eq!(run(given).0, Some(0.1));
     // And the written file loads back as a sheet.
     let mut sheet = request(&["floor"], "denim-twill", None);
-    sheet.overrides.sheet = true;
+    sheet.overrides.sheet = Some(true);
     let (out, _) = assets::transform(&bytes, "plain.gltf", path.parent(), &[sheet]).unwrap();
     let scene = scene::load_slice(&out, "sheet.gltf", path.parent()).expect("loads back");
     let m = &scene.materials[0];

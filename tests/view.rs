@@ -378,3 +378,124 @@ fn dropped_files_load_or_say_why() {
         println!("({box_path} not present: the real-file half of this test is skipped)");
     }
 }
+
+/// Authoring in the viewer (issue 27 item 5), through the functions its panel calls: SheenChair
+/// (no fabric material) has its seat woven with a preset, then with a weaving draft, tuned as the
+/// panel's sliders tune it (a sheet, a new exponent), and saved; the saved file is what `weft
+/// fabric` writes for the same requests, and loads back with the tuned parameters.
+#[test]
+fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
+    let dir = std::env::temp_dir().join(format!("weft-view-authoring-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let from = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/khronos/SheenChair/glTF");
+    for entry in std::fs::read_dir(&from).unwrap() {
+        let p = entry.unwrap().path();
+        std::fs::copy(&p, dir.join(p.file_name().unwrap())).unwrap();
+    }
+    let file = dir.join("SheenChair.gltf");
+    let source = weft::view::SceneSource::File(file.clone());
+    let lights = weft::env::LightsMode::Auto;
+    let scene = controls::load(&source, None, lights, 0.0, false).unwrap();
+    assert!(controls::fabric_materials(&scene).is_empty());
+    let materials = controls::file_materials(&scene);
+    assert!(
+        materials.iter().all(|(_, n)| !n.contains("default ground")),
+        "{materials:?}"
+    );
+    let (seat, _) = materials
+        .iter()
+        .find(|(_, n)| n.to_lowercase().contains("fabric"))
+        .cloned()
+        .expect("SheenChair has a fabric material");
+
+    // Weave it with a preset: the scene loads again with the woven seat.
+    let mut requests = Vec::new();
+    let (r, _) = controls::weave_request(seat, "denim-twill", None).unwrap();
+    controls::replace_request(&mut requests, r);
+    let (scene, applied) =
+        controls::load_woven(&source, None, &requests, lights, 0.0, false).unwrap();
+    let woven = scene.materials[seat].fabric.clone().expect("woven");
+    assert_eq!(applied.len(), 1);
+    assert_eq!(woven.pattern, weft::fabric::WeavePattern::twill());
+    // The preset's 0.5 mm pitch, converted by the mesh's UV density.
+    let pitch = woven.repeat as f64 / 2.0 * applied[0].density.metres_per_uv;
+    assert!((pitch - 0.5e-3).abs() < 1e-6, "pitch {pitch}");
+
+    // Again with a draft: it replaces the first weave of that material.
+    let draft = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/drafts/tartan-twill.wif");
+    let (r, _) = controls::weave_request(seat, "cotton-plain", Some(&draft)).unwrap();
+    controls::replace_request(&mut requests, r);
+    assert_eq!(requests.len(), 1);
+    let (scene, _) = controls::load_woven(&source, None, &requests, lights, 0.0, false).unwrap();
+    let woven = scene.materials[seat].fabric.clone().unwrap();
+    assert!(woven.has_thread_colours(), "the tartan's sett");
+
+    // Tuned in the panel: a sheet, a narrower lobe.
+    let mut tuned = woven.clone();
+    tuned.e_along = 321.0;
+    tuned.transmission = Some(0.25);
+    controls::replace_request(
+        &mut requests,
+        controls::exact_request(&scene, seat, &tuned).unwrap(),
+    );
+    let (path, _) = controls::save_woven(&source, &requests).unwrap();
+    assert_eq!(path, dir.join("SheenChair-fabric.gltf"));
+    let saved = weft::scene::load(&path).expect("the saved file loads");
+    let back = saved.materials[seat].fabric.clone().unwrap();
+    assert_eq!(back.e_along, 321.0);
+    assert_eq!(back.transmission, Some(0.25));
+    assert_eq!(back.pattern, tuned.pattern);
+    assert_eq!(back.warp_colours, tuned.warp_colours);
+    assert!(
+        (back.repeat - tuned.repeat).abs() <= 1e-5 * tuned.repeat,
+        "{} vs {}",
+        back.repeat,
+        tuned.repeat
+    );
+    // The same bytes as weft fabric's transform of the source with the same requests.
+    let (bytes, _) = weft::fabric::assets::transform(
+        &std::fs::read(&file).unwrap(),
+        &file.display().to_string(),
+        Some(&dir),
+        &requests,
+    )
+    .unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), bytes);
+    // Nothing to save without a weave; the source is never overwritten.
+    assert!(controls::save_woven(&source, &[]).is_err());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Ctrl+click's pick: the material at a pixel of the read-back G-buffer, None on the background.
+#[test]
+fn a_click_picks_the_material_under_it() {
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let scene = weft::scene::default_scene();
+    let (w, h) = (160u32, 120u32);
+    let options = RenderOptions {
+        width: w,
+        height: h,
+        ..Default::default()
+    };
+    renderer.render(&scene, &options).unwrap();
+    let g = renderer.read_gbuffer().unwrap();
+    let (cloth, _) = controls::fabric_materials(&scene)[0].clone();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut background = 0;
+    for y in 0..h {
+        for x in 0..w {
+            match controls::material_at(&g, w, x, y, &scene) {
+                Some(m) => {
+                    seen.insert(m);
+                }
+                None => background += 1,
+            }
+        }
+    }
+    assert!(seen.contains(&cloth), "the cloth is pickable: {seen:?}");
+    assert!(seen.len() >= 2, "{seen:?}");
+    assert!(background > 0, "the sky is no material");
+    assert_eq!(controls::material_at(&g, w, w, 0, &scene), None);
+    assert_eq!(controls::material_at(&g, w, 0, h, &scene), None);
+}

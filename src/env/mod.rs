@@ -371,6 +371,9 @@ impl Background {
     }
 }
 
+/// The name of the ground material [`stage`] adds (not a material of the file).
+pub const GROUND_MATERIAL: &str = "default ground";
+
 /// The colour background's default (linear): the dark blue-grey weft has always used.
 pub const DEFAULT_BACKGROUND: [f32; 3] = [0.010, 0.012, 0.016];
 
@@ -774,7 +777,7 @@ pub fn stage(
     };
     let material = scene.materials.len();
     scene.materials.push(Material {
-        name: "default ground".into(),
+        name: GROUND_MATERIAL.into(),
         base_color: [0.3, 0.3, 0.3, 1.0],
         metallic: 0.0,
         roughness: 0.85,

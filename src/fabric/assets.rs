@@ -147,13 +147,41 @@ pub struct Overrides {
     /// Thread-by-thread colour sequences (a draft's `[WARP COLORS]`, `[WEFT COLORS]`).
     pub warp_colours: Option<Vec<[f32; 3]>>,
     pub weft_colours: Option<Vec<[f32; 3]>>,
-    /// A single sheet (`--sheet`): the preset's thread transmittance, or `transmission`.
-    pub sheet: bool,
+    /// A single sheet: `Some(true)` (`--sheet`) with the preset's thread transmittance, or
+    /// `transmission`; `Some(false)` not a sheet even where the material has
+    /// KHR_materials_diffuse_transmission; None: as the file says.
+    pub sheet: Option<bool>,
     /// The threads' diffuse transmittance (`--transmission`, implies a sheet).
     pub transmission: Option<f32>,
 }
 
 impl Overrides {
+    /// The overrides that give exactly `p` (to the file's 6 digits) on a mesh of UV density
+    /// `density`, whatever the preset: how `weft view` writes the parameters tuned in its panel
+    /// through the same [`apply`] as `weft fabric`.
+    pub fn exact(p: &FabricParams, density: &UvDensity) -> Overrides {
+        let repeat = p.repeat as f64;
+        Overrides {
+            pitch_m: Some(repeat * density.metres_per_uv / 2.0),
+            pattern: Some(p.pattern),
+            gap_fraction: Some(p.gap as f64 / (repeat / 2.0)),
+            e_along: Some(p.e_along),
+            e_across: Some(p.e_across),
+            rs: Some(p.rs),
+            shadow_strength: Some(p.shadow_strength),
+            shadow_width: Some(p.shadow_width),
+            rd: None,
+            rd_warp: Some(Colour::Rgb(p.rd_warp)),
+            rd_weft: Some(Colour::Rgb(p.rd_weft)),
+            coupled_diffuse: Some(p.coupled_diffuse),
+            thread_texture: Some(p.thread_texture),
+            warp_colours: Some(p.warp_colours.clone()),
+            weft_colours: Some(p.weft_colours.clone()),
+            sheet: Some(p.transmission.is_some()),
+            transmission: p.transmission,
+        }
+    }
+
     /// A weaving draft's weave and thread colours over these overrides, where no colour
     /// override is set: a warp or weft of several colours becomes its colour sequence, thread by
     /// thread, reduced to its shortest period (a draft usually spells out several setts), and its
@@ -685,6 +713,9 @@ fn sheet_transmission(
     source: &Source,
     notes: &mut Vec<String>,
 ) -> Result<Option<f32>> {
+    if o.sheet == Some(false) {
+        return Ok(None);
+    }
     if let Some(t) = o.transmission {
         notes.push(format!(
             "a single sheet: its gaps let light through, its threads {t} of their diffuse light"
@@ -709,7 +740,7 @@ fn sheet_transmission(
         ));
         return Ok(Some(factor));
     }
-    if o.sheet {
+    if o.sheet == Some(true) {
         let t = match source {
             Source::Preset(p) => p.thread_transmittance,
             Source::FromSheen => {

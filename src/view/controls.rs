@@ -1,7 +1,10 @@
 //! What the panel edits, as plain functions: the panel calls these, and so do the tests
 //! (tests/view.rs changes a fabric parameter through [`set_fabric`] and [`apply`]).
 
+use std::path::{Path, PathBuf};
+
 use crate::env::LightsMode;
+use crate::fabric::assets::{self, Applied, MaterialRef, Overrides, Request, Source};
 use crate::fabric::FabricParams;
 use crate::render::plan::weave_key;
 use crate::render::{GpuScene, Renderer};
@@ -127,4 +130,184 @@ pub fn apply(
             Ok(())
         }
     }
+}
+
+// ---- Authoring: weave any material and save the file `weft fabric` would write ----
+
+/// Every material of `scene` a file gave it (the staged ground is not one), by index, with a
+/// name for the panel.
+pub fn file_materials(scene: &Scene) -> Vec<(usize, String)> {
+    scene
+        .materials
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.name != crate::env::GROUND_MATERIAL)
+        .map(|(i, m)| {
+            let name = if m.name.is_empty() {
+                format!("material {i}")
+            } else {
+                format!("{i}: {}", m.name)
+            };
+            (i, name)
+        })
+        .collect()
+}
+
+/// The file behind `source`: its bytes, its name for messages, and the directory its external
+/// buffers and images resolve from (the built-in scene: its GLB, none).
+fn source_bytes(source: &SceneSource) -> crate::Result<(Vec<u8>, String, Option<PathBuf>)> {
+    match source {
+        SceneSource::File(path) => {
+            let bytes = std::fs::read(path).map_err(|e| {
+                Error::input(format!(
+                    "scene file '{}' could not be read again: {e}",
+                    path.display()
+                ))
+            })?;
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            Ok((bytes, path.display().to_string(), Some(dir)))
+        }
+        SceneSource::Builtin => Ok((
+            crate::scene::DEFAULT_SCENE_GLB.to_vec(),
+            "built-in default scene".to_string(),
+            None,
+        )),
+    }
+}
+
+/// What `weft fabric --material INDEX --preset PRESET [--draft FILE]` asks, for the panel's
+/// "weave": the preset at its own pitch (the mesh's UV density converts it), the draft's weave
+/// and thread colours over it. Returns the request and the draft's warnings.
+pub fn weave_request(
+    material: usize,
+    preset: &str,
+    draft: Option<&Path>,
+) -> crate::Result<(Request, Vec<String>)> {
+    let mut overrides = Overrides::default();
+    let mut warnings = Vec::new();
+    if let Some(path) = draft {
+        let d = crate::fabric::draft::Draft::load(path)?;
+        warnings = overrides.apply_draft(&d);
+    }
+    Ok((
+        Request {
+            materials: vec![MaterialRef::parse(&material.to_string())],
+            source: Source::parse(preset)?,
+            overrides,
+        },
+        warnings,
+    ))
+}
+
+/// The request that writes `params` on material `material` exactly (the panel's live edits),
+/// measured on `scene`'s meshes.
+pub fn exact_request(
+    scene: &Scene,
+    material: usize,
+    params: &FabricParams,
+) -> crate::Result<Request> {
+    let density = assets::uv_density(scene, material, &format!("material {material}"))?;
+    Ok(Request {
+        materials: vec![MaterialRef::parse(&material.to_string())],
+        source: Source::parse("cotton-plain")?,
+        overrides: Overrides::exact(params, &density),
+    })
+}
+
+/// Puts `request` in `requests` in place of any earlier one for the same materials.
+pub fn replace_request(requests: &mut Vec<Request>, request: Request) {
+    let same = |r: &Request| {
+        r.materials.iter().any(|m| {
+            request
+                .materials
+                .iter()
+                .any(|n| format!("{m}") == format!("{n}"))
+        })
+    };
+    requests.retain(|r| !same(r));
+    requests.push(request);
+}
+
+/// Loads `source` (with `variant`) with `requests` applied by `weft fabric`'s own transform,
+/// staged as [`load`] stages it; and what was applied.
+pub fn load_woven(
+    source: &SceneSource,
+    variant: Option<String>,
+    requests: &[Request],
+    lights: LightsMode,
+    env_rotation: f32,
+    own_env: bool,
+) -> crate::Result<(Scene, Vec<Applied>)> {
+    let (bytes, name, dir) = source_bytes(source)?;
+    let (out, applied) = assets::transform(&bytes, &name, dir.as_deref(), requests)?;
+    let mut scene =
+        crate::scene::load_slice_with(&out, &name, dir.as_deref(), &LoadOptions { variant })?;
+    crate::env::stage(&mut scene, lights, env_rotation, own_env);
+    Ok((scene, applied))
+}
+
+/// Writes the file `weft fabric` would write for `requests`: beside the source as
+/// `NAME-fabric.glb` (or `.gltf`, whose external files then resolve as the source's do), or for
+/// the built-in scene `default-fabric.glb` in the working directory. Returns the path and what
+/// was applied. Refuses to overwrite the source.
+pub fn save_woven(
+    source: &SceneSource,
+    requests: &[Request],
+) -> crate::Result<(PathBuf, Vec<Applied>)> {
+    if requests.is_empty() {
+        return Err(Error::input(
+            "nothing to save: weave a material or change a fabric in the panel first",
+        ));
+    }
+    let (bytes, name, dir) = source_bytes(source)?;
+    let (out, applied) = assets::transform(&bytes, &name, dir.as_deref(), requests)?;
+    let path = match source {
+        SceneSource::File(p) => {
+            let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+            let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("glb");
+            p.with_file_name(format!("{stem}-fabric.{ext}"))
+        }
+        SceneSource::Builtin => PathBuf::from("default-fabric.glb"),
+    };
+    if let SceneSource::File(p) = source {
+        if path == *p {
+            return Err(Error::input(format!(
+                "will not overwrite the source {}",
+                p.display()
+            )));
+        }
+    }
+    std::fs::write(&path, out).map_err(|e| {
+        Error::input(format!(
+            "could not write {}: {e}; check the directory is writable",
+            path.display()
+        ))
+    })?;
+    Ok((path, applied))
+}
+
+/// The material drawn at pixel (`x`, `y`) of a frame `width` pixels wide, from its read-back
+/// G-buffer (ctrl+click in the viewer); None where no surface is (the background) or the pixel
+/// is outside. Surfaces drawn by the transparent pass (blended, transmissive, fabric sheets) are
+/// not in the G-buffer: a click there picks what is behind them.
+pub fn material_at(
+    g: &crate::render::GBufferReadback,
+    width: u32,
+    x: u32,
+    y: u32,
+    scene: &Scene,
+) -> Option<usize> {
+    if x >= width {
+        return None;
+    }
+    let i = (y as usize) * (width as usize) + x as usize;
+    // Reversed Z: the cleared depth is 0.
+    if !(*g.depth.get(i)? > 0.0) {
+        return None;
+    }
+    let m = g.surface.get(4 * i + 1)?.round();
+    (m >= 0.0 && (m as usize) < scene.materials.len()).then_some(m as usize)
 }

@@ -205,6 +205,14 @@ struct App {
     error: Option<Error>,
     report: Option<BenchReport>,
     studio: Option<Arc<Environment>>,
+    /// Ctrl is held (ctrl+click picks the material under the cursor).
+    ctrl: bool,
+    /// Where the scene's image starts in the window (right of the panel), and its width.
+    scene_x0: u32,
+    scene_width: u32,
+    /// What the panel wove or changed, as `weft fabric` requests on the source file: the scene
+    /// is the source with these applied, and "save woven file" writes it.
+    requests: Vec<crate::fabric::assets::Request>,
 }
 
 /// Warm-up frames of `--bench-frames` (the first pays the shader JIT and pipeline creation).
@@ -246,6 +254,10 @@ impl App {
             error: None,
             report: None,
             studio: None,
+            requests: Vec::new(),
+            ctrl: false,
+            scene_x0: 0,
+            scene_width: 0,
         }
     }
 
@@ -328,12 +340,28 @@ impl App {
             .as_ref()
             .map(|e| e.rotation)
             .unwrap_or(0.0);
-        let scene = controls::load(&source, variant, self.lights, rotation, self.own_env)?;
+        let new_file = source != self.source;
+        let scene = if new_file || self.requests.is_empty() {
+            controls::load(&source, variant, self.lights, rotation, self.own_env)?
+        } else {
+            // The same file (another variant, a weave): with what the panel wove.
+            controls::load_woven(
+                &source,
+                variant,
+                &self.requests,
+                self.lights,
+                rotation,
+                self.own_env,
+            )?
+            .0
+        };
+        if new_file {
+            self.requests.clear();
+        }
         if let Some(r) = &self.running {
             let gpu = r.renderer.upload(&scene)?;
             self.running.as_mut().expect("checked").gpu = gpu;
         }
-        let new_file = source != self.source;
         self.scene = scene;
         self.source = source;
         if new_file {
@@ -346,6 +374,66 @@ impl App {
         }
         self.ui.scene_changed(&self.scene);
         Ok(())
+    }
+
+    /// Ctrl+click: the material under the cursor becomes the panel's choice (to weave, and in
+    /// the fabric editor when it is a fabric).
+    fn pick(&mut self) {
+        let (Some((x, y)), Some(r)) = (self.cursor, self.running.as_ref()) else {
+            return;
+        };
+        let x = x as i64 - self.scene_x0 as i64;
+        let picked = if x < 0 || y < 0.0 {
+            Ok(None)
+        } else {
+            r.renderer.read_gbuffer().map(|g| {
+                controls::material_at(&g, self.scene_width, x as u32, y as u32, &self.scene)
+            })
+        };
+        self.ui.status = Some(match picked {
+            Ok(Some(m)) => {
+                self.ui.select(m);
+                let name = &self.scene.materials[m].name;
+                (format!("picked material {m} '{name}'"), false)
+            }
+            Ok(None) => (
+                "no surface under the cursor (or one the transparent pass draws)".into(),
+                false,
+            ),
+            Err(e) => (e.to_string(), true),
+        });
+    }
+
+    /// Weaves material `material` with `preset` (and a draft file): the request replaces any
+    /// earlier one for that material and the scene is loaded again with all of them.
+    fn weave(
+        &mut self,
+        material: usize,
+        preset: &str,
+        draft: Option<&str>,
+    ) -> crate::Result<Option<String>> {
+        let (request, warnings) = controls::weave_request(material, preset, draft.map(Path::new))?;
+        let before = self.requests.clone();
+        controls::replace_request(&mut self.requests, request);
+        let variant = self.scene.variant.clone();
+        if let Err(e) = self.open(self.source.clone(), variant) {
+            self.requests = before;
+            return Err(e);
+        }
+        self.ui.select(material);
+        let name = self
+            .scene
+            .materials
+            .get(material)
+            .map_or(String::new(), |m| m.name.clone());
+        let mut msg = format!("wove material {material} '{name}' with {preset}");
+        if let Some(d) = draft {
+            msg.push_str(&format!(" and {d}"));
+        }
+        for w in warnings {
+            msg.push_str(&format!("; {w}"));
+        }
+        Ok(Some(msg))
     }
 
     fn set_environment(&mut self, choice: &panel::EnvChoice) -> crate::Result<()> {
@@ -397,7 +485,25 @@ impl App {
                     self.ui.env = choice;
                     None
                 }),
+                panel::Action::Weave {
+                    material,
+                    preset,
+                    draft,
+                } => self.weave(material, &preset, draft.as_deref()),
+                panel::Action::SaveFabric => controls::save_woven(&self.source, &self.requests)
+                    .map(|(path, applied)| {
+                        Some(format!(
+                            "saved {} ({} material(s) woven, as weft fabric writes them)",
+                            path.display(),
+                            applied.len()
+                        ))
+                    }),
                 panel::Action::Fabric(material, params) => {
+                    // Kept as the request that writes these parameters, for "save".
+                    match controls::exact_request(&self.scene, material, &params) {
+                        Ok(r) => controls::replace_request(&mut self.requests, r),
+                        Err(e) => self.ui.status = Some((e.to_string(), true)),
+                    }
                     match controls::set_fabric(&mut self.scene, material, &params) {
                         Ok(update) => match &mut self.running {
                             Some(r) => {
@@ -466,6 +572,7 @@ impl App {
         let (w, h) = r.presenter.extent();
         let x0 = ((left * full.pixels_per_point).round().max(0.0) as u32).min(w.saturating_sub(1));
         let options = self.frame_options(w - x0, h)?;
+        (self.scene_x0, self.scene_width) = (x0, w - x0);
         let r = self.running.as_mut().expect("started");
         let t = Instant::now();
         let (frame, ldr) = r
@@ -670,10 +777,18 @@ impl ApplicationHandler for App {
                 }
                 self.dirty = true;
             }
-            WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
+            WindowEvent::ModifiersChanged(m) => {
+                self.shift = m.state().shift_key();
+                self.ctrl = m.state().control_key();
+            }
             WindowEvent::MouseInput { state, button, .. } if !response.consumed => {
                 let down = state == ElementState::Pressed;
                 if down && egui_pointer {
+                    return;
+                }
+                if down && self.ctrl && button == MouseButton::Left {
+                    self.pick();
+                    self.dirty = true;
                     return;
                 }
                 match button {

@@ -19,6 +19,15 @@ pub enum Action {
     Environment(EnvChoice),
     /// New fabric parameters for a material.
     Fabric(usize, FabricParams),
+    /// Weave a material with a preset (by name) and optionally a draft file: what `weft fabric
+    /// --material M --preset P [--draft F]` does, the scene reloaded with it.
+    Weave {
+        material: usize,
+        preset: String,
+        draft: Option<String>,
+    },
+    /// Write the file `weft fabric` would write for every material woven or changed here.
+    SaveFabric,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +43,10 @@ pub struct UiState {
     /// The last message: text, and whether it is an error.
     pub status: Option<(String, bool)>,
     material: Option<usize>,
+    /// The panel's "weave a material": which, with which preset and draft.
+    weave_material: usize,
+    weave_preset: usize,
+    draft_path: String,
     pub env: EnvChoice,
     env_path: String,
     samples: u32,
@@ -62,6 +75,9 @@ impl UiState {
             show,
             status: None,
             material: None,
+            weave_material: 0,
+            weave_preset: 0,
+            draft_path: String::new(),
             env,
             env_path: String::new(),
             samples: options.accuracy.samples().max(4),
@@ -75,6 +91,13 @@ impl UiState {
         self.material = super::controls::fabric_materials(scene)
             .first()
             .map(|m| m.0);
+    }
+
+    /// Selects material `material` in the fabric editor (after it was woven) and as the one
+    /// to weave (a ctrl+click on it).
+    pub fn select(&mut self, material: usize) {
+        self.material = Some(material);
+        self.weave_material = material;
     }
 
     pub fn take_key_actions(&mut self) -> Vec<Action> {
@@ -150,6 +173,8 @@ pub fn show(
                 ui.separator();
                 fabric(ui, state, scene, actions);
                 ui.separator();
+                weave(ui, state, scene, actions);
+                ui.separator();
                 // Last, so that a message appearing does not move the controls under the cursor.
                 if let Some((msg, error)) = &state.status {
                     let color = if *error {
@@ -160,7 +185,7 @@ pub fn show(
                     ui.colored_label(color, msg);
                     ui.separator();
                 }
-                ui.small("drag: orbit · shift/right drag: pan · wheel: zoom · F: frame · C: next camera · Tab: panel · P/F12: screenshot · drop a .gltf/.glb to open");
+                ui.small("drag: orbit · shift/right drag: pan · wheel: zoom · F: frame · C: next camera · Tab: panel · P/F12: screenshot · ctrl+click: pick a material · drop a .gltf/.glb to open");
             });
         });
     ctx.available_rect().left()
@@ -339,13 +364,63 @@ fn camera_controls(
     });
 }
 
+/// "Weave a material": any material of the file, a preset, a draft, and saving the result.
+fn weave(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, actions: &mut Vec<Action>) {
+    ui.label("weave a material (as weft fabric)");
+    let materials = super::controls::file_materials(scene);
+    if materials.is_empty() {
+        ui.label("the file has no materials");
+        return;
+    }
+    if !materials.iter().any(|(i, _)| *i == state.weave_material) {
+        state.weave_material = materials[0].0;
+    }
+    combo(ui, "material", &mut state.weave_material, &materials);
+    let presets: Vec<(usize, String)> = crate::fabric::presets::PRESETS
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, p.name.to_string()))
+        .chain(std::iter::once((
+            crate::fabric::presets::PRESETS.len(),
+            "from-sheen".to_string(),
+        )))
+        .collect();
+    combo(ui, "preset", &mut state.weave_preset, &presets);
+    ui.horizontal(|ui| {
+        ui.label("draft (.wif)");
+        ui.text_edit_singleline(&mut state.draft_path);
+    });
+    ui.horizontal(|ui| {
+        if ui.button("weave").clicked() {
+            let preset = presets
+                .iter()
+                .find(|(i, _)| *i == state.weave_preset)
+                .map_or("cotton-plain".to_string(), |(_, n)| n.clone());
+            let draft = state.draft_path.trim();
+            actions.push(Action::Weave {
+                material: state.weave_material,
+                preset,
+                draft: (!draft.is_empty()).then(|| draft.to_string()),
+            });
+            state.material = Some(state.weave_material);
+        }
+        if ui.button("save woven file").clicked() {
+            actions.push(Action::SaveFabric);
+        }
+    });
+}
+
 fn fabric(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, actions: &mut Vec<Action>) {
     let materials = super::controls::fabric_materials(scene);
     if materials.is_empty() {
-        ui.label("no fabric material in this scene");
+        ui.label("no fabric material in this scene: weave one below");
         return;
     }
-    let mut selected = state.material.unwrap_or(materials[0].0);
+    // The selection may be a material that is not (yet) a fabric (a ctrl+click picks any).
+    let mut selected = state
+        .material
+        .filter(|m| materials.iter().any(|(i, _)| i == m))
+        .unwrap_or(materials[0].0);
     combo(
         ui,
         "fabric material",
@@ -404,6 +479,17 @@ fn fabric(ui: &mut egui::Ui, state: &mut UiState, scene: &Scene, actions: &mut V
         ui.label("weft");
         ui.color_edit_button_rgb(&mut p.rd_weft);
     });
+    // A single sheet: light through the gaps and, by τ, through the threads.
+    let mut sheet = p.transmission.is_some();
+    if ui
+        .checkbox(&mut sheet, "single sheet (light through the weave)")
+        .changed()
+    {
+        p.transmission = sheet.then_some(0.3);
+    }
+    if let Some(t) = p.transmission.as_mut() {
+        ui.add(egui::Slider::new(t, 0.0..=1.0).text("thread transmittance"));
+    }
     if p != old {
         actions.push(Action::Fabric(selected, p));
     }
