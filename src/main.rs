@@ -912,7 +912,7 @@ fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             options.submission.name()
         );
         println!(
-            "weave      {} texture(s), {} dispatch(es) at upload",
+            "weave      {} distinct weave(s); {} weave-pass dispatch(es) (mip chains, built for the first frame that reads them; 0 when only summed-area tables were read)",
             frame.stats.weave_textures, frame.stats.weave_dispatches
         );
         println!(

@@ -82,6 +82,25 @@ fn materials_with_the_same_weave_share_one_texture() {
     let mut renderer = Renderer::new(common::context()).unwrap();
     let frame = renderer.render(&scene, &options()).unwrap();
     assert_eq!(frame.stats.weave_textures, 2);
+    // The default precision reads the summed-area tables: the weave pass dispatches nothing.
+    // The mip chains are built by the first frame that reads them (RGBA16F here): two weaves,
+    // one dispatch per level each.
+    assert_eq!(frame.stats.weave_dispatches, 0);
+    let chains = renderer
+        .render(
+            &scene,
+            &RenderOptions {
+                weave_precision: weft::render::WeavePrecision::Rgba16f,
+                ..options()
+            },
+        )
+        .unwrap();
+    assert_eq!(chains.stats.weave_textures, 2);
+    assert!(
+        chains.stats.weave_dispatches >= 2 * 7,
+        "{}",
+        chains.stats.weave_dispatches
+    );
 }
 
 #[test]

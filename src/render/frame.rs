@@ -527,9 +527,20 @@ impl Renderer {
         options: &RenderOptions,
         plan: &Plan,
     ) -> crate::Result<()> {
+        // The weave pass: the mip chains, for every precision but the summed-area table's.
+        if options.weave_precision != WeavePrecision::Sat && gpu.weaves.get().is_none() {
+            let weaves = gpu
+                .weave_params
+                .iter()
+                .map(|f| self.build_weave(f))
+                .collect::<crate::Result<Vec<_>>>()?;
+            let _ = gpu.weaves.set(weaves);
+        }
         if options.weave_precision == WeavePrecision::Rgba8 && gpu.weaves8.get().is_none() {
             let copies = gpu
                 .weaves
+                .get()
+                .expect("built above")
                 .iter()
                 .map(|w| self.weave_rgba8(w))
                 .collect::<crate::Result<Vec<_>>>()?;
@@ -748,7 +759,7 @@ impl Renderer {
                     Some(w) if options.weave_precision == WeavePrecision::Sat => {
                         &gpu.weaves_sat.get().expect("made for summed-area frames")[w]
                     }
-                    Some(w) => &gpu.weaves[w],
+                    Some(w) => &gpu.weaves.get().expect("made for mip-chain frames")[w],
                     None => &d.white,
                 };
                 // Binding 4 is the weave; the texture slots take the bindings around it.
@@ -835,11 +846,17 @@ impl Renderer {
             match pass {
                 // Preprocessed before the frame (prepare), or found in the cache.
                 Pass::Environment => {}
-                // The weave pass ran when the scene was uploaded (once per distinct weave, one
-                // dispatch per mip level); a frame reuses its textures.
+                // The weaves' forms were made before the frame (prepare_targets) by the first
+                // frame that reads them: the summed-area tables on the CPU, the mip chains by the
+                // weave pass (once per distinct weave, one dispatch per mip level); later frames
+                // reuse them. The counts: distinct weaves, and the weave pass's dispatches so far
+                // (0 while only summed-area tables were read).
                 Pass::Weave => {
-                    stats.weave_textures = gpu.weaves.len();
-                    stats.weave_dispatches = gpu.weaves.iter().map(|w| w.desc.mip_levels).sum();
+                    stats.weave_textures = gpu.weave_params.len();
+                    stats.weave_dispatches = gpu
+                        .weaves
+                        .get()
+                        .map_or(0, |w| w.iter().map(|w| w.desc.mip_levels).sum());
                 }
                 Pass::GBuffer => recorded.push(self.gbuffer.record(
                     &pool,

@@ -74,9 +74,11 @@ pub struct GpuScene {
     pub(crate) fabrics: Buffer,
     /// Thread-by-thread colours (set 0 binding 5 of the G-buffer and transparent passes).
     pub(crate) thread_colours: Buffer,
-    /// One weave texture per distinct weave (RGBA16F; the RGBA8 copies are made by the first
-    /// frame that asks for that precision), and per material the weave it uses.
-    pub(crate) weaves: Vec<Image>,
+    /// One weave texture per distinct weave (RGBA16F mip chains, built by the weave pass for
+    /// the first frame that reads them: a frame of the default precision reads the summed-area
+    /// tables instead and never needs them; the RGBA8 copies likewise), and per material the
+    /// weave it uses.
+    pub(crate) weaves: std::sync::OnceLock<Vec<Image>>,
     pub(crate) weaves8: std::sync::OnceLock<Vec<Image>>,
     /// The summed-area tables of the weaves (made by the first frame that asks for them).
     pub(crate) weaves_sat: std::sync::OnceLock<Vec<Image>>,
@@ -228,10 +230,6 @@ impl Renderer {
             BufferUsageFlags::STORAGE_BUFFER,
             &thread_colours,
         )?;
-        let weaves = weave_params
-            .iter()
-            .map(|f| self.build_weave(f))
-            .collect::<crate::Result<Vec<_>>>()?;
         let material_textures = scene.materials.iter().map(|m| m.textures()).collect();
         let (material_samplers, samplers) = texture_samplers(ctx, scene)?;
         let material_mask = scene
@@ -263,7 +261,7 @@ impl Renderer {
             materials,
             fabrics,
             thread_colours,
-            weaves,
+            weaves: std::sync::OnceLock::new(),
             weaves8: std::sync::OnceLock::new(),
             weaves_sat: std::sync::OnceLock::new(),
             weave_params,
