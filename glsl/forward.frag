@@ -120,8 +120,13 @@ void main() {
         discard;
     }
     vec3 v = normalize(frame.eye.xyz - in_world_pos);
+    // A fabric sheet covers what is behind it by its threads only (-1: not a sheet); its
+    // emission, as all its light, comes from its threads.
+    float cover = fabric_sheet_cover(s.surface, s.fabric);
+    cover = cover >= 0.0 ? min(cover, 1.0) : (cover == -1.0 ? -1.0 : 0.0);
+    vec4 emissive = cover >= 0.0 ? vec4(s.emissive.rgb * cover, s.emissive.a) : s.emissive;
     vec3 radiance = shade_surface(in_world_pos, v, s.albedo, frame_decode(s.frame), s.surface, s.fabric,
-                                  s.emissive, s.specular, s.transmission, s.attenuation, s.coat,
+                                  emissive, s.specular, s.transmission, s.attenuation, s.coat,
                                   s.coat_normal, s.diffuse_transmission, s.iridescence);
     radiance = all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0);
     // alphaMode BLEND blends by the base colour's alpha; a transmissive surface that is not BLEND
@@ -134,10 +139,8 @@ void main() {
         discard;
     }
     float alpha = blended ? clamp(s.alpha, 0.0, 1.0) : 1.0;
-    // A fabric sheet covers what is behind it by its threads only: its radiance is already the
-    // coverage-weighted light of its threads (dark gaps), so it is premultiplied by the coverage,
-    // and the gaps pass the light behind them (1 − coverage).
-    float cover = fabric_sheet_cover(s.surface, s.fabric);
+    // A sheet's radiance is already the coverage-weighted light of its threads (dark gaps), so
+    // it is premultiplied by the coverage, and the gaps pass the light behind them (1 − cover).
     if (cover >= 0.0) {
         out_color = vec4(radiance * alpha, cover * alpha);
         return;

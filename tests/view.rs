@@ -431,14 +431,25 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
     let woven = scene.materials[seat].fabric.clone().unwrap();
     assert!(woven.has_thread_colours(), "the tartan's sett");
 
-    // Tuned in the panel: a sheet, a narrower lobe.
+    // Tuned in the panel: a sheet, a narrower lobe. Becoming a sheet moves the cloth to the
+    // transparent pass: the scene is uploaded again; then a new τ only rewrites the records.
     let mut tuned = woven.clone();
     tuned.e_along = 321.0;
     tuned.transmission = Some(0.25);
-    controls::replace_request(
-        &mut requests,
-        controls::exact_request(&scene, seat, &tuned).unwrap(),
+    let mut live = scene.clone();
+    assert_eq!(
+        controls::set_fabric(&mut live, seat, &tuned).unwrap(),
+        MaterialUpdate::Weave
     );
+    assert!(live.materials[seat].blended());
+    let mut thinner = tuned.clone();
+    thinner.transmission = Some(0.1);
+    assert_eq!(
+        controls::set_fabric(&mut live, seat, &thinner).unwrap(),
+        MaterialUpdate::Records
+    );
+    let exact = controls::exact_request(&scene, &requests, seat, &tuned).unwrap();
+    controls::replace_request(&mut requests, exact);
     let (path, _) = controls::save_woven(&source, &requests).unwrap();
     assert_eq!(path, dir.join("SheenChair-fabric.gltf"));
     let saved = weft::scene::load(&path).expect("the saved file loads");
@@ -453,16 +464,31 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
         back.repeat,
         tuned.repeat
     );
-    // The same bytes as weft fabric's transform of the source with the same requests.
-    let (bytes, _) = weft::fabric::assets::transform(
-        &std::fs::read(&file).unwrap(),
-        &file.display().to_string(),
-        Some(&dir),
-        &requests,
-    )
-    .unwrap();
-    assert_eq!(std::fs::read(&path).unwrap(), bytes);
-    // Nothing to save without a weave; the source is never overwritten.
+    // The tuned request kept the preset's source (its fallback written again for the new
+    // parameters); a fabric the file already had is saved as tuned, the rest of the material
+    // untouched.
+    assert_eq!(requests[0].source.name(), "cotton-plain");
+    let before: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let source2 = weft::view::SceneSource::File(path.clone());
+    let scene2 = controls::load(&source2, None, lights, 0.0, false).unwrap();
+    let mut retuned = scene2.materials[seat].fabric.clone().unwrap();
+    retuned.rs = 0.1;
+    let exact = controls::exact_request(&scene2, &[], seat, &retuned).unwrap();
+    assert_eq!(exact.source.name(), "as tuned");
+    let (path2, _) = controls::save_woven(&source2, &[exact]).unwrap();
+    assert_eq!(path2, dir.join("SheenChair-fabric-fabric.gltf"));
+    let after: serde_json::Value = serde_json::from_slice(&std::fs::read(&path2).unwrap()).unwrap();
+    let (m0, m1) = (&before["materials"][seat], &after["materials"][seat]);
+    assert_eq!(
+        m1["extensions"]["WEFT_materials_fabric"]["rs"],
+        serde_json::json!(0.1)
+    );
+    assert_eq!(m0["pbrMetallicRoughness"], m1["pbrMetallicRoughness"]);
+    assert_eq!(
+        m0["extensions"]["KHR_materials_sheen"],
+        m1["extensions"]["KHR_materials_sheen"]
+    );
+    // Nothing to save without a weave.
     assert!(controls::save_woven(&source, &[]).is_err());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -69,6 +69,10 @@ pub enum Source {
     Preset(&'static Preset),
     /// The material's own `KHR_materials_sheen` and base colour ([`from_sheen`]).
     FromSheen,
+    /// The overrides alone over the extension's defaults, and nothing else of the material
+    /// touched (no fallback written): how `weft view` saves a fabric the file already had,
+    /// tuned in its panel ([`Overrides::exact`]). Not a command-line choice.
+    Exact,
 }
 
 impl Source {
@@ -88,6 +92,7 @@ impl Source {
         match self {
             Source::Preset(p) => p.name,
             Source::FromSheen => "from-sheen",
+            Source::Exact => "as tuned",
         }
     }
 }
@@ -743,7 +748,7 @@ fn sheet_transmission(
     if o.sheet == Some(true) {
         let t = match source {
             Source::Preset(p) => p.thread_transmittance,
-            Source::FromSheen => {
+            Source::FromSheen | Source::Exact => {
                 presets::by_name("cotton-plain").map_or(0.3, |p| p.thread_transmittance)
             }
         };
@@ -1079,10 +1084,14 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
                     from_sheen(&original, &who, &mut notes)?,
                     presets::by_name("cotton-plain").map_or(0.37e-3, |p| p.pitch_m),
                 ),
+                Source::Exact => (
+                    FabricParams::default(),
+                    presets::by_name("cotton-plain").map_or(0.37e-3, |p| p.pitch_m),
+                ),
             };
             let gap_default = match request.source {
                 Source::Preset(p) => p.gap_fraction,
-                Source::FromSheen => {
+                Source::FromSheen | Source::Exact => {
                     presets::by_name("cotton-plain").map_or(0.1, |p| p.gap_fraction)
                 }
             };

@@ -97,6 +97,8 @@ pub struct ProbeInput {
 /// | 128 | `phong` | `phong_brdf`, r | g | b | `phong_lobe` (exponent `fabric_phong_exponent`) |
 /// | 144 | `plain_as` | `plain_as_brdf`, r | g | b | 0 |
 /// | 160 | `f_tint` | `fabric_brdf` of `fabric_tinted(m, tint)`, input coverage, r | g | b | 0 |
+/// | 176 | `sheet` | `fabric_btdf` with k1 mirrored to the far side, r | g | b | `fabric_thread_cover` |
+/// | 192 | `f_sheet` | `fabric_brdf` of `fabric_reflecting(m)`, input coverage, r | g | b | 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ProbeOutput {

@@ -256,14 +256,24 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
             None => background,
         };
         let hdr = match sheet {
+            // The woven model draws a sheet over what is behind it by its thread coverage (the
+            // comparison models, as forward.frag, draw it opaque).
+            Some(s)
+                if options.shading == crate::render::Shading::Fabric
+                    && fragment.is_none_or(|f| s.depth > f.depth) =>
+            {
+                // The sheet's threads (their light already weighted by their coverage, their
+                // emission too), and the light behind through its gaps. At a sample of
+                // render_pixel_integrated the coverage is the weave's at that point: thread or
+                // gap, 1 or 0.
+                let cover = crate::reference::brdf::single::fabric_thread_cover(s.surface.coverage);
+                let mut surface = s.surface;
+                surface.emissive = surface.emissive.map(|e| e * cover);
+                let front = shading::shade_with(&frame, &lights, &surface, options.shading);
+                std::array::from_fn(|c| front[c] + (1.0 - cover) * behind[c])
+            }
             Some(s) if fragment.is_none_or(|f| s.depth > f.depth) => {
-                // The sheet's threads (their light already weighted by their coverage), and the
-                // light behind through its gaps. At a sample of render_pixel_integrated the
-                // coverage is the weave's at that point: thread or gap, 1 or 0.
-                let front = shading::shade_with(&frame, &lights, &s.surface, options.shading);
-                let open =
-                    1.0 - crate::reference::brdf::single::fabric_thread_cover(s.surface.coverage);
-                std::array::from_fn(|c| front[c] + open * behind[c])
+                shading::shade_with(&frame, &lights, &s.surface, options.shading)
             }
             _ => behind,
         };

@@ -174,7 +174,8 @@ pub struct Material {
 
 impl Material {
     /// Whether the G-buffer cannot hold this material, so the transparent pass draws it:
-    /// alphaMode BLEND, transmission, a clear coat, diffuse transmission, a thin film.
+    /// alphaMode BLEND, a fabric sheet, transmission, a clear coat, diffuse transmission, a
+    /// thin film.
     pub fn needs_forward(&self) -> bool {
         self.blended()
             || self.transmission.is_some()

@@ -61,8 +61,9 @@ pub enum MaterialUpdate {
     /// or geometry touched.
     Records,
     /// The weave changed (pattern, gap, shadow width or strength) or its repeat (the pitch: the
-    /// weave UVs of the vertices are offset by whole repeats), so the scene is uploaded again,
-    /// which rebuilds the weave textures.
+    /// weave UVs of the vertices are offset by whole repeats), or the cloth became or stopped
+    /// being a single sheet (which pass draws it), so the scene is uploaded again, which rebuilds
+    /// the weave textures.
     Weave,
 }
 
@@ -106,7 +107,12 @@ pub fn set_fabric(
     let new = params.sanitized();
     let update = if *old == new {
         MaterialUpdate::None
-    } else if weave_key(old) == weave_key(&new) && old.repeat_uv() == new.repeat_uv() {
+    } else if weave_key(old) == weave_key(&new)
+        && old.repeat_uv() == new.repeat_uv()
+        // A sheet is drawn by the transparent pass, any other cloth by the G-buffer pass: which
+        // pass draws it is decided at upload.
+        && old.transmission.is_some() == new.transmission.is_some()
+    {
         MaterialUpdate::Records
     } else {
         MaterialUpdate::Weave
@@ -203,16 +209,25 @@ pub fn weave_request(
 }
 
 /// The request that writes `params` on material `material` exactly (the panel's live edits),
-/// measured on `scene`'s meshes.
+/// measured on `scene`'s meshes. It keeps the source of the material's earlier request in
+/// `requests` (a preset: its fallback is written again for the new parameters; from-sheen: the
+/// sheen stays, its colour texture still the threads'); a fabric the file already had is
+/// written as tuned with the rest of the material untouched ([`Source::Exact`]).
 pub fn exact_request(
     scene: &Scene,
+    requests: &[Request],
     material: usize,
     params: &FabricParams,
 ) -> crate::Result<Request> {
     let density = assets::uv_density(scene, material, &format!("material {material}"))?;
+    let me = MaterialRef::Index(material);
+    let source = requests
+        .iter()
+        .find(|r| r.materials.contains(&me))
+        .map_or(Source::Exact, |r| r.source.clone());
     Ok(Request {
-        materials: vec![MaterialRef::parse(&material.to_string())],
-        source: Source::parse("cotton-plain")?,
+        materials: vec![me],
+        source,
         overrides: Overrides::exact(params, &density),
     })
 }

@@ -355,12 +355,13 @@ impl App {
             )?
             .0
         };
-        if new_file {
-            self.requests.clear();
-        }
         if let Some(r) = &self.running {
             let gpu = r.renderer.upload(&scene)?;
             self.running.as_mut().expect("checked").gpu = gpu;
+        }
+        if new_file {
+            // The panel's requests were for the old file.
+            self.requests.clear();
         }
         self.scene = scene;
         self.source = source;
@@ -499,12 +500,14 @@ impl App {
                         ))
                     }),
                 panel::Action::Fabric(material, params) => {
-                    // Kept as the request that writes these parameters, for "save".
-                    match controls::exact_request(&self.scene, material, &params) {
-                        Ok(r) => controls::replace_request(&mut self.requests, r),
-                        Err(e) => self.ui.status = Some((e.to_string(), true)),
-                    }
-                    match controls::set_fabric(&mut self.scene, material, &params) {
+                    // Kept as the request that writes these parameters, for "save" (an error
+                    // here, a mesh without UVs, only means it cannot be saved).
+                    let kept =
+                        controls::exact_request(&self.scene, &self.requests, material, &params)
+                            .map(|r| controls::replace_request(&mut self.requests, r));
+                    match controls::set_fabric(&mut self.scene, material, &params)
+                        .and_then(|u| kept.map(|_| u))
+                    {
                         Ok(update) => match &mut self.running {
                             Some(r) => {
                                 controls::apply(&r.renderer, &self.scene, &mut r.gpu, update).map(

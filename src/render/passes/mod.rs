@@ -5,7 +5,8 @@
 //! (`record(pool, XInputs { .. })`), returning a [`Recorded`] the frame submits:
 //!
 //! 1. [`environment`]: once per environment, cached: radiance cube, GGX-prefiltered cube, SH;
-//! 2. weave (at upload, `Renderer::build_weave`): the coverage textures of each distinct weave;
+//! 2. weave (`Renderer::build_weave`, by the first frame that reads them): the coverage mip
+//!    chains of each distinct weave (a default frame reads the summed-area tables instead);
 //! 3. [`gbuffer`]: every draw into the G-buffer;
 //! 4. [`shadow`]: casters into the shadow atlas;
 //! 5. [`occlusion`] (with an environment, `--occlusion gtao`): how open each pixel's hemisphere
