@@ -399,6 +399,13 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
     let scene = controls::load(&source, None, lights, 0.0, false).unwrap();
     assert!(controls::fabric_materials(&scene).is_empty());
     let materials = controls::file_materials(&scene);
+    // The file's own materials only (not the staged ground), all of them.
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&file).unwrap()).unwrap();
+    assert_eq!(materials.len(), doc["materials"].as_array().unwrap().len());
+    assert!(
+        scene.materials.len() > materials.len(),
+        "the staged ground is there"
+    );
     assert!(
         materials.iter().all(|(_, n)| !n.contains("default ground")),
         "{materials:?}"

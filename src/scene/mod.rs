@@ -690,6 +690,10 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub draws: Vec<Draw>,
     pub materials: Vec<Material>,
+    /// How many of `materials` are the file's own, in its order (`materials[i]` is the file's
+    /// material `i` for `i` below it); those after it the loader made (the glTF default
+    /// material, unlit copies for points and lines) or staging added (the default ground).
+    pub file_materials: usize,
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
     pub cameras: Vec<Camera>,

@@ -140,14 +140,14 @@ pub fn apply(
 
 // ---- Authoring: weave any material and save the file `weft fabric` would write ----
 
-/// Every material of `scene` a file gave it (the staged ground is not one), by index, with a
-/// name for the panel.
+/// Every material of `scene` its file gave it (not those the loader or staging added:
+/// [`Scene::file_materials`]), by index, with a name for the panel.
 pub fn file_materials(scene: &Scene) -> Vec<(usize, String)> {
     scene
         .materials
         .iter()
         .enumerate()
-        .filter(|(_, m)| m.name != crate::env::GROUND_MATERIAL)
+        .take(scene.file_materials)
         .map(|(i, m)| {
             let name = if m.name.is_empty() {
                 format!("material {i}")

@@ -392,10 +392,17 @@ impl App {
             })
         };
         self.ui.status = Some(match picked {
-            Ok(Some(m)) => {
+            Ok(Some(m)) if m < self.scene.file_materials => {
                 self.ui.select(m);
                 let name = &self.scene.materials[m].name;
                 (format!("picked material {m} '{name}'"), false)
+            }
+            Ok(Some(m)) => {
+                let name = &self.scene.materials[m].name;
+                (
+                    format!("'{name}' is not a material of the file (the loader or the staging made it): nothing to weave"),
+                    false,
+                )
             }
             Ok(None) => (
                 "no surface under the cursor (or one the transparent pass draws)".into(),

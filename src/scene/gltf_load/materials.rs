@@ -12,6 +12,7 @@ impl<'a> Loader<'a> {
             self.scene.materials.push(material);
             self.material_uv.push(uv);
         }
+        self.scene.file_materials = self.scene.materials.len();
         Ok(())
     }
 
