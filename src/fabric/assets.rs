@@ -1252,18 +1252,11 @@ pub fn transform(
     Ok((container.to_bytes()?, applied))
 }
 
-/// `weft render --fabric`: the scene at `path` (the built-in default scene when None) with the
-/// fabric added in memory, by the same [`transform`] as `weft fabric`, then loaded.
-pub fn load_with_fabric(
-    path: Option<&Path>,
-    specs: &[String],
-    options: &crate::scene::LoadOptions,
-) -> Result<(Scene, Vec<Applied>)> {
-    let requests: Vec<Request> = specs
-        .iter()
-        .map(|s| Request::parse_spec(s))
-        .collect::<Result<_>>()?;
-    let (bytes, source, base_dir) = match path {
+/// The scene file at `path` (the built-in default scene when None): its bytes, its name for
+/// messages, and the directory its external buffers and images resolve from (none for the
+/// built-in scene).
+pub fn scene_bytes(path: Option<&Path>) -> Result<(Vec<u8>, String, Option<PathBuf>)> {
+    Ok(match path {
         Some(p) => {
             let bytes = std::fs::read(p).map_err(|e| {
                 Error::input(format!(
@@ -1282,7 +1275,21 @@ pub fn load_with_fabric(
             "built-in default scene".to_string(),
             None,
         ),
-    };
+    })
+}
+
+/// `weft render --fabric`: the scene at `path` (the built-in default scene when None) with the
+/// fabric added in memory, by the same [`transform`] as `weft fabric`, then loaded.
+pub fn load_with_fabric(
+    path: Option<&Path>,
+    specs: &[String],
+    options: &crate::scene::LoadOptions,
+) -> Result<(Scene, Vec<Applied>)> {
+    let requests: Vec<Request> = specs
+        .iter()
+        .map(|s| Request::parse_spec(s))
+        .collect::<Result<_>>()?;
+    let (bytes, source, base_dir) = scene_bytes(path)?;
     let (out, applied) = transform(&bytes, &source, base_dir.as_deref(), &requests)?;
     let scene = crate::scene::load_slice_with(&out, &source, base_dir.as_deref(), options)?;
     Ok((scene, applied))

@@ -159,29 +159,12 @@ pub fn file_materials(scene: &Scene) -> Vec<(usize, String)> {
         .collect()
 }
 
-/// The file behind `source`: its bytes, its name for messages, and the directory its external
-/// buffers and images resolve from (the built-in scene: its GLB, none).
+/// The file behind `source` ([`assets::scene_bytes`]).
 fn source_bytes(source: &SceneSource) -> crate::Result<(Vec<u8>, String, Option<PathBuf>)> {
-    match source {
-        SceneSource::File(path) => {
-            let bytes = std::fs::read(path).map_err(|e| {
-                Error::input(format!(
-                    "scene file '{}' could not be read again: {e}",
-                    path.display()
-                ))
-            })?;
-            let dir = match path.parent() {
-                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-                _ => PathBuf::from("."),
-            };
-            Ok((bytes, path.display().to_string(), Some(dir)))
-        }
-        SceneSource::Builtin => Ok((
-            crate::scene::DEFAULT_SCENE_GLB.to_vec(),
-            "built-in default scene".to_string(),
-            None,
-        )),
-    }
+    assets::scene_bytes(match source {
+        SceneSource::File(path) => Some(path.as_path()),
+        SceneSource::Builtin => None,
+    })
 }
 
 /// What `weft fabric --material INDEX --preset PRESET [--draft FILE]` asks, for the panel's
