@@ -199,8 +199,9 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Try the woven fabric on a material without writing a file: MATERIAL=PRESET[@PITCH]
-    /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen), optionally
-    /// followed by :DRAFT.wif (a weaving draft's weave and colours); repeatable.
+    /// (name or index; a preset of `weft fabric --list-presets`, or from-sheen; PRESET+sheet for
+    /// a single sheet that lets light through), optionally followed by :DRAFT.wif (a weaving
+    /// draft's weave and colours); repeatable.
     #[arg(long)]
     fabric: Vec<String>,
     /// Pose the scene at this time of its animation, in seconds (clamped to the animation's
@@ -469,7 +470,7 @@ struct PlanArgs {
     /// Anti-aliasing, as for render (its default: fxaa; ssN: the plan of each of its N² frames).
     #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
     aa: render::Antialias,
-    /// The woven fabric tried on a material, as for render: MATERIAL=PRESET[@PITCH][:DRAFT.wif];
+    /// The woven fabric tried on a material, as for render: MATERIAL=PRESET[+sheet][@PITCH][:DRAFT.wif];
     /// repeatable.
     #[arg(long)]
     fabric: Vec<String>,

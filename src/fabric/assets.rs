@@ -249,12 +249,13 @@ pub struct Request {
 }
 
 impl Request {
-    /// `MATERIAL=PRESET` or `MATERIAL=PRESET@PITCH` (`weft render --fabric`); MATERIAL is a name
-    /// or an index, and may itself contain '='.
+    /// `MATERIAL=PRESET` or `MATERIAL=PRESET@PITCH` (`weft render --fabric`), the preset
+    /// optionally followed by `+sheet` (a single sheet with the preset's thread transmittance,
+    /// as `weft fabric --sheet`); MATERIAL is a name or an index, and may itself contain '='.
     pub fn parse_spec(spec: &str) -> Result<Request> {
         let (material, rest) = spec.rsplit_once('=').filter(|(m, _)| !m.is_empty()).ok_or_else(|| {
             Error::input(format!(
-                "--fabric '{spec}' should be MATERIAL=PRESET or MATERIAL=PRESET@PITCH, optionally followed by :DRAFT.wif (e.g. seat=denim-twill@0.8mm, 0=from-sheen, 0=cotton-plain@1mm:twill.wif); MATERIAL is a name or an index"
+                "--fabric '{spec}' should be MATERIAL=PRESET or MATERIAL=PRESET@PITCH, optionally followed by :DRAFT.wif, PRESET optionally followed by +sheet (e.g. seat=denim-twill@0.8mm, 0=from-sheen, 0=cotton-plain@1mm:twill.wif, curtain=silk-satin+sheet@0.2mm); MATERIAL is a name or an index"
             ))
         })?;
         // A weaving draft after a colon: MATERIAL=PRESET[@PITCH]:DRAFT.wif.
@@ -266,8 +267,14 @@ impl Request {
             Some((p, pitch)) => (p, Some(parse_length(pitch)?)),
             None => (rest, None),
         };
+        // A single sheet: PRESET+sheet.
+        let (preset, sheet) = match preset.strip_suffix("+sheet") {
+            Some(p) => (p, Some(true)),
+            None => (preset, None),
+        };
         let mut overrides = Overrides {
             pitch_m: pitch,
+            sheet,
             ..Default::default()
         };
         if let Some(path) = draft {
@@ -1417,6 +1424,19 @@ mod tests {
         assert!(e.contains("'tweed'") && e.contains("cotton-plain"), "{e}");
         assert!(Request::parse_spec("denim-twill").is_err());
         assert!(Request::parse_spec("seat=denim-twill@3").is_err());
+        // A single sheet.
+        let r = Request::parse_spec("curtain=silk-satin+sheet@0.2mm").unwrap();
+        assert_eq!(r.source.name(), "silk-satin");
+        assert_eq!(r.overrides.sheet, Some(true));
+        assert_eq!(r.overrides.pitch_m, Some(0.2e-3));
+        assert_eq!(
+            Request::parse_spec("0=silk-satin").unwrap().overrides.sheet,
+            None
+        );
+        let e = Request::parse_spec("0=silk-satin+sheer")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'silk-satin+sheer'"), "{e}");
     }
 
     #[test]
