@@ -214,16 +214,26 @@ GpuFabric fabric_reflecting(GpuFabric m) {
     return m;
 }
 
+// What a sheet's threads pass to their other side of the diffuse light they receive there: τ
+// times the threads' albedo of the coverage (fabric_albedo), 0 for a cloth that is not a sheet.
+// The ambient and environment light of the far side take it as it is; fabric_btdf is it over π.
+vec3 fabric_passed(vec4 coverage, GpuFabric m) {
+    if ((m.flags & FABRIC_FLAG_SHEET) == 0u) {
+        return vec3(0.0);
+    }
+    return clamp(m.transmission, 0.0, 1.0) * fabric_albedo(coverage, m);
+}
+
 // The light a sheet's threads pass through, for light from k1 on the far side (n·k1 < 0) seen
 // from k2 on the near side (n·k2 > 0): τ/π times the threads' albedo of the coverage (each
 // thread's colour times its shadow-weighted area, as the diffuse reflection). 0 for light on the
 // viewer's side, and for a cloth that is not a sheet. What the gaps pass is not here: it is the
 // light behind the sheet, blended by 1 − c_warp − c_weft.
 vec3 fabric_btdf(vec3 k1, vec3 k2, vec4 coverage, GpuFabric m) {
-    if ((m.flags & FABRIC_FLAG_SHEET) == 0u || !(k1.z < 0.0 && k2.z > 0.0)) {
+    if (!(k1.z < 0.0 && k2.z > 0.0)) {
         return vec3(0.0);
     }
-    return clamp(m.transmission, 0.0, 1.0) / FABRIC_PI * fabric_albedo(coverage, m);
+    return fabric_passed(coverage, m) / FABRIC_PI;
 }
 
 // The share of a coverage that is thread (c_warp + c_weft, clamped to [0, 1]): a sheet's opacity.

@@ -91,7 +91,7 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, vec3 ambient_back, mat3 tbn, vec3 k2,
     vec3 radiance = ambient * fabric_albedo(coverage, fr);
     bool sheet = FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u;
     if (sheet) {
-        radiance += ambient_back * (clamp(f.transmission, 0.0, 1.0) * fabric_albedo(coverage, f));
+        radiance += ambient_back * fabric_passed(coverage, f);
     }
     uvec2 list = tile_list();
     for (uint j = 0u; j < list.y; ++j) {
@@ -412,8 +412,8 @@ vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec
     // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
     // averaged exponents would need a sampler of its own.)
     vec3 radiance = rd * diffuse * ao + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
-    if (FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u) {
-        radiance += back * (clamp(f.transmission, 0.0, 1.0) * fabric_albedo(coverage, f));
+    if (FABRIC_SHEETS != 0u) {
+        radiance += back * fabric_passed(coverage, f);
     }
     return radiance;
 }

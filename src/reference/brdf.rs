@@ -291,14 +291,21 @@ macro_rules! fabric_brdf_precision {
             /// (`n·k1 < 0`) seen from `k2` on the near side: `τ/π` times [`fabric_albedo`]; 0
             /// otherwise and for a cloth that is not a sheet (`fabric_btdf`).
             pub fn fabric_btdf(k1: Vec3, k2: Vec3, coverage: Coverage, m: &FabricMaterial) -> Vec3 {
-                let Some(t) = m.sheet else {
-                    return [0.0; 3];
-                };
                 if !(k1[2] < 0.0 && k2[2] > 0.0) {
                     return [0.0; 3];
                 }
-                let w = t.clamp(0.0, 1.0) / PI;
-                fabric_albedo(coverage, m).map(|x| w * x)
+                fabric_passed(coverage, m).map(|x| x / PI)
+            }
+
+            /// What a sheet's threads pass to their other side of the diffuse light they receive
+            /// there: `τ` times [`fabric_albedo`], 0 for a cloth that is not a sheet
+            /// (`fabric_passed`).
+            pub fn fabric_passed(coverage: Coverage, m: &FabricMaterial) -> Vec3 {
+                let Some(t) = m.sheet else {
+                    return [0.0; 3];
+                };
+                let t = t.clamp(0.0, 1.0);
+                fabric_albedo(coverage, m).map(|x| t * x)
             }
 
             /// A sheet's opacity: `c_warp + c_weft` clamped to [0, 1] (`fabric_thread_cover`).

@@ -682,14 +682,13 @@ pub fn shade_with(frame: &FrameData, lights: &[GpuLight], s: &Surface, shading: 
             let mr = fb::fabric_reflecting(&m);
             let rd = fb::fabric_albedo(cov, &mr);
             radiance = add(radiance, mul(ambient, rd));
-            if let Some(t) = m.sheet {
+            if m.sheet.is_some() {
                 let ambient_back = mix(
                     xyz(frame.ambient_ground),
                     xyz(frame.ambient_sky),
                     -n[1] * 0.5 + 0.5,
                 );
-                let through = scale(fb::fabric_albedo(cov, &m), t.clamp(0.0, 1.0));
-                radiance = add(radiance, mul(ambient_back, through));
+                radiance = add(radiance, mul(ambient_back, fb::fabric_passed(cov, &m)));
             }
             for light in &lights[..count] {
                 let (l, e) = light_incoming(light, s.position);
