@@ -409,21 +409,23 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
         println!("{level:>8} {material:>16}: mean relative error {rel:.4}");
     }
     // Bounds ~1.3x what lavapipe measured (mean relative luminance error; docs/fabric-model.md
-    // §6): approx velvet 0.070 (the sheen lobe lit by the SH irradiance: it lives at grazing
-    // angles and is broad; the GGX-prefiltered look-up along the dominant direction was 0.28),
-    // tinted specular 0.032 (the split sum), brushed 0.32 (strength 0.8: the bent normal and the
-    // mean of the two alphas for the look-up approximate a lobe stretched 3x; without bending
-    // 0.55), all three 0.10; Monte Carlo with 1024 sample pairs 0.003-0.011 (unbiased; noise).
-    // fis:8 (the default) samples the anisotropic lobe instead of bending the look-up (issue 28):
-    // brushed 0.115 (0.074 at fis:16, 0.031 at fis:64: it converges), all three 0.123 (0.106,
-    // 0.094: what is left there is the sheen's, as for velvet); velvet and tinted specular as
-    // approx (the split sum, unchanged).
+    // §6): approx velvet 0.039 (the sheen lobe lit by the SH irradiance: it lives at grazing
+    // angles and is broad; the GGX-prefiltered look-up along the dominant direction was 0.28; the
+    // layers below the sheen scaled by 1 - k·E(n·v) alone, which dims grazing light too little,
+    // 0.070: sheen_layer_diffuse, issue 28 item 3), tinted specular 0.032 (the split sum),
+    // brushed 0.32 (strength 0.8: the bent normal and the mean of the two alphas for the look-up
+    // approximate a lobe stretched 3x; without bending 0.55), all three 0.072; Monte Carlo with
+    // 1024 sample pairs 0.003-0.011 (unbiased; noise). fis:8 (the default) samples the
+    // anisotropic lobe instead of bending the look-up (issue 28): brushed 0.115 (0.074 at fis:16,
+    // 0.031 at fis:64: it converges), all three 0.089 (the anisotropic lobe's sampling error, the
+    // sheen's and the SH's); velvet and tinted specular as approx.
     for (level, material, rel) in &report {
         let bound = match (level.as_str(), material.as_str()) {
             ("mc:1024", _) => 0.015,
             ("fis:8", "brushed") => 0.15,
-            ("fis:8", "everything") => 0.16,
-            (_, "velvet") => 0.09,
+            ("fis:8", "everything") => 0.12,
+            (_, "everything") => 0.095,
+            (_, "velvet") => 0.052,
             (_, "tinted specular") => 0.042,
             (_, "brushed") => 0.42,
             _ => 0.135,
