@@ -10,7 +10,7 @@
 //! [`Scene::pose`] ([`animation`]).
 //! [`default_scene`] is the built-in scene embedded in the binary.
 
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 mod accessor;
 pub mod animation;
@@ -648,19 +648,32 @@ pub struct Camera {
 }
 
 /// What an automatic framing frames.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Framing {
     pub bounds: Bounds,
     pub azimuth_degrees: f32,
+    /// The scene's vertices in world space (at most [`FRAMING_POINTS`], evenly strided), which
+    /// the view is fitted to: a model fills its bounding box's projection only in part (a
+    /// draped cloth, a chair seen from above), so fitting the box's corners leaves it small and
+    /// off-centre. Empty: the box's corners.
+    pub points: std::sync::Arc<Vec<Vec3>>,
 }
+
+/// At most this many vertices are kept for fitting the automatic framing.
+pub const FRAMING_POINTS: usize = 1 << 16;
 
 impl Camera {
     /// The camera for an image of this aspect ratio (width / height): an automatic framing is
     /// framed again to fill it; any other camera is returned as it is.
     pub fn for_aspect(&self, aspect: f32) -> Camera {
-        match self.framing {
+        match &self.framing {
             Some(f) if aspect.is_finite() && aspect > 0.0 => {
-                let c = framing(f.bounds, f.azimuth_degrees, aspect.clamp(0.05, 20.0));
+                let c = framing(
+                    f.bounds,
+                    f.points.clone(),
+                    f.azimuth_degrees,
+                    aspect.clamp(0.05, 20.0),
+                );
                 let usable = c.view.is_finite() && c.znear.is_finite() && c.znear > 0.0;
                 if usable {
                     c
@@ -833,7 +846,10 @@ impl Scene {
             max: Vec3::splat(1.0),
         };
         let azimuth = self.framing_azimuth();
-        let camera = framing(self.bounds().unwrap_or(unit), azimuth, 1.0);
+        let camera = match self.bounds() {
+            Some(b) => framing(b, self.framing_points(), azimuth, 1.0),
+            None => framing(unit, Default::default(), azimuth, 1.0),
+        };
         let usable = camera.view.is_finite()
             && camera.znear.is_finite()
             && camera.znear > 0.0
@@ -843,8 +859,39 @@ impl Scene {
         if usable {
             camera
         } else {
-            framing(unit, azimuth, 1.0)
+            framing(unit, Default::default(), azimuth, 1.0)
         }
+    }
+
+    /// The scene's finite world-space vertices (posed, for a skinned or morphed draw), evenly
+    /// strided to at most [`FRAMING_POINTS`], for the automatic framing to fit.
+    fn framing_points(&self) -> std::sync::Arc<Vec<Vec3>> {
+        let total: usize = self
+            .draws
+            .iter()
+            .filter_map(|d| self.meshes.get(d.mesh))
+            .map(|m| m.vertices.len())
+            .sum();
+        let stride = total.div_ceil(FRAMING_POINTS).max(1);
+        let mut points = Vec::with_capacity(total.min(FRAMING_POINTS));
+        let mut k = 0usize;
+        for (i, d) in self.draws.iter().enumerate() {
+            let Some(mesh) = self.meshes.get(d.mesh) else {
+                continue;
+            };
+            let deformed = self.deformed_vertices(i);
+            let vertices = deformed.as_deref().unwrap_or(&mesh.vertices);
+            for v in vertices {
+                if k % stride == 0 {
+                    let p = d.world.transform_point3(Vec3::from(v.position));
+                    if p.is_finite() {
+                        points.push(p);
+                    }
+                }
+                k += 1;
+            }
+        }
+        std::sync::Arc::new(points)
     }
 
     /// The side automatic framing looks from, as degrees about +Y from +Z (0: the front; 90:
@@ -920,8 +967,12 @@ impl Scene {
 /// the bounds inside the view, 5 % in from its edges, so the model fills the frame along its
 /// limiting side (as model-viewer frames a model), where a bounding sphere left a long, flat
 /// model small (GlamVelvetSofa filled 40 % of a 16:9 frame's width).
-fn framing(b: Bounds, azimuth_degrees: f32, aspect: f32) -> Camera {
-    let center = (b.min + b.max) * 0.5;
+fn framing(
+    b: Bounds,
+    points: std::sync::Arc<Vec<Vec3>>,
+    azimuth_degrees: f32,
+    aspect: f32,
+) -> Camera {
     let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
     let yfov = 45f32.to_radians();
     let (e, a) = (20f32.to_radians(), azimuth_degrees.to_radians());
@@ -929,38 +980,71 @@ fn framing(b: Bounds, azimuth_degrees: f32, aspect: f32) -> Camera {
     let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
     let right = Vec3::Y.cross(dir).normalize();
     let up = dir.cross(right).normalize();
-    // The distance at which every corner is inside the view, 5 % in from its edges: a corner
-    // `c` (from the centre) at depth `dist - c·dir` needs |c·right| <= that depth · tan of
-    // the half field of view across, and |c·up| the same with the vertical half angle.
+    let corners: Vec<Vec3> = (0..8)
+        .map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { b.min.x } else { b.max.x },
+                if k & 2 == 0 { b.min.y } else { b.max.y },
+                if k & 4 == 0 { b.min.z } else { b.max.z },
+            )
+        })
+        .collect();
+    let fit: &[Vec3] = if points.is_empty() { &corners } else { &points };
+    // The distance at which every point is inside the view, 5 % in from its edges: a point `c`
+    // (from the target) at depth `dist - c·dir` needs |c·right| <= that depth · tan of the half
+    // field of view across, and |c·up| the same with the vertical half angle.
     let tan_v = (yfov * 0.5).tan() / 1.05;
     let tan_h = tan_v * aspect;
-    let (mut dist, mut nearest) = (0f32, f32::MIN);
-    for k in 0..8 {
-        let corner = Vec3::new(
-            if k & 1 == 0 { b.min.x } else { b.max.x },
-            if k & 2 == 0 { b.min.y } else { b.max.y },
-            if k & 4 == 0 { b.min.z } else { b.max.z },
-        ) - center;
-        let z = corner.dot(dir);
-        nearest = nearest.max(z);
-        dist = dist
-            .max(z + corner.dot(right).abs() / tan_h)
-            .max(z + corner.dot(up).abs() / tan_v);
+    let fit_distance = |center: Vec3| {
+        fit.iter().fold(0f32, |dist, p| {
+            let c = *p - center;
+            let z = c.dot(dir);
+            dist.max(z + c.dot(right).abs() / tan_h)
+                .max(z + c.dot(up).abs() / tan_v)
+        })
+    };
+    // Centre the points' projection: from the bounds' centre, move the target by the middle of
+    // the points' extent across the image (in units of the half view at the target's depth),
+    // four times (perspective makes one step approximate).
+    let mut center = (b.min + b.max) * 0.5;
+    for _ in 0..4 {
+        let dist = fit_distance(center);
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for p in fit {
+            let c = *p - center;
+            let depth = (dist - c.dot(dir)).max(1e-6 * radius);
+            let s = Vec2::new(c.dot(right) / (depth * tan_h), c.dot(up) / (depth * tan_v));
+            lo = lo.min(s);
+            hi = hi.max(s);
+        }
+        let mid = (lo + hi) * 0.5;
+        let shift = right * (mid.x * dist * tan_h) + up * (mid.y * dist * tan_v);
+        if !shift.is_finite() {
+            break;
+        }
+        center += shift;
     }
+    let dist = fit_distance(center);
+    let nearest = |set: &[Vec3]| {
+        set.iter()
+            .fold(f32::MIN, |n, p| n.max((*p - center).dot(dir)))
+    };
     // A flat or tiny bound still gets a camera in front of it.
-    let dist = dist.max(nearest + radius * 0.1).max(radius * 0.1);
+    let dist = dist.max(nearest(fit) + radius * 0.1).max(radius * 0.1);
     let eye = center + dir * dist;
     Camera {
         name: "automatic framing".into(),
         view: Mat4::look_at_rh(eye, center, Vec3::Y),
         yfov,
-        znear: ((dist - nearest) * 0.5).max(radius * 1e-3),
+        // The near plane before the whole box (the points are a sample of the vertices).
+        znear: ((dist - nearest(&corners)) * 0.5).max(radius * 1e-3),
         zfar: Some(dist + radius * 2.0),
         aspect_ratio: None,
         orthographic: None,
         framing: Some(Framing {
             bounds: b,
             azimuth_degrees,
+            points,
         }),
     }
 }
