@@ -1698,10 +1698,13 @@ fn compressed_avocados_render_like_the_original() {
         // edge pixels.
         ("avocado_quant.glb", 0.002),
         ("avocado_meshopt.glb", 0.002),
-        // Lossy WebP (quality 80) textures.
-        ("avocado_webp.glb", 0.02),
-        // UASTC + Zstandard KTX2 textures (made by `make_ktx2_test_files`): measured 0.0046.
-        ("avocado_ktx2.glb", 0.01),
+        // Lossy WebP (quality 80) textures: measured 0.0204 since the automatic framing fits
+        // the model (issue 28 item 9: the avocado covers about twice the pixels, and the mean
+        // is over the frame), below 0.02 before.
+        ("avocado_webp.glb", 0.027),
+        // UASTC + Zstandard KTX2 textures (made by `make_ktx2_test_files`): measured 0.0092
+        // (0.0046 before the framing fitted the model: twice the pixels on the avocado).
+        ("avocado_ktx2.glb", 0.012),
     ] {
         let frame = render(&mut renderer, name);
         let flip = weft::bench::flip_mean(&original, &frame);
