@@ -846,8 +846,8 @@ impl Scene {
             max: Vec3::splat(1.0),
         };
         let azimuth = self.framing_azimuth();
-        let camera = match self.bounds() {
-            Some(b) => framing(b, self.framing_points(), azimuth, 1.0),
+        let camera = match self.framing_points() {
+            Some((b, points)) => framing(b, points, azimuth, 1.0),
             None => framing(unit, Default::default(), azimuth, 1.0),
         };
         let usable = camera.view.is_finite()
@@ -863,9 +863,10 @@ impl Scene {
         }
     }
 
-    /// The scene's finite world-space vertices (posed, for a skinned or morphed draw), evenly
-    /// strided to at most [`FRAMING_POINTS`], for the automatic framing to fit.
-    fn framing_points(&self) -> std::sync::Arc<Vec<Vec3>> {
+    /// The scene's bounds ([`Scene::bounds`]) and its finite world-space vertices (posed, for a
+    /// skinned or morphed draw), evenly strided to at most [`FRAMING_POINTS`], for the
+    /// automatic framing to fit; one pass over the vertices.
+    fn framing_points(&self) -> Option<(Bounds, std::sync::Arc<Vec<Vec3>>)> {
         let total: usize = self
             .draws
             .iter()
@@ -874,6 +875,7 @@ impl Scene {
             .sum();
         let stride = total.div_ceil(FRAMING_POINTS).max(1);
         let mut points = Vec::with_capacity(total.min(FRAMING_POINTS));
+        let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let mut k = 0usize;
         for (i, d) in self.draws.iter().enumerate() {
             let Some(mesh) = self.meshes.get(d.mesh) else {
@@ -882,16 +884,18 @@ impl Scene {
             let deformed = self.deformed_vertices(i);
             let vertices = deformed.as_deref().unwrap_or(&mesh.vertices);
             for v in vertices {
-                if k % stride == 0 {
-                    let p = d.world.transform_point3(Vec3::from(v.position));
-                    if p.is_finite() {
+                let p = d.world.transform_point3(Vec3::from(v.position));
+                if p.is_finite() {
+                    min = min.min(p);
+                    max = max.max(p);
+                    if k % stride == 0 {
                         points.push(p);
                     }
                 }
                 k += 1;
             }
         }
-        std::sync::Arc::new(points)
+        (min.x <= max.x).then(|| (Bounds { min, max }, std::sync::Arc::new(points)))
     }
 
     /// The side automatic framing looks from, as degrees about +Y from +Z (0: the front; 90:
