@@ -189,14 +189,22 @@ void main() {
     vec4 fr = frame_decode(texelFetch(gb_frame, px, 0));
     vec4 surface = texelFetch(gb_surface, px, 0);
     vec4 emissive_ao = texelFetch(gb_emissive, px, 0);
+    vec3 bounce = vec3(1.0);
     if (OCCLUSION != 0u) {
-        float albedo_luminance = dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722));
-        emissive_ao.a *= gtao_multibounce(screen_visibility(px, view_distance(p)), albedo_luminance);
+        // Light bounced between occluders takes their colour (the fit takes the surroundings'
+        // albedo to be the surface's): the diffuse light gets each channel's own multi-bounce,
+        // the specular occlusion the grey one of the albedo's luminance.
+        float visibility = screen_visibility(px, view_distance(p));
+        float grey = gtao_multibounce(visibility, dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722)));
+        vec3 coloured = vec3(gtao_multibounce(visibility, albedo.r), gtao_multibounce(visibility, albedo.g),
+                             gtao_multibounce(visibility, albedo.b));
+        emissive_ao.a *= grey;
+        bounce = grey > 1e-4 ? coloured / grey : vec3(1.0);
     }
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),
                                   emissive_ao, texelFetch(gb_specular, px, 0),
                                   vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0),
-                                  vec4(0.0));
+                                  vec4(0.0), bounce);
     // Never NaN or Inf into the image.
     out_color = vec4(all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0), 1.0);
 }

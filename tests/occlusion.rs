@@ -195,6 +195,75 @@ fn a_wall_occludes_the_floor_as_the_truth_says() {
     assert!(lowest > -0.02, "darker than the truth by {lowest:.4}");
 }
 
+/// Light bounced between occluders takes their colour (issue 28: the Duck's crease, yellow in
+/// Cycles, was darkened grey): an orange floor and wall under a uniform white environment, no
+/// lamps, with and without the pass. Each channel's diffuse light is scaled by its own
+/// multi-bounce, gtao_multibounce(visibility, albedo of that channel) (Rust twin; visibility from
+/// the pass's debug view), not by the one of the albedo's luminance. The scene has no lamps.
+#[test]
+fn the_multi_bounce_takes_the_albedo_s_colour() {
+    use weft::reference::ibl_twin::gtao_multibounce;
+    let ctx = common::context();
+    let mut renderer = Renderer::new(ctx).expect("renderer");
+    let mut scene = wall_scene(true);
+    let albedo = [0.9f32, 0.45, 0.05];
+    scene.materials[0].base_color = [albedo[0], albedo[1], albedo[2], 1.0];
+    scene.materials[0].specular.factor = 0.0;
+    let env = weft::env::EnvLighting::new(std::sync::Arc::new(weft::env::Environment::uniform(
+        [1.0; 3],
+    )));
+    let lit = |occlusion, debug_view| {
+        let mut o = options(320, 240, &scene, occlusion);
+        o.debug_view = debug_view;
+        o.environment = Some(env.clone());
+        o
+    };
+    let occlusion = Occlusion::Gtao { radius: Some(4.0) };
+    let visibility = renderer
+        .render(&scene, &lit(occlusion, DebugView::Occlusion))
+        .expect("render");
+    let with = renderer
+        .render(&scene, &lit(occlusion, DebugView::None))
+        .expect("render");
+    let without = renderer
+        .render(&scene, &lit(Occlusion::None, DebugView::None))
+        .expect("render");
+    let o = lit(occlusion, DebugView::None);
+    let lum = 0.2126 * albedo[0] + 0.7152 * albedo[1] + 0.0722 * albedo[2];
+    let (mut worst, mut spread) = (0f32, 0f32);
+    for d in [0.25f32, 0.5, 1.0] {
+        let (x, y) = pixel_of(&o, Vec3::new(0.0, 0.0, d));
+        let i = (y * o.width as usize + x) * 4;
+        let v = visibility.hdr[i];
+        // No specular (KHR_materials_specular factor 0): the pixel is the diffuse alone, so
+        // with/without is the diffuse's occlusion per channel.
+        let ratio: Vec<f32> = (0..3)
+            .map(|c| with.hdr[i + c] / without.hdr[i + c])
+            .collect();
+        let want: Vec<f32> = (0..3).map(|c| gtao_multibounce(v, albedo[c])).collect();
+        let grey = gtao_multibounce(v, lum);
+        println!(
+            "d = {d}: visibility {v:.3}; with/without per channel {ratio:.4?}; own bounce {want:.4?}; grey {grey:.4}"
+        );
+        for c in 0..3 {
+            worst = worst.max((ratio[c] - want[c]).abs());
+        }
+        spread = spread.max(want[0] - want[2]);
+    }
+    println!(
+        "worst |ratio - own bounce| {worst:.5}; red's bounce above blue's by up to {spread:.3}"
+    );
+    // Measured 0.0012 (f16 storage of the HDR target and of the debug view's visibility): bound
+    // 0.004. The grey bounce (before) gave every channel the same ratio, 0.12 above blue's own
+    // and 0.12 below red's at d = 0.25.
+    assert!(
+        spread > 0.05,
+        "the case does not tell the colours apart: {spread}"
+    );
+    assert!(worst < 0.004, "{worst}");
+    renderer.context().check_validation().unwrap();
+}
+
 #[test]
 fn nothing_to_occlude_leaves_the_image_as_it_was() {
     let ctx = common::context();

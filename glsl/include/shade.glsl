@@ -241,7 +241,7 @@ float sheen_layer_diffuse(float k, float e_v, float roughness) {
 // and scales the layers below it (sheen_layer_diffuse for the diffuse, 1 - max(sheen)·E(n·v)
 // for the specular).
 // e_v: the sheen's albedo E(n·v) (0 without sheen), which the lamps' loop shares.
-vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
+vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v) {
     vec3 base = s.base;
     float metallic = s.metallic;
     float roughness = s.roughness;
@@ -318,7 +318,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, float e_v) {
     vec3 specular = IBL == 2u && s.anisotropy > 0.0 ? aniso_env_specular(n, v, s, ess)
                                                     : prefiltered * spec_albedo;
     specular *= specular_occlusion(nv, ao, roughness);
-    diffuse *= ao;
+    diffuse *= ao * bounce;
     if (!has_sheen) {
         return diffuse + specular;
     }
@@ -428,11 +428,11 @@ vec3 fabric_env_back(mat3 tbn) {
 // The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
 // thread shadowing (as for lamps), each lobe weighted by its thread's coverage, and for a sheet
 // the light its threads pass from its far side (back: fabric_env_back; 0 for any other cloth).
-vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, vec3 back, float ao, float nv) {
+vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, vec3 back, float ao, vec3 bounce, float nv) {
     vec3 rd = fabric_albedo(coverage, FABRIC_SHEETS != 0u ? fabric_reflecting(f) : f);
     // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
     // averaged exponents would need a sampler of its own.)
-    vec3 radiance = rd * diffuse * ao + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
+    vec3 radiance = rd * diffuse * ao * bounce + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
     if (FABRIC_SHEETS != 0u) {
         radiance += back * fabric_passed(coverage, f);
     }
@@ -474,9 +474,11 @@ float fabric_sheet_cover(vec4 surface, vec4 fabric_texel) {
 // emissive_ao and specular; may be any value, the caller keeps NaN and Inf out of the image.
 // transmission, attenuation, coat_params, coat_n, dtrans, iridescence: surface.glsl's GSurface
 // fields (no transmission, coat, diffuse transmission or film from the G-buffer, which holds none).
+// bounce: per channel, what the occlusion pass's coloured multi-bounce makes of emissive_ao.a
+// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
                    vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
-                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence) {
+                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -528,7 +530,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             radiance += classic_radiance(p, ambient, tbn, k2, f, receives);
             if (IBL != 0u) {
                 // The comparison models take only the environment's diffuse light.
-                radiance += fabric_mean_rd(f) * fabric_env_diffuse(tbn, k2, f) * ao;
+                radiance += fabric_mean_rd(f) * fabric_env_diffuse(tbn, k2, f) * ao * bounce;
             }
         } else if (ACCURACY == 3u) {
             Weave w = weave_from_fabric(f);
@@ -541,7 +543,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
                     vec4 c = weave_point(w, s.x, s.y);
                     sum += fabric_radiance(p, ambient, ambient_back, tbn, k2, c, f, receives);
                     if (IBL != 0u) {
-                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, env_back, ao, nv);
+                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, env_back, ao, bounce, nv);
                     }
                 }
             }
@@ -549,7 +551,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         } else {
             radiance += fabric_radiance(p, ambient, ambient_back, tbn, k2, g, f, receives);
             if (IBL != 0u) {
-                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, env_back, ao, nv);
+                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, env_back, ao, bounce, nv);
             }
         }
     } else {
@@ -580,7 +582,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         vec3 under = emissive_ao.rgb;
         radiance -= emissive_ao.rgb;
         if (IBL != 0u) {
-            under += pbr_env(n, v, s, ao, e_v);
+            under += pbr_env(n, v, s, ao, bounce, e_v);
         } else {
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
             under += ambient * base * (1.0 - metallic) * (1.0 - s.transmission) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
@@ -642,7 +644,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             vec3 behind = IBL != 0u
                 ? sh_irradiance(frame.sh, env_dir(-n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x
                 : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, -n.y * 0.5 + 0.5);
-            under += diffuse_through * dtrans.yzw * behind * ao
+            under += diffuse_through * dtrans.yzw * behind * ao * bounce
                    * (1.0 - s.specular * max3(s.f0 * ab.x + ab.y));
         }
         if (COAT != 0u && coat > 0.0) {
