@@ -966,11 +966,14 @@ impl Scene {
     }
 }
 
-/// Frames bounds `b` from `azimuth_degrees` (about +Y from +Z), 20 degrees above, for an image of
-/// this aspect ratio (width / height): the camera is as close as it can be with every corner of
-/// the bounds inside the view, 5 % in from its edges, so the model fills the frame along its
-/// limiting side (as model-viewer frames a model), where a bounding sphere left a long, flat
-/// model small (GlamVelvetSofa filled 40 % of a 16:9 frame's width).
+/// Frames `points` (the model's vertices; the corners of bounds `b` when empty) from
+/// `azimuth_degrees` (about +Y from +Z), 20 degrees above, for an image of this aspect ratio
+/// (width / height): their projection centred, the camera as close as it can be with every point
+/// inside the view, 5 % in from its edges, so the model fills the frame along its limiting side
+/// (as model-viewer frames a model), where a bounding sphere left a long, flat model small
+/// (GlamVelvetSofa filled 40 % of a 16:9 frame's width) and the box's corners a draped cloth
+/// (SheenCloth, half the frame). Past [`FRAMING_POINTS`] vertices the points are a stride of
+/// them, so an extreme vertex between two kept ones may reach into the margin.
 fn framing(
     b: Bounds,
     points: std::sync::Arc<Vec<Vec3>>,
