@@ -113,9 +113,9 @@ pub fn pose_frame(
     }
     let camera = match &base.camera_override {
         Some(c) => c.clone(),
-        None => scene
-            .camera(base.camera)?
-            .for_aspect(base.width as f32 / base.height.max(1) as f32),
+        None => {
+            scene.camera_for_aspect(base.camera, base.width as f32 / base.height.max(1) as f32)?
+        }
     };
     let mut options = base.clone();
     if !motion.is_still() || animation.is_some() {

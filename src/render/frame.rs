@@ -797,9 +797,10 @@ impl Renderer {
         let camera = match &options.camera_override {
             Some(c) => c.clone(),
             // An automatic framing fills this image's aspect ratio.
-            None => scene
-                .camera(options.camera)?
-                .for_aspect(options.width as f32 / options.height.max(1) as f32),
+            None => scene.camera_for_aspect(
+                options.camera,
+                options.width as f32 / options.height.max(1) as f32,
+            )?,
         };
         let buffers = self.frame_buffers(scene, gpu, &plan, options, &camera, keys.env)?;
 

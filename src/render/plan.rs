@@ -565,12 +565,20 @@ impl Plan {
             unlit: unlit_materials > 0 || options.force.unlit,
             vertex_color_meshes,
             vertex_colors: vertex_color_meshes > 0 || options.force.vertex_colors,
-            camera: match options
-                .camera_override
-                .clone()
-                .map(Ok)
-                .unwrap_or_else(|| scene.camera(options.camera))
-            {
+            // The automatic framing is described without fitting it (the fit reads every
+            // vertex, and the plan is made every frame).
+            camera: match options.camera_override.clone().map(Ok).unwrap_or_else(|| {
+                if scene.camera_is_automatic(options.camera) {
+                    Err(None)
+                } else {
+                    scene.camera(options.camera).map_err(Some)
+                }
+            }) {
+                Err(None) => format!(
+                    "'{}', perspective (yfov {:.1}°)",
+                    crate::scene::AUTO_FRAMING_NAME,
+                    crate::scene::AUTO_FRAMING_YFOV_DEGREES
+                ),
                 Ok(c) => match c.orthographic {
                     Some([x, y]) => format!("'{}', orthographic (xmag {x}, ymag {y})", c.name),
                     None => format!(
@@ -579,7 +587,7 @@ impl Plan {
                         c.yfov.to_degrees()
                     ),
                 },
-                Err(_) => "none (the index is out of range)".into(),
+                Err(Some(_)) => "none (the index is out of range)".into(),
             },
             instanced_nodes: scene.instanced_nodes,
             instances: scene.instances,

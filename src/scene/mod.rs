@@ -659,6 +659,10 @@ pub struct Framing {
     pub points: std::sync::Arc<Vec<Vec3>>,
 }
 
+/// The automatic framing's camera name and vertical field of view.
+pub const AUTO_FRAMING_NAME: &str = "automatic framing";
+pub const AUTO_FRAMING_YFOV_DEGREES: f32 = 45.0;
+
 /// At most this many vertices are kept for fitting the automatic framing.
 pub const FRAMING_POINTS: usize = 1 << 16;
 
@@ -780,6 +784,26 @@ impl Scene {
         }
     }
 
+    /// [`Scene::camera`] for an image of this aspect ratio (width / height), as
+    /// [`Camera::for_aspect`] makes it, with an automatic framing fitted once, at that aspect
+    /// (the renderer's per-frame camera: the fit reads every vertex of the pose).
+    pub fn camera_for_aspect(
+        &self,
+        index: Option<usize>,
+        aspect: f32,
+    ) -> Result<Camera, crate::Error> {
+        if index.is_none() && self.cameras.is_empty() {
+            return Ok(self.auto_camera_for_aspect(aspect));
+        }
+        self.camera(index).map(|c| c.for_aspect(aspect))
+    }
+
+    /// Whether [`Scene::camera`] with this index is the automatic framing (the scene has no
+    /// camera and none is asked for), without fitting it.
+    pub fn camera_is_automatic(&self, index: Option<usize>) -> bool {
+        index.is_none() && self.cameras.is_empty()
+    }
+
     /// A camera at `eye` looking at `target` (Y up), with vertical field of view `yfov`; near and
     /// far planes fitted to the scene's bounds.
     pub fn look_at_camera(
@@ -841,14 +865,25 @@ impl Scene {
     /// The camera is framed for a square image; [`Camera::for_aspect`] frames it again for the
     /// image it renders (the renderer does).
     pub fn auto_camera(&self) -> Camera {
+        self.auto_camera_for_aspect(1.0)
+    }
+
+    /// [`Scene::auto_camera`] for an image of this aspect ratio (width / height; clamped to
+    /// [0.05, 20], and 1 when not a positive number).
+    fn auto_camera_for_aspect(&self, aspect: f32) -> Camera {
+        let aspect = if aspect.is_finite() && aspect > 0.0 {
+            aspect.clamp(0.05, 20.0)
+        } else {
+            1.0
+        };
         let unit = Bounds {
             min: Vec3::splat(-1.0),
             max: Vec3::splat(1.0),
         };
         let azimuth = self.framing_azimuth();
         let camera = match self.framing_points() {
-            Some((b, points)) => framing(b, points, azimuth, 1.0),
-            None => framing(unit, Default::default(), azimuth, 1.0),
+            Some((b, points)) => framing(b, points, azimuth, aspect),
+            None => framing(unit, Default::default(), azimuth, aspect),
         };
         let usable = camera.view.is_finite()
             && camera.znear.is_finite()
@@ -859,7 +894,7 @@ impl Scene {
         if usable {
             camera
         } else {
-            framing(unit, Default::default(), azimuth, 1.0)
+            framing(unit, Default::default(), azimuth, aspect)
         }
     }
 
@@ -981,7 +1016,7 @@ fn framing(
     aspect: f32,
 ) -> Camera {
     let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
-    let yfov = 45f32.to_radians();
+    let yfov = AUTO_FRAMING_YFOV_DEGREES.to_radians();
     let (e, a) = (20f32.to_radians(), azimuth_degrees.to_radians());
     // From the centre towards the eye; the view's right and up.
     let dir = Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
@@ -1040,7 +1075,7 @@ fn framing(
     let dist = dist.max(nearest(fit) + radius * 0.1).max(radius * 0.1);
     let eye = center + dir * dist;
     Camera {
-        name: "automatic framing".into(),
+        name: AUTO_FRAMING_NAME.into(),
         view: Mat4::look_at_rh(eye, center, Vec3::Y),
         yfov,
         // The near plane before the whole box (the points are a sample of the vertices).
