@@ -416,7 +416,7 @@ def build():
     entry("texture-ktx2-short-level.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(4, 4, texels))})), "a 4x4 RGBA8 KTX2 texture whose level holds 16 bytes (one row of 64)", "error: `holds 16 bytes where its 4x4 format needs 64`")
     entry("texture-ktx2-bad-zstd.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, b"\x5a" * 24, scheme=2, uncompressed=16))})), "a KTX2 texture whose Zstandard stream is not one", "error: `Zstandard-compressed level 0 does not decode`")
     entry("texture-ktx2-zstd-bomb.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, b"\x5a" * 24, scheme=2, uncompressed=1 << 40))})), "a 2x2 KTX2 texture whose level index declares 1 TiB once decompressed", "error: `declares 1099511627776 uncompressed bytes where its 2x2 format needs 16`")
-    entry("texture-ktx2-basislz.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, texels, vk_format=0, scheme=1))})), "a KTX2 texture in ETC1S (BasisLZ supercompression)", "error: `ETC1S mode (BasisLZ supercompression)`")
+    entry("texture-ktx2-basislz.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(2, 2, texels, vk_format=0, scheme=1))})), "a KTX2 texture marked BasisLZ (ETC1S's supercompression) whose descriptor is RGBA and which has no BasisLZ global data", "error: `supercompression is BasisLZ but whose data format descriptor is not ETC1S`")
     entry("texture-ktx2-bc7.gltf", gltf(textured_doc({"uri": ktx2_uri(ktx2(4, 4, texels, vk_format=146))})), "a KTX2 texture in BC7_SRGB_BLOCK, which weft does not read", "error: `vkFormat BC7_SRGB_BLOCK, which weft does not read`")
     d = quad_doc()
     d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 5}

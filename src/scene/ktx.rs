@@ -6,9 +6,11 @@
 //!   trusts (a basic data format descriptor's texel block dimensions);
 //! - supercompression: none, Zstandard (`ruzstd`) and ZLIB (`miniz_oxide`), each level's declared
 //!   uncompressed length checked against what the format needs before anything is allocated;
-//!   BasisLZ (ETC1S) is refused with the way out;
 //! - UASTC (vkFormat UNDEFINED with a UASTC descriptor) is transcoded to RGBA32 by Binomial's
 //!   transcoder (`basis-universal`'s `LowLevelUastcTranscoder`, as Bevy does);
+//! - ETC1S (BasisLZ supercompression) is transcoded to RGBA32 by Binomial's ETC1S transcoder,
+//!   which the crate reaches only through a `.basis` file: the KTX2 file's global codebooks and
+//!   level 0's slices are repacked as one (`etc1s_as_basis`), byte for byte;
 //! - plain 8-bit UNORM/SRGB formats (R, RG, RGB, RGBA, BGR, BGRA) are read directly, R and RG
 //!   filled out as Vulkan samples them (missing colour channels 0, alpha 1).
 //!
@@ -136,6 +138,7 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
 
     // What level 0 must hold once supercompression is undone, and how to turn it into RGBA8.
     enum Kind {
+        Etc1s,
         Uastc { has_alpha: bool },
         Plain { channels: usize, bgr: bool },
     }
@@ -145,9 +148,19 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
         None if header.supercompression_scheme == Some(SupercompressionScheme::BasisLZ)
             || model == Some(ColorModel::ETC1S) =>
         {
-            return Err(
-                "is a KTX2 texture in Basis Universal's ETC1S mode (BasisLZ supercompression), which weft does not transcode; re-encode it as UASTC (`toktx --encode uastc --zcmp 18`, or `gltf-transform uastc IN OUT`), or use PNG or JPEG".into(),
-            )
+            if header.supercompression_scheme != Some(SupercompressionScheme::BasisLZ)
+                || model != Some(ColorModel::ETC1S)
+            {
+                return Err(format!(
+                    "is a KTX2 texture whose {} (ETC1S data must be BasisLZ-supercompressed and BasisLZ must hold ETC1S); the file is damaged: re-encode it",
+                    if model == Some(ColorModel::ETC1S) {
+                        "data format descriptor says ETC1S but whose supercompression is not BasisLZ"
+                    } else {
+                        "supercompression is BasisLZ but whose data format descriptor is not ETC1S"
+                    }
+                ));
+            }
+            Kind::Etc1s
         }
         None if model == Some(ColorModel::UASTC) => {
             // UASTC's descriptor has one sample, whose channel id says what the blocks hold:
@@ -187,12 +200,27 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
     let pixels = u64::from(width) * u64::from(height);
     let (blocks_x, blocks_y) = (width.div_ceil(4), height.div_ceil(4));
     let expected = match kind {
+        // BasisLZ levels hold Huffman-coded slices of no fixed length.
+        Kind::Etc1s => 0,
         Kind::Uastc { .. } => u64::from(blocks_x) * u64::from(blocks_y) * 16,
         Kind::Plain { channels, .. } => pixels * channels as u64,
     };
-    let data = unsupercompress(&header, &level, expected)?;
+    let data = match kind {
+        Kind::Etc1s => std::borrow::Cow::Borrowed(level.data),
+        _ => unsupercompress(&header, &level, expected)?,
+    };
 
     let mut rgba8 = match kind {
+        Kind::Etc1s => {
+            let basis = etc1s_as_basis(
+                reader.supercompression_global_data(),
+                &data,
+                header.level_count.max(1),
+                width,
+                height,
+            )?;
+            etc1s_transcode(&basis, pixels)?
+        }
         Kind::Uastc { has_alpha } => {
             // basis-universal 0.3.1 sizes the RGBA32 output, and sets its row pitch, as
             // ceil(original_width / 4) pixels (it divides by the 4-texel block width even for an
@@ -313,4 +341,210 @@ fn unsupercompress<'a>(
         ));
     }
     Ok(data)
+}
+
+/// The BasisLZ global data of a KTX2 file (KTX2 specification, section 3.12: the ETC1S
+/// codebooks and Huffman tables shared by every image, and one descriptor per image) with the
+/// slices of level 0, repacked as the equivalent `.basis` file (Binomial's own container, whose
+/// layout is `basis_file_header` and `basis_slice_desc` in basisu_file_headers.h): the
+/// `basis-universal` crate exposes Binomial's ETC1S transcoder only through that container. The
+/// codebooks, tables and slices are copied byte for byte; only the headers are written here.
+fn etc1s_as_basis(
+    global: &[u8],
+    level0: &[u8],
+    level_count: u32,
+    width: u32,
+    height: u32,
+) -> Result<Vec<u8>, String> {
+    let damaged = |what: &str| {
+        format!("is a KTX2 ETC1S texture whose BasisLZ {what}; the file is damaged: re-encode it")
+    };
+    let u16_at = |at: usize| {
+        global
+            .get(at..at + 2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+    };
+    let u32_at = |at: usize| {
+        global
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    const HEADER: usize = 20;
+    const IMAGE_DESC: usize = 20;
+    let (
+        Some(endpoint_count),
+        Some(selector_count),
+        Some(endpoints_len),
+        Some(selectors_len),
+        Some(tables_len),
+        Some(extended_len),
+    ) = (
+        u16_at(0),
+        u16_at(2),
+        u32_at(4),
+        u32_at(8),
+        u32_at(12),
+        u32_at(16),
+    )
+    else {
+        return Err(damaged("global data is shorter than its 20-byte header"));
+    };
+    if endpoint_count == 0
+        || selector_count == 0
+        || endpoints_len == 0
+        || selectors_len == 0
+        || tables_len == 0
+    {
+        return Err(damaged(
+            "global data has an empty endpoint or selector codebook or no Huffman tables",
+        ));
+    }
+    // One descriptor per image: layers x faces x levels, and weft has refused all but one layer
+    // and one face; level 0's comes first.
+    let codebooks = HEADER + IMAGE_DESC * level_count as usize;
+    let needed = codebooks as u64
+        + u64::from(endpoints_len)
+        + u64::from(selectors_len)
+        + u64::from(tables_len)
+        + u64::from(extended_len);
+    if (global.len() as u64) < needed {
+        return Err(damaged(&format!(
+            "global data is {} bytes where its header and {level_count} image descriptors need {needed}",
+            global.len()
+        )));
+    }
+    let desc = |field: usize| u32_at(HEADER + 4 * field).unwrap_or(0) as usize;
+    let slice = |offset: usize, length: usize, what: &str| {
+        level0
+            .get(offset..offset.saturating_add(length))
+            .ok_or_else(|| {
+                damaged(&format!(
+                    "{what} slice ({length} bytes at {offset}) lies outside level 0's {} bytes",
+                    level0.len()
+                ))
+            })
+    };
+    let (rgb_offset, rgb_length, alpha_offset, alpha_length) = (desc(1), desc(2), desc(3), desc(4));
+    if rgb_length == 0 {
+        return Err(damaged("level 0 has an empty colour slice"));
+    }
+    let rgb = slice(rgb_offset, rgb_length, "colour")?;
+    let alpha = if alpha_length > 0 {
+        Some(slice(alpha_offset, alpha_length, "alpha")?)
+    } else {
+        None
+    };
+    let endpoints = &global[codebooks..codebooks + endpoints_len as usize];
+    let selectors_at = codebooks + endpoints_len as usize;
+    let selectors = &global[selectors_at..selectors_at + selectors_len as usize];
+    let tables_at = selectors_at + selectors_len as usize;
+    let tables = &global[tables_at..tables_at + tables_len as usize];
+
+    // basis_file_header: 77 packed bytes, little-endian fields of the widths below.
+    const BASIS_HEADER: usize = 77;
+    const SLICE_DESC: usize = 23;
+    let slices = if alpha.is_some() { 2 } else { 1 };
+    let endpoints_at = BASIS_HEADER + SLICE_DESC * slices;
+    let selectors_at = endpoints_at + endpoints.len();
+    let tables_at = selectors_at + selectors.len();
+    let rgb_at = tables_at + tables.len();
+    let alpha_at = rgb_at + rgb.len();
+    let total = alpha_at + alpha.map_or(0, <[u8]>::len);
+    if u32::try_from(total).is_err() {
+        return Err(damaged("level 0 and codebooks exceed 4 GiB"));
+    }
+    let mut out = Vec::with_capacity(total);
+    let put = |out: &mut Vec<u8>, value: u64, bytes: usize| {
+        out.extend((0..bytes).map(|i| (value >> (8 * i)) as u8));
+    };
+    const ETC1S: u64 = 1;
+    const HAS_ALPHA_SLICES: u64 = 4;
+    put(&mut out, u64::from(u16::from_le_bytes(*b"sB")), 2); // m_sig: ('B' << 8) | 's'
+    put(&mut out, 0x13, 2); // m_ver: the version the transcoder reads
+    put(&mut out, BASIS_HEADER as u64, 2); // m_header_size
+    put(&mut out, 0, 2); // m_header_crc16, filled in below
+    put(&mut out, (total - BASIS_HEADER) as u64, 4); // m_data_size
+    put(&mut out, 0, 2); // m_data_crc16, filled in below
+    put(&mut out, slices as u64, 3); // m_total_slices
+    put(&mut out, 1, 3); // m_total_images
+    put(&mut out, 0, 1); // m_tex_format: ETC1S
+    put(
+        &mut out,
+        ETC1S | if alpha.is_some() { HAS_ALPHA_SLICES } else { 0 },
+        2,
+    );
+    put(&mut out, 0, 1); // m_tex_type: 2D
+    put(&mut out, 0, 3); // m_us_per_frame
+    put(&mut out, 0, 4 + 4 + 4); // m_reserved, m_userdata0, m_userdata1
+    put(&mut out, u64::from(endpoint_count), 2);
+    put(&mut out, endpoints_at as u64, 4);
+    put(&mut out, endpoints.len() as u64, 3);
+    put(&mut out, u64::from(selector_count), 2);
+    put(&mut out, selectors_at as u64, 4);
+    put(&mut out, selectors.len() as u64, 3);
+    put(&mut out, tables_at as u64, 4);
+    put(&mut out, tables.len() as u64, 4);
+    put(&mut out, BASIS_HEADER as u64, 4); // m_slice_desc_file_ofs
+    put(&mut out, 0, 4 + 4); // m_extended_file_ofs, m_extended_file_size
+    debug_assert_eq!(out.len(), BASIS_HEADER);
+    let slice_desc = |out: &mut Vec<u8>, at: usize, data: &[u8], alpha: bool| {
+        put(out, 0, 3); // m_image_index
+        put(out, 0, 1); // m_level_index
+        put(out, u64::from(alpha), 1); // m_flags: cSliceDescFlagsHasAlpha
+        put(out, u64::from(width), 2);
+        put(out, u64::from(height), 2);
+        put(out, u64::from(width.div_ceil(4)), 2);
+        put(out, u64::from(height.div_ceil(4)), 2);
+        put(out, at as u64, 4);
+        put(out, data.len() as u64, 4);
+        put(out, u64::from(crc16(data)), 2);
+    };
+    slice_desc(&mut out, rgb_at, rgb, false);
+    if let Some(alpha) = alpha {
+        slice_desc(&mut out, alpha_at, alpha, true);
+    }
+    for part in [endpoints, selectors, tables, rgb, alpha.unwrap_or(&[])] {
+        out.extend_from_slice(part);
+    }
+    let data_crc = crc16(&out[BASIS_HEADER..]);
+    out[12..14].copy_from_slice(&data_crc.to_le_bytes());
+    let header_crc = crc16(&out[8..BASIS_HEADER]);
+    out[6..8].copy_from_slice(&header_crc.to_le_bytes());
+    Ok(out)
+}
+
+/// Binomial's CRC-16 of the `.basis` container (`basist::crc16`, CCITT polynomial, inverted).
+fn crc16(bytes: &[u8]) -> u16 {
+    let mut crc = !0u16;
+    for &b in bytes {
+        let q = u16::from(b) ^ (crc >> 8);
+        let k = (q >> 4) ^ q;
+        crc = (crc << 8) ^ k ^ (k << 5) ^ (k << 12);
+    }
+    !crc
+}
+
+/// Level 0 of a `.basis` ETC1S file (from `etc1s_as_basis`) as RGBA8, `pixels` texels.
+fn etc1s_transcode(basis: &[u8], pixels: u64) -> Result<Vec<u8>, String> {
+    let mut transcoder = basis_universal::Transcoder::new();
+    transcoder.prepare_transcoding(basis).map_err(|()| {
+        "is a KTX2 ETC1S texture whose codebooks or Huffman tables the Basis Universal transcoder rejected: the file is damaged; re-encode it".to_string()
+    })?;
+    let out = transcoder
+        .transcode_image_level(
+            basis,
+            basis_universal::TranscoderTextureFormat::RGBA32,
+            basis_universal::TranscodeParameters::default(),
+        )
+        .map_err(|e| {
+            format!("is a KTX2 ETC1S texture whose level 0 the Basis Universal transcoder rejected ({e:?}): the file is damaged; re-encode it")
+        })?;
+    if out.len() as u64 != pixels * 4 {
+        return Err(format!(
+            "is a KTX2 ETC1S texture whose transcoded level 0 is {} bytes instead of {} (the basis-universal binding has changed how it sizes its output: weft must be updated for it)",
+            out.len(),
+            pixels * 4
+        ));
+    }
+    Ok(out)
 }
