@@ -155,6 +155,7 @@ fn ambient_occlusion_darkens_environment_light_only() {
         rgba8: (0..8)
             .flat_map(|i| if i < 4 { [0, 0, 0, 255] } else { [255; 4] })
             .collect(),
+        bc7: None,
     };
     let occluded = Material {
         occlusion_texture: Some(0),

@@ -389,6 +389,7 @@ fn texture_wrap_modes_follow_the_sampler() {
                 height: 1,
                 color_space: ColorSpace::Srgb,
                 rgba8: vec![0, 0, 0, 255, 255, 255, 255, 255],
+                bc7: None,
             }],
             cameras: vec![Camera {
                 name: "front".into(),
@@ -956,6 +957,7 @@ fn specular_glossiness_renders_as_its_metallic_roughness_equivalent() {
         height: 1,
         color_space: scene::ColorSpace::Srgb,
         rgba8: vec![90, 20, 20, gloss_a, 200, 200, 200, gloss_b],
+        bc7: None,
     };
     let roughness_texture = scene::Texture {
         name: "roughness".into(),
@@ -963,6 +965,7 @@ fn specular_glossiness_renders_as_its_metallic_roughness_equivalent() {
         height: 1,
         color_space: scene::ColorSpace::Linear,
         rgba8: vec![0, 255 - gloss_a, 0, 255, 0, 255 - gloss_b, 0, 255],
+        bc7: None,
     };
     let base = scene::Material {
         base_color: [0.5, 0.4, 0.3, 1.0],

@@ -102,6 +102,47 @@ def glb(doc, bin_):
             + struct.pack("<II", len(bin_), 0x004E4942) + bin_)
 
 
+def ktx2_glb(exe, src, dst, mode, work):
+    """`src` (.glb) with each image re-encoded by basisu as KTX2 (`mode`: [] for ETC1S, ["-uastc"]
+    for UASTC + Zstandard): base colour, emissive, sheen colour and specular colour images with
+    sRGB metrics, the others -linear (as gltf-transform's `etc1s`/`uastc` do), referenced as
+    gltf-transform does (KHR_texture_basisu required, no core source); the old image bytes stay in
+    the binary chunk, unreferenced."""
+    doc, bin_ = glb_parts(src)
+    srgb_slots = ("baseColorTexture", "emissiveTexture", "sheenColorTexture", "specularColorTexture")
+
+    def textures_in(node):
+        if isinstance(node, dict):
+            for k, v in node.items():
+                if isinstance(v, dict) and "index" in v:
+                    yield k, v["index"]
+                yield from textures_in(v)
+        elif isinstance(node, list):
+            for v in node:
+                yield from textures_in(v)
+
+    srgb = {doc["textures"][i]["source"] for m in doc.get("materials", [])
+            for k, i in textures_in(m) if k in srgb_slots}
+    for i, img in enumerate(doc["images"]):
+        view = doc["bufferViews"][img["bufferView"]]
+        at = view.get("byteOffset", 0)
+        png = os.path.join(work, f"image{i}.png")
+        Image.open(io.BytesIO(bytes(bin_[at:at + view["byteLength"]]))).save(png)
+        ktx2 = os.path.join(work, f"image{i}.ktx2")
+        basisu(exe, "-ktx2", *mode, png, "-output_file", ktx2, *([] if i in srgb else ["-linear"]), cwd=work)
+        data = open(ktx2, "rb").read()
+        bin_ += b"\0" * (-len(bin_) % 16)
+        doc["bufferViews"].append({"buffer": 0, "byteOffset": len(bin_), "byteLength": len(data)})
+        bin_ += data
+        doc["images"][i] = {"bufferView": len(doc["bufferViews"]) - 1, "mimeType": "image/ktx2"}
+    for t in doc["textures"]:
+        t["extensions"] = {"KHR_texture_basisu": {"source": t.pop("source")}}
+    for key in ["extensionsUsed", "extensionsRequired"]:
+        doc[key] = sorted(set(doc.get(key, [])) | {"KHR_texture_basisu"})
+    doc["buffers"][0]["byteLength"] = len(bin_) + (-len(bin_) % 4)
+    open(dst, "wb").write(glb(doc, bin_))
+
+
 def main():
     with tempfile.TemporaryDirectory() as work:
         exe = build_basisu(work)
@@ -120,29 +161,15 @@ def main():
             check_etc1_equals(exe, os.path.join(KTX2, ktx2), rgba, work)
             Image.fromarray(rgba, "RGBA").save(os.path.join(KTX2, name))
 
-        doc, bin_ = glb_parts(os.path.join(COMPRESSED, "avocado_small.glb"))
-        srgb = {doc["textures"][m["pbrMetallicRoughness"]["baseColorTexture"]["index"]]["source"]
-                for m in doc["materials"] if "baseColorTexture" in m.get("pbrMetallicRoughness", {})}
-        for i, img in enumerate(doc["images"]):
-            view = doc["bufferViews"][img["bufferView"]]
-            at = view.get("byteOffset", 0)
-            png = os.path.join(work, f"avocado{i}.png")
-            Image.open(io.BytesIO(bytes(bin_[at:at + view["byteLength"]]))).save(png)
-            ktx2 = os.path.join(work, f"avocado{i}.ktx2")
-            basisu(exe, "-ktx2", png, "-output_file", ktx2, *([] if i in srgb else ["-linear"]), cwd=work)
-            data = open(ktx2, "rb").read()
-            bin_ += b"\0" * (-len(bin_) % 16)
-            doc["bufferViews"].append({"buffer": 0, "byteOffset": len(bin_), "byteLength": len(data)})
-            bin_ += data
-            doc["images"][i] = {"bufferView": len(doc["bufferViews"]) - 1, "mimeType": "image/ktx2"}
-        for t in doc["textures"]:
-            t["extensions"] = {"KHR_texture_basisu": {"source": t.pop("source")}}
-        doc["extensionsUsed"] = ["KHR_texture_basisu"]
-        doc["extensionsRequired"] = ["KHR_texture_basisu"]
-        doc["buffers"][0]["byteLength"] = len(bin_) + (-len(bin_) % 4)
-        open(os.path.join(COMPRESSED, "avocado_etc1s.glb"), "wb").write(glb(doc, bin_))
+        ktx2_glb(exe, os.path.join(COMPRESSED, "avocado_small.glb"), os.path.join(COMPRESSED, "avocado_etc1s.glb"), [], work)
     print("wrote tests/data/ktx2/pattern_etc1s*.ktx2, their references, and tests/data/compressed/avocado_etc1s.glb")
 
 
 if __name__ == "__main__":
-    main()
+    if len(sys.argv) >= 4 and sys.argv[1] == "encode":
+        # python3 tools/make_etc1s_test_files.py encode IN.glb OUT.glb [--uastc]: any .glb's
+        # images as KTX2 (how docs/performance.md's compressed SheenChair was made).
+        with tempfile.TemporaryDirectory() as work:
+            ktx2_glb(build_basisu(work), sys.argv[2], sys.argv[3], ["-uastc"] if "--uastc" in sys.argv else [], work)
+    else:
+        main()

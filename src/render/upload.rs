@@ -317,11 +317,16 @@ pub(crate) fn solid(name: &str, rgba: [u8; 4], color_space: ColorSpace) -> Textu
         height: 1,
         color_space,
         rgba8: rgba.to_vec(),
+        bc7: None,
     }
 }
 
-/// Uploads an RGBA8 texture and builds its mip chain by linear blits.
+/// Uploads a texture: its BC7 mip chain as is where it has one and the device samples BC7
+/// ([`Context::samples_bc7`]), else its RGBA8 level 0 with a mip chain built by linear blits.
 pub(crate) fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<Image> {
+    if let (Some(levels), true) = (&texture.bc7, ctx.samples_bc7()) {
+        return upload_bc7(ctx, texture, levels);
+    }
     let format = match texture.color_space {
         ColorSpace::Srgb => Format::R8G8B8A8_SRGB,
         ColorSpace::Linear => Format::R8G8B8A8_UNORM,
@@ -354,6 +359,50 @@ pub(crate) fn upload_texture(ctx: &Context, texture: &Texture) -> crate::Result<
         cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
         cmd.copy_buffer_to_image(&staging, &image);
         cmd.generate_mips(&image, Usage::FragmentRead);
+    })?;
+    Ok(image)
+}
+
+/// Uploads `levels` (a full BC7 mip chain of `texture`) level by level.
+fn upload_bc7(ctx: &Context, texture: &Texture, levels: &[Vec<u8>]) -> crate::Result<Image> {
+    let format = match texture.color_space {
+        ColorSpace::Srgb => Format::BC7_SRGB_BLOCK,
+        ColorSpace::Linear => Format::BC7_UNORM_BLOCK,
+    };
+    let desc = ImageDesc::new_2d(texture.name.clone(), format, texture.width, texture.height)
+        .usage(ImageUsageFlags::SAMPLED | ImageUsageFlags::TRANSFER_DST)
+        .full_mips();
+    for (level, bytes) in levels.iter().enumerate() {
+        let (w, h) = (
+            (texture.width >> level).max(1),
+            (texture.height >> level).max(1),
+        );
+        let expected = w.div_ceil(4) as usize * h.div_ceil(4) as usize * 16;
+        if levels.len() != desc.mip_levels as usize || bytes.len() != expected {
+            return Err(Error::input(format!(
+                "texture '{}' has {} BC7 mip levels, level {level} of {} bytes; a {}x{} texture needs {} levels and {expected} bytes there",
+                texture.name,
+                levels.len(),
+                bytes.len(),
+                texture.width,
+                texture.height,
+                desc.mip_levels
+            )));
+        }
+    }
+    let image = ctx.create_image(&desc)?;
+    let staging: Vec<_> = levels
+        .iter()
+        .map(|bytes| {
+            ctx.create_buffer_with("BC7 texture staging", BufferUsageFlags::TRANSFER_SRC, bytes)
+        })
+        .collect::<crate::Result<_>>()?;
+    ctx.submit(|cmd| {
+        cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
+        for (level, buffer) in staging.iter().enumerate() {
+            cmd.copy_buffer_to_image_level(buffer, &image, level as u32);
+        }
+        cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
     })?;
     Ok(image)
 }

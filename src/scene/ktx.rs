@@ -30,11 +30,13 @@ pub(super) fn is_ktx2(bytes: &[u8], mime: Option<&str>) -> bool {
     bytes.starts_with(MAGIC) || mime == Some("image/ktx2")
 }
 
-/// A KTX2 file's level 0 as RGBA8, rows top to bottom.
+/// A KTX2 file's level 0 as RGBA8, rows top to bottom, and (for a universal format whose file
+/// carries its full mip chain) every level as BC7 blocks.
 pub(super) struct Rgba8 {
     pub width: u32,
     pub height: u32,
     pub rgba8: Vec<u8>,
+    pub bc7: Option<Vec<Vec<u8>>>,
 }
 
 /// The header fields that size the image, read before anything is decoded (for the caller's size
@@ -207,19 +209,61 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
     };
     let data = match kind {
         Kind::Etc1s => std::borrow::Cow::Borrowed(level.data),
-        _ => unsupercompress(&header, &level, expected)?,
+        _ => unsupercompress(&header, &level, 0, expected)?,
     };
+
+    // The file's own mip chain as BC7, for devices that sample BC7 (the renderer's choice): only
+    // when the file carries the full chain (a device cannot build BC7 mips, and a texture without
+    // them would alias where weft's RGBA8 path filters) and its rows go down (BC7 blocks cannot be
+    // flipped without re-encoding).
+    let up = reader
+        .key_value_data()
+        .find(|(key, _)| *key == "KTXorientation")
+        .is_some_and(|(_, value)| value.get(1) == Some(&b'u'));
+    let full_chain = header.level_count == 32 - width.max(height).leading_zeros();
+    let want_bc7 = full_chain && !up;
+    let mut bc7 = None;
 
     let mut rgba8 = match kind {
         Kind::Etc1s => {
+            let levels: Vec<&[u8]> = if want_bc7 {
+                reader.levels().map(|l| l.data).collect()
+            } else {
+                vec![&data]
+            };
             let basis = etc1s_as_basis(
                 reader.supercompression_global_data(),
-                &data,
+                &levels,
                 header.level_count.max(1),
                 width,
                 height,
             )?;
-            etc1s_transcode(&basis, pixels)?
+            let mut transcoder = basis_universal::Transcoder::new();
+            transcoder.prepare_transcoding(&basis).map_err(|()| {
+                "is a KTX2 ETC1S texture whose codebooks or Huffman tables the Basis Universal transcoder rejected: the file is damaged; re-encode it".to_string()
+            })?;
+            if want_bc7 {
+                bc7 = Some(
+                    (0..header.level_count)
+                        .map(|level| {
+                            etc1s_transcode(
+                                &transcoder,
+                                &basis,
+                                level,
+                                basis_universal::TranscoderTextureFormat::BC7_RGBA,
+                                bc7_bytes(width, height, level),
+                            )
+                        })
+                        .collect::<Result<Vec<_>, _>>()?,
+                );
+            }
+            etc1s_transcode(
+                &transcoder,
+                &basis,
+                0,
+                basis_universal::TranscoderTextureFormat::RGBA32,
+                pixels * 4,
+            )?
         }
         Kind::Uastc { has_alpha } => {
             // basis-universal 0.3.1 sizes the RGBA32 output, and sets its row pitch, as
@@ -249,6 +293,9 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
                 .map_err(|e| {
                     format!("is a KTX2 UASTC texture that the Basis Universal transcoder rejected ({e:?}): the file is damaged; re-encode it")
                 })?;
+            if want_bc7 {
+                bc7 = Some(uastc_bc7_levels(&reader, &header, has_alpha)?);
+            }
             if out.len() as u64 != pixels * 4 {
                 return Err(format!(
                     "is a KTX2 UASTC texture whose transcoded level 0 is {} bytes instead of {} (the basis-universal binding has changed how it sizes its output: weft must be updated for it)",
@@ -276,10 +323,6 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
     };
 
     // KTXorientation "rd" (rows go down, the default) is glTF's; "ru" is flipped here.
-    let up = reader
-        .key_value_data()
-        .find(|(key, _)| *key == "KTXorientation")
-        .is_some_and(|(_, value)| value.get(1) == Some(&b'u'));
     if up {
         let row = width as usize * 4;
         let rows: Vec<&[u8]> = rgba8.chunks_exact(row).rev().collect();
@@ -289,19 +332,74 @@ pub(super) fn decode(bytes: &[u8]) -> Result<Rgba8, String> {
         width,
         height,
         rgba8,
+        bc7,
     })
 }
 
-/// Level 0's bytes with its supercompression undone, exactly `expected` bytes long.
+/// Bytes of mip `level` of a `width` x `height` BC7 image: 16 per 4 x 4 block.
+fn bc7_bytes(width: u32, height: u32, level: u32) -> u64 {
+    let (w, h) = ((width >> level).max(1), (height >> level).max(1));
+    u64::from(w.div_ceil(4)) * u64::from(h.div_ceil(4)) * 16
+}
+
+/// Every level of a UASTC file transcoded to BC7 (UASTC is designed to map onto BC7 nearly
+/// losslessly).
+fn uastc_bc7_levels(
+    reader: &ktx2::Reader<&[u8]>,
+    header: &ktx2::Header,
+    has_alpha: bool,
+) -> Result<Vec<Vec<u8>>, String> {
+    let transcoder = basis_universal::LowLevelUastcTranscoder::new();
+    reader
+        .levels()
+        .enumerate()
+        .map(|(level, data)| {
+            let level = level as u32;
+            let (w, h) = (
+                (header.pixel_width >> level).max(1),
+                (header.pixel_height >> level).max(1),
+            );
+            let expected = bc7_bytes(header.pixel_width, header.pixel_height, level);
+            // A UASTC block is 16 bytes, as a BC7 block is.
+            let blocks = unsupercompress(header, &data, level, expected)?;
+            let out = transcoder
+                .transcode_slice(
+                    &blocks,
+                    basis_universal::SliceParametersUastc {
+                        num_blocks_x: w.div_ceil(4),
+                        num_blocks_y: h.div_ceil(4),
+                        has_alpha,
+                        original_width: w,
+                        original_height: h,
+                    },
+                    basis_universal::DecodeFlags::HIGH_QUALITY,
+                    basis_universal::TranscoderBlockFormat::BC7,
+                )
+                .map_err(|e| {
+                    format!("is a KTX2 UASTC texture whose mip level {level} the Basis Universal transcoder rejected ({e:?}): the file is damaged; re-encode it")
+                })?;
+            if out.len() as u64 != expected {
+                return Err(format!(
+                    "is a KTX2 UASTC texture whose mip level {level} transcodes to {} bytes of BC7 instead of {expected} (the basis-universal binding has changed: weft must be updated for it)",
+                    out.len()
+                ));
+            }
+            Ok(out)
+        })
+        .collect()
+}
+
+/// Level `index`'s bytes with its supercompression undone, exactly `expected` bytes long.
 fn unsupercompress<'a>(
     header: &ktx2::Header,
     level: &ktx2::Level<'a>,
+    index: u32,
     expected: u64,
 ) -> Result<std::borrow::Cow<'a, [u8]>, String> {
     let scheme = header.supercompression_scheme;
     if scheme.is_some() && level.uncompressed_byte_length != expected {
         return Err(format!(
-            "is a KTX2 texture whose level 0 declares {} uncompressed bytes where its {}x{} format needs {expected}; the file is damaged: re-encode it",
+            "is a KTX2 texture whose level {index} declares {} uncompressed bytes where its {}x{} format needs {expected}; the file is damaged: re-encode it",
             level.uncompressed_byte_length, header.pixel_width, header.pixel_height
         ));
     }
@@ -312,7 +410,7 @@ fn unsupercompress<'a>(
             ruzstd::decoding::FrameDecoder::new()
                 .decode_all_to_vec(level.data, &mut out)
                 .map_err(|e| {
-                    format!("is a KTX2 texture whose Zstandard-compressed level 0 does not decode ({e}); the file is damaged: re-encode it")
+                    format!("is a KTX2 texture whose Zstandard-compressed level {index} does not decode ({e}); the file is damaged: re-encode it")
                 })?;
             std::borrow::Cow::Owned(out)
         }
@@ -322,7 +420,7 @@ fn unsupercompress<'a>(
                 expected as usize,
             )
             .map_err(|e| {
-                format!("is a KTX2 texture whose ZLIB-compressed level 0 does not decode ({:?}); the file is damaged: re-encode it", e.status)
+                format!("is a KTX2 texture whose ZLIB-compressed level {index} does not decode ({:?}); the file is damaged: re-encode it", e.status)
             })?;
             std::borrow::Cow::Owned(out)
         }
@@ -334,7 +432,7 @@ fn unsupercompress<'a>(
     };
     if data.len() as u64 != expected {
         return Err(format!(
-            "is a KTX2 texture whose level 0 holds {} bytes where its {}x{} format needs {expected}; the file is damaged or truncated: re-encode it",
+            "is a KTX2 texture whose level {index} holds {} bytes where its {}x{} format needs {expected}; the file is damaged or truncated: re-encode it",
             data.len(),
             header.pixel_width,
             header.pixel_height
@@ -345,13 +443,14 @@ fn unsupercompress<'a>(
 
 /// The BasisLZ global data of a KTX2 file (KTX2 specification, section 3.12: the ETC1S
 /// codebooks and Huffman tables shared by every image, and one descriptor per image) with the
-/// slices of level 0, repacked as the equivalent `.basis` file (Binomial's own container, whose
-/// layout is `basis_file_header` and `basis_slice_desc` in basisu_file_headers.h): the
-/// `basis-universal` crate exposes Binomial's ETC1S transcoder only through that container. The
-/// codebooks, tables and slices are copied byte for byte; only the headers are written here.
+/// slices of `levels` (level 0 first; the first `levels.len()` of the file's `level_count`),
+/// repacked as the equivalent `.basis` file (Binomial's own container, whose layout is
+/// `basis_file_header` and `basis_slice_desc` in basisu_file_headers.h): the `basis-universal`
+/// crate exposes Binomial's ETC1S transcoder only through that container. The codebooks, tables
+/// and slices are copied byte for byte; only the headers are written here.
 fn etc1s_as_basis(
     global: &[u8],
-    level0: &[u8],
+    levels: &[&[u8]],
     level_count: u32,
     width: u32,
     height: u32,
@@ -413,27 +512,32 @@ fn etc1s_as_basis(
             global.len()
         )));
     }
-    let desc = |field: usize| u32_at(HEADER + 4 * field).unwrap_or(0) as usize;
-    let slice = |offset: usize, length: usize, what: &str| {
-        level0
-            .get(offset..offset.saturating_add(length))
-            .ok_or_else(|| {
+    // Each level's colour slice and, when level 0 has one, alpha slice.
+    let alpha = u32_at(HEADER + 16).is_some_and(|length| length > 0);
+    let mut slices: Vec<(u32, bool, &[u8])> = Vec::new();
+    for (level, data) in levels.iter().enumerate() {
+        let desc = |field: usize| u32_at(HEADER + IMAGE_DESC * level + 4 * field).unwrap_or(0) as usize;
+        let slice = |offset: usize, length: usize, what: &str| {
+            data.get(offset..offset.saturating_add(length)).ok_or_else(|| {
                 damaged(&format!(
-                    "{what} slice ({length} bytes at {offset}) lies outside level 0's {} bytes",
-                    level0.len()
+                    "{what} slice of level {level} ({length} bytes at {offset}) lies outside the level's {} bytes",
+                    data.len()
                 ))
             })
-    };
-    let (rgb_offset, rgb_length, alpha_offset, alpha_length) = (desc(1), desc(2), desc(3), desc(4));
-    if rgb_length == 0 {
-        return Err(damaged("level 0 has an empty colour slice"));
+        };
+        let (rgb_offset, rgb_length, alpha_offset, alpha_length) =
+            (desc(1), desc(2), desc(3), desc(4));
+        if rgb_length == 0 {
+            return Err(damaged(&format!("level {level} has an empty colour slice")));
+        }
+        slices.push((level as u32, false, slice(rgb_offset, rgb_length, "colour")?));
+        if alpha {
+            if alpha_length == 0 {
+                return Err(damaged(&format!("level {level} has no alpha slice where level 0 has one")));
+            }
+            slices.push((level as u32, true, slice(alpha_offset, alpha_length, "alpha")?));
+        }
     }
-    let rgb = slice(rgb_offset, rgb_length, "colour")?;
-    let alpha = if alpha_length > 0 {
-        Some(slice(alpha_offset, alpha_length, "alpha")?)
-    } else {
-        None
-    };
     let endpoints = &global[codebooks..codebooks + endpoints_len as usize];
     let selectors_at = codebooks + endpoints_len as usize;
     let selectors = &global[selectors_at..selectors_at + selectors_len as usize];
@@ -443,15 +547,13 @@ fn etc1s_as_basis(
     // basis_file_header: 77 packed bytes, little-endian fields of the widths below.
     const BASIS_HEADER: usize = 77;
     const SLICE_DESC: usize = 23;
-    let slices = if alpha.is_some() { 2 } else { 1 };
-    let endpoints_at = BASIS_HEADER + SLICE_DESC * slices;
+    let endpoints_at = BASIS_HEADER + SLICE_DESC * slices.len();
     let selectors_at = endpoints_at + endpoints.len();
     let tables_at = selectors_at + selectors.len();
-    let rgb_at = tables_at + tables.len();
-    let alpha_at = rgb_at + rgb.len();
-    let total = alpha_at + alpha.map_or(0, <[u8]>::len);
+    let slices_at = tables_at + tables.len();
+    let total = slices_at + slices.iter().map(|s| s.2.len()).sum::<usize>();
     if u32::try_from(total).is_err() {
-        return Err(damaged("level 0 and codebooks exceed 4 GiB"));
+        return Err(damaged("slices and codebooks exceed 4 GiB"));
     }
     let mut out = Vec::with_capacity(total);
     let put = |out: &mut Vec<u8>, value: u64, bytes: usize| {
@@ -465,12 +567,12 @@ fn etc1s_as_basis(
     put(&mut out, 0, 2); // m_header_crc16, filled in below
     put(&mut out, (total - BASIS_HEADER) as u64, 4); // m_data_size
     put(&mut out, 0, 2); // m_data_crc16, filled in below
-    put(&mut out, slices as u64, 3); // m_total_slices
+    put(&mut out, slices.len() as u64, 3); // m_total_slices
     put(&mut out, 1, 3); // m_total_images
     put(&mut out, 0, 1); // m_tex_format: ETC1S
     put(
         &mut out,
-        ETC1S | if alpha.is_some() { HAS_ALPHA_SLICES } else { 0 },
+        ETC1S | if alpha { HAS_ALPHA_SLICES } else { 0 },
         2,
     );
     put(&mut out, 0, 1); // m_tex_type: 2D
@@ -487,24 +589,26 @@ fn etc1s_as_basis(
     put(&mut out, BASIS_HEADER as u64, 4); // m_slice_desc_file_ofs
     put(&mut out, 0, 4 + 4); // m_extended_file_ofs, m_extended_file_size
     debug_assert_eq!(out.len(), BASIS_HEADER);
-    let slice_desc = |out: &mut Vec<u8>, at: usize, data: &[u8], alpha: bool| {
-        put(out, 0, 3); // m_image_index
-        put(out, 0, 1); // m_level_index
-        put(out, u64::from(alpha), 1); // m_flags: cSliceDescFlagsHasAlpha
-        put(out, u64::from(width), 2);
-        put(out, u64::from(height), 2);
-        put(out, u64::from(width.div_ceil(4)), 2);
-        put(out, u64::from(height.div_ceil(4)), 2);
-        put(out, at as u64, 4);
-        put(out, data.len() as u64, 4);
-        put(out, u64::from(crc16(data)), 2);
-    };
-    slice_desc(&mut out, rgb_at, rgb, false);
-    if let Some(alpha) = alpha {
-        slice_desc(&mut out, alpha_at, alpha, true);
+    let mut at = slices_at;
+    for &(level, is_alpha, data) in &slices {
+        let (w, h) = ((width >> level).max(1), (height >> level).max(1));
+        put(&mut out, 0, 3); // m_image_index
+        put(&mut out, u64::from(level), 1); // m_level_index
+        put(&mut out, u64::from(is_alpha), 1); // m_flags: cSliceDescFlagsHasAlpha
+        put(&mut out, u64::from(w), 2);
+        put(&mut out, u64::from(h), 2);
+        put(&mut out, u64::from(w.div_ceil(4)), 2);
+        put(&mut out, u64::from(h.div_ceil(4)), 2);
+        put(&mut out, at as u64, 4);
+        put(&mut out, data.len() as u64, 4);
+        put(&mut out, u64::from(crc16(data)), 2);
+        at += data.len();
     }
-    for part in [endpoints, selectors, tables, rgb, alpha.unwrap_or(&[])] {
+    for part in [endpoints, selectors, tables] {
         out.extend_from_slice(part);
+    }
+    for (_, _, data) in &slices {
+        out.extend_from_slice(data);
     }
     let data_crc = crc16(&out[BASIS_HEADER..]);
     out[12..14].copy_from_slice(&data_crc.to_le_bytes());
@@ -524,26 +628,31 @@ fn crc16(bytes: &[u8]) -> u16 {
     !crc
 }
 
-/// Level 0 of a `.basis` ETC1S file (from `etc1s_as_basis`) as RGBA8, `pixels` texels.
-fn etc1s_transcode(basis: &[u8], pixels: u64) -> Result<Vec<u8>, String> {
-    let mut transcoder = basis_universal::Transcoder::new();
-    transcoder.prepare_transcoding(basis).map_err(|()| {
-        "is a KTX2 ETC1S texture whose codebooks or Huffman tables the Basis Universal transcoder rejected: the file is damaged; re-encode it".to_string()
-    })?;
+/// Mip `level` of a `.basis` ETC1S file (from `etc1s_as_basis`, prepared in `transcoder`) in
+/// `format`, which must come out `expected` bytes long.
+fn etc1s_transcode(
+    transcoder: &basis_universal::Transcoder,
+    basis: &[u8],
+    level: u32,
+    format: basis_universal::TranscoderTextureFormat,
+    expected: u64,
+) -> Result<Vec<u8>, String> {
     let out = transcoder
         .transcode_image_level(
             basis,
-            basis_universal::TranscoderTextureFormat::RGBA32,
-            basis_universal::TranscodeParameters::default(),
+            format,
+            basis_universal::TranscodeParameters {
+                level_index: level,
+                ..Default::default()
+            },
         )
         .map_err(|e| {
-            format!("is a KTX2 ETC1S texture whose level 0 the Basis Universal transcoder rejected ({e:?}): the file is damaged; re-encode it")
+            format!("is a KTX2 ETC1S texture whose level {level} the Basis Universal transcoder rejected ({e:?}): the file is damaged; re-encode it")
         })?;
-    if out.len() as u64 != pixels * 4 {
+    if out.len() as u64 != expected {
         return Err(format!(
-            "is a KTX2 ETC1S texture whose transcoded level 0 is {} bytes instead of {} (the basis-universal binding has changed how it sizes its output: weft must be updated for it)",
-            out.len(),
-            pixels * 4
+            "is a KTX2 ETC1S texture whose level {level} transcodes to {} bytes of {format:?} instead of {expected} (the basis-universal binding has changed how it sizes its output: weft must be updated for it)",
+            out.len()
         ));
     }
     Ok(out)

@@ -116,6 +116,12 @@ pub struct Texture {
     pub color_space: ColorSpace,
     /// width * height * 4 bytes, rows top to bottom.
     pub rgba8: Vec<u8>,
+    /// The same image's full mip chain as BC7 blocks (level 0 first; each level
+    /// ceil(w/4) * ceil(h/4) * 16 bytes, block rows top to bottom), when it came from a KTX2 file
+    /// in a universal format (UASTC, ETC1S) that carries its full chain. Uploaded as is where the
+    /// device samples BC7 (a quarter of RGBA8's memory, the file's own mips); otherwise `rgba8` is
+    /// uploaded and its mips are built by the device.
+    pub bc7: Option<Vec<Vec<u8>>>,
 }
 
 /// glTF metallic-roughness material, plus the optional fabric model.

@@ -186,6 +186,8 @@ pub(super) struct Decoded {
     pub width: u32,
     pub height: u32,
     pub rgba8: Vec<u8>,
+    /// A KTX2 file's own mip chain as BC7 blocks ([`super::Texture::bc7`]).
+    pub bc7: Option<Vec<Vec<u8>>>,
 }
 
 /// A printable name for image `index`: its name or uri when it has one.
@@ -266,6 +268,7 @@ pub(super) fn load_image(
             width: decoded.width,
             height: decoded.height,
             rgba8: decoded.rgba8,
+            bc7: decoded.bc7,
         });
     }
 
@@ -315,6 +318,7 @@ pub(super) fn load_image(
         width: rgba.width(),
         height: rgba.height(),
         rgba8: rgba.into_raw(),
+        bc7: None,
     })
 }
 

@@ -9,7 +9,7 @@ use ash::vk;
 
 use super::context::{vkerr, Context, Shared};
 use super::pipeline::{DescriptorSet, Pipeline};
-use super::resources::{texel_bytes, Buffer, Image, QueryPool};
+use super::resources::{level_bytes, texel_bytes, Buffer, Image, QueryPool};
 
 /// How an image is used, which fixes its layout, stages and access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -352,7 +352,7 @@ impl<'s> Cmd<'s> {
     ///
     /// # Panics
     /// If the buffer is smaller than the image's level 0 (the GPU would read past its end), or
-    /// the format is not one [`texel_bytes`] knows.
+    /// the format is not one [`level_bytes`] knows.
     pub fn copy_buffer_to_image(&mut self, buffer: &'s Buffer, image: &'s Image) {
         self.copy_buffer_to_image_level(buffer, image, 0);
     }
@@ -361,7 +361,7 @@ impl<'s> Cmd<'s> {
     ///
     /// # Panics
     /// If `level` is not a level of the image, the buffer is smaller than that level (the GPU
-    /// would read past its end), or the format is not one [`texel_bytes`] knows.
+    /// would read past its end), or the format is not one [`level_bytes`] knows.
     pub fn copy_buffer_to_image_level(&mut self, buffer: &'s Buffer, image: &'s Image, level: u32) {
         check_copy_size(buffer, image, level);
         let region = vk::BufferImageCopy::default()
@@ -569,15 +569,14 @@ fn check_copy_size(buffer: &Buffer, image: &Image, level: u32) {
         image.desc.name,
         image.desc.mip_levels
     );
-    let texel = texel_bytes(image.desc.format).unwrap_or_else(|| {
+    let w = (image.desc.width >> level).max(1);
+    let h = (image.desc.height >> level).max(1);
+    let need = level_bytes(image.desc.format, w, h).unwrap_or_else(|| {
         panic!(
             "buffer copies of format {:?} (image '{}') are not supported",
             image.desc.format, image.desc.name
         )
-    });
-    let w = u64::from((image.desc.width >> level).max(1));
-    let h = u64::from((image.desc.height >> level).max(1));
-    let need = w * h * texel * u64::from(image.desc.layers());
+    }) * u64::from(image.desc.layers());
     assert!(
         buffer.size >= need,
         "buffer '{}' of {} bytes is too small for level {level} of image '{}' ({need} bytes)",

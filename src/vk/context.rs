@@ -98,6 +98,8 @@ pub(crate) struct Shared {
     /// Boxed so the debug callback's user pointer stays valid for the instance's whole life.
     messages: Box<Mutex<Vec<String>>>,
     pub(crate) anisotropy: bool,
+    /// Whether BC7 textures are enabled and sampled with linear filtering ([`Context::samples_bc7`]).
+    pub(crate) bc7: bool,
     /// The driver's pipeline cache (null when the driver refused one), loaded from weft's cache
     /// on disk (crate::cache) and written back when the context ends if it changed.
     pub(crate) pipeline_cache: vk::PipelineCache,
@@ -408,6 +410,22 @@ impl Context {
         // instead of a second, so CPU devices filter trilinearly; real GPUs get up to 16x.
         let anisotropy = supported.features.sampler_anisotropy == vk::TRUE && !info.is_cpu();
         let float64 = supported.features.shader_float64 == vk::TRUE;
+        // BC7 textures (KTX2 files in a universal format with their full mip chain, transcoded
+        // on load) are uploaded as BC7 where the device samples both BC7 formats with linear
+        // filtering; elsewhere as RGBA8.
+        let bc7 = supported.features.texture_compression_bc == vk::TRUE
+            && [vk::Format::BC7_SRGB_BLOCK, vk::Format::BC7_UNORM_BLOCK]
+                .iter()
+                .all(|&format| {
+                    let props = unsafe {
+                        instance.get_physical_device_format_properties(physical, format)
+                    };
+                    props.optimal_tiling_features.contains(
+                        vk::FormatFeatureFlags::SAMPLED_IMAGE
+                            | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR
+                            | vk::FormatFeatureFlags::TRANSFER_DST,
+                    )
+                });
         let (dr, s2, m4) = (
             supported13.dynamic_rendering,
             supported13.synchronization2,
@@ -435,7 +453,8 @@ impl Context {
             );
         let base_features = vk::PhysicalDeviceFeatures::default()
             .sampler_anisotropy(anisotropy)
-            .shader_float64(float64);
+            .shader_float64(float64)
+            .texture_compression_bc(bc7);
         let mut features = vk::PhysicalDeviceFeatures2::default()
             .features(base_features)
             .push_next(&mut features13);
@@ -517,6 +536,7 @@ impl Context {
                 limits,
                 messages,
                 anisotropy,
+                bc7,
                 pipeline_cache,
                 pipeline_cache_loaded,
                 pipeline_cache_key,
@@ -526,6 +546,13 @@ impl Context {
 
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
+    }
+
+    /// Whether textures that carry a BC7 mip chain are uploaded as BC7 (the device enables
+    /// `textureCompressionBC` and samples BC7 with linear filtering); `WEFT_NO_BC7=1` turns it off
+    /// (the RGBA8 path, for comparison).
+    pub fn samples_bc7(&self) -> bool {
+        self.shared.bc7 && std::env::var_os("WEFT_NO_BC7").is_none_or(|v| v.is_empty() || v == "0")
     }
 
     pub fn validating(&self) -> bool {

@@ -139,6 +139,17 @@ pub fn is_depth(format: vk::Format) -> bool {
 }
 
 /// Bytes per texel of the formats weft's buffer-image copies use; None for any other format.
+/// Bytes of a `width` x `height` level of `format` tightly packed: texels, or 4 x 4 blocks of a
+/// block-compressed format.
+pub(crate) fn level_bytes(format: vk::Format, width: u32, height: u32) -> Option<u64> {
+    match format {
+        vk::Format::BC7_SRGB_BLOCK | vk::Format::BC7_UNORM_BLOCK => {
+            Some(u64::from(width.div_ceil(4)) * u64::from(height.div_ceil(4)) * 16)
+        }
+        _ => Some(u64::from(width) * u64::from(height) * texel_bytes(format)?),
+    }
+}
+
 pub(crate) fn texel_bytes(format: vk::Format) -> Option<u64> {
     use vk::Format as F;
     Some(match format {

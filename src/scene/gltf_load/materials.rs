@@ -839,6 +839,7 @@ impl<'a> Loader<'a> {
             height: decoded.height,
             color_space,
             rgba8: decoded.rgba8,
+            bc7: decoded.bc7,
         });
         let index = self.scene.textures.len() - 1;
         self.textures.insert(key, index);
