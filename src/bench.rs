@@ -17,6 +17,7 @@
 //! on a fixed spiral); only the times vary from run to run.
 
 pub mod ibl_bench;
+pub mod load;
 pub mod plan_bench;
 pub mod plot;
 pub mod submission;

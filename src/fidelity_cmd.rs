@@ -208,7 +208,19 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
         let reference = load_rgba(&reference_path)?;
         let (tw, th) = reference.dimensions();
         let full = renders.join(format!("{}.png", s.short_name()));
-        if let Err(e) = render(s, &shared, 2 * tw, 2 * th, &args.occlusion, &full) {
+        // At the goldens' own size (twice the scenario's: the browsers capture at device pixel
+        // ratio 2), not the thumbnail's: a texture that the golden magnifies, and the site's
+        // resize then averages in display space, would be minified here and mip-filtered in
+        // linear light instead (TextureEncodingTest's lettering: -18.4 dB at twice the
+        // thumbnail, -24.4 at the golden's size).
+        if let Err(e) = render(
+            s,
+            &shared,
+            2 * s.size[0],
+            2 * s.size[1],
+            &args.occlusion,
+            &full,
+        ) {
             eprintln!("{e}");
             continue;
         }

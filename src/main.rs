@@ -454,6 +454,11 @@ struct BenchArgs {
     /// analytic weave, timed in one run, against the pixel-integrating ground truth.
     #[arg(long)]
     footprint: bool,
+    /// Instead: what loading each of these scenes costs (the loader alone, --frames runs each,
+    /// default 5, interleaved; medians and the ratio to the first scene's), with each scene's
+    /// texture memory as uploaded (RGBA8 with mips, or its KTX2 files' BC7 chains).
+    #[arg(long, num_args = 1.., value_name = "SCENE")]
+    load: Vec<PathBuf>,
 }
 
 fn parse_bench_view(text: &str) -> Result<weft::bench::View, String> {
@@ -1389,6 +1394,12 @@ fn checked_size(text: &str) -> anyhow::Result<(u32, u32)> {
 }
 
 fn run_bench(args: BenchArgs) -> anyhow::Result<()> {
+    if !args.load.is_empty() {
+        let runs = args.frames.unwrap_or(5);
+        let rows = weft::bench::load::run(&args.load, runs)?;
+        println!("{}", weft::bench::load::table(&rows, runs));
+        return Ok(());
+    }
     if args.startup {
         return run_startup_bench(&args);
     }

@@ -188,3 +188,41 @@ fn equal_error_samples_interpolate_in_log_log() {
     assert_eq!(equal_error_samples(&curve, 0.3), None);
     assert_eq!(equal_error_samples(&curve, 0.01), None);
 }
+
+/// `weft bench --load`: one row per scene with its medians, ratio and texture memory; the KTX2
+/// scene's figures reflect its files (ETC1S without mips: no BC7 chain, RGBA8 memory).
+#[test]
+fn load_bench_prints_a_row_per_scene() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/compressed");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(["bench", "--frames", "1", "--load"])
+        .arg(data.join("avocado_small.glb"))
+        .arg(data.join("avocado_etc1s.glb"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains("avocado_")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    // avocado_small: 3 textures of 64 x 64, RGBA8 with mips: 3 x 21,844 bytes = 0.06 MiB.
+    for row in &rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert_eq!(
+            cells[3],
+            if row.contains("small") {
+                "1.00"
+            } else {
+                cells[3]
+            },
+            "{row}"
+        );
+        assert_eq!(cells[4], "3", "{row}");
+        assert_eq!(cells[5], "0", "{row}");
+        assert_eq!((cells[6], cells[7]), ("0.1", "0.1"), "{row}");
+        assert!(cells[2].parse::<f64>().unwrap() > 0.0, "{row}");
+    }
+}

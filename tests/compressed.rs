@@ -1813,6 +1813,136 @@ fn the_barn_lamp_ktx2_textures_decode() {
 
 // --- on the GPU ---------------------------------------------------------------------------------
 
+/// A KTX2 file that carries its full mip chain is uploaded as BC7 with the file's own levels on a
+/// device that samples BC7 (lavapipe does), and renders like the RGBA8 path with the device's mip
+/// chain: magnified (level 0) and minified (the file's smaller levels).
+#[test]
+fn a_bc7_upload_renders_like_rgba8() {
+    use weft::render::{RenderOptions, Renderer};
+    let ctx = common::context();
+    let lavapipe =
+        ctx.info().driver_name.contains("llvmpipe") || ctx.info().name.contains("llvmpipe");
+    eprintln!(
+        "device '{}' samples BC7: {}",
+        ctx.info().name,
+        ctx.samples_bc7()
+    );
+    if lavapipe {
+        assert!(ctx.samples_bc7(), "lavapipe (Mesa >= 21) samples BC7");
+    } else if !ctx.samples_bc7() {
+        eprintln!("skipped: this device does not sample BC7");
+        return;
+    }
+    let mut renderer = Renderer::new(ctx).expect("renderer");
+    // A unit quad facing +Z with UVs over the whole texture, shown by its emission (black base
+    // colour): the texels reach the picture as they are, whatever the lighting.
+    let ktx = std::fs::read(ktx2_data("pattern_etc1s_mips.ktx2")).unwrap();
+    let mut bin = ktx.clone();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let geometry_at = bin.len();
+    for v in [
+        [0.0f32, 0.0, 0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0, 1.0, 1.0],
+        [1.0, 1.0, 0.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0],
+    ] {
+        for f in v {
+            bin.extend(f.to_le_bytes());
+        }
+    }
+    let indices_at = bin.len();
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_texture_basisu"],
+        "extensionsRequired": ["KHR_texture_basisu"],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": ktx.len()},
+            {"buffer": 0, "byteOffset": geometry_at, "byteLength": 80, "byteStride": 20},
+            {"buffer": 0, "byteOffset": indices_at, "byteLength": 12},
+        ],
+        "images": [{"bufferView": 0, "mimeType": "image/ktx2"}],
+        "textures": [{"extensions": {"KHR_texture_basisu": {"source": 0}}}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
+            "emissiveTexture": {"index": 0}, "emissiveFactor": [1, 1, 1]}],
+        "accessors": [
+            {"bufferView": 1, "byteOffset": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "byteOffset": 12, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+    });
+    let scene = scene::load_slice(&glb(&doc, &bin), "bc7.glb", None).unwrap();
+    for t in &scene.textures {
+        let levels = t
+            .bc7
+            .as_ref()
+            .expect("a full-chain ETC1S file has BC7 levels");
+        assert_eq!(levels.len(), 6, "62 x 46 has six levels down to 1 x 1");
+    }
+    let mut rgba8_only = scene.clone();
+    rgba8_only.textures.iter_mut().for_each(|t| t.bc7 = None);
+    // A single-level file keeps the RGBA8 path.
+    let single = std::fs::read(ktx2_data("pattern_etc1s.ktx2")).unwrap();
+    assert!(load_ktx2(&single).unwrap().0.bc7.is_none());
+    // Magnified (256 x 256: level 0, ETC1S -> BC7 against the exact ETC1S decode), the FLIP;
+    // minified (24 x 24, about three texels per pixel: the file's levels 1-2, which basisu
+    // filtered with a Kaiser window, against the device's box-filtered ones: visibly softer, by
+    // design), the mean colour, which any mip filter keeps and a wrong colour space would not.
+    for size in [256, 24] {
+        let options = RenderOptions {
+            width: size,
+            height: size,
+            ..Default::default()
+        };
+        let bc7 = renderer.render(&scene, &options).unwrap();
+        let rgba8 = renderer.render(&rgba8_only, &options).unwrap();
+        let flip = weft::bench::flip_mean(&rgba8, &bc7);
+        let mean = |f: &weft::render::Frame| -> Vec<f64> {
+            (0..3)
+                .map(|c| {
+                    f.ldr.chunks_exact(4).map(|p| p[c] as f64).sum::<f64>()
+                        / (f.ldr.len() / 4) as f64
+                })
+                .collect()
+        };
+        let (m_bc7, m_rgba8) = (mean(&bc7), mean(&rgba8));
+        let shift = (0..3)
+            .map(|c| (m_bc7[c] - m_rgba8[c]).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{size} x {size}: BC7 against RGBA8, mean FLIP {flip:.5}, mean colour {m_bc7:.2?} against {m_rgba8:.2?} (largest shift {shift:.2} of 255)"
+        );
+        if let Some(dir) = std::env::var_os("WEFT_BC7_DUMP") {
+            for (name, frame) in [("bc7", &bc7), ("rgba8", &rgba8)] {
+                let path = Path::new(&dir).join(format!("{name}_{size}.png"));
+                weft::render::write_png(&path, frame.width, frame.height, &frame.ldr).unwrap();
+            }
+        }
+        assert!(
+            flip > 0.0,
+            "{size}: the BC7 path drew the same pixels: was it used?"
+        );
+        if size == 256 {
+            // Measured 0.0188; bound 1.3x.
+            assert!(flip <= 0.025, "{size}: mean FLIP {flip} > 0.025");
+        }
+        // Measured 0.11 (256) and 1.84 (24) of 255; bound 3 (sampling BC7_UNORM as if it were
+        // sRGB, or the reverse, moves these means by tens).
+        assert!(
+            shift <= 3.0,
+            "{size}: the mean colour moved by {shift:.2} of 255"
+        );
+    }
+}
+
 #[test]
 fn compressed_avocados_render_like_the_original() {
     use weft::render::{RenderOptions, Renderer};

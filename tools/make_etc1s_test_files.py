@@ -167,9 +167,11 @@ def main():
 
 if __name__ == "__main__":
     if len(sys.argv) >= 4 and sys.argv[1] == "encode":
-        # python3 tools/make_etc1s_test_files.py encode IN.glb OUT.glb [--uastc]: any .glb's
-        # images as KTX2 (how docs/performance.md's compressed SheenChair was made).
+        # python3 tools/make_etc1s_test_files.py encode IN.glb OUT.glb [--uastc] [--mipmap]: any
+        # .glb's images as KTX2, ETC1S or UASTC, with or without their mip chains (how
+        # docs/performance.md's compressed SheenChairs were made).
+        mode = (["-uastc"] if "--uastc" in sys.argv else []) + (["-mipmap"] if "--mipmap" in sys.argv else [])
         with tempfile.TemporaryDirectory() as work:
-            ktx2_glb(build_basisu(work), sys.argv[2], sys.argv[3], ["-uastc"] if "--uastc" in sys.argv else [], work)
+            ktx2_glb(build_basisu(work), sys.argv[2], sys.argv[3], mode, work)
     else:
         main()

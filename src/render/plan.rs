@@ -229,6 +229,9 @@ pub struct Plan {
     /// Whether point and spot lights out of range are skipped per pixel (on unless forced off).
     pub range_culling: bool,
     pub textures: usize,
+    /// Of `textures`, those that carry their KTX2 file's full mip chain as BC7 (uploaded as BC7
+    /// where the device samples it, else as RGBA8 with built mips).
+    pub bc7_textures: usize,
     #[serde(serialize_with = "debug_view_name")]
     pub debug_view: DebugView,
     /// The environment that lights the scene, if any.
@@ -628,6 +631,7 @@ impl Plan {
             shadow_receivers,
             range_culling: !options.force.no_range_culling,
             textures: scene.textures.len(),
+            bc7_textures: scene.textures.iter().filter(|t| t.bc7.is_some()).count(),
             debug_view: options.debug_view,
             supersample: options.supersample(),
             environment,
@@ -845,7 +849,15 @@ impl fmt::Display for Plan {
                 o.method, o.radius, o.radius_from, o.slices, o.steps
             )?,
         }
-        writeln!(f, "textures    {}", self.textures)?;
+        if self.bc7_textures > 0 {
+            writeln!(
+                f,
+                "textures    {} ({} with their file's BC7 mip chain: uploaded as BC7 where the device samples BC7)",
+                self.textures, self.bc7_textures
+            )?;
+        } else {
+            writeln!(f, "textures    {}", self.textures)?;
+        }
         if self.supersample > 1 {
             let n = self.supersample;
             writeln!(

@@ -516,7 +516,8 @@ fn etc1s_as_basis(
     let alpha = u32_at(HEADER + 16).is_some_and(|length| length > 0);
     let mut slices: Vec<(u32, bool, &[u8])> = Vec::new();
     for (level, data) in levels.iter().enumerate() {
-        let desc = |field: usize| u32_at(HEADER + IMAGE_DESC * level + 4 * field).unwrap_or(0) as usize;
+        let desc =
+            |field: usize| u32_at(HEADER + IMAGE_DESC * level + 4 * field).unwrap_or(0) as usize;
         let slice = |offset: usize, length: usize, what: &str| {
             data.get(offset..offset.saturating_add(length)).ok_or_else(|| {
                 damaged(&format!(
@@ -530,12 +531,22 @@ fn etc1s_as_basis(
         if rgb_length == 0 {
             return Err(damaged(&format!("level {level} has an empty colour slice")));
         }
-        slices.push((level as u32, false, slice(rgb_offset, rgb_length, "colour")?));
+        slices.push((
+            level as u32,
+            false,
+            slice(rgb_offset, rgb_length, "colour")?,
+        ));
         if alpha {
             if alpha_length == 0 {
-                return Err(damaged(&format!("level {level} has no alpha slice where level 0 has one")));
+                return Err(damaged(&format!(
+                    "level {level} has no alpha slice where level 0 has one"
+                )));
             }
-            slices.push((level as u32, true, slice(alpha_offset, alpha_length, "alpha")?));
+            slices.push((
+                level as u32,
+                true,
+                slice(alpha_offset, alpha_length, "alpha")?,
+            ));
         }
     }
     let endpoints = &global[codebooks..codebooks + endpoints_len as usize];

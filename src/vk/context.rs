@@ -417,9 +417,8 @@ impl Context {
             && [vk::Format::BC7_SRGB_BLOCK, vk::Format::BC7_UNORM_BLOCK]
                 .iter()
                 .all(|&format| {
-                    let props = unsafe {
-                        instance.get_physical_device_format_properties(physical, format)
-                    };
+                    let props =
+                        unsafe { instance.get_physical_device_format_properties(physical, format) };
                     props.optimal_tiling_features.contains(
                         vk::FormatFeatureFlags::SAMPLED_IMAGE
                             | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR
