@@ -236,11 +236,12 @@ fn the_sheet_code_changes_nothing_where_no_fabric_is_a_sheet() {
 
 /// Under an environment: a sheet facing up, seen from above, in an environment that is bright
 /// only below the horizon (radiance (1, 0.5, 0.25)), at a far-field weave (coverage c uniform):
-/// its front sees black, so it shows τ·c·L through its threads (the environment's SH irradiance
-/// about −n) and (1 − c)·L through its gaps; and in a uniform white environment white threads
+/// its front sees black, so it shows τ·c·L through its threads (the environment's irradiance about
+/// −n) and (1 − c)·L through its gaps; and in a uniform white environment white threads
 /// without shadowing give exactly 1 for every τ beyond what the same cloth opaque gives over c
 /// (reflected 1 − τ and passed τ add to the threads' albedo, the gaps add 1 − c): the sheet's
-/// bookkeeping of light. Both for the SH (fis:8, the default) and the sampled (mc:256) far side.
+/// bookkeeping of light. Both for the prefiltered irradiance (fis:8, the default) and the sampled
+/// (mc:256) far side.
 #[test]
 fn a_sheet_under_the_environment_passes_the_light_from_its_far_side() {
     use std::sync::Arc;
@@ -314,16 +315,20 @@ fn a_sheet_under_the_environment_passes_the_light_from_its_far_side() {
         for t in [0.0f32, 0.4, 1.0] {
             let got = render(&mut renderer, &ground, Some(t));
             let want = [1.0, 0.5, 0.25].map(|l| (t as f64 * c + 1.0 - c) * l);
-            let rel = (0..3)
-                .map(|k| (got[k] - want[k]).abs() / want[k])
+            // The error per channel as a fraction of the ground's radiance L in that channel.
+            let off = (0..3)
+                .map(|k| (got[k] - want[k]).abs() / [1.0, 0.5, 0.25][k])
                 .fold(0.0, f64::max);
-            println!("{}: ground-lit sheet tau {t}: {got:.4?}, want {want:.4?} (c = {c:.4}), worst {:.2} %", level.name(), 100.0 * rel);
-            // Measured (lavapipe, 2026-12-04): within 0.05 % at every τ and both levels (the
-            // order-2 SH of the hemisphere step puts no light on the front at the pole; f16
-            // storage of the cube and the image is 0.05 %). The bound is ten times that; a sheet
-            // lit from its front side instead would be off by all of it.
+            println!("{}: ground-lit sheet tau {t}: {got:.4?}, want {want:.4?} (c = {c:.4}), worst {:.2} % of L", level.name(), 100.0 * off);
+            // Measured (lavapipe, 2026-12-04): mc:256 within 0.05 % of L; fis:8 0.49 % at τ = 0,
+            // 0.08 % at 0.4, 0.54 % at 1: the irradiance comes from the specular cube's
+            // roughness-1 level (16² per face, filtered importance sampling from the radiance
+            // cube's mips), whose blur carries about 0.5 % of the ground's light across the
+            // horizon to the pole (the front, which should see black) and as much of the black
+            // sky to the nadir. The bound is twice that; a sheet lit from its front side instead
+            // would be off by τ·c of L (84 % at τ = 1).
             assert!(
-                rel < 0.005,
+                off < 0.011,
                 "{}: tau {t}: {got:?} against {want:?}",
                 level.name()
             );

@@ -46,7 +46,7 @@ struct FrameData {
                          // z: the radiance cube's face size, w: its last level
     vec4 env_background; // x: 0 environment, 1 colour (background.rgb), 2 transparent;
                          // y: the environment background's blur, in radiance-cube levels
-    vec4 sh[9];          // irradiance/π as order-2 SH in env space (weft::env::Environment::sh9)
+    vec4 sh[9];          // irradiance/π as order-2 SH in env space (weft::env::Environment::sh9); weft's shading reads env_irradiance (the specular cube's roughness-1 level) instead
 };
 
 const uint LIGHT_DIRECTIONAL = 0u;

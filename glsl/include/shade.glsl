@@ -177,6 +177,16 @@ vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
     return normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
 }
 
+// Irradiance/π from the environment at world normal n (times the intensity): the specular cube's
+// roughness-1 level. GGX at α = 1 has D = 1/π, so with n = v its reflected directions are uniform
+// over the sphere and the prefilter's n·l weight makes that level exactly the cosine-weighted mean
+// of the radiance, 16² per face from 512 filtered samples. The order-2 SH it replaces is
+// band-limited: on a contrasted map (lightroom_14b) it was 14 % off in some directions.
+vec3 env_irradiance(vec3 n) {
+    vec3 d = env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2);
+    return textureLod(env_specular, d, frame.env_params.y).rgb * frame.env_params.x;
+}
+
 // The anisotropic GGX lobes (KHR_materials_anisotropy) under the environment at fis:N (issue 28:
 // the split sum's bent normal left anisotropic metals nearly matte): N half vectors from the lobe's
 // own distribution (the isotropic sampler at alpha 1 with its slopes stretched by (at, ab): GGX
@@ -311,7 +321,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v) {
     vec3 r = dominant_dir(n, reflect(-v, bent), lookup_roughness);
     vec3 d = env_dir(r, frame.env_rot0, frame.env_rot1, frame.env_rot2);
     vec3 prefiltered = textureLod(env_specular, d, lookup_roughness * frame.env_params.y).rgb * frame.env_params.x;
-    vec3 irradiance = sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
+    vec3 irradiance = env_irradiance(n);
     vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric))
                  * (1.0 - s.transmission);
     // fis: an anisotropic lobe is sampled (the bent normal above stays approx's).
@@ -406,7 +416,7 @@ vec3 fabric_env_diffuse(mat3 tbn, vec3 k2, GpuFabric f) {
         return sum / float(IBL_SAMPLES);
     }
     vec3 n = tbn[2];
-    return sh_irradiance(frame.sh, env_dir(n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x
+    return env_irradiance(n)
         * fabric_diffuse_albedo(f, k2.z);
 }
 
@@ -422,7 +432,7 @@ vec3 fabric_env_back(mat3 tbn) {
         }
         return sum / float(IBL_SAMPLES);
     }
-    return sh_irradiance(frame.sh, env_dir(-tbn[2], frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x;
+    return env_irradiance(-tbn[2]);
 }
 
 // The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
@@ -642,7 +652,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             float nv = clamp(dot(n, v), 1e-4, 1.0);
             vec2 ab = textureLod(env_dfg, vec2(nv, roughness), 0.0).rg;
             vec3 behind = IBL != 0u
-                ? sh_irradiance(frame.sh, env_dir(-n, frame.env_rot0, frame.env_rot1, frame.env_rot2)) * frame.env_params.x
+                ? env_irradiance(-n)
                 : mix(frame.ambient_ground.rgb, frame.ambient_sky.rgb, -n.y * 0.5 + 0.5);
             under += diffuse_through * dtrans.yzw * behind * ao * bounce
                    * (1.0 - s.specular * max3(s.f0 * ab.x + ab.y));
