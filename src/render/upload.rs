@@ -58,6 +58,14 @@ pub(crate) struct DrawRange {
     pub(crate) scene_draw: usize,
 }
 
+impl DrawRange {
+    /// Whether the world transform mirrors the mesh (negative determinant): its front faces wind
+    /// clockwise (glTF 2.0, "Instantiation").
+    pub(crate) fn mirrored(&self) -> bool {
+        self.world.determinant() < 0.0
+    }
+}
+
 /// A scene's data on the GPU.
 pub struct GpuScene {
     pub(crate) vertices: Buffer,

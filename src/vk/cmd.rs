@@ -245,6 +245,8 @@ impl<'s> Cmd<'s> {
             self.device().cmd_set_scissor(self.raw, 0, &[area]);
             self.device()
                 .cmd_set_cull_mode(self.raw, vk::CullModeFlags::NONE);
+            self.device()
+                .cmd_set_front_face(self.raw, vk::FrontFace::COUNTER_CLOCKWISE);
         }
     }
 
@@ -283,6 +285,19 @@ impl<'s> Cmd<'s> {
             Cull::Front => vk::CullModeFlags::FRONT,
         };
         unsafe { self.device().cmd_set_cull_mode(self.raw, mode) };
+    }
+
+    /// Which winding is a front face for the following draws: counter-clockwise (the default at
+    /// each `begin_rendering`), or clockwise for a draw whose world transform mirrors it (a
+    /// negative determinant: glTF's rule), so that culling and `gl_FrontFacing` see its true
+    /// outside.
+    pub fn set_front_face(&mut self, mirrored: bool) {
+        let face = if mirrored {
+            vk::FrontFace::CLOCKWISE
+        } else {
+            vk::FrontFace::COUNTER_CLOCKWISE
+        };
+        unsafe { self.device().cmd_set_front_face(self.raw, face) };
     }
 
     pub fn bind_pipeline(&mut self, pipeline: &'s Pipeline) {

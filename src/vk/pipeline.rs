@@ -471,6 +471,9 @@ impl Context {
             vk::DynamicState::VIEWPORT,
             vk::DynamicState::SCISSOR,
             vk::DynamicState::CULL_MODE,
+            // Per draw: a node whose world transform mirrors (negative determinant) has clockwise
+            // front faces (glTF 2.0, "Instantiation").
+            vk::DynamicState::FRONT_FACE,
         ];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()

@@ -191,13 +191,9 @@ impl EnvPasses {
         shaders.update(shaders::ENV_CUBE_COMP.spirv);
         shaders.update(shaders::ENV_PREFILTER_COMP.spirv);
         key.extend_from_slice(&shaders.finalize());
-        for v in [
-            radiance_size(env.width),
-            SPECULAR_SIZE,
-            SPECULAR_LEVELS,
-        ]
-        .into_iter()
-        .chain((0..SPECULAR_LEVELS).map(prefilter_samples))
+        for v in [radiance_size(env.width), SPECULAR_SIZE, SPECULAR_LEVELS]
+            .into_iter()
+            .chain((0..SPECULAR_LEVELS).map(prefilter_samples))
         {
             key.extend_from_slice(&v.to_le_bytes());
         }

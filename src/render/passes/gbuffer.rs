@@ -220,6 +220,7 @@ impl GBufferPass {
                     } else {
                         Cull::Back
                     });
+                    cmd.set_front_face(draw.mirrored());
                     let mut push = DrawPush::new(draw.world, material);
                     if !draw.receive_shadows {
                         push.flags &= !DRAW_RECEIVES_SHADOWS;

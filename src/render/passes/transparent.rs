@@ -355,6 +355,7 @@ fn draw_all<'s>(
             push.flags &= !DRAW_RECEIVES_SHADOWS;
         }
         cmd.push_constants(pipeline, &push);
+        cmd.set_front_face(draw.mirrored());
         let faces: &[Cull] = if draw.double_sided && back_first {
             &[Cull::Front, Cull::Back]
         } else if draw.double_sided {
