@@ -535,10 +535,11 @@ fn missing_tangents_are_generated_with_mikktspace() {
         let n = Vec3::from(v.normal);
         let t = Vec3::new(v.tangent[0], v.tangent[1], v.tangent[2]);
         assert!(n.dot(t).abs() < 1e-5);
-        // u grows along +x: the tangent is +x; v grows along -y, and bitangent = w * cross(n, t)
-        // = w * +y must point along +v, so w = -1.
+        // u grows along +x: the tangent is +x; v grows along -y. A glTF normal map's +Y is up
+        // the image, towards smaller v, and bitangent = w * cross(n, t) = w * +y must point
+        // there, so w = +1 (the sign Khronos' NormalTangentMirrorTest carries in its file).
         assert!(t.abs_diff_eq(Vec3::X, 1e-5), "tangent {t}");
-        assert_eq!(v.tangent[3], -1.0);
+        assert_eq!(v.tangent[3], 1.0);
     }
 }
 

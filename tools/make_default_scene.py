@@ -57,8 +57,9 @@ def smoothstep(e0, e1, x):
 #
 # A surface is a function f(u, v) -> position over [0,1]^2. Normals come from the analytic
 # function given (or from finite differences), tangents from the u-derivative, made orthogonal to
-# the normal; the tangent's w is the sign that makes w * cross(n, t) point along +v of the texture
-# coordinates (MikkTSpace's convention, which is also what weft's loader generates).
+# the normal; the tangent's w is the sign that makes w * cross(n, t) point along -v of the texture
+# coordinates: up the image, where a glTF normal map's +Y points (the sign Khronos'
+# NormalTangentMirrorTest carries, and what weft's loader generates with MikkTSpace).
 
 EPS = 1e-4
 
@@ -86,7 +87,7 @@ def grid_mesh(f, nu, nv, uv_scale, normal_fn=None, v_clamp=0.0):
                 # flipped (v grows downward in an image): cross(dv, du).
                 n = normalize(cross(dv, du))
             t = normalize(sub(du, scale(n, dot(n, du))))
-            w = 1.0 if dot(cross(n, t), dv) * uv_scale[1] >= 0.0 else -1.0
+            w = 1.0 if dot(cross(n, t), dv) * uv_scale[1] <= 0.0 else -1.0
             pos.append(p)
             nrm.append(n)
             tan.append(t + [w])
@@ -307,8 +308,8 @@ def check_clearances(cloth_pos, metal_centre):
 def build():
     b = Builder()
     ball = grid_mesh(sphere, 64, 32, (1.0, 1.0), normal_fn=sphere_normal, v_clamp=0.02)
-    # Texture v runs against the surface's v on the cloth and the floor so that their tangent
-    # frames are right-handed (w = +1).
+    # Texture v runs against the surface's v on the cloth and the floor (w = -1 on both; the
+    # spheres have w = +1).
     cloth_mesh = grid_mesh(cloth, CLOTH_CELLS, CLOTH_CELLS, (CLOTH_UV_REPEAT, -CLOTH_UV_REPEAT))
     floor_mesh = grid_mesh(floor_quad, 1, 1, (6.0, -6.0))
     metal_centre = add(METAL_BALL_SPOT, [0.0, METAL_BALL_RADIUS, 0.0])

@@ -158,7 +158,13 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
             self.vertex(face, vert).normal
         }
         fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-            self.vertex(face, vert).uv
+            // MikkTSpace's bitangent follows +v with v up (Blender's UVs, where normal maps are
+            // baked); glTF's v goes down the image, and its normal maps' +Y is up the image: the
+            // UV is given as (u, 1 - v), as Blender's glTF exporter does, so that the generated
+            // tangents' sign agrees with the ones such files carry (NormalTangentTest without its
+            // tangents renders as NormalTangentMirrorTest with them).
+            let [u, v] = self.vertex(face, vert).uv;
+            [u, 1.0 - v]
         }
         fn set_tangent(
             &mut self,
@@ -337,7 +343,9 @@ mod tests {
         (vertices, ran)
     }
 
-    /// A unit quad in the XY plane with u along +x: tangent +x, w = +1 (the MikkTSpace answer).
+    /// A unit quad in the XY plane with u along +x and v along +y: tangent +x, and w = -1, the
+    /// bitangent w·cross(n, t) = -y pointing towards smaller v, up the image, as a glTF normal
+    /// map's +Y does.
     #[test]
     fn a_plain_quad_gets_u_as_its_tangent() {
         let quad = vec![
@@ -352,7 +360,7 @@ mod tests {
         for v in v {
             let t = Vec4::from(v.tangent);
             assert!(
-                (t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6,
+                (t - Vec4::new(1.0, 0.0, 0.0, -1.0)).abs().max_element() < 1e-6,
                 "{t}"
             );
         }
