@@ -77,6 +77,15 @@ void main() {
         c = vec3(0.0);
     }
     c = max(c, vec3(0.0));
+    // Coverage: 1 wherever something opaque or a background was drawn; over a transparent
+    // background (--background none) 0 where nothing was, and a blended surface's alpha where
+    // only blended surfaces were. Those are premultiplied (the transparent pass blends ONE,
+    // ONE_MINUS_SRC_ALPHA): the curve is applied to the colour itself and the PNG gets straight
+    // alpha, as it defines it.
+    float coverage = clamp(texel.a, 0.0, 1.0);
+    if (coverage > 0.0 && coverage < 1.0) {
+        c /= coverage;
+    }
     if (tm.passthrough == 0u) {
         c *= tm.exposure;
         if (tm.curve == 0u) {
@@ -87,6 +96,5 @@ void main() {
             c = agx(c);
         }
     }
-    // Alpha 0 only where the background is transparent (--background none).
-    out_color = vec4(clamp(c, 0.0, 1.0), texel.a > 0.5 ? 1.0 : 0.0);
+    out_color = vec4(clamp(c, 0.0, 1.0), coverage);
 }
