@@ -399,19 +399,7 @@ fn upload_bc7(ctx: &Context, texture: &Texture, levels: &[Vec<u8>]) -> crate::Re
         }
     }
     let image = ctx.create_image(&desc)?;
-    let staging: Vec<_> = levels
-        .iter()
-        .map(|bytes| {
-            ctx.create_buffer_with("BC7 texture staging", BufferUsageFlags::TRANSFER_SRC, bytes)
-        })
-        .collect::<crate::Result<_>>()?;
-    ctx.submit(|cmd| {
-        cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
-        for (level, buffer) in staging.iter().enumerate() {
-            cmd.copy_buffer_to_image_level(buffer, &image, level as u32);
-        }
-        cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
-    })?;
+    ctx.fill_image_levels(&image, levels, "BC7 texture staging")?;
     Ok(image)
 }
 

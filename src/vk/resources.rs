@@ -363,6 +363,40 @@ impl Context {
         Ok(b)
     }
 
+    /// Fills every mip level of a freshly created `image` (in `Undefined` usage) from `levels`
+    /// (level 0 first, each tightly packed) through staging buffers named `name`, and leaves it
+    /// ready for fragment shaders to sample.
+    pub fn fill_image_levels<L: AsRef<[u8]>>(
+        &self,
+        image: &Image,
+        levels: &[L],
+        name: &str,
+    ) -> crate::Result<()> {
+        let staging = levels
+            .iter()
+            .map(|bytes| {
+                self.create_buffer_with(name, vk::BufferUsageFlags::TRANSFER_SRC, bytes.as_ref())
+            })
+            .collect::<crate::Result<Vec<_>>>()?;
+        self.submit(|cmd| {
+            cmd.transition(
+                image,
+                super::Usage::Undefined,
+                super::Usage::TransferDst,
+                None,
+            );
+            for (level, buffer) in staging.iter().enumerate() {
+                cmd.copy_buffer_to_image_level(buffer, image, level as u32);
+            }
+            cmd.transition(
+                image,
+                super::Usage::TransferDst,
+                super::Usage::FragmentRead,
+                None,
+            );
+        })
+    }
+
     pub fn create_image(&self, desc: &ImageDesc) -> crate::Result<Image> {
         let max = self.shared.info.max_image_dimension_2d;
         if desc.width == 0 || desc.height == 0 || desc.width > max || desc.height > max {

@@ -113,23 +113,11 @@ impl Renderer {
             | ImageUsageFlags::TRANSFER_DST
             | ImageUsageFlags::TRANSFER_SRC;
         let image = self.ctx.create_image(&desc)?;
-        let staging = (0..desc.mip_levels)
-            .map(|level| {
-                let bytes = unorm8_round(&self.read_weave(weave, level)?);
-                self.ctx.create_buffer_with(
-                    "weave rgba8 staging",
-                    BufferUsageFlags::TRANSFER_SRC,
-                    &bytes,
-                )
-            })
+        let levels = (0..desc.mip_levels)
+            .map(|level| Ok(unorm8_round(&self.read_weave(weave, level)?)))
             .collect::<crate::Result<Vec<_>>>()?;
-        self.ctx.submit(|cmd| {
-            cmd.transition(&image, Usage::Undefined, Usage::TransferDst, None);
-            for (level, buffer) in staging.iter().enumerate() {
-                cmd.copy_buffer_to_image_level(buffer, &image, level as u32);
-            }
-            cmd.transition(&image, Usage::TransferDst, Usage::FragmentRead, None);
-        })?;
+        self.ctx
+            .fill_image_levels(&image, &levels, "weave rgba8 staging")?;
         Ok(image)
     }
 }
