@@ -19,10 +19,10 @@
     clippy::type_complexity,
     clippy::too_many_arguments
 )]
+use weft::env::quadrature::EnvQuadrature;
 use weft::env::{env_from_world, Environment};
 use weft::reference::brdf::double as fd;
 use weft::reference::brdf::sampling::sample_h;
-use weft::reference::ibl::EnvQuadrature;
 use weft::reference::ibl_twin::formula::{cube_texel_dir, equirect_uv};
 
 type V = [f64; 3];

@@ -71,6 +71,16 @@ pub fn catching_panic() -> bool {
     CATCHING.with(|c| c.get() > 0)
 }
 
+/// Non-fatal problems found while loading: the scene still renders, and the CLI prints these.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Warning(pub String);
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::Error;

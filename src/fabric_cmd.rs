@@ -1,10 +1,10 @@
-//! `weft fabric`: the command line of `weft::fabric::assets` (docs/fabric-on-assets.md).
+//! `weft fabric`: the command line of `weft::assets` (docs/fabric-on-assets.md).
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use weft::fabric::assets::{self, Colour, MaterialRef, Overrides, Request, Source};
+use weft::assets::{self, Colour, MaterialRef, Overrides, Request, Source};
 use weft::fabric::draft::Draft;
 use weft::fabric::{presets, ThreadTexture, WeavePattern};
 

@@ -1,4 +1,4 @@
-//! `weft fabric` and `weft render --fabric` (weft::fabric::assets) on the repository's own scenes:
+//! `weft fabric` and `weft render --fabric` (weft::assets) on the repository's own scenes:
 //! the output passes the Khronos glTF Validator with no errors, loads back with the fabric on the
 //! chosen materials and nowhere else, leaves every other part of the file as it was (JSON minus
 //! the added keys; a .glb's BIN chunk and a .gltf's external buffer byte for byte), converts the
@@ -12,7 +12,7 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use serde_json::{json, Value};
-use weft::fabric::assets::{self, Container, MaterialRef, Overrides, Request, Source};
+use weft::assets::{self, Container, MaterialRef, Overrides, Request, Source};
 use weft::fabric::{presets, WeavePattern, EXTENSION_NAME};
 use weft::scene;
 

@@ -1,5 +1,5 @@
 //! Environment lighting on lavapipe (validation on), against the CPU ground truth of
-//! `weft::reference::ibl` (quadrature over every pixel of the map, f64, none of the GPU's
+//! `weft::env::quadrature` (quadrature over every pixel of the map, f64, none of the GPU's
 //! approximations):
 //! - white furnace: a uniform environment of radiance 1 on white dielectrics, white metals and
 //!   the fabric, at every IBL level;
@@ -12,8 +12,8 @@ mod common;
 use std::sync::Arc;
 
 use glam::Mat4;
+use weft::env::quadrature::EnvQuadrature;
 use weft::env::{EnvLighting, Environment, IblLevel};
-use weft::reference::ibl::EnvQuadrature;
 use weft::reference::shading::Surface;
 use weft::render::gpu::FrameData;
 use weft::render::{GBufferReadback, RenderOptions, Renderer};
@@ -449,7 +449,7 @@ fn real_hdr_matches_the_cpu_ground_truth() {
             flips.push(flip);
             // Bounds, each about 1.3x the worst of the two scenes as measured on lavapipe (the
             // table is in docs/fabric-model.md §6). What they bound: the SH diffuse (2 % on this
-            // map, tested in reference::ibl), the split sum of the glTF spheres (4 % with the
+            // map, tested in env::quadrature), the split sum of the glTF spheres (4 % with the
             // dominant direction: 3.7 %), and for the cloth the estimator of each level: approx
             // takes a lobe's albedo as Fresnel at n·v and ignores its anisotropy (22.6 %); FIS is
             // biased by the blur of its mip look-ups, which shrinks as N grows (16.4 %, 7.6 %,

@@ -341,7 +341,7 @@ fn anisotropic_highlight_stretches_along_the_rotated_tangent() {
 }
 
 /// Environment light on the extension spheres (no lamps) against the CPU ground truth
-/// (`reference::ibl::EnvQuadrature`: f64 quadrature over every 2 x 2 block of map pixels of the
+/// (`env::quadrature::EnvQuadrature`: f64 quadrature over every 2 x 2 block of map pixels of the
 /// twin BRDF, the sheen albedo by its own quadrature), per material and IBL level: what the split
 /// sum costs for sheen, tinted specular and anisotropy (approx; fis samples the anisotropic lobe),
 /// and that Monte Carlo converges to the reference.
@@ -357,7 +357,7 @@ fn environment_light_on_the_extensions_against_the_cpu_ground_truth() {
         .expect("lebombo"),
     );
     let rotation = 60.0;
-    let q = weft::reference::ibl::EnvQuadrature::new(&env, rotation, 1.0, 2);
+    let q = weft::env::quadrature::EnvQuadrature::new(&env, rotation, 1.0, 2);
     let mut scene = spheres_scene();
     scene.lights.clear();
     let (w, h) = (128u32, 48u32);

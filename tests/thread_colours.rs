@@ -120,7 +120,7 @@ fn the_colour_table_gives_the_footprint_colour() {
     );
     // The far field's albedo (`weft fabric`'s fallback colour), summed cell by cell, is the
     // table's mean.
-    let far = weft::fabric::assets::far_field_albedo(&p);
+    let far = weft::assets::far_field_albedo(&p);
     let mean = t.table.texels[t.table.width as usize - 1];
     for k in 0..3 {
         assert!(
@@ -184,7 +184,7 @@ fn sequences_are_checked_where_they_are_read() {
         "{warnings:?}"
     );
     // Written out by `weft fabric` and read back the same.
-    let json = weft::fabric::assets::extension_json(&p);
+    let json = weft::assets::extension_json(&p);
     let back = FabricParams::from_gltf_extension(&json, "plaid", &mut Vec::new()).expect("reads");
     assert_eq!(
         (back.warp_colours, back.weft_colours),
@@ -199,7 +199,7 @@ fn a_tartan_draft_gives_its_colour_sequences() {
         "/tests/data/drafts/tartan-twill.wif"
     )))
     .expect("the draft reads");
-    let mut o = weft::fabric::assets::Overrides::default();
+    let mut o = weft::assets::Overrides::default();
     let warnings = o.apply_draft(&d);
     assert!(warnings.is_empty(), "{warnings:?}");
     let warp = o.warp_colours.expect("the warp is striped");

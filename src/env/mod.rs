@@ -7,6 +7,11 @@
 //! `dir = (sin θ sin φ, cos θ, -sin θ cos φ)` with `θ = π v`, `φ = 2π (u - 1/2)`.
 //! A rotation of the environment by `r` degrees turns it about +y (counter-clockwise seen from
 //! above); shaders look it up with `env_from_world`.
+//!
+//! [`quadrature`] is the ground truth of environment lighting: f64 quadrature over every pixel of
+//! the map with the reference BRDFs.
+
+pub mod quadrature;
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -505,21 +510,7 @@ pub fn dfg_table(size: u32) -> Vec<[f32; 3]> {
     out
 }
 
-/// [`dfg_table`] at [`DFG_SIZE`], as f16 (A, B, E), kept in the
-/// repository (`src/env/dfg_table.f16`, 6 KiB) because computing it costs ~280 ms of the first
-/// picture's time. A test recomputes it and compares; `WEFT_WRITE_DFG=1 cargo test --release --lib
-/// kept_dfg_table` rewrites the file after a change of the BRDF.
-pub fn dfg_table_kept() -> Vec<[half::f16; 3]> {
-    const KEPT: &[u8] = include_bytes!("dfg_table.f16");
-    KEPT.chunks_exact(6)
-        .map(|c| {
-            [0, 1, 2].map(|k| half::f16::from_bits(u16::from_le_bytes([c[2 * k], c[2 * k + 1]])))
-        })
-        .collect()
-}
-
-/// Side of the DFG table (n·v by roughness) the renderer samples.
-pub const DFG_SIZE: u32 = 32;
+pub use crate::reference::shading::{dfg_table_kept, DFG_SIZE};
 
 /// The DFG integral at one (n·v, roughness): see [`dfg_table`]. The BRDF is the project's one
 /// Rust copy of the glTF BRDF ([`crate::reference::shading::pbr_brdf_cos`], f32, accumulated in
@@ -573,7 +564,8 @@ mod kept_dfg {
             .iter()
             .map(|t| t.map(half::f16::from_f32))
             .collect();
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/env/dfg_table.f16");
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/reference/dfg_table.f16");
         if std::env::var_os("WEFT_WRITE_DFG").is_some() {
             let bytes: Vec<u8> = fresh
                 .iter()
@@ -586,14 +578,14 @@ mod kept_dfg {
         assert_eq!(
             kept.len(),
             fresh.len(),
-            "src/env/dfg_table.f16 has the wrong size: rewrite it (WEFT_WRITE_DFG=1)"
+            "src/reference/dfg_table.f16 has the wrong size: rewrite it (WEFT_WRITE_DFG=1)"
         );
         // Within one f16 step: the computation is deterministic, but libm's last bit may differ
         // between platforms.
         for (i, (k, f)) in kept.iter().zip(&fresh).enumerate() {
             for c in 0..3 {
                 let d = (k[c].to_bits() as i32 - f[c].to_bits() as i32).abs();
-                assert!(d <= 1, "entry {i} channel {c}: kept {} fresh {}: rewrite src/env/dfg_table.f16 with WEFT_WRITE_DFG=1", k[c], f[c]);
+                assert!(d <= 1, "entry {i} channel {c}: kept {} fresh {}: rewrite src/reference/dfg_table.f16 with WEFT_WRITE_DFG=1", k[c], f[c]);
             }
         }
     }

@@ -249,7 +249,7 @@ impl<'a> Wif<'a> {
                         ),
                     ));
                 }
-                *out = crate::reference::shading::srgb_decode(((v - lo) / (hi - lo)) as f32);
+                *out = crate::color::srgb_decode(((v - lo) / (hi - lo)) as f32);
             }
             table.insert(index, rgb);
         }

@@ -11,7 +11,7 @@
 //! again, silently, by [`FabricParams::to_gpu`], so no NaN, infinity or out-of-range value can reach
 //! a shader whatever built the params.
 
-pub mod assets;
+pub mod coverage;
 pub mod draft;
 mod pattern;
 pub mod presets;
@@ -23,8 +23,8 @@ pub use texture::{
     WeavePush, WeaveSat, WEAVE_TEXELS_PER_CELL, WEAVE_TEXEL_TOLERANCE,
 };
 
-use crate::scene::Warning;
 use crate::Error;
+use crate::Warning;
 
 /// The glTF extension name.
 pub const EXTENSION_NAME: &str = "WEFT_materials_fabric";

@@ -8,7 +8,7 @@
 //! weighted by the diffuse shadow factor (see `reference::weave`). These are linear in area, so trilinear and
 //! anisotropic filtering of them is again a correct footprint average.
 
-use crate::reference::weave::single::{weave_box, Weave};
+use crate::fabric::coverage::single::{weave_box, Weave};
 
 /// Texels per cell at level 0: enough that a magnified cell (where the point classifier, not the
 /// texture, is used) is still smooth, and that the gap of a 10 % gap weave spans 3 texels.
@@ -131,7 +131,7 @@ pub fn weave_texels_cpu(push: &WeavePush) -> Vec<[f32; 4]> {
 /// repeat has area 1) of the coverage *minus its mean*: the mean's share is added back exactly,
 /// so the table's values stay of the order of one cell's area whatever the box (no cancellation
 /// of large sums in f32). Texel `(2W + 1, 0)` holds the mean. Computed here in f64 from the
-/// exact box coverages ([`crate::reference::weave::double::weave_box`]), stored RGBA32F.
+/// exact box coverages ([`crate::fabric::coverage::double::weave_box`]), stored RGBA32F.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WeaveSat {
     /// `2W + 2` texels.
@@ -149,7 +149,7 @@ impl WeaveSat {
     /// The table of the weave of `push` at `push.width × push.height` cells per repeat (the
     /// weave texture's level 0, [`weave_level0_size`]).
     pub fn new(push: &WeavePush) -> WeaveSat {
-        use crate::reference::weave::double;
+        use crate::fabric::coverage::double;
         let w = double::Weave::from_push(push);
         let (cols, rows) = (push.cols.max(1) as f64, push.rows.max(1) as f64);
         let (nw, nh) = (push.width.max(1), push.height.max(1));
@@ -322,7 +322,7 @@ impl ThreadColourTable {
     /// The table of `params` (None without colour sequences); an error when the colour repeat
     /// is longer than [`Self::MAX_REPEAT_CELLS`].
     pub fn new(params: &super::FabricParams) -> crate::Result<Option<ThreadColourTable>> {
-        use crate::reference::weave::double;
+        use crate::fabric::coverage::double;
         let p = params.sanitized();
         if !p.has_thread_colours() {
             return Ok(None);

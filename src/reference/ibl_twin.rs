@@ -1169,12 +1169,12 @@ pub fn ibl_probe_cpu(inp: &IblProbeInput) -> IblProbeOutput {
     let rows = [xyz(inp.rot[0]), xyz(inp.rot[1]), xyz(inp.rot[2])];
     let sh: [[f32; 3]; 9] = std::array::from_fn(|k| xyz(inp.sh[k]));
     let xi = [inp.xi[0], inp.xi[1]];
-    let (hx, hy) = crate::env::hammersley(inp.counts[0], inp.counts[1]);
+    let [hx, hy] = formula::hammersley::<f64>(inp.counts[0], inp.counts[1]);
     let uv = equirect_uv(xyz(inp.dir));
     let c = inp.cube;
     IblProbeOutput {
         env_dir: v4(env_dir(xyz(inp.world), &rows), 0.0),
-        irradiance: v4(crate::env::sh_eval(&sh, xyz(inp.normal)), 0.0),
+        irradiance: v4(formula::sh_irradiance(&sh, xyz(inp.normal)), 0.0),
         ggx: v4(ggx_sample_h(xi, inp.lobe[0]), 0.0),
         as_h: v4(as_sample_h(xi, inp.lobe[1], inp.lobe[2]), 0.0),
         cosine: v4(cosine_sample(xi), 0.0),

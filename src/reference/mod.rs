@@ -19,11 +19,11 @@
 
 pub mod brdf;
 pub mod furnace;
-pub mod ibl;
 pub mod ibl_twin;
 pub mod probe;
 pub mod raster;
 pub mod shading;
-pub mod weave;
 
+/// The weave's CPU twin lives with the material ([`crate::fabric::coverage`]).
+pub use crate::fabric::coverage as weave;
 pub use probe::{probe_cpu_f32, probe_cpu_f64, ProbeInput, ProbeOutput};

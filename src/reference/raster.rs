@@ -25,7 +25,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use super::shading::{self, GltfSurface, Surface};
 use super::weave::weave_box_uv;
 use crate::fabric::FabricParams;
-use crate::render::gpu::{FrameData, GpuLight};
+use crate::records::{FrameData, GpuLight};
 use crate::scene::{Camera, Material, Scene};
 use crate::Error;
 
@@ -47,7 +47,7 @@ pub struct RasterOptions {
     pub pieces: u32,
     /// How fabric is shaded (`RenderOptions::shading`); Gouraud lights fabric vertices as
     /// gbuffer.vert does and interpolates the result.
-    pub shading: crate::render::Shading,
+    pub shading: crate::records::Shading,
 }
 
 /// A CPU-rendered image, laid out as `render::Frame`.
@@ -106,8 +106,8 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
     let (width, height) = (options.width, options.height);
     if width == 0
         || height == 0
-        || width > crate::render::MAX_SIZE
-        || height > crate::render::MAX_SIZE
+        || width > crate::records::MAX_SIZE
+        || height > crate::records::MAX_SIZE
     {
         return Err(Error::input(format!(
             "reference image size {width}x{height} is out of range"
@@ -175,7 +175,7 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
                 let normal = normal_matrix * Vec3::from(v.normal);
                 let tangent = t.extend(v.tangent[3] * tangent_sign);
                 let gouraud = match &dm.fabric {
-                    Some((_, gpu)) if options.shading == crate::render::Shading::Gouraud => {
+                    Some((_, gpu)) if options.shading == crate::records::Shading::Gouraud => {
                         Vec3::from(shading::gouraud_vertex(
                             &frame,
                             &lights,
@@ -259,7 +259,7 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
             // The woven model draws a sheet over what is behind it by its thread coverage (the
             // comparison models, as forward.frag, draw it opaque).
             Some(s)
-                if options.shading == crate::render::Shading::Fabric
+                if options.shading == crate::records::Shading::Fabric
                     && fragment.is_none_or(|f| s.depth > f.depth) =>
             {
                 // The sheet's threads (their light already weighted by their coverage, their

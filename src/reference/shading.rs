@@ -7,8 +7,7 @@
 
 use super::brdf::single::{self as fb, Vec3};
 use crate::fabric::GpuFabric;
-use crate::render::gpu::{FrameData, GpuLight, LIGHT_DIRECTIONAL, LIGHT_SPOT};
-use crate::render::Shading;
+use crate::records::{FrameData, GpuLight, Shading, LIGHT_DIRECTIONAL, LIGHT_SPOT};
 
 const PI: f32 = std::f32::consts::PI;
 
@@ -533,12 +532,28 @@ pub fn ggx_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
     a + b
 }
 
+/// `crate::env::dfg_table` at [`DFG_SIZE`], as f16 (A, B, E), kept in the
+/// repository (`src/reference/dfg_table.f16`, 6 KiB) because computing it costs ~280 ms of the first
+/// picture's time. A test recomputes it and compares; `WEFT_WRITE_DFG=1 cargo test --release --lib
+/// kept_dfg_table` rewrites the file after a change of the BRDF.
+pub fn dfg_table_kept() -> Vec<[half::f16; 3]> {
+    const KEPT: &[u8] = include_bytes!("dfg_table.f16");
+    KEPT.chunks_exact(6)
+        .map(|c| {
+            [0, 1, 2].map(|k| half::f16::from_bits(u16::from_le_bytes([c[2 * k], c[2 * k + 1]])))
+        })
+        .collect()
+}
+
+/// Side of the DFG table (n·v by roughness) the renderer samples.
+pub const DFG_SIZE: u32 = 32;
+
 /// The DFG table (A, B, E) at (cos θ, roughness) as the GPU stores it (f16) and samples it
 /// (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
 fn dfg_lookup(cos_theta: f32, roughness: f32) -> [f32; 3] {
     static TABLE: std::sync::OnceLock<Vec<[f32; 3]>> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
-        crate::env::dfg_table_kept()
+        dfg_table_kept()
             .iter()
             .map(|t| t.map(|x| x.to_f32()))
             .collect()
@@ -547,7 +562,6 @@ fn dfg_lookup(cos_theta: f32, roughness: f32) -> [f32; 3] {
 }
 
 fn bilinear(table: &[[f32; 3]], c: usize, cos_theta: f32, roughness: f32) -> f32 {
-    use crate::env::DFG_SIZE;
     let table = |k: usize| table[k][c];
     let n = DFG_SIZE as i32;
     let at = |i: i32, j: i32| table((j.clamp(0, n - 1) * n + i.clamp(0, n - 1)) as usize);
@@ -926,25 +940,7 @@ pub fn display_rgba8_with(curve: ToneCurve, hdr: Vec3, exposure: f32) -> [u8; 4]
     [srgb_encode(d[0]), srgb_encode(d[1]), srgb_encode(d[2]), 255]
 }
 
-/// The sRGB transfer function's inverse: an encoded value in [0, 1] to linear.
-pub fn srgb_decode(encoded: f32) -> f32 {
-    if encoded < 0.04045 {
-        encoded / 12.92
-    } else {
-        ((encoded + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// Linear [0, 1] to an sRGB-encoded byte.
-pub fn srgb_encode(linear: f32) -> u8 {
-    let l = linear.clamp(0.0, 1.0);
-    let s = if l <= 0.0031308 {
-        12.92 * l
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
-}
+pub use crate::color::{srgb_decode, srgb_encode};
 
 #[cfg(test)]
 mod tests {

@@ -6,8 +6,10 @@ mod passes;
 mod readback;
 mod targets;
 mod upload;
+/// The GPU records (`crate::records`), under their old name.
+pub use crate::records as gpu;
+pub use crate::records::{Shading, MAX_SIZE};
 pub use passes::environment;
-pub mod gpu;
 mod output;
 pub mod plan;
 pub mod shadow;
@@ -28,9 +30,6 @@ pub use targets::{
 pub use upload::GpuScene;
 
 use crate::Error;
-
-/// The largest output the renderer accepts on either side, before asking the device.
-pub const MAX_SIZE: u32 = 16384;
 
 /// What the G-buffer debug views show instead of the lit image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,69 +87,6 @@ impl DebugView {
                     DebugView::ALL
                         .iter()
                         .map(|v| v.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })
-    }
-}
-
-/// How fabric materials are shaded: the fabric model, or one of the simpler models the paper
-/// compares it with (figures 1, 2 and 4; `weft compare`). Other materials are not affected.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[repr(u32)]
-pub enum Shading {
-    /// The fabric model (docs/fabric-model.md §3).
-    #[default]
-    Fabric = 0,
-    /// The Phong reflection model evaluated per vertex and interpolated (paper figure 1).
-    Gouraud = 1,
-    /// The Phong reflection model per pixel (paper figure 2a).
-    Phong = 2,
-    /// One Ashikhmin–Shirley lobe per pixel, threads along the tangent everywhere, no weave
-    /// (paper figure 2b).
-    PlainAshikhminShirley = 3,
-}
-
-impl Shading {
-    /// In the order of the comparison figure: simplest first.
-    pub const ALL: [Shading; 4] = [
-        Shading::Gouraud,
-        Shading::Phong,
-        Shading::PlainAshikhminShirley,
-        Shading::Fabric,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Shading::Fabric => "fabric",
-            Shading::Gouraud => "gouraud",
-            Shading::Phong => "phong",
-            Shading::PlainAshikhminShirley => "ashikhmin-shirley",
-        }
-    }
-
-    /// The label under the model's panel in the comparison figure.
-    pub fn label(self) -> &'static str {
-        match self {
-            Shading::Fabric => "Fabric model",
-            Shading::Gouraud => "Gouraud",
-            Shading::Phong => "Phong",
-            Shading::PlainAshikhminShirley => "Ashikhmin-Shirley",
-        }
-    }
-
-    pub fn parse(text: &str) -> crate::Result<Shading> {
-        Shading::ALL
-            .iter()
-            .copied()
-            .find(|s| s.name() == text)
-            .ok_or_else(|| {
-                Error::input(format!(
-                    "unknown shading '{text}': choose one of {}",
-                    Shading::ALL
-                        .iter()
-                        .map(|s| s.name())
                         .collect::<Vec<_>>()
                         .join(", ")
                 ))

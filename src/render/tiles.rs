@@ -14,13 +14,7 @@ use glam::{Mat4, Vec3, Vec4};
 
 use super::gpu::{FrameData, GpuLight, LIGHT_DIRECTIONAL};
 
-/// Tile side in pixels.
-pub const TILE: u32 = 16;
-
-/// Tiles across and down for an image of `width` x `height`.
-pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
-    (width.div_ceil(TILE), height.div_ceil(TILE))
-}
+pub use crate::records::{tile_grid, TILE};
 
 /// The light lists of every tile (see the module docs for the layout). With `cull` false every
 /// light is in every tile.

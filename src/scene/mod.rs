@@ -696,15 +696,7 @@ impl Camera {
     }
 }
 
-/// Non-fatal problems found while loading: the scene still renders, and the CLI prints these.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Warning(pub String);
-
-impl std::fmt::Display for Warning {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
+pub use crate::error::Warning;
 
 #[derive(Clone, Debug, Default)]
 pub struct Scene {

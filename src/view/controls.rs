@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::assets::{self, Applied, MaterialRef, Overrides, Request, Source};
 use crate::env::LightsMode;
-use crate::fabric::assets::{self, Applied, MaterialRef, Overrides, Request, Source};
 use crate::fabric::FabricParams;
 use crate::render::plan::weave_key;
 use crate::render::{GpuScene, Renderer};

@@ -212,7 +212,7 @@ struct App {
     scene_width: u32,
     /// What the panel wove or changed, as `weft fabric` requests on the source file: the scene
     /// is the source with these applied, and "save woven file" writes it.
-    requests: Vec<crate::fabric::assets::Request>,
+    requests: Vec<crate::assets::Request>,
 }
 
 /// Warm-up frames of `--bench-frames` (the first pays the shader JIT and pipeline creation).

@@ -1,10 +1,86 @@
-//! GPU-side records, mirrored field for field by `glsl/include/frame.glsl` (std140 for the frame
+//! GPU-side records (below `render`, so that the CPU reference shades the same records),
+//! mirrored field for field by `glsl/include/frame.glsl` (std140 for the frame
 //! uniform, std430 for the storage buffers and push constants). Sizes are asserted at compile time.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::scene::{Light, LightKind, Material, TextureSlot};
+use crate::Error;
+
+/// The largest output the renderer accepts on either side, before asking the device.
+pub const MAX_SIZE: u32 = 16384;
+
+/// Tile side in pixels (the light lists of `render::tiles`).
+pub const TILE: u32 = 16;
+
+/// Tiles across and down for an image of `width` x `height`.
+pub fn tile_grid(width: u32, height: u32) -> (u32, u32) {
+    (width.div_ceil(TILE), height.div_ceil(TILE))
+}
+
+/// How fabric materials are shaded: the fabric model, or one of the simpler models the paper
+/// compares it with (figures 1, 2 and 4; `weft compare`). Other materials are not affected.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Shading {
+    /// The fabric model (docs/fabric-model.md §3).
+    #[default]
+    Fabric = 0,
+    /// The Phong reflection model evaluated per vertex and interpolated (paper figure 1).
+    Gouraud = 1,
+    /// The Phong reflection model per pixel (paper figure 2a).
+    Phong = 2,
+    /// One Ashikhmin–Shirley lobe per pixel, threads along the tangent everywhere, no weave
+    /// (paper figure 2b).
+    PlainAshikhminShirley = 3,
+}
+
+impl Shading {
+    /// In the order of the comparison figure: simplest first.
+    pub const ALL: [Shading; 4] = [
+        Shading::Gouraud,
+        Shading::Phong,
+        Shading::PlainAshikhminShirley,
+        Shading::Fabric,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shading::Fabric => "fabric",
+            Shading::Gouraud => "gouraud",
+            Shading::Phong => "phong",
+            Shading::PlainAshikhminShirley => "ashikhmin-shirley",
+        }
+    }
+
+    /// The label under the model's panel in the comparison figure.
+    pub fn label(self) -> &'static str {
+        match self {
+            Shading::Fabric => "Fabric model",
+            Shading::Gouraud => "Gouraud",
+            Shading::Phong => "Phong",
+            Shading::PlainAshikhminShirley => "Ashikhmin-Shirley",
+        }
+    }
+
+    pub fn parse(text: &str) -> crate::Result<Shading> {
+        Shading::ALL
+            .iter()
+            .copied()
+            .find(|s| s.name() == text)
+            .ok_or_else(|| {
+                Error::input(format!(
+                    "unknown shading '{text}': choose one of {}",
+                    Shading::ALL
+                        .iter()
+                        .map(|s| s.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+    }
+}
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -88,7 +164,7 @@ impl FrameData {
             light_count: 0,
             debug_view: 0,
             material_count: 0,
-            tile_columns: super::tiles::tile_grid(width, height).0,
+            tile_columns: tile_grid(width, height).0,
             env_rot: [
                 [1.0, 0.0, 0.0, 0.0],
                 [0.0, 1.0, 0.0, 0.0],

@@ -1,6 +1,8 @@
 //! The weave: what lies under a point, and the exact coverage of an axis-aligned box (model page §2).
+//! Part of the CPU reference (`reference::weave` is this module), kept beside the material because
+//! the weave's summed-area table and far-field colours are built from it.
 //!
-//! One source, two precisions, as in [`super::brdf`]: [`single`] is the twin of
+//! One source, two precisions, as in [`crate::reference::brdf`]: [`single`] is the twin of
 //! `glsl/include/weave.glsl`, [`double`] the f64 reference.
 //!
 //! Coordinates are in **cells**: `x = u / (s_p/2)`, `y = v / (s_p/2)` (one plain-weave repeat is

@@ -19,16 +19,25 @@
 //!   fabric's parameters, and says what it mapped and what it could not.
 
 use std::fmt;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 use serde_json::{json, Map, Value};
 
-use super::{
+use crate::fabric::{
     presets, presets::Preset, FabricParams, ThreadTexture, WeavePattern, EXTENSION_NAME,
     REPEAT_RANGE,
 };
 use crate::scene::Scene;
 use crate::{Error, Result};
+
+mod container;
+mod fallback;
+mod length;
+
+pub use container::{copy_external_files, external_files, Container};
+use fallback::{base_colour, num, rgb, sheet_transmission, texture_notes};
+pub use fallback::{extension_json, fallback_sheen, far_field_albedo, from_sheen};
+pub use length::{format_length, parse_length, uv_density, UvDensity};
 
 /// The sheen extension of the fallback.
 pub const SHEEN_EXTENSION: &str = "KHR_materials_sheen";
@@ -191,9 +200,9 @@ impl Overrides {
     /// override is set: a warp or weft of several colours becomes its colour sequence, thread by
     /// thread, reduced to its shortest period (a draft usually spells out several setts), and its
     /// mean the thread colour of the far-field fallback; of one colour, that colour. Returns the
-    /// warnings to show: a period longer than [`super::MAX_THREAD_COLOURS`] threads is drawn as
+    /// warnings to show: a period longer than [`crate::fabric::MAX_THREAD_COLOURS`] threads is drawn as
     /// its mean.
-    pub fn apply_draft(&mut self, d: &super::draft::Draft) -> Vec<String> {
+    pub fn apply_draft(&mut self, d: &crate::fabric::draft::Draft) -> Vec<String> {
         self.pattern = Some(d.pattern);
         let mut warnings = Vec::new();
         if self.rd.is_some() {
@@ -216,13 +225,13 @@ impl Overrides {
             *rd = mean.map(Colour::Rgb);
             if d.colour_count(warp) > 1 {
                 let period = shortest_period(colours);
-                if period.len() <= super::MAX_THREAD_COLOURS {
+                if period.len() <= crate::fabric::MAX_THREAD_COLOURS {
                     *sequence = Some(period.to_vec());
                 } else {
                     warnings.push(format!(
                         "the draft's {side} repeats its colours every {} threads, more than the {} a colour sequence holds: drawn as their mean (linear, weighted by thread count), right from afar, not thread by thread up close",
                         period.len(),
-                        super::MAX_THREAD_COLOURS
+                        crate::fabric::MAX_THREAD_COLOURS
                     ));
                 }
             }
@@ -278,7 +287,7 @@ impl Request {
             ..Default::default()
         };
         if let Some(path) = draft {
-            let d = super::draft::Draft::load(Path::new(path))?;
+            let d = crate::fabric::draft::Draft::load(Path::new(path))?;
             for w in overrides.apply_draft(&d) {
                 eprintln!("warning: {path}: {w}");
             }
@@ -289,126 +298,6 @@ impl Request {
             overrides,
         })
     }
-}
-
-/// A length with its unit (`0.8mm`, `1 cm`, `0.01m`, `0.03in`), in metres.
-pub fn parse_length(text: &str) -> Result<f64> {
-    let t = text.trim();
-    // The unit is the trailing letters, so that 1e-3m keeps its exponent.
-    let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
-    let (number, unit) = (number.trim(), &t[number.len()..]);
-    let scale = match unit {
-        "mm" => 1e-3,
-        "cm" => 1e-2,
-        "m" => 1.0,
-        "in" => 0.0254,
-        "" => {
-            return Err(Error::input(format!(
-                "pitch '{text}' has no unit; write it with one of mm, cm, m, in (e.g. 0.8mm): glTF lengths are metres, and a bare number is too easy to get wrong"
-            )))
-        }
-        other => {
-            return Err(Error::input(format!(
-                "pitch '{text}' has the unit '{other}', which weft does not know; use mm, cm, m or in (e.g. 0.8mm)"
-            )))
-        }
-    };
-    let x: f64 = number.parse().map_err(|_| {
-        Error::input(format!(
-            "pitch '{text}': '{number}' is not a number; write e.g. 0.8mm"
-        ))
-    })?;
-    if !(x.is_finite() && x > 0.0) {
-        return Err(Error::input(format!(
-            "pitch '{text}' must be a positive length (e.g. 0.8mm)"
-        )));
-    }
-    Ok(x * scale)
-}
-
-/// A length in metres, in the unit that reads best.
-pub fn format_length(m: f64) -> String {
-    if m < 1e-2 {
-        format!("{:.3} mm", m * 1e3)
-    } else if m < 1.0 {
-        format!("{:.2} cm", m * 1e2)
-    } else {
-        format!("{m:.3} m")
-    }
-}
-
-/// How texture space maps to the world on a material's triangles.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct UvDensity {
-    /// World length per UV unit (metres), `sqrt(world area / UV area)` over all its triangles.
-    pub metres_per_uv: f64,
-    /// The same per drawn primitive: the smallest and largest (they differ when parts of the
-    /// mesh are unwrapped at different scales).
-    pub min: f64,
-    pub max: f64,
-    /// Drawn primitives (mesh primitive × node) that use the material.
-    pub primitives: usize,
-}
-
-/// The UV density of material `material` in a loaded scene. `who` names it in messages.
-pub fn uv_density(scene: &Scene, material: usize, who: &str) -> Result<UvDensity> {
-    let (mut world, mut uv) = (0f64, 0f64);
-    let (mut min, mut max, mut primitives) = (f64::INFINITY, 0f64, 0usize);
-    for draw in &scene.draws {
-        let Some(mesh) = scene.meshes.get(draw.mesh) else {
-            continue;
-        };
-        if mesh.material != material || mesh.topology != crate::scene::Topology::Triangles {
-            continue;
-        }
-        let (mut w, mut t) = (0f64, 0f64);
-        for tri in mesh.indices.chunks_exact(3) {
-            let v: Option<Vec<_>> = tri.iter().map(|&i| mesh.vertices.get(i as usize)).collect();
-            let Some(v) = v else { continue };
-            let p: Vec<glam::DVec3> = v
-                .iter()
-                .map(|v| {
-                    draw.world
-                        .as_dmat4()
-                        .transform_point3(glam::Vec3::from(v.position).as_dvec3())
-                })
-                .collect();
-            let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
-            let q: Vec<glam::DVec2> = v
-                .iter()
-                .map(|v| glam::Vec2::from(v.uv).as_dvec2())
-                .collect();
-            let b = 0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]).abs();
-            if a.is_finite() && b.is_finite() {
-                w += a;
-                t += b;
-            }
-        }
-        primitives += 1;
-        if t > 0.0 && w > 0.0 {
-            let d = (w / t).sqrt();
-            min = min.min(d);
-            max = max.max(d);
-        }
-        world += w;
-        uv += t;
-    }
-    if primitives == 0 {
-        return Err(Error::input(format!(
-            "{who} is not used by any triangle the scene draws, so there is no mesh to measure the thread pitch on; choose a material that a node's mesh uses"
-        )));
-    }
-    if !(uv > 0.0 && world > 0.0) {
-        return Err(Error::input(format!(
-            "{who}: its triangles have no usable texture coordinates (TEXCOORD_0 missing, or every UV triangle has zero area), and the weave is laid out in UV space; unwrap the mesh (add UVs) and export again"
-        )));
-    }
-    Ok(UvDensity {
-        metres_per_uv: (world / uv).sqrt(),
-        min,
-        max,
-        primitives,
-    })
 }
 
 /// What was done to one material.
@@ -481,74 +370,6 @@ impl fmt::Display for Applied {
             writeln!(f, "  note: {n}")?;
         }
         Ok(())
-    }
-}
-
-/// A glTF file split into its JSON and, for `.glb`, its BIN chunk (kept as bytes).
-#[derive(Clone, Debug)]
-pub struct Container {
-    pub json: Value,
-    pub bin: Option<Vec<u8>>,
-    pub glb: bool,
-}
-
-impl Container {
-    /// Splits a `.gltf` or `.glb` file. The loader has accepted the bytes first
-    /// ([`transform`]), so only what it does not check is reported here.
-    pub fn split(bytes: &[u8], source: &str) -> Result<Container> {
-        let broken = |why: String| Error::input(format!("'{source}': {why}"));
-        if bytes.starts_with(b"glTF") {
-            // gltf::Glb subtracts the header size from the declared length unchecked.
-            let declared = bytes
-                .get(8..12)
-                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-            if declared.is_none_or(|l| l < 12) {
-                return Err(broken("the .glb header is broken".into()));
-            }
-            let glb = gltf::Glb::from_slice(bytes)
-                .map_err(|e| broken(format!("the .glb container is broken ({e})")))?;
-            let json = serde_json::from_slice(&glb.json)
-                .map_err(|e| broken(format!("the JSON chunk does not parse ({e})")))?;
-            Ok(Container {
-                json,
-                bin: glb.bin.map(|b| b.into_owned()),
-                glb: true,
-            })
-        } else {
-            let text = bytes
-                .strip_prefix(b"\xEF\xBB\xBF".as_slice())
-                .unwrap_or(bytes);
-            let json = serde_json::from_slice(text)
-                .map_err(|e| broken(format!("the JSON does not parse ({e})")))?;
-            Ok(Container {
-                json,
-                bin: None,
-                glb: false,
-            })
-        }
-    }
-
-    /// The file's bytes: pretty JSON for `.gltf`; for `.glb` compact JSON and the BIN chunk as it
-    /// was (gltf::Glb pads the JSON chunk with spaces as the specification asks).
-    pub fn to_bytes(&self) -> Result<Vec<u8>> {
-        let internal = |e: &dyn fmt::Display| Error::input(format!("cannot write the glTF: {e}"));
-        if !self.glb {
-            let mut text = serde_json::to_vec_pretty(&self.json).map_err(|e| internal(&e))?;
-            text.push(b'\n');
-            return Ok(text);
-        }
-        let json = serde_json::to_vec(&self.json).map_err(|e| internal(&e))?;
-        gltf::Glb {
-            header: gltf::binary::Header {
-                magic: *b"glTF",
-                version: 2,
-                length: 0, // to_writer computes it
-            },
-            json: json.into(),
-            bin: self.bin.as_deref().map(Into::into),
-        }
-        .to_vec()
-        .map_err(|e| internal(&e))
     }
 }
 
@@ -660,351 +481,6 @@ fn variant_stand_in(doc: &Value, index: usize) -> Option<usize> {
                 .then(|| prim.get("material")?.as_u64().map(|m| m as usize))
                 .flatten()
         })
-}
-
-/// A number for the file, rounded to 6 significant digits (f32 values would otherwise be
-/// written as 0.6200000047683716).
-fn num(x: f64) -> Value {
-    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
-    json!(rounded)
-}
-
-/// A colour for the file.
-fn rgb(c: [f64; 3]) -> Value {
-    Value::Array(c.iter().map(|&x| num(x)).collect())
-}
-
-/// The extension object for `p`, every field written out.
-pub fn extension_json(p: &FabricParams) -> Value {
-    let pattern = match WeavePattern::NAMES
-        .iter()
-        .find(|n| WeavePattern::by_name(n) == Some(p.pattern))
-    {
-        Some(n) => json!(n),
-        None => json!(p.pattern.to_rows()),
-    };
-    let c = |c: [f32; 3]| rgb(c.map(|x| x as f64));
-    let mut o = json!({
-        "pattern": pattern,
-        "repeat": num(p.repeat as f64),
-        "gap": num(p.gap as f64),
-        "e_along": num(p.e_along as f64),
-        "e_across": num(p.e_across as f64),
-        "rd_warp": c(p.rd_warp),
-        "rd_weft": c(p.rd_weft),
-        "rs": num(p.rs as f64),
-        "shadow_strength": num(p.shadow_strength as f64),
-        "shadow_width": num(p.shadow_width as f64),
-    });
-    if p.coupled_diffuse {
-        o["coupled_diffuse"] = json!(true);
-    }
-    o["thread_texture"] = json!(p.thread_texture.name());
-    for (key, list) in [
-        ("warp_colours", &p.warp_colours),
-        ("weft_colours", &p.weft_colours),
-    ] {
-        if !list.is_empty() {
-            o[key] = json!(list.iter().map(|&x| c(x)).collect::<Vec<_>>());
-        }
-    }
-    if let Some(t) = p.transmission {
-        o["transmission"] = num(t as f64);
-    }
-    o
-}
-
-/// Whether the fabric is a single sheet, and its threads' diffuse transmittance: `--transmission`;
-/// else the material's own `KHR_materials_diffuse_transmission` factor (a file that says its
-/// surface lets diffuse light through is a sheet); else, with `--sheet`, the preset's
-/// [`Preset::thread_transmittance`] (cotton-plain's for from-sheen); else not a sheet.
-fn sheet_transmission(
-    material: &Value,
-    who: &str,
-    o: &Overrides,
-    source: &Source,
-    notes: &mut Vec<String>,
-) -> Result<Option<f32>> {
-    if o.sheet == Some(false) {
-        return Ok(None);
-    }
-    if let Some(t) = o.transmission {
-        notes.push(format!(
-            "a single sheet: its gaps let light through, its threads {t} of their diffuse light"
-        ));
-        return Ok(Some(t));
-    }
-    if let Some(dt) = material
-        .get("extensions")
-        .and_then(|e| e.get("KHR_materials_diffuse_transmission"))
-    {
-        let factor = match dt.get("diffuseTransmissionFactor") {
-            None => 0.0,
-            Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
-                Error::input(format!(
-                    "{who}: extensions.KHR_materials_diffuse_transmission.diffuseTransmissionFactor must be a number, got {v}; fix the material or give --transmission"
-                ))
-            })?,
-        }
-        .clamp(0.0, 1.0) as f32;
-        notes.push(format!(
-            "a single sheet, from KHR_materials_diffuse_transmission: its threads pass {factor} of their diffuse light (diffuseTransmissionFactor; its colour and textures are not mapped), its gaps let light through"
-        ));
-        return Ok(Some(factor));
-    }
-    if o.sheet == Some(true) {
-        let t = match source {
-            Source::Preset(p) => p.thread_transmittance,
-            Source::FromSheen | Source::Exact => {
-                presets::by_name("cotton-plain").map_or(0.3, |p| p.thread_transmittance)
-            }
-        };
-        notes.push(format!("a single sheet: its gaps let light through, its threads {t} of their diffuse light (the preset's)"));
-        return Ok(Some(t));
-    }
-    Ok(None)
-}
-
-/// The weave's far-field diffuse albedo: each thread's colour times its shadow-weighted area over
-/// one whole repeat (exact, `weave_box` over the repeat). This is
-/// what the fabric's Lambert term averages to where the weave is too small to see.
-pub fn far_field_albedo(p: &FabricParams) -> [f64; 3] {
-    // Thread by thread: Σ s·colour over the colour repeat, per unit area, cell by cell.
-    if p.has_thread_colours() {
-        let w = crate::reference::weave::weave_of(p);
-        let [wc, hc] = super::ThreadColourTable::repeat_cells(p);
-        let mut out = [0.0; 3];
-        for j in 0..hc as usize {
-            let cf = p.thread_colour(false, j);
-            for i in 0..wc as usize {
-                let cw = p.thread_colour(true, i);
-                let (x, y) = (i as f64, j as f64);
-                let c = crate::reference::weave::double::weave_box(&w, x, y, x + 1.0, y + 1.0);
-                for k in 0..3 {
-                    out[k] += (c[2] * cw[k] as f64 + c[3] * cf[k] as f64) / (wc * hc) as f64;
-                }
-            }
-        }
-        return out;
-    }
-    let [ru, rv] = p.repeat_uv();
-    let [_, _, s_warp, s_weft] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
-    let mut out = [0.0; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        *o = s_warp * p.rd_warp[k] as f64 + s_weft * p.rd_weft[k] as f64;
-    }
-    out
-}
-
-/// `KHR_materials_sheen` for viewers without the woven model:
-///
-/// - **sheenRoughnessFactor** from the lobe's width. The A–S lobe's peak is
-///   `sqrt((eu+1)(ev+1))/(2π)`, that of an isotropic Phong lobe of exponent E is `(E+1)/(2π)`, so
-///   the isotropic lobe of the same solid angle has `E = sqrt((eu+1)(ev+1)) − 1`; Walter et al.
-///   2007 (§5.2) relate Phong and Beckmann: `α = sqrt(2/(E+2))`; glTF's roughness is `sqrt(α)`.
-///   Charlie's shape is not Beckmann's, so this matches widths, not lobes.
-/// - **sheenColorFactor**: `sqrt(thread colour) × thread coverage` (the gaps reflect nothing):
-///   the threads' colour, paler, as a fibre's grazing sheen looks. Chosen by eye; not a fit.
-pub fn fallback_sheen(p: &FabricParams) -> ([f64; 3], f64) {
-    let [ru, rv] = p.repeat_uv();
-    let [c_warp, c_weft, _, _] = crate::reference::weave::weave_box_uv(p, 0.0, ru, 0.0, rv);
-    let thread = c_warp + c_weft;
-    let mut colour = [0.0; 3];
-    if thread > 0.0 {
-        for (k, c) in colour.iter_mut().enumerate() {
-            let mean = (c_warp * p.rd_warp[k] as f64 + c_weft * p.rd_weft[k] as f64) / thread;
-            *c = (mean.max(0.0).sqrt() * thread).clamp(0.0, 1.0);
-        }
-    }
-    let e = (((p.e_along as f64 + 1.0) * (p.e_across as f64 + 1.0)).sqrt() - 1.0).max(0.0);
-    let alpha = (2.0 / (e + 2.0)).sqrt();
-    (colour, alpha.sqrt().clamp(0.0, 1.0))
-}
-
-/// A number at `key` of a JSON object, or `default` when absent; an error naming the material
-/// and the key when it is not a finite number.
-fn read_number(obj: &Value, key: &str, default: f64, who: &str, path: &str) -> Result<f64> {
-    match obj.get(key) {
-        None => Ok(default),
-        Some(v) => v.as_f64().filter(|x| x.is_finite()).ok_or_else(|| {
-            Error::input(format!(
-                "{who}: {path}.{key} must be a number, got {v}; fix the material or choose a preset instead of from-sheen"
-            ))
-        }),
-    }
-}
-
-/// An array of `n` numbers at `key`, or `default`.
-fn read_numbers<const N: usize>(
-    obj: &Value,
-    key: &str,
-    default: [f64; N],
-    who: &str,
-    path: &str,
-) -> Result<[f64; N]> {
-    let Some(v) = obj.get(key) else {
-        return Ok(default);
-    };
-    let bad = || {
-        Error::input(format!(
-            "{who}: {path}.{key} must be an array of {N} numbers, got {v}; fix the material or choose a preset instead of from-sheen"
-        ))
-    };
-    let a = v.as_array().filter(|a| a.len() == N).ok_or_else(bad)?;
-    let mut out = default;
-    for (o, x) in out.iter_mut().zip(a) {
-        *o = x.as_f64().filter(|x| x.is_finite()).ok_or_else(bad)?;
-    }
-    Ok(out)
-}
-
-/// The material's `baseColorFactor` (linear RGBA; glTF's default white).
-fn base_colour(material: &Value, who: &str) -> Result<[f64; 4]> {
-    let pbr = material
-        .get("pbrMetallicRoughness")
-        .cloned()
-        .unwrap_or(json!({}));
-    read_numbers(
-        &pbr,
-        "baseColorFactor",
-        [1.0; 4],
-        who,
-        "pbrMetallicRoughness",
-    )
-}
-
-/// The fabric for a material with `KHR_materials_sheen`, and what the mapping did:
-///
-/// - `rd_warp = rd_weft = baseColorFactor.rgb` (clamped to [0, 1]), the base colour texture (if
-///   any) over them; or, where the sheen has a `sheenColorTexture`, `rd = sheenColorFactor` with
-///   that texture over them (`thread_texture: "sheen_color"`): the sheen colour is the fibres';
-/// - the exponents from `sheenRoughnessFactor` r (clamped to [0.05, 1]), the inverse of
-///   [`fallback_sheen`]'s roughness: `α = r²`, `E = 2/α² − 2`, split with
-///   `e_along/e_across` = [`FROM_SHEEN_RATIO`] at the same peak, `sqrt((ea+1)(ex+1)) = E + 1`;
-/// - `rs = 0.04` (glTF's default dielectric F0, IOR 1.5);
-/// - plain weave, gap and shadows of cotton-plain: the sheen carries no weave;
-/// - without a sheen colour texture, `sheenColorFactor` has no counterpart (the woven highlight
-///   is untinted Fresnel); `sheenRoughnessTexture` never has one. Said in the notes.
-pub fn from_sheen(material: &Value, who: &str, notes: &mut Vec<String>) -> Result<FabricParams> {
-    let sheen = material
-        .get("extensions")
-        .and_then(|e| e.get(SHEEN_EXTENSION))
-        .ok_or_else(|| {
-            Error::input(format!(
-                "{who} has no {SHEEN_EXTENSION} to map from; choose a preset ({}) instead of from-sheen",
-                presets::names()
-            ))
-        })?;
-    if !sheen.is_object() {
-        return Err(Error::input(format!(
-            "{who}: extensions.{SHEEN_EXTENSION} must be an object, got {sheen}"
-        )));
-    }
-    let path = format!("extensions.{SHEEN_EXTENSION}");
-    let colour = read_numbers(sheen, "sheenColorFactor", [0.0; 3], who, &path)?;
-    let r = read_number(sheen, "sheenRoughnessFactor", 0.0, who, &path)?;
-    let base = base_colour(material, who)?;
-    let rc = r.clamp(0.05, 1.0);
-    let alpha = rc * rc;
-    let e = (2.0 / (alpha * alpha) - 2.0).max(0.0);
-    let e_across = ((e + 1.0) / FROM_SHEEN_RATIO.sqrt() - 1.0).max(0.0);
-    if e_across == 0.0 {
-        notes.push(format!(
-            "from-sheen: sheenRoughnessFactor {r} is rougher than the broadest lobe of ratio {FROM_SHEEN_RATIO} (about 0.78): e_across is 0"
-        ));
-    }
-    let e_along = FROM_SHEEN_RATIO * (e_across + 1.0) - 1.0;
-    let cotton = presets::by_name("cotton-plain").expect("cotton-plain is a preset");
-    let sheen_texture = sheen.get("sheenColorTexture").is_some();
-    let thread = if sheen_texture {
-        colour
-    } else {
-        [base[0], base[1], base[2]]
-    };
-    let rd = thread.map(|x| x.clamp(0.0, 1.0) as f32);
-    let mut p = cotton.params(1.0);
-    p.rd_warp = rd;
-    p.rd_weft = rd;
-    p.rs = 0.04;
-    p.e_along = (e_along as f32).clamp(0.0, 1e6);
-    p.e_across = (e_across as f32).clamp(0.0, 1e6);
-    p.thread_texture = if sheen_texture {
-        ThreadTexture::SheenColor
-    } else {
-        ThreadTexture::BaseColor
-    };
-    notes.push(format!(
-        "from-sheen: rd = {} [{:.3}, {:.3}, {:.3}]; sheenRoughnessFactor {r}{} -> isotropic exponent {e:.1} -> e_along {:.1}, e_across {:.1} (ratio {FROM_SHEEN_RATIO}); rs 0.04 (glTF default F0); plain weave with cotton-plain's gap and shadow",
-        if sheen_texture { "sheenColorFactor" } else { "baseColorFactor" },
-        rd[0], rd[1], rd[2],
-        if rc != r { format!(" (clamped to {rc})") } else { String::new() },
-        p.e_along, p.e_across
-    ));
-    let base_texture = material
-        .get("pbrMetallicRoughness")
-        .and_then(|p| p.get("baseColorTexture"))
-        .is_some();
-    if sheen_texture {
-        notes.push(
-            "from-sheen: its sheenColorTexture is the thread colour's texture (thread_texture \"sheen_color\"), multiplied over sheenColorFactor".into(),
-        );
-        if base_texture {
-            notes.push(
-                "from-sheen: its baseColorTexture is not used by the woven model (the sheen colour texture is); the material keeps it for other viewers".into(),
-            );
-        }
-    } else if colour.iter().all(|&c| c == 0.0) {
-        notes.push(
-            "from-sheen: sheenColorFactor is 0 (this material's sheen is off); only its base colour and roughness were used".into(),
-        );
-    } else {
-        notes.push(format!(
-            "from-sheen: sheenColorFactor [{:.3}, {:.3}, {:.3}] is not mapped (the woven highlight is untinted Fresnel; without a sheenColorTexture the base colour is the thread colour)",
-            colour[0], colour[1], colour[2]
-        ));
-    }
-    if sheen.get("sheenRoughnessTexture").is_some() {
-        notes.push(
-            "from-sheen: sheenRoughnessTexture is not used by the woven model (its lobe widths are per material); the material keeps it for other viewers".into(),
-        );
-    }
-    Ok(p)
-}
-
-/// What the woven model does with each texture of the material (said, never silent): the thread
-/// texture multiplies the thread colours; the normal map and the occlusion texture stay.
-fn texture_notes(material: &Value, p: &FabricParams, notes: &mut Vec<String>) {
-    let pbr = material.get("pbrMetallicRoughness");
-    let has = |obj: Option<&Value>, key: &str| obj.and_then(|o| o.get(key)).is_some();
-    let sheen = material
-        .get("extensions")
-        .and_then(|e| e.get(SHEEN_EXTENSION));
-    let base = has(pbr, "baseColorTexture");
-    let sheen_colour = has(sheen, "sheenColorTexture");
-    match p.thread_texture {
-        ThreadTexture::BaseColor if base => notes.push(
-            "textures: its baseColorTexture multiplies the thread colours (thread_texture \"base_color\": the print, dye or damask over the weave)".into(),
-        ),
-        ThreadTexture::SheenColor if sheen_colour => notes.push(
-            "textures: its sheenColorTexture multiplies the thread colours (thread_texture \"sheen_color\")".into(),
-        ),
-        ThreadTexture::BaseColor | ThreadTexture::SheenColor => notes.push(format!(
-            "textures: thread_texture \"{}\" but the material has no such texture: plain thread colours",
-            p.thread_texture.name()
-        )),
-        ThreadTexture::None if base || sheen_colour => notes.push(
-            "textures: thread_texture \"none\": the woven model ignores its colour textures".into(),
-        ),
-        ThreadTexture::None => {}
-    }
-    if material.get("normalTexture").is_some() {
-        notes.push("textures: its normalTexture stays and bends the weave's shading frame".into());
-    }
-    if material.get("occlusionTexture").is_some() {
-        notes.push(
-            "textures: its occlusionTexture stays and darkens the environment light on the weave (glTF: indirect light only)".into(),
-        );
-    }
 }
 
 /// Adds `name` to the document's `extensionsUsed` when missing.
@@ -1160,14 +636,14 @@ pub fn apply(doc: &mut Value, scene: &Scene, requests: &[Request]) -> Result<Vec
             params.transmission =
                 sheet_transmission(&original, &who, o, &request.source, &mut notes)?;
             if params.has_thread_colours() {
-                super::ThreadColourTable::check(&params)
+                crate::fabric::ThreadColourTable::check(&params)
                     .map_err(|e| Error::input(format!("{who}: {e}")))?;
                 notes.push(format!(
                     "thread by thread: {} warp and {} weft colours (repeat {} x {} cells)",
                     params.warp_colours.len().max(1),
                     params.weft_colours.len().max(1),
-                    super::ThreadColourTable::repeat_cells(&params)[0],
-                    super::ThreadColourTable::repeat_cells(&params)[1]
+                    crate::fabric::ThreadColourTable::repeat_cells(&params)[0],
+                    crate::fabric::ThreadColourTable::repeat_cells(&params)[1]
                 ));
             }
             texture_notes(&original, &params, &mut notes);
@@ -1300,89 +776,6 @@ pub fn load_with_fabric(
     let (out, applied) = transform(&bytes, &source, base_dir.as_deref(), &requests)?;
     let scene = crate::scene::load_slice_with(&out, &source, base_dir.as_deref(), options)?;
     Ok((scene, applied))
-}
-
-/// The relative file URIs (buffers and images) of a `.gltf`, percent-decoded; data: URIs and
-/// the BIN chunk are not files.
-pub fn external_files(doc: &Value) -> Vec<String> {
-    let mut out = Vec::new();
-    for list in ["buffers", "images"] {
-        for item in doc
-            .get(list)
-            .and_then(Value::as_array)
-            .into_iter()
-            .flatten()
-        {
-            if let Some(uri) = item.get("uri").and_then(Value::as_str) {
-                if uri.starts_with("data:") {
-                    continue;
-                }
-                let decoded = urlencoding::decode_binary(uri.as_bytes());
-                let path = String::from_utf8_lossy(&decoded).into_owned();
-                if !out.contains(&path) {
-                    out.push(path);
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Copies the external files of a `.gltf` from `from` to `to` (the output's folder), so that the
-/// copy's unchanged URIs resolve. Files already there with the same bytes are left; different
-/// ones are an error (nothing is overwritten). URIs that leave the folder (`..`, absolute) are
-/// an error unless `from` and `to` are the same folder. Returns the files copied.
-pub fn copy_external_files(doc: &Value, from: &Path, to: &Path) -> Result<Vec<PathBuf>> {
-    let same = match (from.canonicalize(), to.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
-    };
-    let mut copied = Vec::new();
-    if same {
-        return Ok(copied);
-    }
-    for rel in external_files(doc) {
-        let p = Path::new(&rel);
-        let inside = !rel.contains(':')
-            && p.components()
-                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
-        if !inside {
-            return Err(Error::input(format!(
-                "the file refers to '{rel}', outside its own folder; write the output into the input's folder (-o {}/NAME.gltf) so that the reference still resolves",
-                from.display()
-            )));
-        }
-        let p: PathBuf = p
-            .components()
-            .filter(|c| !matches!(c, Component::CurDir))
-            .collect();
-        let src = from.join(&p);
-        let dst = to.join(&p);
-        let bytes = std::fs::read(&src).map_err(|e| {
-            Error::input(format!(
-                "cannot read '{}' (referenced by the file): {e}",
-                src.display()
-            ))
-        })?;
-        if let Ok(existing) = std::fs::read(&dst) {
-            if existing == bytes {
-                continue;
-            }
-            return Err(Error::input(format!(
-                "'{}' exists and differs from the input's '{}'; the copy's reference to '{rel}' would resolve to the wrong file: choose another output folder",
-                dst.display(),
-                src.display()
-            )));
-        }
-        if let Some(parent) = dst.parent() {
-            std::fs::create_dir_all(parent)
-                .map_err(|e| Error::input(format!("cannot create '{}': {e}", parent.display())))?;
-        }
-        std::fs::write(&dst, &bytes)
-            .map_err(|e| Error::input(format!("cannot write '{}': {e}", dst.display())))?;
-        copied.push(dst);
-    }
-    Ok(copied)
 }
 
 #[cfg(test)]

@@ -5,13 +5,13 @@
 //!
 //! It shares none of the GPU's approximations: no cube resampling, no mips, no SH, no split sum,
 //! no importance sampling. The BRDFs are the project's one Rust copy: the fabric mixture of
-//! [`super::brdf::double`] (f64) and the glTF metallic-roughness BRDF of [`super::shading`]
+//! [`crate::reference::brdf::double`] (f64) and the glTF metallic-roughness BRDF of [`crate::reference::shading`]
 //! (f32, accumulated in f64). A map pixel spans 0.35° on a 1024-wide map: lobes narrower than a
 //! few pixels (A–S exponents above ~10⁴, GGX roughness below ~0.05) are under-resolved here.
 
-use super::brdf::double as fd;
-use super::shading::{gltf_brdf_cos, sheen_albedo, GltfSurface, Surface};
-use crate::env::{pixel_dir, world_from_env, Environment};
+use super::{pixel_dir, world_from_env, Environment};
+use crate::reference::brdf::double as fd;
+use crate::reference::shading::{gltf_brdf_cos, sheen_albedo, GltfSurface, Surface};
 
 /// The environment as a list of world-space directions with radiance × solid angle.
 pub struct EnvQuadrature {
@@ -133,7 +133,7 @@ impl EnvQuadrature {
                 // The GGX lobe's directional albedo for its energy compensation, by its own
                 // quadrature (crate::env::dfg, 1024 Hammersley samples in f64), not the GPU's
                 // table.
-                let [a, b] = crate::env::dfg(nv.clamp(1e-4, 1.0) as f64, gs.roughness as f64, 1024);
+                let [a, b] = super::dfg(nv.clamp(1e-4, 1.0) as f64, gs.roughness as f64, 1024);
                 let ess = (a + b) as f32;
                 self.integrate(|l| {
                     let lf = l.map(|x| x as f32);
