@@ -6,7 +6,7 @@
 //! cloth material's parameters, weave patterns and the weave's coverage), `scene` (glTF into plain
 //! data), `records` (the GPU's records, mirrored by glsl/include/frame.glsl), `reference` (the CPU
 //! twin of every shader function), `env` (environment maps, their preprocessing and the f64
-//! quadrature truth), `render` (the plan and the passes of a frame), `assets` (the woven model
+//! quadrature truth), `render` (the plan and the passes of a frame), `metrics` (image metrics: FLIP, RMSE, PSNR), `assets` (the woven model
 //! written into glTF files), then the commands' libraries (`package`, `batch`, `bench`, `compare`,
 //! `fidelity`, `sheet`, `view`). A module uses only lower ones: tests/module_layers.rs checks it,
 //! with no exception.
@@ -23,6 +23,7 @@ pub mod compare;
 pub mod env;
 pub mod fabric;
 pub mod fidelity;
+pub mod metrics;
 pub mod package;
 pub mod parse;
 pub mod records;

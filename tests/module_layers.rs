@@ -20,6 +20,7 @@ const LAYERS: &[&str] = &[
     "reference",
     "env",
     "render",
+    "metrics",
     "assets",
     "package",
     "batch",
