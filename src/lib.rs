@@ -7,7 +7,7 @@
 //! data), `records` (the GPU's records, mirrored by glsl/include/frame.glsl), `reference` (the CPU
 //! twin of every shader function), `env` (environment maps, their preprocessing and the f64
 //! quadrature truth), `render` (the plan and the passes of a frame), `metrics` (image metrics: FLIP, RMSE, PSNR), `assets` (the woven model
-//! written into glTF files), then the commands' libraries (`package`, `batch`, `bench`, `compare`,
+//! written into glTF files), `spec` (what to render, and the one way to load it), then the commands' libraries (`package`, `batch`, `bench`, `compare`,
 //! `fidelity`, `sheet`, `view`). A module uses only lower ones: tests/module_layers.rs checks it,
 //! with no exception.
 //!
@@ -32,6 +32,7 @@ pub mod reflect;
 pub mod render;
 pub mod scene;
 pub mod sheet;
+pub mod spec;
 pub mod view;
 #[allow(unsafe_code)]
 pub mod vk;

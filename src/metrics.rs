@@ -150,3 +150,41 @@ pub fn psnr_linear(reference: &[f32], test: &[f32], mask: &[bool]) -> f64 {
 pub(crate) fn psnr_db(peak: f64, mse: f64) -> f64 {
     10.0 * (peak * peak / mse).log10()
 }
+
+/// `frames` frames of `scene` (at least one) and the warm frame's times: the first frame (upload
+/// included) pays lavapipe's JIT compiling and pipeline creation, so with more than one frame
+/// each pass's times and the whole frame's wall time are the medians of the frames after it.
+/// `weft render --timings --frames N` prints this; `weft bench --startup` divides by it. Returns
+/// the last frame with its timings replaced by the medians, and the frame's wall ms.
+pub fn render_warm(
+    renderer: &mut crate::render::Renderer,
+    scene: &crate::scene::Scene,
+    options: &crate::render::RenderOptions,
+    frames: u32,
+) -> crate::Result<(Frame, f64)> {
+    let start = std::time::Instant::now();
+    let gpu_scene = renderer.upload(scene)?;
+    let mut frame = renderer.render_frame(scene, &gpu_scene, options)?;
+    let mut wall_ms = vec![start.elapsed().as_secs_f64() * 1e3];
+    let mut history = vec![frame.timings.clone()];
+    for _ in 1..frames {
+        let t = std::time::Instant::now();
+        frame = renderer.render_frame(scene, &gpu_scene, options)?;
+        wall_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        history.push(frame.timings.clone());
+    }
+    if frames > 1 {
+        // Warm frames only.
+        history.remove(0);
+        wall_ms.remove(0);
+        for (i, t) in frame.timings.iter_mut().enumerate() {
+            t.wall_ms = t
+                .wall_ms
+                .map(|_| median(history.iter().filter_map(|h| h[i].wall_ms).collect()));
+            t.gpu_ms = t
+                .gpu_ms
+                .map(|_| median(history.iter().filter_map(|h| h[i].gpu_ms).collect()));
+        }
+    }
+    Ok((frame, median(wall_ms)))
+}

@@ -22,6 +22,7 @@ const LAYERS: &[&str] = &[
     "render",
     "metrics",
     "assets",
+    "spec",
     "package",
     "batch",
     "bench",

@@ -10,7 +10,6 @@
 //! (anisotropy 0.8).
 
 use std::fmt::Write;
-use std::path::Path;
 use std::sync::Arc;
 
 use crate::env::{EnvLighting, Environment, IblLevel};
@@ -116,16 +115,15 @@ fn rel_error(truth: &Frame, test: &Frame, covered: &[bool]) -> f64 {
     e / r.max(1e-30)
 }
 
-/// Runs the IBL bench at `size` with `frames` timed frames per configuration; the ground truth
-/// takes `truth_samples` Monte Carlo samples per pixel.
+/// Runs the IBL bench under `env` at `size` with `frames` timed frames per configuration; the
+/// ground truth takes `truth_samples` Monte Carlo samples per pixel.
 pub fn run(
     renderer: &mut Renderer,
-    env_path: &Path,
+    env: Arc<Environment>,
     size: (u32, u32),
     frames: u32,
     truth_samples: u32,
 ) -> crate::Result<IblReport> {
-    let env = Arc::new(Environment::load(env_path)?);
     let mut cloth = crate::scene::default_scene();
     let lamps = cloth.clone();
     cloth.lights.clear();

@@ -23,31 +23,27 @@ pub fn load(
     env_rotation: f32,
     own_env: bool,
 ) -> crate::Result<Scene> {
-    let load = LoadOptions {
-        variant: variant.clone(),
-    };
-    let mut scene = match source {
-        SceneSource::File(path) => {
-            let ext = path
-                .extension()
-                .and_then(|e| e.to_str())
-                .map(str::to_ascii_lowercase);
-            if !matches!(ext.as_deref(), Some("gltf") | Some("glb")) {
-                return Err(Error::input(format!(
-                    "{} is not a .gltf or .glb file: drop a glTF scene on the window",
-                    path.display()
-                )));
-            }
-            crate::scene::load_with(path, &load)?
+    if let SceneSource::File(path) = source {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        if !matches!(ext.as_deref(), Some("gltf") | Some("glb")) {
+            return Err(Error::input(format!(
+                "{} is not a .gltf or .glb file: drop a glTF scene on the window",
+                path.display()
+            )));
         }
-        SceneSource::Builtin if variant.is_none() => crate::scene::default_scene(),
-        SceneSource::Builtin => crate::scene::load_slice_with(
-            crate::scene::DEFAULT_SCENE_GLB,
-            "built-in default scene",
-            None,
-            &load,
-        )?,
+    }
+    let spec = crate::spec::SceneSpec {
+        scene: match source {
+            SceneSource::File(path) => Some(path.clone()),
+            SceneSource::Builtin => None,
+        },
+        variant,
+        ..Default::default()
     };
+    let (mut scene, _) = spec.load_unstaged()?;
     crate::env::stage(&mut scene, lights, env_rotation, own_env);
     Ok(scene)
 }

@@ -310,17 +310,3 @@ pub fn run(args: FabricArgs) -> anyhow::Result<()> {
     println!("wrote {}", output.display());
     Ok(())
 }
-
-/// `weft render --fabric MATERIAL=PRESET[@PITCH]`: the scene with the fabric added in memory
-/// (the same transform as `weft fabric`), saying what was done on stderr.
-pub fn load(
-    path: Option<&Path>,
-    specs: &[String],
-    options: &weft::scene::LoadOptions,
-) -> anyhow::Result<weft::scene::Scene> {
-    let (scene, applied) = assets::load_with_fabric(path, specs, options)?;
-    for a in &applied {
-        eprint!("fabric: {a}");
-    }
-    Ok(scene)
-}

@@ -1,0 +1,51 @@
+//! `weft plan`: what a frame of the scene needs.
+
+use super::*;
+
+#[derive(Args)]
+pub(super) struct PlanArgs {
+    #[command(flatten)]
+    pub(super) scene: SceneArgs,
+    /// Print the plan as JSON.
+    #[arg(long)]
+    pub(super) json: bool,
+    /// Anti-aliasing, as for render (its default: fxaa; ssN: the plan of each of its N² frames).
+    #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
+    pub(super) aa: render::Antialias,
+    /// The woven fabric tried on a material, as for render: MATERIAL=PRESET[+sheet][@PITCH][:DRAFT.wif];
+    /// repeatable.
+    #[arg(long)]
+    pub(super) fabric: Vec<String>,
+}
+
+pub(super) fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
+    let (scene, mut options) = load_scene_with(&args.scene, (1280, 720), &args.fabric, false)?;
+    options.antialias = args.aa;
+    let plan = Plan::new(&scene, &options);
+    if args.json {
+        let mut json = serde_json::to_value(&plan)?;
+        json["animations"] = scene
+            .animations()
+            .iter()
+            .map(|a| serde_json::json!({"name": a.name, "duration": a.duration}))
+            .collect();
+        json["light_types_mask"] = plan.light_types_mask().into();
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    } else {
+        println!("scene       {}", scene.source);
+        println!("{plan}");
+        for (i, a) in scene.animations().iter().enumerate() {
+            println!(
+                "{}{i}: '{}', {:.3} s",
+                if i == 0 {
+                    "animations  "
+                } else {
+                    "            "
+                },
+                a.name,
+                a.duration
+            );
+        }
+    }
+    Ok(())
+}
