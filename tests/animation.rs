@@ -480,14 +480,10 @@ fn a_channel_to_a_missing_node_is_dropped_with_a_warning_naming_it() {
             dir.path().join("o.png").display().to_string(),
         ],
     ] {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_weft"))
+        let o = common::weft()
             .args(&args)
             .arg(&path)
             .env("RUST_BACKTRACE", "1")
-            .env(
-                "WEFT_DEVICE",
-                std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-            )
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);

@@ -16,13 +16,9 @@ use weft::batch::{
     self, sequence, ExitClass, FrameRange, Job, OutputPattern, Split, Sweep, SweepKey, TaskSpec,
 };
 
+/// `common::weft`: no engine variable of the machine running the tests leaks into a task.
 fn weft() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env(
-        "WEFT_DEVICE",
-        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-    );
-    // No engine variable of the machine running the tests leaks into a task.
+    let mut c = common::weft();
     for k in [
         "SLURM_ARRAY_TASK_ID",
         "SLURM_ARRAY_TASK_COUNT",
@@ -39,13 +35,9 @@ fn weft() -> Command {
     c
 }
 
-/// `weft` with no Vulkan driver to find: a command that gets as far as opening a device fails
-/// with "No Vulkan driver", so one that fails otherwise never touched the GPU.
+/// [`weft`] with no Vulkan driver (`common::weft_without_gpu`).
 fn weft_without_gpu() -> Command {
-    let mut c = weft();
-    c.env("VK_ICD_FILENAMES", "/nonexistent")
-        .env("VK_DRIVER_FILES", "/nonexistent");
-    c
+    common::without_gpu(weft())
 }
 
 #[test]
@@ -668,7 +660,7 @@ fn tasks_share_the_frames_and_a_sweep_writes_each_value() {
         let img = image::open(dir.path().join(format!("e_{v}_4.png")))
             .unwrap()
             .to_rgba8();
-        common::mean_rgb(img.as_raw())
+        weft::sheet::mean_srgb(img.as_raw())
     };
     let (dark, mid, bright) = (mean("-2"), mean("0"), mean("2"));
     assert!(dark < mid && mid < bright, "{dark} {mid} {bright}");

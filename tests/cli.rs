@@ -1,25 +1,12 @@
 //! The command line as a user meets it: errors are one clear sentence and a non-zero exit.
 
-use std::process::Command;
+mod common;
 
-fn weft() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env(
-        "WEFT_DEVICE",
-        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-    );
-    c
-}
-
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("weft-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{temp_dir, weft, weft_without_gpu};
 
 #[test]
 fn no_vulkan_driver_says_what_to_install() {
-    let dir = temp("nodriver");
+    let dir = temp_dir("cli-nodriver");
     let out = weft()
         .args(["render", "-o"])
         .arg(dir.join("x.png"))
@@ -54,7 +41,7 @@ fn missing_scene_file_is_named() {
 
 #[test]
 fn non_gltf_file_is_named() {
-    let dir = temp("notgltf");
+    let dir = temp_dir("cli-notgltf");
     let path = dir.join("notes.gltf");
     std::fs::write(&path, "this is not glTF").unwrap();
     let out = weft().arg("render").arg(&path).output().unwrap();
@@ -78,7 +65,7 @@ fn bad_size_is_explained() {
 
 #[test]
 fn render_writes_png_and_exr() {
-    let dir = temp("render");
+    let dir = temp_dir("cli-render");
     let png = dir.join("out.png");
     let exr = dir.join("out.exr");
     let out = weft()
@@ -218,7 +205,7 @@ fn plan_prints_the_default_scene() {
 
 #[test]
 fn compare_writes_the_labelled_figure_and_rejects_unknown_shading() {
-    let dir = temp("compare");
+    let dir = temp_dir("cli-compare");
     let png = dir.join("figure.png");
     let out = weft()
         .args(["compare", "--validate", "--size", "160x90", "-o"])
@@ -257,7 +244,7 @@ fn compare_writes_the_labelled_figure_and_rejects_unknown_shading() {
 #[test]
 fn relative_paths_start_where_the_user_is() {
     // A user's own folder: the scene, the environment and the output named relative to it.
-    let dir = temp("relative");
+    let dir = temp_dir("cli-relative");
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     std::fs::copy(root.join("assets/scenes/spheres.glb"), dir.join("mine.glb")).unwrap();
     std::fs::copy(
@@ -318,7 +305,7 @@ fn bad_environment_flags_are_refused_clearly() {
     ] {
         let out = weft()
             .args(["render", flag, value, "--size", "32x18", "-o"])
-            .arg(temp("badenv").join("never.png"))
+            .arg(temp_dir("cli-badenv").join("never.png"))
             .output()
             .unwrap();
         assert!(!out.status.success(), "{flag} {value}");
@@ -326,7 +313,7 @@ fn bad_environment_flags_are_refused_clearly() {
         assert!(err.contains(expect), "{flag} {value}: {err}");
     }
     // A broken HDR (a PNG renamed) is named.
-    let dir = temp("brokenhdr");
+    let dir = temp_dir("cli-brokenhdr");
     std::fs::write(dir.join("bad.hdr"), b"#?RADIANCE\nnot really").unwrap();
     let out = weft()
         .args(["render", "--size", "32x18", "--env"])
@@ -418,7 +405,7 @@ fn help_lists_the_values_of_every_choice() {
 /// weft prints the chain (it used to be in the message and the source both).
 #[test]
 fn os_message_appears_once() {
-    let dir = temp("osmessage");
+    let dir = temp_dir("cli-osmessage");
     let file = dir.join("a-file");
     std::fs::write(&file, "in the way").unwrap();
     let out = weft()
@@ -432,14 +419,6 @@ fn os_message_appears_once() {
     assert_eq!(err.matches(&os).count(), 1, "{err}");
     assert!(err.contains("a-file"), "{err}");
     let _ = std::fs::remove_dir_all(dir);
-}
-
-/// `weft` with no Vulkan driver: a command refused before any device work still says why.
-fn weft_without_gpu() -> Command {
-    let mut c = weft();
-    c.env("VK_ICD_FILENAMES", "/nonexistent")
-        .env("VK_DRIVER_FILES", "/nonexistent");
-    c
 }
 
 /// Every file in `dir` with its bytes, to show that a refused command changed nothing.
@@ -461,7 +440,7 @@ fn snapshot(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
 /// refusal comes first, and nothing in the folder changes.
 #[test]
 fn outputs_that_collide_with_inputs_or_each_other_are_refused_before_any_work() {
-    let dir = temp("collide");
+    let dir = temp_dir("cli-collide");
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     for f in std::fs::read_dir(root.join("tests/data/khronos/SimpleSkin/glTF")).unwrap() {
         let f = f.unwrap();
@@ -586,7 +565,7 @@ fn outputs_that_collide_with_inputs_or_each_other_are_refused_before_any_work() 
 /// render, and written all or none.
 #[test]
 fn a_failed_render_leaves_none_of_its_outputs() {
-    let dir = temp("leftover");
+    let dir = temp_dir("cli-leftover");
     let o = weft()
         .current_dir(&dir)
         .args([
@@ -614,7 +593,7 @@ fn a_failed_render_leaves_none_of_its_outputs() {
 /// panicked in the PNG encoder and left a 0-byte temporary file (defect 2).
 #[test]
 fn one_pixel_renders_write_one_pixel() {
-    let dir = temp("onepixel");
+    let dir = temp_dir("cli-onepixel");
     for size in ["1x1", "2x1", "1x3"] {
         let o = weft()
             .current_dir(&dir)
@@ -649,7 +628,7 @@ fn one_pixel_renders_write_one_pixel() {
 /// which adds the process and thread ids, is kept under the limit too.
 #[test]
 fn the_longest_file_names_are_written() {
-    let dir = temp("longname");
+    let dir = temp_dir("cli-longname");
     let name = format!("{}.png", "l".repeat(246));
     assert_eq!(name.len(), 250);
     let o = weft()
@@ -738,7 +717,7 @@ fn sheet_columns_must_be_at_least_one() {
 /// name is refused with the choices.
 #[test]
 fn tonemap_is_chosen_and_written_into_the_png() {
-    let dir = temp("tonemap");
+    let dir = temp_dir("cli-tonemap");
     let text_of = |png: &std::path::Path| -> Vec<(String, String)> {
         let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png).unwrap()));
         let reader = decoder.read_info().unwrap();

@@ -11,31 +11,22 @@
 //! `--lights default` aborted in 3 of 3 runs under it on this project's machine (Intel Xeon, Mesa
 //! 22.3.6), and 0 of 3 with it.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+
+use std::path::Path;
 
 const MALLOC_DEBUG: &str = "/usr/lib/x86_64-linux-gnu/libc_malloc_debug.so.0";
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("weft-driver-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// `weft render ARGS` at 128-bit vectors, validated, under the heap checker where this system
 /// has it; returns (exit status success, stderr).
 fn render_at_128_bits(args: &[&str], out: &Path) -> (bool, String) {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env(
-        "WEFT_DEVICE",
-        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-    )
-    .env("LP_NATIVE_VECTOR_WIDTH", "128")
-    .env_remove("GALLIUM_OVERRIDE_CPU_CAPS")
-    .args(["render", "--validate"])
-    .args(args)
-    .arg("-o")
-    .arg(out);
+    let mut c = common::weft();
+    c.env("LP_NATIVE_VECTOR_WIDTH", "128")
+        .env_remove("GALLIUM_OVERRIDE_CPU_CAPS")
+        .args(["render", "--validate"])
+        .args(args)
+        .arg("-o")
+        .arg(out);
     if Path::new(MALLOC_DEBUG).exists() {
         c.env("LD_PRELOAD", MALLOC_DEBUG).env("MALLOC_CHECK_", "3");
     } else {
@@ -50,7 +41,7 @@ fn render_at_128_bits(args: &[&str], out: &Path) -> (bool, String) {
 
 #[test]
 fn renders_at_128_bit_vectors_do_not_corrupt_the_heap() {
-    let dir = temp("128");
+    let dir = common::temp_dir("driver-128");
     let cases: [(&str, &[&str]); 5] = [
         ("default", &["--size", "32x18"]),
         (

@@ -16,28 +16,13 @@ use weft::assets::{self, Container, MaterialRef, Overrides, Request, Source};
 use weft::fabric::{presets, WeavePattern, EXTENSION_NAME};
 use weft::scene;
 
+use common::{temp_dir, weft};
+
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 const VALIDATOR_VERSION: &str = "2.0.0-dev.3.10";
 
 fn asset(name: &str) -> PathBuf {
     Path::new(ROOT).join("assets").join(name)
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("weft-fabric-assets-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn weft() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env(
-        "WEFT_DEVICE",
-        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-    );
-    c
 }
 
 fn request(materials: &[&str], preset: &str, pitch: Option<&str>) -> Request {
@@ -127,7 +112,7 @@ fn validate(dir: &Path, file: &Path) -> (u64, String) {
 #[test]
 fn output_passes_the_khronos_validator_with_no_errors() {
     let Some(dir) = validator() else { return };
-    let out = temp("validator");
+    let out = temp_dir("fabric-assets-validator");
     let cases: &[(&str, &str, &[&str], &str)] = &[
         ("default.gltf", "d.gltf", &["ball", "floor"], "denim-twill"),
         ("default.glb", "d.glb", &["0"], "silk-satin"),
@@ -264,7 +249,7 @@ fn everything_else_in_the_file_is_unchanged() {
     assert_eq!(after.json["materials"][0], before.json["materials"][0]);
 
     // .gltf written to another folder: JSON likewise, the external buffer copied beside it.
-    let dir = temp("unchanged");
+    let dir = temp_dir("fabric-assets-unchanged");
     let path = dir.join("sub").join("copy.gltf");
     let o = weft()
         .arg("fabric")
@@ -443,7 +428,7 @@ fn user_errors_are_clear_and_name_the_material_and_key() {
     );
 
     // On the command line: one line, non-zero exit, nothing written.
-    let dir = temp("errors");
+    let dir = temp_dir("fabric-assets-errors");
     for (args, needle) in [
         (vec!["--material", "floor", "--preset", "tweed"], "tweed"),
         (
@@ -580,7 +565,7 @@ fn render_fabric_flag_renders_the_weave() {
     assert!(warp > floor1 / 20 && weft_up > floor1 / 20, "{fractions:?}");
 
     // And through the command line, which prints what it did.
-    let dir = temp("render");
+    let dir = temp_dir("fabric-assets-render");
     let o = weft()
         .args([
             "render",
@@ -608,7 +593,7 @@ fn a_weaving_draft_gives_the_weave_and_the_thread_colours() {
     // tests/data/drafts/twill-2-2-denim.wif: a 2/2 twill, indigo warp (79,157,431 of 999), natural
     // weft (900,880,820 of 999), the way a weaving program writes it.
     let draft = Path::new(ROOT).join("tests/data/drafts/twill-2-2-denim.wif");
-    let dir = temp("draft");
+    let dir = temp_dir("fabric-assets-draft");
     let out = dir.join("out.glb");
     // `weft fabric` on the default scene's ball with a draft, more flags, and an output.
     let fabric = |draft: &Path, more: &[&str], out: &Path| {

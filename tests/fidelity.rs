@@ -3,19 +3,13 @@
 //! (the reference) and a darkened copy (a second engine). The real scenarios and thumbnails live
 //! in ../shared/fidelity/ (docs/fidelity.md); this checks the command's plumbing and ranking.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
+
+use common::weft;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
-
-fn weft() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env(
-        "WEFT_DEVICE",
-        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-    );
-    c
-}
 
 fn save_webp(img: &image::RgbaImage, path: &Path) {
     let file = std::fs::File::create(path).unwrap();
@@ -25,8 +19,7 @@ fn save_webp(img: &image::RgbaImage, path: &Path) {
 
 #[test]
 fn scores_and_ranks_weft_among_the_engines() {
-    let dir = std::env::temp_dir().join(format!("weft-fidelity-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = common::temp_dir("fidelity");
     let shared = dir.join("shared");
     let fid = shared.join("fidelity");
     let thumbs = fid.join("thumbnails").join("khronos-Default");

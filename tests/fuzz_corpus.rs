@@ -3,43 +3,29 @@
 //! `cargo test`, without the fuzzer: each must give a scene or an error, never a panic (counted by
 //! a panic hook, since the loader catches panics itself), and a scene must be well formed.
 
+mod common;
+
 #[path = "../tools/fuzz/well_formed.rs"]
 mod well_formed;
 
-use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use common::fuzz::{self, Panics};
 
 #[test]
 fn every_corpus_input_loads_or_fails_without_panicking() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/fuzz/corpus/scene_loader");
-    let mut inputs: Vec<_> = std::fs::read_dir(&dir)
-        .expect("tools/fuzz/corpus/scene_loader")
-        .map(|e| e.expect("corpus entry").path())
-        .filter(|p| p.is_file())
-        .collect();
-    inputs.sort();
+    let inputs = fuzz::files("tools/fuzz/corpus/scene_loader", |_| true);
     assert!(
         inputs.len() >= 24,
         "the corpus has only {} inputs",
         inputs.len()
     );
 
-    let panics = Arc::new(AtomicUsize::new(0));
-    let counter = panics.clone();
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        counter.fetch_add(1, Ordering::SeqCst);
-        eprintln!("panic: {info}");
-    }));
+    let panics = Panics::count();
     let (mut scenes, mut errors) = (0, 0);
     let mut failures = Vec::new();
-    for path in &inputs {
-        let name = path.file_name().unwrap().to_string_lossy().into_owned();
-        let bytes = std::fs::read(path).unwrap();
-        let before = panics.load(Ordering::SeqCst);
-        let result = weft::scene::load_slice(&bytes, &name, None);
-        if panics.load(Ordering::SeqCst) != before {
+    for (name, bytes) in &inputs {
+        let before = panics.so_far();
+        let result = weft::scene::load_slice(bytes, name, None);
+        if panics.so_far() != before {
             failures.push(format!(
                 "{name}: panicked ({:?})",
                 result.err().map(|e| e.to_string())
@@ -53,7 +39,7 @@ fn every_corpus_input_loads_or_fails_without_panicking() {
             },
             Err(e) => {
                 let msg = e.to_string();
-                if msg.contains(&name) {
+                if msg.contains(name.as_str()) {
                     errors += 1;
                 } else {
                     failures.push(format!("{name}: the error does not name the file: {msg}"));
@@ -61,7 +47,7 @@ fn every_corpus_input_loads_or_fails_without_panicking() {
             }
         }
     }
-    std::panic::set_hook(previous);
+    panics.end();
     assert!(
         failures.is_empty(),
         "{} of {} corpus inputs fail:\n{}",

@@ -16,31 +16,19 @@ mod common;
 #[path = "../tools/fuzz/well_formed.rs"]
 mod well_formed;
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-use common::Rng;
+use common::fuzz::{self, Panics, Rng};
 
 fn seeds() -> Vec<(String, Vec<u8>)> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut out = Vec::new();
     for dir in ["tools/fuzz/corpus/scene_loader", "tests/malformed"] {
-        let mut paths: Vec<PathBuf> = std::fs::read_dir(root.join(dir))
-            .unwrap_or_else(|e| panic!("{dir}: {e}"))
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.is_file() && p.extension().is_none_or(|e| e != "md"))
-            .collect();
-        paths.sort();
-        for p in paths {
-            out.push((
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            ));
-        }
+        out.extend(fuzz::files(dir, |p| {
+            p.extension().is_none_or(|e| e != "md")
+        }));
     }
     out
 }
@@ -339,27 +327,14 @@ fn mutate(rng: &mut Rng, seed: &[u8], other: &[u8]) -> Vec<u8> {
 
 #[test]
 fn mutated_scenes_load_or_fail_without_panicking() {
-    let iterations: usize = std::env::var("WEFT_FUZZ_ITERATIONS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(3000);
-    let seed: u64 = std::env::var("WEFT_FUZZ_SEED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1);
+    let (iterations, seed) = fuzz::iterations_and_seed();
     let seeds = seeds();
     assert!(seeds.len() > 50, "only {} seeds", seeds.len());
     let crash_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-mutate-crashes");
 
-    let panics = Arc::new(AtomicUsize::new(0));
-    let counter = panics.clone();
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        counter.fetch_add(1, Ordering::SeqCst);
-        eprintln!("panic: {info}");
-    }));
+    let panics = Panics::count();
 
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xBF58_476D_1CE4_E5B9));
+    let mut rng = Rng::for_seed(seed);
     let start = Instant::now();
     let (mut scenes, mut errors) = (0usize, 0usize);
     let mut crashes = Vec::new();
@@ -372,14 +347,14 @@ fn mutated_scenes_load_or_fail_without_panicking() {
         if rng.chance(4) {
             input = mutate(&mut rng, &input, other);
         }
-        let before = panics.load(Ordering::SeqCst);
+        let before = panics.so_far();
         let t = Instant::now();
         let result = weft::scene::load_slice(&input, "mutant", None);
         let took = t.elapsed();
         if took > slowest.0 {
             slowest = (took, format!("iteration {i}, from {name}"));
         }
-        let problem = if panics.load(Ordering::SeqCst) != before {
+        let problem = if panics.so_far() != before {
             Some(format!(
                 "panicked: {:?}",
                 result.as_ref().err().map(|e| e.to_string())
@@ -406,7 +381,7 @@ fn mutated_scenes_load_or_fail_without_panicking() {
             (None, false) => errors += 1,
         }
     }
-    std::panic::set_hook(previous);
+    panics.end();
     let secs = start.elapsed().as_secs_f64();
     println!(
         "fuzz_mutate: seed {seed}, {iterations} executions in {secs:.1} s ({:.0}/s): {scenes} scenes, {errors} errors, {} crashes; slowest input {:.0} ms ({})",

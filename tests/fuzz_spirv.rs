@@ -16,33 +16,12 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use weft::package::spirv::reflect;
 
-use common::Rng;
-
-fn files(dir: &str, keep: impl Fn(&Path) -> bool) -> Vec<(String, Vec<u8>)> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(&root)
-        .unwrap_or_else(|e| panic!("{dir}: {e}"))
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file() && keep(p))
-        .collect();
-    paths.sort();
-    paths
-        .into_iter()
-        .map(|p| {
-            (
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            )
-        })
-        .collect()
-}
+use common::fuzz::{files, iterations_and_seed, Panics, Rng};
 
 fn seeds() -> Vec<(String, Vec<u8>)> {
     let mut out = files("glsl/spirv", |p| p.extension().is_some_and(|e| e == "spv"));
@@ -190,16 +169,10 @@ fn mutate(rng: &mut Rng, seed: &[u8], other: &[u8]) -> Vec<u8> {
 
 /// Runs `reflect` on each input, counting panics with a hook; returns the problems.
 fn run(inputs: impl Iterator<Item = (String, Vec<u8>)>, crash_dir: Option<&Path>) -> Report {
-    let panics = Arc::new(AtomicUsize::new(0));
-    let counter = panics.clone();
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        counter.fetch_add(1, Ordering::SeqCst);
-        eprintln!("panic: {info}");
-    }));
+    let panics = Panics::count();
     let mut report = Report::default();
     for (name, input) in inputs {
-        let before = panics.load(Ordering::SeqCst);
+        let before = panics.so_far();
         let t = Instant::now();
         let result = std::panic::catch_unwind(|| reflect(&input));
         let took = t.elapsed();
@@ -208,8 +181,8 @@ fn run(inputs: impl Iterator<Item = (String, Vec<u8>)>, crash_dir: Option<&Path>
         }
         report.executions += 1;
         match result {
-            Ok(Ok(_)) if panics.load(Ordering::SeqCst) == before => report.reflected += 1,
-            Ok(Err(_)) if panics.load(Ordering::SeqCst) == before => report.errors += 1,
+            Ok(Ok(_)) if panics.so_far() == before => report.reflected += 1,
+            Ok(Err(_)) if panics.so_far() == before => report.errors += 1,
             _ => {
                 if let Some(dir) = crash_dir {
                     std::fs::create_dir_all(dir).unwrap();
@@ -219,7 +192,7 @@ fn run(inputs: impl Iterator<Item = (String, Vec<u8>)>, crash_dir: Option<&Path>
             }
         }
     }
-    std::panic::set_hook(previous);
+    panics.end();
     report
 }
 
@@ -249,17 +222,10 @@ fn corpus_replays() {
 
 #[test]
 fn mutated_modules_reflect_or_fail_without_panicking() {
-    let iterations: usize = std::env::var("WEFT_FUZZ_ITERATIONS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(3000);
-    let seed: u64 = std::env::var("WEFT_FUZZ_SEED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1);
+    let (iterations, seed) = iterations_and_seed();
     let seeds = seeds();
     let crash_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-spirv-crashes");
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15 ^ seed.wrapping_mul(0xBF58_476D_1CE4_E5B9));
+    let mut rng = Rng::for_seed(seed);
     let start = Instant::now();
     let inputs = (0..iterations).map(|i| {
         let (name, bytes) = &seeds[rng.below(seeds.len())];

@@ -435,12 +435,7 @@ fn real_hdr_matches_the_cpu_ground_truth() {
                 a.extend(ldr(want));
                 b.extend(ldr(got));
             }
-            let flip = nv_flip::FlipPool::from_image(&nv_flip::flip(
-                nv_flip::FlipImageRgb8::with_data(W, H, &a),
-                nv_flip::FlipImageRgb8::with_data(W, H, &b),
-                nv_flip::DEFAULT_PIXELS_PER_DEGREE,
-            ))
-            .mean();
+            let flip = common::flip_mean(W, H, &a, &b);
             println!(
                 "{name} {}: {} pixels, mean relative error {rel:.4}; FLIP mean over the image {flip:.4}",
                 level.name(),

@@ -28,7 +28,7 @@ fn default_scene_renders_clean_and_lit() {
         "non-finite value in the HDR image"
     );
     // Lit: clearly brighter than the background, and not flat.
-    let mean = common::mean_rgb(&frame.ldr);
+    let mean = weft::sheet::mean_srgb(&frame.ldr);
     assert!(mean > 20.0, "image too dark: mean {mean}");
     let lum: Vec<f64> = frame
         .ldr
@@ -65,7 +65,7 @@ fn every_debug_view_renders_clean() {
             .render(&scene, &options)
             .unwrap_or_else(|e| panic!("debug view {}: {e}", view.name()));
         assert!(frame.hdr.iter().all(|v| v.is_finite()));
-        means.push((view.name(), common::mean_rgb(&frame.ldr)));
+        means.push((view.name(), weft::sheet::mean_srgb(&frame.ldr)));
     }
     // The normals view of a scene seen from the front is far from black.
     let normals = means.iter().find(|m| m.0 == "normals").unwrap().1;
@@ -471,7 +471,7 @@ fn every_tone_curve_matches_its_twin() {
                 curve.name()
             );
             if exposure == 0.0 {
-                means.push((curve, common::mean_rgb(&frame.ldr)));
+                means.push((curve, weft::sheet::mean_srgb(&frame.ldr)));
             }
         }
     }

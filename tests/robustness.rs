@@ -27,47 +27,14 @@ use std::time::{Duration, Instant};
 use weft::render::{self, RenderOptions, Renderer};
 use weft::scene::{self, Scene};
 
-// --- helpers --------------------------------------------------------------------------------------
+use common::{weft, TempDir};
 
-fn weft() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_weft"));
-    c.env(
-        "WEFT_DEVICE",
-        std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-    );
-    c
-}
+// --- helpers --------------------------------------------------------------------------------------
 
 fn malformed_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests")
         .join("malformed")
-}
-
-/// A fresh directory under the system temp dir, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(test: &str) -> TempDir {
-        let dir =
-            std::env::temp_dir().join(format!("weft-robustness-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        TempDir(dir)
-    }
-}
-
-impl std::ops::Deref for TempDir {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 thread_local! {
@@ -398,7 +365,7 @@ fn cli_problem(e: &Entry, dir: &Path) -> Option<String> {
 
 #[test]
 fn the_cli_exits_1_with_one_clear_message_and_never_panics() {
-    let dir = TempDir::new("cli");
+    let dir = TempDir::new("robustness-cli");
     let entries = catalogue();
     let entries: Vec<&Entry> = entries
         .iter()
@@ -437,7 +404,7 @@ fn the_cli_exits_1_with_one_clear_message_and_never_panics() {
 
 #[test]
 fn every_renderable_entry_renders_finite_images_with_validation_on() {
-    let dir = TempDir::new("render");
+    let dir = TempDir::new("robustness-render");
     let mut renderer = Renderer::new(common::context()).expect("renderer");
     let mut failures = Vec::new();
     let mut rendered = 0;
@@ -495,7 +462,7 @@ fn every_renderable_entry_renders_finite_images_with_validation_on() {
 
 #[test]
 fn the_cli_renders_a_repaired_scene_and_prints_its_warnings() {
-    let dir = TempDir::new("cli-render");
+    let dir = TempDir::new("robustness-cli-render");
     let png = dir.join("out.png");
     let exr = dir.join("out.exr");
     let out = weft()
@@ -588,7 +555,7 @@ fn big_glb(n: u32, copies: u32) -> Vec<u8> {
 
 #[test]
 fn ten_million_triangles_render_in_bounded_time_and_memory() {
-    let dir = TempDir::new("ten-million");
+    let dir = TempDir::new("robustness-ten-million");
     let path = dir.join("ten-million-triangles.glb");
     // 1001 x 1001 vertices: 2 million triangles, drawn 5 times over by one index buffer.
     let glb = big_glb(1001, 5);
@@ -694,7 +661,7 @@ fn assert_failed_write_keeps(
 
 #[test]
 fn output_to_a_missing_directory_is_a_clear_error() {
-    let dir = TempDir::new("missing-dir");
+    let dir = TempDir::new("robustness-missing-dir");
     let path = dir.join("no/such/dir/out.png");
     let err = render::write_png(&path, 4, 4, &gradient(4, 4))
         .expect_err("must fail")
@@ -722,7 +689,7 @@ fn output_to_a_missing_directory_is_a_clear_error() {
 
 #[test]
 fn a_write_that_fails_leaves_the_existing_file_byte_for_byte() {
-    let dir = TempDir::new("in-the-way");
+    let dir = TempDir::new("robustness-in-the-way");
     let existing = dir.join("out.png");
     render::write_png(&existing, 8, 8, &gradient(8, 8)).unwrap();
     // Something in the way of the temporary file (works whoever runs the test, root included).
@@ -755,7 +722,7 @@ fn a_write_that_fails_leaves_the_existing_file_byte_for_byte() {
 #[test]
 fn output_to_a_read_only_directory_is_a_clear_error_and_keeps_the_old_file() {
     use std::os::unix::fs::PermissionsExt;
-    let dir = TempDir::new("read-only");
+    let dir = TempDir::new("robustness-read-only");
     let ro = dir.join("ro");
     std::fs::create_dir(&ro).unwrap();
     let existing = ro.join("out.png");
@@ -821,7 +788,7 @@ impl Drop for TinyDisk {
 
 #[test]
 fn output_to_a_full_disk_is_a_clear_error_and_keeps_the_old_file() {
-    let dir = TempDir::new("full-disk");
+    let dir = TempDir::new("robustness-full-disk");
     let Some(disk) = TinyDisk::mount(&dir) else {
         println!("fault: full disk skipped: cannot mount a tmpfs here (needs root)");
         return;
@@ -853,17 +820,14 @@ fn an_allocation_the_device_cannot_make_is_a_clear_error() {
         println!("fault: out-of-memory test skipped: it runs on lavapipe (WEFT_DEVICE=cpu)");
         return;
     }
-    let dir = TempDir::new("oom");
+    let dir = TempDir::new("robustness-oom");
     let out = Command::new("sh")
         .arg("-c")
         .arg("ulimit -v 6000000 && exec \"$0\" \"$@\"")
-        .arg(env!("CARGO_BIN_EXE_weft"))
+        .arg(common::WEFT)
         .args(["render", "--size", "16384x16384", "-o"])
         .arg(dir.join("big.png"))
-        .env(
-            "WEFT_DEVICE",
-            std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into()),
-        )
+        .env("WEFT_DEVICE", common::device())
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -969,7 +933,7 @@ fn many_frames_keep_resident_memory_flat() {
 /// the threads removed and renamed each other's temporary files.
 #[test]
 fn threads_writing_one_target_do_not_collide() {
-    let dir = TempDir::new("threads");
+    let dir = TempDir::new("robustness-threads");
     let target = dir.join("shared.png");
     let images: Vec<Vec<u8>> = (0..4u8)
         .map(|t| {
@@ -1020,7 +984,7 @@ fn listing(d: &Path) -> Vec<String> {
 /// it when the EXR failed): a failure of either leaves neither, and an existing PNG as it was.
 #[test]
 fn a_frame_is_written_whole_or_not_at_all() {
-    let dir = TempDir::new("frame-whole");
+    let dir = TempDir::new("robustness-frame-whole");
     let png = dir.join("f.png");
     let ldr = gradient(4, 4);
     let hdr = [0.5f32; 64];
@@ -1089,7 +1053,7 @@ fn a_frame_is_written_whole_or_not_at_all() {
 #[test]
 fn outputs_are_compared_with_inputs_by_the_file_they_name() {
     use render::OutputPath;
-    let dir = TempDir::new("check-outputs");
+    let dir = TempDir::new("robustness-check-outputs");
     let scene = dir.join("s.gltf");
     std::fs::write(&scene, b"{}").unwrap();
     std::fs::create_dir(dir.join("sub")).unwrap();

@@ -2,38 +2,17 @@
 //! generated normals and tangents, textures, transforms, lights, cameras and every error a user can
 //! hit with a broken file. No GPU needed.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 
 use glam::{Mat4, Vec3};
 use serde_json::{json, Value};
 use weft::scene::{self, ColorSpace, LightKind, Scene, Shadow, TextureSlot};
 
+use common::TempDir;
+
 // --- helpers --------------------------------------------------------------------------------------
-
-/// A fresh directory under the system temp dir, unique to this process and test, removed when
-/// dropped.
-struct TempDir(PathBuf);
-
-impl std::ops::Deref for TempDir {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn temp_dir(test: &str) -> TempDir {
-    let dir =
-        std::env::temp_dir().join(format!("weft-scene-loading-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    TempDir(dir)
-}
 
 fn base64(bytes: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -199,7 +178,10 @@ impl Doc {
     }
 
     fn load(&self, test: &str) -> weft::Result<Scene> {
-        self.load_in(&temp_dir(test), "scene.gltf")
+        self.load_in(
+            &TempDir::new(&format!("scene-loading-{test}")),
+            "scene.gltf",
+        )
     }
 }
 
@@ -456,7 +438,7 @@ fn regenerated_tangents_of_the_default_cloth_match_the_stored_ones() {
                 .remove("TANGENT");
         }
     }
-    let dir = temp_dir("regenerated-tangents");
+    let dir = TempDir::new("scene-loading-regenerated-tangents");
     std::fs::copy(path.with_extension("bin"), dir.join("default.bin")).unwrap();
     std::fs::write(dir.join("default.gltf"), serde_json::to_string(&j).unwrap()).unwrap();
     let regenerated = scene::load(&dir.join("default.gltf")).unwrap();
@@ -483,7 +465,7 @@ fn regenerated_tangents_of_the_default_cloth_match_the_stored_ones() {
 
 #[test]
 fn missing_file_error_names_the_file() {
-    let path = temp_dir("missing").join("no such scene.gltf");
+    let path = TempDir::new("scene-loading-missing").join("no such scene.gltf");
     let msg = error_text(scene::load(&path));
     assert!(msg.contains(&path.display().to_string()), "{msg}");
     assert!(msg.contains("does not exist"), "{msg}");
@@ -491,7 +473,7 @@ fn missing_file_error_names_the_file() {
 
 #[test]
 fn non_gltf_file_error_says_so_and_names_the_file() {
-    let dir = temp_dir("not-gltf");
+    let dir = TempDir::new("scene-loading-not-gltf");
     for (name, content) in [
         ("notes.txt", &b"hello, this is not a scene"[..]),
         ("broken.gltf", &b"{ \"asset\": "[..]),
@@ -1071,7 +1053,7 @@ fn write_png(path: &Path, w: u32, h: u32) {
 
 #[test]
 fn textures_are_decoded_once_per_image_and_colour_space() {
-    let dir = temp_dir("textures");
+    let dir = TempDir::new("scene-loading-textures");
     write_png(&dir.join("albedo map.png"), 4, 2);
     let mut d = Doc::new();
     d.quad(true, true);
@@ -1127,7 +1109,7 @@ fn missing_image_is_an_error_naming_material_image_and_file() {
     d.json["materials"] =
         json!([{"name": "velvet", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
-    let dir = temp_dir("missing-image");
+    let dir = TempDir::new("scene-loading-missing-image");
     let msg = error_text(d.load_in(&dir, "scene.gltf"));
     assert!(msg.contains("scene.gltf"), "{msg}");
     assert!(msg.contains("material 'velvet'"), "{msg}");
@@ -1137,7 +1119,7 @@ fn missing_image_is_an_error_naming_material_image_and_file() {
 
 #[test]
 fn undecodable_image_is_an_error() {
-    let dir = temp_dir("bad-image");
+    let dir = TempDir::new("scene-loading-bad-image");
     std::fs::write(dir.join("garbage.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
     let mut d = Doc::new();
     d.quad(true, true);
@@ -1153,7 +1135,7 @@ fn undecodable_image_is_an_error() {
 
 #[test]
 fn oversized_image_is_an_error() {
-    let dir = temp_dir("huge-image");
+    let dir = TempDir::new("scene-loading-huge-image");
     image::GrayImage::new(16385, 1)
         .save(dir.join("wide.png"))
         .unwrap();
@@ -1251,7 +1233,7 @@ fn unsupported_used_extension_is_a_warning() {
 fn external_buffer_resolves_relative_to_the_scene_and_missing_one_is_named() {
     let mut d = Doc::new();
     d.quad(true, true);
-    let dir = temp_dir("external-buffer");
+    let dir = TempDir::new("scene-loading-external-buffer");
     let mut j = d.json.clone();
     j["buffers"] = json!([{"byteLength": d.bin.len(), "uri": "mesh%20data.bin"}]);
     std::fs::write(dir.join("scene.gltf"), serde_json::to_string(&j).unwrap()).unwrap();
@@ -2204,8 +2186,8 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     d.json["meshes"][0]["primitives"][0]["extensions"] =
         json!({"KHR_materials_variants": {"mappings": [{"material": 1, "variants": [1]}]}});
-    let dir = temp_dir("variants");
-    let path = dir.0.join("scene.gltf");
+    let dir = TempDir::new("scene-loading-variants");
+    let path = dir.join("scene.gltf");
     std::fs::write(&path, d.text()).unwrap();
     let plain = scene::load(&path).unwrap();
     assert_eq!(plain.variants, vec!["red".to_string(), "navy".to_string()]);

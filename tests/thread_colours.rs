@@ -7,6 +7,7 @@ mod common;
 
 use glam::Vec3;
 use weft::fabric::{FabricParams, ThreadColourTable, WeavePattern};
+use weft::reference::shading::srgb_decode;
 use weft::reference::weave::{double, weave_of};
 use weft::render::{RenderOptions, Renderer};
 use weft::scene::{Light, LightKind, Scene};
@@ -315,7 +316,7 @@ fn up_close_each_thread_has_its_colour_and_far_away_the_mean() {
     let pixels = 128 * 128;
     for i in 0..pixels {
         for c in 0..3 {
-            mean[c] += common::srgb_to_linear(g.albedo[i * 4 + c]) as f64 / pixels as f64;
+            mean[c] += srgb_decode(g.albedo[i * 4 + c] as f32 / 255.0) as f64 / pixels as f64;
         }
     }
     println!("far away: mean thread colour {mean:?}, exact {want:?}");

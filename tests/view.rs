@@ -10,8 +10,6 @@ use std::process::Command;
 use weft::render::{RenderOptions, Renderer};
 use weft::view::controls::{self, MaterialUpdate};
 
-const WEFT: &str = env!("CARGO_BIN_EXE_weft");
-
 /// `xvfb-run` (package xvfb, installed by tools/setup), or None: the window tests then say they
 /// are skipped.
 fn xvfb_run() -> Option<&'static str> {
@@ -22,17 +20,13 @@ fn xvfb_run() -> Option<&'static str> {
     found.then_some("xvfb-run")
 }
 
-fn device() -> String {
-    std::env::var("WEFT_DEVICE").unwrap_or_else(|_| "cpu".into())
-}
-
 /// Runs `weft ARGS` under a fresh Xvfb server, returning its stderr; panics with its output
 /// when it fails.
 fn weft_in_xvfb(xvfb: &str, args: &[&str]) -> String {
     let out = Command::new(xvfb)
-        .args(["-a", "-s", "-screen 0 1024x768x24", WEFT])
+        .args(["-a", "-s", "-screen 0 1024x768x24", common::WEFT])
         .args(args)
-        .env("WEFT_DEVICE", device())
+        .env("WEFT_DEVICE", common::device())
         .output()
         .expect("running xvfb-run");
     assert!(
@@ -46,10 +40,9 @@ fn weft_in_xvfb(xvfb: &str, args: &[&str]) -> String {
 }
 
 fn weft_render(args: &[&str]) {
-    let out = Command::new(WEFT)
+    let out = common::weft()
         .arg("render")
         .args(args)
-        .env("WEFT_DEVICE", device())
         .output()
         .expect("running weft render");
     assert!(
@@ -73,10 +66,7 @@ fn flip_mean(reference: &image::RgbImage, test: &image::RgbImage, x0: u32) -> f6
             .to_image()
             .into_raw()
     };
-    let a = nv_flip::FlipImageRgb8::with_data(w - x0, h, &crop(reference));
-    let b = nv_flip::FlipImageRgb8::with_data(w - x0, h, &crop(test));
-    let error = nv_flip::flip(a, b, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
-    nv_flip::FlipPool::from_image(&error).mean() as f64
+    common::flip_mean(w - x0, h, &crop(reference), &crop(test)) as f64
 }
 
 fn max_abs_diff(a: &image::RgbImage, b: &image::RgbImage, x0: u32) -> u8 {
@@ -215,7 +205,7 @@ fn panel_is_drawn_left_of_the_scene() {
 fn no_display_is_a_clean_error() {
     // No DISPLAY at all, and a DISPLAY no X server listens on.
     for display in [None, Some(":4711")] {
-        let mut cmd = Command::new(WEFT);
+        let mut cmd = Command::new(common::WEFT);
         cmd.arg("view").env_remove("WAYLAND_DISPLAY");
         match display {
             Some(d) => cmd.env("DISPLAY", d),
@@ -385,9 +375,7 @@ fn dropped_files_load_or_say_why() {
 /// fabric` writes for the same requests, and loads back with the tuned parameters.
 #[test]
 fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
-    let dir = std::env::temp_dir().join(format!("weft-view-authoring-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("view-authoring");
     let from = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/khronos/SheenChair/glTF");
     for entry in std::fs::read_dir(&from).unwrap() {
         let p = entry.unwrap().path();

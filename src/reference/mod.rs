@@ -10,7 +10,8 @@
 //!   the fabric branch).
 //! - [`ibl_twin`]: the f32 twins of `glsl/include/ibl.glsl` and `glsl/include/cube.glsl`, the
 //!   records of `glsl/ibl_probe.comp`, and the interval bound of every output under the Vulkan
-//!   precision rules.
+//!   precision rules; the number types it is written over (`Real` at f32 and f64, and the
+//!   interval arithmetic `Iv`) are in `interval.rs`, re-exported from `ibl_twin`.
 //! - [`probe`]: the std430 buffers of `glsl/fabric_probe.comp`, their CPU evaluation, the inputs
 //!   (hard cases and random) and the GPU-vs-CPU error bound.
 //!
@@ -20,6 +21,7 @@
 pub mod brdf;
 pub mod furnace;
 pub mod ibl_twin;
+mod interval;
 pub mod probe;
 pub mod raster;
 pub mod shading;

@@ -1,5 +1,20 @@
-//! Shared by the GPU tests: a context on lavapipe (or WEFT_DEVICE) with validation always on.
+//! Shared by the integration tests: a context on lavapipe (or WEFT_DEVICE) with validation always
+//! on, the G-buffer read as the lighting pass reads it, the probe shaders' runner, a test fabric
+//! patch and the FLIP of two images; the `weft` binary ([`cli`]), temporary directories
+//! ([`temp`]) and the fuzz driver ([`fuzz`]).
 #![allow(dead_code)]
+
+pub mod cli;
+pub mod fuzz;
+pub mod temp;
+
+// Each test binary uses some of these: the rest are unused there.
+#[allow(unused_imports)]
+pub use cli::{device, weft, weft_without_gpu, without_gpu, WEFT};
+#[allow(unused_imports)]
+pub use fuzz::Rng;
+#[allow(unused_imports)]
+pub use temp::{temp_dir, TempDir};
 
 use weft::vk::{Context, ContextOptions, DeviceChoice};
 
@@ -15,19 +30,15 @@ pub fn context() -> Context {
     .expect("a Vulkan device with the validation layer (run tools/setup)")
 }
 
-/// Mean of the RGB channels of an RGBA8 image, in [0, 255].
-pub fn mean_rgb(rgba: &[u8]) -> f64 {
-    weft::sheet::mean_srgb(rgba)
-}
-
-/// sRGB byte to linear (the albedo target's decode).
-pub fn srgb_to_linear(b: u8) -> f32 {
-    let s = b as f32 / 255.0;
-    if s <= 0.04045 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
+/// Mean FLIP error (Andersson et al. 2020, the `nv-flip` crate's pool) of the packed sRGB RGB8
+/// image `test` against `reference`, both `width` x `height`.
+pub fn flip_mean(width: u32, height: u32, reference: &[u8], test: &[u8]) -> f32 {
+    let error = nv_flip::flip(
+        nv_flip::FlipImageRgb8::with_data(width, height, reference),
+        nv_flip::FlipImageRgb8::with_data(width, height, test),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    nv_flip::FlipPool::from_image(&error).mean()
 }
 
 /// The surface the lighting pass sees at pixel `i` of a read-back G-buffer of a `width` x
@@ -61,7 +72,8 @@ pub fn gbuffer_surface(
         .map(|f| f.to_gpu());
     let normal = oct_decode([px(&g.frame, 0), px(&g.frame, 1)]);
     let tangent = oct_decode([px(&g.frame, 2), px(&g.frame, 3)]);
-    let base_color = [0, 1, 2].map(|c| srgb_to_linear(g.albedo[i * 4 + c]));
+    let base_color = [0, 1, 2]
+        .map(|c| weft::reference::shading::srgb_decode(g.albedo[i * 4 + c] as f32 / 255.0));
     let metallic = g.albedo[i * 4 + 3] as f32 / 255.0;
     let roughness = px(&g.surface, 0);
     // Non-fabric: the extensions' channels (gbuffer.frag), the tangent orthogonalised as the
@@ -167,28 +179,6 @@ pub fn run_probe_shader<T: bytemuck::Pod>(
     let bytes = output.read().unwrap().to_vec();
     ctx.check_validation().unwrap();
     bytes
-}
-
-/// xorshift64*: small, deterministic, good enough to choose mutations (the fuzz tests).
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    pub fn below(&mut self, n: usize) -> usize {
-        if n == 0 {
-            0
-        } else {
-            (self.next() % n as u64) as usize
-        }
-    }
-    pub fn chance(&mut self, one_in: usize) -> bool {
-        self.below(one_in) == 0
-    }
 }
 
 /// A flat 2 m fabric patch in the XZ plane (normal +Y), u along +X, v along -Z so that the

@@ -147,8 +147,7 @@ fn the_page_escapes_quotes_and_the_header() {
         "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;"
     );
     // The header holds driver strings: a hostile one stays text.
-    let dir = std::env::temp_dir().join(format!("weft-report-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::temp_dir("report");
     write_index(&dir, r#"llvmpipe "<script>alert(1)</script>" & co"#, &[]);
     let page = std::fs::read_to_string(dir.join("index.html")).unwrap();
     assert!(!page.contains("<script>"), "{page}");
