@@ -1,8 +1,8 @@
 //! What to render, as every command gives it: a scene file (or the built-in default scene), its
 //! variant and `--fabric` requests, the environment, the lights and the options of a frame.
 //! [`SceneSpec::load`] is the one way from such a description to a loaded, staged [`Scene`] and
-//! its [`RenderOptions`]: `weft render`, `sheet`, `view`, the batch renders and the benches all
-//! come through it (the command line only turns its flags into a `SceneSpec`).
+//! its [`RenderOptions`]: `weft render`, `plan`, `compare`, `sheet`, `view`, the batch renders and
+//! the benches all come through it (the command line only turns its flags into a `SceneSpec`).
 //!
 //! Nothing here prints: the loader's warnings stay in `scene.warnings`, what `--fabric` applied
 //! is returned, and the caller says what it wants to say.

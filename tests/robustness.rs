@@ -178,7 +178,8 @@ fn catalogue() -> Vec<Entry> {
     entries
 }
 
-/// What `weft render FILE ARGS` does before the GPU: load, then the options (mirrors main.rs).
+/// What `weft render FILE ARGS` does before the GPU: load, then the options (mirrors the command
+/// line's `SceneSpec::load`, src/cli/mod.rs).
 /// Renders at 64x36 unless the entry sets --size.
 fn prepare(path: &Path, args: &[String]) -> weft::Result<(Scene, RenderOptions)> {
     let variant = args

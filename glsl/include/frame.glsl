@@ -1,5 +1,5 @@
 // Frame-wide data shared by the G-buffer and lighting passes: the camera and frame uniform, the
-// light and material records, and the G-buffer packing. Mirrored in Rust by src/render/gpu.rs
+// light and material records, and the G-buffer packing. Mirrored in Rust by src/records.rs
 // (same field order; std140 for the uniform, std430 for the storage buffers).
 #ifndef WEFT_FRAME_GLSL
 #define WEFT_FRAME_GLSL

@@ -1,7 +1,7 @@
 // The weave (docs/fabric-model.md §2): what lies under a point, and the exact coverage of an
 // axis-aligned box footprint.
 //
-// Twin of src/reference/weave.rs (module `single`, f32), line for line, same names.
+// Twin of src/fabric/coverage.rs (`reference::weave`, module `single`, f32), line for line, same names.
 //
 // Coordinates are in cells: x = u·cell_per_uv (= u/(s_p/2)). Reduce them to the repeat before
 // they reach f32 (an f32 u = 1e7 has lost the pattern): weave_point and weave_box then take any

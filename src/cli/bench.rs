@@ -297,6 +297,7 @@ pub(super) fn run_startup_bench(args: &BenchArgs) -> anyhow::Result<()> {
         } = SceneSpec::default().load(checked_size(&size)?)?;
         options.antialias = render::Antialias::Fxaa;
         options.submission = render::Submission::Frame;
+        options.read_hdr = false;
         let mut renderer = Renderer::new(open_device(args.device.as_deref(), false)?)?;
         weft::metrics::render_warm(&mut renderer, &scene, &options, 6)?.1
     };
