@@ -146,7 +146,21 @@ fn main() {
         "cargo:rustc-env=WEFT_LONG_VERSION={} (commit {commit}; {rustc}; shaders: {compiler})",
         std::env::var("CARGO_PKG_VERSION").unwrap()
     );
-    println!("cargo:rerun-if-changed=.git/HEAD");
+    // The commit in the version: built again when HEAD moves (a checkout, a commit on the
+    // branch, a pull), also in a git worktree, where `.git` is a file. Only paths that exist are
+    // named: cargo reruns a build script on every build for one that does not.
+    for path in ["HEAD", "refs/heads", "packed-refs"] {
+        let watched = std::process::Command::new("git")
+            .args(["rev-parse", "--git-path", path])
+            .current_dir(&root)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| root.join(String::from_utf8_lossy(&o.stdout).trim()));
+        if let Some(p) = watched.filter(|p| p.exists()) {
+            println!("cargo:rerun-if-changed={}", p.display());
+        }
+    }
 }
 
 /// SHA-256 over every source and include (name and bytes), the settings and the compiler.
