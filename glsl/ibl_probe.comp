@@ -14,21 +14,21 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 struct IblProbeInput {
     vec4 world;      // env_dir: world direction (xyz)
     vec4 rot[3];     // env_dir: rows of env_from_world (xyz)
-    vec4 normal;     // sh_irradiance: env-space normal (xyz)
+    vec4 normal;     // sh_irradiance: env-space normal (xyz); dominant_dir: n
     vec4 sh[9];      // sh_irradiance: the SH9 coefficients (rgb)
     vec4 xi;         // xy: the xi of ggx_sample_h, as_sample_h and cosine_sample
     vec4 lobe;       // x: GGX alpha, y: A–S eu, z: A–S ev
     vec4 lod;        // x: pdf, y: face size (fis_lod); z: n·v, w: ao (specular_occlusion)
-    vec4 misc;       // x: roughness (specular_occlusion), y: n·k2 (fabric_diffuse_albedo),
+    vec4 misc;       // x: roughness (specular_occlusion, dominant_dir), y: n·k2 (fabric_diffuse_albedo),
                      // z: visibility, w: albedo (gtao_multibounce)
     uvec4 counts;    // x: hammersley i, y: hammersley n, z: fis_lod n
     uvec4 cube;      // cube_texel_dir: face, texel x, texel y, size
-    vec4 dir;        // equirect_uv: direction (xyz)
+    vec4 dir;        // equirect_uv: direction (xyz); dominant_dir: the mirror direction r
     GpuFabric fabric; // fabric_diffuse_albedo: the material (rs, flags)
     vec4 arc;        // gtao_arc: h0, h1, n
 };
 
-// Rust twin: weft::reference::ibl_twin::IblProbeOutput (144 bytes).
+// Rust twin: weft::reference::ibl_twin::IblProbeOutput (160 bytes).
 struct IblProbeOutput {
     vec4 env_dir;    // env_dir (xyz), 0
     vec4 irradiance; // sh_irradiance (rgb), 0
@@ -39,6 +39,7 @@ struct IblProbeOutput {
     vec4 uv;         // hammersley (xy), equirect_uv (zw)
     vec4 scalars;    // fis_lod, specular_occlusion, fabric_diffuse_albedo, 0
     vec4 occlusion;  // gtao_arc, gtao_multibounce, 0, 0
+    vec4 dominant;   // dominant_dir(normal, dir, misc.x) (xyz), 0
 };
 
 // set 0, binding 0: the inputs.
@@ -80,5 +81,6 @@ void main() {
         fabric_diffuse_albedo(inp.fabric, inp.misc.y),
         0.0);
     o.occlusion = vec4(gtao_arc(inp.arc.x, inp.arc.y, inp.arc.z), gtao_multibounce(inp.misc.z, inp.misc.w), 0.0, 0.0);
+    o.dominant = vec4(dominant_dir(inp.normal.xyz, inp.dir.xyz, inp.misc.x), 0.0);
     outputs[id] = o;
 }

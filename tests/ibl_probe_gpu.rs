@@ -384,6 +384,12 @@ fn describe(inp: &IblProbeInput, k: usize) -> String {
             inp.arc[0], inp.arc[1], inp.arc[2]
         ),
         8 => format!("multibounce v {:e} albedo {:e}", inp.misc[2], inp.misc[3]),
+        9 => format!(
+            "dominant_dir n {:?} r {:?} roughness {:e}",
+            &inp.normal[..3],
+            &inp.dir[..3],
+            inp.misc[0]
+        ),
         _ => match k % 4 {
             0 => format!(
                 "pdf {:e} n {} size {}",
@@ -431,7 +437,7 @@ impl Worst {
     fn print(&self, title: &str) {
         println!("{title}");
         for k in 0..IBL_PROBE_OUTPUTS {
-            if (k % 4 == 3 && k / 4 < 6) || k == 31 {
+            if (k % 4 == 3 && k / 4 < 6) || k == 31 || k == 34 || k == 35 || k == 39 {
                 continue; // the zero padding
             }
             println!(

@@ -94,6 +94,14 @@ float specular_occlusion(float nv, float ao, float roughness) {
     return clamp(pow(max(nv + ao, 0.0), exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
 }
 
+// The split sum's look-up direction for roughness r about normal n: the mirror direction bent
+// towards the normal as the lobe widens (Lagarde & de Rousiers 2014, "dominant direction"): a
+// rough lobe's mass is nearer n.
+vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
+    float a = roughness * roughness;
+    return normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
+}
+
 // The diffuse factor of the fabric's diffuse term under a uniform-in-cosine environment: 1 for
 // Lambert, (1 - rs)(1 - (1 - n·k2/2)^5) for the A–S coupled diffuse (its hemispherical
 // integral, which its 28/(23π) normalises to exactly that).

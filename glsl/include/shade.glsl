@@ -169,14 +169,6 @@ float ggx_albedo(float cos_theta, float r) {
     return ab.x + ab.y;
 }
 
-// The split sum's look-up direction for roughness r about normal n: the mirror direction bent
-// towards the normal as the lobe widens (Lagarde & de Rousiers 2014, "dominant direction"): a
-// rough lobe's mass is nearer n.
-vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
-    float a = roughness * roughness;
-    return normalize(mix(n, r, (1.0 - a) * (sqrt(1.0 - a) + a)));
-}
-
 // Irradiance/π from the environment at world normal n (times the intensity): the specular cube's
 // roughness-1 level. GGX at α = 1 has D = 1/π, so with n = v its reflected directions are uniform
 // over the sphere and the prefilter's n·l weight makes that level exactly the cosine-weighted mean

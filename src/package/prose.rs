@@ -70,16 +70,17 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "ibl_probe.comp",
         "Evaluates every function of image-based lighting (`include/ibl.glsl`: `env_dir`, \
          `sh_irradiance`, `hammersley`, `ggx_sample_h`, `as_sample_h`, `cosine_sample`, `fis_lod`, \
-         `specular_occlusion`, `fabric_diffuse_albedo`), of `include/cube.glsl` \
+         `specular_occlusion`, `dominant_dir`, `fabric_diffuse_albedo`), of `include/cube.glsl` \
          (`cube_texel_dir`, `equirect_uv`) and of `include/occlusion.glsl` (`gtao_arc`, \
          `gtao_multibounce`) on a batch of inputs, one invocation per input: the way \
          to check that a driver computes them as weft's Rust twins do. Bind a buffer of `count` \
          432-byte `IblProbeInput` records (std430: `vec4 world, rot[3], normal, sh[9], xi, lobe, \
          lod, misc`, `uvec4 counts, cube`, `vec4 dir`, the 80-byte `GpuFabric` of \
-         `include/fabric.glsl`, then `vec4 arc`) and a buffer for `count` 144-byte `IblProbeOutput` \
-         records (nine `vec4`: `env_dir`, `irradiance`, `ggx`, `as_h`, `cosine`, `cube`, `uv` \
+         `include/fabric.glsl`, then `vec4 arc`) and a buffer for `count` 160-byte `IblProbeOutput` \
+         records (ten `vec4`: `env_dir`, `irradiance`, `ggx`, `as_h`, `cosine`, `cube`, `uv` \
          (hammersley xy, equirect uv), `scalars` (fis_lod, specular_occlusion, \
-         fabric_diffuse_albedo), `occlusion` (gtao_arc, gtao_multibounce)). Push the \
+         fabric_diffuse_albedo), `occlusion` (gtao_arc, gtao_multibounce), `dominant` (dominant_dir of the normal, the \
+         direction and the roughness)). Push the \
          `uint count`; dispatch `ceil(count / 64)` groups. weft's Rust twins and the interval \
          bound of each output under the Vulkan precision rules: `weft::reference::ibl_twin`.",
     ),

@@ -118,7 +118,7 @@ pub struct IblProbeInput {
     pub arc: [f32; 4],
 }
 
-/// One output of `glsl/ibl_probe.comp` (std430, 144 bytes; `IblProbeOutput` there).
+/// One output of `glsl/ibl_probe.comp` (std430, 160 bytes; `IblProbeOutput` there).
 ///
 /// | offset | field | x | y | z | w |
 /// |---|---|---|---|---|---|
@@ -131,6 +131,7 @@ pub struct IblProbeInput {
 /// | 96  | `uv` | `hammersley` x | y | `equirect_uv` u | v |
 /// | 112 | `scalars` | `fis_lod` | `specular_occlusion` | `fabric_diffuse_albedo` | 0 |
 /// | 128 | `occlusion` | `gtao_arc` | `gtao_multibounce` | 0 | 0 |
+/// | 144 | `dominant` | `dominant_dir` x | y | z | 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct IblProbeOutput {
@@ -143,6 +144,7 @@ pub struct IblProbeOutput {
     pub uv: [f32; 4],
     pub scalars: [f32; 4],
     pub occlusion: [f32; 4],
+    pub dominant: [f32; 4],
 }
 
 const _: () = {
@@ -151,12 +153,12 @@ const _: () = {
     assert!(std::mem::offset_of!(IblProbeInput, sh) == 80);
     assert!(std::mem::offset_of!(IblProbeInput, counts) == 288);
     assert!(std::mem::offset_of!(IblProbeInput, fabric) == 336);
-    assert!(std::mem::size_of::<IblProbeOutput>() == 144);
+    assert!(std::mem::size_of::<IblProbeOutput>() == 160);
     assert!(std::mem::offset_of!(IblProbeOutput, uv) == 96);
 };
 
 /// Number of f32 components of an [`IblProbeOutput`].
-pub const IBL_PROBE_OUTPUTS: usize = 36;
+pub const IBL_PROBE_OUTPUTS: usize = 40;
 
 /// Names of the output components, in memory order.
 #[rustfmt::skip]
@@ -170,6 +172,7 @@ pub const IBL_PROBE_OUTPUT_NAMES: [&str; IBL_PROBE_OUTPUTS] = [
     "hammersley.x", "hammersley.y", "equirect_uv.u", "equirect_uv.v",
     "fis_lod", "specular_occlusion", "fabric_diffuse_albedo", "scalars.w",
     "gtao_arc", "gtao_multibounce", "occlusion.z", "occlusion.w",
+    "dominant_dir.x", "dominant_dir.y", "dominant_dir.z", "dominant_dir.w",
 ];
 
 /// The component compared modulo 1 (`equirect_uv`'s u: the map wraps).
@@ -188,11 +191,12 @@ impl IblProbeOutput {
             self.uv,
             self.scalars,
             self.occlusion,
+            self.dominant,
         ]));
         a
     }
 
-    /// Reads one output from the shader's buffer bytes (little-endian, 144 bytes).
+    /// Reads one output from the shader's buffer bytes (little-endian, 160 bytes).
     pub fn from_bytes(b: &[u8]) -> Self {
         let v = |k: usize| {
             let mut out = [0f32; 4];
@@ -212,6 +216,7 @@ impl IblProbeOutput {
             uv: v(6),
             scalars: v(7),
             occlusion: v(8),
+            dominant: v(9),
         }
     }
 }
@@ -363,6 +368,17 @@ pub mod formula {
             .clamp(T::lit(0.0), T::lit(1.0))
     }
 
+    /// `dominant_dir` (ibl.glsl): `normalize(mix(n, r, t))`, mix as `n·(1 - t) + r·t` and
+    /// normalize as `v / sqrt(dot(v, v))` (the forms Vulkan's precision rules inherit from).
+    pub fn dominant_dir<T: Real>(n: [T; 3], r: [T; 3], roughness: T) -> [T; 3] {
+        let one = T::lit(1.0);
+        let a = roughness * roughness;
+        let t = (one - a) * ((one - a).sqrt() + a);
+        let d = [0, 1, 2].map(|k| n[k] * (one - t) + r[k] * t);
+        let l = T::dot3(d, d).sqrt();
+        [d[0] / l, d[1] / l, d[2] / l]
+    }
+
     /// `cube_texel_dir` (cube.glsl); [`crate::render::environment::cube_texel_dir`] is this at
     /// f32.
     pub fn cube_texel_dir<T: Real>(face: u32, x: u32, y: u32, size: u32) -> [T; 3] {
@@ -488,6 +504,10 @@ pub fn ibl_probe_cpu(inp: &IblProbeInput) -> IblProbeOutput {
             0.0,
             0.0,
         ],
+        dominant: v4(
+            formula::dominant_dir::<f32>(xyz(inp.normal), xyz(inp.dir), inp.misc[0]),
+            0.0,
+        ),
     }
 }
 
@@ -513,6 +533,7 @@ pub fn ibl_probe_eval<T: Real>(inp: &IblProbeInput) -> [T; IBL_PROBE_OUTPUTS] {
     let cube = formula::cube_texel_dir::<T>(c[0], c[1], c[2], c[3]);
     let h = formula::hammersley::<T>(inp.counts[0], inp.counts[1]);
     let uv = formula::equirect_uv(v3(inp.dir));
+    let dom = formula::dominant_dir(v3(inp.normal), v3(inp.dir), l(inp.misc[0]));
     [
         e[0],
         e[1],
@@ -549,6 +570,10 @@ pub fn ibl_probe_eval<T: Real>(inp: &IblProbeInput) -> [T; IBL_PROBE_OUTPUTS] {
         formula::gtao_arc(l(inp.arc[0]), l(inp.arc[1]), l(inp.arc[2])),
         formula::gtao_multibounce(l(inp.misc[2]), l(inp.misc[3])),
         zero,
+        zero,
+        dom[0],
+        dom[1],
+        dom[2],
         zero,
     ]
 }
