@@ -248,7 +248,7 @@ pub fn run(
     }
     // The environment's cost: the default scene with its lamps, with and without the studio.
     let mut cost = Vec::new();
-    let studio = Arc::new(Environment::studio());
+    let studio = crate::spec::studio();
     for view in [View::Mid, View::CloseUp] {
         let camera = Some(view.camera(&lamps)?);
         let gpu = renderer.upload(&lamps)?;

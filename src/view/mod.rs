@@ -204,7 +204,6 @@ struct App {
     dirty: bool,
     error: Option<Error>,
     report: Option<BenchReport>,
-    studio: Option<Arc<Environment>>,
     /// Ctrl is held (ctrl+click picks the material under the cursor).
     ctrl: bool,
     /// Where the scene's image starts in the window (right of the panel), and its width.
@@ -253,7 +252,6 @@ impl App {
             dirty: true,
             error: None,
             report: None,
-            studio: None,
             requests: Vec::new(),
             ctrl: false,
             scene_x0: 0,
@@ -447,11 +445,7 @@ impl App {
     fn set_environment(&mut self, choice: &panel::EnvChoice) -> crate::Result<()> {
         let env = match choice {
             panel::EnvChoice::None => None,
-            panel::EnvChoice::Studio => Some(
-                self.studio
-                    .get_or_insert_with(|| Arc::new(Environment::studio()))
-                    .clone(),
-            ),
+            panel::EnvChoice::Studio => Some(crate::spec::studio()),
             panel::EnvChoice::File(path) => Some(Arc::new(Environment::load(Path::new(path))?)),
         };
         self.options.environment = env.map(|e| {
