@@ -493,7 +493,7 @@ impl DrawPush {
 
 /// One light's shadow map: `Shadow` of glsl/include/frame.glsl (std430, 96 bytes).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuShadow {
     /// The light's projection x view (reversed-Z), column-major.
     pub clip_from_world: [[f32; 4]; 4],

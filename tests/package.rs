@@ -14,7 +14,12 @@ use weft::render::Renderer;
 use weft::vk::{shaders, BindingKind, Context, ContextOptions, DeviceChoice, Stage, Stages};
 
 /// Modules no renderer pipeline uses: they exist for other programs and for tests.
-const STANDALONE: &[&str] = &["fabric_probe.comp", "ibl_probe.comp", "pbr_probe.comp"];
+const STANDALONE: &[&str] = &[
+    "env_probe.comp",
+    "fabric_probe.comp",
+    "ibl_probe.comp",
+    "pbr_probe.comp",
+];
 
 fn write_temp() -> (tempfile::TempDir, Manifest) {
     let dir = tempfile::tempdir().expect("a temporary directory");

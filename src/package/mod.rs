@@ -45,6 +45,10 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 pub const INCLUDES: &[(&str, &str)] = &[
     ("cube.glsl", include_str!("../../glsl/include/cube.glsl")),
     (
+        "env_light.glsl",
+        include_str!("../../glsl/include/env_light.glsl"),
+    ),
+    (
         "fabric.glsl",
         include_str!("../../glsl/include/fabric.glsl"),
     ),
@@ -60,6 +64,10 @@ pub const INCLUDES: &[(&str, &str)] = &[
     ),
     ("pbr.glsl", include_str!("../../glsl/include/pbr.glsl")),
     ("shade.glsl", include_str!("../../glsl/include/shade.glsl")),
+    (
+        "shadows.glsl",
+        include_str!("../../glsl/include/shadows.glsl"),
+    ),
     (
         "surface.glsl",
         include_str!("../../glsl/include/surface.glsl"),

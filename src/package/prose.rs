@@ -67,6 +67,24 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          front faces; the projection flips y.",
     ),
     (
+        "env_probe.comp",
+        "Evaluates the environment light's estimators of `include/env_light.glsl` (`pbr_env`, \
+         `aniso_env_specular`, `sheen_layer_diffuse`, `fabric_env_lobes`, `fabric_env_diffuse`, \
+         `fabric_env_back`, `fabric_env_combine`, `pixel_random`, `ibl_sample`, `ggx_albedo`) and \
+         the shadow maps' PCF of `include/shadows.glsl` (`shadow_pcf`) on a batch of inputs, one \
+         invocation per input, with closed-form stand-ins for the textures they read (written in \
+         the shader and in `weft::reference::env_light::StandIn`): the way to check that a driver \
+         computes the estimators as weft's Rust twins do. Bind a buffer of `count` 464-byte \
+         `EnvProbeInput` records (std430: fourteen `vec4` — `n`, `v`, `base_metallic`, \
+         `f0_specular`, `sheen`, `t_anisotropy`, `surface`, `film`, `bounce`, `frame_t`, \
+         `frame_n`, `k2`, `coverage`, `rot` —, `uvec4 mode` (level, samples, pixel), the 80-byte \
+         `GpuFabric` of `include/fabric.glsl`, the 96-byte `Shadow` of `include/frame.glsl`, then \
+         `vec4 light_pos, p, pn`) and a buffer for `count` 112-byte `EnvProbeOutput` records \
+         (seven `vec4`: `pbr`, `aniso`, `weft`, `warp`, `diffuse`, `back`, `combined`; the \
+         shader's comments say which function fills each component). Push the `uint count`; \
+         dispatch `ceil(count / 64)` groups. weft's Rust twins: `weft::reference::env_light`.",
+    ),
+    (
         "ibl_probe.comp",
         "Evaluates every function of image-based lighting (`include/ibl.glsl`: `env_dir`, \
          `sh_irradiance`, `hammersley`, `ggx_sample_h`, `as_sample_h`, `cosine_sample`, `fis_lod`, \

@@ -12,6 +12,9 @@
 //!   records of `glsl/ibl_probe.comp`, and the interval bound of every output under the Vulkan
 //!   precision rules; the number types it is written over (`Real` at f32 and f64, and the
 //!   interval arithmetic `Iv`) are in `interval.rs`, re-exported from `ibl_twin`.
+//! - [`env_light`]: the f32 twins of `glsl/include/env_light.glsl` (the environment light's
+//!   estimators) and `glsl/include/shadows.glsl` (PCF), over any look-up of the textures they
+//!   read, and the closed-form stand-ins `glsl/env_probe.comp` gives both sides.
 //! - [`probe`]: the std430 buffers of `glsl/fabric_probe.comp`, their CPU evaluation, the inputs
 //!   (hard cases and random) and the GPU-vs-CPU error bound.
 //!
@@ -19,6 +22,7 @@
 //! macro) and in GLSL. Nothing else may carry a copy.
 
 pub mod brdf;
+pub mod env_light;
 pub mod furnace;
 pub mod ibl_twin;
 mod interval;

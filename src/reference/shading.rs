@@ -506,30 +506,16 @@ pub fn pbr_brdf_cos(n: Vec3, v: Vec3, l: Vec3, base: Vec3, metallic: f32, roughn
     )
 }
 
-/// `sheen_albedo` of lighting.frag: the DFG table's third channel as the GPU stores it (f16)
-/// and samples it (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
+/// `sheen_albedo` of env_light.glsl over the kept DFG table as the GPU stores it (f16) and
+/// samples it (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
 pub fn sheen_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
-    dfg_lookup(cos_theta, roughness)[2]
+    super::env_light::sheen_albedo(&super::env_light::KeptDfg, cos_theta, roughness)
 }
 
-/// `sheen_layer_diffuse` of shade.glsl: what the layers below a sheen keep of a cosine-weighted
-/// hemisphere of light, the lamps' min(1 - k·E(n·v), 1 - k·E(n·l)) averaged over t = (n·l)² by
-/// the same 16-point midpoint rule, E from the table as the GPU samples it.
-pub fn sheen_layer_diffuse(k: f32, e_v: f32, roughness: f32) -> f32 {
-    let sum: f32 = (0..16)
-        .map(|i| {
-            let mu = ((i as f32 + 0.5) / 16.0).sqrt();
-            (1.0 - k * e_v).min(1.0 - k * sheen_albedo_lookup(mu, roughness))
-        })
-        .sum();
-    (sum / 16.0).max(0.0)
-}
-
-/// `ggx_albedo` of lighting.frag: Ess = A + B of the DFG table as the GPU stores and samples it
-/// (the sum of the two bilinear look-ups).
+/// `ggx_albedo` of env_light.glsl over the kept DFG table: Ess = A + B as the GPU stores and
+/// samples it (the sum of the two bilinear look-ups).
 pub fn ggx_albedo_lookup(cos_theta: f32, roughness: f32) -> f32 {
-    let [a, b, _] = dfg_lookup(cos_theta, roughness);
-    a + b
+    super::env_light::ggx_albedo(&super::env_light::KeptDfg, cos_theta, roughness)
 }
 
 /// `crate::env::dfg_table` at [`DFG_SIZE`], as f16 (A, B, E), kept in the
@@ -550,7 +536,7 @@ pub const DFG_SIZE: u32 = 32;
 
 /// The DFG table (A, B, E) at (cos θ, roughness) as the GPU stores it (f16) and samples it
 /// (bilinear, clamp to edge, texel centres at (i + 1/2)/size).
-fn dfg_lookup(cos_theta: f32, roughness: f32) -> [f32; 3] {
+pub fn dfg_lookup(cos_theta: f32, roughness: f32) -> [f32; 3] {
     static TABLE: std::sync::OnceLock<Vec<[f32; 3]>> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
         dfg_table_kept()
@@ -987,7 +973,12 @@ mod tests {
                         .map(|e_l| (1.0 - k as f64 * e_v).min(1.0 - k as f64 * e_l))
                         .sum::<f64>()
                         / 200.0;
-                    let got = sheen_layer_diffuse(k, sheen_albedo_lookup(nv, r), r) as f64;
+                    let got = super::super::env_light::sheen_layer_diffuse(
+                        &super::super::env_light::KeptDfg,
+                        k,
+                        sheen_albedo_lookup(nv, r),
+                        r,
+                    ) as f64;
                     worst = worst.max((got - want).abs());
                     worst_old = worst_old.max((1.0 - k as f64 * e_v - want).abs());
                 }

@@ -1,0 +1,330 @@
+// Environment light (docs/fabric-model.md §6): the estimators of the light an environment map
+// sends the fabric's lobes and the glTF BRDF's, at each level (weft::env::IblLevel: `mode` 1
+// approx, 2 fis:N, 3 mc:N, with N = `samples`), and the sheen's layering. shade.glsl calls them
+// for every pixel with an environment; glsl/env_probe.comp on a batch of inputs.
+//
+// Rust twins: weft::reference::env_light (f32, line for line, over any look-up of the
+// environment), compared on the GPU by tests/env_probe_gpu.rs.
+//
+// The including shader defines the look-ups these read (the leaves: shade.glsl from the
+// environment's cubes and the DFG table, env_probe.comp from closed-form stand-ins):
+// - `vec3 env_radiance_at(vec3 world_dir, float lod)`: the radiance cube (box-filtered mips) at a
+//   world direction and mip level, times the environment's intensity;
+// - `vec3 env_prefiltered(vec3 world_dir, float roughness)`: the GGX-prefiltered specular cube at
+//   a world direction and roughness (its level roughness · (levels − 1)), times the intensity;
+// - `vec3 dfg_lookup(float cos_theta, float roughness)`: the DFG table (weft::env::dfg_table):
+//   the split sum's A and B, and the sheen's directional albedo E;
+// - `float env_face_size()`: the radiance cube's face size in texels (fis_lod's solid angles).
+#ifndef WEFT_ENV_LIGHT_GLSL
+#define WEFT_ENV_LIGHT_GLSL
+
+#include "fabric.glsl"
+#include "ibl.glsl"
+#include "pbr.glsl"
+
+vec3 env_radiance_at(vec3 world_dir, float lod);
+vec3 env_prefiltered(vec3 world_dir, float roughness);
+vec3 dfg_lookup(float cos_theta, float roughness);
+float env_face_size();
+
+// A per-pixel offset in [0, 1)² for the Monte Carlo level (Cranley–Patterson rotation) from the
+// pixel's integer coordinates: makes its error noise, not structured bias.
+vec2 pixel_random(uvec2 p) {
+    uint h = p.x * 1973u + p.y * 9277u + 26699u;
+    h = (h ^ (h >> 16)) * 0x7feb352du;
+    h = (h ^ (h >> 15)) * 0x846ca68bu;
+    h = h ^ (h >> 16);
+    uint g = h * 0x9e3779b9u;
+    g = (g ^ (g >> 16)) * 0x7feb352du;
+    return vec2(float(h >> 8), float(g >> 8)) / 16777216.0;
+}
+
+// Sample i of n: the Hammersley point shifted by `rotation` (0 for fis, pixel_random for mc).
+vec2 ibl_sample(uint i, uint n, vec2 rotation) {
+    return fract(hammersley(i, n) + rotation);
+}
+
+// The directional albedo E(cos θ) of the sheen BRDF with colour 1 at sheen roughness r: the DFG
+// table's third channel (weft::env::dfg_table).
+float sheen_albedo(float cos_theta, float r) {
+    return dfg_lookup(clamp(cos_theta, 0.0, 1.0), r).b;
+}
+
+// The GGX lobe's directional albedo Ess(cos θ) = A + B at roughness r (the DFG table's first two
+// channels), for ggx_energy_compensation.
+float ggx_albedo(float cos_theta, float r) {
+    vec2 ab = dfg_lookup(clamp(cos_theta, 0.0, 1.0), r).rg;
+    return ab.x + ab.y;
+}
+
+// Irradiance/π from the environment at world normal n (times the intensity): the specular cube's
+// roughness-1 level. GGX at α = 1 has D = 1/π, so with n = v its reflected directions are uniform
+// over the sphere and the prefilter's n·l weight makes that level exactly the cosine-weighted mean
+// of the radiance, 16² per face from 512 filtered samples. The order-2 SH it replaces is
+// band-limited: on a contrasted map (lightroom_14b) it was 14 % off in some directions.
+vec3 env_irradiance(vec3 n) {
+    return env_prefiltered(n, 1.0);
+}
+
+// The anisotropic GGX lobes (KHR_materials_anisotropy) under the environment at fis:N (issue 28:
+// the split sum's bent normal left anisotropic metals nearly matte): N half vectors from the lobe's
+// own distribution (the isotropic sampler at alpha 1 with its slopes stretched by (at, ab): GGX
+// is stretch-invariant, so the pdf is D_aniso(h)·(n·h)), each direction's radiance filtered to the
+// solid angle its pdf gives it (fis_lod, as for the fabric's lobes), weighted by the BRDF over
+// the pdf, 4·Vis·F·(n·l)(v·h)/(n·h), both lobes with their energy compensation.
+vec3 aniso_env_specular(vec3 n, vec3 v, GltfSurface s, float ess, uint samples) {
+    vec3 b = cross(n, s.t);
+    float alpha = max(s.roughness * s.roughness, 1e-3);
+    float at = mix(alpha, 1.0, s.anisotropy * s.anisotropy);
+    float nv = max(dot(n, v), 1e-4);
+    vec3 comp_d = s.specular * ggx_energy_compensation(s.f0, ess);
+    vec3 comp_m = ggx_energy_compensation(s.base, ess);
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < samples; ++i) {
+        vec3 h1 = ggx_sample_h(ibl_sample(i, samples, vec2(0.0)), 1.0);
+        vec3 hl = normalize(vec3(at * h1.x, alpha * h1.y, h1.z));
+        vec3 h = hl.x * s.t + hl.y * b + hl.z * n;
+        float vh = dot(v, h);
+        if (!(vh > 0.0) || !(hl.z > 0.0)) {
+            continue;
+        }
+        vec3 l = 2.0 * vh * h - v;
+        float nl = dot(n, l);
+        if (!(nl > 0.0)) {
+            continue;
+        }
+        float pdf = ggx_aniso_d(hl.x, hl.y, hl.z, at, alpha) * hl.z / (4.0 * vh);
+        float vis = ggx_aniso_v(dot(s.t, v), dot(b, v), nv, dot(s.t, l), dot(b, l), nl, at, alpha);
+        float w = pow(1.0 - vh, 5.0);
+        vec3 fd = s.f0 + (1.0 - s.f0) * w;
+        vec3 fm = s.base + (1.0 - s.base) * w;
+        if (s.iridescence > 0.0) {
+            fd = mix(fd, iridescence_fresnel(s.film_ior, vh, s.film_thickness, s.f0), s.iridescence);
+            fm = mix(fm, iridescence_fresnel(s.film_ior, vh, s.film_thickness, s.base), s.iridescence);
+        }
+        vec3 f = mix(fd * comp_d, fm * comp_m, s.metallic);
+        sum += env_radiance_at(l, fis_lod(pdf, samples, env_face_size())) * f
+             * (4.0 * vis * nl * vh / hl.z);
+    }
+    return sum / float(samples);
+}
+
+// What the layers below a sheen keep of light from the whole hemisphere, cosine-weighted: the
+// lamps' scaling min(1 - k·E(n·v), 1 - k·E(n·l)) (gltf_brdf_cos; k = max(sheen colour)) averaged
+// over n·l = μ with weight 2μ, i.e. over t = μ² uniformly, by a 16-point midpoint rule (within
+// 0.007 of the integral; 8 points: 0.012). Light from grazing directions, where E is largest, is
+// dimmed more than 1 - k·E(n·v) says (up to 0.11 more).
+float sheen_layer_diffuse(float k, float e_v, float roughness) {
+    float sum = 0.0;
+    for (uint i = 0u; i < 16u; ++i) {
+        float mu = sqrt((float(i) + 0.5) / 16.0);
+        sum += min(1.0 - k * e_v, 1.0 - k * sheen_albedo(mu, roughness));
+    }
+    return max(sum / 16.0, 0.0);
+}
+
+// The glTF BRDF (with its extensions) under the environment: the prefiltered irradiance for the
+// diffuse, the split sum for the specular and the sheen (approx and fis), or Monte Carlo (mc,
+// `rot` its per-pixel rotation). ao: the occlusion texture (times the occlusion pass's
+// visibility); bounce: the pass's coloured multi-bounce for diffuse light. Anisotropy bends the
+// look-up normal (McAuley's bent reflection vector, as Filament and the glTF Sample Viewer do) at
+// approx and is sampled at fis; the sheen takes the irradiance times its albedo, and scales the
+// layers below it (sheen_layer_diffuse for the diffuse, 1 - max(sheen)·E(n·v) for the specular).
+// e_v: the sheen's albedo E(n·v) (0 without sheen), which the lamps' loop shares.
+vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, uint mode, uint samples, vec2 rot) {
+    vec3 base = s.base;
+    float metallic = s.metallic;
+    float roughness = s.roughness;
+    float nv = clamp(dot(n, v), 1e-4, 1.0);
+    bool has_sheen = max3(s.sheen) > 0.0;
+    if (mode == 3u) {
+        // Ground truth: the glTF BRDF itself (pbr_brdf_cos) over the unfiltered environment, each
+        // sample pair one GGX-sampled and one cosine-sampled direction, weighted by the balance
+        // heuristic (the mixture pdf of the two samplers).
+        mat3 tbn = fabric_frame(n, any_perpendicular(n), 1.0);
+        float alpha = max(roughness * roughness, 1e-3);
+        float ess = ggx_albedo(nv, roughness);
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < samples; ++i) {
+            vec2 xi = ibl_sample(i, samples, rot);
+            vec3 h = tbn * ggx_sample_h(xi, alpha);
+            vec3 dirs[2] = vec3[2](2.0 * dot(v, h) * h - v, tbn * cosine_sample(xi));
+            for (uint k = 0u; k < 2u; ++k) {
+                vec3 l = dirs[k];
+                float nl = dot(n, l);
+                if (!(nl > 0.0)) {
+                    continue;
+                }
+                vec3 hl = normalize(l + v);
+                float vh = dot(v, hl);
+                float p_ggx = vh > 0.0 ? ggx_d(clamp(dot(n, hl), 0.0, 1.0), alpha) * clamp(dot(n, hl), 0.0, 1.0) / (4.0 * vh) : 0.0;
+                float pdf = 0.5 * p_ggx + 0.5 * nl / PI;
+                float e_l = has_sheen ? sheen_albedo(nl, s.sheen_roughness) : 0.0;
+                sum += env_radiance_at(l, 0.0) * gltf_brdf_cos(n, v, l, s, vec2(e_v, e_l), ess) / pdf;
+            }
+        }
+        return sum / float(2u * samples) * ao;
+    }
+    vec2 ab = dfg_lookup(nv, roughness).rg;
+    // Each lobe with its multiple-scattering compensation, as for the lamps (gltf_brdf_cos); the
+    // diffuse below takes what the compensated dielectric lobe leaves, so a white dielectric
+    // still reflects exactly 1 of a white furnace.
+    float ess = ab.x + ab.y;
+    vec3 dielectric = (s.f0 * ab.x + ab.y) * ggx_energy_compensation(s.f0, ess);
+    vec3 metal = (base * ab.x + ab.y) * ggx_energy_compensation(base, ess);
+    if (s.iridescence > 0.0) {
+        // KHR_materials_iridescence: the film's Fresnel at n·v times the lobe's albedo Ess
+        // stands in for the split sum's F0·A + B (as the sample viewer does), mixed by its weight.
+        vec3 fd = iridescence_fresnel(s.film_ior, nv, s.film_thickness, s.f0);
+        dielectric = mix(dielectric, fd * ess * ggx_energy_compensation(s.f0, ess), s.iridescence);
+        metal = mix(metal, iridescence_fresnel(s.film_ior, nv, s.film_thickness, base) * ess
+                               * ggx_energy_compensation(base, ess), s.iridescence);
+    }
+    vec3 spec_albedo = mix(s.specular * dielectric, metal, metallic);
+    vec3 bent = n;
+    float lookup_roughness = roughness;
+    if (s.anisotropy > 0.0) {
+        vec3 b = cross(n, s.t);
+        vec3 across = cross(b, v);
+        vec3 an = cross(across, b);
+        float bend = 1.0 - s.anisotropy * (1.0 - roughness);
+        bend *= bend;
+        vec3 m = mix(an, n, bend * bend);
+        bent = dot(m, m) > 1e-12 ? normalize(m) : n;
+        // The stretched lobe is wider than the isotropic one: look up the prefiltered radiance
+        // at the roughness of the mean of its two alphas.
+        float alpha = roughness * roughness;
+        float at = mix(alpha, 1.0, s.anisotropy * s.anisotropy);
+        lookup_roughness = sqrt(0.5 * (at + alpha));
+    }
+    vec3 r = dominant_dir(n, reflect(-v, bent), lookup_roughness);
+    vec3 prefiltered = env_prefiltered(r, lookup_roughness);
+    vec3 irradiance = env_irradiance(n);
+    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric))
+                 * (1.0 - s.transmission);
+    // fis: an anisotropic lobe is sampled (the bent normal above stays approx's).
+    vec3 specular = mode == 2u && s.anisotropy > 0.0 ? aniso_env_specular(n, v, s, ess, samples)
+                                                     : prefiltered * spec_albedo;
+    specular *= specular_occlusion(nv, ao, roughness);
+    diffuse *= ao * bounce;
+    if (!has_sheen) {
+        return diffuse + specular;
+    }
+    // Under a sheen the specular's light comes from about the mirror direction (n·l ≈ n·v): scaled
+    // by 1 - k·E(n·v); the diffuse's from the whole hemisphere: sheen_layer_diffuse. The Charlie
+    // lobe is broad and lives near the horizon: its light is closer to the cosine-weighted mean
+    // (the irradiance / π) than to any prefiltered GGX look-up. Sampling it instead (uniform
+    // directions weighted by the lobe, normalised, in v's frame) measured worse at 8 samples
+    // (velvet 4.7 % against 4.0 %) and little better at 64 (3.8 %).
+    float k = max3(s.sheen);
+    return diffuse * sheen_layer_diffuse(k, e_v, s.sheen_roughness)
+         + specular * max(1.0 - k * e_v, 0.0) + s.sheen * e_v * irradiance * ao;
+}
+
+// The fabric's two specular lobes under the environment, each without its coverage:
+// (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
+// lobe's width times Fresnel; fis / mc: importance sampling of the coverage-weighted mixture of
+// the two lobes' A–S samplers (one-sample MIS, so both estimates use every sample; mc: rotated
+// by `rot`, unfiltered).
+void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, uint samples, vec2 rot, out vec3 weft, out vec3 warp) {
+    weft = vec3(0.0);
+    warp = vec3(0.0);
+    // rs = 0 keeps its lobes: Schlick's Fresnel is (1 - c)^5 there, not 0 (as for the lamps).
+    if (!(k2.z > 0.0)) {
+        return;
+    }
+    if (mode == 1u) {
+        vec3 r = tbn * vec3(-k2.x, -k2.y, k2.z);
+        float peak = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (8.0 * FABRIC_PI);
+        // One sample at the mirror direction, blurred to the lobe's peak solid angle (+1 level:
+        // the box mips blur less than the lobe's tails reach).
+        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, env_face_size()) + 1.0) * schlick(f.rs, k2.z);
+        weft = l;
+        warp = l;
+        return;
+    }
+    float c_thread = coverage.x + coverage.y;
+    float w_weft = c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
+    vec2 r0 = mode == 3u ? rot : vec2(0.0);
+    for (uint i = 0u; i < samples; ++i) {
+        vec2 xi = ibl_sample(i, samples, r0);
+        bool pick_weft = xi.x < w_weft;
+        xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
+        xi.x = min(xi.x, 0.99999994);
+        vec3 h = pick_weft ? as_sample_h(xi, f.e_along, f.e_across) : as_sample_h(xi, f.e_across, f.e_along);
+        float kh = dot(k2, h);
+        if (!(kh > 0.0)) {
+            continue;
+        }
+        vec3 k1 = 2.0 * kh * h - k2;
+        if (!(k1.z > 0.0)) {
+            continue;
+        }
+        // Each lobe's estimate f·cos/pdf with pdf the mixture of the two samplers: a lobe is
+        // as_lobe_factor·hn^E and its sampler's pdf as_norm/(2π)·hn^E/(4 kh) (fabric.glsl), so
+        // hn^E of each orientation (as_power) is computed once and shared by both.
+        float p_weft = as_power(h.x, h.y, h.z, f.e_along, f.e_across);
+        float p_warp = as_power(h.x, h.y, h.z, f.e_across, f.e_along);
+        float mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
+        if (!(mixed > 0.0)) {
+            continue;
+        }
+        float pdf = as_norm(f.e_along, f.e_across) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
+        float factor = as_lobe_factor(k1.z, k2.z, min(kh, 1.0), f.e_along, f.e_across, f.rs);
+        float common_w = factor * k1.z / pdf;
+        float lod = mode == 3u ? 0.0 : fis_lod(pdf, samples, env_face_size());
+        vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
+        weft += l * p_weft;
+        warp += l * p_warp;
+    }
+    weft /= float(samples);
+    warp /= float(samples);
+}
+
+// The fabric's diffuse under the environment, without its coverage: irradiance/π times the
+// diffuse factor (mc: cosine-sampled, unfiltered, rotated by `rot`).
+vec3 fabric_env_diffuse(mat3 tbn, vec3 k2, GpuFabric f, uint mode, uint samples, vec2 rot) {
+    if (mode == 3u) {
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < samples; ++i) {
+            vec3 k1 = cosine_sample(ibl_sample(i, samples, rot));
+            float factor = (f.flags & FABRIC_FLAG_COUPLED_DIFFUSE) != 0u ? coupled_diffuse(f.rs, k1.z, k2.z) * FABRIC_PI : 1.0;
+            sum += env_radiance_at(tbn * k1, 0.0) * factor;
+        }
+        return sum / float(samples);
+    }
+    vec3 n = tbn[2];
+    return env_irradiance(n) * fabric_diffuse_albedo(f, k2.z);
+}
+
+// The irradiance/π on a sheet's far side from the environment (mc: cosine-sampled over the far
+// hemisphere, unfiltered, rotated by `rot`): what its threads pass through, times τ and their
+// albedo.
+vec3 fabric_env_back(mat3 tbn, uint mode, uint samples, vec2 rot) {
+    if (mode == 3u) {
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < samples; ++i) {
+            vec3 k = cosine_sample(ibl_sample(i, samples, rot));
+            sum += env_radiance_at(tbn * vec3(k.xy, -k.z), 0.0);
+        }
+        return sum / float(samples);
+    }
+    return env_irradiance(-tbn[2]);
+}
+
+// The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
+// thread shadowing (as for lamps), each lobe weighted by its thread's coverage, and for a sheet
+// (`sheets`: the shader draws fabric sheets) the light its threads pass from its far side (back:
+// fabric_env_back; 0 for any other cloth).
+vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, vec3 back, float ao, vec3 bounce, float nv, bool sheets) {
+    vec3 rd = fabric_albedo(coverage, sheets ? fabric_reflecting(f) : f);
+    // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
+    // averaged exponents would need a sampler of its own.)
+    vec3 radiance = rd * diffuse * ao * bounce + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
+    if (sheets) {
+        radiance += back * fabric_passed(coverage, f);
+    }
+    return radiance;
+}
+
+#endif
