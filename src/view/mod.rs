@@ -79,7 +79,9 @@ pub struct BenchReport {
     pub copy_ms: f64,
     pub slot_wait_ms: f64,
     pub present_ms: f64,
-    /// Median over frames of (pass submissions' wall time + copy + slot wait) / frame time.
+    /// Median over frames of (pass submissions' wall time + copy + slot wait) / frame time. Not
+    /// the present call: on lavapipe (Mesa 22.3) vkQueuePresentKHR itself waits for the queue to
+    /// drain, which is where an overlapped frame's wait for the device went (docs/performance.md).
     pub cpu_wait_fraction: f64,
 }
 
@@ -115,7 +117,7 @@ impl BenchReport {
         );
         s += &format!("| present call (whole) | {:.2} |\n", self.present_ms);
         s += &format!(
-            "| CPU blocked on the device | {:.0} % of the frame |\n",
+            "| CPU blocked on the device (render, copy, slot waits; not the present call) | {:.0} % of the frame |\n",
             self.cpu_wait_fraction * 100.0
         );
         s
