@@ -17,7 +17,8 @@ use glam::Mat4;
 use crate::scene::{ColorSpace, Scene, TextureSlot};
 use crate::vk::{
     Attachment, Buffer, BufferLocation, BufferUsageFlags, Cmd, Context, DescriptorPool,
-    DescriptorSet, Filter, Image, ImageDesc, ImageUsageFlags, Pipeline, Resource, Sampler, Usage,
+    DescriptorSet, Filter, Image, ImageDesc, ImageUsageFlags, InFlight, Pipeline, QueryPool,
+    Resource, Sampler, Usage,
 };
 
 use super::gpu::{FrameData, GpuShadow, TonemapPush};
@@ -88,6 +89,9 @@ pub struct Frame {
 /// The renderer: a device, each pass with its pipelines, what the passes share, and the targets
 /// and environments kept between frames.
 pub struct Renderer {
+    /// The last overlapped frame ([`Renderer::render_frame_overlapped`]), submitted and not yet
+    /// waited for. First, so that the renderer's drop waits for it before anything else goes.
+    in_flight: Option<FrameInFlight>,
     pub(crate) ctx: Context,
     gbuffer: GBufferPass,
     shadow: ShadowPass,
@@ -192,6 +196,59 @@ struct FrameBuffers {
     forced_colors: Option<Buffer>,
 }
 
+/// An overlapped frame on the device: its submission, and what its commands read that is its
+/// own (the descriptor pool, the per-frame buffers, the timestamp queries), moved here once the
+/// recorded passes that borrowed them were consumed. What it reads that the renderer keeps (the
+/// targets, pipelines, environments, defaults) or the caller owns (the `GpuScene`) is waited for
+/// before it is recreated or dropped: by `Renderer::settle` where the renderer replaces it, and in
+/// any case by every resource's Drop (`vk::InFlight`).
+struct FrameInFlight {
+    /// First: dropped (and so waited for) before what it reads.
+    submission: InFlight,
+    _pool: DescriptorPool,
+    _buffers: FrameBuffers,
+    queries: Option<QueryPool>,
+    /// The passes between the timestamps.
+    names: Vec<&'static str>,
+}
+
+impl FrameInFlight {
+    /// Waits for the frame, then adds its passes' GPU times to `timings`: each pass's, and the
+    /// whole as "submission (previous frame)".
+    fn wait(self, timings: &mut Vec<PassTiming>) -> crate::Result<()> {
+        self.submission.wait()?;
+        if let Some(q) = &self.queries {
+            let stamps = q.read_ns(self.names.len() as u32 + 1)?;
+            let between = |a: usize, b: usize| Some((stamps[b] - stamps[a]) / 1e6);
+            for (i, name) in self.names.iter().enumerate() {
+                timings.push(PassTiming {
+                    name,
+                    gpu_ms: between(i, i + 1),
+                    wall_ms: None,
+                });
+            }
+            timings.push(PassTiming {
+                name: "submission (previous frame)",
+                gpu_ms: between(0, self.names.len()),
+                wall_ms: None,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Where a frame's image goes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Output {
+    /// Read back to the host (`render_frame`).
+    Readback,
+    /// Left on the device, the submission waited for (`render_frame_to_target`).
+    Target,
+    /// Left on the device, the submission in flight until the next frame's
+    /// (`render_frame_overlapped`).
+    Overlapped,
+}
+
 /// Preprocessed environments a renderer keeps.
 const ENV_CACHE: usize = 2;
 
@@ -216,6 +273,7 @@ impl Renderer {
         });
         let (weave, tonemap, shadow, defaults) = rest?;
         Ok(Renderer {
+            in_flight: None,
             env: env?,
             env_cache: Vec::new(),
             gbuffer: GBufferPass::new(&ctx)?,
@@ -236,6 +294,25 @@ impl Renderer {
 
     pub fn context(&self) -> &Context {
         &self.ctx
+    }
+
+    /// Waits for the overlapped frame in flight, if any, and returns its passes' GPU times (see
+    /// [`Renderer::render_frame_overlapped`]); then checks the validation layer's messages.
+    pub fn finish(&mut self) -> crate::Result<Vec<PassTiming>> {
+        let mut timings = Vec::new();
+        if let Some(f) = self.in_flight.take() {
+            f.wait(&mut timings)?;
+        }
+        self.ctx.check_validation()?;
+        Ok(timings)
+    }
+
+    /// Waits for the overlapped frame in flight, if any: before anything it reads is replaced.
+    fn settle(&mut self) -> crate::Result<()> {
+        match self.in_flight.take() {
+            Some(f) => f.wait(&mut Vec::new()),
+            None => Ok(()),
+        }
     }
 
     /// Every pipeline the renderer has made so far (the default variants at least), with its
@@ -382,6 +459,7 @@ impl Renderer {
                     });
                 }
                 if self.env_cache.len() >= ENV_CACHE {
+                    self.settle()?;
                     self.env_cache.remove(0);
                 }
                 self.env_cache.push(built);
@@ -425,7 +503,7 @@ impl Renderer {
         if n > 1 {
             return self.render_supersampled(scene, gpu, options, n);
         }
-        self.render_frame_impl(scene, gpu, options, true)
+        self.render_frame_impl(scene, gpu, options, Output::Readback)
     }
 
     /// `--aa ssN`: N x N frames, each at the centre of its cell of an N x N grid over the pixel
@@ -455,7 +533,7 @@ impl Renderer {
                     jitter: [offset(i), offset(j)],
                     ..options.clone()
                 };
-                let f = self.render_frame_impl(scene, gpu, &o, true)?;
+                let f = self.render_frame_impl(scene, gpu, &o, Output::Readback)?;
                 for (acc, px) in ldr.chunks_exact_mut(4).zip(f.ldr.chunks_exact(4)) {
                     for c in 0..3 {
                         acc[c] += srgb_decode(px[c] as f32 / 255.0) as f64;
@@ -501,6 +579,40 @@ impl Renderer {
         gpu: &GpuScene,
         options: &RenderOptions,
     ) -> crate::Result<(Frame, &Image)> {
+        self.render_to_target(scene, gpu, options, Output::Target)
+    }
+
+    /// As [`Renderer::render_frame_to_target`], but the frame's submission is not waited for: the
+    /// CPU records the next frame while the device runs this one (`weft view`). The next
+    /// overlapped frame records its passes first, then waits for this one before it submits
+    /// (they share the targets: waiting keeps one frame on the device at a time, and the
+    /// presenter's copy of the image, submitted between the two, is ordered before the next
+    /// frame's writes by its own barriers). Anything that replaces what the frame reads waits
+    /// for it first (targets of another size, an environment evicted from the cache, a new
+    /// shadow atlas; [`Renderer::render_frame`] and [`Renderer::render_frame_to_target`] wait
+    /// before they start; dropping the renderer, or any resource, waits too).
+    ///
+    /// The returned frame's timings are the CPU's for this frame (its "submission" wall time,
+    /// recording and submitting, and "wait for the previous frame") and the GPU's for the
+    /// previous frame, read when its fence was waited for: pass times arrive one frame late.
+    /// [`Renderer::finish`] waits for the last frame and returns its GPU times. With
+    /// `Submission::PerPass` the frame is waited for, as `render_frame_to_target` does.
+    pub fn render_frame_overlapped(
+        &mut self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: &RenderOptions,
+    ) -> crate::Result<(Frame, &Image)> {
+        self.render_to_target(scene, gpu, options, Output::Overlapped)
+    }
+
+    fn render_to_target(
+        &mut self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        options: &RenderOptions,
+        output: Output,
+    ) -> crate::Result<(Frame, &Image)> {
         if options.supersample() > 1 {
             return Err(crate::Error::input(format!(
                 "--aa {} renders {} frames per image, for still renders (weft render); a live view takes fxaa or none",
@@ -508,7 +620,7 @@ impl Renderer {
                 options.antialias.frames_per_side().pow(2)
             )));
         }
-        let frame = self.render_frame_impl(scene, gpu, options, false)?;
+        let frame = self.render_frame_impl(scene, gpu, options, output)?;
         let ldr = &self
             .targets
             .as_ref()
@@ -556,6 +668,7 @@ impl Renderer {
         }
         let (width, height) = (options.width, options.height);
         if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
+            self.settle()?;
             self.targets = None;
             check_target_memory(
                 self.ctx.info(),
@@ -604,7 +717,7 @@ impl Renderer {
         camera: &crate::scene::Camera,
         env_index: Option<usize>,
     ) -> crate::Result<FrameBuffers> {
-        let ctx = &self.ctx;
+        let ctx = &self.ctx.clone();
         let mut frame_data =
             FrameData::new(camera, options.width, options.height).jittered(options.jitter);
         if let (Some(i), Some(e)) = (env_index, &options.environment) {
@@ -654,6 +767,7 @@ impl Renderer {
                 let layout = super::shadow::AtlasLayout::new(&plan.shadows);
                 let size = layout.size();
                 if self.shadow_atlas.as_ref().map(|a| a.extent()) != Some((size, size)) {
+                    self.settle()?;
                     self.shadow_atlas = None;
                     self.shadow_atlas = Some(ctx.create_image(
                         &ImageDesc::new_2d("shadow atlas", SHADOW_FORMAT, size, size).usage(
@@ -781,9 +895,15 @@ impl Renderer {
         scene: &Scene,
         gpu: &GpuScene,
         options: &RenderOptions,
-        readback: bool,
+        output: Output,
     ) -> crate::Result<Frame> {
         options.validate()?;
+        // Only the one-submission frame overlaps; every other waits for the one in flight first.
+        let overlapped = output == Output::Overlapped && options.submission == Submission::Frame;
+        if !overlapped {
+            self.settle()?;
+        }
+        let readback = output == Output::Readback;
         let plan = Plan::new(scene, options);
         let mut timings = Vec::new();
         // Before the frame: pipelines and the environment (Pass::Environment: preprocessed on
@@ -803,6 +923,8 @@ impl Renderer {
             )?,
         };
         let buffers = self.frame_buffers(scene, gpu, &plan, options, &camera, keys.env)?;
+        // The frame in flight (overlapped frames): waited for after this one is recorded.
+        let previous = self.in_flight.take();
 
         // The passes, in the plan's order, each from its named inputs.
         let ctx = self.ctx.clone();
@@ -979,7 +1101,51 @@ impl Renderer {
             stats.pipelines.extend(pass.pipelines.iter().cloned());
         }
 
-        // One submission (or one per pass), then the readback.
+        // One submission (or one per pass), then the readback; or, overlapped, this frame
+        // recorded, the previous one waited for, this one submitted and kept in flight.
+        if overlapped {
+            let names: Vec<&'static str> = recorded.iter().map(|p| p.name).collect();
+            let start = Instant::now();
+            let recording =
+                ctx.record(|cmd| record_frame(cmd, recorded, queries.as_ref(), None))?;
+            let record_ms = start.elapsed().as_secs_f64() * 1e3;
+            let wait = Instant::now();
+            if let Some(p) = previous {
+                p.wait(&mut timings)?;
+            }
+            let wait_ms = wait.elapsed().as_secs_f64() * 1e3;
+            let submit = Instant::now();
+            let submission = recording.submit()?;
+            timings.push(PassTiming {
+                name: "submission",
+                gpu_ms: None,
+                wall_ms: Some(record_ms + submit.elapsed().as_secs_f64() * 1e3),
+            });
+            timings.push(PassTiming {
+                name: "wait for the previous frame",
+                gpu_ms: None,
+                wall_ms: Some(wait_ms),
+            });
+            self.in_flight = Some(FrameInFlight {
+                submission,
+                _pool: pool,
+                _buffers: buffers,
+                queries,
+                names,
+            });
+            stats.submissions = ctx.submissions() - submissions;
+            ctx.check_validation()?;
+            return Ok(Frame {
+                width: options.width,
+                height: options.height,
+                ldr: Vec::new(),
+                hdr: Vec::new(),
+                timings,
+                stats,
+                plan,
+            });
+        }
+        drop(previous);
         submit(
             &ctx,
             recorded,
@@ -1078,6 +1244,29 @@ impl<'t> Readback<'t> {
     }
 }
 
+/// A one-submission frame's commands: the passes with a timestamp before the first and after
+/// each, then the readback copies.
+fn record_frame<'s>(
+    cmd: &mut Cmd<'s>,
+    passes: Vec<Recorded<'s>>,
+    queries: Option<&'s QueryPool>,
+    readback: Option<&'s Readback<'s>>,
+) {
+    if let Some(q) = queries {
+        cmd.reset_queries(q);
+        cmd.timestamp(q, 0);
+    }
+    for (i, pass) in passes.into_iter().enumerate() {
+        (pass.commands)(cmd);
+        if let Some(q) = queries {
+            cmd.timestamp(q, i as u32 + 1);
+        }
+    }
+    if let Some(r) = readback {
+        r.record(cmd);
+    }
+}
+
 /// Submits the recorded passes and the readback copies: as one submission with a timestamp
 /// between each two passes (`Submission::Frame`; a "submission" timing has its wall time), or
 /// one submission per pass between two timestamps, the readback last (`Submission::PerPass`).
@@ -1094,21 +1283,7 @@ fn submit<'s>(
         Submission::Frame => {
             let names: Vec<&'static str> = passes.iter().map(|p| p.name).collect();
             let start = Instant::now();
-            ctx.submit(|cmd| {
-                if let Some(q) = queries {
-                    cmd.reset_queries(q);
-                    cmd.timestamp(q, 0);
-                }
-                for (i, pass) in passes.into_iter().enumerate() {
-                    (pass.commands)(cmd);
-                    if let Some(q) = queries {
-                        cmd.timestamp(q, i as u32 + 1);
-                    }
-                }
-                if let Some(r) = readback {
-                    r.record(cmd);
-                }
-            })?;
+            ctx.submit(|cmd| record_frame(cmd, passes, queries, readback))?;
             let wall = ms(start);
             let stamps = queries
                 .map(|q| q.read_ns(names.len() as u32 + 1))

@@ -2,9 +2,13 @@
 //! an orbit camera and a panel of live controls (docs/viewer.md).
 //!
 //! Each frame: the panel (egui) is laid out, its edits are applied to the scene and the render
-//! options, [`Renderer::render_frame_to_target`] runs the passes, and
+//! options, [`Renderer::render_frame_overlapped`] records the passes, waits for the previous
+//! frame and submits this one without waiting for it, and
 //! [`Presenter::present`](crate::vk::Presenter::present) copies the tonemapped image into the
-//! window and draws the panel over it, with up to [`FRAMES_IN_FLIGHT`] presents in flight.
+//! window and draws the panel over it, with up to [`FRAMES_IN_FLIGHT`] presents in flight. So the
+//! CPU lays out the panel and records frame N+1 while the device runs frame N; the passes' GPU
+//! times a frame reports (the panel's, `--bench-frames`') are the previous frame's, read when
+//! its fence was waited for: one frame late.
 
 pub mod controls;
 pub mod orbit;
@@ -67,11 +71,17 @@ pub struct BenchReport {
     pub ui_ms: f64,
     pub render_ms: f64,
     pub passes_wall_ms: f64,
+    /// Of it, the wait for the previous frame's submission (overlapped frames).
+    pub frame_wait_ms: f64,
+    /// GPU time of each pass: the previous frame's, read when the renderer waited for it (one
+    /// frame late; the same passes, so the medians are the same frames' figures).
     pub passes_gpu_ms: Vec<(&'static str, f64)>,
     pub copy_ms: f64,
     pub slot_wait_ms: f64,
     pub present_ms: f64,
-    /// Median over frames of (pass submissions' wall time + copy + slot wait) / frame time.
+    /// Median over frames of (pass submissions' wall time + copy + slot wait) / frame time. Not
+    /// the present call: on lavapipe (Mesa 22.3) vkQueuePresentKHR itself waits for the queue to
+    /// drain, which is where an overlapped frame's wait for the device went (docs/performance.md).
     pub cpu_wait_fraction: f64,
 }
 
@@ -93,6 +103,10 @@ impl BenchReport {
             "| of it, pass submissions (record + wait) | {:.2} |\n",
             self.passes_wall_ms
         );
+        s += &format!(
+            "| of that, wait for the previous frame | {:.2} |\n",
+            self.frame_wait_ms
+        );
         for (name, ms) in &self.passes_gpu_ms {
             s += &format!("| GPU: {name} | {ms:.2} |\n");
         }
@@ -103,7 +117,7 @@ impl BenchReport {
         );
         s += &format!("| present call (whole) | {:.2} |\n", self.present_ms);
         s += &format!(
-            "| CPU blocked on the device | {:.0} % of the frame |\n",
+            "| CPU blocked on the device (render, copy, slot waits; not the present call) | {:.0} % of the frame |\n",
             self.cpu_wait_fraction * 100.0
         );
         s
@@ -579,9 +593,11 @@ impl App {
         (self.scene_x0, self.scene_width) = (x0, w - x0);
         let r = self.running.as_mut().expect("started");
         let t = Instant::now();
+        // Not waited for: the next frame waits for it once recorded. Its timings carry the
+        // previous frame's GPU times (one frame late).
         let (frame, ldr) = r
             .renderer
-            .render_frame_to_target(&self.scene, &r.gpu, &options)?;
+            .render_frame_overlapped(&self.scene, &r.gpu, &options)?;
         let render_ms = t.elapsed().as_secs_f64() * 1e3;
 
         let after = self.screenshot.as_ref().map(|s| s.1);
@@ -722,6 +738,13 @@ fn bench_report(timed: &[FrameFigures], width: u32, height: u32) -> BenchReport 
         ui_ms: m(&|f| f.ui_ms),
         render_ms: m(&|f| f.render_ms),
         passes_wall_ms: m(&wall),
+        frame_wait_ms: m(&|f| {
+            f.passes
+                .iter()
+                .filter(|p| p.name == "wait for the previous frame")
+                .filter_map(|p| p.wall_ms)
+                .sum()
+        }),
         passes_gpu_ms,
         copy_ms: m(&|f| f.copy_ms),
         slot_wait_ms: m(&|f| f.slot_wait_ms),

@@ -198,6 +198,9 @@ fn timings(ui: &mut egui::Ui, stats: &Stats) {
             ui.label("pass");
             ui.label("GPU ms");
             ui.end_row();
+            // The GPU times are the previous frame's (the renderer reads a frame's timestamps
+            // when the next frame waits for it: Renderer::render_frame_overlapped), so the panel
+            // shows them one frame late.
             for p in &f.passes {
                 if let Some(ms) = p.gpu_ms {
                     ui.label(p.name);

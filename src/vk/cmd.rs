@@ -702,3 +702,168 @@ impl Context {
         Ok(result)
     }
 }
+
+/// Commands recorded by [`Context::record`], not yet submitted: the resources they name stay
+/// borrowed for `'s` until [`Recording::submit`]. Dropped unsubmitted, the command buffer is freed.
+pub struct Recording<'s> {
+    ctx: &'s Context,
+    raw: vk::CommandBuffer,
+}
+
+/// A submission in flight ([`Recording::submit`]): its command buffer and fence. It borrows
+/// nothing: from the submission on, what keeps the resources its commands name alive is that
+/// every resource waits for all submissions in flight before it is destroyed (and host access to
+/// a buffer waits too; `Shared::settle`). [`InFlight::wait`] waits for the fence and frees the
+/// command buffer; dropping it does the same.
+pub struct InFlight {
+    shared: std::sync::Arc<Shared>,
+    raw: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
+impl Context {
+    /// Records commands with `record` into a command buffer of its own, without submitting them
+    /// ([`Recording::submit`]): so that a frame can be recorded while the previous one runs.
+    /// Every resource a command names is borrowed for `'s`, as with [`Context::submit`].
+    pub fn record<'s>(&'s self, record: impl FnOnce(&mut Cmd<'s>)) -> crate::Result<Recording<'s>> {
+        let device = &self.shared.device;
+        // The command pool is shared: allocation and recording hold the queue lock.
+        let lock = || {
+            self.shared
+                .queue_lock
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        };
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.shared.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let raw = {
+            let _queue = lock();
+            unsafe { device.allocate_command_buffers(&alloc) }
+                .map_err(vkerr("vkAllocateCommandBuffers"))?[0]
+        };
+        // Frees the buffer on an early return or a panic in `record` (its Drop takes the queue
+        // lock, so it is declared before the guard below, and dropped after it).
+        let recording = Recording { ctx: self, raw };
+        {
+            let _queue = lock();
+            let begin = vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            unsafe { device.begin_command_buffer(raw, &begin) }
+                .map_err(vkerr("vkBeginCommandBuffer"))?;
+            let mut cmd = Cmd {
+                shared: &self.shared,
+                raw,
+                _submission: PhantomData,
+            };
+            record(&mut cmd);
+            unsafe { device.end_command_buffer(raw) }.map_err(vkerr("vkEndCommandBuffer"))?;
+        }
+        Ok(recording)
+    }
+}
+
+impl Recording<'_> {
+    /// Submits the commands and returns without waiting for them.
+    pub fn submit(self) -> crate::Result<InFlight> {
+        let shared = &self.ctx.shared;
+        let device = &shared.device;
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .map_err(vkerr("vkCreateFence"))?;
+        let _queue = shared
+            .queue_lock
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(self.raw)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos)];
+        if let Err(e) = unsafe { device.queue_submit2(shared.queue, &submit, fence) } {
+            unsafe { device.destroy_fence(fence, None) };
+            return Err(vkerr("vkQueueSubmit2")(e));
+        }
+        // Registered before `self`, which borrows every resource the commands name for `'s`,
+        // is gone: from here on a resource's Drop waits for this fence.
+        shared
+            .in_flight
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .push(fence);
+        shared
+            .submissions
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        drop(_queue);
+        let raw = self.raw;
+        let in_flight = InFlight {
+            shared: shared.clone(),
+            raw,
+            fence,
+        };
+        // The command buffer now belongs to the InFlight.
+        std::mem::forget(self);
+        Ok(in_flight)
+    }
+}
+
+impl Drop for Recording<'_> {
+    fn drop(&mut self) {
+        let shared = &self.ctx.shared;
+        let _queue = shared
+            .queue_lock
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        unsafe {
+            shared
+                .device
+                .free_command_buffers(shared.command_pool, &[self.raw])
+        };
+    }
+}
+
+impl InFlight {
+    /// Waits for the submission to finish, then frees its command buffer and fence.
+    pub fn wait(mut self) -> crate::Result<()> {
+        self.finish()
+    }
+
+    /// Whether the device has finished the submission (does not wait).
+    pub fn is_done(&self) -> bool {
+        unsafe { self.shared.device.get_fence_status(self.fence) }.unwrap_or(false)
+    }
+
+    fn finish(&mut self) -> crate::Result<()> {
+        if self.fence == vk::Fence::null() {
+            return Ok(());
+        }
+        let shared = &self.shared;
+        let waited = {
+            // Under the lock that `Shared::settle` waits under: the fence is not destroyed while
+            // another thread waits for it.
+            let mut pending = shared
+                .in_flight
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let waited = unsafe { shared.device.wait_for_fences(&[self.fence], true, u64::MAX) }
+                .map_err(vkerr("vkWaitForFences"));
+            pending.retain(|&f| f != self.fence);
+            unsafe { shared.device.destroy_fence(self.fence, None) };
+            waited
+        };
+        self.fence = vk::Fence::null();
+        let _queue = shared
+            .queue_lock
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        unsafe {
+            shared
+                .device
+                .free_command_buffers(shared.command_pool, &[self.raw])
+        };
+        waited
+    }
+}
+
+impl Drop for InFlight {
+    fn drop(&mut self) {
+        let _ = self.finish();
+    }
+}

@@ -89,6 +89,11 @@ pub(crate) struct Shared {
     pub(crate) queue_lock: Mutex<()>,
     /// Queue submissions made so far (`Context::submissions`).
     pub(crate) submissions: std::sync::atomic::AtomicU64,
+    /// The fences of submissions in flight ([`InFlight`](super::InFlight): submitted and not yet
+    /// waited for). Every resource waits for them before it is destroyed ([`Shared::settle`]),
+    /// and so does host access to a buffer's memory: an in-flight submission borrows nothing, so
+    /// this is what keeps the resources its commands name alive until the device is done.
+    pub(crate) in_flight: Mutex<Vec<vk::Fence>>,
     pub(crate) allocator: Mutex<Option<Allocator>>,
     pub(crate) info: DeviceInfo,
     /// The physical device and the queue's family (a window's surface is checked against them).
@@ -140,6 +145,21 @@ pub(crate) fn pipeline_cache_header_matches(
 }
 
 impl Shared {
+    /// Waits for every submission in flight (nothing to wait for, the usual case, costs a lock).
+    /// Called before any resource is destroyed and before host access to a buffer's memory, so
+    /// that safe code cannot free or touch what a submission that was not waited for still reads
+    /// or writes: a resource dropped while a frame is in flight waits for that frame.
+    pub(crate) fn settle(&self) {
+        let pending = self
+            .in_flight
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !pending.is_empty() {
+            // A failure here is a lost device, after which nothing the device reads matters.
+            let _ = unsafe { self.device.wait_for_fences(&pending, true, u64::MAX) };
+        }
+    }
+
     /// What a pipeline's creation or destruction holds (issue 23): on a CPU device (lavapipe),
     /// the queue lock, after waiting for the device to go idle, so that no shader is compiled or
     /// freed while lavapipe's queue thread executes one, and no two are compiled at once; `None`
@@ -528,6 +548,7 @@ impl Context {
                 command_pool,
                 queue_lock: Mutex::new(()),
                 submissions: std::sync::atomic::AtomicU64::new(0),
+                in_flight: Mutex::new(Vec::new()),
                 allocator: Mutex::new(Some(allocator)),
                 info,
                 physical,

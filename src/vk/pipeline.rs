@@ -60,6 +60,7 @@ pub struct SetLayout {
 
 impl Drop for SetLayout {
     fn drop(&mut self) {
+        self.shared.settle();
         unsafe {
             self.shared
                 .device
@@ -89,6 +90,7 @@ impl Drop for Pipeline {
     fn drop(&mut self) {
         // Waits for lavapipe's queue to finish (Shared::compile_lock); a pipeline is only dropped
         // when nothing pending uses it, so on a GPU nothing is waited for.
+        self.shared.settle();
         let _compiling = self.shared.compile_lock();
         unsafe {
             self.shared.device.destroy_pipeline(self.raw, None);
@@ -155,6 +157,7 @@ pub struct DescriptorPool {
 
 impl Drop for DescriptorPool {
     fn drop(&mut self) {
+        self.shared.settle();
         unsafe { self.shared.device.destroy_descriptor_pool(self.raw, None) };
     }
 }

@@ -38,7 +38,15 @@ pub struct Buffer {
 
 impl Buffer {
     /// Copies `data` into a host-visible buffer at `offset` bytes.
+    ///
+    /// Waits first for any submission in flight (one may read this buffer).
     pub fn write<T: bytemuck::Pod>(&mut self, offset: u64, data: &[T]) -> crate::Result<()> {
+        self.shared.settle();
+        self.write_fresh(offset, data)
+    }
+
+    /// [`Buffer::write`] without the wait: only for a buffer no command has named yet.
+    fn write_fresh<T: bytemuck::Pod>(&mut self, offset: u64, data: &[T]) -> crate::Result<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let name = self.name.clone();
         let slice = self
@@ -58,8 +66,9 @@ impl Buffer {
         Ok(())
     }
 
-    /// The contents of a host-visible buffer.
+    /// The contents of a host-visible buffer (after any submission in flight, which may write it).
     pub fn read(&self) -> crate::Result<&[u8]> {
+        self.shared.settle();
         self.allocation
             .as_ref()
             .and_then(|a| a.mapped_slice())
@@ -70,6 +79,7 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
+        self.shared.settle();
         unsafe { self.shared.device.destroy_buffer(self.raw, None) };
         if let (Some(a), Ok(mut guard)) = (self.allocation.take(), self.shared.allocator.lock()) {
             if let Some(alloc) = guard.as_mut() {
@@ -188,6 +198,7 @@ impl Image {
 
 impl Drop for Image {
     fn drop(&mut self) {
+        self.shared.settle();
         unsafe {
             for v in self.mip_views.drain(..) {
                 self.shared.device.destroy_image_view(v, None);
@@ -210,6 +221,7 @@ pub struct Sampler {
 
 impl Drop for Sampler {
     fn drop(&mut self) {
+        self.shared.settle();
         unsafe { self.shared.device.destroy_sampler(self.raw, None) };
     }
 }
@@ -285,6 +297,7 @@ impl QueryPool {
 
 impl Drop for QueryPool {
     fn drop(&mut self) {
+        self.shared.settle();
         unsafe { self.shared.device.destroy_query_pool(self.raw, None) };
     }
 }
@@ -359,7 +372,8 @@ impl Context {
             usage,
             BufferLocation::Upload,
         )?;
-        b.write(0, data)?;
+        // Made just now: no submission in flight can name it, so nothing to wait for.
+        b.write_fresh(0, data)?;
         Ok(b)
     }
 

@@ -1,11 +1,13 @@
 //! Presenting to a window (`weft view`): the surface, the swapchain, frames in flight, and the
 //! panel, drawn by egui-ash-renderer into the same command buffer.
 //!
-//! A frame: the renderer's passes run as usual (`Renderer::render_frame_to_target`, each pass its
-//! own submission); then one short submission copies its tonemapped image into this frame's own
-//! copy (in the renderer's queue order, so the next frame's tonemap pass cannot overwrite it under
-//! a blit still in flight); then one submission that is not waited for blits that copy into the
-//! acquired swapchain image, draws the panel over it and presents. [`FRAMES_IN_FLIGHT`] such
+//! A frame: the renderer's passes run as one submission that is not waited for
+//! (`Renderer::render_frame_overlapped`: the next frame waits for it, after recording itself);
+//! then one short submission, not waited for either, copies its tonemapped image into this frame
+//! slot's own copy (in the renderer's queue order, and its last barrier orders the renderer's
+//! next writes to the image after its reads, so the next frame's tonemap pass cannot overwrite it
+//! under a blit still in flight); then one submission that is not waited for blits that copy into
+//! the acquired swapchain image, draws the panel over it and presents. [`FRAMES_IN_FLIGHT`] such
 //! submissions may be in flight: the CPU waits only when it comes back to a frame slot whose
 //! submission has not finished.
 
@@ -49,6 +51,9 @@ struct Slot {
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     acquired: vk::Semaphore,
+    /// The submission copying the renderer's image into `source` (not waited for: the slot's
+    /// fence, of the present submission after it in queue order, covers it too).
+    copy: Option<super::InFlight>,
     /// This frame's copy of the renderer's tonemapped image.
     source: Option<Image>,
     /// egui textures to free once this slot's submission is done.
@@ -168,6 +173,7 @@ impl Presenter {
                 cmd,
                 fence,
                 acquired,
+                copy: None,
                 source: None,
                 free: Vec::new(),
             });
@@ -358,6 +364,10 @@ impl Presenter {
         let fence = self.slots[slot_index].fence;
         unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }
             .map_err(vkerr("vkWaitForFences"))?;
+        // Its copy came before it in queue order: done, so this frees its command buffer.
+        if let Some(copy) = self.slots[slot_index].copy.take() {
+            copy.wait()?;
+        }
         out.slot_wait_ms = t.elapsed().as_secs_f64() * 1e3;
         if let Some(egui) = self.egui.as_mut() {
             let free = std::mem::take(&mut self.slots[slot_index].free);
@@ -401,13 +411,19 @@ impl Presenter {
         let t = Instant::now();
         {
             let source = self.slots[slot_index].source.as_ref().expect("made above");
-            ctx.submit(|cmd| {
-                cmd.transition(scene, Usage::ColorAttachment, Usage::TransferSrc, None);
-                cmd.transition(source, Usage::Undefined, Usage::TransferDst, None);
-                cmd.copy_image(scene, source);
-                cmd.transition(source, Usage::TransferDst, Usage::TransferSrc, None);
-                cmd.transition(scene, Usage::TransferSrc, Usage::ColorAttachment, None);
-            })?;
+            // Not waited for: the renderer's next frame is ordered after it by the last
+            // barrier (its writes to `scene` wait for the copy's reads), and the present
+            // submission below by the one before it.
+            let copy = ctx
+                .record(|cmd| {
+                    cmd.transition(scene, Usage::ColorAttachment, Usage::TransferSrc, None);
+                    cmd.transition(source, Usage::Undefined, Usage::TransferDst, None);
+                    cmd.copy_image(scene, source);
+                    cmd.transition(source, Usage::TransferDst, Usage::TransferSrc, None);
+                    cmd.transition(scene, Usage::TransferSrc, Usage::ColorAttachment, None);
+                })?
+                .submit()?;
+            self.slots[slot_index].copy = Some(copy);
         }
         out.copy_ms = t.elapsed().as_secs_f64() * 1e3;
 
