@@ -67,7 +67,7 @@ layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 layout(set = 0, binding = 5, std430) readonly buffer ThreadColours { vec4 thread_colours[]; };  // thread-by-thread colours, as gbuffer.frag's binding 5
 layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;  // the shadow atlas, as lighting.frag's binding 10
 layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };  // shadow records, as lighting.frag's binding 11
-layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };  // per-tile light lists, as lighting.frag's binding 12
+layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };  // per-cluster light lists, as lighting.frag's binding 12
 layout(set = 0, binding = 13) uniform samplerCube env_radiance;  // the environment's radiance cube, as lighting.frag's binding 13
 layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube, as lighting.frag's binding 14
 layout(set = 0, binding = 15) uniform sampler2D env_dfg;  // the split-sum DFG table, as lighting.frag's binding 15

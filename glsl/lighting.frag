@@ -25,7 +25,10 @@ layout(constant_id = 4) const uint SHADING = 0u;
 // shadow code is compiled out.
 layout(constant_id = 5) const uint SHADOWS = 0u;
 // 1: a point or spot light whose range cannot reach the pixel is skipped before its falloff and
-// BRDF (the default); 0: every light is evaluated everywhere (to show the culling changes nothing).
+// BRDF (the default), and the pixel loops over its 16 x 16-pixel tile's lights; 2: as 1, and the
+// light lists may also be sliced by view distance (frame.clusters; the plan's choice when the
+// scene has many lights); 0: every light is evaluated everywhere (to show the culling changes
+// nothing).
 layout(constant_id = 6) const uint RANGE_CULLING = 1u;
 // Environment lighting (weft::env::IblLevel): 0 none (the fixed hemispherical ambient), 1 approx,
 // 2 filtered importance sampling, 3 brute-force Monte Carlo (the ground truth).
@@ -53,9 +56,10 @@ layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 // The shadow atlas (D32, one square tile per shadow-casting light) and its tiles.
 layout(set = 0, binding = 10) uniform sampler2DShadow shadow_atlas;  // the shadow atlas (D32) with a comparison sampler (GREATER_OR_EQUAL, linear, clamp); any depth image when SHADOWS = 0
 layout(set = 0, binding = 11, std430) readonly buffer Shadows { Shadow shadows[]; };  // shadow records (`Shadow[]`, include/frame.glsl), indexed by `Light.spot.z - 1`
-// Per 16 x 16-pixel tile (row-major): (offset, count) of its light list, then the lists' light
-// indices (src/render/tiles.rs): the lights whose range can reach the tile.
-layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };  // per-tile light lists (uint[]): for each 16 x 16-pixel tile, row-major over `frame.tile_columns` tiles per row, (offset, count) of its list, then the lists of light indices; one tile listing every light works
+// Per cluster (a 16 x 16-pixel tile and a slice of view distance, frame.clusters): (offset,
+// count) of its light list, then the lists' light indices (src/render/tiles.rs): the lights
+// whose range can reach the cluster.
+layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lights[]; };  // per-cluster light lists (uint[]): for each cluster (slice·rows + y)·`frame.tile_columns` + x of 16 x 16-pixel tiles (x, y) and depth slices (`frame.clusters`: slices, near distance, slices per doubling of the view distance, tile rows), (offset, count) of its list, then the lists of light indices; with `frame.clusters.x` = 1, a list per tile (every tile listing every light works)
 // The environment (env space; 1 x 1 black cubes when there is none): radiance with box-filtered
 // mips, the GGX-prefiltered specular levels of the split sum, and the DFG table (n·v, roughness).
 layout(set = 0, binding = 13) uniform samplerCube env_radiance;  // the environment's radiance cube (RGBA16F, env space, box-filtered mips: env_cube.comp); any cube when IBL = 0

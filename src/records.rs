@@ -108,8 +108,11 @@ pub struct FrameData {
     pub env_background: [f32; 4],
     /// Irradiance/π, order-2 SH in env space (rgb, a unused).
     pub sh: [[f32; 4]; 9],
+    /// The light clusters (render::tiles): x: depth slices (1: the tiles alone), y: the near
+    /// distance the slices start at, z: slices per doubling of the view distance, w: tile rows.
+    pub clusters: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<FrameData>() == 4 * 64 + 5 * 16 + 16 + 14 * 16);
+const _: () = assert!(std::mem::size_of::<FrameData>() == 4 * 64 + 5 * 16 + 16 + 15 * 16);
 
 impl FrameData {
     /// The frame uniform for `camera` at `width` x `height`, with no lights, materials or debug
@@ -173,6 +176,7 @@ impl FrameData {
             env_params: [0.0; 4],
             env_background: [1.0, 0.0, 0.0, 0.0],
             sh: [[0.0; 4]; 9],
+            clusters: [1.0, 1.0, 1.0, tile_grid(width, height).1 as f32],
         }
     }
 }

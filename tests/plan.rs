@@ -373,8 +373,11 @@ fn range_culling_changes_nothing() {
         max_hdr_diff(&culled, &unlit) > 0.05,
         "the local lights must light something"
     );
-    assert!(lighting_pipeline(&culled).contains("range_culling=1"));
+    assert!(lighting_pipeline(&culled).contains("range_culling=2"));
     assert!(lighting_pipeline(&all).contains("range_culling=0"));
+    // Culled by tile and by slice of view distance (render::tiles): the lists are sliced here.
+    assert_eq!(culled.stats.light_slices, weft::render::tiles::SLICES);
+    assert_eq!(all.stats.light_slices, 1);
     assert_eq!(max_hdr_diff(&culled, &all), 0.0);
 }
 

@@ -47,6 +47,10 @@ struct FrameData {
     vec4 env_background; // x: 0 environment, 1 colour (background.rgb), 2 transparent;
                          // y: the environment background's blur, in radiance-cube levels
     vec4 sh[9];          // irradiance/π as order-2 SH in env space (weft::env::Environment::sh9); weft's shading reads env_irradiance (the specular cube's roughness-1 level) instead
+    vec4 clusters;       // the light clusters (weft::render::tiles): x: depth slices S (1: the
+                         // 16 x 16 tiles alone), y: the near distance d0, z: slices per doubling
+                         // of the view distance k (view distance d is in slice
+                         // clamp(floor(log2(max(d, d0)/d0)·k), 0, S − 1)), w: tile rows
 };
 
 const uint LIGHT_DIRECTIONAL = 0u;

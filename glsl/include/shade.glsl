@@ -15,14 +15,22 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 
 #include "lights.glsl"
 
-// The pixel's tile's light list: (offset into tile_lights, count).
-uvec2 tile_list() {
+// The light list of world point p's cluster (its pixel's 16 x 16 tile and, when the frame has
+// depth slices, its slice of view distance; frame.clusters, weft::render::tiles): (offset into
+// tile_lights, count).
+uvec2 tile_list(vec3 p) {
     uvec2 t = uvec2(gl_FragCoord.xy) / 16u;
-    uint index = t.y * frame.tile_columns + t.x;
+    uint slice = 0u;
+    if (RANGE_CULLING == 2u && frame.clusters.x > 1.5) {
+        float d = -(frame.view * vec4(p, 1.0)).z;
+        float s = floor(log2(max(d, frame.clusters.y) / frame.clusters.y) * frame.clusters.z);
+        slice = uint(clamp(s, 0.0, frame.clusters.x - 1.0));
+    }
+    uint index = (slice * uint(frame.clusters.w + 0.5) + t.y) * frame.tile_columns + t.x;
     return uvec2(tile_lights[2u * index], tile_lights[2u * index + 1u]);
 }
 
-// Light j of a tile's list (tile_list()): its index i into `lights`, the unit direction l towards
+// Light j of a cluster's list (tile_list(p)): its index i into `lights`, the unit direction l towards
 // it and the illuminance it brings to p (light_incoming: 0 where its range cannot reach p).
 vec3 tile_light(uvec2 list, uint j, vec3 p, out uint i, out vec3 l) {
     i = tile_lights[list.x + j];
@@ -71,7 +79,7 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, vec3 ambient_back, mat3 tbn, vec3 k2,
     if (sheet) {
         radiance += ambient_back * fabric_passed(coverage, f);
     }
-    uvec2 list = tile_list();
+    uvec2 list = tile_list(p);
     for (uint j = 0u; j < list.y; ++j) {
         uint i;
         vec3 l;
@@ -94,7 +102,7 @@ vec3 fabric_radiance(vec3 p, vec3 ambient, vec3 ambient_back, mat3 tbn, vec3 k2,
 // Ambient plus every light reflected by one of the comparison models (Phong or plain A–S).
 vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f, float receives) {
     vec3 radiance = ambient * fabric_mean_rd(f);
-    uvec2 list = tile_list();
+    uvec2 list = tile_list(p);
     for (uint j = 0u; j < list.y; ++j) {
         uint i;
         vec3 l;
@@ -287,7 +295,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
             under += ambient * base * (1.0 - metallic) * (1.0 - s.transmission) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;
         }
-        uvec2 list = tile_list();
+        uvec2 list = tile_list(p);
         for (uint j = 0u; j < list.y; ++j) {
             uint i;
             vec3 l;

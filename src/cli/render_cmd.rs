@@ -302,6 +302,13 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             "shadows    {} map(s), {} caster draw(s)",
             frame.stats.shadow_maps, frame.stats.shadow_draws
         );
+        println!(
+            "lights     lists per 16 x 16-pixel tile{}",
+            match frame.stats.light_slices {
+                1 => String::new(),
+                n => format!(" and {n} slices of view distance"),
+            }
+        );
     }
     Ok(())
 }

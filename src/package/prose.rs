@@ -289,7 +289,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 2, "FABRIC_AS_PBR: 1 shades fabric pixels with the metallic-roughness BRDF, for cost comparisons (default 0)"),
     ("lighting.frag", 3, "LIGHT_TYPES: bit mask of the light types whose code is compiled in: 1 directional, 2 point, 4 spot (default 7, all)"),
     ("lighting.frag", 5, "SHADOWS: 1 samples the shadow atlas for lights with a shadow record (Light.spot.z > 0) on pixels that receive (G-buffer surface.w = 1); 0 (default) compiles the shadow code out"),
-    ("lighting.frag", 6, "RANGE_CULLING: 1 (default) skips point and spot lights whose range cannot reach the pixel before their falloff and BRDF; 0 evaluates every light everywhere (same image)"),
+    ("lighting.frag", 6, "RANGE_CULLING: 1 (default) skips point and spot lights whose range cannot reach the pixel before their falloff and BRDF; 2 as 1, with the light lists of binding 12 also sliced by view distance when `FrameData.clusters.x` > 1; 0 evaluates every light everywhere (same image)"),
     ("lighting.frag", 7, "IBL: environment lighting: 0 none (default; a fixed hemispherical ambient), 1 approx, 2 filtered importance sampling (fis:N), 3 brute-force Monte Carlo (mc:N, the ground truth)"),
     ("lighting.frag", 8, "IBL_SAMPLES: N of fis:N and mc:N (default 16)"),
     ("lighting.frag", 4, "SHADING: how fabric pixels are shaded: 0 the fabric model (default), 1 Gouraud (the G-buffer's emissive already holds the per-vertex lighting), 2 the Phong reflection model, 3 one Ashikhmin-Shirley lobe without the weave (the models of `weft compare`)"),

@@ -65,6 +65,9 @@ pub struct FrameStats {
     pub shadow_draws: usize,
     /// alphaMode BLEND draws the transparent pass drew.
     pub blend_draws: usize,
+    /// Slices of view distance of the frame's light lists (1: a list per 16 x 16-pixel tile;
+    /// render::tiles).
+    pub light_slices: u32,
     /// Queue submissions the frame made (the passes and the readback; not the environment's
     /// preprocessing or other work done once before the first frame that needs it).
     pub submissions: u64,
@@ -188,6 +191,8 @@ struct FrameBuffers {
     /// The projection the frame uniform holds (jittered if the frame is).
     proj: Mat4,
     tile_lights: Buffer,
+    /// The light lists' slices of view distance.
+    light_slices: u32,
     shadows: Buffer,
     /// Per map: its tile (x, y, side) in the atlas and the light's clip-from-world.
     shadow_tiles: Vec<(u32, u32, u32, Mat4)>,
@@ -748,16 +753,19 @@ impl Renderer {
         frame_data.light_count = gpu.light_count;
         frame_data.material_count = gpu.material_count;
         frame_data.debug_view = options.debug_view as u32;
+        let (lists, clusters) = super::tiles::tile_lights(
+            &frame_data,
+            &gpu.light_records[..gpu.light_count as usize],
+            plan.range_culling,
+            plan.light_slices,
+        );
+        frame_data.clusters = clusters;
         let frame =
             ctx.create_buffer_with("frame", BufferUsageFlags::UNIFORM_BUFFER, &[frame_data])?;
         let tile_lights = ctx.create_buffer_with(
-            "tile light lists",
+            "light cluster lists",
             BufferUsageFlags::STORAGE_BUFFER,
-            &super::tiles::tile_lights(
-                &frame_data,
-                &gpu.light_records[..gpu.light_count as usize],
-                plan.range_culling,
-            ),
+            &lists,
         )?;
 
         // Shadow maps: the atlas, one record per map, and the lights with their map's index.
@@ -821,6 +829,7 @@ impl Renderer {
             frame,
             proj: Mat4::from_cols_array_2d(&frame_data.proj),
             tile_lights,
+            light_slices: clusters[0] as u32,
             shadows,
             shadow_tiles: maps.into_iter().map(|(_, tile)| tile).collect(),
             lights,
@@ -957,6 +966,7 @@ impl Renderer {
             draws: gpu.draws.len(),
             triangles: gpu.triangles,
             environment_from_disk: keys.env_from_disk,
+            light_slices: buffers.light_slices,
             ..Default::default()
         };
         // Where the output goes, and a timestamp before and after each pass.

@@ -228,6 +228,10 @@ pub struct Plan {
     pub shadow_sampling: bool,
     /// Whether point and spot lights out of range are skipped per pixel (on unless forced off).
     pub range_culling: bool,
+    /// Whether the light lists may also be sliced by view distance (render::tiles): range
+    /// culling is on and the scene has at least `tiles::SLICE_FROM` lights (with fewer no tile can
+    /// list that many, and the slices' code is not compiled).
+    pub light_slices: bool,
     pub textures: usize,
     /// Of `textures`, those that carry their KTX2 file's full mip chain as BC7 (uploaded as BC7
     /// where the device samples it, else as RGBA8 with built mips).
@@ -630,6 +634,8 @@ impl Plan {
             shadow_casters,
             shadow_receivers,
             range_culling: !options.force.no_range_culling,
+            light_slices: !options.force.no_range_culling
+                && scene.lights.len() as f64 >= super::tiles::SLICE_FROM,
             textures: scene.textures.len(),
             bc7_textures: scene.textures.iter().filter(|t| t.bc7.is_some()).count(),
             debug_view: options.debug_view,
@@ -641,6 +647,15 @@ impl Plan {
     }
 
     /// lighting.frag's IBL constant: 0 without an environment.
+    /// lighting.frag's RANGE_CULLING: 0 off, 1 per tile, 2 per tile and slice of view distance.
+    pub fn range_code(&self) -> u32 {
+        match (self.range_culling, self.light_slices) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+        }
+    }
+
     pub fn ibl_code(&self, options: &RenderOptions) -> u32 {
         match (&self.environment, &options.environment) {
             (Some(_), Some(e)) => e.level.code(),
@@ -817,8 +832,14 @@ impl fmt::Display for Plan {
         }
         writeln!(
             f,
-            "lighting    shadow sampling {}, range culling {}",
-            self.shadow_sampling, self.range_culling
+            "lighting    shadow sampling {}, range culling {}{}",
+            self.shadow_sampling,
+            self.range_culling,
+            if self.light_slices {
+                " (light lists per tile and slice of view distance where tiles list many)"
+            } else {
+                ""
+            }
         )?;
         match &self.environment {
             None => writeln!(f, "environment none (fixed hemispherical ambient)")?,

@@ -51,7 +51,7 @@ impl LightingPass {
             (3, "light_types", light_types),
             (4, "shading", options.shading as u32),
             (5, "shadows", plan.shadow_sampling as u32),
-            (6, "range_culling", plan.range_culling as u32),
+            (6, "range_culling", plan.range_code()),
             (7, "ibl", plan.ibl_code(options)),
             (
                 8,
