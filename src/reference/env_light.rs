@@ -825,7 +825,7 @@ mod tests {
                 [1.0; 3]
             }
             fn dfg(&self, c: f32, r: f32) -> Vec3 {
-                super::super::shading::dfg_lookup(c, r)
+                KeptDfg.dfg(c, r)
             }
             fn face_size(&self) -> f32 {
                 256.0

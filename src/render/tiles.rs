@@ -192,6 +192,20 @@ mod tests {
     use super::*;
     use crate::records::LIGHT_POINT;
 
+    /// A perspective camera 6 m back and 2 m up, looking at the origin.
+    fn camera() -> crate::scene::Camera {
+        crate::scene::Camera {
+            name: String::new(),
+            view: Mat4::look_at_rh(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO, Vec3::Y),
+            yfov: 0.8,
+            znear: 0.05,
+            zfar: None,
+            aspect_ratio: None,
+            orthographic: None,
+            framing: None,
+        }
+    }
+
     /// What shade.glsl's tile_list does for a pixel and its world point, in f32.
     fn cluster_of(frame: &FrameData, clusters: [f32; 4], px: [f32; 2], p: Vec3) -> usize {
         let view = Mat4::from_cols_array_2d(&frame.view);
@@ -211,16 +225,7 @@ mod tests {
     /// 40 m deep, 20,000 random points near them.
     #[test]
     fn every_point_in_range_finds_its_lights() {
-        let camera = crate::scene::Camera {
-            name: String::new(),
-            view: Mat4::look_at_rh(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO, Vec3::Y),
-            yfov: 0.8,
-            znear: 0.05,
-            zfar: None,
-            aspect_ratio: None,
-            orthographic: None,
-            framing: None,
-        };
+        let camera = camera();
         let (w, h) = (333, 200);
         let frame = FrameData::new(&camera, w, h);
         let mut rng = crate::reference::probe::XorShift::new(29);
@@ -313,16 +318,7 @@ mod tests {
     /// Without a ranged light there is nothing to slice: one slice, as the tiles alone.
     #[test]
     fn directional_lights_alone_keep_one_slice() {
-        let camera = crate::scene::Camera {
-            name: String::new(),
-            view: Mat4::look_at_rh(Vec3::new(0.0, 2.0, 6.0), Vec3::ZERO, Vec3::Y),
-            yfov: 0.8,
-            znear: 0.05,
-            zfar: None,
-            aspect_ratio: None,
-            orthographic: None,
-            framing: None,
-        };
+        let camera = camera();
         let frame = FrameData::new(&camera, 64, 48);
         let sun = GpuLight {
             position_range: [0.0; 4],
