@@ -237,7 +237,7 @@ mod tests {
                     rng.range(-35.0, 5.8) as f32,
                     rng.log_range(0.05, 3.0) as f32,
                 ],
-                direction_type: [0.0, -1.0, 0.0, LIGHT_POINT as f32],
+                direction_type: [0.0, -1.0, 0.0, LIGHT_POINT],
                 color_intensity: [1.0; 4],
                 spot: [0.0; 4],
             })
@@ -322,7 +322,7 @@ mod tests {
         let frame = FrameData::new(&camera, 64, 48);
         let sun = GpuLight {
             position_range: [0.0; 4],
-            direction_type: [0.0, -1.0, 0.0, LIGHT_DIRECTIONAL as f32],
+            direction_type: [0.0, -1.0, 0.0, LIGHT_DIRECTIONAL],
             color_intensity: [1.0; 4],
             spot: [0.0; 4],
         };
