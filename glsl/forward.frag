@@ -55,6 +55,11 @@ layout(constant_id = 25) const uint THREAD_COLOURS = 0u;
 // 1: some drawn fabric is a single sheet (WEFT_materials_fabric "transmission"): light through
 // its gaps (blended by its thread coverage) and its threads (lit from both sides).
 layout(constant_id = 26) const uint FABRIC_SHEETS = 0u;
+// The transparent pass draws every kind of material with one pipeline, every texture slot read.
+const uint MATERIAL_KIND = MATERIAL_KIND_ANY;
+const uint TEXTURE_SLOTS = TEXTURE_SLOTS_ALL;
+const uint PIXEL_KINDS = PIXEL_KINDS_ALL;
+const uint GLTF_FEATURES = GLTF_FEATURES_ALL;
 
 // Set 0: gbuffer.vert's and gbuffer.frag's bindings 0-5, then lighting.frag's shadow and environment bindings (one
 // number per resource in every shader).

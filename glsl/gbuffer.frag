@@ -26,6 +26,12 @@ layout(constant_id = 5) const uint VERTEX_COLORS = 0u;
 layout(constant_id = 6) const uint ALPHA_MASK = 0u;
 // 1: some fabric has thread-by-thread colours (the ThreadColours buffer is read).
 layout(constant_id = 7) const uint THREAD_COLOURS = 0u;
+// The draw's kind of material (MATERIAL_KIND_*, frame.glsl): the pass binds a pipeline per kind,
+// so a glTF material runs none of the weave's code and fabric none of the glTF extensions'.
+layout(constant_id = 8) const uint MATERIAL_KIND = 0u;
+// The texture slots some material of the scene has a texture in (bit SLOT_*): the others are
+// not sampled (sample_slot, surface.glsl).
+layout(constant_id = 9) const uint TEXTURE_SLOTS = 0x7FFFFu;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`, include/frame.glsl)

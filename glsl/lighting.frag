@@ -42,6 +42,17 @@ layout(constant_id = 9) const uint UNLIT = 0u;
 // raised for light bounced between occluders, multiplies the material's occlusion texture in the
 // environment's light; 0: it is not read.
 layout(constant_id = 10) const uint OCCLUSION = 0u;
+// 1: a debug view (frame.debug_view) may show a G-buffer target instead of the lit image; 0: that
+// code is compiled out.
+layout(constant_id = 11) const uint DEBUG_VIEWS = 1u;
+// The kinds of pixel this pipeline shades (PIXEL_KIND_* bits, frame.glsl): the background, the
+// woven model, glTF materials. One pipeline of every kind the scene has, or (where the G-buffer's
+// stencil says what each pixel is, weft::render::passes::lighting) one per kind, each drawn over
+// its own pixels only: the other kinds' code is compiled out.
+layout(constant_id = 12) const uint PIXEL_KINDS = 7u;
+// The glTF extensions some deferred material of the scene has (GLTF_FEATURE_* bits): the others'
+// code is compiled out.
+layout(constant_id = 13) const uint GLTF_FEATURES = 3u;
 // Fabric sheets are drawn by the transparent pass (forward.frag), never deferred.
 const uint FABRIC_SHEETS = 0u;
 
@@ -162,10 +173,10 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gb_depth, px, 0).r;
-    if (depth <= 0.0) {
+    if ((PIXEL_KINDS & PIXEL_KIND_BACKGROUND) != 0u && depth <= 0.0) {
         // Empty pixel: the background (the environment seen along the view ray, a colour, or
         // transparent); debug views show black.
-        if (frame.debug_view != DEBUG_NONE) {
+        if (DEBUG_VIEWS != 0u && frame.debug_view != DEBUG_NONE) {
             out_color = vec4(0.0, 0.0, 0.0, 1.0);
         } else if (IBL != 0u && frame.env_background.x == 0.0) {
             vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
@@ -179,7 +190,12 @@ void main() {
         }
         return;
     }
-    if (frame.debug_view != DEBUG_NONE) {
+    if ((PIXEL_KINDS & (PIXEL_KIND_WOVEN | PIXEL_KIND_GLTF)) == 0u) {
+        // The background's pipeline: the stencil leaves it nothing else.
+        out_color = vec4(0.0);
+        return;
+    }
+    if (DEBUG_VIEWS != 0u && frame.debug_view != DEBUG_NONE) {
         out_color = vec4(debug_color(frame.debug_view, px, depth), 1.0);
         return;
     }

@@ -488,3 +488,111 @@ fn no_mask_material_compiles_no_discard_and_forcing_it_changes_nothing() {
     assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
     assert_eq!(planned.ldr, forced.ldr);
 }
+
+/// A Khronos sample model of tests/data/khronos ("SheenChair/glTF/SheenChair.gltf").
+fn khronos(path: &str) -> Scene {
+    scene::load(std::path::Path::new(&format!(
+        "{}/tests/data/khronos/{path}",
+        env!("CARGO_MANIFEST_DIR")
+    )))
+    .unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+const CHAIR: &str = "SheenChair/glTF/SheenChair.gltf";
+const ANISOTROPY: &str = "AnisotropyRotationTest/glTF-Binary/AnisotropyRotationTest.glb";
+
+#[test]
+fn a_pipeline_per_kind_of_material_with_only_the_scenes_code_changes_nothing() {
+    // The G-buffer draws fabric and glTF materials with a pipeline each (the other kind's code
+    // compiled out), samples only the texture slots some material has a texture in, and the
+    // lighting compiles only the glTF extensions the scene has: against one pipeline of each pass
+    // with all of it (Force::material_kinds), under the studio environment at its default level,
+    // the same image bit for bit. The scenes: the default (fabric and untextured glTF), SheenChair
+    // (textures, sheen), AnisotropyRotationTest (anisotropy), and the default with its fabric
+    // shaded as glTF.
+    let studio = Some(weft::env::EnvLighting::new(std::sync::Arc::new(
+        weft::env::Environment::studio(),
+    )));
+    let base = RenderOptions {
+        width: 96,
+        height: 64,
+        environment: studio,
+        ..Default::default()
+    };
+    let cases: [(&str, Scene, RenderOptions, &[&str]); 4] = [
+        (
+            "default",
+            scene::default_scene(),
+            base.clone(),
+            &["woven", "glTF"],
+        ),
+        ("SheenChair", khronos(CHAIR), base.clone(), &["glTF"]),
+        (
+            "AnisotropyRotationTest",
+            khronos(ANISOTROPY),
+            base.clone(),
+            &["glTF"],
+        ),
+        (
+            "default, fabric as glTF",
+            scene::default_scene(),
+            RenderOptions {
+                fabric_as_pbr: true,
+                ..base.clone()
+            },
+            &["woven", "glTF"],
+        ),
+    ];
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    for (name, scene, options, kinds) in cases {
+        let plan = Plan::new(&scene, &options);
+        assert!(plan.material_kinds, "{name}");
+        let planned = renderer.render(&scene, &options).unwrap();
+        let forced = renderer
+            .render(
+                &scene,
+                &RenderOptions {
+                    force: weft::render::Force {
+                        material_kinds: true,
+                        ..Default::default()
+                    },
+                    ..options.clone()
+                },
+            )
+            .unwrap();
+        let gbuffers: Vec<&String> = planned
+            .stats
+            .pipelines
+            .iter()
+            .filter(|p| p.starts_with("gbuffer["))
+            .collect();
+        assert_eq!(gbuffers.len(), kinds.len(), "{name}: {gbuffers:?}");
+        for k in kinds {
+            assert!(
+                gbuffers.iter().any(|p| p.ends_with(&format!(", {k}]"))),
+                "{name}: no {k} pipeline in {gbuffers:?}"
+            );
+        }
+        assert!(
+            !gbuffer_pipeline(&forced).contains("woven"),
+            "{name}: {}",
+            gbuffer_pipeline(&forced)
+        );
+        assert!(lighting_pipeline(&forced).contains("pixel_kinds=7"));
+        assert!(lighting_pipeline(&forced).contains("gltf_features=3"));
+        assert_eq!(max_hdr_diff(&planned, &forced), 0.0, "{name}");
+    }
+    // What each scene compiles in.
+    let slots = |s: &Scene| Plan::new(s, &base).texture_slots;
+    assert_eq!(slots(&scene::default_scene()), 0);
+    assert_ne!(slots(&khronos(CHAIR)), 0);
+    assert_eq!(Plan::new(&scene::default_scene(), &base).gltf_features, 0);
+    assert_eq!(
+        Plan::new(&khronos(CHAIR), &base).gltf_features,
+        weft::render::plan::GLTF_SHEEN
+    );
+    assert_eq!(
+        Plan::new(&khronos(ANISOTROPY), &base).gltf_features,
+        weft::render::plan::GLTF_ANISOTROPY
+    );
+}

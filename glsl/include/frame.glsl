@@ -75,6 +75,25 @@ struct Shadow {
 };
 
 // Texture slots (weft::scene::TextureSlot): the index of a slot's UV map in Material.uv.
+// What one G-buffer pipeline draws (gbuffer.frag's MATERIAL_KIND, weft::render::passes::gbuffer):
+// any material, or only fabric (the woven model's code) or only glTF materials (none of it).
+const uint MATERIAL_KIND_ANY = 0u;
+const uint MATERIAL_KIND_WOVEN = 1u;
+const uint MATERIAL_KIND_GLTF = 2u;
+// Every texture slot (TEXTURE_SLOTS: one bit per SLOT_*).
+const uint TEXTURE_SLOTS_ALL = 0x7FFFFu;
+// What one lighting pipeline shades (lighting.frag's PIXEL_KINDS, a bit each): empty pixels (the
+// background), fabric by the woven model, glTF materials (and fabric shaded as one).
+const uint PIXEL_KIND_BACKGROUND = 1u;
+const uint PIXEL_KIND_WOVEN = 2u;
+const uint PIXEL_KIND_GLTF = 4u;
+const uint PIXEL_KINDS_ALL = 7u;
+// glTF extensions the lighting compiles in (GLTF_FEATURES, a bit each): KHR_materials_sheen,
+// KHR_materials_anisotropy.
+const uint GLTF_FEATURE_SHEEN = 1u;
+const uint GLTF_FEATURE_ANISOTROPY = 2u;
+const uint GLTF_FEATURES_ALL = 3u;
+
 const uint SLOT_BASE_COLOR = 0u;
 const uint SLOT_METALLIC_ROUGHNESS = 1u;
 const uint SLOT_NORMAL = 2u;

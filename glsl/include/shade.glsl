@@ -5,7 +5,8 @@
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
-// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION, IRIDESCENCE and FABRIC_SHEETS, and defines `transmitted_light` (forward.frag: from the
+// IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION, IRIDESCENCE, FABRIC_SHEETS,
+// PIXEL_KINDS and GLTF_FEATURES, and defines `transmitted_light` (forward.frag: from the
 // backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
@@ -207,13 +208,18 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         return base;
     }
 
-    if (fabric > 0u && FABRIC_AS_PBR == 0u) {
+    // The woven model or the glTF BRDF; a pipeline made for one kind of pixel (PIXEL_KINDS) has
+    // only that kind's code.
+    bool woven = (PIXEL_KINDS & PIXEL_KIND_GLTF) == 0u ? true
+               : (PIXEL_KINDS & PIXEL_KIND_WOVEN) == 0u ? false
+               : fabric > 0u && FABRIC_AS_PBR == 0u;
+    if (woven) {
         // The fabric model (docs/fabric-model.md §3) with the weave coverages of the pixel's
         // footprint (filtered by the G-buffer pass), or, supersampled, the analytic weave at
         // N x N points of the footprint.
         // The thread texture (gbuffer.frag writes its value to the albedo target) over the
         // thread colours.
-        GpuFabric f = fabric_tinted(fabrics[fabric - 1u], base);
+        GpuFabric f = fabric_tinted(fabrics[max(fabric, 1u) - 1u], base);
         mat3 tbn = fabric_frame(n, oct_decode(fr.zw), surface.z);
         vec3 k2 = fabric_local(v, tbn);
         vec4 g = fabric_texel;
@@ -275,7 +281,11 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         // reflected (what remains).
         float t_spec = TRANSMISSION != 0u ? transmission.x : 0.0;
         float t_diff = DIFFUSE_TRANSMISSION != 0u ? dtrans.x : 0.0;
-        GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sh.rgb, sh.a, ta, surface.z,
+        // Sheen and anisotropy only where the scene has them (GLTF_FEATURES): as constant zeros
+        // their code folds away.
+        vec3 sheen = (GLTF_FEATURES & GLTF_FEATURE_SHEEN) != 0u ? sh.rgb : vec3(0.0);
+        float anisotropy = (GLTF_FEATURES & GLTF_FEATURE_ANISOTROPY) != 0u ? surface.z : 0.0;
+        GltfSurface s = GltfSurface(base, metallic, roughness, sp.a, sp.rgb, sheen, sh.a, ta, anisotropy,
                                     1.0 - (1.0 - t_spec) * (1.0 - t_diff),
                                     IRIDESCENCE != 0u ? iridescence.x : 0.0, iridescence.y, iridescence.z);
         float diffuse_through = (1.0 - metallic) * (1.0 - t_spec) * t_diff;

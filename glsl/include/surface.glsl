@@ -3,7 +3,8 @@
 // gbuffer.frag writes them to the G-buffer targets; forward.frag (alphaMode BLEND) shades them
 // at once with the same functions the lighting pass uses (shade.glsl), so a blended surface is lit
 // exactly as an opaque one. The including shader declares `materials`, `fabrics` and the
-// specialization constants ACCURACY, WEAVE_SOURCE, SHADING, FOOTPRINT_PIECES and VERTEX_COLORS.
+// specialization constants ACCURACY, WEAVE_SOURCE, SHADING, FOOTPRINT_PIECES, VERTEX_COLORS,
+// MATERIAL_KIND and TEXTURE_SLOTS.
 
 // Per material; missing textures are bound to 1x1 defaults (white, or a flat normal).
 layout(set = 1, binding = 0) uniform sampler2D base_color_tex;  // base colour texture (sRGB)
@@ -89,8 +90,15 @@ struct GSurface {
 vec2 uv_d[6];
 
 // Samples texture slot `slot` of material m through its own UV set and transform, with the
-// derivatives carried through the transform's linear part.
+// derivatives carried through the transform's linear part. A slot no material of the scene has a
+// texture in (TEXTURE_SLOTS, from the plan) is not sampled: every material has the 1x1 stand-in
+// there (render::frame's defaults: flat normal for the two normal slots, white otherwise), whose
+// value this returns exactly. `slot` is a constant at every call, so the sampling is compiled out.
 vec4 sample_slot(sampler2D tex, Material m, uint slot) {
+    if ((TEXTURE_SLOTS & (1u << slot)) == 0u) {
+        return slot == SLOT_NORMAL || slot == SLOT_CLEARCOAT_NORMAL
+            ? vec4(128.0 / 255.0, 128.0 / 255.0, 1.0, 1.0) : vec4(1.0);
+    }
     vec4 r0 = m.uv[2u * slot];
     vec4 r1 = m.uv[2u * slot + 1u];
     uint set = r0.w > 0.5 ? 1u : 0u;
@@ -276,7 +284,10 @@ GSurface material_surface() {    GSurface s;
         roughness = clamp(1.0 - m.metallic_roughness.y * mr.a, 0.0, 1.0);
     }
     vec3 emissive = m.emissive_normal.rgb * sample_slot(emissive_tex, m, SLOT_EMISSIVE).rgb;
+    // The material's fabric (1-based; 0: glTF). A pipeline made for one kind of material
+    // (MATERIAL_KIND, per draw) compiles the other kind's code out.
     uint fabric = uint(m.metallic_roughness.z + 0.5);
+    fabric = MATERIAL_KIND == MATERIAL_KIND_GLTF ? 0u : MATERIAL_KIND == MATERIAL_KIND_WOVEN ? max(fabric, 1u) : fabric;
 
     // KHR_materials_anisotropy: the direction in the (normal-mapped) tangent frame, rotated, and
     // the strength; stored in place of the tangent and its sign (non-fabric only).

@@ -254,6 +254,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("gbuffer.vert", 5, "VERTEX_COLORS: 1 reads each vertex's colour (set 0, binding 4) and writes it to output location 7 for gbuffer.frag; 0 (default) reads none and writes white"),
     ("gbuffer.frag", 5, "VERTEX_COLORS: 1 multiplies the vertex colour (input location 7) into the base colour and alpha, and for fabric into the thread texture's value; 0 (default) compiles that out"),
     ("gbuffer.frag", 6, "ALPHA_MASK: 1 discards pixels of alphaMode MASK materials (`Material.extra.w` flag 8) whose base colour alpha (factor x texture x vertex colour) is below the cutoff `Material.alpha.x`, after every target is written; 0 (default) compiles the discard out"),
+    ("gbuffer.frag", 8, "MATERIAL_KIND: what the pipeline draws: 0 (default) any material; 1 only fabric (materials whose `metallic_roughness.z` names a fabric record), the glTF extensions compiled out; 2 only glTF materials, the weave's code compiled out"),
+    ("gbuffer.frag", 9, "TEXTURE_SLOTS: bit mask of the material texture slots (set 1 bindings 0-19 as `SLOT_*` of frame.glsl: bit 0 base colour, 2 normal, ...) that are sampled; a slot whose bit is clear reads the stand-in value (flat normal (128/255, 128/255, 1, 1) for the normal and clearcoat-normal slots, white otherwise) without sampling (default 0x7FFFF, all)"),
     ("gbuffer.frag", 7, "THREAD_COLOURS: 1 reads fabrics' thread-by-thread colours (`GpuFabric.flags` bit 3) from the `ThreadColours` buffer (set 0 binding 5) into the albedo target; 0 (default) compiles that out (the buffer may then hold one zero vec4)"),
     ("forward.frag", 0, "ACCURACY: as gbuffer.frag's and lighting.frag's"),
     ("forward.frag", 1, "WEAVE_SOURCE: as gbuffer.frag's"),
@@ -279,6 +281,9 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 0 (default) uses the texture alone and reads nothing at binding 27"),
     ("occlusion.frag", 0, "SLICES: slices per pixel (default 2; the blur averages 16 x SLICES directions)"),
     ("occlusion.frag", 1, "STEPS: depth samples per side of a slice (default 6)"),
+    ("lighting.frag", 11, "DEBUG_VIEWS: 1 (default) shows the G-buffer target `FrameData.debug_view` names instead of the lit image when it is not 0; 0 compiles the debug views out"),
+    ("lighting.frag", 12, "PIXEL_KINDS: bit mask of the kinds of pixel shaded: 1 empty pixels (the background), 2 fabric by the woven model, 4 glTF materials (and fabric with FABRIC_AS_PBR); the other kinds' code is compiled out, for pipelines each drawn over its own pixels (by a stencil test, say). A pipeline without 4 shades every surface pixel as fabric, one without 2 as glTF (default 7, all)"),
+    ("lighting.frag", 13, "GLTF_FEATURES: bit mask of the glTF extensions whose lighting is compiled in: 1 KHR_materials_sheen (the G-buffer's fabric target holds its colour and roughness), 2 KHR_materials_anisotropy (the surface target's z its strength); a clear bit reads that extension as absent (default 3, both)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",

@@ -424,7 +424,7 @@ impl Renderer {
             });
             let made_gbuffer = need_gbuffer
                 .iter()
-                .map(|&t| gbuffer.make(ctx, &gbuffer_key, t).map(|p| (t, p)))
+                .map(|&(t, k)| gbuffer.make(ctx, &gbuffer_key, t, k).map(|p| (t, k, p)))
                 .collect::<crate::Result<Vec<_>>>();
             let built_env = need_env.map(|e| env_passes.build(ctx, e)).transpose();
             let made_lighting = made_lighting
@@ -441,8 +441,8 @@ impl Renderer {
                 .transpose();
             (made_gbuffer, made_lighting, made_forward, built_env)
         });
-        for (t, p) in made_gbuffer? {
-            self.gbuffer.insert(gbuffer_key.clone(), t, p);
+        for (t, k, p) in made_gbuffer? {
+            self.gbuffer.insert(gbuffer_key.clone(), t, k, p);
         }
         if let Some(p) = made_lighting? {
             self.lighting.insert(lighting_key.clone(), p);
@@ -1006,6 +1006,7 @@ impl Renderer {
                             &self.gbuffer.material_layout,
                         )?,
                         targets,
+                        material_kinds: plan.material_kinds,
                     },
                 )?),
                 Pass::Shadow if buffers.shadow_tiles.is_empty() => {}

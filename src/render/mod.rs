@@ -120,6 +120,10 @@ pub struct Force {
     /// Compile the fabric-sheet code in (forward FABRIC_SHEETS = 1: light through the weave)
     /// with no sheet in the scene.
     pub fabric_sheets: bool,
+    /// One G-buffer and one lighting pipeline with every kind of material's code (fabric and
+    /// glTF, background), every texture slot sampled and every glTF extension's lighting compiled
+    /// in, instead of a pipeline per kind with only what the scene has.
+    pub material_kinds: bool,
 }
 
 impl Force {
@@ -133,6 +137,7 @@ impl Force {
         back_faces_first: false,
         sat_fetch: false,
         fabric_sheets: false,
+        material_kinds: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -145,6 +150,7 @@ impl Force {
         // Not a feature compiled in: the table's other reading, with the same values.
         sat_fetch: false,
         fabric_sheets: true,
+        material_kinds: true,
     };
 }
 

@@ -233,6 +233,23 @@ pub struct Plan {
     /// list that many, and the slices' code is not compiled).
     pub light_slices: bool,
     pub textures: usize,
+    /// The texture slots ([`crate::scene::TextureSlot`], a bit each) some material has a texture
+    /// in: gbuffer.frag samples only these (every material reads the 1x1 stand-in elsewhere, whose
+    /// value the shader knows). All of them when forced.
+    pub texture_slots: u32,
+    /// Draws the G-buffer pass holds, by kind of material: fabric (the woven model) and glTF.
+    /// With `material_kinds`, each kind is drawn by a G-buffer pipeline of its own, with the other
+    /// kind's code compiled out, and the lighting pass shades each kind of pixel with a pipeline
+    /// of its own (the G-buffer's stencil says which pixel is which); without (forced), one
+    /// pipeline of each pass runs every kind's code.
+    pub woven_draws: usize,
+    pub gltf_draws: usize,
+    #[serde(rename = "material_kinds_code")]
+    pub material_kinds: bool,
+    /// The glTF extensions the lighting compiles in (lighting.frag's GLTF_FEATURES: 1
+    /// KHR_materials_sheen, 2 KHR_materials_anisotropy): those some deferred glTF material has
+    /// (every one when fabric is shaded as glTF, or forced).
+    pub gltf_features: u32,
     /// Of `textures`, those that carry their KTX2 file's full mip chain as BC7 (uploaded as BC7
     /// where the device samples it, else as RGBA8 with built mips).
     pub bc7_textures: usize,
@@ -248,6 +265,21 @@ pub struct Plan {
     /// when one of them needs it (None otherwise, and for a scene with nothing to draw).
     #[serde(skip)]
     pub caster_bounds: Option<crate::scene::Bounds>,
+}
+
+/// The texture slots of a TEXTURE_SLOTS mask, by name ("none" for none).
+fn slot_names(mask: u32) -> String {
+    let names: Vec<&str> = crate::scene::TextureSlot::NAMES
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| mask & (1 << i) != 0)
+        .map(|(_, n)| *n)
+        .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
 }
 
 fn debug_view_name<S: serde::Serializer>(view: &DebugView, s: S) -> Result<S::Ok, S::Error> {
@@ -293,6 +325,11 @@ pub struct EnvPlan {
     pub intensity: f32,
     pub background: String,
 }
+
+/// lighting.frag's GLTF_FEATURES bits (frame.glsl's GLTF_FEATURE_*).
+pub const GLTF_SHEEN: u32 = 1;
+pub const GLTF_ANISOTROPY: u32 = 2;
+pub const GLTF_FEATURES_ALL: u32 = 3;
 
 impl Plan {
     /// The light types present, as lighting.frag's LIGHT_TYPES bits (1 directional, 2 point,
@@ -542,6 +579,50 @@ impl Plan {
         .map(|(pass, _)| pass)
         .collect();
         let unlit_materials = scene.materials.iter().filter(|m| m.unlit).count();
+        // The G-buffer's draws by kind of material (lines and points are its whatever their
+        // material).
+        let deferred = |woven: bool| {
+            scene
+                .draws
+                .iter()
+                .filter(|d| {
+                    let m = scene.drawn_material(d);
+                    let forward =
+                        topology(d) == Topology::Triangles && m.is_some_and(|m| m.needs_forward());
+                    !forward && m.is_some_and(|m| m.fabric.is_some()) == woven
+                })
+                .count()
+        };
+        let (woven_draws, gltf_draws) = (deferred(true), deferred(false));
+        let all_kinds = options.force.material_kinds;
+        let texture_slots = if all_kinds {
+            (1u32 << crate::scene::TextureSlot::COUNT) - 1
+        } else {
+            scene.materials.iter().fold(0u32, |bits, m| {
+                m.textures()
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, t)| t.is_some())
+                    .fold(bits, |bits, (slot, _)| bits | 1 << slot)
+            })
+        };
+        let gltf_like = |m: &&crate::scene::Material| m.fabric.is_none() || options.fabric_as_pbr;
+        let gltf_features = if all_kinds || (options.fabric_as_pbr && woven_draws > 0) {
+            GLTF_FEATURES_ALL
+        } else {
+            let has = |f: &dyn Fn(&crate::scene::Material) -> bool| {
+                scene.materials.iter().filter(gltf_like).any(f)
+            };
+            (if has(&|m| m.sheen.is_some()) {
+                GLTF_SHEEN
+            } else {
+                0
+            }) | (if has(&|m| m.anisotropy.is_some()) {
+                GLTF_ANISOTROPY
+            } else {
+                0
+            })
+        };
         let mut drawn = vec![false; scene.meshes.len()];
         for d in &scene.draws {
             if let Some(x) = drawn.get_mut(d.mesh) {
@@ -637,6 +718,11 @@ impl Plan {
             light_slices: !options.force.no_range_culling
                 && scene.lights.len() as f64 >= super::tiles::SLICE_FROM,
             textures: scene.textures.len(),
+            texture_slots,
+            woven_draws,
+            gltf_draws,
+            material_kinds: !all_kinds,
+            gltf_features,
             bc7_textures: scene.textures.iter().filter(|t| t.bc7.is_some()).count(),
             debug_view: options.debug_view,
             supersample: options.supersample(),
@@ -714,6 +800,27 @@ impl fmt::Display for Plan {
             self.anisotropic_materials,
             self.unlit_materials,
             if self.unlit { "compiled" } else { "none" }
+        )?;
+        writeln!(
+            f,
+            "kinds       {} fabric and {} glTF draw(s) in the G-buffer: {}; texture slots sampled: {}; glTF extension code: {}",
+            self.woven_draws,
+            self.gltf_draws,
+            if self.material_kinds {
+                "a G-buffer and a lighting pipeline per kind, each with only its own code"
+            } else {
+                "one pipeline of each pass with every kind's code (forced)"
+            },
+            slot_names(self.texture_slots),
+            match self.gltf_features {
+                0 => "none".to_string(),
+                f => [(GLTF_SHEEN, "sheen"), (GLTF_ANISOTROPY, "anisotropy")]
+                    .iter()
+                    .filter(|(bit, _)| f & bit != 0)
+                    .map(|(_, n)| *n)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }
         )?;
         writeln!(
             f,

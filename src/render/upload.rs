@@ -52,6 +52,8 @@ pub(crate) struct DrawRange {
     /// transparent pass instead; `blended`: alphaMode BLEND (else opaque there).
     pub(crate) forward: bool,
     pub(crate) blended: bool,
+    /// The material is fabric (the G-buffer pass draws it with its woven-model pipeline).
+    pub(crate) woven: bool,
     /// The centre of the mesh's bounds (object space): the transparent pass sorts by it.
     pub(crate) centre: glam::Vec3,
     /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
@@ -191,6 +193,7 @@ impl Renderer {
                     .materials
                     .get(mesh.material)
                     .is_some_and(|m| m.blended()),
+                woven: scene.drawn_material(d).is_some_and(|m| m.fabric.is_some()),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
                 ),

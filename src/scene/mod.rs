@@ -738,6 +738,14 @@ pub struct Bounds {
 }
 
 impl Scene {
+    /// The material draw `d` is drawn with, as the GPU reads it (an index past the last material
+    /// reads the last); None without a mesh or any material.
+    pub fn drawn_material(&self, d: &Draw) -> Option<&Material> {
+        let mesh = self.meshes.get(d.mesh)?;
+        self.materials
+            .get(mesh.material.min(self.materials.len().saturating_sub(1)))
+    }
+
     /// World-space bounds of every drawn vertex; None for a scene with nothing to draw.
     pub fn bounds(&self) -> Option<Bounds> {
         self.bounds_of(|_| true)

@@ -17,12 +17,62 @@ use crate::vk::{
     Pipeline, Resource, SetLayout, Stages, Topology, Usage,
 };
 
-/// The pass's pipelines (one per variant and topology) and its two set layouts: set 0 (frame,
-/// materials, fabrics, lights, vertex colours, thread colours) and set 1 (a material's textures).
+/// The pass's pipelines (one per variant, topology and kind of material) and its two set
+/// layouts: set 0 (frame, materials, fabrics, lights, vertex colours, thread colours) and set 1 (a
+/// material's textures).
 pub struct GBufferPass {
     frame_layout: SetLayout,
     pub(crate) material_layout: SetLayout,
-    variants: HashMap<(VariantKey, Topology), Pipeline>,
+    variants: HashMap<(VariantKey, Topology, Kind), Pipeline>,
+}
+
+/// What a G-buffer pipeline draws (gbuffer.frag's MATERIAL_KIND): every kind of material, or one
+/// kind with the other's code compiled out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kind {
+    Any = 0,
+    /// Fabric: the woven model's coverage, no glTF extension.
+    Woven = 1,
+    /// glTF materials: no weave.
+    Gltf = 2,
+}
+
+impl Kind {
+    /// The kind a draw of a fabric (`woven`) or glTF material is drawn with: its own where the
+    /// kinds are split ([`Plan::material_kinds`]).
+    pub fn of(woven: bool, split: bool) -> Kind {
+        match (split, woven) {
+            (false, _) => Kind::Any,
+            (true, true) => Kind::Woven,
+            (true, false) => Kind::Gltf,
+        }
+    }
+
+    /// The kinds `plan` draws (glTF's for a scene that draws nothing: the default variant).
+    pub fn drawn(plan: &Plan) -> Vec<Kind> {
+        if !plan.material_kinds {
+            return vec![Kind::Any];
+        }
+        if plan.woven_draws + plan.gltf_draws == 0 {
+            return vec![Kind::Gltf];
+        }
+        [
+            (plan.woven_draws > 0, Kind::Woven),
+            (plan.gltf_draws > 0, Kind::Gltf),
+        ]
+        .into_iter()
+        .filter(|&(drawn, _)| drawn)
+        .map(|(_, k)| k)
+        .collect()
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Any => "",
+            Kind::Woven => ", woven",
+            Kind::Gltf => ", glTF",
+        }
+    }
 }
 
 /// What the pass reads; it writes every G-buffer target and depth.
@@ -38,6 +88,8 @@ pub struct GBufferInputs<'s> {
     /// Per material, the set of its textures (`material_layout`).
     pub material_sets: Vec<DescriptorSet<'s>>,
     pub targets: &'s Targets,
+    /// A pipeline per kind of material ([`Plan::material_kinds`]), else one for every kind.
+    pub material_kinds: bool,
 }
 
 impl GBufferPass {
@@ -78,38 +130,46 @@ impl GBufferPass {
             (5, "vertex_colors", plan.vertex_colors as u32),
             (6, "alpha_mask", plan.alpha_mask as u32),
             (7, "thread_colours", plan.features.thread_colours as u32),
+            (9, "texture_slots", plan.texture_slots),
         ])
     }
 
-    /// The topologies of `key` the plan draws whose pipeline is not made yet.
-    pub fn missing(&self, key: &VariantKey, plan: &Plan) -> Vec<Topology> {
+    /// The topologies and kinds of `key` the plan draws whose pipeline is not made yet.
+    pub fn missing(&self, key: &VariantKey, plan: &Plan) -> Vec<(Topology, Kind)> {
+        let kinds = Kind::drawn(plan);
         [
             (true, Topology::Triangles),
             (plan.line_draws > 0, Topology::Lines),
             (plan.point_draws > 0, Topology::Points),
         ]
         .into_iter()
-        .filter(|&(needed, t)| needed && !self.variants.contains_key(&(key.clone(), t)))
-        .map(|(_, t)| t)
+        .filter(|&(needed, _)| needed)
+        .flat_map(|(_, t)| kinds.iter().map(move |&k| (t, k)))
+        .filter(|&(t, k)| !self.variants.contains_key(&(key.clone(), t, k)))
         .collect()
     }
 
-    /// Makes the pipeline of variant `key` for `topology` (not kept: see [`GBufferPass::insert`]).
+    /// Makes the pipeline of variant `key` for `topology` and `kind` (not kept: see
+    /// [`GBufferPass::insert`]).
     pub fn make(
         &self,
         ctx: &Context,
         key: &VariantKey,
         topology: Topology,
+        kind: Kind,
     ) -> crate::Result<Pipeline> {
+        let mut constants = key.constants();
+        constants.push((8, kind as u32));
         ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!(
-                "gbuffer[{}{}]",
+                "gbuffer[{}{}{}]",
                 match topology {
                     Topology::Triangles => "",
                     Topology::Lines => "lines, ",
                     Topology::Points => "points, ",
                 },
-                key.describe()
+                key.describe(),
+                kind.name()
             ),
             vertex: &shaders::GBUFFER_VERT,
             fragment: &shaders::GBUFFER_FRAG,
@@ -126,14 +186,14 @@ impl GBufferPass {
             set_layouts: &[&self.frame_layout, &self.material_layout],
             push_constant_size: std::mem::size_of::<DrawPush>() as u32,
             push_stages: Stages::GRAPHICS,
-            constants: &key.constants(),
+            constants: &constants,
             blend: false,
             topology,
         })
     }
 
-    pub fn insert(&mut self, key: VariantKey, topology: Topology, pipeline: Pipeline) {
-        self.variants.insert((key, topology), pipeline);
+    pub fn insert(&mut self, key: VariantKey, topology: Topology, kind: Kind, pipeline: Pipeline) {
+        self.variants.insert((key, topology, kind), pipeline);
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
@@ -160,15 +220,21 @@ impl GBufferPass {
                 (5, Resource::Storage(&scene.thread_colours)),
             ],
         )?;
-        let pipelines: Vec<(Topology, &'s Pipeline)> =
+        let split = inputs.material_kinds;
+        let kind_of = move |woven: bool| Kind::of(woven, split);
+        let pipelines: Vec<(Topology, Kind, &'s Pipeline)> =
             [Topology::Triangles, Topology::Lines, Topology::Points]
                 .into_iter()
-                .filter(|&t| {
-                    t == Topology::Triangles || scene.draws.iter().any(|d| d.topology == t)
+                .flat_map(|t| [Kind::Any, Kind::Woven, Kind::Gltf].map(|k| (t, k)))
+                .filter(|&(t, k)| {
+                    scene
+                        .draws
+                        .iter()
+                        .any(|d| !d.forward && d.topology == t && kind_of(d.woven) == k)
                 })
-                .filter_map(|t| self.variants.get(&(key.clone(), t)).map(|p| (t, p)))
+                .filter_map(|(t, k)| self.variants.get(&(key.clone(), t, k)).map(|p| (t, k, p)))
                 .collect();
-        let names = pipelines.iter().map(|(_, p)| p.name.clone()).collect();
+        let names = pipelines.iter().map(|(_, _, p)| p.name.clone()).collect();
         let targets = inputs.targets;
         let material_sets = inputs.material_sets;
         Ok(Recorded::new("gbuffer", names, move |cmd| {
@@ -198,14 +264,14 @@ impl GBufferPass {
             );
             cmd.bind_vertex_buffer(&scene.vertices);
             cmd.bind_index_buffer(&scene.indices);
-            // Each topology with its pipeline (the same layout and shaders); depth makes the
-            // order moot.
-            for (topology, pipeline) in pipelines {
+            // Each topology and kind of material with its pipeline (the same layout and
+            // shaders); depth makes the order moot.
+            for (topology, kind, pipeline) in pipelines {
                 // Draws the G-buffer cannot hold are the transparent pass's.
                 let mut draws = scene
                     .draws
                     .iter()
-                    .filter(|d| !d.forward && d.topology == topology)
+                    .filter(|d| !d.forward && d.topology == topology && kind_of(d.woven) == kind)
                     .peekable();
                 if draws.peek().is_none() {
                     continue;

@@ -32,6 +32,26 @@ pub struct LightingInputs<'s> {
     pub occlusion: &'s Image,
 }
 
+/// lighting.frag's PIXEL_KIND_* bits.
+pub const PIXEL_BACKGROUND: u32 = 1;
+pub const PIXEL_WOVEN: u32 = 2;
+pub const PIXEL_GLTF: u32 = 4;
+
+/// The kinds of pixel a frame has (PIXEL_* bits): the background, and the woven model's and the
+/// glTF BRDF's pixels where the G-buffer holds draws of them (fabric shaded as glTF is glTF's);
+/// every kind when the kinds are not split (forced).
+pub fn pixel_kinds(options: &RenderOptions, plan: &Plan) -> u32 {
+    if !plan.material_kinds {
+        return PIXEL_BACKGROUND | PIXEL_WOVEN | PIXEL_GLTF;
+    }
+    let (woven, gltf) = if options.fabric_as_pbr {
+        (0, plan.woven_draws + plan.gltf_draws)
+    } else {
+        (plan.woven_draws, plan.gltf_draws)
+    };
+    PIXEL_BACKGROUND | ((woven > 0) as u32 * PIXEL_WOVEN) | ((gltf > 0) as u32 * PIXEL_GLTF)
+}
+
 impl LightingPass {
     pub fn new(ctx: &Context) -> crate::Result<LightingPass> {
         let [layout] =
@@ -64,6 +84,13 @@ impl LightingPass {
             ),
             (9, "unlit", plan.unlit as u32),
             (10, "occlusion", plan.occlusion.is_some() as u32),
+            (
+                11,
+                "debug_views",
+                (options.debug_view != crate::render::DebugView::None) as u32,
+            ),
+            (12, "pixel_kinds", pixel_kinds(options, plan)),
+            (13, "gltf_features", plan.gltf_features),
         ])
     }
 

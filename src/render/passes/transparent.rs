@@ -83,7 +83,9 @@ impl TransparentPass {
             lighting
                 .0
                 .iter()
-                .filter(|(id, _, _)| ![0, 3, 4, 10].contains(id))
+                // (Not the occlusion, debug views, pixel kinds and glTF features: the
+                // transparent pass compiles every kind and feature in.)
+                .filter(|(id, _, _)| ![0, 3, 4].contains(id) && *id < 10)
                 .map(|&(id, name, value)| (id + 10, name, value)),
         );
         key.extend([
