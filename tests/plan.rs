@@ -505,8 +505,9 @@ const ANISOTROPY: &str = "AnisotropyRotationTest/glTF-Binary/AnisotropyRotationT
 fn a_pipeline_per_kind_of_material_with_only_the_scenes_code_changes_nothing() {
     // The G-buffer draws fabric and glTF materials with a pipeline each (the other kind's code
     // compiled out), samples only the texture slots some material has a texture in, and the
-    // lighting compiles only the glTF extensions the scene has: against one pipeline of each pass
-    // with all of it (Force::material_kinds), under the studio environment at its default level,
+    // lighting shades each kind of pixel (background, fabric, glTF) with a pipeline of its own
+    // over the G-buffer's stencil, with only the glTF extensions the scene has: against one
+    // pipeline of each pass with all of it (Force::material_kinds), under the studio at fis:8,
     // the same image bit for bit. The scenes: the default (fabric and untextured glTF), SheenChair
     // (textures, sheen), AnisotropyRotationTest (anisotropy), and the default with its fabric
     // shaded as glTF.
@@ -578,6 +579,26 @@ fn a_pipeline_per_kind_of_material_with_only_the_scenes_code_changes_nothing() {
             "{name}: {}",
             gbuffer_pipeline(&forced)
         );
+        // The lighting pass: a pipeline per kind of pixel (the background's, and each kind of
+        // surface the G-buffer holds), each drawn where the G-buffer's stencil is its kind.
+        let lightings: Vec<&String> = planned
+            .stats
+            .pipelines
+            .iter()
+            .filter(|p| p.starts_with("lighting["))
+            .collect();
+        // (A device without D32_SFLOAT_S8_UINT has no stencil: one pipeline of the scene's kinds.)
+        let surfaces = if options.fabric_as_pbr {
+            1
+        } else {
+            kinds.len()
+        };
+        if renderer.context().info().depth_stencil {
+            assert_eq!(lightings.len(), 1 + surfaces, "{name}: {lightings:?}");
+            assert!(lightings.iter().any(|p| p.contains("pixel_kinds=1,")));
+        } else {
+            assert_eq!(lightings.len(), 1, "{name}: {lightings:?}");
+        }
         assert!(lighting_pipeline(&forced).contains("pixel_kinds=7"));
         assert!(lighting_pipeline(&forced).contains("gltf_features=3"));
         assert_eq!(max_hdr_diff(&planned, &forced), 0.0, "{name}");

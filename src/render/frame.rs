@@ -25,7 +25,7 @@ use super::gpu::{FrameData, GpuShadow, TonemapPush};
 use super::passes::antialias::{AntialiasInputs, AntialiasPass};
 use super::passes::environment::{EnvPasses, GpuEnvironment};
 use super::passes::gbuffer::{GBufferInputs, GBufferPass};
-use super::passes::lighting::{LightingInputs, LightingPass};
+use super::passes::lighting::{LightingInputs, LightingPass, LightingVariant};
 use super::passes::occlusion::{OcclusionInputs, OcclusionPass, OcclusionPush};
 use super::passes::shadow::{ShadowInputs, ShadowPass};
 use super::passes::tonemap::{TonemapInputs, TonemapPass};
@@ -174,10 +174,17 @@ impl Defaults {
     }
 }
 
+/// Whether the lighting pass shades each kind of pixel with a pipeline of its own, over the
+/// G-buffer's stencil (`passes::lighting`): where the device has the depth-stencil format, the
+/// plan splits the kinds and no debug view shows the G-buffer instead.
+fn split_lighting(ctx: &Context, options: &RenderOptions, plan: &Plan) -> bool {
+    ctx.info().depth_stencil && plan.material_kinds && options.debug_view == super::DebugView::None
+}
+
 /// The pipeline variants a frame records with, and its environment's index in the cache.
 struct FrameKeys {
     gbuffer: VariantKey,
-    lighting: VariantKey,
+    lighting: Vec<LightingVariant>,
     forward: Option<VariantKey>,
     env: Option<usize>,
     /// The environment was prepared for this frame, from the cache on disk.
@@ -392,7 +399,13 @@ impl Renderer {
             .runs(Pass::Transparent)
             .then(|| TransparentPass::key(&gbuffer_key, &lighting_key, light_types, plan));
         let need_gbuffer = self.gbuffer.missing(&gbuffer_key, plan);
-        let need_lighting = !self.lighting.has(&lighting_key);
+        let lighting_variants =
+            LightingPass::variants(&lighting_key, split_lighting(&self.ctx, options, plan));
+        let need_lighting: Vec<LightingVariant> = lighting_variants
+            .iter()
+            .filter(|v| !self.lighting.has(v))
+            .cloned()
+            .collect();
         let need_forward = match &forward_key {
             Some(k) => self.transparent.missing(k, plan),
             None => Vec::new(),
@@ -411,8 +424,14 @@ impl Renderer {
             &self.env,
         );
         let (made_gbuffer, made_lighting, made_forward, built_env) = std::thread::scope(|scope| {
-            let made_lighting =
-                need_lighting.then(|| scope.spawn(|| lighting.make(ctx, &lighting_key)));
+            let made_lighting = (!need_lighting.is_empty()).then(|| {
+                scope.spawn(|| {
+                    need_lighting
+                        .iter()
+                        .map(|v| lighting.make(ctx, v).map(|p| (v.clone(), p)))
+                        .collect::<crate::Result<Vec<_>>>()
+                })
+            });
             let made_forward = (!need_forward.is_empty()).then(|| {
                 scope.spawn(|| {
                     let key = forward_key.as_ref().expect("needed only with a key");
@@ -444,8 +463,8 @@ impl Renderer {
         for (t, k, p) in made_gbuffer? {
             self.gbuffer.insert(gbuffer_key.clone(), t, k, p);
         }
-        if let Some(p) = made_lighting? {
-            self.lighting.insert(lighting_key.clone(), p);
+        for (v, p) in made_lighting?.into_iter().flatten() {
+            self.lighting.insert(v, p);
         }
         if let (Some(made), Some(k)) = (made_forward?, &forward_key) {
             for (blend, p) in made {
@@ -484,7 +503,7 @@ impl Renderer {
         }
         Ok(FrameKeys {
             gbuffer: gbuffer_key,
-            lighting: lighting_key,
+            lighting: lighting_variants,
             forward: forward_key,
             env: env_index,
             env_from_disk,
@@ -1007,6 +1026,7 @@ impl Renderer {
                         )?,
                         targets,
                         material_kinds: plan.material_kinds,
+                        fabric_as_pbr: options.fabric_as_pbr,
                     },
                 )?),
                 Pass::Shadow if buffers.shadow_tiles.is_empty() => {}

@@ -12,7 +12,16 @@ pub const FABRIC_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const EMISSIVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 /// The dielectric specular layer (KHR_materials_specular): rgb F0, a: specular weight.
 pub const SPECULAR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
-pub const DEPTH_FORMAT: Format = Format::D32_SFLOAT;
+/// The G-buffer's depth: 32-bit float depth, with an 8-bit stencil where the device has
+/// D32_SFLOAT_S8_UINT (the G-buffer marks each pixel's kind of material there, and the lighting
+/// pass shades each kind by a pipeline of its own: `passes::lighting`).
+pub fn depth_format(ctx: &Context) -> Format {
+    if ctx.info().depth_stencil {
+        Format::D32_SFLOAT_S8_UINT
+    } else {
+        Format::D32_SFLOAT
+    }
+}
 pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
 pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
@@ -85,7 +94,7 @@ impl Targets {
             specular: t("gbuffer specular", SPECULAR_FORMAT, color | read)?,
             depth: t(
                 "gbuffer depth",
-                DEPTH_FORMAT,
+                depth_format(ctx),
                 ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED | read,
             )?,
             hdr: t("hdr", HDR_FORMAT, color | read)?,
@@ -108,9 +117,9 @@ impl Targets {
     }
 }
 
-/// Bytes a pixel of the render targets takes on the device (six G-buffer targets, depth, HDR,
-/// LDR: 60).
-pub const TARGET_BYTES_PER_PIXEL: u64 = 4 + 8 + 8 + 8 + 8 + 8 + 4 + 8 + 4;
+/// Bytes a pixel of the render targets takes on the device (six G-buffer targets, depth and
+/// stencil, which drivers keep as 8 bytes, HDR, LDR: 64).
+pub const TARGET_BYTES_PER_PIXEL: u64 = 4 + 8 + 8 + 8 + 8 + 8 + 8 + 8 + 4;
 
 /// Bytes a pixel of the readback takes in host memory: the LDR buffer and its copy (4 + 4), and
 /// with `read_hdr` the half-float buffer and the f32 image (8 + 16).

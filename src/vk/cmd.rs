@@ -9,7 +9,7 @@ use ash::vk;
 
 use super::context::{vkerr, Context, Shared};
 use super::pipeline::{DescriptorSet, Pipeline};
-use super::resources::{level_bytes, texel_bytes, Buffer, Image, QueryPool};
+use super::resources::{has_stencil, level_bytes, texel_bytes, Buffer, Image, QueryPool};
 
 /// How an image is used, which fixes its layout, stages and access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,6 +100,23 @@ impl<'s> Cmd<'s> {
     ) {
         let (old_layout, src_stage, src_access) = from.parts();
         let (new_layout, dst_stage, dst_access) = to.parts();
+        let (old_layout, new_layout) = (image.layout_for(old_layout), image.layout_for(new_layout));
+        // A depth-stencil image read by shaders may also be a read-only attachment whose stencil
+        // a pass tests (begin_rendering_stencil_test): its reads include the fragment tests'.
+        let tests = |layout: vk::ImageLayout, stage, access| {
+            if layout == vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL {
+                (
+                    stage
+                        | vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                    access | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
+                )
+            } else {
+                (stage, access)
+            }
+        };
+        let (src_stage, src_access) = tests(old_layout, src_stage, src_access);
+        let (dst_stage, dst_access) = tests(new_layout, dst_stage, dst_access);
         let (base, count) = levels.unwrap_or((0, image.desc.mip_levels));
         let barrier = vk::ImageMemoryBarrier2::default()
             .src_stage_mask(src_stage)
@@ -110,7 +127,7 @@ impl<'s> Cmd<'s> {
             .new_layout(new_layout)
             .image(image.raw)
             .subresource_range(vk::ImageSubresourceRange {
-                aspect_mask: image.aspect(),
+                aspect_mask: image.full_aspect(),
                 base_mip_level: base,
                 level_count: count,
                 base_array_layer: 0,
@@ -200,8 +217,8 @@ impl<'s> Cmd<'s> {
                 (None, _) => vk::ClearValue::default(),
             };
             vk::RenderingAttachmentInfo::default()
-                .image_view(a.image.view)
-                .image_layout(layout)
+                .image_view(a.image.attachment_view())
+                .image_layout(a.image.layout_for(layout))
                 .load_op(if a.clear.is_some() {
                     vk::AttachmentLoadOp::CLEAR
                 } else {
@@ -230,9 +247,74 @@ impl<'s> Cmd<'s> {
             .color_attachments(&color_infos);
         if let Some(d) = depth_info.as_ref() {
             info = info.depth_attachment(d);
+            if depth
+                .as_ref()
+                .is_some_and(|a| has_stencil(a.image.desc.format))
+            {
+                info = info.stencil_attachment(d);
+            }
         }
+        self.begin(&info, extent);
+    }
+
+    /// Begins a dynamic-rendering pass into `colors` (loaded) that tests the stencil of the
+    /// depth-stencil image `depth_stencil` without writing it, while the pass's shaders may sample
+    /// its depth: both read-only, in DEPTH_STENCIL_READ_ONLY_OPTIMAL (its `Usage::FragmentRead`).
+    pub fn begin_rendering_stencil_test(&mut self, colors: &[&'s Image], depth_stencil: &'s Image) {
+        let extent = depth_stencil.extent();
+        let color_infos: Vec<_> = colors
+            .iter()
+            .map(|image| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(image.view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::LOAD)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+            })
+            .collect();
+        let ds = vk::RenderingAttachmentInfo::default()
+            .image_view(depth_stencil.attachment_view())
+            .image_layout(vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::LOAD)
+            .store_op(vk::AttachmentStoreOp::NONE);
+        let area = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D {
+                width: extent.0,
+                height: extent.1,
+            },
+        };
+        let info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&color_infos)
+            .depth_attachment(&ds)
+            .stencil_attachment(&ds);
+        self.begin(&info, extent);
+    }
+
+    /// The stencil reference value of the draws that follow (pipelines that write or test the
+    /// stencil take it from here).
+    pub fn set_stencil_reference(&mut self, reference: u32) {
         unsafe {
-            self.device().cmd_begin_rendering(self.raw, &info);
+            self.device().cmd_set_stencil_reference(
+                self.raw,
+                vk::StencilFaceFlags::FRONT_AND_BACK,
+                reference,
+            )
+        };
+    }
+
+    fn begin(&mut self, info: &vk::RenderingInfo, extent: (u32, u32)) {
+        let area = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D {
+                width: extent.0,
+                height: extent.1,
+            },
+        };
+        unsafe {
+            self.device().cmd_begin_rendering(self.raw, info);
             let viewport = vk::Viewport {
                 x: 0.0,
                 y: 0.0,

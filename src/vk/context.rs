@@ -69,6 +69,10 @@ pub struct DeviceInfo {
     /// Whether RGBA32F images can be sampled with linear filtering (optional in Vulkan; the
     /// weave's summed-area table is filtered where it can be, fetched where not).
     pub rgba32f_linear: bool,
+    /// Whether D32_SFLOAT_S8_UINT can be a sampled depth-stencil attachment (Vulkan requires it or
+    /// D24_UNORM_S8_UINT): the G-buffer's depth then has a stencil that marks each pixel's kind of
+    /// material, and the lighting pass shades each kind with a pipeline of its own.
+    pub depth_stencil: bool,
 }
 
 impl DeviceInfo {
@@ -704,6 +708,17 @@ fn choose_device(
                 };
                 f.optimal_tiling_features
                     .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+            },
+            depth_stencil: {
+                let f = unsafe {
+                    instance
+                        .get_physical_device_format_properties(pd, vk::Format::D32_SFLOAT_S8_UINT)
+                };
+                f.optimal_tiling_features.contains(
+                    vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT
+                        | vk::FormatFeatureFlags::SAMPLED_IMAGE
+                        | vk::FormatFeatureFlags::TRANSFER_SRC,
+                )
             },
         };
         let usable = family.is_some() && v >= vk::API_VERSION_1_3;

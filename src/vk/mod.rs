@@ -20,7 +20,7 @@ pub use cmd::{Attachment, Cmd, Cull, InFlight, Recording, Usage};
 pub use context::{Context, ContextOptions, DeviceChoice, DeviceInfo};
 pub use pipeline::{
     Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline,
-    Resource, SetLayout, Stages, Topology, VertexLayout,
+    Resource, SetLayout, Stages, StencilMode, Topology, VertexLayout,
 };
 pub use resources::{
     Address, Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler,

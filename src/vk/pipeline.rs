@@ -127,6 +127,22 @@ pub struct GraphicsDesc<'a> {
     pub blend: bool,
     /// How vertices assemble: triangle, line or point lists (lines and points 1 pixel wide).
     pub topology: Topology,
+    /// What the pipeline does with the stencil of a depth-stencil attachment.
+    pub stencil: StencilMode,
+}
+
+/// A graphics pipeline's use of the stencil (of a `depth_format` with a stencil aspect; the
+/// reference value is dynamic: [`Cmd::set_stencil_reference`](super::Cmd::set_stencil_reference)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StencilMode {
+    /// Not tested, not written.
+    #[default]
+    None,
+    /// Every fragment that passes the depth test writes the reference.
+    Write,
+    /// Only fragments whose stencil equals the reference are drawn; no depth test, nothing
+    /// written to the attachment (it may be attached read-only).
+    Equal,
 }
 
 /// The primitive topology of a graphics pipeline.
@@ -200,7 +216,8 @@ pub struct DescriptorSet<'r> {
 pub enum Resource<'a> {
     Uniform(&'a Buffer),
     Storage(&'a Buffer),
-    /// An image in SHADER_READ_ONLY_OPTIMAL layout, with a sampler.
+    /// An image in SHADER_READ_ONLY_OPTIMAL layout (a depth-stencil image's depth in
+    /// DEPTH_STENCIL_READ_ONLY_OPTIMAL), with a sampler.
     Sampled(&'a Image, &'a Sampler),
     /// One mip level of an image, in GENERAL layout.
     StorageImage(&'a Image, u32),
@@ -445,10 +462,38 @@ impl Context {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_format.is_some())
-            .depth_write_enable(desc.depth_format.is_some() && !desc.blend)
+        let stencil_op = |compare: vk::CompareOp, pass: vk::StencilOp, write: u32| {
+            vk::StencilOpState::default()
+                .fail_op(vk::StencilOp::KEEP)
+                .pass_op(pass)
+                .depth_fail_op(vk::StencilOp::KEEP)
+                .compare_op(compare)
+                .compare_mask(0xff)
+                .write_mask(write)
+        };
+        let tests_depth = desc.depth_format.is_some() && desc.stencil != StencilMode::Equal;
+        let mut depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(tests_depth)
+            .depth_write_enable(tests_depth && !desc.blend)
             .depth_compare_op(vk::CompareOp::GREATER); // reversed-Z: near is 1, far is 0
+        let with_stencil = desc.depth_format.is_some_and(super::resources::has_stencil);
+        match desc.stencil {
+            StencilMode::None => {}
+            StencilMode::Write => {
+                let op = stencil_op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0xff);
+                depth = depth.stencil_test_enable(true).front(op).back(op);
+            }
+            StencilMode::Equal => {
+                let op = stencil_op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, 0);
+                depth = depth.stencil_test_enable(true).front(op).back(op);
+            }
+        }
+        if desc.stencil != StencilMode::None && !with_stencil {
+            return Err(Error::device(format!(
+                "pipeline {}: a stencil mode without a depth-stencil format",
+                desc.name
+            )));
+        }
         let attachments: Vec<_> = desc
             .color_formats
             .iter()
@@ -470,7 +515,7 @@ impl Context {
             })
             .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
-        let dynamic_states = [
+        let mut dynamic_states = vec![
             vk::DynamicState::VIEWPORT,
             vk::DynamicState::SCISSOR,
             vk::DynamicState::CULL_MODE,
@@ -478,10 +523,18 @@ impl Context {
             // front faces (glTF 2.0, "Instantiation").
             vk::DynamicState::FRONT_FACE,
         ];
+        if desc.stencil != StencilMode::None {
+            dynamic_states.push(vk::DynamicState::STENCIL_REFERENCE);
+        }
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(desc.color_formats)
-            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED))
+            .stencil_attachment_format(if with_stencil {
+                desc.depth_format.unwrap_or(vk::Format::UNDEFINED)
+            } else {
+                vk::Format::UNDEFINED
+            });
         let layout = self.pipeline_layout(
             desc.set_layouts,
             desc.push_constant_size,
@@ -651,7 +704,7 @@ impl DescriptorPool {
                 Resource::Sampled(img, s) => image_infos.push([vk::DescriptorImageInfo {
                     sampler: s.raw,
                     image_view: img.view,
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    image_layout: img.layout_for(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
                 }]),
                 Resource::StorageImage(img, level) => image_infos.push([vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),

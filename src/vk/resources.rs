@@ -144,7 +144,18 @@ impl ImageDesc {
 pub fn is_depth(format: vk::Format) -> bool {
     matches!(
         format,
-        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::D24_UNORM_S8_UINT
+        vk::Format::D32_SFLOAT
+            | vk::Format::D16_UNORM
+            | vk::Format::D24_UNORM_S8_UINT
+            | vk::Format::D32_SFLOAT_S8_UINT
+    )
+}
+
+/// Whether a depth format also has a stencil aspect.
+pub fn has_stencil(format: vk::Format) -> bool {
+    matches!(
+        format,
+        vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT
     )
 }
 
@@ -163,7 +174,12 @@ pub(crate) fn level_bytes(format: vk::Format, width: u32, height: u32) -> Option
 pub(crate) fn texel_bytes(format: vk::Format) -> Option<u64> {
     use vk::Format as F;
     Some(match format {
-        F::R8G8B8A8_UNORM | F::R8G8B8A8_SRGB | F::D32_SFLOAT | F::R32_SFLOAT => 4,
+        // (A depth-stencil format's depth aspect alone: what a copy of it reads.)
+        F::R8G8B8A8_UNORM
+        | F::R8G8B8A8_SRGB
+        | F::D32_SFLOAT
+        | F::D32_SFLOAT_S8_UINT
+        | F::R32_SFLOAT => 4,
         F::D16_UNORM => 2,
         F::R16G16B16A16_SFLOAT | F::R16G16B16A16_UINT | F::R32G32_SFLOAT => 8,
         F::R32G32B32_SFLOAT => 12,
@@ -179,6 +195,9 @@ pub struct Image {
     pub(crate) view: vk::ImageView,
     /// One view per mip level (for storage writes of a single level).
     pub(crate) mip_views: Vec<vk::ImageView>,
+    /// A depth-stencil image's view of both aspects (its attachment view; `view`, of the depth
+    /// alone, is what shaders sample); null for other images.
+    pub(crate) attachment_view: vk::ImageView,
     allocation: Option<Allocation>,
     pub desc: ImageDesc,
 }
@@ -187,11 +206,48 @@ impl Image {
     pub fn extent(&self) -> (u32, u32) {
         (self.desc.width, self.desc.height)
     }
+    /// The aspect its views sample and copies read: a depth-stencil image's depth.
     pub(crate) fn aspect(&self) -> vk::ImageAspectFlags {
         if is_depth(self.desc.format) {
             vk::ImageAspectFlags::DEPTH
         } else {
             vk::ImageAspectFlags::COLOR
+        }
+    }
+
+    /// Every aspect (what a layout transition covers).
+    pub(crate) fn full_aspect(&self) -> vk::ImageAspectFlags {
+        if has_stencil(self.desc.format) {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        } else {
+            self.aspect()
+        }
+    }
+
+    /// The view a render pass attaches: both aspects of a depth-stencil image.
+    pub(crate) fn attachment_view(&self) -> vk::ImageView {
+        if self.attachment_view == vk::ImageView::null() {
+            self.view
+        } else {
+            self.attachment_view
+        }
+    }
+
+    /// The layout this image takes for a usage's generic `layout`: a depth-stencil image is read
+    /// by shaders in DEPTH_STENCIL_READ_ONLY_OPTIMAL (so a pass can test its stencil while it
+    /// samples its depth) and attached in DEPTH_STENCIL_ATTACHMENT_OPTIMAL.
+    pub(crate) fn layout_for(&self, layout: vk::ImageLayout) -> vk::ImageLayout {
+        if !has_stencil(self.desc.format) {
+            return layout;
+        }
+        match layout {
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL => {
+                vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+            }
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL => {
+                vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+            }
+            l => l,
         }
     }
 }
@@ -202,6 +258,11 @@ impl Drop for Image {
         unsafe {
             for v in self.mip_views.drain(..) {
                 self.shared.device.destroy_image_view(v, None);
+            }
+            if self.attachment_view != vk::ImageView::null() {
+                self.shared
+                    .device
+                    .destroy_image_view(self.attachment_view, None);
             }
             self.shared.device.destroy_image_view(self.view, None);
             self.shared.device.destroy_image(self.raw, None);
@@ -498,6 +559,7 @@ impl Context {
             raw,
             view: vk::ImageView::null(),
             mip_views: Vec::new(),
+            attachment_view: vk::ImageView::null(),
             allocation: Some(allocation),
             desc: desc.clone(),
         };
@@ -506,19 +568,23 @@ impl Context {
             .map_err(vkerr("vkBindImageMemory"))?;
         let aspect = image.aspect();
         let layers = desc.layers();
+        let make_aspect_view =
+            |base: u32, count: u32, view_type: vk::ImageViewType, aspect: vk::ImageAspectFlags| {
+                let info = vk::ImageViewCreateInfo::default()
+                    .image(raw)
+                    .view_type(view_type)
+                    .format(desc.format)
+                    .subresource_range(vk::ImageSubresourceRange {
+                        aspect_mask: aspect,
+                        base_mip_level: base,
+                        level_count: count,
+                        base_array_layer: 0,
+                        layer_count: layers,
+                    });
+                unsafe { device.create_image_view(&info, None) }.map_err(vkerr("vkCreateImageView"))
+            };
         let make_view = |base: u32, count: u32, view_type: vk::ImageViewType| {
-            let info = vk::ImageViewCreateInfo::default()
-                .image(raw)
-                .view_type(view_type)
-                .format(desc.format)
-                .subresource_range(vk::ImageSubresourceRange {
-                    aspect_mask: aspect,
-                    base_mip_level: base,
-                    level_count: count,
-                    base_array_layer: 0,
-                    layer_count: layers,
-                });
-            unsafe { device.create_image_view(&info, None) }.map_err(vkerr("vkCreateImageView"))
+            make_aspect_view(base, count, view_type, aspect)
         };
         let (sampled_type, storage_type) = if desc.cube {
             (vk::ImageViewType::CUBE, vk::ImageViewType::TYPE_2D_ARRAY)
@@ -526,6 +592,10 @@ impl Context {
             (vk::ImageViewType::TYPE_2D, vk::ImageViewType::TYPE_2D)
         };
         image.view = make_view(0, desc.mip_levels, sampled_type)?;
+        if has_stencil(desc.format) {
+            image.attachment_view =
+                make_aspect_view(0, desc.mip_levels, sampled_type, image.full_aspect())?;
+        }
         if (desc.mip_levels > 1 || desc.cube) && desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
             for level in 0..desc.mip_levels {
                 let v = make_view(level, 1, storage_type)?;

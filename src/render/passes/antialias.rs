@@ -8,7 +8,7 @@ use super::Recorded;
 use crate::render::targets::{Targets, LDR_FORMAT};
 use crate::vk::{
     shaders, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout, Stages,
-    Topology, Usage,
+    StencilMode, Topology, Usage,
 };
 
 /// The pass's set layout (reflected from fxaa.frag) and its pipeline, made by the first frame
@@ -53,6 +53,7 @@ impl AntialiasPass {
                     constants: &[],
                     blend: false,
                     topology: Topology::Triangles,
+                    stencil: StencilMode::None,
                 })?);
         }
         Ok(())

@@ -3,18 +3,19 @@
 
 use std::collections::HashMap;
 
+use super::lighting::stencil_of;
 use super::{Recorded, VariantKey};
 use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
 use crate::render::plan::Plan;
 use crate::render::targets::{
-    Targets, ALBEDO_FORMAT, DEPTH_FORMAT, EMISSIVE_FORMAT, FABRIC_FORMAT, FRAME_FORMAT,
+    depth_format, Targets, ALBEDO_FORMAT, EMISSIVE_FORMAT, FABRIC_FORMAT, FRAME_FORMAT,
     SPECULAR_FORMAT, SURFACE_FORMAT,
 };
 use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
 use crate::render::{RenderOptions, Shading};
 use crate::vk::{
     shaders, Attachment, Buffer, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc,
-    Pipeline, Resource, SetLayout, Stages, Topology, Usage,
+    Pipeline, Resource, SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines (one per variant, topology and kind of material) and its two set
@@ -90,6 +91,8 @@ pub struct GBufferInputs<'s> {
     pub targets: &'s Targets,
     /// A pipeline per kind of material ([`Plan::material_kinds`]), else one for every kind.
     pub material_kinds: bool,
+    /// Fabric is shaded with the glTF BRDF (its pixels' stencil is glTF's).
+    pub fabric_as_pbr: bool,
 }
 
 impl GBufferPass {
@@ -182,13 +185,19 @@ impl GBufferPass {
                 EMISSIVE_FORMAT,
                 SPECULAR_FORMAT,
             ],
-            depth_format: Some(DEPTH_FORMAT),
+            depth_format: Some(depth_format(ctx)),
             set_layouts: &[&self.frame_layout, &self.material_layout],
             push_constant_size: std::mem::size_of::<DrawPush>() as u32,
             push_stages: Stages::GRAPHICS,
             constants: &constants,
             blend: false,
             topology,
+            // Each draw marks its pixels with the kind the lighting pass shades them as.
+            stencil: if ctx.info().depth_stencil {
+                StencilMode::Write
+            } else {
+                StencilMode::None
+            },
         })
     }
 
@@ -221,6 +230,7 @@ impl GBufferPass {
             ],
         )?;
         let split = inputs.material_kinds;
+        let fabric_as_pbr = inputs.fabric_as_pbr;
         let kind_of = move |woven: bool| Kind::of(woven, split);
         let pipelines: Vec<(Topology, Kind, &'s Pipeline)> =
             [Topology::Triangles, Topology::Lines, Topology::Points]
@@ -287,6 +297,7 @@ impl GBufferPass {
                         Cull::Back
                     });
                     cmd.set_front_face(draw.mirrored());
+                    cmd.set_stencil_reference(stencil_of(draw.woven, fabric_as_pbr));
                     let mut push = DrawPush::new(draw.world, material);
                     if !draw.receive_shadows {
                         push.flags &= !DRAW_RECEIVES_SHADOWS;

@@ -5,18 +5,38 @@ use std::collections::HashMap;
 
 use super::{Recorded, SceneLighting, VariantKey};
 use crate::render::plan::Plan;
-use crate::render::targets::{Targets, HDR_FORMAT};
+use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
     shaders, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler, SetLayout,
-    Stages, Topology, Usage,
+    Stages, StencilMode, Topology, Usage,
 };
 
-/// The pass's pipelines by variant and its set layout (reflected from lighting.frag).
+/// The pass's pipelines by variant and whether they test the stencil, and its set layout
+/// (reflected from lighting.frag).
 pub struct LightingPass {
     layout: SetLayout,
-    variants: HashMap<VariantKey, Pipeline>,
+    variants: HashMap<(VariantKey, bool), Pipeline>,
+}
+
+/// One lighting pipeline of a frame: its variant, and the stencil value of the pixels it shades
+/// (None: every pixel, no stencil test).
+pub type LightingVariant = (VariantKey, Option<u32>);
+
+/// The stencil the G-buffer pass writes: 0 (its clear) where nothing is drawn, then per draw the
+/// kind of pixel the lighting pass shades it as.
+pub const STENCIL_BACKGROUND: u32 = 0;
+pub const STENCIL_WOVEN: u32 = 1;
+pub const STENCIL_GLTF: u32 = 2;
+
+/// The stencil value of a G-buffer draw of a fabric (`woven`) or glTF material.
+pub fn stencil_of(woven: bool, fabric_as_pbr: bool) -> u32 {
+    if woven && !fabric_as_pbr {
+        STENCIL_WOVEN
+    } else {
+        STENCIL_GLTF
+    }
 }
 
 /// What the pass reads; it writes the HDR target (left readable by fragment shaders).
@@ -94,47 +114,93 @@ impl LightingPass {
         ])
     }
 
-    pub fn has(&self, key: &VariantKey) -> bool {
-        self.variants.contains_key(key)
+    /// The pipelines a frame shades with: where the G-buffer's depth has a stencil
+    /// (`split`: the device has the format, the kinds are not forced together, no debug view),
+    /// one per kind of pixel the frame can have (`key` with PIXEL_KINDS that kind alone), each
+    /// drawn over the pixels whose stencil is its kind; else `key` alone, over every pixel.
+    pub fn variants(key: &VariantKey, split: bool) -> Vec<LightingVariant> {
+        let Some(&(_, _, kinds)) = key.0.iter().find(|(id, _, _)| *id == 12) else {
+            return vec![(key.clone(), None)];
+        };
+        if !split {
+            return vec![(key.clone(), None)];
+        }
+        [
+            (PIXEL_BACKGROUND, STENCIL_BACKGROUND),
+            (PIXEL_WOVEN, STENCIL_WOVEN),
+            (PIXEL_GLTF, STENCIL_GLTF),
+        ]
+        .into_iter()
+        .filter(|(kind, _)| kinds & kind != 0)
+        .map(|(kind, stencil)| {
+            let mut k = key.clone();
+            for e in &mut k.0 {
+                if e.0 == 12 {
+                    e.2 = kind;
+                }
+            }
+            (k, Some(stencil))
+        })
+        .collect()
     }
 
-    /// Makes the pipeline of variant `key` (not kept: see [`LightingPass::insert`]).
-    pub fn make(&self, ctx: &Context, key: &VariantKey) -> crate::Result<Pipeline> {
+    pub fn has(&self, variant: &LightingVariant) -> bool {
+        self.variants
+            .contains_key(&(variant.0.clone(), variant.1.is_some()))
+    }
+
+    /// Makes the pipeline of `variant` (not kept: see [`LightingPass::insert`]): with a stencil
+    /// value, over the G-buffer's depth-stencil attachment, drawing only where the stencil equals
+    /// it.
+    pub fn make(&self, ctx: &Context, variant: &LightingVariant) -> crate::Result<Pipeline> {
+        let (key, stencil) = variant;
         ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!("lighting[{}]", key.describe()),
             vertex: &shaders::FULLSCREEN_VERT,
             fragment: &shaders::LIGHTING_FRAG,
             vertex_layout: None,
             color_formats: &[HDR_FORMAT],
-            depth_format: None,
+            depth_format: stencil.map(|_| depth_format(ctx)),
             set_layouts: &[&self.layout],
             push_constant_size: 0,
             push_stages: Stages::FRAGMENT,
             constants: &key.constants(),
             blend: false,
             topology: Topology::Triangles,
+            stencil: if stencil.is_some() {
+                StencilMode::Equal
+            } else {
+                StencilMode::None
+            },
         })
     }
 
-    pub fn insert(&mut self, key: VariantKey, pipeline: Pipeline) {
-        self.variants.insert(key, pipeline);
+    pub fn insert(&mut self, variant: LightingVariant, pipeline: Pipeline) {
+        self.variants
+            .insert((variant.0, variant.1.is_some()), pipeline);
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
         self.variants.values()
     }
 
-    /// Records the pass with variant `key` (made by [`LightingPass::make`]).
+    /// Records the pass with `variants` (made by [`LightingPass::make`]).
     pub fn record<'s>(
         &'s self,
         pool: &'s DescriptorPool,
-        key: &VariantKey,
+        variants: &[LightingVariant],
         inputs: LightingInputs<'s>,
     ) -> crate::Result<Recorded<'s>> {
-        let pipeline = self
-            .variants
-            .get(key)
-            .expect("the frame makes the lighting variant before recording");
+        let pipelines: Vec<(&'s Pipeline, Option<u32>)> = variants
+            .iter()
+            .map(|(key, stencil)| {
+                let p = self
+                    .variants
+                    .get(&(key.clone(), stencil.is_some()))
+                    .expect("the frame makes the lighting variants before recording");
+                (p, *stencil)
+            })
+            .collect();
         let t = inputs.targets;
         let g = |image| Resource::Sampled(image, inputs.nearest);
         let mut bindings = vec![
@@ -153,9 +219,26 @@ impl LightingPass {
         let set = pool.set(&self.layout, &bindings)?;
         Ok(Recorded::new(
             "lighting",
-            vec![pipeline.name.clone()],
+            pipelines.iter().map(|(p, _)| p.name.clone()).collect(),
             move |cmd| {
-                super::fullscreen::<u32>(cmd, pipeline, set, None, &t.hdr);
+                match pipelines.as_slice() {
+                    [(pipeline, None)] => {
+                        super::fullscreen::<u32>(cmd, pipeline, set, None, &t.hdr)
+                    }
+                    _ => {
+                        // A fullscreen triangle per kind of pixel, each where the stencil is
+                        // its kind: together they cover every pixel once.
+                        cmd.transition(&t.hdr, Usage::Undefined, Usage::ColorAttachment, None);
+                        cmd.begin_rendering_stencil_test(&[&t.hdr], &t.depth);
+                        for (pipeline, stencil) in &pipelines {
+                            cmd.bind_pipeline(pipeline);
+                            cmd.bind_sets(pipeline, 0, &[set]);
+                            cmd.set_stencil_reference(stencil.unwrap_or(0));
+                            cmd.draw(3);
+                        }
+                        cmd.end_rendering();
+                    }
+                }
                 cmd.transition(&t.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
             },
         ))

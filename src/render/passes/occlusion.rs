@@ -15,7 +15,7 @@ use crate::render::plan::OcclusionPlan;
 use crate::render::targets::{Targets, OCCLUSION_FORMAT};
 use crate::vk::{
     shaders, Buffer, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout,
-    Stages, Topology, Usage,
+    Stages, StencilMode, Topology, Usage,
 };
 
 /// occlusion.frag's push constants (80 bytes).
@@ -96,6 +96,7 @@ impl OcclusionPass {
                     constants,
                     blend: false,
                     topology: Topology::Triangles,
+                    stencil: StencilMode::None,
                 })
             };
             let estimate = make(

@@ -10,7 +10,8 @@ use crate::render::targets::SHADOW_FORMAT;
 use crate::render::upload::{GpuScene, VERTEX_FLOATS};
 use crate::vk::{
     shaders, Attachment, Buffer, Cmd, Context, DescriptorPool, DescriptorSet, Format, GraphicsDesc,
-    Image, Pipeline, Resource, Sampler, SetLayout, Stages, Topology, Usage, VertexLayout,
+    Image, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
+    VertexLayout,
 };
 
 /// The pass's pipelines: depth only for opaque casters (shadow.vert/.frag), and for alphaMode
@@ -61,6 +62,7 @@ impl ShadowPass {
                 constants: &[],
                 blend: false,
                 topology: Topology::Triangles,
+                stencil: StencilMode::None,
             })?,
             mask_variants: HashMap::new(),
             mask_layout,
@@ -92,6 +94,7 @@ impl ShadowPass {
                 constants: &[(0, key)],
                 blend: false,
                 topology: Topology::Triangles,
+                stencil: StencilMode::None,
             })?;
             self.mask_variants.insert(key, pipeline);
         }

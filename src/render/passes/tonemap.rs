@@ -6,7 +6,7 @@ use crate::render::gpu::TonemapPush;
 use crate::render::targets::{Targets, LDR_FORMAT};
 use crate::vk::{
     shaders, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout, Stages,
-    Topology,
+    StencilMode, Topology,
 };
 
 /// The pass's pipeline and set layout (reflected from tonemap.frag).
@@ -42,6 +42,7 @@ impl TonemapPass {
             constants: &[],
             blend: false,
             topology: Topology::Triangles,
+            stencil: StencilMode::None,
         })?;
         Ok(TonemapPass { layout, pipeline })
     }

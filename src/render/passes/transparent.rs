@@ -20,11 +20,11 @@ use glam::{Mat4, Vec3};
 use super::{Recorded, SceneLighting, VariantKey};
 use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
 use crate::render::plan::Plan;
-use crate::render::targets::{Targets, DEPTH_FORMAT, HDR_FORMAT};
+use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
 use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
 use crate::vk::{
     shaders, Attachment, Buffer, Cmd, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc,
-    Image, Pipeline, Resource, Sampler, SetLayout, Stages, Topology, Usage,
+    Image, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and blend mode (true: BLEND, blended without depth writes;
@@ -129,13 +129,14 @@ impl TransparentPass {
             fragment: &shaders::FORWARD_FRAG,
             vertex_layout: Some(gbuffer_vertex_layout()),
             color_formats: &[HDR_FORMAT],
-            depth_format: Some(DEPTH_FORMAT),
+            depth_format: Some(depth_format(ctx)),
             set_layouts: &[&self.layout, &self.material_layout],
             push_constant_size: std::mem::size_of::<DrawPush>() as u32,
             push_stages: Stages::GRAPHICS,
             constants: &key.constants(),
             blend,
             topology: Topology::Triangles,
+            stencil: StencilMode::None,
         })
     }
 
