@@ -251,7 +251,12 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, 
         bool pick_weft = xi.x < w_weft;
         xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
         xi.x = min(xi.x, 0.99999994);
-        vec3 h = pick_weft ? as_sample_h(xi, f.e_along, f.e_across) : as_sample_h(xi, f.e_across, f.e_along);
+        // One sampler call with the picked lobe's exponents (a choice between two calls would
+        // run both where a branch costs every lane).
+        float e;
+        float log_cos;
+        vec3 h = as_sample_h_log(xi, pick_weft ? f.e_along : f.e_across,
+                                 pick_weft ? f.e_across : f.e_along, e, log_cos);
         float kh = dot(k2, h);
         if (!(kh > 0.0)) {
             continue;
@@ -262,9 +267,11 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, 
         }
         // Each lobe's estimate f·cos/pdf with pdf the mixture of the two samplers: a lobe is
         // as_lobe_factor·hn^E and its sampler's pdf as_norm/(2π)·hn^E/(4 kh) (fabric.glsl), so
-        // hn^E of each orientation (as_power) is computed once and shared by both.
-        float p_weft = as_power(h.x, h.y, h.z, f.e_along, f.e_across);
-        float p_warp = as_power(h.x, h.y, h.z, f.e_across, f.e_along);
+        // hn^E of each orientation is computed once and shared by both: from the sample's
+        // log2 cos θ, the two exponents at its φ adding up to e_along + e_across.
+        float e_other = f.e_along + f.e_across - e;
+        float p_weft = exp2((pick_weft ? e : e_other) * log_cos);
+        float p_warp = exp2((pick_weft ? e_other : e) * log_cos);
         float mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
         if (!(mixed > 0.0)) {
             continue;

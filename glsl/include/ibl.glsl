@@ -57,7 +57,10 @@ vec3 ggx_sample_h(vec2 xi, float alpha) {
 // floor(4·xi.x); cos θ = xi.y^(1/(eu cos²φ + ev sin²φ + 1)). (cos φ0, sin φ0) is taken as the
 // direction of (cos x, k·sin x), x = πr/2: no tan (unbounded error near π/2 under Vulkan's
 // precision rules), no atan, no trigonometry of φ afterwards.
-vec3 as_sample_h(vec2 xi, float eu, float ev) {
+// Also gives the exponent E = eu cos²φ + ev sin²φ at the sample and log2 cos θ =
+// log2(xi.y)/(E + 1), from which hn^E' = exp2(E'·log2 cos θ) for any exponent E' at the same φ
+// (as_power's value, from xi.y itself: nothing cancels where cos θ rounds to 1).
+vec3 as_sample_h_log(vec2 xi, float eu, float ev, out float e, out float log_cos) {
     float q = clamp(floor(4.0 * xi.x), 0.0, 3.0);
     float r = 4.0 * xi.x - q;
     float x = 0.5 * IBL_PI * min(r, 0.9999999);
@@ -66,9 +69,17 @@ vec3 as_sample_h(vec2 xi, float eu, float ev) {
     d = d / sqrt(max(dot(d, d), 1e-30));
     float cp = (q == 1.0 || q == 2.0) ? -d.x : d.x;
     float sp = q >= 2.0 ? -d.y : d.y;
-    float cos_t = pow(max(xi.y, 1e-30), 1.0 / (eu * cp * cp + ev * sp * sp + 1.0));
+    e = eu * cp * cp + ev * sp * sp;
+    log_cos = log2(max(xi.y, 1e-30)) * (1.0 / (e + 1.0));
+    float cos_t = exp2(log_cos);
     float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
     return vec3(sin_t * cp, sin_t * sp, cos_t);
+}
+
+vec3 as_sample_h(vec2 xi, float eu, float ev) {
+    float e;
+    float log_cos;
+    return as_sample_h_log(xi, eu, ev, e, log_cos);
 }
 
 // A cosine-distributed direction in the local frame (pdf z/π).

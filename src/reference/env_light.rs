@@ -15,7 +15,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: true for NaN, as in the GLSL.
 
 use super::brdf::single::{
-    self as fb, add, as_lobe_factor, as_norm, as_power, coupled_diffuse, cross, dot, scale, sub,
+    self as fb, add, as_lobe_factor, as_norm, coupled_diffuse, cross, dot, scale, sub,
     FabricMaterial, Vec3,
 };
 use super::ibl_twin::{self, formula};
@@ -412,11 +412,12 @@ pub fn fabric_env_lobes(
             (xi[0] - w_weft) / (1.0 - w_weft)
         };
         xi[0] = xi[0].min(0.99999994);
-        let h = if pick_weft {
-            ibl_twin::as_sample_h(xi, f.e_along, f.e_across)
+        let (eu, ev) = if pick_weft {
+            (f.e_along, f.e_across)
         } else {
-            ibl_twin::as_sample_h(xi, f.e_across, f.e_along)
+            (f.e_across, f.e_along)
         };
+        let (h, e, log_cos) = ibl_twin::as_sample_h_log(xi, eu, ev);
         let kh = dot(k2, h);
         if !(kh > 0.0) {
             continue;
@@ -425,8 +426,10 @@ pub fn fabric_env_lobes(
         if !(k1[2] > 0.0) {
             continue;
         }
-        let p_weft = as_power(h[0], h[1], h[2], f.e_along, f.e_across);
-        let p_warp = as_power(h[0], h[1], h[2], f.e_across, f.e_along);
+        let e_other = f.e_along + f.e_across - e;
+        let (e_weft, e_warp) = if pick_weft { (e, e_other) } else { (e_other, e) };
+        let p_weft = (e_weft * log_cos).exp2();
+        let p_warp = (e_warp * log_cos).exp2();
         let mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
         if !(mixed > 0.0) {
             continue;

@@ -291,6 +291,11 @@ pub mod formula {
 
     /// `as_sample_h` (ibl.glsl).
     pub fn as_sample_h<T: Real>(xi: [T; 2], eu: T, ev: T) -> [T; 3] {
+        as_sample_h_log(xi, eu, ev).0
+    }
+
+    /// `as_sample_h_log` (ibl.glsl): the half vector, the exponent E at its φ and log2 cos θ.
+    pub fn as_sample_h_log<T: Real>(xi: [T; 2], eu: T, ev: T) -> ([T; 3], T, T) {
         let one = T::lit(1.0);
         let zero = T::lit(0.0);
         let q = (T::lit(4.0) * xi[0]).floor().clamp(zero, T::lit(3.0));
@@ -308,11 +313,11 @@ pub mod formula {
             dx
         };
         let sp = if qv >= 2.0 { zero - dy } else { dy };
-        let cos_t = xi[1]
-            .max(T::lit(1e-30))
-            .pow(one / (eu.mul_square(cp) + ev.mul_square(sp) + one));
+        let e = eu.mul_square(cp) + ev.mul_square(sp);
+        let log_cos = xi[1].max(T::lit(1e-30)).log2() * (one / (e + one));
+        let cos_t = log_cos.exp2();
         let sin_t = (one - cos_t * cos_t).max(zero).sqrt();
-        [sin_t * cp, sin_t * sp, cos_t]
+        ([sin_t * cp, sin_t * sp, cos_t], e, log_cos)
     }
 
     /// `cosine_sample` (ibl.glsl).
@@ -427,6 +432,12 @@ pub fn ggx_sample_h(xi: [f32; 2], alpha: f32) -> [f32; 3] {
 /// [`super::brdf::sampling::sample_h`], with the GLSL's clamps: `r ≤ 0.9999999`, `xi.y ≥ 1e-30`).
 pub fn as_sample_h(xi: [f32; 2], eu: f32, ev: f32) -> [f32; 3] {
     formula::as_sample_h(xi, eu, ev)
+}
+
+/// `as_sample_h_log` of ibl.glsl: [`as_sample_h`] with the exponent E = eu cos²φ + ev sin²φ at the
+/// sample and log2 cos θ = log2(xi.y)/(E + 1) (hn^E' of any exponent E' is exp2(E'·log2 cos θ)).
+pub fn as_sample_h_log(xi: [f32; 2], eu: f32, ev: f32) -> ([f32; 3], f32, f32) {
+    formula::as_sample_h_log(xi, eu, ev)
 }
 
 /// `cosine_sample` of ibl.glsl: a cosine-distributed direction in the local frame.
