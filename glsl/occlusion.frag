@@ -106,8 +106,11 @@ void main() {
                 if (lo > 0.0 && hi <= lo * 1.02) {
                     d = mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
                 } else {
+                    // The texel q lies in, which the gather holds (its (0, 1), (1, 1), (1, 0),
+                    // (0, 0) texels from base): floor(q) = base + 1 where f >= 0.5. No second
+                    // fetch (on lavapipe both sides of this branch run for every pixel).
                     q = floor(q) + 0.5;
-                    d = texelFetch(gb_depth, ivec2(q), 0).r;
+                    d = f.y >= 0.5 ? (f.x >= 0.5 ? g.y : g.x) : (f.x >= 0.5 ? g.z : g.w);
                 }
                 if (d <= 0.0) {
                     continue;  // empty: the environment itself
