@@ -778,3 +778,38 @@ fn tonemap_is_chosen_and_written_into_the_png() {
         "{err}"
     );
 }
+
+#[test]
+fn without_a_depth_stencil_format_the_frame_is_the_same() {
+    // A device without D32_SFLOAT_S8_UINT (WEFT_NO_STENCIL=1 stands in for one) keeps a D32 depth
+    // and shades every pixel with one lighting pipeline of the scene's kinds instead of one per
+    // kind over the stencil: the same PNG, byte for byte, validation on.
+    let dir = temp_dir("cli-no-stencil");
+    let render = |name: &str, no_stencil: bool| {
+        let png = dir.join(name);
+        let mut cmd = weft();
+        if no_stencil {
+            cmd.env("WEFT_NO_STENCIL", "1");
+        }
+        let out = cmd
+            .args(["render", "--validate", "--size", "160x90", "--stats", "-o"])
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        (
+            std::fs::read(&png).unwrap(),
+            stdout.matches("lighting[").count(),
+        )
+    };
+    let (split, split_pipelines) = render("split.png", false);
+    let (one, one_pipelines) = render("one.png", true);
+    assert_eq!(split_pipelines, 3, "background, fabric, glTF");
+    assert_eq!(one_pipelines, 1);
+    assert!(split == one, "the two paths' PNGs differ");
+}

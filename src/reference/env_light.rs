@@ -427,7 +427,11 @@ pub fn fabric_env_lobes(
             continue;
         }
         let e_other = f.e_along + f.e_across - e;
-        let (e_weft, e_warp) = if pick_weft { (e, e_other) } else { (e_other, e) };
+        let (e_weft, e_warp) = if pick_weft {
+            (e, e_other)
+        } else {
+            (e_other, e)
+        };
         let p_weft = (e_weft * log_cos).exp2();
         let p_warp = (e_warp * log_cos).exp2();
         let mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;

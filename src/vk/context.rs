@@ -72,6 +72,7 @@ pub struct DeviceInfo {
     /// Whether D32_SFLOAT_S8_UINT can be a sampled depth-stencil attachment (Vulkan requires it or
     /// D24_UNORM_S8_UINT): the G-buffer's depth then has a stencil that marks each pixel's kind of
     /// material, and the lighting pass shades each kind with a pipeline of its own.
+    /// `WEFT_NO_STENCIL=1` makes weft take it as absent.
     pub depth_stencil: bool,
 }
 
@@ -714,11 +715,12 @@ fn choose_device(
                     instance
                         .get_physical_device_format_properties(pd, vk::Format::D32_SFLOAT_S8_UINT)
                 };
+                // `WEFT_NO_STENCIL=1`: as a device without it (the one-pipeline path, to compare).
                 f.optimal_tiling_features.contains(
                     vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT
                         | vk::FormatFeatureFlags::SAMPLED_IMAGE
                         | vk::FormatFeatureFlags::TRANSFER_SRC,
-                )
+                ) && std::env::var_os("WEFT_NO_STENCIL").is_none_or(|v| v.is_empty() || v == "0")
             },
         };
         let usable = family.is_some() && v >= vk::API_VERSION_1_3;

@@ -23,7 +23,7 @@ pub use pipeline::{
     Resource, SetLayout, Stages, StencilMode, Topology, VertexLayout,
 };
 pub use resources::{
-    Address, Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler,
+    has_stencil, Address, Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler,
     TextureSamplerDesc,
 };
 pub use swapchain::{PanelDraw, Presented, Presenter, FRAMES_IN_FLIGHT};

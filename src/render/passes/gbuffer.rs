@@ -231,6 +231,8 @@ impl GBufferPass {
         )?;
         let split = inputs.material_kinds;
         let fabric_as_pbr = inputs.fabric_as_pbr;
+        // The draws mark their kind where the depth has a stencil (the pipelines then write it).
+        let stencil = crate::vk::has_stencil(inputs.targets.depth.desc.format);
         let kind_of = move |woven: bool| Kind::of(woven, split);
         let pipelines: Vec<(Topology, Kind, &'s Pipeline)> =
             [Topology::Triangles, Topology::Lines, Topology::Points]
@@ -297,7 +299,9 @@ impl GBufferPass {
                         Cull::Back
                     });
                     cmd.set_front_face(draw.mirrored());
-                    cmd.set_stencil_reference(stencil_of(draw.woven, fabric_as_pbr));
+                    if stencil {
+                        cmd.set_stencil_reference(stencil_of(draw.woven, fabric_as_pbr));
+                    }
                     let mut push = DrawPush::new(draw.world, material);
                     if !draw.receive_shadows {
                         push.flags &= !DRAW_RECEIVES_SHADOWS;
