@@ -394,13 +394,17 @@ impl Renderer {
             plan.light_types_mask()
         };
         let gbuffer_key = GBufferPass::key(options, plan, weave_source, light_types);
-        let lighting_key = LightingPass::key(options, plan, light_types);
-        let forward_key = plan
-            .runs(Pass::Transparent)
-            .then(|| TransparentPass::key(&gbuffer_key, &lighting_key, light_types, plan));
+        let lighting_variants = LightingPass::variants(
+            options,
+            plan,
+            light_types,
+            split_lighting(&self.ctx, options, plan),
+        );
+        // (The transparent pass takes the lighting constants every variant shares.)
+        let forward_key = plan.runs(Pass::Transparent).then(|| {
+            TransparentPass::key(&gbuffer_key, &lighting_variants[0].0, light_types, plan)
+        });
         let need_gbuffer = self.gbuffer.missing(&gbuffer_key, plan);
-        let lighting_variants =
-            LightingPass::variants(&lighting_key, split_lighting(&self.ctx, options, plan));
         let need_lighting: Vec<LightingVariant> = lighting_variants
             .iter()
             .filter(|v| !self.lighting.has(v))

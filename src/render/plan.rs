@@ -453,12 +453,7 @@ impl Plan {
             }
         }
         // Draws by what their material needs.
-        let material_of = |d: &crate::scene::Draw| {
-            scene
-                .meshes
-                .get(d.mesh)
-                .and_then(|m| scene.materials.get(m.material))
-        };
+        let material_of = |d: &crate::scene::Draw| scene.drawn_material(d);
         // (Triangles only: points and lines are the G-buffer pass's whatever their material.)
         let count = |keep: &dyn Fn(&crate::scene::Material) -> bool| {
             scene
@@ -586,7 +581,7 @@ impl Plan {
                 .draws
                 .iter()
                 .filter(|d| {
-                    let m = scene.drawn_material(d);
+                    let m = material_of(d);
                     let forward =
                         topology(d) == Topology::Triangles && m.is_some_and(|m| m.needs_forward());
                     !forward && m.is_some_and(|m| m.fabric.is_some()) == woven

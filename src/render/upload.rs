@@ -130,10 +130,7 @@ impl Renderer {
                 mesh.indices.len() as u32,
                 vertices.len() as i32,
             ));
-            let fabric = scene
-                .materials
-                .get(mesh.material)
-                .and_then(|m| m.fabric.as_ref());
+            let fabric = scene.mesh_material(mesh).and_then(|m| m.fabric.as_ref());
             let weave_offset = fabric.map(|f| weave_uv_offset(f, mesh)).unwrap_or([0.0; 2]);
             vertices.extend(mesh.vertices.iter().map(|v| {
                 let mut w = [0f32; VERTEX_FLOATS];
@@ -164,6 +161,8 @@ impl Renderer {
             if topology == Topology::Triangles {
                 triangles += index_count as usize / 3;
             }
+            // What the GPU reads for the draw (the index clamped to the last material).
+            let material = scene.mesh_material(mesh);
             draws.push(DrawRange {
                 topology,
                 first_index,
@@ -171,29 +170,17 @@ impl Renderer {
                 vertex_offset,
                 material: mesh.material as u32,
                 world: d.world,
-                double_sided: scene
-                    .materials
-                    .get(mesh.material)
-                    .is_some_and(|m| m.double_sided),
+                double_sided: material.is_some_and(|m| m.double_sided),
                 // Points and lines cover no area a shadow map could hold.
                 cast_shadows: d.cast_shadows && topology == Topology::Triangles,
                 receive_shadows: d.receive_shadows,
-                alpha_mask: scene
-                    .materials
-                    .get(mesh.material)
-                    .is_some_and(|m| m.alpha_cutoff.is_some() || m.blend),
+                alpha_mask: material.is_some_and(|m| m.alpha_cutoff.is_some() || m.blend),
                 // Points and lines are the G-buffer pass's whatever their material (the loader
                 // says so).
                 forward: topology == Topology::Triangles
-                    && scene
-                        .materials
-                        .get(mesh.material)
-                        .is_some_and(|m| m.needs_forward()),
-                blended: scene
-                    .materials
-                    .get(mesh.material)
-                    .is_some_and(|m| m.blended()),
-                woven: scene.drawn_material(d).is_some_and(|m| m.fabric.is_some()),
+                    && material.is_some_and(|m| m.needs_forward()),
+                blended: material.is_some_and(|m| m.blended()),
+                woven: material.is_some_and(|m| m.fabric.is_some()),
                 centre: passes::transparent::bounds_centre(
                     mesh.vertices.iter().map(|v| v.position),
                 ),

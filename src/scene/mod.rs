@@ -738,12 +738,16 @@ pub struct Bounds {
 }
 
 impl Scene {
-    /// The material draw `d` is drawn with, as the GPU reads it (an index past the last material
-    /// reads the last); None without a mesh or any material.
-    pub fn drawn_material(&self, d: &Draw) -> Option<&Material> {
-        let mesh = self.meshes.get(d.mesh)?;
+    /// The material `mesh` is drawn with, as the GPU reads it (an index past the last material
+    /// reads the last); None when the scene has no material.
+    pub fn mesh_material(&self, mesh: &Mesh) -> Option<&Material> {
         self.materials
             .get(mesh.material.min(self.materials.len().saturating_sub(1)))
+    }
+
+    /// The material draw `d` is drawn with ([`Scene::mesh_material`]); None without a mesh.
+    pub fn drawn_material(&self, d: &Draw) -> Option<&Material> {
+        self.mesh_material(self.meshes.get(d.mesh)?)
     }
 
     /// World-space bounds of every drawn vertex; None for a scene with nothing to draw.
@@ -966,10 +970,7 @@ impl Scene {
             let Some(mesh) = self.meshes.get(d.mesh) else {
                 continue;
             };
-            let two_sided = self
-                .materials
-                .get(mesh.material)
-                .is_some_and(|m| m.double_sided);
+            let two_sided = self.mesh_material(mesh).is_some_and(|m| m.double_sided);
             // A mirroring transform turns the winding, and with it the front.
             let sign = if Mat3::from_mat4(d.world).determinant() < 0.0 {
                 -1.0

@@ -234,15 +234,7 @@ impl<'s> Cmd<'s> {
         let depth_info = depth
             .as_ref()
             .map(|a| attachment(a, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, true));
-        let area = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent: vk::Extent2D {
-                width: extent.0,
-                height: extent.1,
-            },
-        };
         let mut info = vk::RenderingInfo::default()
-            .render_area(area)
             .layer_count(1)
             .color_attachments(&color_infos);
         if let Some(d) = depth_info.as_ref() {
@@ -254,7 +246,7 @@ impl<'s> Cmd<'s> {
                 info = info.stencil_attachment(d);
             }
         }
-        self.begin(&info, extent);
+        self.begin(info, extent);
     }
 
     /// Begins a dynamic-rendering pass into `colors` (loaded) that tests the stencil of the
@@ -277,20 +269,12 @@ impl<'s> Cmd<'s> {
             .image_layout(vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::LOAD)
             .store_op(vk::AttachmentStoreOp::NONE);
-        let area = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent: vk::Extent2D {
-                width: extent.0,
-                height: extent.1,
-            },
-        };
         let info = vk::RenderingInfo::default()
-            .render_area(area)
             .layer_count(1)
             .color_attachments(&color_infos)
             .depth_attachment(&ds)
             .stencil_attachment(&ds);
-        self.begin(&info, extent);
+        self.begin(info, extent);
     }
 
     /// The stencil reference value of the draws that follow (pipelines that write or test the
@@ -305,7 +289,9 @@ impl<'s> Cmd<'s> {
         };
     }
 
-    fn begin(&mut self, info: &vk::RenderingInfo, extent: (u32, u32)) {
+    /// Begins `info` over the whole of attachments `extent` pixels large (its render area), with
+    /// the viewport and scissor the same and the default cull and front face.
+    fn begin(&mut self, info: vk::RenderingInfo, extent: (u32, u32)) {
         let area = vk::Rect2D {
             offset: vk::Offset2D::default(),
             extent: vk::Extent2D {
@@ -313,8 +299,9 @@ impl<'s> Cmd<'s> {
                 height: extent.1,
             },
         };
+        let info = info.render_area(area);
         unsafe {
-            self.device().cmd_begin_rendering(self.raw, info);
+            self.device().cmd_begin_rendering(self.raw, &info);
             let viewport = vk::Viewport {
                 x: 0.0,
                 y: 0.0,

@@ -82,8 +82,9 @@ impl LightingPass {
         })
     }
 
-    /// The variant `options` and `plan` ask for (lighting.frag's constants by id).
-    pub fn key(options: &RenderOptions, plan: &Plan, light_types: u32) -> VariantKey {
+    /// The variant `options` and `plan` ask for (lighting.frag's constants by id), shading the
+    /// kinds of pixel `kinds` (PIXEL_* bits).
+    pub fn key(options: &RenderOptions, plan: &Plan, light_types: u32, kinds: u32) -> VariantKey {
         VariantKey(vec![
             (0, "accuracy", options.accuracy.code()),
             (1, "samples", options.accuracy.samples()),
@@ -109,21 +110,24 @@ impl LightingPass {
                 "debug_views",
                 (options.debug_view != crate::render::DebugView::None) as u32,
             ),
-            (12, "pixel_kinds", pixel_kinds(options, plan)),
+            (12, "pixel_kinds", kinds),
             (13, "gltf_features", plan.gltf_features),
         ])
     }
 
     /// The pipelines a frame shades with: where the G-buffer's depth has a stencil
     /// (`split`: the device has the format, the kinds are not forced together, no debug view),
-    /// one per kind of pixel the frame can have (`key` with PIXEL_KINDS that kind alone), each
-    /// drawn over the pixels whose stencil is its kind; else `key` alone, over every pixel.
-    pub fn variants(key: &VariantKey, split: bool) -> Vec<LightingVariant> {
-        let Some(&(_, _, kinds)) = key.0.iter().find(|(id, _, _)| *id == 12) else {
-            return vec![(key.clone(), None)];
-        };
+    /// one per kind of pixel the frame has (PIXEL_KINDS that kind alone), each drawn over the
+    /// pixels whose stencil is its kind; else one of every kind the frame has, over every pixel.
+    pub fn variants(
+        options: &RenderOptions,
+        plan: &Plan,
+        light_types: u32,
+        split: bool,
+    ) -> Vec<LightingVariant> {
+        let kinds = pixel_kinds(options, plan);
         if !split {
-            return vec![(key.clone(), None)];
+            return vec![(Self::key(options, plan, light_types, kinds), None)];
         }
         [
             (PIXEL_BACKGROUND, STENCIL_BACKGROUND),
@@ -132,15 +136,7 @@ impl LightingPass {
         ]
         .into_iter()
         .filter(|(kind, _)| kinds & kind != 0)
-        .map(|(kind, stencil)| {
-            let mut k = key.clone();
-            for e in &mut k.0 {
-                if e.0 == 12 {
-                    e.2 = kind;
-                }
-            }
-            (k, Some(stencil))
-        })
+        .map(|(kind, stencil)| (Self::key(options, plan, light_types, kind), Some(stencil)))
         .collect()
     }
 
