@@ -102,5 +102,30 @@ fn scores_and_ranks_weft_among_the_engines() {
     assert!(md.contains("| Default | -inf | filament"), "{md}");
     let sheet = image::open(out.join("sheet.png")).unwrap();
     assert_eq!(sheet.width(), 3 * (256 + 4));
+
+    // --ibl reaches weft's renders: with its Monte Carlo estimate the cloth is not the image the
+    // reference was made from, so weft no longer scores -inf.
+    let o = weft()
+        .args(["fidelity", "--shared"])
+        .arg(&shared)
+        .arg("--out")
+        .arg(dir.join("out-mc"))
+        .args(["--ibl", "mc:4"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}");
+    let row = stdout
+        .lines()
+        .find(|l| l.starts_with("Default"))
+        .expect(&stdout);
+    assert!(!row.contains("-inf"), "{row}");
+    // A level weft does not know is refused, naming the flag.
+    let o = weft()
+        .args(["fidelity", "--ibl", "fis:many"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("--ibl"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -32,6 +32,11 @@ pub struct FidelityArgs {
     /// takes it (gtao, gtao:R, none): to see what it changes in the comparison.
     #[arg(long, default_value = "gtao", value_parser = |s: &str| weft::render::Occlusion::parse(s).map(|_| s.to_string()))]
     pub occlusion: String,
+    /// How weft's renders integrate environment light, as `weft render --ibl` takes it (approx,
+    /// fis:N, mc:N): what a better estimator would change in the comparison (mc:N is weft's own
+    /// Monte Carlo truth).
+    #[arg(long, default_value = "fis:8", value_parser = |s: &str| weft::env::IblLevel::parse(s).map(|_| s.to_string()))]
+    pub ibl: String,
 }
 
 fn shared_dir(arg: &Option<PathBuf>) -> anyhow::Result<PathBuf> {
@@ -97,6 +102,7 @@ fn render(
     width: u32,
     height: u32,
     occlusion: &str,
+    ibl: &str,
     out: &Path,
 ) -> anyhow::Result<()> {
     let exe = std::env::current_exe()?;
@@ -115,6 +121,7 @@ fn render(
         .args(["--background", if s.skybox { "env" } else { "none" }])
         .args(["--tonemap", "aces"])
         .args(["--occlusion", occlusion])
+        .args(["--ibl", ibl])
         .arg("-o")
         .arg(out)
         .output()?;
@@ -181,6 +188,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
             2 * s.size[0],
             2 * s.size[1],
             &args.occlusion,
+            &args.ibl,
             Path::new(out),
         );
     }
@@ -219,6 +227,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
             2 * s.size[0],
             2 * s.size[1],
             &args.occlusion,
+            &args.ibl,
             &full,
         ) {
             eprintln!("{e}");
