@@ -846,11 +846,14 @@ fn an_allocation_the_device_cannot_make_is_a_clear_error() {
 
 // --- load -----------------------------------------------------------------------------------------
 
-/// Resident memory may grow by less than this between frame 10 and frame 100 (lavapipe's and the
-/// allocator's caches have settled by frame 10; a leak of one 128x72 RGBA16F readback per frame
-/// would add 6.6 MiB over 90 frames, of the frame's uniform buffer and descriptor pool far less, so
-/// this catches leaks of whole images, not of small objects — the figures are in
-/// docs/robustness.md).
+/// Resident memory may grow by less than this over 90 frames, from frame 10 to 100 or from frame
+/// 100 to 190, whichever grew less (lavapipe's and the allocator's caches have settled by frame
+/// 10; a leak of one 128x72 RGBA16F readback per frame would add 6.6 MiB over 90 frames, of the
+/// frame's uniform buffer and descriptor pool far less, so this catches leaks of whole images, not
+/// of small objects — the figures are in docs/robustness.md). A leak grows in both stretches;
+/// the lesser of the two leaves out a single step in one of them (a malloc arena a late thread
+/// touches: +9.8 MiB once in a CI run at 128-bit vectors under the heap checker, where nine runs
+/// here grew by 0 to 4 KiB).
 const GROWTH_BOUND_KIB: u64 = 8 << 10;
 
 #[test]
@@ -868,7 +871,7 @@ fn many_frames_child() {
         ..Default::default()
     };
     let mut rss = Vec::new();
-    for i in 0..100 {
+    for i in 0..190 {
         let frame = renderer
             .render_frame(&scene, &gpu, &options)
             .unwrap_or_else(|e| panic!("frame {i}: {e}"));
@@ -879,8 +882,8 @@ fn many_frames_child() {
         rss.push(proc_kib("self", "VmRSS:").expect("VmRSS"));
     }
     println!(
-        "RSS_KIB frame1={} frame10={} frame100={}",
-        rss[0], rss[9], rss[99]
+        "RSS_KIB frame1={} frame10={} frame100={} frame190={}",
+        rss[0], rss[9], rss[99], rss[189]
     );
 }
 
@@ -913,18 +916,29 @@ fn many_frames_keep_resident_memory_flat() {
             .and_then(|v| v.parse().ok())
             .expect("figure")
     };
-    let (first, tenth, last) = (kib("frame1="), kib("frame10="), kib("frame100="));
+    let (first, tenth, hundredth, last) = (
+        kib("frame1="),
+        kib("frame10="),
+        kib("frame100="),
+        kib("frame190="),
+    );
     println!(
-        "load: 100 frames of the default scene at 128x72, validation on: resident {} MiB after frame 1, {} KiB after frame 10, {} KiB after frame 100 ({:+} KiB)",
+        "load: 190 frames of the default scene at 128x72, validation on: resident {} MiB after frame 1, {} KiB after frame 10, {} KiB after frame 100 ({:+} KiB), {} KiB after frame 190 ({:+} KiB)",
         first >> 10,
         tenth,
+        hundredth,
+        hundredth as i64 - tenth as i64,
         last,
-        last as i64 - tenth as i64
+        last as i64 - hundredth as i64
     );
+    let growth = hundredth
+        .saturating_sub(tenth)
+        .min(last.saturating_sub(hundredth));
     assert!(
-        last < tenth + GROWTH_BOUND_KIB,
-        "resident memory grew by {} KiB over 90 frames",
-        last - tenth
+        growth < GROWTH_BOUND_KIB,
+        "resident memory grew by {} KiB over frames 10-100 and {} KiB over frames 100-190",
+        hundredth as i64 - tenth as i64,
+        last as i64 - hundredth as i64
     );
 }
 
