@@ -13,6 +13,15 @@
 //! the exact albedo (65 536 samples); `tN` looks up N taps along each sample's footprint's long
 //! axis at the level of its short one; `gauss KxM` is a deterministic quadrature on a Gaussian
 //! approximation of the lobe (K x M quantile points, `s1`: weighted by the true lobe).
+//!
+//! With `GH=1` (and `GHQ=1` to skip the slow grid), the session-23 candidates instead: the ratio
+//! estimator at 8-24 samples and with the two lobes' mixture at weights 0.5 and 0.8 (the mid and
+//! far field's), a Gauss–Hermite quadrature of the lobe in the half vector's angle plane with
+//! each node looked up through an ideal isotropic Gaussian prefilter (`ideal`: the cube's level
+//! 0 averaged over the kernel) or the box mips, and the best case of an anisotropic split sum
+//! (the radiance averaged over the lobe seen at normal incidence about the mirror direction,
+//! computed exactly, times the exact albedo); `IDEAL_K=k` replaces fis's mip look-ups by the
+//! ideal Gaussian of k times each sample's solid angle's side.
 #![allow(
     dead_code,
     clippy::needless_range_loop,
@@ -289,8 +298,12 @@ fn fis_w(cube: &Cube, c: &Cfg, n: u32, pat: Pat, bias: f64, aniso: u32, w_self: 
         let wgt = factor * k1[2] / pdf * p_self;
         let omega_s = 1.0 / (n as f64 * pdf);
         let l = if aniso == 0 {
-            let lod = (0.5 * (omega_s / omega_p).log2() + bias).max(0.0);
-            cube.sample(c.world(k1), lod)
+            if let Some(k) = ideal_k() {
+                ideal(cube, c.world(k1), omega_s.sqrt() * k)
+            } else {
+                let lod = (0.5 * (omega_s / omega_p).log2() + bias).max(0.0);
+                cube.sample(c.world(k1), lod)
+            }
         } else {
             // major axis in h space: the axis with the smaller exponent of the picked lobe
             let (eu, ev) = if pick_self { (EU, EV) } else { (EV, EU) };
@@ -345,6 +358,9 @@ fn fis_w(cube: &Cube, c: &Cfg, n: u32, pat: Pat, bias: f64, aniso: u32, w_self: 
         sw += wgt;
     }
     (s.map(|x| x / n as f64), sw / n as f64)
+}
+fn ideal_k() -> Option<f64> {
+    std::env::var("IDEAL_K").ok().map(|v| v.parse().unwrap())
 }
 fn albedo(c: &Cfg) -> f64 {
     // exact-ish: many samples
@@ -480,6 +496,168 @@ fn gauss(cube: &Cube, c: &Cfg, kx: u32, ky: u32, bias: f64, shape: bool, mode: u
     }
 }
 
+/// Gauss–Hermite nodes and weights for the standard normal (weights sum to 1).
+fn gauss_hermite(n: usize) -> Vec<(f64, f64)> {
+    if n == 1 {
+        return vec![(0.0, 1.0)];
+    }
+    let he = |k: usize, x: f64| -> f64 {
+        let (mut a, mut b) = (1.0, x);
+        if k == 0 {
+            return 1.0;
+        }
+        for j in 1..k {
+            let c = x * b - j as f64 * a;
+            a = b;
+            b = c;
+        }
+        b
+    };
+    let mut roots = Vec::new();
+    let steps = 200000;
+    let (lo, hi) = (-12.0, 12.0);
+    let mut px = lo;
+    let mut pv = he(n, px);
+    for s in 1..=steps {
+        let x = lo + (hi - lo) * s as f64 / steps as f64;
+        let v = he(n, x);
+        if pv == 0.0 || pv * v < 0.0 {
+            let (mut a, mut b) = (px, x);
+            for _ in 0..80 {
+                let m = 0.5 * (a + b);
+                if he(n, a) * he(n, m) <= 0.0 {
+                    b = m
+                } else {
+                    a = m
+                }
+            }
+            roots.push(0.5 * (a + b));
+        }
+        px = x;
+        pv = v;
+    }
+    let fact: f64 = (1..=n).map(|k| k as f64).product();
+    roots
+        .into_iter()
+        .map(|x| (x, fact / ((n * n) as f64 * he(n - 1, x).powi(2))))
+        .collect()
+}
+
+/// The radiance averaged over an isotropic Gaussian of angular sigma around `d` (world), from the
+/// cube's level 0 (an ideal prefilter, to tell the mips' error from the quadrature's).
+fn ideal(cube: &Cube, d: V, sigma: f64) -> V {
+    if sigma < 1e-4 {
+        return cube.sample(d, 0.0);
+    }
+    let a = if d[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let t1 = norm(cross(d, a));
+    let t2 = cross(d, t1);
+    let gh = gauss_hermite(10);
+    let mut c = [0.0; 3];
+    for &(x, wx) in &gh {
+        for &(y, wy) in &gh {
+            let p = norm(add(add(d, t1, x * sigma), t2, y * sigma));
+            let v = cube.sample(p, 0.0);
+            for k in 0..3 {
+                c[k] += wx * wy * v[k];
+            }
+        }
+    }
+    c
+}
+
+/// Slope-space Gauss–Hermite quadrature of the lobe: kx x ky nodes of the Gaussian the A–S lobe
+/// is for small slopes (sigma 1/sqrt(e) per axis), each looked up prefiltered by an isotropic
+/// kernel covering what the nodes leave out (`pre` scales it), weighted by the true lobe over the
+/// Gaussian, ratio-normalised, times the exact albedo. lookup: 0 ideal Gaussian, 1 box mips.
+fn gh(cube: &Cube, c: &Cfg, kx: usize, ky: usize, pre: f64, lookup: u32, mipk: f64) -> V {
+    let k2 = c.k2;
+    let (sx, sy) = (1.0 / EU.sqrt(), 1.0 / EV.sqrt());
+    // Jacobian of l(slopes) at 0: l = reflect(k2, h), h = normalize(x, y, 1)
+    let hof = |x: f64, y: f64| -> V {
+        let th = (x * x + y * y).sqrt();
+        if th < 1e-12 {
+            return [0.0, 0.0, 1.0];
+        }
+        let st = th.sin() / th;
+        [x * st, y * st, th.cos()]
+    };
+    let lof = |x: f64, y: f64| -> (V, f64) {
+        let h = hof(x, y);
+        let kh = dot(k2, h);
+        (add([-k2[0], -k2[1], -k2[2]], h, 2.0 * kh), kh)
+    };
+    let e = 1e-4;
+    let (l0, _) = lof(0.0, 0.0);
+    let jx = {
+        let (a, _) = lof(e, 0.0);
+        let d = add(a, l0, -1.0);
+        dot(d, d).sqrt() / e
+    };
+    let jy = {
+        let (a, _) = lof(0.0, e);
+        let d = add(a, l0, -1.0);
+        dot(d, d).sqrt() / e
+    };
+    // residual widths (slope units) per axis the prefilter must cover
+    let rx = if kx == 1 { sx } else { sx / kx as f64 * pre };
+    let ry = if ky == 1 { sy } else { sy / ky as f64 * pre };
+    let sig_l = (rx * jx).min(ry * jy);
+    let sig_l = if kx == 1 && ky == 1 {
+        (rx * jx * ry * jy).sqrt()
+    } else {
+        sig_l
+    };
+    // node spreads shrunk by what the prefilter blurs
+    let nx = (sx * sx - (sig_l / jx).powi(2)).max(0.0).sqrt();
+    let ny = (sy * sy - (sig_l / jy).powi(2)).max(0.0).sqrt();
+    let (gx, gy) = (gauss_hermite(kx), gauss_hermite(ky));
+    let size = cube.size as f64;
+    let texel = (4.0 * std::f64::consts::PI / (6.0 * size * size)).sqrt();
+    let mut s = [0.0; 3];
+    let mut sw = 0.0;
+    for &(ax, wx) in &gx {
+        for &(ay, wy) in &gy {
+            let (x, y) = (ax * nx, ay * ny);
+            let (l, _) = lof(x, y);
+            if !(l[2] > 0.0) {
+                continue;
+            }
+            // true lobe·cos·|dl/ds| over the node Gaussian's density (up to constants)
+            let h = hof(x, y);
+            let kh = dot(k2, h);
+            if !(kh > 0.0) || !(h[2] > 0.0) {
+                continue;
+            }
+            let th = (x * x + y * y).sqrt();
+            // dω_h/ds = sin θ / θ ; dω_l/dω_h = 4 kh
+            let jac = 4.0 * kh * if th > 1e-9 { th.sin() / th } else { 1.0 };
+            let g = -(x * x / (sx * sx) + y * y / (sy * sy)) * 0.5;
+            let w = fd::as_lobe(l, k2, EU, EV, RS) * l[2] * jac / g.exp();
+            let v = if lookup == 0 {
+                ideal(cube, c.world(l), sig_l)
+            } else {
+                let lod = ((sig_l * mipk / texel).log2()).max(0.0);
+                cube.sample(c.world(l), lod)
+            };
+            for k in 0..3 {
+                s[k] += wx * wy * w * v[k];
+            }
+            sw += wx * wy * w;
+        }
+    }
+    let a = albedo(c);
+    if sw > 0.0 {
+        s.map(|v| v / sw * a)
+    } else {
+        [0.0; 3]
+    }
+}
+
 fn main() {
     let env = if std::env::var("WHITE").is_ok() {
         Environment::uniform([1.0, 1.0, 1.0])
@@ -522,54 +700,132 @@ fn main() {
     }
     let truths: Vec<V> = cfgs.iter().map(|c| truth(&q, c)).collect();
     let mut ests: Vec<(String, Box<dyn Fn(&Cfg) -> V>)> = Vec::new();
-    for n in [8u32, 16, 32, 64] {
+    if std::env::var("GH").is_ok() {
         let cube = &cube;
         ests.push((
-            format!("fis:{n}"),
-            Box::new(move |c| fis(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),
+            "ratio fis:8".into(),
+            Box::new(move |c| ratio(cube, c, 8, Pat::Hammersley, 0.0, 0, 0.95)),
         ));
         ests.push((
-            format!("ratio fis:{n}"),
-            Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),
+            "aniso split sum (normal-incidence lobe about r)".into(),
+            Box::new(move |c| {
+                let k2 = c.k2;
+                let r = c.world([-k2[0], -k2[1], k2[2]]);
+                let t = norm(add(c.t, r, -dot(c.t, r)));
+                let cn = Cfg {
+                    t,
+                    b: cross(r, t),
+                    n: r,
+                    k2: [0.0, 0.0, 1.0],
+                };
+                let (v, w) = fis_w(cube, &cn, 4096, Pat::Hammersley, -20.0, 0, 1.0);
+                let a = albedo(c);
+                v.map(|x| x / w * a)
+            }),
         ));
-    }
-    for (n, taps) in [(8u32, 4u32), (16, 3), (24, 4), (32, 4)] {
-        let cube = &cube;
-        ests.push((
-            format!("fis:{n} t{taps}"),
-            Box::new(move |c| fis(cube, c, n, Pat::Hammersley, 0.0, taps, 0.95)),
-        ));
-        ests.push((
-            format!("ratio fis:{n} t{taps}"),
-            Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, taps, 0.95)),
-        ));
-    }
-    for bias in [-0.5, 0.5] {
-        let cube = &cube;
-        ests.push((
-            format!("fis:8 lod {bias:+}"),
-            Box::new(move |c| fis(cube, c, 8, Pat::Hammersley, bias, 0, 0.95)),
-        ));
-    }
-    for (kx, ky, mode, shape) in [
-        (1u32, 12u32, 1u32, false),
-        (2, 8, 0, true),
-        (3, 6, 0, true),
-        (16, 64, 1, true),
-    ] {
-        let cube = &cube;
-        let bias = if kx == 16 { -20.0 } else { 0.0 };
-        ests.push((
-            format!("gauss {kx}x{ky}{}", if shape { " s1" } else { "" }),
-            Box::new(move |c| gauss(cube, c, kx, ky, bias, shape, mode)),
-        ));
-    }
-    {
-        let cube = &cube;
-        ests.push((
-            "fis:4096 at level 0 (check)".into(),
-            Box::new(move |c| fis(cube, c, 4096, Pat::Hammersley, -20.0, 0, 0.95)),
-        ));
+        for ws in [0.5f64, 0.8] {
+            for n in [8u32, 16, 256] {
+                ests.push((
+                    format!("fis:{n} mixture {ws}"),
+                    Box::new(move |c| fis(cube, c, n, Pat::Hammersley, 0.0, 0, ws)),
+                ));
+                ests.push((
+                    format!("ratio fis:{n} mixture {ws}"),
+                    Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, 0, ws)),
+                ));
+            }
+        }
+        for n in [8u32, 12, 16, 24] {
+            ests.push((
+                format!("ratio fis:{n}"),
+                Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),
+            ));
+        }
+        for (kx, ky, pre) in [(12usize, 24usize, 0.3), (24, 48, 0.3), (12, 24, 0.01)] {
+            if std::env::var("GHQ").is_ok() {
+                break;
+            }
+            ests.push((
+                format!("gh {kx}x{ky} ideal pre {pre}"),
+                Box::new(move |c| gh(cube, c, kx, ky, pre, 0, 0.0)),
+            ));
+        }
+        for (kx, ky) in [
+            (1usize, 1usize),
+            (1, 3),
+            (1, 4),
+            (1, 6),
+            (1, 8),
+            (2, 4),
+            (2, 6),
+            (3, 6),
+        ] {
+            if std::env::var("GHQ").is_ok() {
+                break;
+            }
+            for pre in [1.0, 1.5] {
+                ests.push((
+                    format!("gh {kx}x{ky} ideal pre {pre}"),
+                    Box::new(move |c| gh(cube, c, kx, ky, pre, 0, 0.0)),
+                ));
+            }
+            for mipk in [1.0, 2.0, 3.0] {
+                ests.push((
+                    format!("gh {kx}x{ky} mips k{mipk}"),
+                    Box::new(move |c| gh(cube, c, kx, ky, 1.0, 1, mipk)),
+                ));
+            }
+        }
+    } else {
+        for n in [8u32, 16, 32, 64] {
+            let cube = &cube;
+            ests.push((
+                format!("fis:{n}"),
+                Box::new(move |c| fis(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),
+            ));
+            ests.push((
+                format!("ratio fis:{n}"),
+                Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),
+            ));
+        }
+        for (n, taps) in [(8u32, 4u32), (16, 3), (24, 4), (32, 4)] {
+            let cube = &cube;
+            ests.push((
+                format!("fis:{n} t{taps}"),
+                Box::new(move |c| fis(cube, c, n, Pat::Hammersley, 0.0, taps, 0.95)),
+            ));
+            ests.push((
+                format!("ratio fis:{n} t{taps}"),
+                Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, taps, 0.95)),
+            ));
+        }
+        for bias in [-0.5, 0.5] {
+            let cube = &cube;
+            ests.push((
+                format!("fis:8 lod {bias:+}"),
+                Box::new(move |c| fis(cube, c, 8, Pat::Hammersley, bias, 0, 0.95)),
+            ));
+        }
+        for (kx, ky, mode, shape) in [
+            (1u32, 12u32, 1u32, false),
+            (2, 8, 0, true),
+            (3, 6, 0, true),
+            (16, 64, 1, true),
+        ] {
+            let cube = &cube;
+            let bias = if kx == 16 { -20.0 } else { 0.0 };
+            ests.push((
+                format!("gauss {kx}x{ky}{}", if shape { " s1" } else { "" }),
+                Box::new(move |c| gauss(cube, c, kx, ky, bias, shape, mode)),
+            ));
+        }
+        {
+            let cube = &cube;
+            ests.push((
+                "fis:4096 at level 0 (check)".into(),
+                Box::new(move |c| fis(cube, c, 4096, Pat::Hammersley, -20.0, 0, 0.95)),
+            ));
+        }
     }
     println!(
         "{:<34} {:>9} {:>9} {:>8}",

@@ -82,6 +82,10 @@ float env_face_size() {
     return g_face_size;
 }
 
+vec2 lobe_albedo_texel(uint table, uint i, uint j) {
+    return vec2(0.2 + 0.02 * float(i) - 0.01 * float(j) + 0.05 * float(table), 0.5 + 0.02 * float(i) + 0.005 * float(j));
+}
+
 float shadow_compare(vec3 uvz) {
     return clamp(8.0 * (uvz.x - 0.5 * uvz.y) - uvz.z * 2.0 + 0.5, 0.0, 1.0);
 }
@@ -110,7 +114,7 @@ void main() {
     mat3 tbn = fabric_frame(p.frame_n.xyz, p.frame_t.xyz, p.frame_t.w);
     vec3 weft;
     vec3 warp;
-    fabric_env_lobes(tbn, p.k2.xyz, p.coverage, p.fabric, mode, samples, rot, weft, warp);
+    fabric_env_lobes(tbn, p.k2.xyz, p.coverage, p.fabric, p.mode.w % 3u, mode, samples, rot, weft, warp);
     vec2 pr = pixel_random(p.mode.zw);
     o.weft = vec4(weft, pr.x);
     o.warp = vec4(warp, pr.y);

@@ -76,6 +76,7 @@ layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lig
 layout(set = 0, binding = 13) uniform samplerCube env_radiance;  // the environment's radiance cube, as lighting.frag's binding 13
 layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube, as lighting.frag's binding 14
 layout(set = 0, binding = 15) uniform sampler2D env_dfg;  // the split-sum DFG table, as lighting.frag's binding 15
+layout(set = 0, binding = 17, std430) readonly buffer FabricLobeAlbedo { vec2 fabric_lobe_albedo_table[]; };  // the fabric records' lobe albedo tables, as lighting.frag's binding 17
 // The backdrop: the lit opaque image (the lighting pass's HDR target before this pass), with box-
 // filtered mips; any image when TRANSMISSION = 0.
 layout(set = 0, binding = 16) uniform sampler2D backdrop;  // the backdrop: the lighting pass's HDR image copied before the transparent pass draws, with box-filtered mips (linear, clamp); any image when TRANSMISSION = 0

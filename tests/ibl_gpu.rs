@@ -321,25 +321,32 @@ fn fabric_furnace_every_parameter_set() {
             // cloth's measured error), and the mean bias within them too.
             //
             // Lobes only (black threads), measured on lavapipe: rs 0 approx 1.21 (bias +1.17),
-            // fis:16 0.19 (-0.11), mc:64 0.066 (-0.047); rs 0.04 approx 0.52, fis:16 0.080,
-            // mc:64 0.024. What is left there is the estimators' own error on lobes that live
-            // near the horizon (approx takes a lobe's albedo as Schlick's Fresnel at n·v; fis:16
-            // and mc:64 are few samples of a peaked integrand): issue 31 item 1. Bounds ~1.3x
-            // those; and every level's mean bias above -0.5, which dropping the lobes (-1.0, as
-            // the early exit did) cannot pass.
+            // fis:16 0.041 (-0.031), mc:64 0.058 (-0.042); rs 0.04 approx 0.52, fis:16 0.012,
+            // mc:64 0.023. What is left there is the estimators' own error on lobes that live
+            // near the horizon (approx takes a lobe's albedo as Schlick's Fresnel at n·v; mc:64
+            // is few samples of a peaked integrand; fis takes the albedo from the exact table
+            // and is left with the table's interpolation and this coarse map's quadrature).
+            // Before fis took its albedo from the table (session 23) its figures were 0.19 and
+            // 0.080: bound 0.06 for fis now catches a return to the samples' own albedo. Bounds
+            // ~1.3x-1.5x the measured; and every level's mean bias above -0.5, which dropping
+            // the lobes (-1.0, as the early exit did) cannot pass.
+            //
+            // The other sets, fis:16: 0.0007 to 0.0078 (satin's narrow lobes), bound 0.012 (it
+            // was 0.03, the sampled levels' common bound, before the table).
             let lobes_only = params.rd_warp == [0.0; 3] && params.rd_weft == [0.0; 3];
+            let fis = matches!(level, IblLevel::Fis(_));
             let ok = if lobes_only {
                 let bound = match level {
                     IblLevel::Approx => 1.6,
                     IblLevel::MonteCarlo(_) => 0.09,
-                    _ => 0.25,
+                    _ => 0.06,
                 };
                 bias > -0.5 && rel < bound
             } else {
-                let bound = if level == IblLevel::Approx {
-                    0.16
-                } else {
-                    0.03
+                let bound = match level {
+                    IblLevel::Approx => 0.16,
+                    _ if fis => 0.012,
+                    _ => 0.03,
                 };
                 rel < bound && bias.abs() < bound
             };

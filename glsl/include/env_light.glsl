@@ -14,7 +14,9 @@
 //   a world direction and roughness (its level roughness · (levels − 1)), times the intensity;
 // - `vec3 dfg_lookup(float cos_theta, float roughness)`: the DFG table (weft::env::dfg_table):
 //   the split sum's A and B, and the sheen's directional albedo E;
-// - `float env_face_size()`: the radiance cube's face size in texels (fis_lod's solid angles).
+// - `float env_face_size()`: the radiance cube's face size in texels (fis_lod's solid angles);
+// - `vec2 lobe_albedo_texel(uint table, uint i, uint j)`: entry (i, j) of fabric record `table`'s
+//   lobe albedo table (weft::env::lobe_albedo: the weft lobe's albedo at rs 0 and at rs 1).
 #ifndef WEFT_ENV_LIGHT_GLSL
 #define WEFT_ENV_LIGHT_GLSL
 
@@ -26,6 +28,31 @@ vec3 env_radiance_at(vec3 world_dir, float lod);
 vec3 env_prefiltered(vec3 world_dir, float roughness);
 vec3 dfg_lookup(float cos_theta, float roughness);
 float env_face_size();
+vec2 lobe_albedo_texel(uint table, uint i, uint j);
+
+// The lobe albedo tables' nodes (weft::env::lobe_albedo): n·k2 = i/(MU-1), the view's azimuth
+// from the lobe's long axis j/(PHI-1)·π/2.
+const uint LOBE_ALBEDO_MU = 24u;
+const uint LOBE_ALBEDO_PHI = 12u;
+
+// The exact directional albedo ∫ ρs (n·k1) dk1 of the fabric's weft lobe (warp = false) or warp
+// lobe (the weft lobe turned by 90°) for the view k2 with Fresnel rs, bilinear in fabric record
+// `table`'s table over n·k2 and the view's azimuth folded into the first quadrant.
+float fabric_lobe_albedo(uint table, vec3 k2, float rs, bool warp) {
+    float ax = abs(warp ? k2.y : k2.x);
+    float ay = abs(warp ? k2.x : k2.y);
+    float phi = atan(ay, max(ax, 1e-20));
+    float x = clamp(k2.z, 0.0, 1.0) * float(LOBE_ALBEDO_MU - 1u);
+    float y = clamp(phi * (2.0 / FABRIC_PI), 0.0, 1.0) * float(LOBE_ALBEDO_PHI - 1u);
+    uint i = min(uint(x), LOBE_ALBEDO_MU - 2u);
+    uint j = min(uint(y), LOBE_ALBEDO_PHI - 2u);
+    float fx = x - float(i);
+    float fy = y - float(j);
+    vec2 a = mix(lobe_albedo_texel(table, i, j), lobe_albedo_texel(table, i + 1u, j), fx);
+    vec2 b = mix(lobe_albedo_texel(table, i, j + 1u), lobe_albedo_texel(table, i + 1u, j + 1u), fx);
+    vec2 e = mix(a, b, fy);
+    return mix(e.x, e.y, rs);
+}
 
 // A per-pixel offset in [0, 1)² for the Monte Carlo level (Cranley–Patterson rotation) from the
 // pixel's integer coordinates: makes its error noise, not structured bias.
@@ -225,8 +252,11 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
 // (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
 // lobe's width times Fresnel; fis / mc: importance sampling of the coverage-weighted mixture of
 // the two lobes' A–S samplers (one-sample MIS, so both estimates use every sample; mc: rotated
-// by `rot`, unfiltered).
-void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, uint samples, vec2 rot, out vec3 weft, out vec3 warp) {
+// by `rot`, unfiltered). fis takes from the samples only the lobe's weighted mean radiance (a
+// ratio estimator: Σ w L / Σ w) and its albedo from fabric record `table`'s exact table
+// (fabric_lobe_albedo): eight fixed samples' own estimate of the albedo was the larger half of
+// their error (issue 31 item 1; docs/performance.md). mc stays the plain unbiased estimate.
+void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table, uint mode, uint samples, vec2 rot, out vec3 weft, out vec3 warp) {
     weft = vec3(0.0);
     warp = vec3(0.0);
     // rs = 0 keeps its lobes: Schlick's Fresnel is (1 - c)^5 there, not 0 (as for the lamps).
@@ -246,6 +276,8 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, 
     float c_thread = coverage.x + coverage.y;
     float w_weft = c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
     vec2 r0 = mode == 3u ? rot : vec2(0.0);
+    float w_sum_weft = 0.0;
+    float w_sum_warp = 0.0;
     for (uint i = 0u; i < samples; ++i) {
         vec2 xi = ibl_sample(i, samples, r0);
         bool pick_weft = xi.x < w_weft;
@@ -283,6 +315,19 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, 
         vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
         weft += l * p_weft;
         warp += l * p_warp;
+        w_sum_weft += common_w * p_weft;
+        w_sum_warp += common_w * p_warp;
+    }
+    if (mode == 2u) {
+        // Σ w L / Σ w is a weighted mean of the samples' radiance: bounded by the brightest,
+        // whatever the weights (divided before the albedo multiplies). A lobe its samples
+        // together weigh under 1e-6 of one sample's full weight has no sample on it (no sample
+        // above the horizon, or only the far tails of a sample of the other lobe, whose hn^E
+        // underflows differently on each device): it stays dark, as the plain estimate leaves it.
+        float w_min = 1e-6 * float(samples);
+        weft = w_sum_weft > w_min ? weft / w_sum_weft * fabric_lobe_albedo(table, k2, f.rs, false) : vec3(0.0);
+        warp = w_sum_warp > w_min ? warp / w_sum_warp * fabric_lobe_albedo(table, k2, f.rs, true) : vec3(0.0);
+        return;
     }
     weft /= float(samples);
     warp /= float(samples);

@@ -3,7 +3,7 @@
 // deferred lighting pass (lighting.frag) calls it for each pixel from the targets; the forward
 // pass (forward.frag, alphaMode BLEND) for each fragment, so both light a surface alike. The
 // including shader declares `frame`, `lights`, `materials`, `fabrics`, `shadow_atlas`, `shadows`,
-// `tile_lights`, `env_radiance`, `env_specular`, `env_dfg` and the specialization constants
+// `tile_lights`, `env_radiance`, `env_specular`, `env_dfg`, `fabric_lobe_albedo_table` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
 // IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION, IRIDESCENCE, FABRIC_SHEETS,
 // PIXEL_KINDS and GLTF_FEATURES, and defines `transmitted_light` (forward.frag: from the
@@ -143,6 +143,10 @@ float env_face_size() {
 
 #include "env_light.glsl"
 
+vec2 lobe_albedo_texel(uint table, uint i, uint j) {
+    return fabric_lobe_albedo_table[table * (LOBE_ALBEDO_MU * LOBE_ALBEDO_PHI) + j * LOBE_ALBEDO_MU + i];
+}
+
 // The Monte Carlo level's per-pixel rotation (0 at the other levels).
 vec2 ibl_rotation() {
     return IBL == 3u ? pixel_random(uvec2(gl_FragCoord.xy)) : vec2(0.0);
@@ -232,7 +236,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         if (IBL != 0u && SHADING == SHADING_FABRIC) {
             vec4 mean_cov = ACCURACY == 3u ? vec4(0.5, 0.5, 0.5, 0.5) : g;
             env_diffuse = fabric_env_diffuse(tbn, k2, f, IBL, IBL_SAMPLES, ibl_rotation());
-            fabric_env_lobes(tbn, k2, mean_cov, f, IBL, IBL_SAMPLES, ibl_rotation(), env_weft, env_warp);
+            fabric_env_lobes(tbn, k2, mean_cov, f, max(fabric, 1u) - 1u, IBL, IBL_SAMPLES, ibl_rotation(), env_weft, env_warp);
             if (FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u) {
                 env_back = fabric_env_back(tbn, IBL, IBL_SAMPLES, ibl_rotation());
             }

@@ -39,6 +39,12 @@ pub trait EnvLookup {
     fn dfg(&self, cos_theta: f32, roughness: f32) -> Vec3;
     /// The radiance cube's face size in texels.
     fn face_size(&self) -> f32;
+    /// Entry (i, j) of fabric record `table`'s lobe albedo table (`lobe_albedo_texel`): by
+    /// default the real table of `f`'s exponents ([`crate::env::lobe_albedo::table`]).
+    fn lobe_albedo_texel(&self, f: &GpuFabric, _table: u32, i: u32, j: u32) -> [f32; 2] {
+        crate::env::lobe_albedo::table(f.e_along, f.e_across)
+            [j as usize * crate::env::lobe_albedo::LOBE_ALBEDO_MU + i as usize]
+    }
 }
 
 /// The closed-form environment `glsl/env_probe.comp` defines for its leaves: smooth in the
@@ -75,6 +81,12 @@ impl EnvLookup for StandIn {
     }
     fn face_size(&self) -> f32 {
         self.face_size
+    }
+    fn lobe_albedo_texel(&self, _: &GpuFabric, table: u32, i: u32, j: u32) -> [f32; 2] {
+        [
+            0.2 + 0.02 * i as f32 - 0.01 * j as f32 + 0.05 * table as f32,
+            0.5 + 0.02 * i as f32 + 0.005 * j as f32,
+        ]
     }
 }
 
@@ -371,8 +383,37 @@ pub fn pbr_env(
     )
 }
 
+/// `fabric_lobe_albedo`: the exact albedo of the weft lobe (`warp` false) or the warp lobe for
+/// view `k2` with Fresnel `rs`, bilinear in fabric record `table`'s table.
+pub fn fabric_lobe_albedo(
+    env: &impl EnvLookup,
+    f: &GpuFabric,
+    table: u32,
+    k2: Vec3,
+    rs: f32,
+    warp: bool,
+) -> f32 {
+    use crate::env::lobe_albedo::{LOBE_ALBEDO_MU, LOBE_ALBEDO_PHI};
+    let ax = (if warp { k2[1] } else { k2[0] }).abs();
+    let ay = (if warp { k2[0] } else { k2[1] }).abs();
+    let phi = ay.atan2(ax.max(1e-20));
+    let x = k2[2].clamp(0.0, 1.0) * (LOBE_ALBEDO_MU as u32 - 1) as f32;
+    let y = (phi * (2.0 / PI)).clamp(0.0, 1.0) * (LOBE_ALBEDO_PHI as u32 - 1) as f32;
+    let i = (x as u32).min(LOBE_ALBEDO_MU as u32 - 2);
+    let j = (y as u32).min(LOBE_ALBEDO_PHI as u32 - 2);
+    let fx = x - i as f32;
+    let fy = y - j as f32;
+    let t = |i, j| env.lobe_albedo_texel(f, table, i, j);
+    let mix2 = |a: [f32; 2], b: [f32; 2], t: f32| [mixf(a[0], b[0], t), mixf(a[1], b[1], t)];
+    let a = mix2(t(i, j), t(i + 1, j), fx);
+    let b = mix2(t(i, j + 1), t(i + 1, j + 1), fx);
+    let e = mix2(a, b, fy);
+    mixf(e[0], e[1], rs)
+}
+
 /// `fabric_env_lobes`: the fabric's two specular lobes under the environment, each without its
-/// coverage: (weft lobe, warp lobe).
+/// coverage: (weft lobe, warp lobe); fis as a ratio estimator times the exact albedo of fabric
+/// record `table` ([`fabric_lobe_albedo`]).
 #[allow(clippy::too_many_arguments)]
 pub fn fabric_env_lobes(
     env: &impl EnvLookup,
@@ -380,6 +421,7 @@ pub fn fabric_env_lobes(
     k2: Vec3,
     coverage: [f32; 4],
     f: &GpuFabric,
+    table: u32,
     mode: u32,
     samples: u32,
     rot: [f32; 2],
@@ -403,6 +445,8 @@ pub fn fabric_env_lobes(
         0.5
     };
     let r0 = if mode == 3 { rot } else { [0.0; 2] };
+    let mut w_sum_weft = 0.0f32;
+    let mut w_sum_warp = 0.0f32;
     for i in 0..samples {
         let mut xi = ibl_sample(i, samples, r0);
         let pick_weft = xi[0] < w_weft;
@@ -449,6 +493,24 @@ pub fn fabric_env_lobes(
         let l = scale(env.radiance(to_world(tbn, k1), lod), common_w);
         weft = add(weft, scale(l, p_weft));
         warp = add(warp, scale(l, p_warp));
+        w_sum_weft += common_w * p_weft;
+        w_sum_warp += common_w * p_warp;
+    }
+    if mode == 2 {
+        let ratio = |sum: Vec3, w: f32, warp: bool| {
+            if w > 1e-6 * samples as f32 {
+                scale(
+                    scale(sum, 1.0 / w),
+                    fabric_lobe_albedo(env, f, table, k2, f.rs, warp),
+                )
+            } else {
+                [0.0; 3]
+            }
+        };
+        return (
+            ratio(weft, w_sum_weft, false),
+            ratio(warp, w_sum_warp, true),
+        );
     }
     (
         scale(weft, 1.0 / samples as f32),
@@ -754,8 +816,17 @@ pub fn env_probe_eval(
     );
     let tbn = fb::fabric_frame(xyz(inp.frame_n), xyz(inp.frame_t), inp.frame_t[3]);
     let k2 = xyz(inp.k2);
-    let (weft, warp) =
-        fabric_env_lobes(env, &tbn, k2, inp.coverage, &inp.fabric, mode, samples, rot);
+    let (weft, warp) = fabric_env_lobes(
+        env,
+        &tbn,
+        k2,
+        inp.coverage,
+        &inp.fabric,
+        inp.mode[3] % 3,
+        mode,
+        samples,
+        rot,
+    );
     let pr = pixel_random([inp.mode[2], inp.mode[3]]);
     let diffuse = fabric_env_diffuse(env, &tbn, k2, &inp.fabric, mode, samples, rot);
     let back = fabric_env_back(env, &tbn, mode, samples, rot);
@@ -854,12 +925,30 @@ mod tests {
             k2,
             [0.0, 1.0, 0.0, 1.0],
             &f,
+            0,
             3,
             4096,
             [0.37, 0.61],
         );
         let k2d = [k2[0] as f64, k2[1] as f64, k2[2] as f64];
         let truth = super::super::furnace::lobe_albedo(k2d, 200.0, 10.0, 0.04, 512);
+        // fis:8 takes the albedo from the table: under white each lobe is its exact albedo,
+        // whatever the mixture's weights (an even mixture's eight samples alone estimated the
+        // weft lobe over half too low: examples/ibl_lobe_estimators.rs).
+        let truth_warp = super::super::furnace::lobe_albedo(k2d, 10.0, 200.0, 0.04, 512);
+        for cov in [
+            [0.0, 1.0, 0.0, 1.0],
+            [0.5, 0.5, 0.5, 0.5],
+            [0.9, 0.1, 0.9, 0.1],
+        ] {
+            let (w, v) = fabric_env_lobes(&White, &tbn, k2, cov, &f, 0, 2, 8, [0.0; 2]);
+            for (got, t) in [(w[0], truth), (v[0], truth_warp)] {
+                assert!(
+                    ((got as f64) - t).abs() < 0.01 * t + 1e-4,
+                    "fis:8 under white, coverage {cov:?}: {got} against the albedo {t}"
+                );
+            }
+        }
         assert!(
             ((weft[0] as f64) - truth).abs() < 0.01 * truth.max(1e-3) + 2e-3,
             "weft lobe under white: {} against the albedo {truth}",

@@ -131,6 +131,8 @@ pub(crate) struct Defaults {
     pub(crate) flat_normal: Image,
     /// A 1 x 1 shadow atlas at depth 0 (everything lit), bound when no shadow map is rendered.
     pub(crate) no_shadows: Image,
+    /// One zeroed lobe albedo table, bound when a frame reads none (binding 17).
+    pub(crate) no_lobe_albedo: Buffer,
 }
 
 impl Defaults {
@@ -170,6 +172,11 @@ impl Defaults {
                 &solid("default normal", [128, 128, 255, 255], ColorSpace::Linear),
             )?,
             no_shadows,
+            no_lobe_albedo: ctx.create_buffer_with(
+                "no lobe albedo",
+                BufferUsageFlags::STORAGE_BUFFER,
+                &crate::env::lobe_albedo::records(&[]),
+            )?,
         })
     }
 }
@@ -686,6 +693,20 @@ impl Renderer {
                 .collect::<crate::Result<Vec<_>>>()?;
             let _ = gpu.weaves8.set(copies);
         }
+        // The fabric lobes' exact albedo, for fis levels of environment light.
+        let tables = plan
+            .environment
+            .as_ref()
+            .map_or(0, |e| e.lobe_albedo_tables);
+        if tables > 0 && gpu.lobe_albedo.get().is_none() {
+            let records = crate::env::lobe_albedo::records(&gpu.fabric_records);
+            let buffer = self.ctx.create_buffer_with(
+                "fabric lobe albedo",
+                BufferUsageFlags::STORAGE_BUFFER,
+                &records,
+            )?;
+            let _ = gpu.lobe_albedo.set(buffer);
+        }
         if options.weave_precision == WeavePrecision::Sat && gpu.weaves_sat.get().is_none() {
             let tables = gpu
                 .weave_params
@@ -984,6 +1005,7 @@ impl Renderer {
             env_specular,
             env_dfg: &self.env.dfg,
             env_sampler: &self.env.sampler,
+            lobe_albedo: gpu.lobe_albedo.get().unwrap_or(&d.no_lobe_albedo),
         };
         let mut stats = FrameStats {
             draws: gpu.draws.len(),

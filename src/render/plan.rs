@@ -324,6 +324,9 @@ pub struct EnvPlan {
     pub rotation: f32,
     pub intensity: f32,
     pub background: String,
+    /// Fabric records whose lobes' exact albedo is tabulated for fis (weft::env::lobe_albedo):
+    /// one per fabric material at a fis level, none otherwise.
+    pub lobe_albedo_tables: usize,
 }
 
 /// lighting.frag's GLTF_FEATURES bits (frame.glsl's GLTF_FEATURE_*).
@@ -506,6 +509,14 @@ impl Plan {
                         crate::env::Background::Env { .. } => "environment".into(),
                         crate::env::Background::Color(c) => format!("colour {c:?}"),
                         crate::env::Background::None => "transparent".into(),
+                    },
+                    lobe_albedo_tables: match e.level {
+                        crate::env::IblLevel::Fis(_) => scene
+                            .materials
+                            .iter()
+                            .filter(|m| m.fabric.is_some())
+                            .count(),
+                        _ => 0,
                     },
                 }
             });
@@ -960,6 +971,19 @@ impl fmt::Display for Plan {
                 e.intensity,
                 e.background
             )?,
+        }
+        if let Some(e) = self
+            .environment
+            .as_ref()
+            .filter(|e| e.lobe_albedo_tables > 0)
+        {
+            writeln!(
+                f,
+                "            fabric lobes: exact albedo tables for {} fabric record(s) ({} x {} views each), the samples give the mean radiance",
+                e.lobe_albedo_tables,
+                crate::env::lobe_albedo::LOBE_ALBEDO_MU,
+                crate::env::lobe_albedo::LOBE_ALBEDO_PHI
+            )?;
         }
         match &self.occlusion {
             None => writeln!(

@@ -3,7 +3,7 @@
 
 use glam::Mat4;
 
-use crate::fabric::FabricParams;
+use crate::fabric::{FabricParams, GpuFabric};
 use crate::scene::{ColorSpace, Scene, Texture, TextureSlot};
 use crate::vk::{
     Buffer, BufferUsageFlags, Context, Format, Image, ImageDesc, ImageUsageFlags, Sampler,
@@ -82,6 +82,11 @@ pub struct GpuScene {
     pub(crate) materials: Buffer,
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
     pub(crate) fabrics: Buffer,
+    /// The same records on the CPU, and their lobes' exact albedo tables (weft::env::lobe_albedo;
+    /// made by the first frame at a fis level of environment light, binding 17 of the lighting
+    /// and transparent passes).
+    pub(crate) fabric_records: Vec<GpuFabric>,
+    pub(crate) lobe_albedo: std::sync::OnceLock<Buffer>,
     /// Thread-by-thread colours (set 0 binding 5 of the G-buffer and transparent passes).
     pub(crate) thread_colours: Buffer,
     /// One weave texture per distinct weave (RGBA16F mip chains, built by the weave pass for
@@ -257,7 +262,9 @@ impl Renderer {
             vertex_count,
             indices,
             materials,
+            fabric_records: bytemuck::pod_collect_to_vec(&fabric_bytes),
             fabrics,
+            lobe_albedo: std::sync::OnceLock::new(),
             thread_colours,
             weaves: std::sync::OnceLock::new(),
             weaves8: std::sync::OnceLock::new(),
@@ -297,6 +304,9 @@ impl Renderer {
         let ctx = &self.ctx;
         gpu.fabrics =
             ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+        // New exponents need new albedo tables (the next frame that reads them makes them).
+        gpu.fabric_records = bytemuck::pod_collect_to_vec(&fabric_bytes);
+        gpu.lobe_albedo = std::sync::OnceLock::new();
         gpu.thread_colours = ctx.create_buffer_with(
             "thread colours",
             BufferUsageFlags::STORAGE_BUFFER,

@@ -120,11 +120,14 @@ pub(crate) struct SceneLighting<'s> {
     pub env_specular: &'s crate::vk::Image,
     pub env_dfg: &'s crate::vk::Image,
     pub env_sampler: &'s crate::vk::Sampler,
+    /// The fabric records' lobe albedo tables (weft::env::lobe_albedo; one zeroed table when the
+    /// frame reads none).
+    pub lobe_albedo: &'s crate::vk::Buffer,
 }
 
 impl<'s> SceneLighting<'s> {
     /// The bindings of set 0 these resources have in every shader that reads them.
-    pub fn bindings(&self) -> [(u32, crate::vk::Resource<'s>); 8] {
+    pub fn bindings(&self) -> [(u32, crate::vk::Resource<'s>); 9] {
         use crate::vk::Resource;
         [
             (0, Resource::Uniform(self.frame)),
@@ -138,6 +141,7 @@ impl<'s> SceneLighting<'s> {
             (13, Resource::Sampled(self.env_radiance, self.env_sampler)),
             (14, Resource::Sampled(self.env_specular, self.env_sampler)),
             (15, Resource::Sampled(self.env_dfg, self.env_sampler)),
+            (17, Resource::Storage(self.lobe_albedo)),
         ]
     }
 }
