@@ -76,7 +76,7 @@ layout(set = 0, binding = 12, std430) readonly buffer TileLights { uint tile_lig
 layout(set = 0, binding = 13) uniform samplerCube env_radiance;  // the environment's radiance cube (RGBA16F, env space, box-filtered mips: env_cube.comp); any cube when IBL = 0
 layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube (level i: roughness i/(levels-1); env_prefilter.comp); any cube when IBL = 0
 layout(set = 0, binding = 15) uniform sampler2D env_dfg;  // the split-sum DFG table (x: n·v, y: roughness; rg = A, B, b = the sheen albedo E; weft::env::dfg_table), linear, clamp
-layout(set = 0, binding = 17, std430) readonly buffer FabricLobeAlbedo { vec2 fabric_lobe_albedo_table[]; };  // the fabric records' lobe albedo tables (`vec2[]`, weft::env::lobe_albedo: record k's at k·LOBE_ALBEDO_MU·LOBE_ALBEDO_PHI, n·k2 fastest; albedo at rs 0, at rs 1); one zeroed table when the frame has no fabric under an environment
+layout(set = 0, binding = 17, std430) readonly buffer FabricLobeAlbedo { vec2 fabric_lobe_albedo_table[]; };  // the fabric records' lobe albedo tables (`vec2[]`, weft::reference::lobe_albedo: record k's at k·LOBE_ALBEDO_MU·LOBE_ALBEDO_PHI, n·k2 fastest; albedo at rs 0, at rs 1); one zeroed table when the frame has no fabric under an environment
 // The G-buffer (gbuffer.frag's outputs at the same locations, fetched per pixel).
 layout(set = 0, binding = 20) uniform sampler2D gb_albedo;  // G-buffer albedo (RGBA8 sRGB): base colour, a: metallic
 layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl

@@ -16,7 +16,7 @@
 //   the split sum's A and B, and the sheen's directional albedo E;
 // - `float env_face_size()`: the radiance cube's face size in texels (fis_lod's solid angles);
 // - `vec2 lobe_albedo_texel(uint table, uint i, uint j)`: entry (i, j) of fabric record `table`'s
-//   lobe albedo table (weft::env::lobe_albedo: the weft lobe's albedo at rs 0 and at rs 1).
+//   lobe albedo table (weft::reference::lobe_albedo: the weft lobe's albedo at rs 0 and at rs 1).
 #ifndef WEFT_ENV_LIGHT_GLSL
 #define WEFT_ENV_LIGHT_GLSL
 
@@ -30,7 +30,7 @@ vec3 dfg_lookup(float cos_theta, float roughness);
 float env_face_size();
 vec2 lobe_albedo_texel(uint table, uint i, uint j);
 
-// The lobe albedo tables' nodes (weft::env::lobe_albedo): n·k2 = i/(MU-1), the view's azimuth
+// The lobe albedo tables' nodes (weft::reference::lobe_albedo): n·k2 = i/(MU-1), the view's azimuth
 // from the lobe's long axis j/(PHI-1)·π/2.
 const uint LOBE_ALBEDO_MU = 24u;
 const uint LOBE_ALBEDO_PHI = 12u;

@@ -11,7 +11,7 @@
 //! [`quadrature`] is the ground truth of environment lighting: f64 quadrature over every pixel of
 //! the map with the reference BRDFs.
 
-pub mod lobe_albedo;
+pub use crate::reference::lobe_albedo;
 pub mod quadrature;
 
 use std::f64::consts::PI;

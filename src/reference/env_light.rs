@@ -40,10 +40,10 @@ pub trait EnvLookup {
     /// The radiance cube's face size in texels.
     fn face_size(&self) -> f32;
     /// Entry (i, j) of fabric record `table`'s lobe albedo table (`lobe_albedo_texel`): by
-    /// default the real table of `f`'s exponents ([`crate::env::lobe_albedo::table`]).
+    /// default the real table of `f`'s exponents ([`super::lobe_albedo::table`]).
     fn lobe_albedo_texel(&self, f: &GpuFabric, _table: u32, i: u32, j: u32) -> [f32; 2] {
-        crate::env::lobe_albedo::table(f.e_along, f.e_across)
-            [j as usize * crate::env::lobe_albedo::LOBE_ALBEDO_MU + i as usize]
+        super::lobe_albedo::table(f.e_along, f.e_across)
+            [j as usize * super::lobe_albedo::LOBE_ALBEDO_MU + i as usize]
     }
 }
 
@@ -393,7 +393,7 @@ pub fn fabric_lobe_albedo(
     rs: f32,
     warp: bool,
 ) -> f32 {
-    use crate::env::lobe_albedo::{LOBE_ALBEDO_MU, LOBE_ALBEDO_PHI};
+    use super::lobe_albedo::{LOBE_ALBEDO_MU, LOBE_ALBEDO_PHI};
     let ax = (if warp { k2[1] } else { k2[0] }).abs();
     let ay = (if warp { k2[0] } else { k2[1] }).abs();
     let phi = ay.atan2(ax.max(1e-20));

@@ -26,6 +26,7 @@ pub mod env_light;
 pub mod furnace;
 pub mod ibl_twin;
 mod interval;
+pub mod lobe_albedo;
 pub mod probe;
 pub mod raster;
 pub mod shading;

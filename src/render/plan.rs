@@ -324,7 +324,7 @@ pub struct EnvPlan {
     pub rotation: f32,
     pub intensity: f32,
     pub background: String,
-    /// Fabric records whose lobes' exact albedo is tabulated for fis (weft::env::lobe_albedo):
+    /// Fabric records whose lobes' exact albedo is tabulated for fis (weft::reference::lobe_albedo):
     /// one per fabric material at a fis level, none otherwise.
     pub lobe_albedo_tables: usize,
 }

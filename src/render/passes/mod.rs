@@ -120,7 +120,7 @@ pub(crate) struct SceneLighting<'s> {
     pub env_specular: &'s crate::vk::Image,
     pub env_dfg: &'s crate::vk::Image,
     pub env_sampler: &'s crate::vk::Sampler,
-    /// The fabric records' lobe albedo tables (weft::env::lobe_albedo; one zeroed table when the
+    /// The fabric records' lobe albedo tables (weft::reference::lobe_albedo; one zeroed table when the
     /// frame reads none).
     pub lobe_albedo: &'s crate::vk::Buffer,
 }
