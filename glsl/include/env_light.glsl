@@ -250,7 +250,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
 
 // The fabric's two specular lobes under the environment, each without its coverage:
 // (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
-// lobe's width times Fresnel; fis / mc: importance sampling of the coverage-weighted mixture of
+// lobe's width times the lobe's exact albedo; fis / mc: importance sampling of the coverage-weighted mixture of
 // the two lobes' A–S samplers (one-sample MIS, so both estimates use every sample; mc: rotated
 // by `rot`, unfiltered). fis takes from the samples only the lobe's weighted mean radiance (a
 // ratio estimator: Σ w L / Σ w) and its albedo from fabric record `table`'s exact table
@@ -267,10 +267,12 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table,
         vec3 r = tbn * vec3(-k2.x, -k2.y, k2.z);
         float peak = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (8.0 * FABRIC_PI);
         // One sample at the mirror direction, blurred to the lobe's peak solid angle (+1 level:
-        // the box mips blur less than the lobe's tails reach).
-        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, env_face_size()) + 1.0) * schlick(f.rs, k2.z);
-        weft = l;
-        warp = l;
+        // the box mips blur less than the lobe's tails reach), times each lobe's exact albedo
+        // (it was Schlick's Fresnel at n·k2: 12 % off the albedo under a white map, +117 % for
+        // an rs = 0 cloth's lobes).
+        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, env_face_size()) + 1.0);
+        weft = l * fabric_lobe_albedo(table, k2, f.rs, false);
+        warp = l * fabric_lobe_albedo(table, k2, f.rs, true);
         return;
     }
     float c_thread = coverage.x + coverage.y;

@@ -435,8 +435,11 @@ pub fn fabric_env_lobes(
         let r = to_world(tbn, [-k2[0], -k2[1], k2[2]]);
         let peak = ((f.e_along + 1.0) * (f.e_across + 1.0)).sqrt() / (8.0 * PI);
         let lod = ibl_twin::fis_lod(peak, 1, env.face_size()) + 1.0;
-        let l = scale(env.radiance(r, lod), fb::schlick(f.rs, k2[2]));
-        return (l, l);
+        let l = env.radiance(r, lod);
+        return (
+            scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, false)),
+            scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, true)),
+        );
     }
     let c_thread = coverage[0] + coverage[1];
     let w_weft = if c_thread > 0.0 {

@@ -693,7 +693,7 @@ impl Renderer {
                 .collect::<crate::Result<Vec<_>>>()?;
             let _ = gpu.weaves8.set(copies);
         }
-        // The fabric lobes' exact albedo, for fis levels of environment light.
+        // The fabric lobes' exact albedo, for the approx and fis levels of environment light.
         let tables = plan
             .environment
             .as_ref()

@@ -324,8 +324,8 @@ pub struct EnvPlan {
     pub rotation: f32,
     pub intensity: f32,
     pub background: String,
-    /// Fabric records whose lobes' exact albedo is tabulated for fis (weft::reference::lobe_albedo):
-    /// one per fabric material at a fis level, none otherwise.
+    /// Fabric records whose lobes' exact albedo is tabulated (weft::reference::lobe_albedo): one
+    /// per fabric material at the approx and fis levels, none for Monte Carlo.
     pub lobe_albedo_tables: usize,
 }
 
@@ -511,7 +511,7 @@ impl Plan {
                         crate::env::Background::None => "transparent".into(),
                     },
                     lobe_albedo_tables: match e.level {
-                        crate::env::IblLevel::Fis(_) => scene
+                        crate::env::IblLevel::Fis(_) | crate::env::IblLevel::Approx => scene
                             .materials
                             .iter()
                             .filter(|m| m.fabric.is_some())
@@ -979,7 +979,7 @@ impl fmt::Display for Plan {
         {
             writeln!(
                 f,
-                "            fabric lobes: exact albedo tables for {} fabric record(s) ({} x {} views each), the samples give the mean radiance",
+                "            fabric lobes: exact albedo tables for {} fabric record(s) ({} x {} views each), the look-ups give the mean radiance",
                 e.lobe_albedo_tables,
                 crate::env::lobe_albedo::LOBE_ALBEDO_MU,
                 crate::env::lobe_albedo::LOBE_ALBEDO_PHI

@@ -83,7 +83,7 @@ pub struct GpuScene {
     /// One GpuFabric record per fabric material (a zeroed one when there is none).
     pub(crate) fabrics: Buffer,
     /// The same records on the CPU, and their lobes' exact albedo tables (weft::reference::lobe_albedo;
-    /// made by the first frame at a fis level of environment light, binding 17 of the lighting
+    /// made by the first frame at the approx or a fis level of environment light, binding 17 of the lighting
     /// and transparent passes).
     pub(crate) fabric_records: Vec<GpuFabric>,
     pub(crate) lobe_albedo: std::sync::OnceLock<Buffer>,
