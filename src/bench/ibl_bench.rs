@@ -6,7 +6,8 @@
 //! default level next to the same pass with lamps only, on the same G-buffer, same run.
 //!
 //! The scenes: the default cloth under the Lebombo interior (tests/data/env, CC0) with no lamps,
-//! at the bench's close-up, mid and far cameras, and the glTF spheres under it, plain and brushed
+//! at the bench's close-up, mid and far cameras (and the cloth alone with black threads, its lobes
+//! alone, at the same three), and the glTF spheres under it, plain and brushed
 //! (anisotropy 0.8).
 
 use std::fmt::Write;
@@ -165,6 +166,25 @@ pub fn run(
     let mut rows = Vec::new();
     let mut equal_error = Vec::new();
     let mut truth_ms = Vec::new();
+    // The cloth alone with black threads: its lobes are all its light, so the lobes' estimator
+    // shows without the diffuse's floor (issue 31's independent renderer measured "lobes only"
+    // the same way), over the cloth's pixels only (the other draws removed).
+    let mut lobes = cloth.clone();
+    if lobes.rig.infos.is_empty() {
+        let keep: Vec<bool> = lobes
+            .draws
+            .iter()
+            .map(|d| lobes.drawn_material(d).is_some_and(|m| m.fabric.is_some()))
+            .collect();
+        let mut k = keep.iter();
+        lobes.draws.retain(|_| *k.next().unwrap_or(&true));
+    }
+    for m in &mut lobes.materials {
+        if let Some(f) = m.fabric.as_mut() {
+            f.rd_warp = [0.0; 3];
+            f.rd_weft = [0.0; 3];
+        }
+    }
     let views: Vec<(String, &Scene, Option<crate::scene::Camera>)> = vec![
         (
             "cloth close-up".into(),
@@ -175,6 +195,13 @@ pub fn run(
         // Many repeats per pixel: both threads' lobes in every pixel, the mixture at about even
         // weights (issue 31's independent renderer measured its far view there).
         ("cloth far".into(), &cloth, Some(View::Far.camera(&cloth)?)),
+        (
+            "lobes close-up".into(),
+            &lobes,
+            Some(View::CloseUp.camera(&cloth)?),
+        ),
+        ("lobes mid".into(), &lobes, Some(View::Mid.camera(&cloth)?)),
+        ("lobes far".into(), &lobes, Some(View::Far.camera(&cloth)?)),
         ("spheres".into(), &spheres, None),
         ("brushed spheres".into(), &brushed, None),
     ];
@@ -461,6 +488,10 @@ impl IblReport {
             [1.0, 0.5, 0.05],
             [0.17, 0.63, 0.17],
             [0.84, 0.15, 0.16],
+            [0.58, 0.40, 0.74],
+            [0.55, 0.34, 0.29],
+            [0.89, 0.47, 0.76],
+            [0.50, 0.50, 0.50],
         ];
         let mut views: Vec<&str> = Vec::new();
         for (r, _, _) in &pts {
