@@ -617,3 +617,57 @@ fn a_pipeline_per_kind_of_material_with_only_the_scenes_code_changes_nothing() {
         weft::render::plan::GLTF_ANISOTROPY
     );
 }
+
+/// The fabric lobes' albedo tables are planned only where the woven model reads them: at the
+/// approx and fis levels of environment light, not at mc, not with the fabric shaded as glTF or
+/// by a comparison model, not without an environment.
+#[test]
+fn lobe_albedo_tables_only_where_the_woven_model_reads_them() {
+    use weft::env::{EnvLighting, Environment, IblLevel};
+    let scene = scene::default_scene();
+    let env = |level| {
+        let mut e = EnvLighting::new(std::sync::Arc::new(Environment::uniform([1.0; 3])));
+        e.level = level;
+        Some(e)
+    };
+    let tables = |o: RenderOptions| {
+        Plan::new(&scene, &o)
+            .environment
+            .map_or(0, |e| e.lobe_albedo_tables)
+    };
+    let fabrics = scene
+        .materials
+        .iter()
+        .filter(|m| m.fabric.is_some())
+        .count();
+    assert!(fabrics > 0);
+    let with = |level| RenderOptions {
+        environment: env(level),
+        ..options()
+    };
+    assert_eq!(tables(with(IblLevel::Fis(8))), fabrics);
+    assert_eq!(tables(with(IblLevel::Approx)), fabrics);
+    assert_eq!(tables(with(IblLevel::MonteCarlo(4))), 0);
+    assert_eq!(tables(options()), 0);
+    assert_eq!(
+        tables(RenderOptions {
+            fabric_as_pbr: true,
+            ..with(IblLevel::Fis(8))
+        }),
+        0
+    );
+    assert_eq!(
+        tables(RenderOptions {
+            shading: weft::records::Shading::Phong,
+            ..with(IblLevel::Fis(8))
+        }),
+        0
+    );
+    let plain = without_fabric(scene.clone());
+    assert_eq!(
+        Plan::new(&plain, &with(IblLevel::Fis(8)))
+            .environment
+            .map_or(usize::MAX, |e| e.lobe_albedo_tables),
+        0
+    );
+}

@@ -325,7 +325,8 @@ pub struct EnvPlan {
     pub intensity: f32,
     pub background: String,
     /// Fabric records whose lobes' exact albedo is tabulated (weft::reference::lobe_albedo): one
-    /// per fabric material at the approx and fis levels, none for Monte Carlo.
+    /// per fabric material at the approx and fis levels when the woven model shades the fabric,
+    /// none for Monte Carlo, the fabric shaded as glTF or the comparison models.
     pub lobe_albedo_tables: usize,
 }
 
@@ -510,12 +511,19 @@ impl Plan {
                         crate::env::Background::Color(c) => format!("colour {c:?}"),
                         crate::env::Background::None => "transparent".into(),
                     },
+                    // Read only where the woven model shades fabric under the environment: not
+                    // with the fabric shaded as glTF, nor by the paper's comparison models.
                     lobe_albedo_tables: match e.level {
-                        crate::env::IblLevel::Fis(_) | crate::env::IblLevel::Approx => scene
-                            .materials
-                            .iter()
-                            .filter(|m| m.fabric.is_some())
-                            .count(),
+                        crate::env::IblLevel::Fis(_) | crate::env::IblLevel::Approx
+                            if options.shading == crate::records::Shading::Fabric
+                                && !options.fabric_as_pbr =>
+                        {
+                            scene
+                                .materials
+                                .iter()
+                                .filter(|m| m.fabric.is_some())
+                                .count()
+                        }
                         _ => 0,
                     },
                 }
