@@ -1,6 +1,7 @@
 #version 460
 // Evaluates the environment light's estimators of include/env_light.glsl (pbr_env,
-// aniso_env_specular, sheen_layer_diffuse, fabric_env_lobes, fabric_env_diffuse, fabric_env_back,
+// aniso_env_specular, sheen_layer_diffuse, fabric_env_lobes (and a quad lane's fabric_env_lobe_sums,
+// fabric_env_lobes_resolve), fabric_env_diffuse, fabric_env_back,
 // fabric_env_combine, pixel_random, ibl_sample, ggx_albedo) and the shadow maps' PCF of
 // include/shadows.glsl (shadow_pcf) on a batch of inputs, so tests can compare the GPU with the
 // Rust twins (weft::reference::env_light). The textures those functions read are replaced by the
@@ -30,7 +31,7 @@ struct EnvProbeInput {
     vec4 k2;             // the view in the fabric's frame (unit, xyz)
     vec4 coverage;       // the weave coverage (c_warp, c_weft, s_warp, s_weft)
     vec4 rot;            // xy: the Monte Carlo rotation; zw: sheen_layer_diffuse's k and E(n·v)
-    uvec4 mode;          // x: the level (1 approx, 2 fis, 3 mc), y: samples, zw: pixel_random's pixel
+    uvec4 mode;          // x: the level (1 approx, 2 fis, 3 mc), y: samples, zw: pixel_random's pixel; w % 3: the lobe table, at fis w / 3 % 4: a quad lane (0: fabric_env_lobes, else its shifted set at a pooled count of lane + 1)
     GpuFabric fabric;    // the fabric material
     Shadow shadow;       // shadow_pcf: the shadow record
     vec4 light_pos;      // shadow_pcf: the light's position (xyz); w > 0.5: fabric sheets (fabric_env_combine)
@@ -114,7 +115,20 @@ void main() {
     mat3 tbn = fabric_frame(p.frame_n.xyz, p.frame_t.xyz, p.frame_t.w);
     vec3 weft;
     vec3 warp;
-    fabric_env_lobes(tbn, p.k2.xyz, p.coverage, p.fabric, p.mode.w % 3u, mode, samples, rot, weft, warp);
+    uint lane = (p.mode.w / 3u) % 4u;
+    if (mode == 2u && lane != 0u) {
+        // One lane of a pooled quad (shade.glsl): its shifted set, the mip level of lane + 1
+        // pooled sets, resolved as if they were its own.
+        uint pooled = samples * (lane + 1u);
+        vec4 weft_sum;
+        vec4 warp_sum;
+        fabric_env_lobe_sums(tbn, p.k2.xyz, p.coverage, p.fabric, mode, samples,
+                             fabric_quad_shift(lane, samples), pooled, weft_sum, warp_sum);
+        fabric_env_lobes_resolve(weft_sum, warp_sum, p.k2.xyz, p.fabric, p.mode.w % 3u, mode, pooled,
+                                 weft, warp);
+    } else {
+        fabric_env_lobes(tbn, p.k2.xyz, p.coverage, p.fabric, p.mode.w % 3u, mode, samples, rot, weft, warp);
+    }
     vec2 pr = pixel_random(p.mode.zw);
     o.weft = vec4(weft, pr.x);
     o.warp = vec4(warp, pr.y);

@@ -60,6 +60,9 @@ const uint MATERIAL_KIND = MATERIAL_KIND_ANY;
 const uint TEXTURE_SLOTS = TEXTURE_SLOTS_ALL;
 const uint PIXEL_KINDS = PIXEL_KINDS_ALL;
 const uint GLTF_FEATURES = GLTF_FEATURES_ALL;
+// A fragment of a blended surface estimates its fabric lobes alone (a quad's fragments may lie on
+// different triangles and layers).
+const uint QUAD_POOL = 0u;
 
 // Set 0: gbuffer.vert's and gbuffer.frag's bindings 0-5, then lighting.frag's shadow and environment bindings (one
 // number per resource in every shader).
@@ -133,7 +136,8 @@ void main() {
     vec4 emissive = cover >= 0.0 ? vec4(s.emissive.rgb * cover, s.emissive.a) : s.emissive;
     vec3 radiance = shade_surface(in_world_pos, v, s.albedo, frame_decode(s.frame), s.surface, s.fabric,
                                   emissive, s.specular, s.transmission, s.attenuation, s.coat,
-                                  s.coat_normal, s.diffuse_transmission, s.iridescence, vec3(1.0));
+                                  s.coat_normal, s.diffuse_transmission, s.iridescence, vec3(1.0),
+                                  vec4(0.0, 0.0, 1.0, 0.0));
     radiance = all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0);
     // alphaMode BLEND blends by the base colour's alpha; a transmissive surface that is not BLEND
     // covers what is behind (its transmitted light is in its radiance).

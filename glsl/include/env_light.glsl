@@ -248,40 +248,31 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
          + specular * max(1.0 - k * e_v, 0.0) + s.sheen * e_v * irradiance * ao;
 }
 
-// The fabric's two specular lobes under the environment, each without its coverage:
-// (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
-// lobe's width times the lobe's exact albedo; fis / mc: importance sampling of the coverage-weighted mixture of
-// the two lobes' A–S samplers (one-sample MIS, so both estimates use every sample; mc: rotated
-// by `rot`, unfiltered). fis takes from the samples only the lobe's weighted mean radiance (a
-// ratio estimator: Σ w L / Σ w) and its albedo from fabric record `table`'s exact table
-// (fabric_lobe_albedo): eight fixed samples' own estimate of the albedo was the larger half of
-// their error (issue 31 item 1; docs/performance.md). mc stays the plain unbiased estimate.
-void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table, uint mode, uint samples, vec2 rot, out vec3 weft, out vec3 warp) {
-    weft = vec3(0.0);
-    warp = vec3(0.0);
-    // rs = 0 keeps its lobes: Schlick's Fresnel is (1 - c)^5 there, not 0 (as for the lamps).
+// The shift of the Hammersley set that lane `lane` (0-3: x parity + 2 y parity) of a 2 x 2 pixel
+// quad uses when the quad's lanes pool their lobe samples (fabric_quad_pool, shade.glsl): a
+// quarter of a stratum in x and a bit-reversed quarter in y, so each lane's set alone is still
+// the whole stratified set and the four together fill every stratum's quarters.
+vec2 fabric_quad_shift(uint lane, uint samples) {
+    uint reversed = ((lane & 1u) << 1u) | (lane >> 1u);
+    return vec2(float(lane & 3u), float(reversed & 3u)) / float(4u * samples);
+}
+
+// The sums of the fabric's lobe estimators (fis and mc): per lobe (Σ w·L, Σ w) over `samples`
+// samples of the coverage-weighted mixture of the two lobes' A–S samplers (one-sample MIS, so
+// both lobes use every sample), the Hammersley set shifted by `shift` (fis: a quad lane's
+// fabric_quad_shift, or 0; mc: its per-pixel rotation), fis's mip level chosen for
+// `lod_samples` samples (the samples pooled over a quad, or `samples`), mc's unfiltered. w is
+// f·cos/pdf times the lobe's hn^E; fabric_env_lobes_resolve turns the sums into radiance.
+void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, uint samples, vec2 shift, uint lod_samples, out vec4 weft, out vec4 warp) {
+    weft = vec4(0.0);
+    warp = vec4(0.0);
     if (!(k2.z > 0.0)) {
-        return;
-    }
-    if (mode == 1u) {
-        vec3 r = tbn * vec3(-k2.x, -k2.y, k2.z);
-        float peak = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (8.0 * FABRIC_PI);
-        // One sample at the mirror direction, blurred to the lobe's peak solid angle (+1 level:
-        // the box mips blur less than the lobe's tails reach), times each lobe's exact albedo
-        // (it was Schlick's Fresnel at n·k2: 12 % off the albedo under a white map, +117 % for
-        // an rs = 0 cloth's lobes).
-        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, env_face_size()) + 1.0);
-        weft = l * fabric_lobe_albedo(table, k2, f.rs, false);
-        warp = l * fabric_lobe_albedo(table, k2, f.rs, true);
         return;
     }
     float c_thread = coverage.x + coverage.y;
     float w_weft = c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
-    vec2 r0 = mode == 3u ? rot : vec2(0.0);
-    float w_sum_weft = 0.0;
-    float w_sum_warp = 0.0;
     for (uint i = 0u; i < samples; ++i) {
-        vec2 xi = ibl_sample(i, samples, r0);
+        vec2 xi = ibl_sample(i, samples, shift);
         bool pick_weft = xi.x < w_weft;
         xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
         xi.x = min(xi.x, 0.99999994);
@@ -313,26 +304,61 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table,
         float pdf = as_norm(f.e_along, f.e_across) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
         float factor = as_lobe_factor(k1.z, k2.z, min(kh, 1.0), f.e_along, f.e_across, f.rs);
         float common_w = factor * k1.z / pdf;
-        float lod = mode == 3u ? 0.0 : fis_lod(pdf, samples, env_face_size());
+        float lod = mode == 3u ? 0.0 : fis_lod(pdf, lod_samples, env_face_size());
         vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
-        weft += l * p_weft;
-        warp += l * p_warp;
-        w_sum_weft += common_w * p_weft;
-        w_sum_warp += common_w * p_warp;
+        weft += vec4(l, common_w) * p_weft;
+        warp += vec4(l, common_w) * p_warp;
     }
+}
+
+// The lobes' radiance from fabric_env_lobe_sums' sums over `samples` samples (fis: all a quad
+// pooled). fis takes from the samples only the lobe's weighted mean radiance (a ratio estimator:
+// Σ w L / Σ w, bounded by the brightest sample whatever the weights) and its albedo from fabric
+// record `table`'s exact table (fabric_lobe_albedo): eight fixed samples' own estimate of the
+// albedo was the larger half of their error (issue 31 item 1; docs/performance.md). A lobe its
+// samples together weigh under 1e-6 of one sample's full weight has no sample on it (no sample
+// above the horizon, or only the far tails of a sample of the other lobe, whose hn^E underflows
+// differently on each device): it stays dark, as the plain estimate leaves it. mc: the plain
+// unbiased estimate Σ w L / samples.
+void fabric_env_lobes_resolve(vec4 weft_sum, vec4 warp_sum, vec3 k2, GpuFabric f, uint table, uint mode, uint samples, out vec3 weft, out vec3 warp) {
     if (mode == 2u) {
-        // Σ w L / Σ w is a weighted mean of the samples' radiance: bounded by the brightest,
-        // whatever the weights (divided before the albedo multiplies). A lobe its samples
-        // together weigh under 1e-6 of one sample's full weight has no sample on it (no sample
-        // above the horizon, or only the far tails of a sample of the other lobe, whose hn^E
-        // underflows differently on each device): it stays dark, as the plain estimate leaves it.
         float w_min = 1e-6 * float(samples);
-        weft = w_sum_weft > w_min ? weft / w_sum_weft * fabric_lobe_albedo(table, k2, f.rs, false) : vec3(0.0);
-        warp = w_sum_warp > w_min ? warp / w_sum_warp * fabric_lobe_albedo(table, k2, f.rs, true) : vec3(0.0);
+        weft = weft_sum.w > w_min ? weft_sum.rgb / weft_sum.w * fabric_lobe_albedo(table, k2, f.rs, false) : vec3(0.0);
+        warp = warp_sum.w > w_min ? warp_sum.rgb / warp_sum.w * fabric_lobe_albedo(table, k2, f.rs, true) : vec3(0.0);
         return;
     }
-    weft /= float(samples);
-    warp /= float(samples);
+    weft = weft_sum.rgb / float(samples);
+    warp = warp_sum.rgb / float(samples);
+}
+
+// The fabric's two specular lobes under the environment, each without its coverage:
+// (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
+// lobe's width times the lobe's exact albedo; fis / mc: fabric_env_lobe_sums (mc: rotated by
+// `rot`, unfiltered) and fabric_env_lobes_resolve, for one pixel alone (the deferred lighting
+// pools a quad's samples instead: shade.glsl).
+void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table, uint mode, uint samples, vec2 rot, out vec3 weft, out vec3 warp) {
+    weft = vec3(0.0);
+    warp = vec3(0.0);
+    // rs = 0 keeps its lobes: Schlick's Fresnel is (1 - c)^5 there, not 0 (as for the lamps).
+    if (!(k2.z > 0.0)) {
+        return;
+    }
+    if (mode == 1u) {
+        vec3 r = tbn * vec3(-k2.x, -k2.y, k2.z);
+        float peak = sqrt((f.e_along + 1.0) * (f.e_across + 1.0)) / (8.0 * FABRIC_PI);
+        // One sample at the mirror direction, blurred to the lobe's peak solid angle (+1 level:
+        // the box mips blur less than the lobe's tails reach), times each lobe's exact albedo
+        // (it was Schlick's Fresnel at n·k2: 12 % off the albedo under a white map, +117 % for
+        // an rs = 0 cloth's lobes).
+        vec3 l = env_radiance_at(r, fis_lod(peak, 1u, env_face_size()) + 1.0);
+        weft = l * fabric_lobe_albedo(table, k2, f.rs, false);
+        warp = l * fabric_lobe_albedo(table, k2, f.rs, true);
+        return;
+    }
+    vec4 weft_sum;
+    vec4 warp_sum;
+    fabric_env_lobe_sums(tbn, k2, coverage, f, mode, samples, mode == 3u ? rot : vec2(0.0), samples, weft_sum, warp_sum);
+    fabric_env_lobes_resolve(weft_sum, warp_sum, k2, f, table, mode, samples, weft, warp);
 }
 
 // The fabric's diffuse under the environment, without its coverage: irradiance/π times the

@@ -6,8 +6,8 @@
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg`, `fabric_lobe_albedo_table` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
 // IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION, IRIDESCENCE, FABRIC_SHEETS,
-// PIXEL_KINDS and GLTF_FEATURES, and defines `transmitted_light` (forward.frag: from the
-// backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
+// PIXEL_KINDS, GLTF_FEATURES and QUAD_POOL, and defines `transmitted_light` (forward.frag: from
+// the backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
 // with normal n towards v: transmission = (factor, thickness, attenuation distance, ior),
@@ -182,16 +182,35 @@ float fabric_sheet_cover(vec4 surface, vec4 fabric_texel) {
     return fabric_thread_cover(fabric_texel);
 }
 
+// A 2 x 2 pixel quad pools its lanes' fabric lobe sums (fabric_env_lobe_sums: per lobe Σ w·L and
+// Σ w) where the surface agrees: `quad` is lighting.frag's fabric_quad, (pool with the x
+// neighbour 0/1, with the y neighbour 0/1, the lanes pooled, this lane). The x neighbour's sums
+// come first, then the y neighbour's already pooled ones, so a lane gets the diagonal's through its
+// y neighbour. The neighbours' values come from fine derivatives (the other lane's value minus or
+// plus this one's), which every lane of the quad computes: called where control flow is uniform,
+// or where it diverges only between pixels a quad does not pool (a woven and a glTF pixel).
+vec4 fabric_quad_pool(vec4 sums, vec4 quad) {
+    uint lane = uint(quad.w + 0.5);
+    float sx = (lane & 1u) == 0u ? 1.0 : -1.0;
+    float sy = (lane & 2u) == 0u ? 1.0 : -1.0;
+    vec4 other = sums + sx * dFdxFine(sums);
+    sums = quad.x > 0.5 ? sums + other : sums;
+    other = sums + sy * dFdyFine(sums);
+    return quad.y > 0.5 ? sums + other : sums;
+}
+
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
 // emissive_ao and specular; may be any value, the caller keeps NaN and Inf out of the image.
 // transmission, attenuation, coat_params, coat_n, dtrans, iridescence: surface.glsl's GSurface
 // fields (no transmission, coat, diffuse transmission or film from the G-buffer, which holds none).
 // bounce: per channel, what the occlusion pass's coloured multi-bounce makes of emissive_ao.a
-// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass).
+// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass). quad: the pixel's
+// quad pooling (fabric_quad_pool; read only where QUAD_POOL is 1).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
                    vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
-                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce) {
+                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce,
+                   vec4 quad) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -236,7 +255,24 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         if (IBL != 0u && SHADING == SHADING_FABRIC) {
             vec4 mean_cov = ACCURACY == 3u ? vec4(0.5, 0.5, 0.5, 0.5) : g;
             env_diffuse = fabric_env_diffuse(tbn, k2, f, IBL, IBL_SAMPLES, ibl_rotation());
-            fabric_env_lobes(tbn, k2, mean_cov, f, max(fabric, 1u) - 1u, IBL, IBL_SAMPLES, ibl_rotation(), env_weft, env_warp);
+            if (QUAD_POOL != 0u && IBL == 2u) {
+                // fis, the deferred pass: each lane of the quad takes its own shift of the set,
+                // the quad pools the sums, the mip level is chosen for all the pooled samples.
+                uint pooled = IBL_SAMPLES * uint(quad.z + 0.5);
+                vec4 weft_sum;
+                vec4 warp_sum;
+                // A pixel its quad leaves alone takes the unshifted set, as without pooling.
+                uint lane = pooled > IBL_SAMPLES ? uint(quad.w + 0.5) : 0u;
+                fabric_env_lobe_sums(tbn, k2, mean_cov, f, IBL, IBL_SAMPLES,
+                                     fabric_quad_shift(lane, IBL_SAMPLES), pooled,
+                                     weft_sum, warp_sum);
+                weft_sum = fabric_quad_pool(weft_sum, quad);
+                warp_sum = fabric_quad_pool(warp_sum, quad);
+                fabric_env_lobes_resolve(weft_sum, warp_sum, k2, f, max(fabric, 1u) - 1u, IBL, pooled,
+                                         env_weft, env_warp);
+            } else {
+                fabric_env_lobes(tbn, k2, mean_cov, f, max(fabric, 1u) - 1u, IBL, IBL_SAMPLES, ibl_rotation(), env_weft, env_warp);
+            }
             if (FABRIC_SHEETS != 0u && (f.flags & FABRIC_FLAG_SHEET) != 0u) {
                 env_back = fabric_env_back(tbn, IBL, IBL_SAMPLES, ibl_rotation());
             }

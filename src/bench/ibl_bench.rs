@@ -67,7 +67,23 @@ pub struct IblReport {
     pub rows: Vec<IblRow>,
     pub equal_error: Vec<EqualErrorRow>,
     pub cost: Vec<EnvCostRow>,
+    /// The fabric views at fis with the lobe samples pooled over 2 x 2 quads (the default) and
+    /// each pixel alone (`EnvLighting::quad_pool` off), timed in the same interleaved loop.
+    pub pooling: Vec<PoolingRow>,
 }
+
+/// One fabric view at one fis level: pooled over quads against alone.
+#[derive(Clone, Debug)]
+pub struct PoolingRow {
+    pub view: String,
+    pub level: IblLevel,
+    /// (lighting ms, rel error, PSNR dB) pooled, then alone.
+    pub pooled: (f64, f64, f64),
+    pub alone: (f64, f64, f64),
+}
+
+/// The fis levels the pooling table compares.
+pub const POOLING_LEVELS: [IblLevel; 2] = [IblLevel::Fis(8), IblLevel::Fis(16)];
 
 /// The brute-force levels of the equal-error comparison.
 pub const MC_LEVELS: [u32; 5] = [4, 16, 64, 256, 1024];
@@ -145,23 +161,29 @@ pub fn run(
             texture: None,
         });
     }
+    let options_pooled =
+        |camera: Option<crate::scene::Camera>, level: Option<IblLevel>, pooled: bool| {
+            RenderOptions {
+                width: size.0,
+                height: size.1,
+                camera_override: camera,
+                environment: level.map(|l| {
+                    let mut e = EnvLighting::new(env.clone());
+                    e.rotation = 60.0;
+                    e.level = l;
+                    // Transparent background: the background is not what is measured.
+                    e.background = crate::env::Background::None;
+                    e.quad_pool = pooled;
+                    e
+                }),
+                ..crate::bench::timed_options()
+            }
+        };
     let options = |scene: &Scene, camera: Option<crate::scene::Camera>, level: Option<IblLevel>| {
         let _ = scene;
-        RenderOptions {
-            width: size.0,
-            height: size.1,
-            camera_override: camera,
-            environment: level.map(|l| {
-                let mut e = EnvLighting::new(env.clone());
-                e.rotation = 60.0;
-                e.level = l;
-                // Transparent background: the background is not what is measured.
-                e.background = crate::env::Background::None;
-                e
-            }),
-            ..crate::bench::timed_options()
-        }
+        options_pooled(camera, level, true)
     };
+    let mut pooling = Vec::new();
     let truth = IblLevel::MonteCarlo(truth_samples);
     let mut rows = Vec::new();
     let mut equal_error = Vec::new();
@@ -212,9 +234,17 @@ pub fn run(
         let t = renderer.render_frame(scene, &gpu, &options(scene, camera.clone(), Some(truth)))?;
         truth_ms.push((name.clone(), super::pass_ms(&t, "lighting")));
         let covered: Vec<bool> = truth_frame.ldr.chunks_exact(4).map(|p| p[3] > 0).collect();
+        // The fabric views also each pixel alone at the pooling table's levels (after LEVELS).
+        let fabric_view = name.starts_with("cloth") || name.starts_with("lobes");
+        let alone: &[IblLevel] = if fabric_view { &POOLING_LEVELS } else { &[] };
         let sets: Vec<RenderOptions> = LEVELS
             .iter()
             .map(|l| options(scene, camera.clone(), Some(*l)))
+            .chain(
+                alone
+                    .iter()
+                    .map(|l| options_pooled(camera.clone(), Some(*l), false)),
+            )
             .collect();
         let mut last: Vec<Option<Frame>> = sets.iter().map(|_| None).collect();
         for o in &sets {
@@ -238,6 +268,23 @@ pub fn run(
                 rel_error: rel_error(&truth_frame, f, &covered),
                 psnr: super::psnr_linear(&truth_frame.hdr, &f.hdr, &covered),
                 pareto: false,
+            });
+        }
+        for (j, level) in alone.iter().enumerate() {
+            let f = last[LEVELS.len() + j].as_ref().expect("rendered");
+            let pooled = rows
+                .iter()
+                .find(|r| r.view == *name && r.level == *level)
+                .map_or((0.0, 0.0, 0.0), |r| (r.lighting_ms, r.rel_error, r.psnr));
+            pooling.push(PoolingRow {
+                view: name.clone(),
+                level: *level,
+                pooled,
+                alone: (
+                    super::median(times[LEVELS.len() + j].clone()),
+                    rel_error(&truth_frame, f, &covered),
+                    super::psnr_linear(&truth_frame.hdr, &f.hdr, &covered),
+                ),
             });
         }
         // The cloth only: the spheres take the split sum at every level.
@@ -319,6 +366,7 @@ pub fn run(
         rows,
         equal_error,
         cost,
+        pooling,
     })
 }
 
@@ -390,6 +438,38 @@ impl IblReport {
                     e.default_ms,
                     at,
                     mc.join(", ")
+                );
+            }
+        }
+        if !self.pooling.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nThe fabric lobes' samples pooled over 2x2 pixel quads (the default) against each pixel alone, same run"
+            );
+            let _ = writeln!(
+                s,
+                "{:<16} {:<8} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8}",
+                "view",
+                "level",
+                "pooled ms",
+                "rel error",
+                "PSNR dB",
+                "alone ms",
+                "rel error",
+                "PSNR dB"
+            );
+            for p in &self.pooling {
+                let _ = writeln!(
+                    s,
+                    "{:<16} {:<8} {:>10.2} {:>10.4} {:>8.2} {:>10.2} {:>10.4} {:>8.2}",
+                    p.view,
+                    p.level.name(),
+                    p.pooled.0,
+                    p.pooled.1,
+                    p.pooled.2,
+                    p.alone.0,
+                    p.alone.1,
+                    p.alone.2
                 );
             }
         }

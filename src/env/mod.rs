@@ -461,6 +461,10 @@ pub struct EnvLighting {
     pub intensity: f32,
     pub background: Background,
     pub level: IblLevel,
+    /// At fis, the deferred lighting pools the woven model's lobe samples over each 2 x 2 pixel
+    /// quad whose pixels agree (lighting.frag's QUAD_POOL; the default). `false`: each pixel
+    /// estimates its lobes alone, as the forward pass does (`weft bench --ibl` measures both).
+    pub quad_pool: bool,
 }
 
 impl EnvLighting {
@@ -471,6 +475,7 @@ impl EnvLighting {
             intensity: 1.0,
             background: Background::Env { blur: 0.0 },
             level: DEFAULT_IBL,
+            quad_pool: true,
         }
     }
 

@@ -411,35 +411,32 @@ pub fn fabric_lobe_albedo(
     mixf(e[0], e[1], rs)
 }
 
-/// `fabric_env_lobes`: the fabric's two specular lobes under the environment, each without its
-/// coverage: (weft lobe, warp lobe); fis as a ratio estimator times the exact albedo of fabric
-/// record `table` ([`fabric_lobe_albedo`]).
+/// `fabric_quad_shift`: the Hammersley set's shift for lane `lane` (0-3) of a 2 x 2 pixel quad
+/// whose lanes pool their lobe samples.
+pub fn fabric_quad_shift(lane: u32, samples: u32) -> [f32; 2] {
+    let reversed = ((lane & 1) << 1) | (lane >> 1);
+    let n = (4 * samples) as f32;
+    [(lane & 3) as f32 / n, (reversed & 3) as f32 / n]
+}
+
+/// `fabric_env_lobe_sums`: per lobe (Σ w·L, Σ w) over `samples` samples of the lobes' mixture,
+/// the set shifted by `shift`, fis's mip level chosen for `lod_samples` samples (mc: unfiltered).
 #[allow(clippy::too_many_arguments)]
-pub fn fabric_env_lobes(
+pub fn fabric_env_lobe_sums(
     env: &impl EnvLookup,
     tbn: &[Vec3; 3],
     k2: Vec3,
     coverage: [f32; 4],
     f: &GpuFabric,
-    table: u32,
     mode: u32,
     samples: u32,
-    rot: [f32; 2],
-) -> (Vec3, Vec3) {
-    let mut weft = [0.0f32; 3];
-    let mut warp = [0.0f32; 3];
+    shift: [f32; 2],
+    lod_samples: u32,
+) -> ([f32; 4], [f32; 4]) {
+    let mut weft = [0.0f32; 4];
+    let mut warp = [0.0f32; 4];
     if !(k2[2] > 0.0) {
         return (weft, warp);
-    }
-    if mode == 1 {
-        let r = to_world(tbn, [-k2[0], -k2[1], k2[2]]);
-        let peak = ((f.e_along + 1.0) * (f.e_across + 1.0)).sqrt() / (8.0 * PI);
-        let lod = ibl_twin::fis_lod(peak, 1, env.face_size()) + 1.0;
-        let l = env.radiance(r, lod);
-        return (
-            scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, false)),
-            scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, true)),
-        );
     }
     let c_thread = coverage[0] + coverage[1];
     let w_weft = if c_thread > 0.0 {
@@ -447,11 +444,8 @@ pub fn fabric_env_lobes(
     } else {
         0.5
     };
-    let r0 = if mode == 3 { rot } else { [0.0; 2] };
-    let mut w_sum_weft = 0.0f32;
-    let mut w_sum_warp = 0.0f32;
     for i in 0..samples {
-        let mut xi = ibl_sample(i, samples, r0);
+        let mut xi = ibl_sample(i, samples, shift);
         let pick_weft = xi[0] < w_weft;
         xi[0] = if pick_weft {
             xi[0] / w_weft
@@ -491,34 +485,85 @@ pub fn fabric_env_lobes(
         let lod = if mode == 3 {
             0.0
         } else {
-            ibl_twin::fis_lod(pdf, samples, env.face_size())
+            ibl_twin::fis_lod(pdf, lod_samples, env.face_size())
         };
         let l = scale(env.radiance(to_world(tbn, k1), lod), common_w);
-        weft = add(weft, scale(l, p_weft));
-        warp = add(warp, scale(l, p_warp));
-        w_sum_weft += common_w * p_weft;
-        w_sum_warp += common_w * p_warp;
+        for (sum, p) in [(&mut weft, p_weft), (&mut warp, p_warp)] {
+            for c in 0..3 {
+                sum[c] += l[c] * p;
+            }
+            sum[3] += common_w * p;
+        }
     }
+    (weft, warp)
+}
+
+/// `fabric_env_lobes_resolve`: the lobes' radiance from their sums over `samples` samples: fis
+/// a ratio estimator times the exact albedo of fabric record `table` ([`fabric_lobe_albedo`]),
+/// mc the plain estimate.
+#[allow(clippy::too_many_arguments)]
+pub fn fabric_env_lobes_resolve(
+    env: &impl EnvLookup,
+    weft: [f32; 4],
+    warp: [f32; 4],
+    k2: Vec3,
+    f: &GpuFabric,
+    table: u32,
+    mode: u32,
+    samples: u32,
+) -> (Vec3, Vec3) {
     if mode == 2 {
-        let ratio = |sum: Vec3, w: f32, warp: bool| {
-            if w > 1e-6 * samples as f32 {
+        let ratio = |sum: [f32; 4], warp: bool| {
+            if sum[3] > 1e-6 * samples as f32 {
                 scale(
-                    scale(sum, 1.0 / w),
+                    scale([sum[0], sum[1], sum[2]], 1.0 / sum[3]),
                     fabric_lobe_albedo(env, f, table, k2, f.rs, warp),
                 )
             } else {
                 [0.0; 3]
             }
         };
+        return (ratio(weft, false), ratio(warp, true));
+    }
+    let n = 1.0 / samples as f32;
+    (
+        [weft[0] * n, weft[1] * n, weft[2] * n],
+        [warp[0] * n, warp[1] * n, warp[2] * n],
+    )
+}
+
+/// `fabric_env_lobes`: the fabric's two specular lobes under the environment, each without its
+/// coverage: (weft lobe, warp lobe); approx one look-up times the exact albedo, fis and mc
+/// [`fabric_env_lobe_sums`] and [`fabric_env_lobes_resolve`] for one pixel alone.
+#[allow(clippy::too_many_arguments)]
+pub fn fabric_env_lobes(
+    env: &impl EnvLookup,
+    tbn: &[Vec3; 3],
+    k2: Vec3,
+    coverage: [f32; 4],
+    f: &GpuFabric,
+    table: u32,
+    mode: u32,
+    samples: u32,
+    rot: [f32; 2],
+) -> (Vec3, Vec3) {
+    if !(k2[2] > 0.0) {
+        return ([0.0; 3], [0.0; 3]);
+    }
+    if mode == 1 {
+        let r = to_world(tbn, [-k2[0], -k2[1], k2[2]]);
+        let peak = ((f.e_along + 1.0) * (f.e_across + 1.0)).sqrt() / (8.0 * PI);
+        let lod = ibl_twin::fis_lod(peak, 1, env.face_size()) + 1.0;
+        let l = env.radiance(r, lod);
         return (
-            ratio(weft, w_sum_weft, false),
-            ratio(warp, w_sum_warp, true),
+            scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, false)),
+            scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, true)),
         );
     }
-    (
-        scale(weft, 1.0 / samples as f32),
-        scale(warp, 1.0 / samples as f32),
-    )
+    let shift = if mode == 3 { rot } else { [0.0; 2] };
+    let (weft, warp) =
+        fabric_env_lobe_sums(env, tbn, k2, coverage, f, mode, samples, shift, samples);
+    fabric_env_lobes_resolve(env, weft, warp, k2, f, table, mode, samples)
 }
 
 /// `fabric_env_diffuse`: the fabric's diffuse under the environment, without its coverage.
@@ -819,17 +864,43 @@ pub fn env_probe_eval(
     );
     let tbn = fb::fabric_frame(xyz(inp.frame_n), xyz(inp.frame_t), inp.frame_t[3]);
     let k2 = xyz(inp.k2);
-    let (weft, warp) = fabric_env_lobes(
-        env,
-        &tbn,
-        k2,
-        inp.coverage,
-        &inp.fabric,
-        inp.mode[3] % 3,
-        mode,
-        samples,
-        rot,
-    );
+    let lane = (inp.mode[3] / 3) % 4;
+    let (weft, warp) = if mode == 2 && lane != 0 {
+        let pooled = samples * (lane + 1);
+        let (weft, warp) = fabric_env_lobe_sums(
+            env,
+            &tbn,
+            k2,
+            inp.coverage,
+            &inp.fabric,
+            mode,
+            samples,
+            fabric_quad_shift(lane, samples),
+            pooled,
+        );
+        fabric_env_lobes_resolve(
+            env,
+            weft,
+            warp,
+            k2,
+            &inp.fabric,
+            inp.mode[3] % 3,
+            mode,
+            pooled,
+        )
+    } else {
+        fabric_env_lobes(
+            env,
+            &tbn,
+            k2,
+            inp.coverage,
+            &inp.fabric,
+            inp.mode[3] % 3,
+            mode,
+            samples,
+            rot,
+        )
+    };
     let pr = pixel_random([inp.mode[2], inp.mode[3]]);
     let diffuse = fabric_env_diffuse(env, &tbn, k2, &inp.fabric, mode, samples, rot);
     let back = fabric_env_back(env, &tbn, mode, samples, rot);

@@ -328,6 +328,9 @@ pub struct EnvPlan {
     /// per fabric material at the approx and fis levels when the woven model shades the fabric,
     /// none for Monte Carlo, the fabric shaded as glTF or the comparison models.
     pub lobe_albedo_tables: usize,
+    /// At fis, where the woven model shades fabric in the deferred pass: its lobe samples
+    /// pooled over each 2 x 2 pixel quad whose pixels agree (lighting.frag's QUAD_POOL).
+    pub quad_pool: bool,
 }
 
 /// lighting.frag's GLTF_FEATURES bits (frame.glsl's GLTF_FEATURE_*).
@@ -526,6 +529,11 @@ impl Plan {
                         }
                         _ => 0,
                     },
+                    quad_pool: e.quad_pool
+                        && matches!(e.level, crate::env::IblLevel::Fis(_))
+                        && options.shading == crate::records::Shading::Fabric
+                        && !options.fabric_as_pbr
+                        && scene.materials.iter().any(|m| m.fabric.is_some()),
                 }
             });
         // Occlusion of the environment's light, when there is one (or the debug view shows it).
@@ -754,6 +762,11 @@ impl Plan {
             (true, false) => 1,
             (true, true) => 2,
         }
+    }
+
+    /// lighting.frag's QUAD_POOL: the plan's, or forced on (`Force::quad_pool`).
+    pub fn quad_pool_code(&self, options: &RenderOptions) -> u32 {
+        (options.force.quad_pool || self.environment.as_ref().is_some_and(|e| e.quad_pool)) as u32
     }
 
     pub fn ibl_code(&self, options: &RenderOptions) -> u32 {
@@ -991,6 +1004,14 @@ impl fmt::Display for Plan {
                 e.lobe_albedo_tables,
                 crate::env::lobe_albedo::LOBE_ALBEDO_MU,
                 crate::env::lobe_albedo::LOBE_ALBEDO_PHI
+            )?;
+        }
+        if let Some(e) = self.environment.as_ref().filter(|e| e.quad_pool) {
+            writeln!(
+                f,
+                "            fabric lobes: {} samples per pixel, pooled over 2x2 pixel quads where the surface agrees (up to {} a pixel)",
+                e.level.trim_start_matches("fis:"),
+                4 * e.level.trim_start_matches("fis:").parse::<u32>().unwrap_or(0)
             )?;
         }
         match &self.occlusion {

@@ -112,6 +112,7 @@ impl LightingPass {
             ),
             (12, "pixel_kinds", kinds),
             (13, "gltf_features", plan.gltf_features),
+            (14, "quad_pool", plan.quad_pool_code(options)),
         ])
     }
 
