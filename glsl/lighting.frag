@@ -211,8 +211,9 @@ vec4 fabric_quad(ivec2 px, float depth, vec4 fr, vec4 surface) {
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gb_depth, px, 0).r;
-    // Before any pixel returns: the quad's lanes compare their surfaces by derivatives.
-    vec4 quad = QUAD_POOL != 0u ? fabric_quad(px, depth, frame_decode(texelFetch(gb_frame, px, 0)),
+    // Before any pixel returns: the quad's lanes compare their surfaces by derivatives (only in a
+    // pipeline that shades woven pixels: the background's and the glTF pixels' have none to pool).
+    vec4 quad = QUAD_POOL != 0u && (PIXEL_KINDS & PIXEL_KIND_WOVEN) != 0u ? fabric_quad(px, depth, frame_decode(texelFetch(gb_frame, px, 0)),
                                               texelFetch(gb_surface, px, 0))
                                 : vec4(0.0, 0.0, 1.0, 0.0);
     if ((PIXEL_KINDS & PIXEL_KIND_BACKGROUND) != 0u && depth <= 0.0) {

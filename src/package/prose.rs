@@ -78,7 +78,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          `EnvProbeInput` records (std430: fourteen `vec4` — `n`, `v`, `base_metallic`, \
          `f0_specular`, `sheen`, `t_anisotropy`, `surface`, `film`, `bounce`, `frame_t`, \
          `frame_n`, `k2`, `coverage`, `rot` —, `uvec4 mode` (level, samples, pixel; pixel y mod 3 is \
-         also the lobe albedo table `fabric_env_lobes` reads), the 80-byte \
+         also the lobe albedo table `fabric_env_lobes` reads, and at fis (y / 3) mod 4 a pooled \
+         quad's lane whose shifted sample set `fabric_env_lobe_sums` evaluates), the 80-byte \
          `GpuFabric` of `include/fabric.glsl`, the 96-byte `Shadow` of `include/frame.glsl`, then \
          `vec4 light_pos, p, pn`) and a buffer for `count` 112-byte `EnvProbeOutput` records \
          (seven `vec4`: `pbr`, `aniso`, `weft`, `warp`, `diffuse`, `back`, `combined`; the \

@@ -495,6 +495,21 @@ impl Plan {
             .filter(|_| options.debug_view == DebugView::None)
             .map(|e| {
                 let radiance_size = super::environment::radiance_size(e.env.width);
+                // Read only where the woven model shades fabric under the environment: not with
+                // the fabric shaded as glTF, nor by the paper's comparison models.
+                let lobe_albedo_tables = match e.level {
+                    crate::env::IblLevel::Fis(_) | crate::env::IblLevel::Approx
+                        if options.shading == crate::records::Shading::Fabric
+                            && !options.fabric_as_pbr =>
+                    {
+                        scene
+                            .materials
+                            .iter()
+                            .filter(|m| m.fabric.is_some())
+                            .count()
+                    }
+                    _ => 0,
+                };
                 EnvPlan {
                     name: e.env.name.clone(),
                     width: e.env.width,
@@ -514,26 +529,11 @@ impl Plan {
                         crate::env::Background::Color(c) => format!("colour {c:?}"),
                         crate::env::Background::None => "transparent".into(),
                     },
-                    // Read only where the woven model shades fabric under the environment: not
-                    // with the fabric shaded as glTF, nor by the paper's comparison models.
-                    lobe_albedo_tables: match e.level {
-                        crate::env::IblLevel::Fis(_) | crate::env::IblLevel::Approx
-                            if options.shading == crate::records::Shading::Fabric
-                                && !options.fabric_as_pbr =>
-                        {
-                            scene
-                                .materials
-                                .iter()
-                                .filter(|m| m.fabric.is_some())
-                                .count()
-                        }
-                        _ => 0,
-                    },
+                    lobe_albedo_tables,
+                    // Where fis estimates the woven model's lobes (which read the tables).
                     quad_pool: e.quad_pool
                         && matches!(e.level, crate::env::IblLevel::Fis(_))
-                        && options.shading == crate::records::Shading::Fabric
-                        && !options.fabric_as_pbr
-                        && scene.materials.iter().any(|m| m.fabric.is_some()),
+                        && lobe_albedo_tables > 0,
                 }
             });
         // Occlusion of the environment's light, when there is one (or the debug view shows it).
@@ -1006,12 +1006,10 @@ impl fmt::Display for Plan {
                 crate::env::lobe_albedo::LOBE_ALBEDO_PHI
             )?;
         }
-        if let Some(e) = self.environment.as_ref().filter(|e| e.quad_pool) {
+        if self.environment.as_ref().is_some_and(|e| e.quad_pool) {
             writeln!(
                 f,
-                "            fabric lobes: {} samples per pixel, pooled over 2x2 pixel quads where the surface agrees (up to {} a pixel)",
-                e.level.trim_start_matches("fis:"),
-                4 * e.level.trim_start_matches("fis:").parse::<u32>().unwrap_or(0)
+                "            fabric lobes: each pixel's fis samples pooled over its 2x2 pixel quad where the surface agrees (up to 4x the samples)"
             )?;
         }
         match &self.occlusion {
