@@ -115,16 +115,18 @@ void main() {
     mat3 tbn = fabric_frame(p.frame_n.xyz, p.frame_t.xyz, p.frame_t.w);
     vec3 weft;
     vec3 warp;
-    uint lane = (p.mode.w / 3u) % 4u;
-    if (mode == 2u && lane != 0u) {
-        // One lane of a pooled quad (shade.glsl): its shifted set, the mip level of lane + 1
-        // pooled sets, resolved as if they were its own.
-        uint pooled = samples * (lane + 1u);
+    uint block = (p.mode.w / 3u) % 4u;
+    if (mode == 2u && block != 0u) {
+        // A pixel that pools (fabric_lobes.frag): block `block` of the Sobol' sequence, the mip
+        // level of block + 1 pixels' samples, through fabric_lobe_pack as lighting.frag reads
+        // it, resolved as if they were all its own.
+        uint pooled = samples * (block + 1u);
         vec4 weft_sum;
         vec4 warp_sum;
-        fabric_env_lobe_sums(tbn, p.k2.xyz, p.coverage, p.fabric, mode, samples,
-                             fabric_quad_shift(lane, samples), pooled, weft_sum, warp_sum);
-        fabric_env_lobes_resolve(weft_sum, warp_sum, p.k2.xyz, p.fabric, p.mode.w % 3u, mode, pooled,
+        fabric_env_lobe_sums(tbn, p.k2.xyz, p.coverage, p.fabric, mode, samples, rot, block + 1u,
+                             pooled, weft_sum, warp_sum);
+        fabric_lobe_unpack(fabric_lobe_pack(weft_sum, warp_sum, samples, 0u), weft_sum, warp_sum);
+        fabric_env_lobes_resolve(weft_sum, warp_sum, p.k2.xyz, p.fabric, p.mode.w % 3u, mode, 1u,
                                  weft, warp);
     } else {
         fabric_env_lobes(tbn, p.k2.xyz, p.coverage, p.fabric, p.mode.w % 3u, mode, samples, rot, weft, warp);

@@ -62,7 +62,7 @@ const uint PIXEL_KINDS = PIXEL_KINDS_ALL;
 const uint GLTF_FEATURES = GLTF_FEATURES_ALL;
 // A fragment of a blended surface estimates its fabric lobes alone (a quad's fragments may lie on
 // different triangles and layers).
-const uint QUAD_POOL = 0u;
+const uint POOL = 0u;
 
 // Set 0: gbuffer.vert's and gbuffer.frag's bindings 0-5, then lighting.frag's shadow and environment bindings (one
 // number per resource in every shader).
@@ -120,6 +120,14 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 
 #include "shade.glsl"
 
+// Blended fabric is lit fragment by fragment, never pooled (POOL is 0): shade.glsl's declaration
+// needs a body.
+void fabric_pooled_lobe_sums(GpuFabric f, out vec4 weft, out vec4 warp, out uint pixels) {
+    weft = vec4(0.0);
+    warp = vec4(0.0);
+    pixels = 1u;
+}
+
 layout(location = 0) out vec4 out_color;
 
 void main() {
@@ -136,8 +144,7 @@ void main() {
     vec4 emissive = cover >= 0.0 ? vec4(s.emissive.rgb * cover, s.emissive.a) : s.emissive;
     vec3 radiance = shade_surface(in_world_pos, v, s.albedo, frame_decode(s.frame), s.surface, s.fabric,
                                   emissive, s.specular, s.transmission, s.attenuation, s.coat,
-                                  s.coat_normal, s.diffuse_transmission, s.iridescence, vec3(1.0),
-                                  vec4(0.0, 0.0, 1.0, 0.0));
+                                  s.coat_normal, s.diffuse_transmission, s.iridescence, vec3(1.0));
     radiance = all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0);
     // alphaMode BLEND blends by the base colour's alpha; a transmissive surface that is not BLEND
     // covers what is behind (its transmitted light is in its radiance).

@@ -53,10 +53,12 @@ layout(constant_id = 12) const uint PIXEL_KINDS = 7u;
 // The glTF extensions some deferred material of the scene has (GLTF_FEATURE_* bits): the others'
 // code is compiled out.
 layout(constant_id = 13) const uint GLTF_FEATURES = 3u;
-// 1: at fis, the woven model's lobe samples are pooled over each 2 x 2 pixel quad whose pixels
-// agree (fabric_quad: the same fabric material, normals and tangents within a quarter of the
-// lobe's narrow width); 0 (default): each pixel estimates its lobes alone.
-layout(constant_id = 14) const uint QUAD_POOL = 0u;
+// R ≥ 1: at fis, the woven model's lobe samples are pooled over the (2R + 1) x (2R + 1) pixels
+// around each pixel whose surface agrees with its own (fabric_pool_agrees: the same material,
+// normals and tangents within a quarter of the lobe's narrow width), from the sums
+// fabric_lobes.frag wrote at binding 28 with the same R; 0 (default): each pixel estimates its
+// lobes alone.
+layout(constant_id = 14) const uint POOL = 0u;
 // Fabric sheets are drawn by the transparent pass (forward.frag), never deferred.
 const uint FABRIC_SHEETS = 0u;
 
@@ -90,6 +92,7 @@ layout(set = 0, binding = 24) uniform sampler2D gb_emissive;  // G-buffer emissi
 layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
 layout(set = 0, binding = 26) uniform sampler2D gb_specular;  // G-buffer specular (KHR_materials_specular: rgb F0, a weight)
 layout(set = 0, binding = 27) uniform sampler2D screen_occlusion;  // the occlusion pass's visibility of the environment and view distance per 2 x 2 pixels (RG16F, half resolution, occlusion_blur.frag); any image when OCCLUSION = 0
+layout(set = 0, binding = 28) uniform usampler2D fabric_lobe_sums;  // fabric_lobes.frag's lobe sums per pixel (RGBA32_UINT, fabric_lobe_pack of include/env_light.glsl) when POOL ≥ 1; any unsigned-integer image otherwise
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
@@ -104,6 +107,30 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 }
 
 #include "shade.glsl"
+#include "pool.glsl"
+
+// shade.glsl's fabric_pooled_lobe_sums: this pixel's lobe sums (fabric_lobes.frag's, at
+// binding 28) and those of the pixels its mask names (within POOL of it, their surface agreeing
+// with its own); the pixels pooled in `pixels`.
+void fabric_pooled_lobe_sums(GpuFabric f, out vec4 weft, out vec4 warp, out uint pixels) {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    uvec4 own = texelFetch(fabric_lobe_sums, px, 0);
+    fabric_lobe_unpack(own, weft, warp);
+    pixels = 1u;
+    // A loop over the mask's bits, not the window: llvmpipe leaves a loop as soon as no lane of
+    // a vector has a turn left, where it would run every fetch of an `if` under a mask.
+    uint mask = own.w;
+    while (mask != 0u) {
+        int bit = findLSB(mask);
+        mask &= mask - 1u;
+        vec4 a;
+        vec4 b;
+        fabric_lobe_unpack(texelFetch(fabric_lobe_sums, px + fabric_pool_offset(bit, POOL), 0), a, b);
+        weft += a;
+        warp += b;
+        pixels += 1u;
+    }
+}
 
 // The occlusion pass's visibility at pixel px, whose view distance is `dist`: the half-resolution
 // estimates around it (each made at the top-left pixel of its 2 x 2 block), bilinearly, each
@@ -175,47 +202,9 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
     return vec3(1.0, 0.0, 1.0);
 }
 
-// The angle, in units of the fabric's narrow lobe width 1/sqrt(max exponent), within which two
-// pixels' normals and tangents must agree for their quad to pool their lobe samples: at a quarter
-// the pooled lobes' centres differ by half their width at most (the reflection turns twice as
-// fast as the normal). Measured (weft bench --ibl): 0.25 keeps the mid and far views' accuracy,
-// where a fixed 5.7° pooled across the cloth's curvature and lost 1-2 dB on the lobes.
-const float QUAD_POOL_ANGLE = 0.25;
-
-// This pixel's quad pooling for shade_surface (fabric_quad_pool): (pool with the x neighbour,
-// with the y neighbour, lanes pooled 1-4, lane). Two pixels pool when both show the same fabric
-// material (not empty) and their normals and tangents are within QUAD_POOL_ANGLE lobe widths.
-// At the top of main, in uniform control flow, for the derivatives.
-vec4 fabric_quad(ivec2 px, float depth, vec4 fr, vec4 surface) {
-    uint lane = uint(px.x & 1) | (uint(px.y & 1) << 1u);
-    uint material = uint(surface.y + 0.5);
-    uint fabric = uint(materials[min(material, frame.material_count - 1u)].metallic_roughness.z + 0.5);
-    GpuFabric f = fabrics[max(fabric, 1u) - 1u];
-    float near = cos(QUAD_POOL_ANGLE * inversesqrt(max(max(f.e_along, f.e_across), 1.0)));
-    float id = depth > 0.0 && fabric > 0u ? float(material) : -1.0;
-    vec4 key = vec4(oct_decode(fr.xy), id);
-    vec3 t = oct_decode(fr.zw);
-    float sx = (lane & 1u) == 0u ? 1.0 : -1.0;
-    float sy = (lane & 2u) == 0u ? 1.0 : -1.0;
-    vec4 kx = key + sx * dFdxFine(key);
-    vec3 tx = t + sx * dFdxFine(t);
-    vec4 ky = key + sy * dFdyFine(key);
-    vec3 ty = t + sy * dFdyFine(t);
-    float cx = id >= 0.0 && abs(kx.w - id) < 0.5 && dot(kx.xyz, key.xyz) > near && dot(tx, t) > near ? 1.0 : 0.0;
-    float cy = id >= 0.0 && abs(ky.w - id) < 0.5 && dot(ky.xyz, key.xyz) > near && dot(ty, t) > near ? 1.0 : 0.0;
-    // The y neighbour's own x pooling, which it passes on.
-    float cx_y = cx + sy * dFdyFine(cx);
-    return vec4(cx, cy, 1.0 + cx + cy * (1.0 + cx_y), float(lane));
-}
-
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gb_depth, px, 0).r;
-    // Before any pixel returns: the quad's lanes compare their surfaces by derivatives (only in a
-    // pipeline that shades woven pixels: the background's and the glTF pixels' have none to pool).
-    vec4 quad = QUAD_POOL != 0u && (PIXEL_KINDS & PIXEL_KIND_WOVEN) != 0u ? fabric_quad(px, depth, frame_decode(texelFetch(gb_frame, px, 0)),
-                                              texelFetch(gb_surface, px, 0))
-                                : vec4(0.0, 0.0, 1.0, 0.0);
     if ((PIXEL_KINDS & PIXEL_KIND_BACKGROUND) != 0u && depth <= 0.0) {
         // Empty pixel: the background (the environment seen along the view ray, a colour, or
         // transparent); debug views show black.
@@ -267,7 +256,7 @@ void main() {
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),
                                   emissive_ao, texelFetch(gb_specular, px, 0),
                                   vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0),
-                                  vec4(0.0), bounce, quad);
+                                  vec4(0.0), bounce);
     // Never NaN or Inf into the image.
     out_color = vec4(all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0), 1.0);
 }

@@ -89,6 +89,8 @@ pub struct SceneSpec {
     pub env_intensity: f32,
     pub background: Background,
     pub ibl: IblLevel,
+    /// The fabric lobes' pooling radius at fis ([`EnvLighting::pool`]).
+    pub ibl_pool: u32,
     pub occlusion: Occlusion,
     pub lights: LightsMode,
 }
@@ -113,6 +115,7 @@ impl Default for SceneSpec {
             env_intensity: 1.0,
             background: Background::Env { blur: 0.0 },
             ibl: crate::env::DEFAULT_IBL,
+            ibl_pool: crate::env::DEFAULT_POOL,
             occlusion: Occlusion::Gtao { radius: None },
             lights: LightsMode::Auto,
         }
@@ -183,6 +186,7 @@ impl SceneSpec {
             l.intensity = self.env_intensity;
             l.background = self.background;
             l.level = self.ibl;
+            l.pool = self.ibl_pool;
             l
         });
         if let Some(l) = &lighting {

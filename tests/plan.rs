@@ -672,11 +672,11 @@ fn lobe_albedo_tables_only_where_the_woven_model_reads_them() {
     );
 }
 
-/// The fabric lobes' quad pooling is planned only at fis where the woven model shades fabric;
-/// compiled in where it has nothing to pool (no fabric, or the fabric at mc) it changes nothing,
-/// and where it pools it changes the cloth's lobes only: the same image off the cloth.
+/// The pooling of the fabric lobes' samples is planned only at fis where the woven model shades
+/// fabric; compiled in where it has nothing to pool (no fabric, or the fabric at mc) it changes
+/// nothing, and where it pools it changes the cloth's lobes only: the same image off the cloth.
 #[test]
-fn quad_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
+fn lobe_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
     use weft::env::{EnvLighting, IblLevel};
     let scene = scene::default_scene();
     let lit = |level, pooled| RenderOptions {
@@ -685,13 +685,13 @@ fn quad_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
         environment: Some({
             let mut e = EnvLighting::new(weft::spec::studio());
             e.level = level;
-            e.quad_pool = pooled;
+            e.pool = if pooled { weft::env::DEFAULT_POOL } else { 0 };
             e
         }),
         ..options()
     };
     let pooled =
-        |s: &Scene, o: &RenderOptions| Plan::new(s, o).environment.is_some_and(|e| e.quad_pool);
+        |s: &Scene, o: &RenderOptions| Plan::new(s, o).environment.is_some_and(|e| e.pool > 0);
     assert!(pooled(&scene, &lit(IblLevel::Fis(8), true)));
     assert!(!pooled(&scene, &lit(IblLevel::Fis(8), false)));
     assert!(!pooled(&scene, &lit(IblLevel::Approx, true)));
@@ -709,7 +709,7 @@ fn quad_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
     let mut renderer = Renderer::new(common::context()).unwrap();
     let force = |o: RenderOptions| RenderOptions {
         force: weft::render::Force {
-            quad_pool: true,
+            pool: true,
             ..Default::default()
         },
         ..o
@@ -721,8 +721,8 @@ fn quad_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
     ] {
         let planned = renderer.render(s, &lit(level, true)).unwrap();
         let forced = renderer.render(s, &force(lit(level, true))).unwrap();
-        assert!(lighting_pipeline(&planned).contains("quad_pool=0"));
-        assert!(lighting_pipeline(&forced).contains("quad_pool=1"));
+        assert!(lighting_pipeline(&planned).contains("pool=0"));
+        assert!(lighting_pipeline(&forced).contains("pool=1"));
         assert_eq!(max_hdr_diff(&planned, &forced), 0.0, "{}", level.name());
         assert_eq!(planned.ldr, forced.ldr);
     }
@@ -733,8 +733,12 @@ fn quad_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
     let off = renderer
         .render(&scene, &lit(IblLevel::Fis(8), false))
         .unwrap();
-    assert!(lighting_pipeline(&on).contains("quad_pool=1"));
-    assert!(lighting_pipeline(&off).contains("quad_pool=0"));
+    assert!(lighting_pipeline(&on).contains("pool=1"));
+    assert!(lighting_pipeline(&off).contains("pool=0"));
+    // The lobe sums draw runs only where the lighting pools.
+    let lobes_draw = |f: &weft::render::Frame| f.stats.pipelines.iter().any(|p| p.starts_with("fabric lobes["));
+    assert!(lobes_draw(&on));
+    assert!(!lobes_draw(&off));
     let plain_on = renderer
         .render(&plain, &lit(IblLevel::Fis(8), true))
         .unwrap();

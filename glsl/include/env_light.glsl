@@ -248,22 +248,17 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
          + specular * max(1.0 - k * e_v, 0.0) + s.sheen * e_v * irradiance * ao;
 }
 
-// The shift of the Hammersley set that lane `lane` (0-3: x parity + 2 y parity) of a 2 x 2 pixel
-// quad uses when the quad's lanes pool their lobe samples (fabric_quad_pool, shade.glsl): a
-// quarter of a stratum in x and a bit-reversed quarter in y, so each lane's set alone is still
-// the whole stratified set and the four together fill every stratum's quarters.
-vec2 fabric_quad_shift(uint lane, uint samples) {
-    uint reversed = ((lane & 1u) << 1u) | (lane >> 1u);
-    return vec2(float(lane & 3u), float(reversed & 3u)) / float(4u * samples);
-}
-
 // The sums of the fabric's lobe estimators (fis and mc): per lobe (Σ w·L, Σ w) over `samples`
 // samples of the coverage-weighted mixture of the two lobes' A–S samplers (one-sample MIS, so
-// both lobes use every sample), the Hammersley set shifted by `shift` (fis: a quad lane's
-// fabric_quad_shift, or 0; mc: its per-pixel rotation), fis's mip level chosen for
-// `lod_samples` samples (the samples pooled over a quad, or `samples`), mc's unfiltered. w is
-// f·cos/pdf times the lobe's hn^E; fabric_env_lobes_resolve turns the sums into radiance.
-void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, uint samples, vec2 shift, uint lod_samples, out vec4 weft, out vec4 warp) {
+// both lobes use every sample). `block` 0: the Hammersley set shifted by `rot` (fis: 0, a pixel
+// alone; mc: the pixel's rotation); b ≥ 1: block b − 1 of the Sobol' (0,2)-sequence (sobol_block:
+// pixels that pool take different blocks, which together are one well-spread set; alone, a
+// block is no better than the Hammersley set, and worse once the lobe choice splits it: the
+// bench's lobes mid and far views lost 1.5-2 dB with it). fis's mip level is chosen for
+// `lod_samples` samples (all the samples a pixel's neighbourhood pools, or `samples`), mc's
+// unfiltered. w is f·cos/pdf times the lobe's hn^E; fabric_env_lobes_resolve turns the sums
+// into radiance.
+void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mode, uint samples, vec2 rot, uint block, uint lod_samples, out vec4 weft, out vec4 warp) {
     weft = vec4(0.0);
     warp = vec4(0.0);
     if (!(k2.z > 0.0)) {
@@ -272,7 +267,7 @@ void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mo
     float c_thread = coverage.x + coverage.y;
     float w_weft = c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
     for (uint i = 0u; i < samples; ++i) {
-        vec2 xi = ibl_sample(i, samples, shift);
+        vec2 xi = block == 0u ? ibl_sample(i, samples, rot) : sobol_block(i, samples, block - 1u);
         bool pick_weft = xi.x < w_weft;
         xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
         xi.x = min(xi.x, 0.99999994);
@@ -311,8 +306,8 @@ void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mo
     }
 }
 
-// The lobes' radiance from fabric_env_lobe_sums' sums over `samples` samples (fis: all a quad
-// pooled). fis takes from the samples only the lobe's weighted mean radiance (a ratio estimator:
+// The lobes' radiance from fabric_env_lobe_sums' sums over `samples` samples (or, as the
+// deferred lighting pools them, the sum of `samples` pixels' fabric_lobe_unpack). fis takes from the samples only the lobe's weighted mean radiance (a ratio estimator:
 // Σ w L / Σ w, bounded by the brightest sample whatever the weights) and its albedo from fabric
 // record `table`'s exact table (fabric_lobe_albedo): eight fixed samples' own estimate of the
 // albedo was the larger half of their error (issue 31 item 1; docs/performance.md). A lobe its
@@ -331,11 +326,70 @@ void fabric_env_lobes_resolve(vec4 weft_sum, vec4 warp_sum, vec3 k2, GpuFabric f
     warp = warp_sum.rgb / float(samples);
 }
 
+// Three non-negative values under one exponent, as VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 holds them
+// (nine-bit mantissas, the exponent from the largest, rounded to nearest; values above 65408
+// clamped, NaN read as 0).
+uint rgb9e5_pack(vec3 c) {
+    // max(x, 0) turns NaN into 0 on every device.
+    c = min(max(c, vec3(0.0)), vec3(65408.0));
+    float m = max(max(c.r, c.g), c.b);
+    int e2;
+    frexp(m, e2);
+    // m = mantissa · 2^e2 with the mantissa in [0.5, 1): floor(log2 m) = e2 − 1; the shared
+    // exponent is that + 16 (bias 15, one more for the mantissa's leading bit), at least 0.
+    int e = m > 0.0 ? max(e2 + 15, 0) : 0;
+    float scale = exp2(float(24 - e));
+    if (floor(m * scale + 0.5) >= 512.0) {
+        e += 1;
+        scale *= 0.5;
+    }
+    uvec3 q = uvec3(floor(c * scale + 0.5));
+    return q.r | (q.g << 9u) | (q.b << 18u) | (uint(e) << 27u);
+}
+
+vec3 rgb9e5_unpack(uint p) {
+    vec3 q = vec3(float(p & 511u), float((p >> 9u) & 511u), float((p >> 18u) & 511u));
+    return q * exp2(float(int(p >> 27u) - 24));
+}
+
+// Two non-negative values as the top 16 bits of their f32 (bfloat16: 8 exponent and 7 mantissa
+// bits, rounded), in integer arithmetic: packHalf2x16 took lavapipe down with SIGILL at
+// LP_NATIVE_VECTOR_WIDTH=128 (Mesa 22.3.6, its CPU caps at SSE4.1).
+uint bf16x2_pack(vec2 v) {
+    // max(x, 0) turns NaN into 0; the bound keeps the rounding below infinity.
+    uvec2 b = floatBitsToUint(min(max(v, vec2(0.0)), vec2(3.0e38)));
+    b = (b + 0x8000u) >> 16u;
+    return b.x | (b.y << 16u);
+}
+
+vec2 bf16x2_unpack(uint p) {
+    return uintBitsToFloat(uvec2(p << 16u, p & 0xffff0000u));
+}
+
+// One pixel's lobe sums (fabric_env_lobe_sums over `samples` samples) as fabric_lobes.frag
+// writes them for the deferred lighting to pool: per lobe its weighted mean radiance
+// Σ w·L / Σ w (x: weft, y: warp, rgb9e5_pack) and its weight per sample Σ w / samples (z: both,
+// bf16x2_pack; a weight only weighs one pixel's mean against its neighbours'), and `mask` (w: which
+// pixels around it pool with it).
+uvec4 fabric_lobe_pack(vec4 weft, vec4 warp, uint samples, uint mask) {
+    vec3 weft_mean = weft.w > 0.0 ? weft.rgb / weft.w : vec3(0.0);
+    vec3 warp_mean = warp.w > 0.0 ? warp.rgb / warp.w : vec3(0.0);
+    vec2 weights = vec2(weft.w, warp.w) / float(samples);
+    return uvec4(rgb9e5_pack(weft_mean), rgb9e5_pack(warp_mean), bf16x2_pack(weights), mask);
+}
+
+// fabric_lobe_pack's texel back as sums per sample: per lobe (mean · weight, weight).
+void fabric_lobe_unpack(uvec4 texel, out vec4 weft, out vec4 warp) {
+    vec2 w = bf16x2_unpack(texel.z);
+    weft = vec4(rgb9e5_unpack(texel.x) * w.x, w.x);
+    warp = vec4(rgb9e5_unpack(texel.y) * w.y, w.y);
+}
+
 // The fabric's two specular lobes under the environment, each without its coverage:
 // (weft lobe, warp lobe) radiance. approx: the radiance in the mirror direction blurred to the
 // lobe's width times the lobe's exact albedo; fis / mc: fabric_env_lobe_sums (mc: rotated by
 // `rot`, unfiltered) and fabric_env_lobes_resolve, for one pixel alone (the deferred lighting
-// pools a quad's samples instead: shade.glsl).
+// pools a neighbourhood's samples instead: fabric_lobes.frag and lighting.frag).
 void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table, uint mode, uint samples, vec2 rot, out vec3 weft, out vec3 warp) {
     weft = vec3(0.0);
     warp = vec3(0.0);
@@ -357,7 +411,7 @@ void fabric_env_lobes(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint table,
     }
     vec4 weft_sum;
     vec4 warp_sum;
-    fabric_env_lobe_sums(tbn, k2, coverage, f, mode, samples, mode == 3u ? rot : vec2(0.0), samples, weft_sum, warp_sum);
+    fabric_env_lobe_sums(tbn, k2, coverage, f, mode, samples, rot, 0u, samples, weft_sum, warp_sum);
     fabric_env_lobes_resolve(weft_sum, warp_sum, k2, f, table, mode, samples, weft, warp);
 }
 

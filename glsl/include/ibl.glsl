@@ -40,6 +40,23 @@ vec2 hammersley(uint i, uint n) {
     return vec2(float(i) / float(n), float(bitfieldReverse(i)) * 2.3283064365386963e-10);
 }
 
+// Point i of block `block` of the 2D Sobol' (0,2)-sequence in blocks of n points (n a power of
+// two): point block·n + i, its first coordinate the van der Corput radical inverse, its second
+// Sobol's second dimension (the direction numbers v_b = v_(b-1) xor v_(b-1)/2 from 1/2). Each
+// block alone is a (0,m,2)-net of n points (as stratified as the Hammersley set), and the first
+// 2^k blocks together are one of 2^k·n points: pixels that pool their samples take different
+// blocks and together sample as well as one pixel taking them all.
+vec2 sobol_block(uint i, uint n, uint block) {
+    uint j = block * n + i;
+    uint y = 0u;
+    uint v = 0x80000000u;
+    for (uint b = 0u; (j >> b) != 0u; ++b) {
+        y ^= v & (0u - ((j >> b) & 1u));
+        v ^= v >> 1u;
+    }
+    return vec2(float(bitfieldReverse(j)), float(y)) * 2.3283064365386963e-10;
+}
+
 // A GGX half vector in the local frame (z = n) with pdf D(h)·h.z, alpha = roughness².
 // cos²θ = (1 - y)/((1 - y) + a²y) and sin²θ = a²y/((1 - y) + a²y), each without cancellation
 // (1 - cos²θ loses half its digits when the lobe is narrow).

@@ -6,7 +6,7 @@
 // `tile_lights`, `env_radiance`, `env_specular`, `env_dfg`, `fabric_lobe_albedo_table` and the specialization constants
 // ACCURACY, SAMPLES, FABRIC_AS_PBR, LIGHT_TYPES, SHADING, SHADOWS, RANGE_CULLING, IBL,
 // IBL_SAMPLES, UNLIT, TRANSMISSION, COAT, DIFFUSE_TRANSMISSION, IRIDESCENCE, FABRIC_SHEETS,
-// PIXEL_KINDS, GLTF_FEATURES and QUAD_POOL, and defines `transmitted_light` (forward.frag: from
+// PIXEL_KINDS, GLTF_FEATURES and POOL, and defines `transmitted_light` and `fabric_pooled_lobe_sums` (forward.frag: from
 // the backdrop; lighting.frag, whose TRANSMISSION is 0: nothing).
 
 // The light seen through a transmissive surface (KHR_materials_transmission and _volume) at p
@@ -121,26 +121,7 @@ vec3 classic_radiance(vec3 p, vec3 ambient, mat3 tbn, vec3 k2, GpuFabric f, floa
 
 // ---- Environment lighting (docs/fabric-model.md §6; the estimators in env_light.glsl) ----
 
-// env_light.glsl's leaves, from the environment's cubes (env space: a world direction is looked
-// up at env_dir) and the DFG table.
-vec3 env_radiance_at(vec3 world_dir, float lod) {
-    vec3 d = env_dir(world_dir, frame.env_rot0, frame.env_rot1, frame.env_rot2);
-    return textureLod(env_radiance, d, lod).rgb * frame.env_params.x;
-}
-
-vec3 env_prefiltered(vec3 world_dir, float roughness) {
-    vec3 d = env_dir(world_dir, frame.env_rot0, frame.env_rot1, frame.env_rot2);
-    return textureLod(env_specular, d, roughness * frame.env_params.y).rgb * frame.env_params.x;
-}
-
-vec3 dfg_lookup(float cos_theta, float roughness) {
-    return textureLod(env_dfg, vec2(cos_theta, roughness), 0.0).rgb;
-}
-
-float env_face_size() {
-    return frame.env_params.z;
-}
-
+#include "env_cubes.glsl"
 #include "env_light.glsl"
 
 vec2 lobe_albedo_texel(uint table, uint i, uint j) {
@@ -182,22 +163,10 @@ float fabric_sheet_cover(vec4 surface, vec4 fabric_texel) {
     return fabric_thread_cover(fabric_texel);
 }
 
-// A 2 x 2 pixel quad pools its lanes' fabric lobe sums (fabric_env_lobe_sums: per lobe Σ w·L and
-// Σ w) where the surface agrees: `quad` is lighting.frag's fabric_quad, (pool with the x
-// neighbour 0/1, with the y neighbour 0/1, the lanes pooled, this lane). The x neighbour's sums
-// come first, then the y neighbour's already pooled ones, so a lane gets the diagonal's through its
-// y neighbour. The neighbours' values come from fine derivatives (the other lane's value minus or
-// plus this one's), which every lane of the quad computes: called where control flow is uniform,
-// or where it diverges only between pixels a quad does not pool (a woven and a glTF pixel).
-vec4 fabric_quad_pool(vec4 sums, vec4 quad) {
-    uint lane = uint(quad.w + 0.5);
-    float sx = (lane & 1u) == 0u ? 1.0 : -1.0;
-    float sy = (lane & 2u) == 0u ? 1.0 : -1.0;
-    vec4 other = sums + sx * dFdxFine(sums);
-    sums = quad.x > 0.5 ? sums + other : sums;
-    other = sums + sy * dFdyFine(sums);
-    return quad.y > 0.5 ? sums + other : sums;
-}
+// The fabric lobes' sums pooled over the pixel's neighbourhood (lighting.frag: fabric_lobes.frag's
+// sums of the pixels around it whose surface agrees; forward.frag, which never pools: unused):
+// per lobe the sum of fabric_lobe_unpack over `pixels` pixels.
+void fabric_pooled_lobe_sums(GpuFabric f, out vec4 weft, out vec4 warp, out uint pixels);
 
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
@@ -205,12 +174,10 @@ vec4 fabric_quad_pool(vec4 sums, vec4 quad) {
 // transmission, attenuation, coat_params, coat_n, dtrans, iridescence: surface.glsl's GSurface
 // fields (no transmission, coat, diffuse transmission or film from the G-buffer, which holds none).
 // bounce: per channel, what the occlusion pass's coloured multi-bounce makes of emissive_ao.a
-// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass). quad: the pixel's
-// quad pooling (fabric_quad_pool; read only where QUAD_POOL is 1).
+// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
                    vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
-                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce,
-                   vec4 quad) {
+                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -255,20 +222,14 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         if (IBL != 0u && SHADING == SHADING_FABRIC) {
             vec4 mean_cov = ACCURACY == 3u ? vec4(0.5, 0.5, 0.5, 0.5) : g;
             env_diffuse = fabric_env_diffuse(tbn, k2, f, IBL, IBL_SAMPLES, ibl_rotation());
-            if (QUAD_POOL != 0u && IBL == 2u) {
-                // fis, the deferred pass: each lane of the quad takes its own shift of the set,
-                // the quad pools the sums, the mip level is chosen for all the pooled samples.
-                uint pooled = IBL_SAMPLES * uint(quad.z + 0.5);
+            if (POOL != 0u && IBL == 2u) {
+                // fis, the deferred pass: the lobes' samples of the pixels around this one whose
+                // surface agrees (fabric_lobes.frag took them, each pixel its own block).
                 vec4 weft_sum;
                 vec4 warp_sum;
-                // A pixel its quad leaves alone takes the unshifted set, as without pooling.
-                uint lane = pooled > IBL_SAMPLES ? uint(quad.w + 0.5) : 0u;
-                fabric_env_lobe_sums(tbn, k2, mean_cov, f, IBL, IBL_SAMPLES,
-                                     fabric_quad_shift(lane, IBL_SAMPLES), pooled,
-                                     weft_sum, warp_sum);
-                weft_sum = fabric_quad_pool(weft_sum, quad);
-                warp_sum = fabric_quad_pool(warp_sum, quad);
-                fabric_env_lobes_resolve(weft_sum, warp_sum, k2, f, max(fabric, 1u) - 1u, IBL, pooled,
+                uint pixels;
+                fabric_pooled_lobe_sums(f, weft_sum, warp_sum, pixels);
+                fabric_env_lobes_resolve(weft_sum, warp_sum, k2, f, max(fabric, 1u) - 1u, IBL, pixels,
                                          env_weft, env_warp);
             } else {
                 fabric_env_lobes(tbn, k2, mean_cov, f, max(fabric, 1u) - 1u, IBL, IBL_SAMPLES, ibl_rotation(), env_weft, env_warp);

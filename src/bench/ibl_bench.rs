@@ -67,20 +67,25 @@ pub struct IblReport {
     pub rows: Vec<IblRow>,
     pub equal_error: Vec<EqualErrorRow>,
     pub cost: Vec<EnvCostRow>,
-    /// The fabric views at fis with the lobe samples pooled over 2 x 2 quads (the default) and
-    /// each pixel alone (`EnvLighting::quad_pool` off), timed in the same interleaved loop.
+    /// The fabric views at fis with the lobe samples pooled over 3 x 3 pixels (the default),
+    /// over 5 x 5, and each pixel alone (`EnvLighting::pool` 1, 2, 0), timed in the same
+    /// interleaved loop.
     pub pooling: Vec<PoolingRow>,
 }
 
-/// One fabric view at one fis level: pooled over quads against alone.
+/// One fabric view at one fis level: pooled over 3 x 3 and 5 x 5 pixels against alone.
 #[derive(Clone, Debug)]
 pub struct PoolingRow {
     pub view: String,
     pub level: IblLevel,
-    /// (lighting ms, rel error, PSNR dB) pooled, then alone.
+    /// (lighting ms, rel error, PSNR dB) pooled over 3 x 3 (the default), 5 x 5, then alone.
     pub pooled: (f64, f64, f64),
+    pub wide: (f64, f64, f64),
     pub alone: (f64, f64, f64),
 }
+
+/// The pooling radii the pooling table compares with the default's: 5 x 5, and alone.
+const POOLING_RADII: [u32; 2] = [2, 0];
 
 /// The fis levels the pooling table compares.
 pub const POOLING_LEVELS: [IblLevel; 2] = [IblLevel::Fis(8), IblLevel::Fis(16)];
@@ -162,7 +167,7 @@ pub fn run(
         });
     }
     let options_pooled =
-        |camera: Option<crate::scene::Camera>, level: Option<IblLevel>, pooled: bool| {
+        |camera: Option<crate::scene::Camera>, level: Option<IblLevel>, radius: u32| {
             RenderOptions {
                 width: size.0,
                 height: size.1,
@@ -173,7 +178,7 @@ pub fn run(
                     e.level = l;
                     // Transparent background: the background is not what is measured.
                     e.background = crate::env::Background::None;
-                    e.quad_pool = pooled;
+                    e.pool = radius;
                     e
                 }),
                 ..crate::bench::timed_options()
@@ -181,7 +186,7 @@ pub fn run(
         };
     let options = |scene: &Scene, camera: Option<crate::scene::Camera>, level: Option<IblLevel>| {
         let _ = scene;
-        options_pooled(camera, level, true)
+        options_pooled(camera, level, crate::env::DEFAULT_POOL)
     };
     let mut pooling = Vec::new();
     let truth = IblLevel::MonteCarlo(truth_samples);
@@ -234,16 +239,24 @@ pub fn run(
         let t = renderer.render_frame(scene, &gpu, &options(scene, camera.clone(), Some(truth)))?;
         truth_ms.push((name.clone(), super::pass_ms(&t, "lighting")));
         let covered: Vec<bool> = truth_frame.ldr.chunks_exact(4).map(|p| p[3] > 0).collect();
-        // The fabric views also each pixel alone at the pooling table's levels (after LEVELS).
+        // The fabric views also pooled wider and each pixel alone at the pooling table's levels
+        // (after LEVELS).
         let fabric_view = name.starts_with("cloth") || name.starts_with("lobes");
-        let alone: &[IblLevel] = if fabric_view { &POOLING_LEVELS } else { &[] };
+        let alone: Vec<(IblLevel, u32)> = if fabric_view {
+            POOLING_LEVELS
+                .iter()
+                .flat_map(|l| POOLING_RADII.iter().map(move |r| (*l, *r)))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let sets: Vec<RenderOptions> = LEVELS
             .iter()
             .map(|l| options(scene, camera.clone(), Some(*l)))
             .chain(
                 alone
                     .iter()
-                    .map(|l| options_pooled(camera.clone(), Some(*l), false)),
+                    .map(|(l, r)| options_pooled(camera.clone(), Some(*l), *r)),
             )
             .collect();
         let mut last: Vec<Option<Frame>> = sets.iter().map(|_| None).collect();
@@ -270,8 +283,18 @@ pub fn run(
                 pareto: false,
             });
         }
-        for (j, level) in alone.iter().enumerate() {
+        let measured = |j: usize| {
             let f = last[LEVELS.len() + j].as_ref().expect("rendered");
+            (
+                super::median(times[LEVELS.len() + j].clone()),
+                rel_error(&truth_frame, f, &covered),
+                super::psnr_linear(&truth_frame.hdr, &f.hdr, &covered),
+            )
+        };
+        for (i, level) in POOLING_LEVELS.iter().enumerate() {
+            if !fabric_view {
+                break;
+            }
             let pooled = rows
                 .iter()
                 .find(|r| r.view == *name && r.level == *level)
@@ -280,11 +303,8 @@ pub fn run(
                 view: name.clone(),
                 level: *level,
                 pooled,
-                alone: (
-                    super::median(times[LEVELS.len() + j].clone()),
-                    rel_error(&truth_frame, f, &covered),
-                    super::psnr_linear(&truth_frame.hdr, &f.hdr, &covered),
-                ),
+                wide: measured(2 * i),
+                alone: measured(2 * i + 1),
             });
         }
         // The cloth only: the spheres take the split sum at every level.
@@ -444,29 +464,26 @@ impl IblReport {
         if !self.pooling.is_empty() {
             let _ = writeln!(
                 s,
-                "\nThe fabric lobes' samples pooled over 2x2 pixel quads (the default) against each pixel alone, same run"
+                "\nThe fabric lobes' samples pooled over 3x3 pixels (the default) and 5x5 against each pixel alone, same run"
             );
             let _ = writeln!(
                 s,
-                "{:<16} {:<8} {:>10} {:>10} {:>8} {:>10} {:>10} {:>8}",
-                "view",
-                "level",
-                "pooled ms",
-                "rel error",
-                "PSNR dB",
-                "alone ms",
-                "rel error",
-                "PSNR dB"
+                "{:<16} {:<8} {:>8} {:>9} {:>7}  {:>8} {:>9} {:>7}  {:>8} {:>9} {:>7}",
+                "view", "level", "3x3 ms", "rel err", "PSNR", "5x5 ms", "rel err", "PSNR", "alone ms",
+                "rel err", "PSNR"
             );
             for p in &self.pooling {
                 let _ = writeln!(
                     s,
-                    "{:<16} {:<8} {:>10.2} {:>10.4} {:>8.2} {:>10.2} {:>10.4} {:>8.2}",
+                    "{:<16} {:<8} {:>8.2} {:>9.4} {:>7.2}  {:>8.2} {:>9.4} {:>7.2}  {:>8.2} {:>9.4} {:>7.2}",
                     p.view,
                     p.level.name(),
                     p.pooled.0,
                     p.pooled.1,
                     p.pooled.2,
+                    p.wide.0,
+                    p.wide.1,
+                    p.wide.2,
                     p.alone.0,
                     p.alone.1,
                     p.alone.2

@@ -149,6 +149,11 @@ struct SceneArgs {
     /// and error of each.
     #[arg(long, default_value = "fis:8")]
     ibl: String,
+    /// At fis, the radius within which the cloth's pixels pool their environment samples where
+    /// the surface agrees: 1 (default, 3x3 pixels), 2 (5x5: closer to the truth close up, slower),
+    /// 0 (each pixel alone, the fastest). weft bench --ibl shows the cost and error of each.
+    #[arg(long, default_value_t = weft::env::DEFAULT_POOL)]
+    ibl_pool: u32,
     /// Occlusion of the environment's light: gtao (screen-space ground-truth ambient occlusion
     /// from the depth buffer, out to 0.3 of the scene's size), gtao:R (out to R world units),
     /// or none (occlusion textures only). Runs only when an environment lights the scene.
@@ -188,6 +193,7 @@ impl SceneArgs {
             env_intensity: self.env_intensity,
             background: weft::env::Background::parse(&self.background)?,
             ibl: weft::env::IblLevel::parse(&self.ibl)?,
+            ibl_pool: self.ibl_pool,
             occlusion: self.occlusion,
             lights: weft::env::LightsMode::parse(&self.lights)?,
         })

@@ -452,6 +452,12 @@ pub const DEFAULT_IBL: IblLevel = IblLevel::Fis(8);
 
 /// A scene lit by an environment: which, turned how far, how bright, and what the background
 /// shows.
+/// The default radius of the fabric lobes' pooling ([`EnvLighting::pool`]): a 3 x 3 window.
+pub const DEFAULT_POOL: u32 = 1;
+
+/// The largest radius the pooling takes (a 5 x 5 window).
+pub const MAX_POOL: u32 = 2;
+
 #[derive(Clone, Debug)]
 pub struct EnvLighting {
     pub env: Arc<Environment>,
@@ -461,10 +467,11 @@ pub struct EnvLighting {
     pub intensity: f32,
     pub background: Background,
     pub level: IblLevel,
-    /// At fis, the deferred lighting pools the woven model's lobe samples over each 2 x 2 pixel
-    /// quad whose pixels agree (lighting.frag's QUAD_POOL; the default). `false`: each pixel
-    /// estimates its lobes alone, as the forward pass does (`weft bench --ibl` measures both).
-    pub quad_pool: bool,
+    /// At fis, the deferred lighting pools the woven model's lobe samples over the pixels within
+    /// this radius whose surface agrees (fabric_lobes.frag and lighting.frag's POOL; default
+    /// [`DEFAULT_POOL`]). 0: each pixel estimates its lobes alone, as the forward pass does
+    /// (`weft bench --ibl` measures both).
+    pub pool: u32,
 }
 
 impl EnvLighting {
@@ -475,11 +482,17 @@ impl EnvLighting {
             intensity: 1.0,
             background: Background::Env { blur: 0.0 },
             level: DEFAULT_IBL,
-            quad_pool: true,
+            pool: DEFAULT_POOL,
         }
     }
 
     pub fn validate(&self) -> crate::Result<()> {
+        if self.pool > MAX_POOL {
+            return Err(Error::input(format!(
+                "--ibl-pool {} is out of range: give 0 (each pixel alone), 1 (3x3 pixels, the default) or {MAX_POOL} (5x5)",
+                self.pool
+            )));
+        }
         if !self.rotation.is_finite() || self.rotation.abs() > 1e6 {
             return Err(Error::input(format!(
                 "--env-rotation {} is out of range: give degrees, a finite number",

@@ -45,6 +45,10 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 pub const INCLUDES: &[(&str, &str)] = &[
     ("cube.glsl", include_str!("../../glsl/include/cube.glsl")),
     (
+        "env_cubes.glsl",
+        include_str!("../../glsl/include/env_cubes.glsl"),
+    ),
+    (
         "env_light.glsl",
         include_str!("../../glsl/include/env_light.glsl"),
     ),
@@ -63,6 +67,7 @@ pub const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/occlusion.glsl"),
     ),
     ("pbr.glsl", include_str!("../../glsl/include/pbr.glsl")),
+    ("pool.glsl", include_str!("../../glsl/include/pool.glsl")),
     ("shade.glsl", include_str!("../../glsl/include/shade.glsl")),
     (
         "shadows.glsl",

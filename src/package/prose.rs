@@ -140,6 +140,16 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          to one RGBA16F target. No push constants.",
     ),
     (
+        "fabric_lobes.frag",
+        "The woven model's environment lobe samples for `lighting.frag` to pool, one fullscreen \
+         triangle (`fullscreen.vert`) drawn before lighting.frag with the same set and \
+         constants, over the fabric pixels (a stencil test, or every pixel: the others write \
+         zeros). Reads the G-buffer's frame, surface, fabric and depth targets and the radiance \
+         cube; writes per pixel its two lobes' weighted mean radiance and weight per sample as \
+         eight half floats (`include/env_light.glsl`'s fabric_lobe_pack) to one RGBA32_UINT \
+         target, which lighting.frag reads at binding 28. No push constants.",
+    ),
+    (
         "forward.frag",
         "Forward pass for alphaMode BLEND surfaces, fragment stage; pair it with `gbuffer.vert` \
          (same vertex buffer and 128-byte push constants) and draw after the lighting pass into \
@@ -286,7 +296,10 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 11, "DEBUG_VIEWS: 1 (default) shows the G-buffer target `FrameData.debug_view` names instead of the lit image when it is not 0; 0 compiles the debug views out"),
     ("lighting.frag", 12, "PIXEL_KINDS: bit mask of the kinds of pixel shaded: 1 empty pixels (the background), 2 fabric by the woven model, 4 glTF materials (and fabric with FABRIC_AS_PBR); the other kinds' code is compiled out, for pipelines each drawn over its own pixels (by a stencil test, say). A pipeline without 4 shades every surface pixel as fabric, one without 2 as glTF (default 7, all)"),
     ("lighting.frag", 13, "GLTF_FEATURES: bit mask of the glTF extensions whose lighting is compiled in: 1 KHR_materials_sheen (the G-buffer's fabric target holds its colour and roughness), 2 KHR_materials_anisotropy (the surface target's z its strength); a clear bit reads that extension as absent (default 3, both)"),
-    ("lighting.frag", 14, "QUAD_POOL: 1 pools the woven model's environment lobe samples at fis (IBL 2) over each 2 x 2 pixel quad whose pixels show the same fabric material with normals and tangents within a quarter of the lobe's narrow width (each lane its own shift of the sample set, the mip level chosen for the pooled count, the sums exchanged by fine derivatives); 0 (default) estimates each pixel's lobes alone"),
+    ("lighting.frag", 14, "POOL: R >= 1 pools the woven model's environment lobe samples at fis (IBL 2) over the (2R + 1) x (2R + 1) pixels around each pixel that show the same material with normals and tangents within a quarter of the lobe's narrow width, from `fabric_lobes.frag`'s sums at binding 28 (drawn first with the same constants); 0 (default) estimates each pixel's lobes alone and reads nothing at binding 28"),
+    ("fabric_lobes.frag", 0, "ACCURACY: as lighting.frag's (3, supersampled, weighs the two lobes' sampling evenly; otherwise the pixel's coverage does)"),
+    ("fabric_lobes.frag", 8, "IBL_SAMPLES: N of fis:N, as lighting.frag's: the samples each pixel takes"),
+    ("fabric_lobes.frag", 14, "POOL: the pooling radius R (>= 1), as lighting.frag's: each pixel takes block (x mod (2R + 1)) + (2R + 1)(y mod (2R + 1)) of the Sobol' (0,2)-sequence (include/ibl.glsl's sobol_block), so that every window lighting.frag pools holds each block once (default 1)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",

@@ -411,16 +411,100 @@ pub fn fabric_lobe_albedo(
     mixf(e[0], e[1], rs)
 }
 
-/// `fabric_quad_shift`: the Hammersley set's shift for lane `lane` (0-3) of a 2 x 2 pixel quad
-/// whose lanes pool their lobe samples.
-pub fn fabric_quad_shift(lane: u32, samples: u32) -> [f32; 2] {
-    let reversed = ((lane & 1) << 1) | (lane >> 1);
-    let n = (4 * samples) as f32;
-    [(lane & 3) as f32 / n, (reversed & 3) as f32 / n]
+/// `sobol_block` (ibl.glsl): point `i` of block `block` of the 2D Sobol' (0,2)-sequence in
+/// blocks of `n` points (point block·n + i: the van der Corput radical inverse, and Sobol's
+/// second dimension with direction numbers v_b = v_(b-1) xor v_(b-1)/2 from 1/2).
+pub fn sobol_block(i: u32, n: u32, block: u32) -> [f32; 2] {
+    let j = block.wrapping_mul(n).wrapping_add(i);
+    let mut y = 0u32;
+    let mut v = 0x8000_0000u32;
+    let mut b = 0;
+    while b < 32 && (j >> b) != 0 {
+        y ^= v & 0u32.wrapping_sub((j >> b) & 1);
+        v ^= v >> 1;
+        b += 1;
+    }
+    let scale = 2.328_306_4e-10f32;
+    [j.reverse_bits() as f32 * scale, y as f32 * scale]
 }
 
-/// `fabric_env_lobe_sums`: per lobe (Σ w·L, Σ w) over `samples` samples of the lobes' mixture,
-/// the set shifted by `shift`, fis's mip level chosen for `lod_samples` samples (mc: unfiltered).
+/// `rgb9e5_pack`: three non-negative values under one exponent (E5B9G9R9: nine-bit mantissas,
+/// rounded to nearest, above 65408 clamped, NaN read as 0).
+pub fn rgb9e5_pack(c: Vec3) -> u32 {
+    // GLSL's max(x, 0) is 0 for NaN; f32::max returns the other operand, as it does.
+    let c = c.map(|x| x.max(0.0).min(65408.0));
+    let m = c[0].max(c[1]).max(c[2]);
+    // frexp's exponent: m = mantissa · 2^e2 with the mantissa in [0.5, 1).
+    let e2 = if m > 0.0 {
+        ((m.to_bits() >> 23) & 0xff) as i32 - 126
+    } else {
+        0
+    };
+    let mut e = if m > 0.0 { (e2 + 15).max(0) } else { 0 };
+    let mut scale = (2.0f32).powi(24 - e);
+    if (m * scale + 0.5).floor() >= 512.0 {
+        e += 1;
+        scale *= 0.5;
+    }
+    let q = c.map(|x| (x * scale + 0.5).floor() as u32);
+    q[0] | (q[1] << 9) | (q[2] << 18) | ((e as u32) << 27)
+}
+
+/// `rgb9e5_unpack`.
+pub fn rgb9e5_unpack(p: u32) -> Vec3 {
+    let scale = (2.0f32).powi((p >> 27) as i32 - 24);
+    [
+        (p & 511) as f32 * scale,
+        ((p >> 9) & 511) as f32 * scale,
+        ((p >> 18) & 511) as f32 * scale,
+    ]
+}
+
+/// `bf16x2_pack`: two non-negative values as the top 16 bits of their f32, rounded (NaN and
+/// negatives 0, at most 3e38).
+pub fn bf16x2_pack(v: [f32; 2]) -> u32 {
+    let b = v.map(|x| (x.max(0.0).min(3.0e38).to_bits().wrapping_add(0x8000)) >> 16);
+    b[0] | (b[1] << 16)
+}
+
+/// `bf16x2_unpack`.
+pub fn bf16x2_unpack(p: u32) -> [f32; 2] {
+    [f32::from_bits(p << 16), f32::from_bits(p & 0xffff_0000)]
+}
+
+/// `fabric_lobe_pack`: one pixel's lobe sums over `samples` samples as fabric_lobes.frag writes
+/// them: per lobe the weighted mean radiance (rgb9e5) and the weight per sample (bf16x2), and
+/// the mask of the pixels that pool with it.
+pub fn fabric_lobe_pack(weft: [f32; 4], warp: [f32; 4], samples: u32, mask: u32) -> [u32; 4] {
+    let mean = |s: [f32; 4]| {
+        if s[3] > 0.0 {
+            [s[0] / s[3], s[1] / s[3], s[2] / s[3]]
+        } else {
+            [0.0; 3]
+        }
+    };
+    let weights = [weft[3] / samples as f32, warp[3] / samples as f32];
+    [
+        rgb9e5_pack(mean(weft)),
+        rgb9e5_pack(mean(warp)),
+        bf16x2_pack(weights),
+        mask,
+    ]
+}
+
+/// `fabric_lobe_unpack`: a packed texel back as sums per sample, per lobe (mean · weight, weight).
+pub fn fabric_lobe_unpack(texel: [u32; 4]) -> ([f32; 4], [f32; 4]) {
+    let [wa, wb] = bf16x2_unpack(texel[2]);
+    let (a, b) = (rgb9e5_unpack(texel[0]), rgb9e5_unpack(texel[1]));
+    (
+        [a[0] * wa, a[1] * wa, a[2] * wa, wa],
+        [b[0] * wb, b[1] * wb, b[2] * wb, wb],
+    )
+}
+
+/// `fabric_env_lobe_sums`: per lobe (Σ w·L, Σ w) over `samples` samples of the lobes' mixture:
+/// `block` 0 the Hammersley set shifted by `rot`, b ≥ 1 block b − 1 of the Sobol' sequence; fis's
+/// mip level chosen for `lod_samples` samples, mc's unfiltered.
 #[allow(clippy::too_many_arguments)]
 pub fn fabric_env_lobe_sums(
     env: &impl EnvLookup,
@@ -430,7 +514,8 @@ pub fn fabric_env_lobe_sums(
     f: &GpuFabric,
     mode: u32,
     samples: u32,
-    shift: [f32; 2],
+    rot: [f32; 2],
+    block: u32,
     lod_samples: u32,
 ) -> ([f32; 4], [f32; 4]) {
     let mut weft = [0.0f32; 4];
@@ -445,7 +530,11 @@ pub fn fabric_env_lobe_sums(
         0.5
     };
     for i in 0..samples {
-        let mut xi = ibl_sample(i, samples, shift);
+        let mut xi = if block == 0 {
+            ibl_sample(i, samples, rot)
+        } else {
+            sobol_block(i, samples, block - 1)
+        };
         let pick_weft = xi[0] < w_weft;
         xi[0] = if pick_weft {
             xi[0] / w_weft
@@ -560,9 +649,8 @@ pub fn fabric_env_lobes(
             scale(l, fabric_lobe_albedo(env, f, table, k2, f.rs, true)),
         );
     }
-    let shift = if mode == 3 { rot } else { [0.0; 2] };
     let (weft, warp) =
-        fabric_env_lobe_sums(env, tbn, k2, coverage, f, mode, samples, shift, samples);
+        fabric_env_lobe_sums(env, tbn, k2, coverage, f, mode, samples, rot, 0, samples);
     fabric_env_lobes_resolve(env, weft, warp, k2, f, table, mode, samples)
 }
 
@@ -864,9 +952,11 @@ pub fn env_probe_eval(
     );
     let tbn = fb::fabric_frame(xyz(inp.frame_n), xyz(inp.frame_t), inp.frame_t[3]);
     let k2 = xyz(inp.k2);
-    let lane = (inp.mode[3] / 3) % 4;
-    let (weft, warp) = if mode == 2 && lane != 0 {
-        let pooled = samples * (lane + 1);
+    let block = (inp.mode[3] / 3) % 4;
+    let (weft, warp) = if mode == 2 && block != 0 {
+        // A pixel that pools: its own block, the mip level of block + 1 pixels' samples, through
+        // the packed texel lighting.frag reads, resolved as if they were all its own.
+        let pooled = samples * (block + 1);
         let (weft, warp) = fabric_env_lobe_sums(
             env,
             &tbn,
@@ -875,9 +965,11 @@ pub fn env_probe_eval(
             &inp.fabric,
             mode,
             samples,
-            fabric_quad_shift(lane, samples),
+            rot,
+            block + 1,
             pooled,
         );
+        let (weft, warp) = fabric_lobe_unpack(fabric_lobe_pack(weft, warp, samples, 0));
         fabric_env_lobes_resolve(
             env,
             weft,
@@ -886,7 +978,7 @@ pub fn env_probe_eval(
             &inp.fabric,
             inp.mode[3] % 3,
             mode,
-            pooled,
+            1,
         )
     } else {
         fabric_env_lobes(
@@ -954,6 +1046,37 @@ mod tests {
             }
         }
         assert_eq!(seen.len(), 1024, "every pixel its own rotation");
+    }
+
+    #[test]
+    fn rgb9e5_keeps_nine_bits_of_the_largest_channel() {
+        for c in [
+            [1.0, 0.5, 0.25],
+            [65408.0, 1.0, 0.0],
+            [1e-3, 2e-3, 3e-3],
+            [511.5, 0.0, 0.0],
+            [0.0, 0.0, 0.0],
+        ] {
+            let d = rgb9e5_unpack(rgb9e5_pack(c));
+            let m = c[0].max(c[1]).max(c[2]);
+            for k in 0..3 {
+                assert!((d[k] - c[k]).abs() <= m / 512.0 + 1e-30, "{c:?} -> {d:?}");
+            }
+        }
+        // Beyond the format's largest value, negative and NaN: clamped, 0.
+        assert_eq!(rgb9e5_unpack(rgb9e5_pack([1e9, -1.0, f32::NAN])), [65408.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn bf16_keeps_eight_bits_and_the_range() {
+        for v in [[1.0, 3.0e-20], [0.123_456, 7.5e6], [0.0, 1.0]] {
+            let d = bf16x2_unpack(bf16x2_pack(v));
+            for k in 0..2 {
+                assert!((d[k] - v[k]).abs() <= v[k] / 256.0, "{v:?} -> {d:?}");
+            }
+        }
+        assert_eq!(bf16x2_unpack(bf16x2_pack([f32::NAN, -2.0])), [0.0, 0.0]);
+        assert!(bf16x2_unpack(bf16x2_pack([f32::INFINITY, f32::MAX]))[0].is_finite());
     }
 
     #[test]

@@ -339,6 +339,16 @@ impl Renderer {
     pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
         let options = RenderOptions::default();
         self.prepare(&options, &Plan::new(&Scene::default(), &options), None)?;
+        // The default scene's cloth under an environment at the default level: the lighting
+        // variants that pool the fabric lobes' samples, with their lobe sums draw.
+        let lit = RenderOptions {
+            environment: Some(crate::env::EnvLighting::new(std::sync::Arc::new(
+                crate::env::Environment::uniform([1.0; 3]),
+            ))),
+            ..RenderOptions::default()
+        };
+        let cloth = crate::scene::default_scene();
+        self.prepare(&lit, &Plan::new(&cloth, &lit), None)?;
         // The transparent pass's default variant: a scene with one blended draw.
         let blended = Scene {
             meshes: vec![crate::scene::Mesh {
@@ -740,6 +750,14 @@ impl Renderer {
         if plan.runs(Pass::Occlusion) && targets.occlusion.is_none() {
             targets.occlusion = Some(OcclusionTargets::new(&self.ctx, width, height)?);
         }
+        if plan.pool_code(options) > 0 && targets.lobes.is_none() {
+            targets.lobes = Some(
+                self.ctx.create_image(
+                    &ImageDesc::new_2d("fabric lobe sums", LOBES_FORMAT, width, height)
+                        .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED),
+                )?,
+            );
+        }
         if plan.transmission_draws > 0 && targets.backdrop.is_none() {
             targets.backdrop = Some(
                 self.ctx.create_image(
@@ -1098,6 +1116,7 @@ impl Renderer {
                             Some(o) if plan.runs(Pass::Occlusion) => &o.visibility,
                             _ => &d.white,
                         },
+                        lobes: targets.lobes.as_ref(),
                     },
                 )?),
                 Pass::Transparent => {

@@ -124,9 +124,9 @@ pub struct Force {
     /// glTF, background), every texture slot sampled and every glTF extension's lighting compiled
     /// in, instead of a pipeline per kind with only what the scene has.
     pub material_kinds: bool,
-    /// Compile the quad pooling of the fabric lobes' samples in (lighting QUAD_POOL = 1) where
-    /// no woven pixel is shaded at fis: it must change nothing there.
-    pub quad_pool: bool,
+    /// Compile the pooling of the fabric lobes' samples in (the lobe sums draw, lighting POOL =
+    /// 1) where no woven pixel is shaded at fis: it must change nothing there.
+    pub pool: bool,
 }
 
 impl Force {
@@ -141,7 +141,7 @@ impl Force {
         sat_fetch: false,
         fabric_sheets: false,
         material_kinds: false,
-        quad_pool: false,
+        pool: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -155,7 +155,7 @@ impl Force {
         sat_fetch: false,
         fabric_sheets: true,
         material_kinds: true,
-        quad_pool: true,
+        pool: true,
     };
 }
 

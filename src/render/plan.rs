@@ -328,9 +328,10 @@ pub struct EnvPlan {
     /// per fabric material at the approx and fis levels when the woven model shades the fabric,
     /// none for Monte Carlo, the fabric shaded as glTF or the comparison models.
     pub lobe_albedo_tables: usize,
-    /// At fis, where the woven model shades fabric in the deferred pass: its lobe samples
-    /// pooled over each 2 x 2 pixel quad whose pixels agree (lighting.frag's QUAD_POOL).
-    pub quad_pool: bool,
+    /// At fis, where the woven model shades fabric in the deferred pass: the radius within which
+    /// pixels whose surface agrees pool their lobe samples (fabric_lobes.frag, lighting.frag's
+    /// POOL); 0: none.
+    pub pool: u32,
 }
 
 /// lighting.frag's GLTF_FEATURES bits (frame.glsl's GLTF_FEATURE_*).
@@ -531,9 +532,11 @@ impl Plan {
                     },
                     lobe_albedo_tables,
                     // Where fis estimates the woven model's lobes (which read the tables).
-                    quad_pool: e.quad_pool
-                        && matches!(e.level, crate::env::IblLevel::Fis(_))
-                        && lobe_albedo_tables > 0,
+                    pool: if matches!(e.level, crate::env::IblLevel::Fis(_)) && lobe_albedo_tables > 0 {
+                        e.pool.min(crate::env::MAX_POOL)
+                    } else {
+                        0
+                    },
                 }
             });
         // Occlusion of the environment's light, when there is one (or the debug view shows it).
@@ -764,9 +767,13 @@ impl Plan {
         }
     }
 
-    /// lighting.frag's QUAD_POOL: the plan's, or forced on (`Force::quad_pool`).
-    pub fn quad_pool_code(&self, options: &RenderOptions) -> u32 {
-        (options.force.quad_pool || self.environment.as_ref().is_some_and(|e| e.quad_pool)) as u32
+    /// lighting.frag's and fabric_lobes.frag's POOL: the plan's radius, or 1 where forced on
+    /// (`Force::pool`) and the plan has none.
+    pub fn pool_code(&self, options: &RenderOptions) -> u32 {
+        match self.environment.as_ref().map_or(0, |e| e.pool) {
+            0 => options.force.pool as u32,
+            r => r,
+        }
     }
 
     pub fn ibl_code(&self, options: &RenderOptions) -> u32 {
@@ -1006,10 +1013,12 @@ impl fmt::Display for Plan {
                 crate::env::lobe_albedo::LOBE_ALBEDO_PHI
             )?;
         }
-        if self.environment.as_ref().is_some_and(|e| e.quad_pool) {
+        if let Some(r) = self.environment.as_ref().map(|e| e.pool).filter(|&r| r > 0) {
+            let side = 2 * r + 1;
             writeln!(
                 f,
-                "            fabric lobes: each pixel's fis samples pooled over its 2x2 pixel quad where the surface agrees (up to 4x the samples)"
+                "            fabric lobes: a lobe-sums draw before the lighting; each pixel's fis samples pooled with those of the {side}x{side} pixels around it where the surface agrees (up to {}x the samples)",
+                side * side
             )?;
         }
         match &self.occlusion {

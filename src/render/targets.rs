@@ -29,6 +29,9 @@ pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const WEAVE_SAT_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
 pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
+/// fabric_lobes.frag's lobe sums per pixel (fabric_lobe_pack: eight half floats), which the
+/// lighting pass pools.
+pub const LOBES_FORMAT: Format = Format::R32G32B32A32_UINT;
 /// The occlusion pass's estimates and their blur (visibility, view distance; half resolution).
 pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
 
@@ -52,6 +55,8 @@ pub(crate) struct Targets {
     /// The occlusion pass's per-pixel estimates and their blur (made by the first frame that
     /// plans the pass).
     pub(crate) occlusion: Option<OcclusionTargets>,
+    /// The fabric lobes' sums before the lighting pools them (made by the first frame that pools).
+    pub(crate) lobes: Option<Image>,
 }
 
 /// The occlusion pass's two targets.
@@ -102,6 +107,7 @@ impl Targets {
             backdrop: None,
             tonemapped: None,
             occlusion: None,
+            lobes: None,
         })
     }
 

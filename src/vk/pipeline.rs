@@ -213,6 +213,7 @@ pub struct DescriptorSet<'r> {
 }
 
 /// What to bind at one binding of a set.
+#[derive(Clone, Copy)]
 pub enum Resource<'a> {
     Uniform(&'a Buffer),
     Storage(&'a Buffer),

@@ -1,23 +1,28 @@
 //! The deferred lighting pass: one fullscreen triangle from the G-buffer into HDR
-//! (fullscreen.vert, lighting.frag): lamps with their shadows, the environment, emission.
+//! (fullscreen.vert, lighting.frag): lamps with their shadows, the environment, emission. Where
+//! the woven model pools its environment lobe samples (the plan's `pool`), a first fullscreen
+//! triangle over the woven pixels writes each one's lobe sums (fabric_lobes.frag) into the
+//! target the lighting then reads around each pixel.
 
 use std::collections::HashMap;
 
 use super::{Recorded, SceneLighting, VariantKey};
 use crate::render::plan::Plan;
-use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
+use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
-    shaders, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler, SetLayout,
+    Attachment,     shaders, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler, SetLayout,
     Stages, StencilMode, Topology, Usage,
 };
 
-/// The pass's pipelines by variant and whether they test the stencil, and its set layout
-/// (reflected from lighting.frag).
+/// The pass's pipelines by variant and whether they test the stencil (each with the lobe sums
+/// draw's pipeline when the variant pools the fabric lobes' samples), and the set layouts of
+/// the two (reflected from lighting.frag and from fabric_lobes.frag).
 pub struct LightingPass {
     layout: SetLayout,
-    variants: HashMap<(VariantKey, bool), Pipeline>,
+    lobes_layout: SetLayout,
+    variants: HashMap<(VariantKey, bool), (Pipeline, Option<Pipeline>)>,
 }
 
 /// One lighting pipeline of a frame: its variant, and the stencil value of the pixels it shades
@@ -50,7 +55,12 @@ pub struct LightingInputs<'s> {
     /// The occlusion pass's visibility when the plan has the pass (any image otherwise: the
     /// variant without OCCLUSION does not read it).
     pub occlusion: &'s Image,
+    /// The fabric lobes' sums (`LOBES_FORMAT`) when a variant pools them (made by the frame).
+    pub lobes: Option<&'s Image>,
 }
+
+/// The constants fabric_lobes.frag declares (ACCURACY, IBL_SAMPLES, POOL), by lighting.frag's ids.
+const LOBES_CONSTANTS: [u32; 3] = [0, 8, 14];
 
 /// lighting.frag's PIXEL_KIND_* bits.
 pub const PIXEL_BACKGROUND: u32 = 1;
@@ -76,8 +86,11 @@ impl LightingPass {
     pub fn new(ctx: &Context) -> crate::Result<LightingPass> {
         let [layout] =
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::LIGHTING_FRAG])?;
+        let [lobes_layout] =
+            ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::FABRIC_LOBES_FRAG])?;
         Ok(LightingPass {
             layout,
+            lobes_layout,
             variants: HashMap::new(),
         })
     }
@@ -112,7 +125,7 @@ impl LightingPass {
             ),
             (12, "pixel_kinds", kinds),
             (13, "gltf_features", plan.gltf_features),
-            (14, "quad_pool", plan.quad_pool_code(options)),
+            (14, "pool", plan.pool_code(options)),
         ])
     }
 
@@ -146,12 +159,56 @@ impl LightingPass {
             .contains_key(&(variant.0.clone(), variant.1.is_some()))
     }
 
-    /// Makes the pipeline of `variant` (not kept: see [`LightingPass::insert`]): with a stencil
+    /// Whether `key` pools the fabric lobes' samples (POOL ≥ 1) where it shades woven pixels:
+    /// its pass first runs the lobe sums draw.
+    pub fn pools(key: &VariantKey) -> bool {
+        let constant = |id| key.0.iter().find(|c| c.0 == id).map_or(0, |c| c.2);
+        constant(14) > 0 && constant(12) & PIXEL_WOVEN != 0
+    }
+
+    /// Makes the pipelines of `variant` (not kept: see [`LightingPass::insert`]): with a stencil
     /// value, over the G-buffer's depth-stencil attachment, drawing only where the stencil equals
-    /// it.
-    pub fn make(&self, ctx: &Context, variant: &LightingVariant) -> crate::Result<Pipeline> {
+    /// it; and where it pools the fabric lobes' samples, the lobe sums draw's (fabric_lobes.frag,
+    /// the same constants, into `LOBES_FORMAT`).
+    pub fn make(
+        &self,
+        ctx: &Context,
+        variant: &LightingVariant,
+    ) -> crate::Result<(Pipeline, Option<Pipeline>)> {
         let (key, stencil) = variant;
-        ctx.create_graphics_pipeline(&GraphicsDesc {
+        let stencil_mode = if stencil.is_some() {
+            StencilMode::Equal
+        } else {
+            StencilMode::None
+        };
+        let lobes = if Self::pools(key) {
+            // fabric_lobes.frag's constants: lighting.frag's of the same ids.
+            let lobes_key = VariantKey(
+                key.0
+                    .iter()
+                    .filter(|c| LOBES_CONSTANTS.contains(&c.0))
+                    .copied()
+                    .collect(),
+            );
+            Some(ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!("fabric lobes[{}]", lobes_key.describe()),
+                vertex: &shaders::FULLSCREEN_VERT,
+                fragment: &shaders::FABRIC_LOBES_FRAG,
+                vertex_layout: None,
+                color_formats: &[LOBES_FORMAT],
+                depth_format: stencil.map(|_| depth_format(ctx)),
+                set_layouts: &[&self.lobes_layout],
+                push_constant_size: 0,
+                push_stages: Stages::FRAGMENT,
+                constants: &lobes_key.constants(),
+                blend: false,
+                topology: Topology::Triangles,
+                stencil: stencil_mode,
+            })?)
+        } else {
+            None
+        };
+        let shade = ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!("lighting[{}]", key.describe()),
             vertex: &shaders::FULLSCREEN_VERT,
             fragment: &shaders::LIGHTING_FRAG,
@@ -164,21 +221,20 @@ impl LightingPass {
             constants: &key.constants(),
             blend: false,
             topology: Topology::Triangles,
-            stencil: if stencil.is_some() {
-                StencilMode::Equal
-            } else {
-                StencilMode::None
-            },
-        })
+            stencil: stencil_mode,
+        })?;
+        Ok((shade, lobes))
     }
 
-    pub fn insert(&mut self, variant: LightingVariant, pipeline: Pipeline) {
+    pub fn insert(&mut self, variant: LightingVariant, pipelines: (Pipeline, Option<Pipeline>)) {
         self.variants
-            .insert((variant.0, variant.1.is_some()), pipeline);
+            .insert((variant.0, variant.1.is_some()), pipelines);
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
-        self.variants.values()
+        self.variants
+            .values()
+            .flat_map(|(shade, lobes)| std::iter::once(shade).chain(lobes.as_ref()))
     }
 
     /// Records the pass with `variants` (made by [`LightingPass::make`]).
@@ -188,16 +244,26 @@ impl LightingPass {
         variants: &[LightingVariant],
         inputs: LightingInputs<'s>,
     ) -> crate::Result<Recorded<'s>> {
-        let pipelines: Vec<(&'s Pipeline, Option<u32>)> = variants
+        let pipelines: Vec<(&'s Pipeline, Option<&'s Pipeline>, Option<u32>)> = variants
             .iter()
             .map(|(key, stencil)| {
-                let p = self
+                let (p, lobes) = self
                     .variants
                     .get(&(key.clone(), stencil.is_some()))
                     .expect("the frame makes the lighting variants before recording");
-                (p, *stencil)
+                (p, lobes.as_ref(), *stencil)
             })
             .collect();
+        let lobes = match pipelines.iter().find_map(|(_, l, s)| l.map(|l| (l, *s))) {
+            Some((pipeline, stencil)) => Some((
+                pipeline,
+                stencil,
+                inputs.lobes.ok_or_else(|| {
+                    crate::Error::device("the lighting pass pools the fabric lobes without their target".to_string())
+                })?,
+            )),
+            None => None,
+        };
         let t = inputs.targets;
         let g = |image| Resource::Sampled(image, inputs.nearest);
         let mut bindings = vec![
@@ -211,15 +277,49 @@ impl LightingPass {
             (25, g(&t.depth)),
             (26, g(&t.specular)),
             (27, g(inputs.occlusion)),
+            // The lobe sums where a variant pools them (the first draw writes them); else any
+            // unsigned-integer image in the layout sampled images are in (unread).
+            (28, g(lobes.map_or(&t.frame, |(_, _, image)| image))),
         ];
         bindings.extend(inputs.lighting.bindings());
         let set = pool.set(&self.layout, &bindings)?;
+        // The lobe sums draw reads some of the same resources at the same numbers.
+        let lobes_set = match lobes {
+            Some(_) => {
+                let wanted: Vec<(u32, Resource)> = bindings
+                    .iter()
+                    .filter(|(b, _)| self.lobes_layout.bindings.iter().any(|l| l.binding == *b))
+                    .cloned()
+                    .collect();
+                Some(pool.set(&self.lobes_layout, &wanted)?)
+            }
+            None => None,
+        };
+        let mut names: Vec<String> = lobes.iter().map(|(p, _, _)| p.name.clone()).collect();
+        names.extend(pipelines.iter().map(|(p, _, _)| p.name.clone()));
         Ok(Recorded::new(
             "lighting",
-            pipelines.iter().map(|(p, _)| p.name.clone()).collect(),
+            names,
             move |cmd| {
+                if let (Some((pipeline, stencil, image)), Some(lobes_set)) = (lobes, lobes_set) {
+                    // The fabric lobes' samples first, over the woven pixels (every pixel where
+                    // the kinds are not split), for the lighting to pool.
+                    cmd.transition(image, Usage::Undefined, Usage::ColorAttachment, None);
+                    match stencil {
+                        Some(_) => cmd.begin_rendering_stencil_test(&[image], &t.depth),
+                        None => cmd.begin_rendering(&[Attachment { image, clear: None }], None),
+                    }
+                    cmd.bind_pipeline(pipeline);
+                    cmd.bind_sets(pipeline, 0, &[lobes_set]);
+                    if let Some(s) = stencil {
+                        cmd.set_stencil_reference(s);
+                    }
+                    cmd.draw(3);
+                    cmd.end_rendering();
+                    cmd.transition(image, Usage::ColorAttachment, Usage::FragmentRead, None);
+                }
                 match pipelines.as_slice() {
-                    [(pipeline, None)] => {
+                    [(pipeline, _, None)] => {
                         super::fullscreen::<u32>(cmd, pipeline, set, None, &t.hdr)
                     }
                     _ => {
@@ -227,7 +327,7 @@ impl LightingPass {
                         // its kind: together they cover every pixel once.
                         cmd.transition(&t.hdr, Usage::Undefined, Usage::ColorAttachment, None);
                         cmd.begin_rendering_stencil_test(&[&t.hdr], &t.depth);
-                        for (pipeline, stencil) in &pipelines {
+                        for (pipeline, _, stencil) in &pipelines {
                             cmd.bind_pipeline(pipeline);
                             cmd.bind_sets(pipeline, 0, &[set]);
                             cmd.set_stencil_reference(stencil.unwrap_or(0));

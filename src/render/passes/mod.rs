@@ -11,7 +11,9 @@
 //! 4. [`shadow`]: casters into the shadow atlas;
 //! 5. [`occlusion`] (with an environment, `--occlusion gtao`): how open each pixel's hemisphere
 //!    is, from the depth buffer, for the environment's light;
-//! 6. [`lighting`]: lamps and the environment from the G-buffer into HDR;
+//! 6. [`lighting`]: lamps and the environment from the G-buffer into HDR (where the woven model
+//!    pools its environment samples at fis, a first draw writes each woven pixel's lobe sums:
+//!    fabric_lobes.frag);
 //! 7. [`transparent`]: alphaMode BLEND draws, forward-lit, back to front over HDR;
 //! 8. [`tonemap`]: exposure and tone curve into the 8-bit target;
 //! 9. [`antialias`] (`--aa fxaa`): edge anti-aliasing of the tone-mapped image into the 8-bit
