@@ -61,8 +61,8 @@ void main() {
     vec3 tx = t + sx * dFdxFine(t);
     vec4 ky = key + sy * dFdyFine(key);
     vec3 ty = t + sy * dFdyFine(t);
-    bool quad = (abs(kx.w - key.w) < 0.5 && dot(kx.xyz, n) > near && dot(tx, t) > near)
-             || (abs(ky.w - key.w) < 0.5 && dot(ky.xyz, n) > near && dot(ty, t) > near);
+    bool quad = fabric_pool_agrees(n, t, key.w, kx.xyz, tx, kx.w, near)
+             || fabric_pool_agrees(n, t, key.w, ky.xyz, ty, ky.w, near);
     if (!woven) {
         out_sums = uvec4(0u);
         return;
@@ -80,7 +80,8 @@ void main() {
                 continue;
             }
             vec4 fq = frame_decode(texelFetch(gb_frame, q, 0));
-            if (fabric_pool_agrees(n, t, surface.y, fq, texelFetch(gb_surface, q, 0).y, near)) {
+            if (fabric_pool_agrees(n, t, surface.y, oct_decode(fq.xy), oct_decode(fq.zw),
+                                   texelFetch(gb_surface, q, 0).y, near)) {
                 mask |= fabric_pool_bit(ivec2(dx, dy), POOL);
                 pixels += 1u;
             }

@@ -122,7 +122,7 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 
 // Blended fabric is lit fragment by fragment, never pooled (POOL is 0): shade.glsl's declaration
 // needs a body.
-void fabric_pooled_lobe_sums(GpuFabric f, out vec4 weft, out vec4 warp, out uint pixels) {
+void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels) {
     weft = vec4(0.0);
     warp = vec4(0.0);
     pixels = 1u;

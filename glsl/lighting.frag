@@ -112,7 +112,7 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 // shade.glsl's fabric_pooled_lobe_sums: this pixel's lobe sums (fabric_lobes.frag's, at
 // binding 28) and those of the pixels its mask names (within POOL of it, their surface agreeing
 // with its own); the pixels pooled in `pixels`.
-void fabric_pooled_lobe_sums(GpuFabric f, out vec4 weft, out vec4 warp, out uint pixels) {
+void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels) {
     ivec2 px = ivec2(gl_FragCoord.xy);
     uvec4 own = texelFetch(fabric_lobe_sums, px, 0);
     fabric_lobe_unpack(own, weft, warp);

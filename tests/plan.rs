@@ -736,7 +736,12 @@ fn lobe_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
     assert!(lighting_pipeline(&on).contains("pool=1"));
     assert!(lighting_pipeline(&off).contains("pool=0"));
     // The lobe sums draw runs only where the lighting pools.
-    let lobes_draw = |f: &weft::render::Frame| f.stats.pipelines.iter().any(|p| p.starts_with("fabric lobes["));
+    let lobes_draw = |f: &weft::render::Frame| {
+        f.stats
+            .pipelines
+            .iter()
+            .any(|p| p.starts_with("fabric lobes["))
+    };
     assert!(lobes_draw(&on));
     assert!(!lobes_draw(&off));
     let plain_on = renderer

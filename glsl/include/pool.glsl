@@ -22,11 +22,12 @@ float fabric_pool_near(GpuFabric f) {
     return cos(POOL_ANGLE * inversesqrt(max(max(f.e_along, f.e_across), 1.0)));
 }
 
-// Whether a pixel of material `material` with normal n and tangent t pools with a pixel whose
-// frame target (frame_decode) is `fq` and material `mq`. An empty pixel's frame target is zero,
-// its normal equal to its tangent, which no fabric pixel's normal and tangent both come near.
-bool fabric_pool_agrees(vec3 n, vec3 t, float material, vec4 fq, float mq, float near) {
-    return abs(mq - material) < 0.5 && dot(oct_decode(fq.xy), n) > near && dot(oct_decode(fq.zw), t) > near;
+// Whether a pixel of material `material` with normal n and tangent t pools with a pixel of
+// material `mq` with normal nq and tangent tq (`near`: fabric_pool_near). An empty pixel's
+// frame target is zero, its normal equal to its tangent, which no fabric pixel's normal and
+// tangent both come near.
+bool fabric_pool_agrees(vec3 n, vec3 t, float material, vec3 nq, vec3 tq, float mq, float near) {
+    return abs(mq - material) < 0.5 && dot(nq, n) > near && dot(tq, t) > near;
 }
 
 // The Sobol' block (sobol_block) pixel px takes when pixels pool within `radius` of each other

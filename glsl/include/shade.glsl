@@ -166,7 +166,7 @@ float fabric_sheet_cover(vec4 surface, vec4 fabric_texel) {
 // The fabric lobes' sums pooled over the pixel's neighbourhood (lighting.frag: fabric_lobes.frag's
 // sums of the pixels around it whose surface agrees; forward.frag, which never pools: unused):
 // per lobe the sum of fabric_lobe_unpack over `pixels` pixels.
-void fabric_pooled_lobe_sums(GpuFabric f, out vec4 weft, out vec4 warp, out uint pixels);
+void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels);
 
 // The radiance leaving world point p towards v (unit, towards the eye) from the surface with
 // G-buffer values albedo, fr (frame_decode of the frame target), surface, fabric_texel,
@@ -228,7 +228,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
                 vec4 weft_sum;
                 vec4 warp_sum;
                 uint pixels;
-                fabric_pooled_lobe_sums(f, weft_sum, warp_sum, pixels);
+                fabric_pooled_lobe_sums(weft_sum, warp_sum, pixels);
                 fabric_env_lobes_resolve(weft_sum, warp_sum, k2, f, max(fabric, 1u) - 1u, IBL, pixels,
                                          env_weft, env_warp);
             } else {

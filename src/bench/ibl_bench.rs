@@ -469,8 +469,17 @@ impl IblReport {
             let _ = writeln!(
                 s,
                 "{:<16} {:<8} {:>8} {:>9} {:>7}  {:>8} {:>9} {:>7}  {:>8} {:>9} {:>7}",
-                "view", "level", "3x3 ms", "rel err", "PSNR", "5x5 ms", "rel err", "PSNR", "alone ms",
-                "rel err", "PSNR"
+                "view",
+                "level",
+                "3x3 ms",
+                "rel err",
+                "PSNR",
+                "5x5 ms",
+                "rel err",
+                "PSNR",
+                "alone ms",
+                "rel err",
+                "PSNR"
             );
             for p in &self.pooling {
                 let _ = writeln!(

@@ -450,14 +450,14 @@ impl IblLevel {
 /// The default IBL level.
 pub const DEFAULT_IBL: IblLevel = IblLevel::Fis(8);
 
-/// A scene lit by an environment: which, turned how far, how bright, and what the background
-/// shows.
 /// The default radius of the fabric lobes' pooling ([`EnvLighting::pool`]): a 3 x 3 window.
 pub const DEFAULT_POOL: u32 = 1;
 
 /// The largest radius the pooling takes (a 5 x 5 window).
 pub const MAX_POOL: u32 = 2;
 
+/// A scene lit by an environment: which, turned how far, how bright, and what the background
+/// shows.
 #[derive(Clone, Debug)]
 pub struct EnvLighting {
     pub env: Arc<Environment>,

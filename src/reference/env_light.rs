@@ -970,16 +970,7 @@ pub fn env_probe_eval(
             pooled,
         );
         let (weft, warp) = fabric_lobe_unpack(fabric_lobe_pack(weft, warp, samples, 0));
-        fabric_env_lobes_resolve(
-            env,
-            weft,
-            warp,
-            k2,
-            &inp.fabric,
-            inp.mode[3] % 3,
-            mode,
-            1,
-        )
+        fabric_env_lobes_resolve(env, weft, warp, k2, &inp.fabric, inp.mode[3] % 3, mode, 1)
     } else {
         fabric_env_lobes(
             env,
@@ -1064,7 +1055,10 @@ mod tests {
             }
         }
         // Beyond the format's largest value, negative and NaN: clamped, 0.
-        assert_eq!(rgb9e5_unpack(rgb9e5_pack([1e9, -1.0, f32::NAN])), [65408.0, 0.0, 0.0]);
+        assert_eq!(
+            rgb9e5_unpack(rgb9e5_pack([1e9, -1.0, f32::NAN])),
+            [65408.0, 0.0, 0.0]
+        );
     }
 
     #[test]

@@ -490,7 +490,7 @@ impl Plan {
             count(&|m| m.transmission.as_ref().is_some_and(|t| t.dispersion > 0.0));
         // Environment preprocessing only when an environment lights the scene (debug views show
         // no lighting, so they need none either).
-        let environment = options
+        let mut environment = options
             .environment
             .as_ref()
             .filter(|_| options.debug_view == DebugView::None)
@@ -532,7 +532,9 @@ impl Plan {
                     },
                     lobe_albedo_tables,
                     // Where fis estimates the woven model's lobes (which read the tables).
-                    pool: if matches!(e.level, crate::env::IblLevel::Fis(_)) && lobe_albedo_tables > 0 {
+                    pool: if matches!(e.level, crate::env::IblLevel::Fis(_))
+                        && lobe_albedo_tables > 0
+                    {
                         e.pool.min(crate::env::MAX_POOL)
                     } else {
                         0
@@ -619,6 +621,13 @@ impl Plan {
                 .count()
         };
         let (woven_draws, gltf_draws) = (deferred(true), deferred(false));
+        // The lobes are pooled where the deferred pass shades woven pixels: a scene whose fabric
+        // is all forward-lit (sheets) has none to pool, no lobe sums draw and no target for it.
+        if woven_draws == 0 {
+            if let Some(e) = environment.as_mut() {
+                e.pool = 0;
+            }
+        }
         let all_kinds = options.force.material_kinds;
         let texture_slots = if all_kinds {
             (1u32 << crate::scene::TextureSlot::COUNT) - 1

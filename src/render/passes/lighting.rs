@@ -12,8 +12,8 @@ use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
-    Attachment,     shaders, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler, SetLayout,
-    Stages, StencilMode, Topology, Usage,
+    shaders, Attachment, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler,
+    SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and whether they test the stencil (each with the lobe sums
@@ -259,7 +259,9 @@ impl LightingPass {
                 pipeline,
                 stencil,
                 inputs.lobes.ok_or_else(|| {
-                    crate::Error::device("the lighting pass pools the fabric lobes without their target".to_string())
+                    crate::Error::device(
+                        "the lighting pass pools the fabric lobes without their target".to_string(),
+                    )
                 })?,
             )),
             None => None,
@@ -284,60 +286,59 @@ impl LightingPass {
         bindings.extend(inputs.lighting.bindings());
         let set = pool.set(&self.layout, &bindings)?;
         // The lobe sums draw reads some of the same resources at the same numbers.
-        let lobes_set = match lobes {
-            Some(_) => {
+        let lobes = match lobes {
+            Some((pipeline, stencil, image)) => {
                 let wanted: Vec<(u32, Resource)> = bindings
                     .iter()
                     .filter(|(b, _)| self.lobes_layout.bindings.iter().any(|l| l.binding == *b))
                     .cloned()
                     .collect();
-                Some(pool.set(&self.lobes_layout, &wanted)?)
+                Some((
+                    pipeline,
+                    stencil,
+                    image,
+                    pool.set(&self.lobes_layout, &wanted)?,
+                ))
             }
             None => None,
         };
-        let mut names: Vec<String> = lobes.iter().map(|(p, _, _)| p.name.clone()).collect();
+        let mut names: Vec<String> = lobes.iter().map(|(p, _, _, _)| p.name.clone()).collect();
         names.extend(pipelines.iter().map(|(p, _, _)| p.name.clone()));
-        Ok(Recorded::new(
-            "lighting",
-            names,
-            move |cmd| {
-                if let (Some((pipeline, stencil, image)), Some(lobes_set)) = (lobes, lobes_set) {
-                    // The fabric lobes' samples first, over the woven pixels (every pixel where
-                    // the kinds are not split), for the lighting to pool.
-                    cmd.transition(image, Usage::Undefined, Usage::ColorAttachment, None);
-                    match stencil {
-                        Some(_) => cmd.begin_rendering_stencil_test(&[image], &t.depth),
-                        None => cmd.begin_rendering(&[Attachment { image, clear: None }], None),
+        Ok(Recorded::new("lighting", names, move |cmd| {
+            if let Some((pipeline, stencil, image, lobes_set)) = lobes {
+                // The fabric lobes' samples first, over the woven pixels (every pixel where
+                // the kinds are not split), for the lighting to pool.
+                cmd.transition(image, Usage::Undefined, Usage::ColorAttachment, None);
+                match stencil {
+                    Some(_) => cmd.begin_rendering_stencil_test(&[image], &t.depth),
+                    None => cmd.begin_rendering(&[Attachment { image, clear: None }], None),
+                }
+                cmd.bind_pipeline(pipeline);
+                cmd.bind_sets(pipeline, 0, &[lobes_set]);
+                if let Some(s) = stencil {
+                    cmd.set_stencil_reference(s);
+                }
+                cmd.draw(3);
+                cmd.end_rendering();
+                cmd.transition(image, Usage::ColorAttachment, Usage::FragmentRead, None);
+            }
+            match pipelines.as_slice() {
+                [(pipeline, _, None)] => super::fullscreen::<u32>(cmd, pipeline, set, None, &t.hdr),
+                _ => {
+                    // A fullscreen triangle per kind of pixel, each where the stencil is
+                    // its kind: together they cover every pixel once.
+                    cmd.transition(&t.hdr, Usage::Undefined, Usage::ColorAttachment, None);
+                    cmd.begin_rendering_stencil_test(&[&t.hdr], &t.depth);
+                    for (pipeline, _, stencil) in &pipelines {
+                        cmd.bind_pipeline(pipeline);
+                        cmd.bind_sets(pipeline, 0, &[set]);
+                        cmd.set_stencil_reference(stencil.unwrap_or(0));
+                        cmd.draw(3);
                     }
-                    cmd.bind_pipeline(pipeline);
-                    cmd.bind_sets(pipeline, 0, &[lobes_set]);
-                    if let Some(s) = stencil {
-                        cmd.set_stencil_reference(s);
-                    }
-                    cmd.draw(3);
                     cmd.end_rendering();
-                    cmd.transition(image, Usage::ColorAttachment, Usage::FragmentRead, None);
                 }
-                match pipelines.as_slice() {
-                    [(pipeline, _, None)] => {
-                        super::fullscreen::<u32>(cmd, pipeline, set, None, &t.hdr)
-                    }
-                    _ => {
-                        // A fullscreen triangle per kind of pixel, each where the stencil is
-                        // its kind: together they cover every pixel once.
-                        cmd.transition(&t.hdr, Usage::Undefined, Usage::ColorAttachment, None);
-                        cmd.begin_rendering_stencil_test(&[&t.hdr], &t.depth);
-                        for (pipeline, _, stencil) in &pipelines {
-                            cmd.bind_pipeline(pipeline);
-                            cmd.bind_sets(pipeline, 0, &[set]);
-                            cmd.set_stencil_reference(stencil.unwrap_or(0));
-                            cmd.draw(3);
-                        }
-                        cmd.end_rendering();
-                    }
-                }
-                cmd.transition(&t.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
-            },
-        ))
+            }
+            cmd.transition(&t.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
+        }))
     }
 }
