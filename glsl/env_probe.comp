@@ -1,6 +1,6 @@
 #version 460
 // Evaluates the environment light's estimators of include/env_light.glsl (pbr_env,
-// aniso_env_specular, sheen_layer_diffuse, fabric_env_lobes (and a quad lane's fabric_env_lobe_sums,
+// aniso_env_specular, sheen_layer_diffuse, fabric_env_lobes (and a woven pixel's fabric_pixel_lobe_sums,
 // fabric_env_lobes_resolve), fabric_env_diffuse, fabric_env_back,
 // fabric_env_combine, pixel_random, ibl_sample, ggx_albedo) and the shadow maps' PCF of
 // include/shadows.glsl (shadow_pcf) on a batch of inputs, so tests can compare the GPU with the
@@ -31,7 +31,7 @@ struct EnvProbeInput {
     vec4 k2;             // the view in the fabric's frame (unit, xyz)
     vec4 coverage;       // the weave coverage (c_warp, c_weft, s_warp, s_weft)
     vec4 rot;            // xy: the Monte Carlo rotation; zw: sheen_layer_diffuse's k and E(n·v)
-    uvec4 mode;          // x: the level (1 approx, 2 fis, 3 mc), y: samples, zw: pixel_random's pixel; w % 3: the lobe table, at fis w / 3 % 4: a quad lane (0: fabric_env_lobes, else its shifted set at a pooled count of lane + 1)
+    uvec4 mode;          // x: the level (1 approx, 2 fis, 3 mc), y: samples, zw: pixel_random's pixel; w % 3: the lobe table, at fis w / 3 % 4: a lane (0: fabric_env_lobes, 1: fabric_pixel_lobe_sums alone, 2 and 3: pooled, block lane - 1 of 9, lane pixels)
     GpuFabric fabric;    // the fabric material
     Shadow shadow;       // shadow_pcf: the shadow record
     vec4 light_pos;      // shadow_pcf: the light's position (xyz); w > 0.5: fabric sheets (fabric_env_combine)
@@ -115,16 +115,17 @@ void main() {
     mat3 tbn = fabric_frame(p.frame_n.xyz, p.frame_t.xyz, p.frame_t.w);
     vec3 weft;
     vec3 warp;
-    uint block = (p.mode.w / 3u) % 4u;
-    if (mode == 2u && block != 0u) {
-        // A pixel that pools (fabric_lobes.frag): block `block` of the Sobol' sequence, the mip
-        // level of block + 1 pixels' samples, through fabric_lobe_pack as lighting.frag reads
-        // it, resolved as if they were all its own.
-        uint pooled = samples * (block + 1u);
+    uint lane = (p.mode.w / 3u) % 4u;
+    if (mode == 2u && lane != 0u) {
+        // A woven pixel as fabric_lobes.frag takes its samples (fabric_pixel_lobe_sums): lane 1
+        // alone, lanes 2 and 3 pooled (block lane - 1 of a 3 x 3 window, the mip level of `lane`
+        // pixels' samples), through fabric_lobe_pack as lighting.frag reads it, resolved as if
+        // they were all its own.
+        uint block = lane - 1u;
         vec4 weft_sum;
         vec4 warp_sum;
-        fabric_env_lobe_sums(tbn, p.k2.xyz, p.coverage, p.fabric, mode, samples, rot, block + 1u,
-                             pooled, weft_sum, warp_sum);
+        fabric_pixel_lobe_sums(tbn, p.k2.xyz, p.coverage, p.fabric, samples, block, 9u, lane,
+                               weft_sum, warp_sum);
         fabric_lobe_unpack(fabric_lobe_pack(weft_sum, warp_sum, samples, 0u), weft_sum, warp_sum);
         fabric_env_lobes_resolve(weft_sum, warp_sum, p.k2.xyz, p.fabric, p.mode.w % 3u, mode, 1u,
                                  weft, warp);

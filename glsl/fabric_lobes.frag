@@ -2,12 +2,13 @@
 // The fabric lobes' environment samples, for the deferred lighting to pool (issue 31 item 1): one
 // fullscreen triangle over the woven pixels (where the G-buffer's stencil says what each pixel
 // is; over every pixel otherwise, the others writing zeros) before lighting.frag. Each pixel
-// finds which pixels within POOL of it agree with it (fabric_pool_agrees), takes IBL_SAMPLES
-// samples of its A–S lobes (fabric_env_lobe_sums at fis) from block fabric_pool_block of the
-// Sobol' (0,2)-sequence where any does (the Hammersley set otherwise, as a pixel alone), the mip
-// level chosen for all the samples pooled, and writes them with the mask of those pixels
-// (fabric_lobe_pack); lighting.frag then sums the masked pixels' with its own, so a window of
-// agreeing pixels samples its lobe with (2·POOL + 1)² times the samples.
+// finds which pixels within POOL of it agree with it (fabric_pool_agrees), takes samples of its
+// A–S lobes at fis (fabric_pixel_lobe_sums: blocks of the Sobol' (0,2)-sequence from its place
+// fabric_pool_block where any does, the Hammersley set otherwise, as a pixel alone; more of them
+// the more grazing its view, fabric_lobe_passes), the mip level chosen for all the samples
+// pooled, and writes them with the mask of those pixels (fabric_lobe_pack); lighting.frag then
+// sums the masked pixels' with its own, so a window of agreeing pixels samples its lobe with
+// (2·POOL + 1)² pixels' samples.
 #include "frame.glsl"
 #include "fabric.glsl"
 #include "ibl.glsl"
@@ -93,12 +94,12 @@ void main() {
     mat3 tbn = fabric_frame(n, t, surface.z);
     vec3 k2 = fabric_local(v, tbn);
     vec4 coverage = ACCURACY == 3u ? vec4(0.5) : texelFetch(gb_fabric, px, 0);
-    // A pixel that pools takes its block of the Sobol' sequence; one alone the Hammersley set
-    // (block 0), exactly as without pooling.
+    // A pixel that pools takes its blocks of the Sobol' sequence; one alone the Hammersley set,
+    // each as many times its base count as its view needs (fabric_lobe_passes).
+    uint window = (2u * POOL + 1u) * (2u * POOL + 1u);
     uint block = pixels > 1u ? fabric_pool_block(px, POOL) + 1u : 0u;
     vec4 weft;
     vec4 warp;
-    fabric_env_lobe_sums(tbn, k2, coverage, f, 2u, IBL_SAMPLES, vec2(0.0), block, IBL_SAMPLES * pixels,
-                         weft, warp);
+    fabric_pixel_lobe_sums(tbn, k2, coverage, f, IBL_SAMPLES, block, window, pixels, weft, warp);
     out_sums = fabric_lobe_pack(weft, warp, IBL_SAMPLES, mask);
 }

@@ -145,9 +145,9 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          triangle (`fullscreen.vert`) drawn before lighting.frag with the same set and \
          constants, over the fabric pixels (a stencil test, or every pixel: the others write \
          zeros). Reads the G-buffer's frame, surface, fabric and depth targets and the radiance \
-         cube; writes per pixel its two lobes' weighted mean radiance and weight per sample as \
-         eight half floats (`include/env_light.glsl`'s fabric_lobe_pack) to one RGBA32_UINT \
-         target, which lighting.frag reads at binding 28. No push constants.",
+         cube; writes per pixel its two lobes' weighted mean radiance (RGB9E5), their weights \
+         (bfloat16) and which pixels around it pool with it (`include/env_light.glsl`'s \
+         fabric_lobe_pack) to one RGBA32_UINT target, which lighting.frag reads at binding 28. No push constants.",
     ),
     (
         "forward.frag",
@@ -298,8 +298,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 13, "GLTF_FEATURES: bit mask of the glTF extensions whose lighting is compiled in: 1 KHR_materials_sheen (the G-buffer's fabric target holds its colour and roughness), 2 KHR_materials_anisotropy (the surface target's z its strength); a clear bit reads that extension as absent (default 3, both)"),
     ("lighting.frag", 14, "POOL: R >= 1 pools the woven model's environment lobe samples at fis (IBL 2) over the (2R + 1) x (2R + 1) pixels around each pixel that show the same material with normals and tangents within a quarter of the lobe's narrow width, from `fabric_lobes.frag`'s sums at binding 28 (drawn first with the same constants); 0 (default) estimates each pixel's lobes alone and reads nothing at binding 28"),
     ("fabric_lobes.frag", 0, "ACCURACY: as lighting.frag's (3, supersampled, weighs the two lobes' sampling evenly; otherwise the pixel's coverage does)"),
-    ("fabric_lobes.frag", 8, "IBL_SAMPLES: N of fis:N, as lighting.frag's: the samples each pixel takes"),
-    ("fabric_lobes.frag", 14, "POOL: the pooling radius R (>= 1), as lighting.frag's: each pixel takes block (x mod (2R + 1)) + (2R + 1)(y mod (2R + 1)) of the Sobol' (0,2)-sequence (include/ibl.glsl's sobol_block), so that every window lighting.frag pools holds each block once (default 1)"),
+    ("fabric_lobes.frag", 8, "IBL_SAMPLES: N of fis:N, as lighting.frag's: the base count of each pixel's samples; a pixel alone takes N times include/env_light.glsl's fabric_lobe_passes (1 to 6, more toward grazing views, where the lobes are bright), a pixel that pools N / 2 times that"),
+    ("fabric_lobes.frag", 14, "POOL: the pooling radius R (>= 1), as lighting.frag's: a pixel that pools takes blocks b, b + (2R + 1)^2, b + 2(2R + 1)^2, ... of the Sobol' (0,2)-sequence (include/ibl.glsl's sobol_block), b = (x mod (2R + 1)) + (2R + 1)(y mod (2R + 1)), so that no two pixels of a window lighting.frag pools share a block (default 1)"),
     ("lighting.frag", 9, "UNLIT: 1 shows the pixels of KHR_materials_unlit materials (`Material.extra.w` flag 4) with the albedo target's base colour as their radiance, unlit; 0 (default) compiles the check out"),
     (
         "lighting.frag",

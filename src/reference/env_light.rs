@@ -587,6 +587,65 @@ pub fn fabric_env_lobe_sums(
     (weft, warp)
 }
 
+/// `fabric_lobe_passes` (env_light.glsl): how many times its base count of fis samples a woven
+/// pixel takes: about half its Schlick Fresnel at n·k2 over the cloth's rs (at least 0.02),
+/// 1 to 6 (the lobes' error is where they are bright, at grazing views).
+pub fn fabric_lobe_passes(nk2: f32, rs: f32) -> u32 {
+    let x = 1.0 - nk2.clamp(0.0, 1.0);
+    let x2 = x * x;
+    let fresnel = rs + (1.0 - rs) * (x2 * x2 * x);
+    // GLSL's uint() of a float truncates toward zero, as `as u32` does (NaN: clamp makes 1).
+    ((0.5 * fresnel / rs.max(0.02) + 0.5) as u32).clamp(1, 6)
+}
+
+/// `fabric_pixel_lobe_sums`: one woven pixel's lobe sums as fabric_lobes.frag takes them at fis:
+/// alone (`block` 0) the Hammersley set of `samples` · passes; pooled (`block` b ≥ 1 of a
+/// `window`) `passes` blocks of samples / 2 of the Sobol' sequence (b, b + window, ...), the mip
+/// level for `pixels` pixels' samples.
+#[allow(clippy::too_many_arguments)]
+pub fn fabric_pixel_lobe_sums(
+    env: &impl EnvLookup,
+    tbn: &[Vec3; 3],
+    k2: Vec3,
+    coverage: [f32; 4],
+    f: &GpuFabric,
+    samples: u32,
+    block: u32,
+    window: u32,
+    pixels: u32,
+) -> ([f32; 4], [f32; 4]) {
+    let passes = fabric_lobe_passes(k2[2], f.rs);
+    let pooled = block != 0;
+    let unit = if pooled {
+        (samples / 2).max(1)
+    } else {
+        samples * passes
+    };
+    let lod_samples = if pooled { unit * passes * pixels } else { unit };
+    let mut weft = [0.0f32; 4];
+    let mut warp = [0.0f32; 4];
+    for k in 0..(if pooled { passes } else { 1 }) {
+        let b = if pooled { block + window * k } else { 0 };
+        let (a, c) = fabric_env_lobe_sums(
+            env,
+            tbn,
+            k2,
+            coverage,
+            f,
+            2,
+            unit,
+            [0.0, 0.0],
+            b,
+            lod_samples,
+        );
+        for i in 0..4 {
+            weft[i] += a[i];
+            warp[i] += c[i];
+        }
+    }
+    (weft, warp)
+}
+
 /// `fabric_env_lobes_resolve`: the lobes' radiance from their sums over `samples` samples: fis
 /// a ratio estimator times the exact albedo of fabric record `table` ([`fabric_lobe_albedo`]),
 /// mc the plain estimate.
@@ -952,22 +1011,21 @@ pub fn env_probe_eval(
     );
     let tbn = fb::fabric_frame(xyz(inp.frame_n), xyz(inp.frame_t), inp.frame_t[3]);
     let k2 = xyz(inp.k2);
-    let block = (inp.mode[3] / 3) % 4;
-    let (weft, warp) = if mode == 2 && block != 0 {
-        // A pixel that pools: its own block, the mip level of block + 1 pixels' samples, through
+    let lane = (inp.mode[3] / 3) % 4;
+    let (weft, warp) = if mode == 2 && lane != 0 {
+        // A woven pixel as fabric_lobes.frag takes its samples: lane 1 alone, 2 and 3 pooled
+        // (block lane − 1 of a 3 x 3 window, the mip level of `lane` pixels' samples), through
         // the packed texel lighting.frag reads, resolved as if they were all its own.
-        let pooled = samples * (block + 1);
-        let (weft, warp) = fabric_env_lobe_sums(
+        let (weft, warp) = fabric_pixel_lobe_sums(
             env,
             &tbn,
             k2,
             inp.coverage,
             &inp.fabric,
-            mode,
             samples,
-            rot,
-            block + 1,
-            pooled,
+            lane - 1,
+            9,
+            lane,
         );
         let (weft, warp) = fabric_lobe_unpack(fabric_lobe_pack(weft, warp, samples, 0));
         fabric_env_lobes_resolve(env, weft, warp, k2, &inp.fabric, inp.mode[3] % 3, mode, 1)
@@ -1037,6 +1095,30 @@ mod tests {
             }
         }
         assert_eq!(seen.len(), 1024, "every pixel its own rotation");
+    }
+
+    #[test]
+    fn lobe_passes_grow_toward_grazing_within_one_to_six() {
+        // The default cloth (rs 0.04): its base count facing the view, more toward grazing
+        // (Schlick: 0.5·F/rs is 0.9 at n·k2 0.5, 1.9 at 0.35, 3.3 at 0.25 and 9.8 at 0.05).
+        assert_eq!(fabric_lobe_passes(1.0, 0.04), 1);
+        assert_eq!(fabric_lobe_passes(0.5, 0.04), 1);
+        assert_eq!(fabric_lobe_passes(0.35, 0.04), 2);
+        assert_eq!(fabric_lobe_passes(0.25, 0.04), 3);
+        assert_eq!(fabric_lobe_passes(0.05, 0.04), 6);
+        let mut last = 0;
+        for i in 0..=100 {
+            let p = fabric_lobe_passes(1.0 - i as f32 / 100.0, 0.04);
+            assert!(p >= last && (1..=6).contains(&p), "monotone within 1..=6");
+            last = p;
+        }
+        // rs = 0 (issue 31 item 2) and rs = 1 stay in range; so do NaN and out-of-range cosines.
+        assert_eq!(fabric_lobe_passes(1.0, 0.0), 1);
+        assert_eq!(fabric_lobe_passes(0.0, 0.0), 6);
+        assert_eq!(fabric_lobe_passes(0.0, 1.0), 1);
+        for c in [f32::NAN, -1.0, 2.0, f32::INFINITY] {
+            assert!((1..=6).contains(&fabric_lobe_passes(c, 0.04)));
+        }
     }
 
     #[test]
