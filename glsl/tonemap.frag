@@ -4,11 +4,16 @@
 // pass through unmapped. Rust twins: weft::reference::shading::{pbr_neutral, aces_three, agx}.
 layout(set = 0, binding = 0) uniform sampler2D hdr;  // the HDR image from lighting.frag
 
+// The tone curve (weft::reference::shading::ToneCurve::code: 0 Khronos PBR Neutral, 1 none
+// (clamp), 2 three.js' ACES fit with its 1/2.2 display gamma, 3 AgX), or 4 for a debug view (no
+// exposure, no curve): a specialization constant, one pipeline per curve in use, because
+// llvmpipe runs every side of a branch on a uniform value (the three curves a push constant chose
+// between cost 32 ms at 1080p, the one in use 15 ms).
+layout(constant_id = 0) const uint CURVE = 0u;
+const uint CURVE_PASSTHROUGH = 4u;
+
 layout(push_constant, std430) uniform Tonemap {
     float exposure;   // linear scale, 2^EV
-    uint passthrough; // 1: no exposure, no curve (debug views)
-    uint curve;       // 0 PBR Neutral, 1 none (clamp), 2 ACES (three.js), 3 AgX
-    uint _pad;
 } tm;
 
 layout(location = 0) in vec2 in_uv;
@@ -86,13 +91,13 @@ void main() {
     if (coverage > 0.0 && coverage < 1.0) {
         c /= coverage;
     }
-    if (tm.passthrough == 0u) {
+    if (CURVE != CURVE_PASSTHROUGH) {
         c *= tm.exposure;
-        if (tm.curve == 0u) {
+        if (CURVE == 0u) {
             c = pbr_neutral(c);
-        } else if (tm.curve == 2u) {
+        } else if (CURVE == 2u) {
             c = aces_three(c);
-        } else if (tm.curve == 3u) {
+        } else if (CURVE == 3u) {
             c = agx(c);
         }
     }

@@ -530,9 +530,6 @@ const _: () = assert!(std::mem::size_of::<ShadowMaskPush>() == 80);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct TonemapPush {
+    /// Linear scale, 2^EV (the tone curve is the pipeline's specialization constant 0).
     pub exposure: f32,
-    pub passthrough: u32,
-    /// The tone curve: [`crate::reference::shading::ToneCurve::code`].
-    pub curve: u32,
-    pub _pad: u32,
 }

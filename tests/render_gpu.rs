@@ -456,6 +456,13 @@ fn every_tone_curve_matches_its_twin() {
                 ..Default::default()
             };
             let frame = renderer.render(&scene, &options).expect("render");
+            // Only the curve in use is compiled in: its own pipeline ran.
+            let name = format!("tonemap[CURVE={}]", curve.code());
+            assert!(
+                frame.stats.pipelines.contains(&name),
+                "{name} not among {:?}",
+                frame.stats.pipelines
+            );
             let (mut worst, mut off) = (0i32, 0usize);
             for (px, hdr) in frame.ldr.chunks_exact(4).zip(frame.hdr.chunks_exact(4)) {
                 let want = display_rgba8_with(curve, [hdr[0], hdr[1], hdr[2]], 2f32.powf(exposure));

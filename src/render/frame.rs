@@ -373,7 +373,8 @@ impl Renderer {
         self.antialias.make(&self.ctx)?;
         self.occlusion.make(&self.ctx)?;
         self.shadow.make_mask(&self.ctx, false)?;
-        let mut all = vec![self.weave.pipeline(), self.tonemap.pipeline()];
+        let mut all = vec![self.weave.pipeline()];
+        all.extend(self.tonemap.pipelines());
         all.extend(self.shadow.pipelines());
         all.extend(self.env.pipelines());
         all.extend(self.gbuffer.pipelines());
@@ -516,6 +517,7 @@ impl Renderer {
         if plan.mask_casters > 0 && plan.runs(Pass::Shadow) {
             self.shadow.make_mask(&self.ctx, plan.vertex_colors)?;
         }
+        self.tonemap.make(&self.ctx, TonemapPass::curve(options))?;
         if plan.runs(Pass::Antialias) {
             self.antialias.make(&self.ctx)?;
         }
@@ -1156,10 +1158,8 @@ impl Renderer {
                         nearest: &d.nearest,
                         push: TonemapPush {
                             exposure: 2f32.powf(options.exposure),
-                            passthrough: (options.debug_view != super::DebugView::None) as u32,
-                            curve: options.tonemap.code(),
-                            _pad: 0,
                         },
+                        curve: TonemapPass::curve(options),
                         antialiased: plan.runs(Pass::Antialias),
                     },
                 )?),

@@ -255,6 +255,9 @@ pub struct Plan {
     pub bc7_textures: usize,
     #[serde(serialize_with = "debug_view_name")]
     pub debug_view: DebugView,
+    /// The tone curve the tonemap pass compiles in (`--tonemap`'s name; "passthrough" for a
+    /// debug view): the others are not in its pipeline.
+    pub tone_curve: &'static str,
     /// The environment that lights the scene, if any.
     pub environment: Option<EnvPlan>,
     /// Screen-space occlusion of the environment's light (with an environment and
@@ -759,6 +762,11 @@ impl Plan {
             gltf_features,
             bc7_textures: scene.textures.iter().filter(|t| t.bc7.is_some()).count(),
             debug_view: options.debug_view,
+            tone_curve: if options.debug_view != DebugView::None {
+                "passthrough"
+            } else {
+                options.tonemap.name()
+            },
             supersample: options.supersample(),
             environment,
             occlusion,
@@ -1058,6 +1066,11 @@ impl fmt::Display for Plan {
                 n * n
             )?;
         }
+        writeln!(
+            f,
+            "tone curve  {} (the only curve compiled into the tonemap pass's pipeline)",
+            self.tone_curve
+        )?;
         write!(f, "debug view  {}", self.debug_view.name())
     }
 }

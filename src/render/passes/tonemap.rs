@@ -1,26 +1,37 @@
 //! The tonemap pass: exposure and tone curve from HDR into the 8-bit target
 //! (fullscreen.vert, tonemap.frag).
 
+use std::sync::OnceLock;
+
 use super::Recorded;
 use crate::render::gpu::TonemapPush;
 use crate::render::targets::{Targets, LDR_FORMAT};
+use crate::render::{DebugView, RenderOptions};
 use crate::vk::{
     shaders, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout, Stages,
     StencilMode, Topology,
 };
 
-/// The pass's pipeline and set layout (reflected from tonemap.frag).
+/// tonemap.frag's CURVE for a debug view: no exposure, no curve.
+pub const CURVE_PASSTHROUGH: u32 = 4;
+
+/// The pass's set layout (reflected from tonemap.frag) and a pipeline per tone curve
+/// (specialization constant 0, CURVE: llvmpipe runs every side of a branch on a uniform value,
+/// so only the curve in use is compiled in): the default curve's made with the device, the
+/// others by the first frame that asks for them.
 pub struct TonemapPass {
     layout: SetLayout,
-    pipeline: Pipeline,
+    pipelines: [OnceLock<Pipeline>; CURVE_PASSTHROUGH as usize + 1],
 }
 
 /// What the pass reads and where it writes.
 pub struct TonemapInputs<'s> {
     pub targets: &'s Targets,
     pub nearest: &'s Sampler,
-    /// Exposure, curve, and whether a debug view passes through untouched.
+    /// The exposure (the curve is [`TonemapPass::curve`]'s pipeline).
     pub push: TonemapPush,
+    /// tonemap.frag's CURVE ([`TonemapPass::curve`]); its pipeline made by [`TonemapPass::make`].
+    pub curve: u32,
     /// The anti-aliasing pass follows: write `targets.tonemapped` for it (else the output).
     pub antialiased: bool,
 }
@@ -29,26 +40,51 @@ impl TonemapPass {
     pub fn new(ctx: &Context) -> crate::Result<TonemapPass> {
         let [layout] =
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::TONEMAP_FRAG])?;
-        let pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
-            name: "tonemap",
-            vertex: &shaders::FULLSCREEN_VERT,
-            fragment: &shaders::TONEMAP_FRAG,
-            vertex_layout: None,
-            color_formats: &[LDR_FORMAT],
-            depth_format: None,
-            set_layouts: &[&layout],
-            push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
-            push_stages: Stages::FRAGMENT,
-            constants: &[],
-            blend: false,
-            topology: Topology::Triangles,
-            stencil: StencilMode::None,
-        })?;
-        Ok(TonemapPass { layout, pipeline })
+        let pass = TonemapPass {
+            layout,
+            pipelines: Default::default(),
+        };
+        pass.make(ctx, Self::curve(&RenderOptions::default()))?;
+        Ok(pass)
     }
 
-    pub fn pipeline(&self) -> &Pipeline {
-        &self.pipeline
+    /// tonemap.frag's CURVE for `options`: the tone curve's code, or [`CURVE_PASSTHROUGH`] for a
+    /// debug view.
+    pub fn curve(options: &RenderOptions) -> u32 {
+        if options.debug_view != DebugView::None {
+            CURVE_PASSTHROUGH
+        } else {
+            options.tonemap.code()
+        }
+    }
+
+    /// Makes the pipeline of `curve` once.
+    pub fn make(&self, ctx: &Context, curve: u32) -> crate::Result<()> {
+        let slot = &self.pipelines[curve.min(CURVE_PASSTHROUGH) as usize];
+        if slot.get().is_none() {
+            let pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: &format!("tonemap[CURVE={curve}]"),
+                vertex: &shaders::FULLSCREEN_VERT,
+                fragment: &shaders::TONEMAP_FRAG,
+                vertex_layout: None,
+                color_formats: &[LDR_FORMAT],
+                depth_format: None,
+                set_layouts: &[&self.layout],
+                push_constant_size: std::mem::size_of::<TonemapPush>() as u32,
+                push_stages: Stages::FRAGMENT,
+                constants: &[(0, curve)],
+                blend: false,
+                topology: Topology::Triangles,
+                stencil: StencilMode::None,
+            })?;
+            let _ = slot.set(pipeline);
+        }
+        Ok(())
+    }
+
+    /// Every curve's pipeline made so far.
+    pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
+        self.pipelines.iter().filter_map(|p| p.get())
     }
 
     /// Reads HDR, writes the display-referred 8-bit image.
@@ -67,7 +103,9 @@ impl TonemapPass {
             _ => &t.ldr,
         };
         let push = inputs.push;
-        let pipeline = &self.pipeline;
+        let pipeline = self.pipelines[inputs.curve.min(CURVE_PASSTHROUGH) as usize]
+            .get()
+            .expect("the frame makes the tone curve's pipeline before recording");
         Ok(Recorded::new(
             "tonemap",
             vec![pipeline.name.clone()],
