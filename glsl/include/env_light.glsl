@@ -325,7 +325,7 @@ uint fabric_lobe_passes(float nk2, float rs) {
 // samples · passes; a pixel that pools (`block` b ≥ 1: 1 + its place in a window of `window`
 // pixels, fabric_pool_block) takes `passes` blocks of samples / 2 of the Sobol' sequence (b,
 // b + window, b + 2·window, ...: no two pixels of a window share one) with the mip level for
-// `pixels` pixels' samples (the window's pooled share half the base count each: ten pooled
+// `pixels` pixels' samples (a pooled pixel takes half the base count: a window of agreeing
 // pixels' samples are more than a pixel alone needs).
 void fabric_pixel_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint samples, uint block, uint window, uint pixels, out vec4 weft, out vec4 warp) {
     uint passes = fabric_lobe_passes(k2.z, f.rs);
