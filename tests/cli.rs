@@ -121,6 +121,20 @@ fn plan_prints_the_default_scene() {
             "antialias"
         ])
     );
+    // The tone curve the tonemap pass compiles in (the others are not in its pipeline).
+    assert_eq!(v["tone_curve"], "pbr-neutral");
+    let out = weft()
+        .args(["plan", "--json", "--tonemap", "agx"])
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["tone_curve"], "agx");
+    let out = weft()
+        .args(["plan", "--json", "--debug-view", "normals"])
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["tone_curve"], "passthrough");
     let out = weft()
         .args(["plan", "--json", "--aa", "none"])
         .output()

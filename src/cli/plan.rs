@@ -12,6 +12,9 @@ pub(super) struct PlanArgs {
     /// Anti-aliasing, as for render (its default: fxaa; ssN: the plan of each of its N² frames).
     #[arg(long, default_value = "fxaa", value_parser = parse_aa)]
     pub(super) aa: render::Antialias,
+    /// The tone curve, as for render (the plan says which one the tonemap pass compiles in).
+    #[arg(long, default_value = "pbr-neutral", value_parser = parse_tonemap)]
+    pub(super) tonemap: render::ToneCurve,
     /// The woven fabric tried on a material, as for render: MATERIAL=PRESET[+sheet][@PITCH][:DRAFT.wif];
     /// repeatable.
     #[arg(long)]
@@ -21,6 +24,7 @@ pub(super) struct PlanArgs {
 pub(super) fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
     let (scene, mut options) = load_scene_with(&args.scene, (1280, 720), &args.fabric, false)?;
     options.antialias = args.aa;
+    options.tonemap = args.tonemap;
     let plan = Plan::new(&scene, &options);
     if args.json {
         let mut json = serde_json::to_value(&plan)?;
