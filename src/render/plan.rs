@@ -762,10 +762,9 @@ impl Plan {
             gltf_features,
             bc7_textures: scene.textures.iter().filter(|t| t.bc7.is_some()).count(),
             debug_view: options.debug_view,
-            tone_curve: if options.debug_view != DebugView::None {
-                "passthrough"
-            } else {
-                options.tonemap.name()
+            tone_curve: match super::passes::tonemap::TonemapPass::curve(options) {
+                super::passes::tonemap::CURVE_PASSTHROUGH => "passthrough",
+                _ => options.tonemap.name(),
             },
             supersample: options.supersample(),
             environment,

@@ -29,8 +29,8 @@ pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const WEAVE_SAT_FORMAT: Format = Format::R32G32B32A32_SFLOAT;
 pub const WEAVE_FORMAT_8: Format = Format::R8G8B8A8_UNORM;
 pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
-/// fabric_lobes.frag's lobe sums per pixel (fabric_lobe_pack: eight half floats), which the
-/// lighting pass pools.
+/// fabric_lobes.frag's lobe sums per pixel (fabric_lobe_pack: each lobe's mean radiance as
+/// RGB9E5, both weights as bfloat16, the pooling mask), which the lighting pass pools.
 pub const LOBES_FORMAT: Format = Format::R32G32B32A32_UINT;
 /// The occlusion pass's estimates and their blur (visibility, view distance; half resolution).
 pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
