@@ -716,6 +716,83 @@ fn summed_area_table_gives_box_coverage() {
     );
 }
 
+// The G-buffer takes the summed-area table's whole-table terms once per pixel, for the first
+// piece only (surface.glsl): that is exact only if no piece of a footprint cut into several
+// (`weave_pieces`) reaches past the table, wherever it lies. Random footprints of up to eight cells
+// (cut ones are under four), every rotation and aspect, on every built-in weave: every piece of a
+// cut footprint has a zero whole-table part; footprints taken whole still reach past it.
+#[test]
+fn summed_area_table_pieces_lie_inside_the_table() {
+    use weft::fabric::{weave_level0_size, WeaveSat};
+    let mut rng = weft::reference::probe::XorShift::new(4321);
+    let (mut cut, mut whole_taken) = (0usize, 0usize);
+    for pattern in [
+        WeavePattern::plain(),
+        WeavePattern::twill(),
+        WeavePattern::satin(),
+    ] {
+        let p = FabricParams {
+            pattern,
+            ..Default::default()
+        };
+        let (nw, nh) = weave_level0_size(&p.pattern);
+        let push = p.weave_push(nw, nh);
+        let sat = WeaveSat::new(&push);
+        let r = WeaveSat::repeats_for(push.cols, push.rows);
+        assert_eq!(sat.repeats(), r as f32);
+        assert!(r as f32 >= 1.0 + 4.0 / push.cols.min(push.rows) as f32);
+        let cells = [push.cols as f32, push.rows as f32];
+        for _ in 0..4000 {
+            // A footprint's edges in cells: length 0.05 to 8, any direction.
+            let edge = |rng: &mut weft::reference::probe::XorShift| {
+                let (len, a) = (rng.log_range(0.05, 8.0), rng.range(0.0, 2.0 * PI));
+                [(len * a.cos()) as f32, (len * a.sin()) as f32]
+            };
+            let (dx, dy) = (edge(&mut rng), edge(&mut rng));
+            let k = ws::weave_pieces(dx, dy, 2 + (rng.next_f64() * 2.0) as u32);
+            // In repeats, as the shader has them; the centre anywhere in the first repeat.
+            let (sdx, sdy) = (
+                [dx[0] / cells[0], dx[1] / cells[1]],
+                [dy[0] / cells[0], dy[1] / cells[1]],
+            );
+            let half = ws::weave_piece_half(sdx, sdy, k);
+            let c = [rng.next_f64() as f32, rng.next_f64() as f32];
+            let kf = [k[0] as f32, k[1] as f32];
+            for j in 0..k[1] {
+                for i in 0..k[0] {
+                    let f = [
+                        (i as f32 + 0.5) / kf[0] - 0.5,
+                        (j as f32 + 0.5) / kf[1] - 0.5,
+                    ];
+                    let pc = [
+                        c[0] + sdx[0] * f[0] + sdy[0] * f[1],
+                        c[1] + sdx[1] * f[0] + sdy[1] * f[1],
+                    ];
+                    let lo = [pc[0] - half[0], pc[1] - half[1]];
+                    let hi = [pc[0] + half[0], pc[1] + half[1]];
+                    let w = sat.box_whole(lo, hi);
+                    if k == [1, 1] {
+                        whole_taken += w.iter().any(|x| *x != 0.0) as usize;
+                        continue;
+                    }
+                    cut += 1;
+                    assert_eq!(
+                        w,
+                        [0.0; 4],
+                        "piece {i},{j} of {k:?} at {c:?}, edges {dx:?} {dy:?} cells, of {}: past the table ({r} repeats)",
+                        p.pattern.name()
+                    );
+                }
+            }
+        }
+    }
+    println!("{cut} pieces of cut footprints inside the table; {whole_taken} whole footprints used the whole-table part");
+    assert!(
+        cut > 1000 && whole_taken > 100,
+        "the cases must cover both: {cut} cut pieces, {whole_taken} whole"
+    );
+}
+
 #[test]
 fn gap_limits() {
     // s_g = 0: no gap anywhere but on borders; a whole repeat has no gap.

@@ -109,15 +109,22 @@ vec4 sample_slot(sampler2D tex, Material m, uint slot) {
 }
 
 // The weave's summed-area table (WEAVE_SOURCE 2 filtered, 3 fetched; Rust twin
-// weft::fabric::WeaveSat, which builds it): it spans 2 x 2 repeats (a box up to a repeat wide,
-// its corner in the first repeat, lies inside). With W x H texels per repeat, texel (i, j),
-// i <= 2W, j <= 2H, is the integral over [0, i/W] x [0, j/H] (a repeat has area 1) of the
-// coverage minus its mean; texel (2W + 1, 0) the mean. The table at q in texel-corner units, bilinear between the four corners around it (exact
+// weft::fabric::WeaveSat, which builds it): it spans R x R repeats (2, more for a weave of fewer
+// than four cells a side: a box narrower than R - 1 repeats, its corner in the first repeat, lies
+// inside, and R - 1 repeats hold four cells, the widest footprint weave_pieces cuts). With W x H
+// texels per repeat, texel (i, j), i <= RW, j <= RH, is the integral over [0, i/W] x [0, j/H] (a
+// repeat has area 1) of the coverage minus its mean; texel (RW + 1, 0) the mean, texel (RW + 1, 1)
+// R. The table at q in texel-corner units, bilinear between the four corners around it (exact
 // for the texel-averaged coverage): by the sampler, or where the device cannot filter RGBA32F
 // (Vulkan makes it optional) by four texel fetches.
+// R: the repeats a weave's table spans along each axis.
+float weave_sat_repeats() {
+    return texelFetch(weave_tex, ivec2(textureSize(weave_tex, 0).x - 1, 1), 0).x;
+}
+
 // W x H: the table's texels per repeat (level 0 of the weave texture).
 vec2 weave_sat_repeat_texels() {
-    return vec2(textureSize(weave_tex, 0) - ivec2(2, 1)) / 2.0;
+    return vec2(textureSize(weave_tex, 0) - ivec2(2, 1)) / weave_sat_repeats();
 }
 
 // A summed-area table's texel: the weave texture's (src = SAT_WEAVE) or, from the thread-colour
@@ -142,27 +149,52 @@ vec4 sat_corner(uint src, ivec2 size, vec2 q) {
     return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
 }
 
-// The mean over the box [lo, hi] of st (a repeat is 1 unit; any size and place): with lo
-// reduced into the first repeat and hi = 2X + u1 (X whole tables), the integral of the value minus
-// its mean is T(u1,v1) - T(u1,v0) - T(u0,v1) + T(u0,v0) + X (T(2,v1) - T(2,v0)) + Y (T(u1,2) - T(u0,2));
-// X and Y are 0 for boxes up to a repeat. Rust twin: weft::fabric::WeaveSat::box_mean.
-vec4 sat_box(uint src, ivec2 size, vec2 lo, vec2 hi) {
+// Where the box [lo, hi] of st (a repeat is 1 unit) lies in a table of r x r repeats: lo
+// reduced into the first repeat, hi = r X + u1 (X whole tables); q0, q1 the corners in
+// texel-corner units. Rust twin: WeaveSat::place.
+void sat_place(ivec2 size, float r, vec2 lo, vec2 hi, out vec2 q0, out vec2 q1, out vec2 whole) {
     vec2 n = vec2(size - ivec2(2, 1));
-    vec2 ext = hi - lo;
     vec2 l = lo - floor(lo);
-    vec2 h = l + ext;
-    vec2 whole = floor(h / 2.0);
-    vec2 q0 = l * n / 2.0;
-    vec2 q1 = (h - 2.0 * whole) * n / 2.0;
-    vec4 sum = sat_corner(src, size, q1) - sat_corner(src, size, vec2(q1.x, q0.y))
-             - sat_corner(src, size, vec2(q0.x, q1.y)) + sat_corner(src, size, q0);
+    vec2 h = l + (hi - lo);
+    whole = floor(h / r);
+    q0 = l * n / r;
+    q1 = (h - r * whole) * n / r;
+}
+
+// The four corners' part of the integral of the value minus its mean over [lo, hi],
+// T(u1,v1) - T(u1,v0) - T(u0,v1) + T(u0,v0): all of it for a box narrower than r - 1 repeats.
+// Rust twin: WeaveSat::box_corners.
+vec4 sat_corners(uint src, ivec2 size, float r, vec2 lo, vec2 hi) {
+    vec2 q0, q1, whole;
+    sat_place(size, r, lo, hi, q0, q1, whole);
+    return sat_corner(src, size, q1) - sat_corner(src, size, vec2(q1.x, q0.y))
+         - sat_corner(src, size, vec2(q0.x, q1.y)) + sat_corner(src, size, q0);
+}
+
+// The whole tables' part, X (T(r,v1) - T(r,v0)) + Y (T(u1,r) - T(u0,r)) (a whole table of the
+// value minus its mean is 0): 0 for a box narrower than r - 1 repeats. Rust twin:
+// WeaveSat::box_whole.
+vec4 sat_whole(uint src, ivec2 size, float r, vec2 lo, vec2 hi) {
+    vec2 q0, q1, whole;
+    sat_place(size, r, lo, hi, q0, q1, whole);
+    vec2 n = vec2(size - ivec2(2, 1));
+    vec4 sum = vec4(0.0);
     if (whole.x > 0.0) {
         sum += whole.x * (sat_corner(src, size, vec2(n.x, q1.y)) - sat_corner(src, size, vec2(n.x, q0.y)));
     }
     if (whole.y > 0.0) {
         sum += whole.y * (sat_corner(src, size, vec2(q1.x, n.y)) - sat_corner(src, size, vec2(q0.x, n.y)));
     }
-    return sat_texel(src, size, ivec2(size.x - 1, 0)) + sum / max(ext.x * ext.y, 1e-30);
+    return sum;
+}
+
+// The mean over the box [lo, hi] of st (any size and place): the table's mean (texel (RW + 1, 0))
+// plus the corners' and whole tables' parts over the box's area. Rust twin: WeaveSat::box_mean.
+vec4 sat_box(uint src, ivec2 size, vec2 lo, vec2 hi) {
+    float r = sat_texel(src, size, ivec2(size.x - 1, 1)).x;
+    vec2 ext = hi - lo;
+    return sat_texel(src, size, ivec2(size.x - 1, 0))
+        + (sat_corners(src, size, r, lo, hi) + sat_whole(src, size, r, lo, hi)) / max(ext.x * ext.y, 1e-30);
 }
 
 // The weave's mean coverage over the box [lo, hi] of st.
@@ -401,17 +433,30 @@ GSurface material_surface() {    GSurface s;
                 // weave's, each its own box), each box at least one texel of level 0 (there the
                 // table's box is the texture's bilinear filter).
                 vec2 c = fract(st);
+                ivec2 sat_size = textureSize(weave_tex, 0);
+                float sat_r = weave_sat_repeats();
                 vec2 least = 0.5 / weave_sat_repeat_texels();
                 uvec2 k = FOOTPRINT_PIECES == 0u ? uvec2(1u)
                     : weave_pieces(st_dx * repeat_cells, st_dy * repeat_cells, FOOTPRINT_PIECES);
                 vec2 half_box = max(FOOTPRINT_PIECES == 0u ? ext : weave_piece_half(st_dx, st_dy, k), least);
                 vec2 kf = vec2(k);
+                // Only a footprint taken whole (k = 1 x 1) can be wider than the table less a
+                // repeat (weave_pieces cuts none of four cells or more, and the table spans a
+                // repeat more than four cells), so the whole tables' part is the first piece's
+                // alone, taken once here rather than for every piece (lavapipe would run it for
+                // each: it runs both sides of a branch).
+                vec2 p0 = c + st_dx * (0.5 / kf.x - 0.5) + st_dy * (0.5 / kf.y - 0.5);
+                vec4 whole0 = sat_whole(SAT_WEAVE, sat_size, sat_r, p0 - half_box, p0 + half_box);
+                vec4 sat_mean = texelFetch(weave_tex, ivec2(sat_size.x - 1, 0), 0);
+                vec2 piece_ext = 2.0 * half_box;
+                float inv_area = 1.0 / max(piece_ext.x * piece_ext.y, 1e-30);
                 coverage = vec4(0.0);
                 vec4 pieces_mixed = vec4(0.0);
                 for (uint j = 0u; j < k.y; j++) {
                     for (uint i = 0u; i < k.x; i++) {
                         vec2 p = c + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
-                        vec4 piece = weave_sat_box(p - half_box, p + half_box);
+                        vec4 part = sat_corners(SAT_WEAVE, sat_size, sat_r, p - half_box, p + half_box);
+                        vec4 piece = sat_mean + (i + j == 0u ? part + whole0 : part) * inv_area;
                         coverage += piece;
                         if (threads) {
                             // Each piece's colour over the piece itself, with its coverage: the

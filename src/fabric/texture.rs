@@ -124,27 +124,39 @@ pub fn weave_texels_cpu(push: &WeavePush) -> Vec<[f32; 4]> {
 /// where a trilinear probe of the mip chain spreads a footprint of about one cell over a tent
 /// twice its width.
 ///
-/// The table spans [`WeaveSat::REPEATS`]² repeats, so that any box up to a repeat wide, its
-/// corner reduced into the first repeat, lies inside it (no whole-table terms, no branch in the
-/// shader for footprints up to a repeat). With `W × H` the level-0 size of one repeat, texel
-/// `(i, j)`, `i ≤ 2W`, `j ≤ 2H`, holds the integral over `[0, i/W] × [0, j/H]` (in repeats: a
+/// The table spans `R × R` repeats ([`WeaveSat::repeats_for`]: 2, or more for weaves of fewer
+/// than four cells a side), so that any box narrower than `R − 1` repeats, its corner reduced into
+/// the first repeat, lies inside it and its integral is four corners alone. `R − 1` repeats hold
+/// four cells, the widest footprint the G-buffer cuts into pieces (`weave_pieces`), so only a
+/// footprint taken whole can need the whole-table terms, and the shader takes them once per
+/// pixel rather than once per piece. With `W × H` the level-0 size of one repeat, texel
+/// `(i, j)`, `i ≤ RW`, `j ≤ RH`, holds the integral over `[0, i/W] × [0, j/H]` (in repeats: a
 /// repeat has area 1) of the coverage *minus its mean*: the mean's share is added back exactly,
 /// so the table's values stay of the order of one cell's area whatever the box (no cancellation
-/// of large sums in f32). Texel `(2W + 1, 0)` holds the mean. Computed here in f64 from the
-/// exact box coverages ([`crate::fabric::coverage::double::weave_box`]), stored RGBA32F.
+/// of large sums in f32). Texel `(RW + 1, 0)` holds the mean, texel `(RW + 1, 1)` holds `R` (in
+/// its first channel). Computed here in f64 from the exact box coverages
+/// ([`crate::fabric::coverage::double::weave_box`]), stored RGBA32F.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WeaveSat {
-    /// `2W + 2` texels.
+    /// `RW + 2` texels.
     pub width: u32,
-    /// `2H + 1` texels.
+    /// `RH + 1` texels.
     pub height: u32,
     /// Row `j` after row `j - 1`.
     pub texels: Vec<[f32; 4]>,
 }
 
 impl WeaveSat {
-    /// Repeats the table spans along each axis.
+    /// The fewest repeats a table spans along each axis (a thread-colour table's count).
     pub const REPEATS: u32 = 2;
+
+    /// The repeats `R` a weave's table spans along each axis: at least [`Self::REPEATS`], and
+    /// `1 + 4 / cells` for a repeat of fewer cells a side, so that every piece of a footprint
+    /// under four cells (`weave_pieces` of weave.glsl cuts no wider one) lies inside the table.
+    pub fn repeats_for(cols: u32, rows: u32) -> u32 {
+        let cells = cols.min(rows).max(1);
+        Self::REPEATS.max(1 + 4u32.div_ceil(cells))
+    }
 
     /// The table of the weave of `push` at `push.width × push.height` cells per repeat (the
     /// weave texture's level 0, [`weave_level0_size`]).
@@ -153,7 +165,8 @@ impl WeaveSat {
         let w = double::Weave::from_push(push);
         let (cols, rows) = (push.cols.max(1) as f64, push.rows.max(1) as f64);
         let (nw, nh) = (push.width.max(1), push.height.max(1));
-        let (tw, th) = (Self::REPEATS * nw, Self::REPEATS * nh);
+        let r = Self::repeats_for(push.cols, push.rows);
+        let (tw, th) = (r * nw, r * nh);
         let mean = double::weave_box(&w, 0.0, 0.0, cols, rows);
         let (width, height) = (tw + 2, th + 1);
         let mut texels = vec![[0f32; 4]; (width * height) as usize];
@@ -167,6 +180,7 @@ impl WeaveSat {
             }
         }
         texels[tw as usize + 1] = mean.map(|m| m as f32);
+        texels[(width + tw + 1) as usize] = [r as f32, 0.0, 0.0, 0.0];
         WeaveSat {
             width,
             height,
@@ -180,8 +194,18 @@ impl WeaveSat {
         self.texels[(j * self.width + i) as usize]
     }
 
-    /// The table at `q` in texel-corner units (`[0, 2W] × [0, 2H]`): bilinear between the four
-    /// corners around it, exact for the texel-averaged coverage (`weave_sat_corner` of
+    /// The repeats `R` the table spans along each axis (texel `(RW + 1, 1)`).
+    pub fn repeats(&self) -> f32 {
+        self.texel(self.width as i32 - 1, 1)[0]
+    }
+
+    /// The mean of the table's value (texel `(RW + 1, 0)`).
+    pub fn mean(&self) -> [f32; 4] {
+        self.texel(self.width as i32 - 1, 0)
+    }
+
+    /// The table at `q` in texel-corner units (`[0, RW] × [0, RH]`): bilinear between the four
+    /// corners around it, exact for the texel-averaged coverage (`sat_corner` of
     /// surface.glsl, f32 as there).
     pub fn corner(&self, q: [f32; 2]) -> [f32; 4] {
         let n = [self.width as i32 - 2, self.height as i32 - 1];
@@ -199,14 +223,11 @@ impl WeaveSat {
         std::array::from_fn(|k| mix(mix(a[k], b[k], f[0]), mix(c[k], d[k], f[0]), f[1]))
     }
 
-    /// The mean coverage over the box `[lo, hi]` of st (a repeat is 1 unit; any size and place,
-    /// `hi > lo`): `weave_sat_box` of surface.glsl. With `lo` reduced into the first repeat and
-    /// `hi = 2X + u1` (X whole tables), the integral of coverage minus mean is
-    /// `T(u1,v1) − T(u1,v0) − T(u0,v1) + T(u0,v0) + X·(T(2,v1) − T(2,v0)) + Y·(T(u1,2) − T(u0,2))`
-    /// (a whole table of it is 0); X and Y are 0 for boxes up to a repeat.
-    pub fn box_mean(&self, lo: [f32; 2], hi: [f32; 2]) -> [f32; 4] {
+    /// Where the box `[lo, hi]` lies in the table: `lo` reduced into the first repeat and
+    /// `hi = R·X + u1` (X whole tables); `(q0, q1, X)`, the corners in texel-corner units.
+    fn place(&self, lo: [f32; 2], hi: [f32; 2]) -> ([f32; 2], [f32; 2], [f32; 2]) {
         let n = [(self.width - 2) as f32, (self.height - 1) as f32];
-        let r = Self::REPEATS as f32;
+        let r = self.repeats();
         let ext = [hi[0] - lo[0], hi[1] - lo[1]];
         let l = [lo[0] - lo[0].floor(), lo[1] - lo[1].floor()];
         let h = [l[0] + ext[0], l[1] + ext[1]];
@@ -216,11 +237,28 @@ impl WeaveSat {
             (h[0] - r * whole[0]) * n[0] / r,
             (h[1] - r * whole[1]) * n[1] / r,
         ];
+        (q0, q1, whole)
+    }
+
+    /// The four corners' part of the integral of coverage minus mean over `[lo, hi]`,
+    /// `T(u1,v1) − T(u1,v0) − T(u0,v1) + T(u0,v0)`: all of it for a box narrower than `R − 1`
+    /// repeats (`sat_corners` of surface.glsl).
+    pub fn box_corners(&self, lo: [f32; 2], hi: [f32; 2]) -> [f32; 4] {
+        let (q0, q1, _) = self.place(lo, hi);
         let t11 = self.corner(q1);
         let t10 = self.corner([q1[0], q0[1]]);
         let t01 = self.corner([q0[0], q1[1]]);
         let t00 = self.corner(q0);
-        let mut sum: [f32; 4] = std::array::from_fn(|k| t11[k] - t10[k] - t01[k] + t00[k]);
+        std::array::from_fn(|k| t11[k] - t10[k] - t01[k] + t00[k])
+    }
+
+    /// The whole tables' part, `X·(T(R,v1) − T(R,v0)) + Y·(T(u1,R) − T(u0,R))` (a whole table
+    /// of coverage minus mean is 0): 0 for a box narrower than `R − 1` repeats (`sat_whole` of
+    /// surface.glsl).
+    pub fn box_whole(&self, lo: [f32; 2], hi: [f32; 2]) -> [f32; 4] {
+        let n = [(self.width - 2) as f32, (self.height - 1) as f32];
+        let (q0, q1, whole) = self.place(lo, hi);
+        let mut sum = [0f32; 4];
         if whole[0] > 0.0 {
             let (a, b) = (self.corner([n[0], q1[1]]), self.corner([n[0], q0[1]]));
             for k in 0..4 {
@@ -233,9 +271,17 @@ impl WeaveSat {
                 sum[k] += whole[1] * (a[k] - b[k]);
             }
         }
-        let area = (ext[0] * ext[1]).max(1e-30);
-        let mean = self.texel(self.width as i32 - 1, 0);
-        std::array::from_fn(|k| mean[k] + sum[k] / area)
+        sum
+    }
+
+    /// The mean coverage over the box `[lo, hi]` of st (a repeat is 1 unit; any size and place,
+    /// `hi > lo`): the mean plus the corners' and the whole tables' parts over the box's area
+    /// (`sat_box` of surface.glsl).
+    pub fn box_mean(&self, lo: [f32; 2], hi: [f32; 2]) -> [f32; 4] {
+        let (c, w) = (self.box_corners(lo, hi), self.box_whole(lo, hi));
+        let area = ((hi[0] - lo[0]) * (hi[1] - lo[1])).max(1e-30);
+        let mean = self.mean();
+        std::array::from_fn(|k| mean[k] + (c[k] + w[k]) / area)
     }
 }
 
@@ -371,6 +417,7 @@ impl ThreadColourTable {
             }
         }
         texels[tw as usize + 1] = mean.map(|m| m as f32);
+        texels[(width + tw + 1) as usize] = [r as f32, 0.0, 0.0, 0.0];
         Ok(Some(ThreadColourTable {
             warp: (0..p.warp_colours.len().max(1))
                 .map(|i| p.thread_colour(true, i))

@@ -413,7 +413,10 @@ impl Plan {
                         levels: crate::fabric::weave_mip_count((width, height)),
                         lookup: match options.weave_precision {
                             super::WeavePrecision::Sat => {
-                                let r = crate::fabric::WeaveSat::REPEATS;
+                                let r = crate::fabric::WeaveSat::repeats_for(
+                                    f.pattern.cols() as u32,
+                                    f.pattern.rows() as u32,
+                                );
                                 format!(
                                     "summed-area table {}x{} RGBA32F",
                                     r * width + 2,
