@@ -452,17 +452,23 @@ GSurface material_surface() {    GSurface s;
                 float inv_area = 1.0 / max(piece_ext.x * piece_ext.y, 1e-30);
                 coverage = vec4(0.0);
                 vec4 pieces_mixed = vec4(0.0);
-                for (uint j = 0u; j < k.y; j++) {
-                    for (uint i = 0u; i < k.x; i++) {
-                        vec2 p = c + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
-                        vec4 part = sat_corners(SAT_WEAVE, sat_size, sat_r, p - half_box, p + half_box);
-                        vec4 piece = sat_mean + (i + j == 0u ? part + whole0 : part) * inv_area;
-                        coverage += piece;
-                        if (threads) {
-                            // Each piece's colour over the piece itself, with its coverage: the
-                            // mean's Σ s equals the coverage's, so the lighting gets Σ s·colour.
-                            pieces_mixed += thread_box(f, p - half_box + colour_shift, p + half_box + colour_shift, piece);
-                        }
+                // One loop over the pieces, not a loop in a loop: llvmpipe runs a loop's body once
+                // more under an empty mask when every lane has left (its test comes first), and
+                // the inner loop of a nested pair once more for each outer turn. (A loop with its
+                // test at the end, which would save that turn, gave wrong coverages on Mesa 22.3's
+                // lavapipe.)
+                uint pieces = k.x * k.y;
+                for (uint n = 0u; n < pieces; ++n) {
+                    uint i = n % k.x;
+                    uint j = n / k.x;
+                    vec2 p = c + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
+                    vec4 part = sat_corners(SAT_WEAVE, sat_size, sat_r, p - half_box, p + half_box);
+                    vec4 piece = sat_mean + (n == 0u ? part + whole0 : part) * inv_area;
+                    coverage += piece;
+                    if (threads) {
+                        // Each piece's colour over the piece itself, with its coverage: the
+                        // mean's Σ s equals the coverage's, so the lighting gets Σ s·colour.
+                        pieces_mixed += thread_box(f, p - half_box + colour_shift, p + half_box + colour_shift, piece);
                     }
                 }
                 coverage /= kf.x * kf.y;
@@ -483,11 +489,12 @@ GSurface material_surface() {    GSurface s;
                 vec2 pdx = st_dx / kf.x * sharpen;
                 vec2 pdy = st_dy / kf.y * sharpen;
                 coverage = vec4(0.0);
-                for (uint j = 0u; j < k.y; j++) {
-                    for (uint i = 0u; i < k.x; i++) {
-                        vec2 p = st + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
-                        coverage += textureGrad(weave_tex, p, pdx, pdy);
-                    }
+                // One loop, not two (as the summed-area table's pieces above).
+                for (uint n = 0u; n < k.x * k.y; ++n) {
+                    uint i = n % k.x;
+                    uint j = n / k.x;
+                    vec2 p = st + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
+                    coverage += textureGrad(weave_tex, p, pdx, pdy);
                 }
                 coverage /= kf.x * kf.y;
             }

@@ -251,13 +251,15 @@ vec4 weave_parallelogram(Weave w, vec2 c, vec2 dx, vec2 dy, uvec2 k) {
     vec2 kf = vec2(max(k, uvec2(1u)));
     vec2 half_box = weave_piece_half(dx, dy, k);
     vec4 sum = vec4(0.0);
-    for (uint j = 0u; j < k.y; j++) {
-        for (uint i = 0u; i < k.x; i++) {
-            vec2 p = c + dx * ((float(i) + 0.5) / kf.x - 0.5) + dy * ((float(j) + 0.5) / kf.y - 0.5);
-            vec2 lo = p - half_box;
-            vec2 hi = p + half_box;
-            sum += weave_box(w, lo.x, lo.y, hi.x, hi.y);
-        }
+    // One loop, not two: llvmpipe runs a loop's body once more under an empty mask after every
+    // lane has left, and a nested loop's inner loop once more per outer turn.
+    for (uint n = 0u; n < k.x * k.y; ++n) {
+        uint i = n % k.x;
+        uint j = n / k.x;
+        vec2 p = c + dx * ((float(i) + 0.5) / kf.x - 0.5) + dy * ((float(j) + 0.5) / kf.y - 0.5);
+        vec2 lo = p - half_box;
+        vec2 hi = p + half_box;
+        sum += weave_box(w, lo.x, lo.y, hi.x, hi.y);
     }
     return sum / (kf.x * kf.y);
 }
