@@ -73,19 +73,20 @@ void main() {
     ivec2 size = textureSize(gb_frame, 0);
     uint mask = 0u;
     uint pixels = 1u;
-    int r = quad ? int(POOL) : 0;
-    for (int dy = -r; dy <= r; ++dy) {
-        for (int dx = -r; dx <= r; ++dx) {
-            ivec2 q = px + ivec2(dx, dy);
-            if ((dx == 0 && dy == 0) || any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
-                continue;
-            }
-            vec4 fq = frame_decode(texelFetch(gb_frame, q, 0));
-            if (fabric_pool_agrees(n, t, surface.y, oct_decode(fq.xy), oct_decode(fq.zw),
-                                   texelFetch(gb_surface, q, 0).y, near)) {
-                mask |= fabric_pool_bit(ivec2(dx, dy), POOL);
-                pixels += 1u;
-            }
+    // One loop over the window's other pixels by their bits, not a loop of rows around a loop
+    // of columns: llvmpipe runs a loop's body once more under an empty mask after every lane has
+    // left, and an inner loop once more per outer turn (13 turns for 8 pixels).
+    int others = quad ? (2 * int(POOL) + 1) * (2 * int(POOL) + 1) - 1 : 0;
+    for (int bit = 0; bit < others; ++bit) {
+        ivec2 q = px + fabric_pool_offset(bit, POOL);
+        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+            continue;
+        }
+        vec4 fq = frame_decode(texelFetch(gb_frame, q, 0));
+        if (fabric_pool_agrees(n, t, surface.y, oct_decode(fq.xy), oct_decode(fq.zw),
+                               texelFetch(gb_surface, q, 0).y, near)) {
+            mask |= 1u << uint(bit);
+            pixels += 1u;
         }
     }
     vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;

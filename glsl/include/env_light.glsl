@@ -248,6 +248,53 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
          + specular * max(1.0 - k * e_v, 0.0) + s.sheen * e_v * irradiance * ao;
 }
 
+// The weft lobe's share of the mixture the samples draw from: its thread coverage's share,
+// kept within [0.05, 0.95] so neither lobe goes unsampled (0.5 where no thread covers).
+float fabric_lobe_weft_weight(vec4 coverage) {
+    float c_thread = coverage.x + coverage.y;
+    return c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
+}
+
+// One sample of fabric_env_lobe_sums at the unit square's point xi (before the lobe choice
+// stretches it), added to each lobe's (Σ w·L, Σ w). Rust twin: fabric_env_lobe_sample.
+void fabric_env_lobe_sample(mat3 tbn, vec3 k2, GpuFabric f, float w_weft, uint mode, vec2 xi, uint lod_samples, inout vec4 weft, inout vec4 warp) {
+    bool pick_weft = xi.x < w_weft;
+    xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
+    xi.x = min(xi.x, 0.99999994);
+    // One sampler call with the picked lobe's exponents (a choice between two calls would
+    // run both where a branch costs every lane).
+    float e;
+    float log_cos;
+    vec3 h = as_sample_h_log(xi, pick_weft ? f.e_along : f.e_across,
+                             pick_weft ? f.e_across : f.e_along, e, log_cos);
+    float kh = dot(k2, h);
+    if (!(kh > 0.0)) {
+        return;
+    }
+    vec3 k1 = 2.0 * kh * h - k2;
+    if (!(k1.z > 0.0)) {
+        return;
+    }
+    // Each lobe's estimate f·cos/pdf with pdf the mixture of the two samplers: a lobe is
+    // as_lobe_factor·hn^E and its sampler's pdf as_norm/(2π)·hn^E/(4 kh) (fabric.glsl), so
+    // hn^E of each orientation is computed once and shared by both: from the sample's
+    // log2 cos θ, the two exponents at its φ adding up to e_along + e_across.
+    float e_other = f.e_along + f.e_across - e;
+    float p_weft = exp2((pick_weft ? e : e_other) * log_cos);
+    float p_warp = exp2((pick_weft ? e_other : e) * log_cos);
+    float mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
+    if (!(mixed > 0.0)) {
+        return;
+    }
+    float pdf = as_norm(f.e_along, f.e_across) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
+    float factor = as_lobe_factor(k1.z, k2.z, min(kh, 1.0), f.e_along, f.e_across, f.rs);
+    float common_w = factor * k1.z / pdf;
+    float lod = mode == 3u ? 0.0 : fis_lod(pdf, lod_samples, env_face_size());
+    vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
+    weft += vec4(l, common_w) * p_weft;
+    warp += vec4(l, common_w) * p_warp;
+}
+
 // The sums of the fabric's lobe estimators (fis and mc): per lobe (Σ w·L, Σ w) over `samples`
 // samples of the coverage-weighted mixture of the two lobes' A–S samplers (one-sample MIS, so
 // both lobes use every sample). `block` 0: the Hammersley set shifted by `rot` (fis: 0, a pixel
@@ -264,45 +311,10 @@ void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mo
     if (!(k2.z > 0.0)) {
         return;
     }
-    float c_thread = coverage.x + coverage.y;
-    float w_weft = c_thread > 0.0 ? clamp(coverage.y / c_thread, 0.05, 0.95) : 0.5;
+    float w_weft = fabric_lobe_weft_weight(coverage);
     for (uint i = 0u; i < samples; ++i) {
         vec2 xi = block == 0u ? ibl_sample(i, samples, rot) : sobol_block(i, samples, block - 1u);
-        bool pick_weft = xi.x < w_weft;
-        xi.x = pick_weft ? xi.x / w_weft : (xi.x - w_weft) / (1.0 - w_weft);
-        xi.x = min(xi.x, 0.99999994);
-        // One sampler call with the picked lobe's exponents (a choice between two calls would
-        // run both where a branch costs every lane).
-        float e;
-        float log_cos;
-        vec3 h = as_sample_h_log(xi, pick_weft ? f.e_along : f.e_across,
-                                 pick_weft ? f.e_across : f.e_along, e, log_cos);
-        float kh = dot(k2, h);
-        if (!(kh > 0.0)) {
-            continue;
-        }
-        vec3 k1 = 2.0 * kh * h - k2;
-        if (!(k1.z > 0.0)) {
-            continue;
-        }
-        // Each lobe's estimate f·cos/pdf with pdf the mixture of the two samplers: a lobe is
-        // as_lobe_factor·hn^E and its sampler's pdf as_norm/(2π)·hn^E/(4 kh) (fabric.glsl), so
-        // hn^E of each orientation is computed once and shared by both: from the sample's
-        // log2 cos θ, the two exponents at its φ adding up to e_along + e_across.
-        float e_other = f.e_along + f.e_across - e;
-        float p_weft = exp2((pick_weft ? e : e_other) * log_cos);
-        float p_warp = exp2((pick_weft ? e_other : e) * log_cos);
-        float mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
-        if (!(mixed > 0.0)) {
-            continue;
-        }
-        float pdf = as_norm(f.e_along, f.e_across) / (2.0 * FABRIC_PI) * mixed / (4.0 * kh);
-        float factor = as_lobe_factor(k1.z, k2.z, min(kh, 1.0), f.e_along, f.e_across, f.rs);
-        float common_w = factor * k1.z / pdf;
-        float lod = mode == 3u ? 0.0 : fis_lod(pdf, lod_samples, env_face_size());
-        vec3 l = env_radiance_at(tbn * k1, lod) * common_w;
-        weft += vec4(l, common_w) * p_weft;
-        warp += vec4(l, common_w) * p_warp;
+        fabric_env_lobe_sample(tbn, k2, f, w_weft, mode, xi, lod_samples, weft, warp);
     }
 }
 
@@ -334,14 +346,18 @@ void fabric_pixel_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint 
     uint lod_samples = pooled ? unit * passes * pixels : unit;
     weft = vec4(0.0);
     warp = vec4(0.0);
-    // One loop for both (llvmpipe runs both sides of an if for a vector of pixels).
-    for (uint k = 0u; k < (pooled ? passes : 1u); ++k) {
-        vec4 a;
-        vec4 b;
-        fabric_env_lobe_sums(tbn, k2, coverage, f, 2u, unit, vec2(0.0), pooled ? block + window * k : 0u,
-                             lod_samples, a, b);
-        weft += a;
-        warp += b;
+    if (!(k2.z > 0.0)) {
+        return;
+    }
+    float w_weft = fabric_lobe_weft_weight(coverage);
+    // One loop over every sample, for both (llvmpipe runs both sides of an if for a vector of
+    // pixels), and not a loop of passes around a loop of samples: llvmpipe runs a loop's body
+    // once more under an empty mask after every lane has left, and an inner loop once more per
+    // outer turn.
+    for (uint n = 0u; n < (pooled ? unit * passes : unit); ++n) {
+        uint k = n / unit;
+        vec2 xi = pooled ? sobol_block(n - k * unit, unit, block - 1u + window * k) : ibl_sample(n, unit, vec2(0.0));
+        fabric_env_lobe_sample(tbn, k2, f, w_weft, 2u, xi, lod_samples, weft, warp);
     }
 }
 

@@ -46,14 +46,18 @@ vec2 hammersley(uint i, uint n) {
 // block alone is a (0,m,2)-net of n points (as stratified as the Hammersley set), and the first
 // 2^k blocks together are one of 2^k·n points: pixels that pool their samples take different
 // blocks and together sample as well as one pixel taking them all.
+// The second coordinate without a loop over j's bits (a loop llvmpipe runs for the longest
+// index of a vector of pixels, and once more): the direction numbers are the binomial
+// coefficients mod 2, so the coordinate is the bit-reversed j times that matrix, five shifted
+// xors (Rust twin checked against the direction numbers: weft::reference::env_light).
 vec2 sobol_block(uint i, uint n, uint block) {
     uint j = block * n + i;
-    uint y = 0u;
-    uint v = 0x80000000u;
-    for (uint b = 0u; (j >> b) != 0u; ++b) {
-        y ^= v & (0u - ((j >> b) & 1u));
-        v ^= v >> 1u;
-    }
+    uint y = bitfieldReverse(j);
+    y ^= y << 16u;
+    y ^= (y & 0x00FF00FFu) << 8u;
+    y ^= (y & 0x0F0F0F0Fu) << 4u;
+    y ^= (y & 0x33333333u) << 2u;
+    y ^= (y & 0x55555555u) << 1u;
     return vec2(float(bitfieldReverse(j)), float(y)) * 2.3283064365386963e-10;
 }
 

@@ -416,14 +416,15 @@ pub fn fabric_lobe_albedo(
 /// second dimension with direction numbers v_b = v_(b-1) xor v_(b-1)/2 from 1/2).
 pub fn sobol_block(i: u32, n: u32, block: u32) -> [f32; 2] {
     let j = block.wrapping_mul(n).wrapping_add(i);
-    let mut y = 0u32;
-    let mut v = 0x8000_0000u32;
-    let mut b = 0;
-    while b < 32 && (j >> b) != 0 {
-        y ^= v & 0u32.wrapping_sub((j >> b) & 1);
-        v ^= v >> 1;
-        b += 1;
-    }
+    // The direction numbers are the binomial coefficients mod 2: the second coordinate is the
+    // bit-reversed index times that matrix, five shifted xors (no loop over the index's bits;
+    // `sobol_direction_numbers` in the tests below builds it from the direction numbers).
+    let mut y = j.reverse_bits();
+    y ^= y << 16;
+    y ^= (y & 0x00FF_00FF) << 8;
+    y ^= (y & 0x0F0F_0F0F) << 4;
+    y ^= (y & 0x3333_3333) << 2;
+    y ^= (y & 0x5555_5555) << 1;
     let scale = 2.328_306_4e-10f32;
     [j.reverse_bits() as f32 * scale, y as f32 * scale]
 }
@@ -502,6 +503,82 @@ pub fn fabric_lobe_unpack(texel: [u32; 4]) -> ([f32; 4], [f32; 4]) {
     )
 }
 
+/// `fabric_lobe_weft_weight`: the weft lobe's share of the mixture the samples draw from (its
+/// thread coverage's share within [0.05, 0.95]; 0.5 where no thread covers).
+pub fn fabric_lobe_weft_weight(coverage: [f32; 4]) -> f32 {
+    let c_thread = coverage[0] + coverage[1];
+    if c_thread > 0.0 {
+        (coverage[1] / c_thread).clamp(0.05, 0.95)
+    } else {
+        0.5
+    }
+}
+
+/// `fabric_env_lobe_sample`: one sample of the lobes' mixture at the unit square's point `xi`,
+/// added to each lobe's (Σ w·L, Σ w).
+#[allow(clippy::too_many_arguments)]
+pub fn fabric_env_lobe_sample(
+    env: &impl EnvLookup,
+    tbn: &[Vec3; 3],
+    k2: Vec3,
+    f: &GpuFabric,
+    w_weft: f32,
+    mode: u32,
+    mut xi: [f32; 2],
+    lod_samples: u32,
+    weft: &mut [f32; 4],
+    warp: &mut [f32; 4],
+) {
+    let pick_weft = xi[0] < w_weft;
+    xi[0] = if pick_weft {
+        xi[0] / w_weft
+    } else {
+        (xi[0] - w_weft) / (1.0 - w_weft)
+    };
+    xi[0] = xi[0].min(0.99999994);
+    let (eu, ev) = if pick_weft {
+        (f.e_along, f.e_across)
+    } else {
+        (f.e_across, f.e_along)
+    };
+    let (h, e, log_cos) = ibl_twin::as_sample_h_log(xi, eu, ev);
+    let kh = dot(k2, h);
+    if !(kh > 0.0) {
+        return;
+    }
+    let k1 = sub(scale(h, 2.0 * kh), k2);
+    if !(k1[2] > 0.0) {
+        return;
+    }
+    let e_other = f.e_along + f.e_across - e;
+    let (e_weft, e_warp) = if pick_weft {
+        (e, e_other)
+    } else {
+        (e_other, e)
+    };
+    let p_weft = (e_weft * log_cos).exp2();
+    let p_warp = (e_warp * log_cos).exp2();
+    let mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
+    if !(mixed > 0.0) {
+        return;
+    }
+    let pdf = as_norm(f.e_along, f.e_across) / (2.0 * PI) * mixed / (4.0 * kh);
+    let factor = as_lobe_factor(k1[2], k2[2], kh.min(1.0), f.e_along, f.e_across, f.rs);
+    let common_w = factor * k1[2] / pdf;
+    let lod = if mode == 3 {
+        0.0
+    } else {
+        ibl_twin::fis_lod(pdf, lod_samples, env.face_size())
+    };
+    let l = scale(env.radiance(to_world(tbn, k1), lod), common_w);
+    for (sum, p) in [(weft, p_weft), (warp, p_warp)] {
+        for c in 0..3 {
+            sum[c] += l[c] * p;
+        }
+        sum[3] += common_w * p;
+    }
+}
+
 /// `fabric_env_lobe_sums`: per lobe (Σ w·L, Σ w) over `samples` samples of the lobes' mixture:
 /// `block` 0 the Hammersley set shifted by `rot`, b ≥ 1 block b − 1 of the Sobol' sequence; fis's
 /// mip level chosen for `lod_samples` samples, mc's unfiltered.
@@ -523,66 +600,25 @@ pub fn fabric_env_lobe_sums(
     if !(k2[2] > 0.0) {
         return (weft, warp);
     }
-    let c_thread = coverage[0] + coverage[1];
-    let w_weft = if c_thread > 0.0 {
-        (coverage[1] / c_thread).clamp(0.05, 0.95)
-    } else {
-        0.5
-    };
+    let w_weft = fabric_lobe_weft_weight(coverage);
     for i in 0..samples {
-        let mut xi = if block == 0 {
+        let xi = if block == 0 {
             ibl_sample(i, samples, rot)
         } else {
             sobol_block(i, samples, block - 1)
         };
-        let pick_weft = xi[0] < w_weft;
-        xi[0] = if pick_weft {
-            xi[0] / w_weft
-        } else {
-            (xi[0] - w_weft) / (1.0 - w_weft)
-        };
-        xi[0] = xi[0].min(0.99999994);
-        let (eu, ev) = if pick_weft {
-            (f.e_along, f.e_across)
-        } else {
-            (f.e_across, f.e_along)
-        };
-        let (h, e, log_cos) = ibl_twin::as_sample_h_log(xi, eu, ev);
-        let kh = dot(k2, h);
-        if !(kh > 0.0) {
-            continue;
-        }
-        let k1 = sub(scale(h, 2.0 * kh), k2);
-        if !(k1[2] > 0.0) {
-            continue;
-        }
-        let e_other = f.e_along + f.e_across - e;
-        let (e_weft, e_warp) = if pick_weft {
-            (e, e_other)
-        } else {
-            (e_other, e)
-        };
-        let p_weft = (e_weft * log_cos).exp2();
-        let p_warp = (e_warp * log_cos).exp2();
-        let mixed = w_weft * p_weft + (1.0 - w_weft) * p_warp;
-        if !(mixed > 0.0) {
-            continue;
-        }
-        let pdf = as_norm(f.e_along, f.e_across) / (2.0 * PI) * mixed / (4.0 * kh);
-        let factor = as_lobe_factor(k1[2], k2[2], kh.min(1.0), f.e_along, f.e_across, f.rs);
-        let common_w = factor * k1[2] / pdf;
-        let lod = if mode == 3 {
-            0.0
-        } else {
-            ibl_twin::fis_lod(pdf, lod_samples, env.face_size())
-        };
-        let l = scale(env.radiance(to_world(tbn, k1), lod), common_w);
-        for (sum, p) in [(&mut weft, p_weft), (&mut warp, p_warp)] {
-            for c in 0..3 {
-                sum[c] += l[c] * p;
-            }
-            sum[3] += common_w * p;
-        }
+        fabric_env_lobe_sample(
+            env,
+            tbn,
+            k2,
+            f,
+            w_weft,
+            mode,
+            xi,
+            lod_samples,
+            &mut weft,
+            &mut warp,
+        );
     }
     (weft, warp)
 }
@@ -624,24 +660,30 @@ pub fn fabric_pixel_lobe_sums(
     let lod_samples = if pooled { unit * passes * pixels } else { unit };
     let mut weft = [0.0f32; 4];
     let mut warp = [0.0f32; 4];
-    for k in 0..(if pooled { passes } else { 1 }) {
-        let b = if pooled { block + window * k } else { 0 };
-        let (a, c) = fabric_env_lobe_sums(
+    if !(k2[2] > 0.0) {
+        return (weft, warp);
+    }
+    let w_weft = fabric_lobe_weft_weight(coverage);
+    // One loop over every sample (the shader's: no loop of passes around a loop of samples).
+    for n in 0..(if pooled { unit * passes } else { unit }) {
+        let k = n / unit;
+        let xi = if pooled {
+            sobol_block(n - k * unit, unit, block - 1 + window * k)
+        } else {
+            ibl_sample(n, unit, [0.0, 0.0])
+        };
+        fabric_env_lobe_sample(
             env,
             tbn,
             k2,
-            coverage,
             f,
+            w_weft,
             2,
-            unit,
-            [0.0, 0.0],
-            b,
+            xi,
             lod_samples,
+            &mut weft,
+            &mut warp,
         );
-        for i in 0..4 {
-            weft[i] += a[i];
-            warp[i] += c[i];
-        }
     }
     (weft, warp)
 }
@@ -1095,6 +1137,43 @@ mod tests {
             }
         }
         assert_eq!(seen.len(), 1024, "every pixel its own rotation");
+    }
+
+    // sobol_block's second coordinate by its definition: Sobol's second dimension, the direction
+    // numbers v_1 = 1/2, v_b = v_(b-1) xor v_(b-1)/2, xored for each set bit of the index.
+    fn sobol_direction_numbers(j: u32) -> u32 {
+        let (mut y, mut v) = (0u32, 0x8000_0000u32);
+        for b in 0..32 {
+            if (j >> b) & 1 == 1 {
+                y ^= v;
+            }
+            v ^= v >> 1;
+        }
+        y
+    }
+
+    #[test]
+    fn sobol_block_matches_the_direction_numbers() {
+        let scale = 2.328_306_4e-10f32;
+        let check = |j: u32| {
+            let got = sobol_block(j, 1, 0);
+            assert_eq!(
+                got[1],
+                sobol_direction_numbers(j) as f32 * scale,
+                "index {j}"
+            );
+            assert_eq!(got[0], j.reverse_bits() as f32 * scale, "index {j}");
+        };
+        (0..1u32 << 16).for_each(check);
+        let mut x = 0x9E37_79B9u32;
+        for _ in 0..10_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            check(x);
+        }
+        // Blocks: point i of block b is point b·n + i.
+        assert_eq!(sobol_block(3, 8, 5), sobol_block(43, 1, 0));
     }
 
     #[test]
