@@ -320,16 +320,17 @@ void fabric_env_lobe_sums(mat3 tbn, vec3 k2, vec4 coverage, GpuFabric f, uint mo
 
 // How many times its base count of fis samples a woven pixel takes (issue 31 item 1): the
 // lobes' error is where they are bright, at grazing views (the Fresnel factor rises from rs
-// toward 1, and the samples the horizon cuts off are lost), so a pixel takes about half its
-// Schlick Fresnel at n·k2 over the cloth's rs times the samples, 1 to 6 times (rs at least
+// toward 1, and the samples the horizon cuts off are lost), so a pixel takes 0.6 times its
+// Schlick Fresnel at n·k2 over the cloth's rs times the samples, 1 to 7 times (rs at least
 // 0.02, so an rs = 0 cloth is not all grazing). Measured (weft bench --ibl, close-up, 480x270):
-// 37.8 -> 40.0 dB close up at about the same lighting-pass time, the pooled pixels' base count
-// halved; lobes alone far away 38.2 -> 40.5 dB for 1.3x the time of a pixel alone.
+// half the Fresnel up to 6 took 37.8 -> 40.0 dB close up at about the same lighting-pass time,
+// the pooled pixels' base count halved; 0.6 up to 7, once the sample loop was flattened, 40.7 dB
+// at 1.4x the time of a pixel alone (docs/performance.md).
 uint fabric_lobe_passes(float nk2, float rs) {
     float x = 1.0 - clamp(nk2, 0.0, 1.0);
     float x2 = x * x;
     float fresnel = rs + (1.0 - rs) * (x2 * x2 * x);
-    return clamp(uint(0.5 * fresnel / max(rs, 0.02) + 0.5), 1u, 6u);
+    return clamp(uint(0.6 * fresnel / max(rs, 0.02) + 0.5), 1u, 7u);
 }
 
 // One woven pixel's lobe sums as fabric_lobes.frag takes them, at fis: `passes`
