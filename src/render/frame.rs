@@ -17,7 +17,7 @@ use glam::Mat4;
 use crate::scene::{ColorSpace, Scene, TextureSlot};
 use crate::vk::{
     Attachment, Buffer, BufferLocation, BufferUsageFlags, Cmd, Context, DescriptorPool,
-    DescriptorSet, Filter, Image, ImageDesc, ImageUsageFlags, InFlight, Pipeline, QueryPool,
+    DescriptorSet, Filter, Image, ImageDesc, ImageUsageFlags, InFlight, Load, Pipeline, QueryPool,
     Resource, Sampler, Usage,
 };
 
@@ -147,7 +147,7 @@ impl Defaults {
                 &[],
                 Some(Attachment {
                     image: &no_shadows,
-                    clear: Some([0.0; 4]),
+                    load: Load::Clear([0.0; 4]),
                 }),
             );
             cmd.end_rendering();

@@ -63,10 +63,22 @@ impl Usage {
     }
 }
 
-/// One attachment of a dynamic-rendering pass: the image and, if it is cleared, the clear value.
+/// One attachment of a dynamic-rendering pass: the image and what the pass starts from.
 pub struct Attachment<'a> {
     pub image: &'a Image,
-    pub clear: Option<[f32; 4]>,
+    pub load: Load,
+}
+
+/// What a dynamic-rendering pass starts an attachment from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Load {
+    /// Cleared to this value (depth: the first component; stencil 0).
+    Clear([f32; 4]),
+    /// As the image holds it.
+    Keep,
+    /// Anything (`LOAD_OP_DONT_CARE`): for a target every pixel a later pass reads is written
+    /// first (a driver need not clear it; lavapipe's clear of a 1080p RGBA16F target is ~5 ms).
+    Undefined,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -204,25 +216,25 @@ impl<'s> Cmd<'s> {
             .map(|a| a.image.extent())
             .unwrap_or((1, 1));
         let attachment = |a: &Attachment, layout: vk::ImageLayout, depth: bool| {
-            let clear = match (a.clear, depth) {
-                (Some(c), false) => vk::ClearValue {
+            let clear = match (a.load, depth) {
+                (Load::Clear(c), false) => vk::ClearValue {
                     color: vk::ClearColorValue { float32: c },
                 },
-                (Some(c), true) => vk::ClearValue {
+                (Load::Clear(c), true) => vk::ClearValue {
                     depth_stencil: vk::ClearDepthStencilValue {
                         depth: c[0],
                         stencil: 0,
                     },
                 },
-                (None, _) => vk::ClearValue::default(),
+                _ => vk::ClearValue::default(),
             };
             vk::RenderingAttachmentInfo::default()
                 .image_view(a.image.attachment_view())
                 .image_layout(a.image.layout_for(layout))
-                .load_op(if a.clear.is_some() {
-                    vk::AttachmentLoadOp::CLEAR
-                } else {
-                    vk::AttachmentLoadOp::LOAD
+                .load_op(match a.load {
+                    Load::Clear(_) => vk::AttachmentLoadOp::CLEAR,
+                    Load::Keep => vk::AttachmentLoadOp::LOAD,
+                    Load::Undefined => vk::AttachmentLoadOp::DONT_CARE,
                 })
                 .store_op(vk::AttachmentStoreOp::STORE)
                 .clear_value(clear)

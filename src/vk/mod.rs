@@ -16,7 +16,7 @@ mod swapchain;
 
 pub use ash::vk::Format;
 pub use ash::vk::{BufferUsageFlags, ImageUsageFlags};
-pub use cmd::{Attachment, Cmd, Cull, InFlight, Recording, Usage};
+pub use cmd::{Attachment, Cmd, Cull, InFlight, Load, Recording, Usage};
 pub use context::{Context, ContextOptions, DeviceChoice, DeviceInfo};
 pub use pipeline::{
     Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline,

@@ -12,8 +12,8 @@ use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
-    shaders, Attachment, Context, DescriptorPool, GraphicsDesc, Image, Pipeline, Resource, Sampler,
-    SetLayout, Stages, StencilMode, Topology, Usage,
+    shaders, Attachment, Context, DescriptorPool, GraphicsDesc, Image, Load, Pipeline, Resource,
+    Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and whether they test the stencil (each with the lobe sums
@@ -311,7 +311,13 @@ impl LightingPass {
                 cmd.transition(image, Usage::Undefined, Usage::ColorAttachment, None);
                 match stencil {
                     Some(_) => cmd.begin_rendering_stencil_test(&[image], &t.depth),
-                    None => cmd.begin_rendering(&[Attachment { image, clear: None }], None),
+                    None => cmd.begin_rendering(
+                        &[Attachment {
+                            image,
+                            load: Load::Keep,
+                        }],
+                        None,
+                    ),
                 }
                 cmd.bind_pipeline(pipeline);
                 cmd.bind_sets(pipeline, 0, &[lobes_set]);

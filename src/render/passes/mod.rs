@@ -41,12 +41,12 @@ pub(crate) fn fullscreen<'s, P: bytemuck::Pod>(
     push: Option<&P>,
     target: &'s crate::vk::Image,
 ) {
-    use crate::vk::{Attachment, Usage};
+    use crate::vk::{Attachment, Load, Usage};
     cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
     cmd.begin_rendering(
         &[Attachment {
             image: target,
-            clear: None,
+            load: Load::Keep,
         }],
         None,
     );

@@ -10,7 +10,7 @@ use crate::render::targets::SHADOW_FORMAT;
 use crate::render::upload::{GpuScene, VERTEX_FLOATS};
 use crate::vk::{
     shaders, Attachment, Buffer, Cmd, Context, DescriptorPool, DescriptorSet, Format, GraphicsDesc,
-    Image, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
+    Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
     VertexLayout,
 };
 
@@ -189,7 +189,7 @@ fn shadow_pass<'s>(
         &[],
         Some(Attachment {
             image: atlas,
-            clear: Some([0.0; 4]),
+            load: Load::Clear([0.0; 4]),
         }),
     );
     cmd.bind_vertex_buffer(&scene.vertices);

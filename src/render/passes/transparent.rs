@@ -24,7 +24,7 @@ use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
 use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
 use crate::vk::{
     shaders, Attachment, Buffer, Cmd, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc,
-    Image, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
+    Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and blend mode (true: BLEND, blended without depth writes;
@@ -293,11 +293,11 @@ fn transparent_pass<'s>(
     cmd.begin_rendering(
         &[Attachment {
             image: &targets.hdr,
-            clear: None,
+            load: Load::Keep,
         }],
         Some(Attachment {
             image: &targets.depth,
-            clear: None,
+            load: Load::Keep,
         }),
     );
     // The opaque ones first, nearest first (depth hides what is behind them, among themselves
