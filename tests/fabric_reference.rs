@@ -393,14 +393,19 @@ fn borders_are_gap() {
     assert_eq!(weave_ref::weave_point_uv(&p, 0.1, -0.25), [0.0; 4]);
 }
 
-#[test]
-fn huge_and_negative_coordinates_keep_the_pattern() {
-    // A dyadic repeat, so shifting by whole repeats is exact in f64.
-    for pattern in [
+// The weaves weft builds in (plain, twill, satin).
+fn built_in_patterns() -> [WeavePattern; 3] {
+    [
         WeavePattern::plain(),
         WeavePattern::twill(),
         WeavePattern::satin(),
-    ] {
+    ]
+}
+
+#[test]
+fn huge_and_negative_coordinates_keep_the_pattern() {
+    // A dyadic repeat, so shifting by whole repeats is exact in f64.
+    for pattern in built_in_patterns() {
         let p = FabricParams {
             pattern,
             repeat: 0.0625,
@@ -726,11 +731,7 @@ fn summed_area_table_pieces_lie_inside_the_table() {
     use weft::fabric::{weave_level0_size, WeaveSat};
     let mut rng = weft::reference::probe::XorShift::new(4321);
     let (mut cut, mut whole_taken) = (0usize, 0usize);
-    for pattern in [
-        WeavePattern::plain(),
-        WeavePattern::twill(),
-        WeavePattern::satin(),
-    ] {
+    for pattern in built_in_patterns() {
         let p = FabricParams {
             pattern,
             ..Default::default()
