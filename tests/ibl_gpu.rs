@@ -443,18 +443,18 @@ fn real_hdr_matches_the_cpu_ground_truth() {
             flips.push(flip);
             // Bounds, each about 1.3x the worst of the two scenes as measured on lavapipe (the
             // table is in docs/fabric-model.md §6). What they bound: the SH diffuse (2 % on this
-            // map, tested in env::quadrature), the split sum of the glTF spheres (4 % with the
-            // dominant direction: 3.7 %), and for the cloth the estimator of each level: approx
-            // takes a lobe's albedo as Fresnel at n·v and ignores its anisotropy (22.6 %); FIS is
-            // biased by the blur of its mip look-ups, which shrinks as N grows (16.4 %, 7.6 %,
-            // 5.7 %, 2.3 % at 4, 8, 16, 64); Monte Carlo with 512 samples is unbiased, its noise
-            // averages to ~1 %. The convergence itself is asserted below.
+            // map, tested in env::quadrature), the split sum of the glTF spheres (3.47 % at every
+            // level: the level changes only the fabric), and for the cloth the estimator of each
+            // level: approx takes one look-up per lobe (16.1 %); FIS, its samples pooled over
+            // 3 x 3 pixels and more of them at grazing views, 3.47 %, 3.65 %, 2.19 %, 0.68 % at
+            // 4, 8, 16, 64 (2026-12-05; it was 16.4 %, 7.6 %, 5.7 %, 2.3 % before the exact lobe
+            // albedo and the pooling, when these bounds were 0.215, 0.10, 0.075 and 0.05), so
+            // every FIS level is bounded by the spheres' split sum; Monte Carlo with 512 samples
+            // is unbiased, its noise averages to ~1 %. The convergence is asserted below.
             let bound = match level {
-                IblLevel::Approx => 0.30,
-                IblLevel::Fis(4) => 0.215,
-                IblLevel::Fis(8) => 0.10,
-                IblLevel::Fis(16) => 0.075,
-                IblLevel::Fis(_) => 0.05,
+                IblLevel::Approx => 0.21,
+                IblLevel::Fis(8) => 0.048,
+                IblLevel::Fis(_) => 0.046,
                 IblLevel::MonteCarlo(_) => 0.016,
             };
             errors.push(rel);
@@ -478,11 +478,17 @@ fn real_hdr_matches_the_cpu_ground_truth() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
-    // On the cloth, every level closer than the last (FIS converges to the Monte Carlo answer).
+    // On the cloth, FIS converges to the Monte Carlo answer: approx is the farthest, each 4x the
+    // samples closer (fis:4, 16, 64), Monte Carlo the closest. fis:8 lies between approx and
+    // fis:16; against fis:4 it is not ordered on this 140-pixel image (3.65 % against 3.47 %,
+    // FLIP 0.0336 against 0.0342: the two sets of pooled samples differ by less than the image's
+    // noise), while `weft bench --ibl` at 480x270 has fis:8 closer on every view (close up 3.7 %
+    // against 5.1 %).
     let cloth = &errors[errors.len() - 6..];
+    let [approx, fis4, fis8, fis16, fis64, mc] = [0, 1, 2, 3, 4, 5].map(|i| cloth[i]);
     assert!(
-        cloth.windows(2).all(|w| w[1] < w[0]),
-        "cloth errors do not shrink: {cloth:?}"
+        approx > fis4.max(fis8) && fis16 < fis4.min(fis8) && fis64 < fis16 && mc < fis64,
+        "cloth errors do not shrink (approx, fis:4, 8, 16, 64, mc:512): {cloth:?}"
     );
 }
 
