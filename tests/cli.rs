@@ -101,11 +101,20 @@ fn render_writes_png_and_exr() {
     assert!(hdr.as_raw().iter().all(|v| v.is_finite()));
 }
 
+// `weft plan --json` of the default scene with `args`: it succeeds, and its JSON.
+fn plan_json(args: &[&str]) -> serde_json::Value {
+    let out = weft().args(["plan", "--json"]).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "weft plan --json {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 #[test]
 fn plan_prints_the_default_scene() {
-    let out = weft().args(["plan", "--json"]).output().unwrap();
-    assert!(out.status.success());
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = plan_json(&[]);
     // Lit by the built-in studio by default: its preprocessing comes first, the occlusion of its
     // light before the lighting; edge anti-aliasing last (weft render's default), and not with
     // --aa none.
@@ -123,23 +132,11 @@ fn plan_prints_the_default_scene() {
     );
     // The tone curve the tonemap pass compiles in (the others are not in its pipeline).
     assert_eq!(v["tone_curve"], "pbr-neutral");
-    let out = weft()
-        .args(["plan", "--json", "--tonemap", "agx"])
-        .output()
-        .unwrap();
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = plan_json(&["--tonemap", "agx"]);
     assert_eq!(v["tone_curve"], "agx");
-    let out = weft()
-        .args(["plan", "--json", "--debug-view", "normals"])
-        .output()
-        .unwrap();
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = plan_json(&["--debug-view", "normals"]);
     assert_eq!(v["tone_curve"], "passthrough");
-    let out = weft()
-        .args(["plan", "--json", "--aa", "none"])
-        .output()
-        .unwrap();
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = plan_json(&["--aa", "none"]);
     assert_eq!(
         v["passes"],
         serde_json::json!([
@@ -158,8 +155,7 @@ fn plan_prints_the_default_scene() {
     );
     // --occlusion none, or no environment: no occlusion pass.
     for args in [["--occlusion", "none"], ["--env", "none"]] {
-        let out = weft().args(["plan", "--json"]).args(args).output().unwrap();
-        let n: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let n = plan_json(&args);
         let passes = n["passes"].as_array().expect("a list");
         assert!(
             !passes.contains(&serde_json::json!("occlusion")),
@@ -168,11 +164,7 @@ fn plan_prints_the_default_scene() {
         assert!(n["occlusion"].is_null(), "{args:?}: {n}");
     }
     // --aa ss3: nine frames of the same passes, without the FXAA pass.
-    let out = weft()
-        .args(["plan", "--json", "--aa", "ss3"])
-        .output()
-        .unwrap();
-    let v3: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v3 = plan_json(&["--aa", "ss3"]);
     assert_eq!(v3["passes"], v["passes"]);
     assert_eq!(v3["supersample"], 3);
     let out = weft().args(["plan", "--aa", "ss9"]).output().unwrap();
@@ -181,35 +173,19 @@ fn plan_prints_the_default_scene() {
     assert!(err.contains("ssN") && err.contains("from 2 to 8"), "{err}");
     // A draft tried on the cloth: its thread colours are planned.
     assert_eq!(v["features"]["thread_colours"], false);
-    let out = weft()
-        .args([
-            "plan",
-            "--json",
-            "--fabric",
-            &format!(
-                "red cloth=cotton-plain@8mm:{}/tests/data/drafts/tartan-twill.wif",
-                env!("CARGO_MANIFEST_DIR")
-            ),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let vt: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let vt = plan_json(&[
+        "--fabric",
+        &format!(
+            "red cloth=cotton-plain@8mm:{}/tests/data/drafts/tartan-twill.wif",
+            env!("CARGO_MANIFEST_DIR")
+        ),
+    ]);
     assert_eq!(vt["features"]["thread_colours"], true);
     assert_eq!(v["environment"]["name"], "built-in studio");
     assert_eq!(v["environment"]["ibl"], "fis:8");
     assert!(v["lights"]["directional"].as_u64().unwrap() >= 1);
     // Without an environment there is nothing to preprocess.
-    let out = weft()
-        .args(["plan", "--json", "--env", "none"])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = plan_json(&["--env", "none"]);
     assert_eq!(
         v["passes"],
         serde_json::json!(["weave", "gbuffer", "lighting", "tonemap", "antialias"])

@@ -758,32 +758,22 @@ fn summed_area_table_pieces_lie_inside_the_table() {
             );
             let half = ws::weave_piece_half(sdx, sdy, k);
             let c = [rng.next_f64() as f32, rng.next_f64() as f32];
-            let kf = [k[0] as f32, k[1] as f32];
-            for j in 0..k[1] {
-                for i in 0..k[0] {
-                    let f = [
-                        (i as f32 + 0.5) / kf[0] - 0.5,
-                        (j as f32 + 0.5) / kf[1] - 0.5,
-                    ];
-                    let pc = [
-                        c[0] + sdx[0] * f[0] + sdy[0] * f[1],
-                        c[1] + sdx[1] * f[0] + sdy[1] * f[1],
-                    ];
-                    let lo = [pc[0] - half[0], pc[1] - half[1]];
-                    let hi = [pc[0] + half[0], pc[1] + half[1]];
-                    let w = sat.box_whole(lo, hi);
-                    if k == [1, 1] {
-                        whole_taken += w.iter().any(|x| *x != 0.0) as usize;
-                        continue;
-                    }
-                    cut += 1;
-                    assert_eq!(
-                        w,
-                        [0.0; 4],
-                        "piece {i},{j} of {k:?} at {c:?}, edges {dx:?} {dy:?} cells, of {}: past the table ({r} repeats)",
-                        p.pattern.name()
-                    );
+            for n in 0..k[0] * k[1] {
+                let pc = ws::weave_piece_centre(c, sdx, sdy, k, n);
+                let lo = [pc[0] - half[0], pc[1] - half[1]];
+                let hi = [pc[0] + half[0], pc[1] + half[1]];
+                let w = sat.box_whole(lo, hi);
+                if k == [1, 1] {
+                    whole_taken += w.iter().any(|x| *x != 0.0) as usize;
+                    continue;
                 }
+                cut += 1;
+                assert_eq!(
+                    w,
+                    [0.0; 4],
+                    "piece {n} of {k:?} at {c:?}, edges {dx:?} {dy:?} cells, of {}: past the table ({r} repeats)",
+                    p.pattern.name()
+                );
             }
         }
     }

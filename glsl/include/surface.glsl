@@ -117,21 +117,27 @@ vec4 sample_slot(sampler2D tex, Material m, uint slot) {
 // R. The table at q in texel-corner units, bilinear between the four corners around it (exact
 // for the texel-averaged coverage): by the sampler, or where the device cannot filter RGBA32F
 // (Vulkan makes it optional) by four texel fetches.
-// R: the repeats a weave's table spans along each axis.
-float weave_sat_repeats() {
-    return texelFetch(weave_tex, ivec2(textureSize(weave_tex, 0).x - 1, 1), 0).x;
-}
-
-// W x H: the table's texels per repeat (level 0 of the weave texture).
-vec2 weave_sat_repeat_texels() {
-    return vec2(textureSize(weave_tex, 0) - ivec2(2, 1)) / weave_sat_repeats();
-}
-
 // A summed-area table's texel: the weave texture's (src = SAT_WEAVE) or, from the thread-colour
 // buffer, that of the table starting at vec4 `src` (a row of `size.x` texels after another).
 #define SAT_WEAVE 0xffffffffu
 vec4 sat_texel(uint src, ivec2 size, ivec2 i) {
     return src == SAT_WEAVE ? texelFetch(weave_tex, i, 0) : thread_colours[src + uint(i.y * size.x + i.x)];
+}
+
+// The mean of a table's value (texel (RW + 1, 0)). Rust twin: WeaveSat::mean.
+vec4 sat_mean(uint src, ivec2 size) {
+    return sat_texel(src, size, ivec2(size.x - 1, 0));
+}
+
+// R, the repeats a table spans along each axis (texel (RW + 1, 1)). Rust twin: WeaveSat::repeats.
+float sat_repeats(uint src, ivec2 size) {
+    return sat_texel(src, size, ivec2(size.x - 1, 1)).x;
+}
+
+// W x H: the weave table's texels per repeat (level 0 of the weave texture).
+vec2 weave_sat_repeat_texels() {
+    ivec2 size = textureSize(weave_tex, 0);
+    return vec2(size - ivec2(2, 1)) / sat_repeats(SAT_WEAVE, size);
 }
 
 vec4 sat_corner(uint src, ivec2 size, vec2 q) {
@@ -191,9 +197,9 @@ vec4 sat_whole(uint src, ivec2 size, float r, vec2 lo, vec2 hi) {
 // The mean over the box [lo, hi] of st (any size and place): the table's mean (texel (RW + 1, 0))
 // plus the corners' and whole tables' parts over the box's area. Rust twin: WeaveSat::box_mean.
 vec4 sat_box(uint src, ivec2 size, vec2 lo, vec2 hi) {
-    float r = sat_texel(src, size, ivec2(size.x - 1, 1)).x;
+    float r = sat_repeats(src, size);
     vec2 ext = hi - lo;
-    return sat_texel(src, size, ivec2(size.x - 1, 0))
+    return sat_mean(src, size)
         + (sat_corners(src, size, r, lo, hi) + sat_whole(src, size, r, lo, hi)) / max(ext.x * ext.y, 1e-30);
 }
 
@@ -434,7 +440,7 @@ GSurface material_surface() {    GSurface s;
                 // table's box is the texture's bilinear filter).
                 vec2 c = fract(st);
                 ivec2 sat_size = textureSize(weave_tex, 0);
-                float sat_r = weave_sat_repeats();
+                float sat_r = sat_repeats(SAT_WEAVE, sat_size);
                 vec2 least = 0.5 / weave_sat_repeat_texels();
                 uvec2 k = FOOTPRINT_PIECES == 0u ? uvec2(1u)
                     : weave_pieces(st_dx * repeat_cells, st_dy * repeat_cells, FOOTPRINT_PIECES);
@@ -445,25 +451,20 @@ GSurface material_surface() {    GSurface s;
                 // repeat more than four cells), so the whole tables' part is the first piece's
                 // alone, taken once here rather than for every piece (lavapipe would run it for
                 // each: it runs both sides of a branch).
-                vec2 p0 = c + st_dx * (0.5 / kf.x - 0.5) + st_dy * (0.5 / kf.y - 0.5);
+                vec2 p0 = weave_piece_centre(c, st_dx, st_dy, k, 0u);
                 vec4 whole0 = sat_whole(SAT_WEAVE, sat_size, sat_r, p0 - half_box, p0 + half_box);
-                vec4 sat_mean = texelFetch(weave_tex, ivec2(sat_size.x - 1, 0), 0);
+                vec4 mean = sat_mean(SAT_WEAVE, sat_size);
                 vec2 piece_ext = 2.0 * half_box;
                 float inv_area = 1.0 / max(piece_ext.x * piece_ext.y, 1e-30);
                 coverage = vec4(0.0);
                 vec4 pieces_mixed = vec4(0.0);
-                // One loop over the pieces, not a loop in a loop: llvmpipe runs a loop's body once
-                // more under an empty mask when every lane has left (its test comes first), and
-                // the inner loop of a nested pair once more for each outer turn. (A loop with its
-                // test at the end, which would save that turn, gave wrong coverages on Mesa 22.3's
-                // lavapipe.)
-                uint pieces = k.x * k.y;
-                for (uint n = 0u; n < pieces; ++n) {
-                    uint i = n % k.x;
-                    uint j = n / k.x;
-                    vec2 p = c + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
+                // One loop over the pieces (weave_piece_centre). (A loop with its test at the end,
+                // which would save llvmpipe's extra masked turn, gave wrong coverages on Mesa
+                // 22.3's lavapipe.)
+                for (uint n = 0u; n < k.x * k.y; ++n) {
+                    vec2 p = weave_piece_centre(c, st_dx, st_dy, k, n);
                     vec4 part = sat_corners(SAT_WEAVE, sat_size, sat_r, p - half_box, p + half_box);
-                    vec4 piece = sat_mean + (n == 0u ? part + whole0 : part) * inv_area;
+                    vec4 piece = mean + (n == 0u ? part + whole0 : part) * inv_area;
                     coverage += piece;
                     if (threads) {
                         // Each piece's colour over the piece itself, with its coverage: the
@@ -489,11 +490,8 @@ GSurface material_surface() {    GSurface s;
                 vec2 pdx = st_dx / kf.x * sharpen;
                 vec2 pdy = st_dy / kf.y * sharpen;
                 coverage = vec4(0.0);
-                // One loop, not two (as the summed-area table's pieces above).
                 for (uint n = 0u; n < k.x * k.y; ++n) {
-                    uint i = n % k.x;
-                    uint j = n / k.x;
-                    vec2 p = st + st_dx * ((float(i) + 0.5) / kf.x - 0.5) + st_dy * ((float(j) + 0.5) / kf.y - 0.5);
+                    vec2 p = weave_piece_centre(st, st_dx, st_dy, k, n);
                     coverage += textureGrad(weave_tex, p, pdx, pdy);
                 }
                 coverage /= kf.x * kf.y;

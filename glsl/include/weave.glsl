@@ -242,6 +242,17 @@ vec2 weave_piece_half(vec2 dx, vec2 dy, uvec2 k) {
     return half_box * (box_area > area && area > 0.0 ? sqrt(area / box_area) : 1.0);
 }
 
+// The centre of piece n (row by row: i = n mod k.x, j = n / k.x) when the parallelogram
+// {c + a·dx + b·dy : a, b in [-1/2, 1/2]} is cut into k.x x k.y equal pieces. The pieces are
+// one loop over n, not a loop in a loop: llvmpipe runs a loop's body once more under an empty
+// mask after every lane has left, and a nested loop's inner loop once more per outer turn.
+// Rust twin: reference::weave::single::weave_piece_centre.
+vec2 weave_piece_centre(vec2 c, vec2 dx, vec2 dy, uvec2 k, uint n) {
+    vec2 kf = vec2(max(k, uvec2(1u)));
+    uint kx = max(k.x, 1u);
+    return c + dx * ((float(n % kx) + 0.5) / kf.x - 0.5) + dy * ((float(n / kx) + 0.5) / kf.y - 0.5);
+}
+
 // The coverage of the parallelogram {c + a·dx + b·dy : a, b in [-1/2, 1/2]} (cells; c reduced to
 // the repeat) cut into k.x x k.y equal pieces: the mean of the exact box coverages of one box per
 // piece, its bounding box shrunk about its centre to the piece's area (equal areas, and every
@@ -251,12 +262,8 @@ vec4 weave_parallelogram(Weave w, vec2 c, vec2 dx, vec2 dy, uvec2 k) {
     vec2 kf = vec2(max(k, uvec2(1u)));
     vec2 half_box = weave_piece_half(dx, dy, k);
     vec4 sum = vec4(0.0);
-    // One loop, not two: llvmpipe runs a loop's body once more under an empty mask after every
-    // lane has left, and a nested loop's inner loop once more per outer turn.
     for (uint n = 0u; n < k.x * k.y; ++n) {
-        uint i = n % k.x;
-        uint j = n / k.x;
-        vec2 p = c + dx * ((float(i) + 0.5) / kf.x - 0.5) + dy * ((float(j) + 0.5) / kf.y - 0.5);
+        vec2 p = weave_piece_centre(c, dx, dy, k, n);
         vec2 lo = p - half_box;
         vec2 hi = p + half_box;
         sum += weave_box(w, lo.x, lo.y, hi.x, hi.y);

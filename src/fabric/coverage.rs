@@ -320,6 +320,22 @@ macro_rules! weave_precision {
                 [half[0] * shrink, half[1] * shrink]
             }
 
+            /// The centre of piece `n` (row by row: `i = n mod k[0]`, `j = n / k[0]`) when the
+            /// parallelogram `{c + a·dx + b·dy : a, b in [-1/2, 1/2]}` is cut into `k[0] × k[1]`
+            /// equal pieces (`weave_piece_centre` of weave.glsl).
+            pub fn weave_piece_centre(
+                c: [$t; 2],
+                dx: [$t; 2],
+                dy: [$t; 2],
+                k: [u32; 2],
+                n: u32,
+            ) -> [$t; 2] {
+                let (kx, ky) = (k[0].max(1), k[1].max(1));
+                let a = ((n % kx) as $t + 0.5) / kx as $t - 0.5;
+                let b = ((n / kx) as $t + 0.5) / ky as $t - 0.5;
+                [c[0] + dx[0] * a + dy[0] * b, c[1] + dx[1] * a + dy[1] * b]
+            }
+
             /// The coverage of the parallelogram `{c + a·dx + b·dy : a, b in [-1/2, 1/2]}` (cells,
             /// `c` reduced to the repeat) cut into `k[0] × k[1]` equal pieces: the mean of the
             /// exact box coverages of one box per piece, its bounding box shrunk about its centre
@@ -335,21 +351,17 @@ macro_rules! weave_precision {
                 let ky = k[1].max(1) as $t;
                 let half = weave_piece_half(dx, dy, k);
                 let mut sum = [0.0; 4];
-                for j in 0..k[1].max(1) {
-                    for i in 0..k[0].max(1) {
-                        let a = (i as $t + 0.5) / kx - 0.5;
-                        let b = (j as $t + 0.5) / ky - 0.5;
-                        let p = [c[0] + dx[0] * a + dy[0] * b, c[1] + dx[1] * a + dy[1] * b];
-                        let cov = weave_box(
-                            w,
-                            p[0] - half[0],
-                            p[1] - half[1],
-                            p[0] + half[0],
-                            p[1] + half[1],
-                        );
-                        for (s, v) in sum.iter_mut().zip(cov) {
-                            *s += v;
-                        }
+                for n in 0..k[0].max(1) * k[1].max(1) {
+                    let p = weave_piece_centre(c, dx, dy, k, n);
+                    let cov = weave_box(
+                        w,
+                        p[0] - half[0],
+                        p[1] - half[1],
+                        p[0] + half[0],
+                        p[1] + half[1],
+                    );
+                    for (s, v) in sum.iter_mut().zip(cov) {
+                        *s += v;
                     }
                 }
                 sum.map(|s| s / (kx * ky))

@@ -158,6 +158,13 @@ impl WeaveSat {
         Self::REPEATS.max(1 + 4u32.div_ceil(cells))
     }
 
+    /// The table's size in texels for a weave of `cols × rows` cells whose repeat is `level0`
+    /// texels (the weave texture's level 0): `RW + 2` by `RH + 1`.
+    pub fn size_for(cols: u32, rows: u32, level0: (u32, u32)) -> (u32, u32) {
+        let r = Self::repeats_for(cols, rows);
+        (r * level0.0.max(1) + 2, r * level0.1.max(1) + 1)
+    }
+
     /// The table of the weave of `push` at `push.width × push.height` cells per repeat (the
     /// weave texture's level 0, [`weave_level0_size`]).
     pub fn new(push: &WeavePush) -> WeaveSat {
@@ -168,7 +175,7 @@ impl WeaveSat {
         let r = Self::repeats_for(push.cols, push.rows);
         let (tw, th) = (r * nw, r * nh);
         let mean = double::weave_box(&w, 0.0, 0.0, cols, rows);
-        let (width, height) = (tw + 2, th + 1);
+        let (width, height) = Self::size_for(push.cols, push.rows, (nw, nh));
         let mut texels = vec![[0f32; 4]; (width * height) as usize];
         for j in 1..=th {
             let y = j as f64 / nh as f64;

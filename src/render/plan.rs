@@ -413,15 +413,12 @@ impl Plan {
                         levels: crate::fabric::weave_mip_count((width, height)),
                         lookup: match options.weave_precision {
                             super::WeavePrecision::Sat => {
-                                let r = crate::fabric::WeaveSat::repeats_for(
+                                let (w, h) = crate::fabric::WeaveSat::size_for(
                                     f.pattern.cols() as u32,
                                     f.pattern.rows() as u32,
+                                    (width, height),
                                 );
-                                format!(
-                                    "summed-area table {}x{} RGBA32F",
-                                    r * width + 2,
-                                    r * height + 1
-                                )
+                                format!("summed-area table {w}x{h} RGBA32F")
                             }
                             super::WeavePrecision::Rgba16f => "texture RGBA16F".into(),
                             super::WeavePrecision::Rgba8 => "texture RGBA8".into(),
