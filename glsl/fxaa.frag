@@ -5,9 +5,12 @@
 // along it the edge's ends are; it then samples the image shifted across the edge by how far the
 // pixel is from the edge's middle (a pixel near an end of a staircase step moves most), and never
 // less than its sub-pixel aliasing (a lone bright or dark pixel is blended with its neighbours).
-// The image is an sRGB target: sampling returns linear colour, luma is taken on its square root
-// (close to the display encoding), the blend itself is linear.
+// The image is an sRGB target: sampling it returns linear colour, and the blend itself is linear.
+// Luma is taken from its encoded bytes (the same image viewed as UNORM, as FXAA 3.11 takes luma in
+// the display encoding): on lavapipe the sRGB decode of every look-up was half the pass (1080p:
+// 99 ms with every look-up decoded, 53 ms with none), and the edge search reads nothing else.
 layout(set = 0, binding = 0) uniform sampler2D image;  // the tone-mapped image (an `R8G8B8A8_SRGB` target, linear filtering, clamp to edge)
+layout(set = 0, binding = 1) uniform sampler2D encoded;  // the same image viewed as `R8G8B8A8_UNORM`: its sRGB-encoded values, undecoded (linear filtering, clamp to edge)
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
@@ -21,13 +24,14 @@ const float SUBPIXEL = 0.75;
 const int SEARCH_STEPS = 12;
 const float STEP[SEARCH_STEPS] = float[SEARCH_STEPS](1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 2.0, 2.0, 2.0, 2.0, 4.0, 8.0);
 
-float luma(vec3 linear_rgb) {
-    return sqrt(max(dot(linear_rgb, vec3(0.299, 0.587, 0.114)), 0.0));
+// Luma of sRGB-encoded colour (Rec. 601 weights on the encoded values).
+float luma(vec3 encoded_rgb) {
+    return dot(encoded_rgb, vec3(0.299, 0.587, 0.114));
 }
 
 float luma_at(ivec2 p) {
-    ivec2 size = textureSize(image, 0);
-    return luma(texelFetch(image, clamp(p, ivec2(0), size - 1), 0).rgb);
+    ivec2 size = textureSize(encoded, 0);
+    return luma(texelFetch(encoded, clamp(p, ivec2(0), size - 1), 0).rgb);
 }
 
 void main() {
@@ -36,7 +40,7 @@ void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec2 uv = (vec2(p) + 0.5) * texel;
     vec4 centre = texelFetch(image, p, 0);
-    float m = luma(centre.rgb);
+    float m = luma_at(p);
     float n = luma_at(p + ivec2(0, -1));
     float s = luma_at(p + ivec2(0, 1));
     float e = luma_at(p + ivec2(1, 0));
@@ -81,19 +85,19 @@ void main() {
     vec2 along = horizontal ? vec2(texel.x, 0.0) : vec2(0.0, texel.y);
     vec2 a = on_edge - along;
     vec2 b = on_edge + along;
-    float end_a = luma(textureLod(image, a, 0.0).rgb) - local;
-    float end_b = luma(textureLod(image, b, 0.0).rgb) - local;
+    float end_a = luma(textureLod(encoded, a, 0.0).rgb) - local;
+    float end_b = luma(textureLod(encoded, b, 0.0).rgb) - local;
     bool done_a = abs(end_a) >= gradient;
     bool done_b = abs(end_b) >= gradient;
     for (int i = 1; i < SEARCH_STEPS && !(done_a && done_b); ++i) {
         if (!done_a) {
             a -= along * STEP[i];
-            end_a = luma(textureLod(image, a, 0.0).rgb) - local;
+            end_a = luma(textureLod(encoded, a, 0.0).rgb) - local;
             done_a = abs(end_a) >= gradient;
         }
         if (!done_b) {
             b += along * STEP[i];
-            end_b = luma(textureLod(image, b, 0.0).rgb) - local;
+            end_b = luma(textureLod(encoded, b, 0.0).rgb) - local;
             done_b = abs(end_b) >= gradient;
         }
     }

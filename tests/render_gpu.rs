@@ -176,6 +176,37 @@ fn submissions_from_two_threads_are_safe() {
     ctx.check_validation().expect("no validation message");
 }
 
+/// An image viewed as a second format (FXAA reads the tone-mapped sRGB image's bytes as UNORM):
+/// made MUTABLE_FORMAT with both formats listed, clean under validation; a view format of another
+/// texel size is refused with the image's name.
+#[test]
+fn images_take_an_alias_view_of_the_same_texel_size_only() {
+    use weft::vk::{Format, ImageDesc, ImageUsageFlags, Usage};
+    let ctx = common::context();
+    let image = ctx
+        .create_image(
+            &ImageDesc::new_2d("srgb", Format::R8G8B8A8_SRGB, 8, 8)
+                .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED)
+                .alias(Format::R8G8B8A8_UNORM),
+        )
+        .expect("an sRGB image with a UNORM view");
+    ctx.submit(|cmd| cmd.transition(&image, Usage::Undefined, Usage::FragmentRead, None))
+        .unwrap();
+    let err = ctx
+        .create_image(
+            &ImageDesc::new_2d("half", Format::R8G8B8A8_SRGB, 8, 8)
+                .usage(ImageUsageFlags::SAMPLED)
+                .alias(Format::R16G16B16A16_SFLOAT),
+        )
+        .err()
+        .expect("must fail");
+    assert!(
+        err.to_string().contains("'half'") && err.to_string().contains("not a view format"),
+        "{err}"
+    );
+    ctx.check_validation().expect("no validation message");
+}
+
 /// A readback copy into a buffer too small for the image would make the GPU write past the
 /// buffer's end: `Cmd::copy_image_to_buffer` refuses it (a panic, before anything is recorded),
 /// the context stays usable, and nothing invalid reaches the driver (no validation message).

@@ -221,7 +221,10 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "Edge anti-aliasing of a tone-mapped 8-bit image (FXAA in the manner of Lottes' 3.11 \
          quality preset): finds luma edges, their direction and their ends along a search of up to \
          32 pixels, and samples across the edge by how far the pixel is from its middle, or by its \
-         sub-pixel aliasing. Drawn with `fullscreen.vert` after `tonemap.frag`, into the output \
+         sub-pixel aliasing. Binding 0 samples the tone-mapped `R8G8B8A8_SRGB` image (colour, \
+         blended linearly), binding 1 the same image through an `R8G8B8A8_UNORM` view (create it \
+         `MUTABLE_FORMAT` with both formats listed): luma from the encoded bytes, without an sRGB \
+         decode per look-up. Drawn with `fullscreen.vert` after `tonemap.frag`, into the output \
          target; no push constants, no specialization constants.",
     ),
     (

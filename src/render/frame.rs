@@ -745,7 +745,8 @@ impl Renderer {
             targets.tonemapped = Some(
                 self.ctx.create_image(
                     &ImageDesc::new_2d("tone-mapped", LDR_FORMAT, width, height)
-                        .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED),
+                        .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED)
+                        .alias(LDR_ENCODED_FORMAT),
                 )?,
             );
         }

@@ -24,6 +24,8 @@ pub fn depth_format(ctx: &Context) -> Format {
 }
 pub const HDR_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 pub const LDR_FORMAT: Format = Format::R8G8B8A8_SRGB;
+/// The tone-mapped image's bytes undecoded (its alias view, which FXAA takes luma from).
+pub const LDR_ENCODED_FORMAT: Format = Format::R8G8B8A8_UNORM;
 pub const WEAVE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 /// The weave's summed-area table (`--weave-precision sat`): f32, fetched (never filtered).
 pub const WEAVE_SAT_FORMAT: Format = Format::R32G32B32A32_SFLOAT;

@@ -220,6 +220,8 @@ pub enum Resource<'a> {
     /// An image in SHADER_READ_ONLY_OPTIMAL layout (a depth-stencil image's depth in
     /// DEPTH_STENCIL_READ_ONLY_OPTIMAL), with a sampler.
     Sampled(&'a Image, &'a Sampler),
+    /// The same through the image's alias view ([`crate::vk::ImageDesc::alias_format`]).
+    SampledAlias(&'a Image, &'a Sampler),
     /// One mip level of an image, in GENERAL layout.
     StorageImage(&'a Image, u32),
 }
@@ -676,6 +678,14 @@ impl DescriptorPool {
             .lock()
             .map_err(|_| Error::device("descriptor pool lock poisoned"))?;
         for (binding, r) in resources {
+            if let Resource::SampledAlias(img, _) = r {
+                if img.alias_view == vk::ImageView::null() {
+                    return Err(Error::device(format!(
+                        "binding {binding}: image '{}' has no alias format to be sampled as",
+                        img.desc.name
+                    )));
+                }
+            }
             if let Resource::StorageImage(img, level) = r {
                 if *level >= img.desc.mip_levels {
                     return Err(Error::device(format!(
@@ -707,6 +717,11 @@ impl DescriptorPool {
                     image_view: img.view,
                     image_layout: img.layout_for(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
                 }]),
+                Resource::SampledAlias(img, s) => image_infos.push([vk::DescriptorImageInfo {
+                    sampler: s.raw,
+                    image_view: img.alias_view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }]),
                 Resource::StorageImage(img, level) => image_infos.push([vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
                     image_view: if img.mip_views.is_empty() {
@@ -735,7 +750,7 @@ impl DescriptorPool {
                     w.descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                         .buffer_info(&buffer_infos[bi - 1])
                 }
-                Resource::Sampled(..) => {
+                Resource::Sampled(..) | Resource::SampledAlias(..) => {
                     ii += 1;
                     w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                         .image_info(&image_infos[ii - 1])

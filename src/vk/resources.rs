@@ -101,6 +101,10 @@ pub struct ImageDesc {
     /// A cube map: six square layers (+x, -x, +y, -y, +z, -z), sampled as `samplerCube`, each
     /// mip level written as an `image2DArray` (layer = face).
     pub cube: bool,
+    /// A second format the image is also viewed as (`vk::ImageCreateFlags::MUTABLE_FORMAT`, both
+    /// listed in its format list), sampled through [`crate::vk::Resource::SampledAlias`]: e.g. an
+    /// sRGB image's encoded bytes read as UNORM, without the sRGB decode. Same texel size.
+    pub alias_format: Option<vk::Format>,
 }
 
 impl ImageDesc {
@@ -113,6 +117,7 @@ impl ImageDesc {
             mip_levels: 1,
             usage: vk::ImageUsageFlags::empty(),
             cube: false,
+            alias_format: None,
         }
     }
     /// A cube map of `size` x `size` faces.
@@ -132,6 +137,11 @@ impl ImageDesc {
     }
     pub fn usage(mut self, usage: vk::ImageUsageFlags) -> Self {
         self.usage |= usage;
+        self
+    }
+    /// Also viewed as `format` ([`ImageDesc::alias_format`]).
+    pub fn alias(mut self, format: vk::Format) -> Self {
+        self.alias_format = Some(format);
         self
     }
     /// A full mip chain down to 1x1.
@@ -198,6 +208,8 @@ pub struct Image {
     /// A depth-stencil image's view of both aspects (its attachment view; `view`, of the depth
     /// alone, is what shaders sample); null for other images.
     pub(crate) attachment_view: vk::ImageView,
+    /// The view of every mip level as `desc.alias_format`; null when it has none.
+    pub(crate) alias_view: vk::ImageView,
     allocation: Option<Allocation>,
     pub desc: ImageDesc,
 }
@@ -259,10 +271,10 @@ impl Drop for Image {
             for v in self.mip_views.drain(..) {
                 self.shared.device.destroy_image_view(v, None);
             }
-            if self.attachment_view != vk::ImageView::null() {
-                self.shared
-                    .device
-                    .destroy_image_view(self.attachment_view, None);
+            for v in [self.attachment_view, self.alias_view] {
+                if v != vk::ImageView::null() {
+                    self.shared.device.destroy_image_view(v, None);
+                }
             }
             self.shared.device.destroy_image_view(self.view, None);
             self.shared.device.destroy_image(self.raw, None);
@@ -500,12 +512,27 @@ impl Context {
             )));
         }
         let device = &self.shared.device;
-        let info = vk::ImageCreateInfo::default()
-            .flags(if desc.cube {
-                vk::ImageCreateFlags::CUBE_COMPATIBLE
-            } else {
-                vk::ImageCreateFlags::empty()
-            })
+        let mut flags = if desc.cube {
+            vk::ImageCreateFlags::CUBE_COMPATIBLE
+        } else {
+            vk::ImageCreateFlags::empty()
+        };
+        let formats: Vec<vk::Format> = match desc.alias_format {
+            Some(alias) => {
+                if texel_bytes(alias) != texel_bytes(desc.format) || texel_bytes(alias).is_none() {
+                    return Err(Error::device(format!(
+                        "image '{}': {alias:?} is not a view format of {:?}",
+                        desc.name, desc.format
+                    )));
+                }
+                flags |= vk::ImageCreateFlags::MUTABLE_FORMAT;
+                vec![desc.format, alias]
+            }
+            None => Vec::new(),
+        };
+        let mut format_list = vk::ImageFormatListCreateInfo::default().view_formats(&formats);
+        let mut info = vk::ImageCreateInfo::default()
+            .flags(flags)
             .image_type(vk::ImageType::TYPE_2D)
             .format(desc.format)
             .extent(vk::Extent3D {
@@ -520,6 +547,9 @@ impl Context {
             .usage(desc.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        if !formats.is_empty() {
+            info = info.push_next(&mut format_list);
+        }
         let raw = unsafe { device.create_image(&info, None) }.map_err(|e| match e {
             vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
                 Error::device(format!(
@@ -560,6 +590,7 @@ impl Context {
             view: vk::ImageView::null(),
             mip_views: Vec::new(),
             attachment_view: vk::ImageView::null(),
+            alias_view: vk::ImageView::null(),
             allocation: Some(allocation),
             desc: desc.clone(),
         };
@@ -568,20 +599,27 @@ impl Context {
             .map_err(vkerr("vkBindImageMemory"))?;
         let aspect = image.aspect();
         let layers = desc.layers();
+        let make_format_view = |base: u32,
+                                count: u32,
+                                view_type: vk::ImageViewType,
+                                aspect: vk::ImageAspectFlags,
+                                format: vk::Format| {
+            let info = vk::ImageViewCreateInfo::default()
+                .image(raw)
+                .view_type(view_type)
+                .format(format)
+                .subresource_range(vk::ImageSubresourceRange {
+                    aspect_mask: aspect,
+                    base_mip_level: base,
+                    level_count: count,
+                    base_array_layer: 0,
+                    layer_count: layers,
+                });
+            unsafe { device.create_image_view(&info, None) }.map_err(vkerr("vkCreateImageView"))
+        };
         let make_aspect_view =
             |base: u32, count: u32, view_type: vk::ImageViewType, aspect: vk::ImageAspectFlags| {
-                let info = vk::ImageViewCreateInfo::default()
-                    .image(raw)
-                    .view_type(view_type)
-                    .format(desc.format)
-                    .subresource_range(vk::ImageSubresourceRange {
-                        aspect_mask: aspect,
-                        base_mip_level: base,
-                        level_count: count,
-                        base_array_layer: 0,
-                        layer_count: layers,
-                    });
-                unsafe { device.create_image_view(&info, None) }.map_err(vkerr("vkCreateImageView"))
+                make_format_view(base, count, view_type, aspect, desc.format)
             };
         let make_view = |base: u32, count: u32, view_type: vk::ImageViewType| {
             make_aspect_view(base, count, view_type, aspect)
@@ -595,6 +633,9 @@ impl Context {
         if has_stencil(desc.format) {
             image.attachment_view =
                 make_aspect_view(0, desc.mip_levels, sampled_type, image.full_aspect())?;
+        }
+        if let Some(alias) = desc.alias_format {
+            image.alias_view = make_format_view(0, desc.mip_levels, sampled_type, aspect, alias)?;
         }
         if (desc.mip_levels > 1 || desc.cube) && desc.usage.contains(vk::ImageUsageFlags::STORAGE) {
             for level in 0..desc.mip_levels {

@@ -20,7 +20,8 @@ pub struct AntialiasPass {
 
 /// What the pass reads; it writes the 8-bit output target.
 pub struct AntialiasInputs<'s> {
-    /// `targets.tonemapped` is read, linear-filtered and clamped with `sampler`.
+    /// `targets.tonemapped` is read, linear-filtered and clamped with `sampler`: decoded (its
+    /// view) for the colour, encoded (its UNORM alias view) for the luma.
     pub targets: &'s Targets,
     pub sampler: &'s Sampler,
 }
@@ -79,7 +80,10 @@ impl AntialiasPass {
             .expect("the frame makes the tone-mapped target when it plans this pass");
         let set = pool.set(
             &self.layout,
-            &[(0, Resource::Sampled(source, inputs.sampler))],
+            &[
+                (0, Resource::Sampled(source, inputs.sampler)),
+                (1, Resource::SampledAlias(source, inputs.sampler)),
+            ],
         )?;
         Ok(Recorded::new(
             "antialias",
