@@ -178,7 +178,7 @@ fn submissions_from_two_threads_are_safe() {
 
 /// An image viewed as a second format (FXAA reads the tone-mapped sRGB image's bytes as UNORM):
 /// made MUTABLE_FORMAT with both formats listed, clean under validation; a view format of another
-/// texel size is refused with the image's name.
+/// texel size, or a depth format, is refused with the image's name.
 #[test]
 fn images_take_an_alias_view_of_the_same_texel_size_only() {
     use weft::vk::{Format, ImageDesc, ImageUsageFlags, Usage};
@@ -204,6 +204,16 @@ fn images_take_an_alias_view_of_the_same_texel_size_only() {
         err.to_string().contains("'half'") && err.to_string().contains("not a view format"),
         "{err}"
     );
+    // Four bytes a texel too, but a depth format is never a colour image's view.
+    let err = ctx
+        .create_image(
+            &ImageDesc::new_2d("depth", Format::D32_SFLOAT, 8, 8)
+                .usage(ImageUsageFlags::SAMPLED)
+                .alias(Format::R8G8B8A8_UNORM),
+        )
+        .err()
+        .expect("must fail");
+    assert!(err.to_string().contains("not a view format"), "{err}");
     ctx.check_validation().expect("no validation message");
 }
 

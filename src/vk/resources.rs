@@ -519,7 +519,14 @@ impl Context {
         };
         let formats: Vec<vk::Format> = match desc.alias_format {
             Some(alias) => {
-                if texel_bytes(alias) != texel_bytes(desc.format) || texel_bytes(alias).is_none() {
+                // Vulkan lets a MUTABLE_FORMAT image be viewed in formats of its own compatibility
+                // class, never a depth or stencil one; of the colour formats weft knows the size
+                // of, those of one size share a class.
+                if texel_bytes(alias) != texel_bytes(desc.format)
+                    || texel_bytes(alias).is_none()
+                    || is_depth(alias)
+                    || is_depth(desc.format)
+                {
                     return Err(Error::device(format!(
                         "image '{}': {alias:?} is not a view format of {:?}",
                         desc.name, desc.format
