@@ -262,8 +262,7 @@ impl GBufferPass {
             let colors: Vec<Attachment> = targets
                 .gbuffer_colors()
                 .into_iter()
-                .enumerate()
-                .map(|(i, image)| Attachment {
+                .map(|image| Attachment {
                     image,
                     // Cleared: the frame (normals, tangents) and surface (material) targets,
                     // which fabric_lobes.frag reads at its neighbours, empty or not (an empty
@@ -272,7 +271,9 @@ impl GBufferPass {
                     // pipelines run over their stencil kinds, the background's reads depth
                     // alone, debug views show empty pixels black before any read): not cleared,
                     // about 20 ms of a 1080p frame on lavapipe.
-                    load: if i == 1 || i == 2 {
+                    load: if std::ptr::eq(image, &targets.frame)
+                        || std::ptr::eq(image, &targets.surface)
+                    {
                         Load::Clear([0.0; 4])
                     } else {
                         Load::Undefined
