@@ -18,13 +18,13 @@ use crate::scene::{ColorSpace, Scene, TextureSlot};
 use crate::vk::{
     Attachment, Buffer, BufferLocation, BufferUsageFlags, Cmd, Context, DescriptorPool,
     DescriptorSet, Filter, Image, ImageDesc, ImageUsageFlags, InFlight, Load, Pipeline, QueryPool,
-    Resource, Sampler, Usage,
+    Resource, Sampler, Topology, Usage,
 };
 
 use super::gpu::{FrameData, GpuShadow, TonemapPush};
 use super::passes::antialias::{AntialiasInputs, AntialiasPass};
 use super::passes::environment::{EnvPasses, GpuEnvironment};
-use super::passes::gbuffer::{GBufferInputs, GBufferPass};
+use super::passes::gbuffer::{GBufferInputs, GBufferPass, Kind};
 use super::passes::lighting::{LightingInputs, LightingPass, LightingVariant};
 use super::passes::occlusion::{OcclusionInputs, OcclusionPass, OcclusionPush};
 use super::passes::shadow::{ShadowInputs, ShadowPass};
@@ -179,6 +179,26 @@ impl Defaults {
             )?,
         })
     }
+}
+
+/// One pipeline (or the fixed passes' few) that a frame lacks, made by [`Renderer::prepare`]'s
+/// threads.
+enum Job<'v> {
+    Shade(&'v LightingVariant),
+    Lobes(&'v LightingVariant),
+    GBuffer(Topology, Kind),
+    Forward(bool),
+    /// The tone map's, FXAA's and the occlusion pass' pipelines, each made once.
+    Fixed,
+}
+
+/// What a [`Job`] made.
+enum Made {
+    Shade(LightingVariant, Pipeline),
+    Lobes(LightingVariant, Option<Pipeline>),
+    GBuffer(Topology, Kind, Pipeline),
+    Forward(bool, Pipeline),
+    Fixed,
 }
 
 /// Whether the lighting pass shades each kind of pixel with a pipeline of its own, over the
@@ -445,53 +465,90 @@ impl Renderer {
             &self.transparent,
             &self.env,
         );
-        let (made_gbuffer, made_lighting, made_forward, built_env) = std::thread::scope(|scope| {
-            let made_lighting = (!need_lighting.is_empty()).then(|| {
-                scope.spawn(|| {
-                    need_lighting
-                        .iter()
-                        .map(|v| lighting.make(ctx, v).map(|p| (v.clone(), p)))
-                        .collect::<crate::Result<Vec<_>>>()
-                })
-            });
-            let made_forward = (!need_forward.is_empty()).then(|| {
-                scope.spawn(|| {
-                    let key = forward_key.as_ref().expect("needed only with a key");
-                    need_forward
-                        .iter()
-                        .map(|&b| transparent.make(ctx, key, b).map(|p| (b, p)))
-                        .collect::<crate::Result<Vec<_>>>()
-                })
-            });
-            let made_gbuffer = need_gbuffer
+        let (occlusion, tonemap, antialias) = (&self.occlusion, &self.tonemap, &self.antialias);
+        // Every pipeline the frame lacks is one job, the costliest kinds first; the jobs go to as
+        // many threads as the machine has cores (this one among them), each taking the next job
+        // when it finishes one. The environment's preprocessing waits on the queue (which a CPU
+        // driver shares with its compiler) on a thread of its own.
+        let mut jobs: Vec<Job> = Vec::new();
+        jobs.extend(need_lighting.iter().map(Job::Shade));
+        jobs.extend(
+            need_lighting
                 .iter()
-                .map(|&(t, k)| gbuffer.make(ctx, &gbuffer_key, t, k).map(|p| (t, k, p)))
-                .collect::<crate::Result<Vec<_>>>();
-            let built_env = need_env.map(|e| env_passes.build(ctx, e)).transpose();
-            let made_lighting = made_lighting
-                .map(|h| {
-                    h.join()
-                        .expect("the lighting pipeline's thread does not panic")
-                })
-                .transpose();
-            let made_forward = made_forward
-                .map(|h| {
-                    h.join()
-                        .expect("the forward pipeline's thread does not panic")
-                })
-                .transpose();
-            (made_gbuffer, made_lighting, made_forward, built_env)
-        });
-        for (t, k, p) in made_gbuffer? {
-            self.gbuffer.insert(gbuffer_key.clone(), t, k, p);
-        }
-        for (v, p) in made_lighting?.into_iter().flatten() {
-            self.lighting.insert(v, p);
-        }
-        if let (Some(made), Some(k)) = (made_forward?, &forward_key) {
-            for (blend, p) in made {
-                self.transparent.insert(k.clone(), blend, p);
+                .filter(|v| LightingPass::pools(&v.0))
+                .map(Job::Lobes),
+        );
+        jobs.extend(need_gbuffer.iter().map(|&(t, k)| Job::GBuffer(t, k)));
+        jobs.extend(need_forward.iter().map(|&b| Job::Forward(b)));
+        jobs.push(Job::Fixed);
+        let curve = TonemapPass::curve(options);
+        let run = |job: &Job| -> crate::Result<Made> {
+            Ok(match *job {
+                Job::Shade(v) => Made::Shade(v.clone(), lighting.make_shade(ctx, v)?),
+                Job::Lobes(v) => Made::Lobes(v.clone(), lighting.make_lobes(ctx, v)?),
+                Job::GBuffer(t, k) => Made::GBuffer(t, k, gbuffer.make(ctx, &gbuffer_key, t, k)?),
+                Job::Forward(b) => {
+                    let key = forward_key.as_ref().expect("needed only with a key");
+                    Made::Forward(b, transparent.make(ctx, key, b)?)
+                }
+                Job::Fixed => {
+                    tonemap.make(ctx, curve)?;
+                    if plan.runs(Pass::Antialias) {
+                        antialias.make(ctx)?;
+                    }
+                    if plan.runs(Pass::Occlusion) {
+                        occlusion.make(ctx)?;
+                    }
+                    Made::Fixed
+                }
+            })
+        };
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let work = || {
+            let mut made = Vec::new();
+            loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(job) = jobs.get(i) else {
+                    return made;
+                };
+                made.push(run(job));
             }
+        };
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(jobs.len());
+        let (made, built_env) = std::thread::scope(|scope| {
+            let env = need_env.map(|e| scope.spawn(|| env_passes.build(ctx, e)));
+            let helpers: Vec<_> = (1..threads).map(|_| scope.spawn(work)).collect();
+            let mut made = work();
+            for h in helpers {
+                made.extend(h.join().expect("a pipeline thread does not panic"));
+            }
+            let built_env = env
+                .map(|h| h.join().expect("the environment's thread does not panic"))
+                .transpose();
+            (made, built_env)
+        });
+        let mut shades = Vec::new();
+        let mut lobes = Vec::new();
+        for m in made {
+            match m? {
+                Made::Shade(v, p) => shades.push((v, p)),
+                Made::Lobes(v, p) => lobes.push((v, p)),
+                Made::GBuffer(t, k, p) => self.gbuffer.insert(gbuffer_key.clone(), t, k, p),
+                Made::Forward(b, p) => {
+                    let k = forward_key.as_ref().expect("made only with a key");
+                    self.transparent.insert(k.clone(), b, p);
+                }
+                Made::Fixed => {}
+            }
+        }
+        for (v, shade) in shades {
+            let l = lobes
+                .iter()
+                .position(|(w, _)| *w == v)
+                .and_then(|i| lobes.swap_remove(i).1);
+            self.lighting.insert(v, (shade, l));
         }
         let mut env_from_disk = false;
         let env_index = match built_env? {
@@ -516,13 +573,6 @@ impl Renderer {
         // The cut-out shadow pipeline only when a MASK material casts into a shadow map.
         if plan.mask_casters > 0 && plan.runs(Pass::Shadow) {
             self.shadow.make_mask(&self.ctx, plan.vertex_colors)?;
-        }
-        self.tonemap.make(&self.ctx, TonemapPass::curve(options))?;
-        if plan.runs(Pass::Antialias) {
-            self.antialias.make(&self.ctx)?;
-        }
-        if plan.runs(Pass::Occlusion) {
-            self.occlusion.make(&self.ctx)?;
         }
         Ok(FrameKeys {
             gbuffer: gbuffer_key,

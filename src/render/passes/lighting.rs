@@ -166,49 +166,51 @@ impl LightingPass {
         constant(14) > 0 && constant(12) & PIXEL_WOVEN != 0
     }
 
-    /// Makes the pipelines of `variant` (not kept: see [`LightingPass::insert`]): with a stencil
-    /// value, over the G-buffer's depth-stencil attachment, drawing only where the stencil equals
-    /// it; and where it pools the fabric lobes' samples, the lobe sums draw's (fabric_lobes.frag,
-    /// the same constants, into `LOBES_FORMAT`).
-    pub fn make(
+    /// The pipelines of `variant` (not kept: see [`LightingPass::insert`]) are made in two
+    /// halves, so that two threads can compile them: with a stencil value, over the G-buffer's
+    /// depth-stencil attachment, drawing only where the stencil equals it; and where it pools the
+    /// fabric lobes' samples, the lobe sums draw's (fabric_lobes.frag, the same constants, into
+    /// `LOBES_FORMAT`).
+    ///
+    /// The lobe sums draw's pipeline of `variant` (None where it does not pool).
+    pub fn make_lobes(
         &self,
         ctx: &Context,
         variant: &LightingVariant,
-    ) -> crate::Result<(Pipeline, Option<Pipeline>)> {
+    ) -> crate::Result<Option<Pipeline>> {
         let (key, stencil) = variant;
-        let stencil_mode = if stencil.is_some() {
-            StencilMode::Equal
-        } else {
-            StencilMode::None
-        };
-        let lobes = if Self::pools(key) {
-            // fabric_lobes.frag's constants: lighting.frag's of the same ids.
-            let lobes_key = VariantKey(
-                key.0
-                    .iter()
-                    .filter(|c| LOBES_CONSTANTS.contains(&c.0))
-                    .copied()
-                    .collect(),
-            );
-            Some(ctx.create_graphics_pipeline(&GraphicsDesc {
-                name: &format!("fabric lobes[{}]", lobes_key.describe()),
-                vertex: &shaders::FULLSCREEN_VERT,
-                fragment: &shaders::FABRIC_LOBES_FRAG,
-                vertex_layout: None,
-                color_formats: &[LOBES_FORMAT],
-                depth_format: stencil.map(|_| depth_format(ctx)),
-                set_layouts: &[&self.lobes_layout],
-                push_constant_size: 0,
-                push_stages: Stages::FRAGMENT,
-                constants: &lobes_key.constants(),
-                blend: false,
-                topology: Topology::Triangles,
-                stencil: stencil_mode,
-            })?)
-        } else {
-            None
-        };
-        let shade = ctx.create_graphics_pipeline(&GraphicsDesc {
+        if !Self::pools(key) {
+            return Ok(None);
+        }
+        // fabric_lobes.frag's constants: lighting.frag's of the same ids.
+        let lobes_key = VariantKey(
+            key.0
+                .iter()
+                .filter(|c| LOBES_CONSTANTS.contains(&c.0))
+                .copied()
+                .collect(),
+        );
+        Ok(Some(ctx.create_graphics_pipeline(&GraphicsDesc {
+            name: &format!("fabric lobes[{}]", lobes_key.describe()),
+            vertex: &shaders::FULLSCREEN_VERT,
+            fragment: &shaders::FABRIC_LOBES_FRAG,
+            vertex_layout: None,
+            color_formats: &[LOBES_FORMAT],
+            depth_format: stencil.map(|_| depth_format(ctx)),
+            set_layouts: &[&self.lobes_layout],
+            push_constant_size: 0,
+            push_stages: Stages::FRAGMENT,
+            constants: &lobes_key.constants(),
+            blend: false,
+            topology: Topology::Triangles,
+            stencil: stencil_mode(stencil),
+        })?))
+    }
+
+    /// The shading draw's pipeline of `variant`.
+    pub fn make_shade(&self, ctx: &Context, variant: &LightingVariant) -> crate::Result<Pipeline> {
+        let (key, stencil) = variant;
+        ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!("lighting[{}]", key.describe()),
             vertex: &shaders::FULLSCREEN_VERT,
             fragment: &shaders::LIGHTING_FRAG,
@@ -221,9 +223,8 @@ impl LightingPass {
             constants: &key.constants(),
             blend: false,
             topology: Topology::Triangles,
-            stencil: stencil_mode,
-        })?;
-        Ok((shade, lobes))
+            stencil: stencil_mode(stencil),
+        })
     }
 
     pub fn insert(&mut self, variant: LightingVariant, pipelines: (Pipeline, Option<Pipeline>)) {
@@ -237,7 +238,7 @@ impl LightingPass {
             .flat_map(|(shade, lobes)| std::iter::once(shade).chain(lobes.as_ref()))
     }
 
-    /// Records the pass with `variants` (made by [`LightingPass::make`]).
+    /// Records the pass with `variants` (made by [`LightingPass::make_shade`] and [`LightingPass::make_lobes`]).
     pub fn record<'s>(
         &'s self,
         pool: &'s DescriptorPool,
@@ -346,5 +347,14 @@ impl LightingPass {
             }
             cmd.transition(&t.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
         }))
+    }
+}
+
+/// A variant's stencil test: drawn where the stencil equals its kind, or everywhere.
+fn stencil_mode(stencil: &Option<u32>) -> StencilMode {
+    if stencil.is_some() {
+        StencilMode::Equal
+    } else {
+        StencilMode::None
     }
 }
