@@ -181,6 +181,52 @@ impl Defaults {
     }
 }
 
+/// Makes the intermediates a frame of `options` writes that `targets` lacks: the tone-mapped
+/// image before anti-aliasing, the occlusion pass' targets, the fabric lobes' sums, the backdrop
+/// of transmissive draws.
+fn make_targets(
+    ctx: &Context,
+    targets: &mut Targets,
+    options: &RenderOptions,
+    plan: &Plan,
+) -> crate::Result<()> {
+    let (width, height) = (options.width, options.height);
+    if plan.runs(Pass::Antialias) && targets.tonemapped.is_none() {
+        targets.tonemapped = Some(
+            ctx.create_image(
+                &ImageDesc::new_2d("tone-mapped", LDR_FORMAT, width, height)
+                    .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED)
+                    .alias(LDR_ENCODED_FORMAT),
+            )?,
+        );
+    }
+    if plan.runs(Pass::Occlusion) && targets.occlusion.is_none() {
+        targets.occlusion = Some(OcclusionTargets::new(ctx, width, height)?);
+    }
+    if plan.pool_code(options) > 0 && targets.lobes.is_none() {
+        targets.lobes = Some(
+            ctx.create_image(
+                &ImageDesc::new_2d("fabric lobe sums", LOBES_FORMAT, width, height)
+                    .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED),
+            )?,
+        );
+    }
+    if plan.transmission_draws > 0 && targets.backdrop.is_none() {
+        targets.backdrop = Some(
+            ctx.create_image(
+                &ImageDesc::new_2d("backdrop", HDR_FORMAT, width, height)
+                    .full_mips()
+                    .usage(
+                        ImageUsageFlags::SAMPLED
+                            | ImageUsageFlags::TRANSFER_DST
+                            | ImageUsageFlags::TRANSFER_SRC,
+                    ),
+            )?,
+        );
+    }
+    Ok(())
+}
+
 /// One pipeline (or the fixed passes' few) that a frame lacks, made by [`Renderer::prepare`]'s
 /// threads.
 enum Job<'v> {
@@ -358,7 +404,12 @@ impl Renderer {
     /// shaders, set layouts, push-constant size and specialization constants.
     pub fn pipelines(&mut self) -> crate::Result<Vec<&Pipeline>> {
         let options = RenderOptions::default();
-        self.prepare(&options, &Plan::new(&Scene::default(), &options), None)?;
+        self.prepare(
+            &options,
+            &Plan::new(&Scene::default(), &options),
+            None,
+            false,
+        )?;
         // The default scene's cloth under an environment at the default level: the lighting
         // variants that pool the fabric lobes' samples, with their lobe sums draw.
         let lit = RenderOptions {
@@ -368,7 +419,7 @@ impl Renderer {
             ..RenderOptions::default()
         };
         let cloth = crate::scene::default_scene();
-        self.prepare(&lit, &Plan::new(&cloth, &lit), None)?;
+        self.prepare(&lit, &Plan::new(&cloth, &lit), None, false)?;
         // The transparent pass's default variant: a scene with one blended draw.
         let blended = Scene {
             meshes: vec![crate::scene::Mesh {
@@ -386,7 +437,7 @@ impl Renderer {
             }],
             ..Default::default()
         };
-        self.prepare(&options, &Plan::new(&blended, &options), None)?;
+        self.prepare(&options, &Plan::new(&blended, &options), None, false)?;
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
@@ -407,16 +458,18 @@ impl Renderer {
     }
 
     /// The pipeline variants `options` and `plan` need, and the environment `env` preprocessed
-    /// if it is not cached: what is missing is made concurrently (the lighting and transparent
-    /// pipelines on threads of their own, the G-buffer pipelines and then the environment on this
-    /// one), since a driver compiles pipelines on the CPU and lavapipe runs the compute passes
-    /// there too. Then the shadow pass's cut-out pipeline and the anti-aliasing pipeline when the
-    /// plan has them.
+    /// if it is not cached, made concurrently: the pipelines as a list of jobs taken by one
+    /// thread per core (this one among them; a CPU driver makes them one at a time, behind
+    /// `Context`'s compile lock, a GPU's at once), the environment on a thread of its own, and
+    /// with `fresh_targets` the frame's targets ([`Targets::new`] and [`make_targets`]) on
+    /// another (on a CPU device their first page faults take the core the one-at-a-time compiler
+    /// leaves). Then the shadow pass's cut-out pipeline when the plan has one.
     fn prepare(
         &mut self,
         options: &RenderOptions,
         plan: &Plan,
         env: Option<(&crate::env::Environment, &mut Vec<PassTiming>)>,
+        fresh_targets: bool,
     ) -> crate::Result<FrameKeys> {
         let weave_source = match options.weave_precision {
             WeavePrecision::Analytic => 1,
@@ -517,8 +570,15 @@ impl Renderer {
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
             .min(jobs.len());
-        let (made, built_env) = std::thread::scope(|scope| {
+        let (made, built_env, targets) = std::thread::scope(|scope| {
             let env = need_env.map(|e| scope.spawn(|| env_passes.build(ctx, e)));
+            let targets = fresh_targets.then(|| {
+                scope.spawn(|| {
+                    let mut t = Targets::new(ctx, options.width, options.height)?;
+                    make_targets(ctx, &mut t, options, plan)?;
+                    Ok::<_, crate::Error>(t)
+                })
+            });
             let helpers: Vec<_> = (1..threads).map(|_| scope.spawn(work)).collect();
             let mut made = work();
             for h in helpers {
@@ -527,8 +587,14 @@ impl Renderer {
             let built_env = env
                 .map(|h| h.join().expect("the environment's thread does not panic"))
                 .transpose();
-            (made, built_env)
+            let targets = targets
+                .map(|h| h.join().expect("the targets' thread does not panic"))
+                .transpose();
+            (made, built_env, targets)
         });
+        if let Some(t) = targets? {
+            self.targets = Some(t);
+        }
         let mut shades = Vec::new();
         let mut lobes = Vec::new();
         for m in made {
@@ -777,54 +843,11 @@ impl Renderer {
                 .collect::<crate::Result<Vec<_>>>()?;
             let _ = gpu.weaves_sat.set(tables);
         }
-        let (width, height) = (options.width, options.height);
-        if self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height)) {
-            self.settle()?;
-            self.targets = None;
-            check_target_memory(
-                self.ctx.info(),
-                host_available_bytes(),
-                width,
-                height,
-                options.read_hdr,
-            )?;
-            self.targets = Some(Targets::new(&self.ctx, width, height)?);
-        }
-        let targets = self.targets.as_mut().expect("made above");
-        if plan.runs(Pass::Antialias) && targets.tonemapped.is_none() {
-            targets.tonemapped = Some(
-                self.ctx.create_image(
-                    &ImageDesc::new_2d("tone-mapped", LDR_FORMAT, width, height)
-                        .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED)
-                        .alias(LDR_ENCODED_FORMAT),
-                )?,
-            );
-        }
-        if plan.runs(Pass::Occlusion) && targets.occlusion.is_none() {
-            targets.occlusion = Some(OcclusionTargets::new(&self.ctx, width, height)?);
-        }
-        if plan.pool_code(options) > 0 && targets.lobes.is_none() {
-            targets.lobes = Some(
-                self.ctx.create_image(
-                    &ImageDesc::new_2d("fabric lobe sums", LOBES_FORMAT, width, height)
-                        .usage(ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED),
-                )?,
-            );
-        }
-        if plan.transmission_draws > 0 && targets.backdrop.is_none() {
-            targets.backdrop = Some(
-                self.ctx.create_image(
-                    &ImageDesc::new_2d("backdrop", HDR_FORMAT, width, height)
-                        .full_mips()
-                        .usage(
-                            ImageUsageFlags::SAMPLED
-                                | ImageUsageFlags::TRANSFER_DST
-                                | ImageUsageFlags::TRANSFER_SRC,
-                        ),
-                )?,
-            );
-        }
-        Ok(())
+        let targets = self
+            .targets
+            .as_mut()
+            .expect("made by prepare, at the frame's size");
+        make_targets(&self.ctx, targets, options, plan)
     }
 
     /// The frame's own buffers (see [`FrameBuffers`]); makes the shadow atlas of the plan's size.
@@ -1036,7 +1059,22 @@ impl Renderer {
             (Some(_), Some(e)) => Some((e.env.as_ref(), &mut timings)),
             _ => None,
         };
-        let keys = self.prepare(options, &plan, env)?;
+        // Targets of another size are dropped here, once the device is done with them, and made
+        // while the pipelines compile.
+        let (width, height) = (options.width, options.height);
+        let fresh_targets = self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height));
+        if fresh_targets {
+            self.settle()?;
+            self.targets = None;
+            check_target_memory(
+                self.ctx.info(),
+                host_available_bytes(),
+                width,
+                height,
+                options.read_hdr,
+            )?;
+        }
+        let keys = self.prepare(options, &plan, env, fresh_targets)?;
         self.prepare_targets(gpu, options, &plan)?;
         let camera = match &options.camera_override {
             Some(c) => c.clone(),
