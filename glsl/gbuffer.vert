@@ -51,6 +51,9 @@ layout(location = 4) out vec2 out_weave_uv;
 layout(location = 5) out vec3 out_gouraud;
 layout(location = 6) out vec2 out_uv1;
 layout(location = 7) out vec4 out_color;
+// The depth pre-pass (depth.vert) computes the same clip position by the same expression, both
+// `precise`: equal bit for bit.
+precise gl_Position;
 
 // The Phong reflection model at a fabric vertex: hemispherical ambient and every light, with the
 // normal turned towards the viewer (the vertex stage cannot know which face will be drawn).

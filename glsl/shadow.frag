@@ -1,5 +1,6 @@
 #version 460
-// Shadow pass, fragment stage: nothing to write but depth, which the fixed function does.
+// Depth-only passes (the shadow maps, the G-buffer's depth pre-pass), fragment stage: nothing to
+// write but depth, which the fixed function does.
 
 void main() {
 }

@@ -775,3 +775,72 @@ fn lobe_pooling_only_at_fis_on_woven_fabric_and_forcing_it_changes_nothing() {
         mean_on / mean_off
     );
 }
+
+#[test]
+fn the_depth_prepass_runs_where_cloth_is_drawn_and_changes_nothing() {
+    let has_prepass = |frame: &weft::render::Frame| {
+        frame
+            .stats
+            .pipelines
+            .iter()
+            .any(|p| p == "gbuffer depth pre-pass")
+    };
+    let sized = RenderOptions {
+        width: 320,
+        height: 180,
+        ..options()
+    };
+    let with = |force: weft::render::Force| RenderOptions {
+        force,
+        ..sized.clone()
+    };
+    let mut renderer = Renderer::new(common::context()).unwrap();
+
+    // The default scene: the cloth and the three glTF draws pre-passed; without it (forced) the
+    // same image bit for bit, every hidden fragment shaded.
+    let scene = scene::default_scene();
+    assert_eq!(Plan::new(&scene, &sized).depth_prepass, 4);
+    let planned = renderer.render(&scene, &sized).unwrap();
+    let skipped = renderer
+        .render(
+            &scene,
+            &with(weft::render::Force {
+                no_depth_prepass: true,
+                ..Default::default()
+            }),
+        )
+        .unwrap();
+    assert!(has_prepass(&planned) && !has_prepass(&skipped));
+    assert!(gbuffer_pipeline(&planned).contains(", depth >="));
+    assert!(!gbuffer_pipeline(&skipped).contains("depth >="));
+    assert_eq!(max_hdr_diff(&planned, &skipped), 0.0);
+    assert_eq!(planned.ldr, skipped.ldr);
+
+    // No opaque cloth: not planned, and run anyway (forced) it changes nothing.
+    for scene in [without_fabric(shadows_scene()), khronos(CHAIR)] {
+        let plan = Plan::new(&scene, &sized);
+        assert_eq!(plan.depth_prepass, 0);
+        let planned = renderer.render(&scene, &sized).unwrap();
+        let forced = renderer
+            .render(
+                &scene,
+                &with(weft::render::Force {
+                    depth_prepass: true,
+                    ..Default::default()
+                }),
+            )
+            .unwrap();
+        assert!(!has_prepass(&planned) && has_prepass(&forced));
+        assert_eq!(max_hdr_diff(&planned, &forced), 0.0);
+        assert_eq!(planned.ldr, forced.ldr);
+    }
+
+    // A cut-out cloth's depth depends on its cut-out: not pre-passed, so no opaque cloth is left.
+    let mut cut = scene::default_scene();
+    for m in &mut cut.materials {
+        if m.fabric.is_some() {
+            m.alpha_cutoff = Some(0.5);
+        }
+    }
+    assert_eq!(Plan::new(&cut, &sized).depth_prepass, 0);
+}

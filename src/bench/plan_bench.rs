@@ -149,7 +149,16 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         planned_ms: kinds[0].0,
         forced_ms: kinds[1].0,
     }];
-    let cases: [(&str, &str, &Scene, Force); 5] = [
+    let cases: [(&str, &str, &Scene, Force); 6] = [
+        (
+            "default",
+            "hidden G-buffer fragments (depth pre-pass)",
+            &default,
+            Force {
+                no_depth_prepass: true,
+                ..Force::NONE
+            },
+        ),
         (
             "default, steel ball as 2-sided glass",
             "glass back faces behind its front faces",

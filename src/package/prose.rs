@@ -64,7 +64,18 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          VERTEX_COLORS = 1) at output location 7. Push constants per draw: `mat4 \
          world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
          (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
-         front faces; the projection flips y.",
+         front faces; the projection flips y. Its clip position is `precise`, computed as \
+         depth.vert computes it.",
+    ),
+    (
+        "depth.vert",
+        "G-buffer pass, depth pre-pass, vertex stage: the opaque draws' depth alone, before \
+         gbuffer.vert/.frag draw them again with depth test GREATER_OR_EQUAL (reversed-Z), so that \
+         the G-buffer's shading runs once per pixel. Reads position (location 0) of gbuffer.vert's \
+         vertex buffer, the frame uniform (set 0 binding 0) and gbuffer.vert's push block (128 \
+         bytes); its clip position is gbuffer.vert's by the same `precise` expression, equal bit \
+         for bit. Pair it with `shadow.frag`; weft runs it when the G-buffer draws an opaque woven \
+         draw (`weft plan`'s depth line).",
     ),
     (
         "env_probe.comp",
@@ -164,7 +175,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
     ),
     (
         "shadow.frag",
-        "Shadow pass, fragment stage: empty (depth only); pair it with `shadow.vert`.",
+        "Depth-only passes, fragment stage: empty; pair it with `shadow.vert` (the shadow maps) or \
+         `depth.vert` (the G-buffer's depth pre-pass).",
     ),
     (
         "shadow_mask.frag",

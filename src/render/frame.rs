@@ -234,7 +234,8 @@ enum Job<'v> {
     Lobes(&'v LightingVariant),
     GBuffer(Topology, Kind),
     Forward(bool),
-    /// The tone map's, FXAA's and the occlusion pass' pipelines, each made once.
+    /// The G-buffer's depth pre-pass', the tone map's, FXAA's and the occlusion pass'
+    /// pipelines, each made once.
     Fixed,
 }
 
@@ -539,12 +540,19 @@ impl Renderer {
             Ok(match *job {
                 Job::Shade(v) => Made::Shade(v.clone(), lighting.make_shade(ctx, v)?),
                 Job::Lobes(v) => Made::Lobes(v.clone(), lighting.make_lobes(ctx, v)?),
-                Job::GBuffer(t, k) => Made::GBuffer(t, k, gbuffer.make(ctx, &gbuffer_key, t, k)?),
+                Job::GBuffer(t, k) => Made::GBuffer(
+                    t,
+                    k,
+                    gbuffer.make(ctx, &gbuffer_key, t, k, plan.depth_prepass > 0)?,
+                ),
                 Job::Forward(b) => {
                     let key = forward_key.as_ref().expect("needed only with a key");
                     Made::Forward(b, transparent.make(ctx, key, b)?)
                 }
                 Job::Fixed => {
+                    if plan.depth_prepass > 0 {
+                        gbuffer.make_depth(ctx)?;
+                    }
                     tonemap.make(ctx, curve)?;
                     if plan.runs(Pass::Antialias) {
                         antialias.make(ctx)?;
@@ -601,7 +609,10 @@ impl Renderer {
             match m? {
                 Made::Shade(v, p) => shades.push((v, p)),
                 Made::Lobes(v, p) => lobes.push((v, p)),
-                Made::GBuffer(t, k, p) => self.gbuffer.insert(gbuffer_key.clone(), t, k, p),
+                Made::GBuffer(t, k, p) => {
+                    self.gbuffer
+                        .insert(gbuffer_key.clone(), t, k, plan.depth_prepass > 0, p)
+                }
                 Made::Forward(b, p) => {
                     let k = forward_key.as_ref().expect("made only with a key");
                     self.transparent.insert(k.clone(), b, p);
@@ -1091,7 +1102,7 @@ impl Renderer {
         // The passes, in the plan's order, each from its named inputs.
         let ctx = self.ctx.clone();
         let submissions = ctx.submissions();
-        let pool = ctx.create_descriptor_pool(10 + 3 * gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(11 + 3 * gpu.material_count)?;
         let targets = self.targets.as_ref().expect("made by prepare_targets");
         let d = &self.defaults;
         let colors = buffers.forced_colors.as_ref().unwrap_or(&gpu.colors);
@@ -1162,6 +1173,7 @@ impl Renderer {
                         targets,
                         material_kinds: plan.material_kinds,
                         fabric_as_pbr: options.fabric_as_pbr,
+                        depth_prepass: plan.depth_prepass > 0,
                     },
                 )?),
                 Pass::Shadow if buffers.shadow_tiles.is_empty() => {}

@@ -127,6 +127,12 @@ pub struct Force {
     /// Compile the pooling of the fabric lobes' samples in (the lobe sums draw, lighting POOL =
     /// 1) where no woven pixel is shaded at fis: it must change nothing there.
     pub pool: bool,
+    /// Run the G-buffer's depth pre-pass where the plan does not (no opaque woven draw): it must
+    /// change no pixel.
+    pub depth_prepass: bool,
+    /// Skip the G-buffer's depth pre-pass where the plan runs it: every hidden fragment of an
+    /// opaque draw is shaded (a bench comparison).
+    pub no_depth_prepass: bool,
 }
 
 impl Force {
@@ -142,6 +148,8 @@ impl Force {
         fabric_sheets: false,
         material_kinds: false,
         pool: false,
+        depth_prepass: false,
+        no_depth_prepass: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -156,6 +164,9 @@ impl Force {
         fabric_sheets: true,
         material_kinds: true,
         pool: true,
+        // The costly reading: every hidden fragment shaded where the plan pre-passes depth.
+        depth_prepass: false,
+        no_depth_prepass: true,
     };
 }
 

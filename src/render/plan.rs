@@ -244,6 +244,13 @@ pub struct Plan {
     /// pipeline of each pass runs every kind's code.
     pub woven_draws: usize,
     pub gltf_draws: usize,
+    /// The G-buffer pass's depth pre-pass: how many draws it draws depth-only first (its opaque
+    /// triangle draws, MASK ones aside: their depth depends on the cut-out), so that the costly
+    /// G-buffer shading runs once per pixel (then drawn with depth test GREATER_OR_EQUAL). 0:
+    /// none. Planned where an opaque woven draw is among them (the woven model's G-buffer shading
+    /// is the one worth saving); `Force::depth_prepass` runs it anyway, where it must change no
+    /// pixel, `Force::no_depth_prepass` skips it.
+    pub depth_prepass: usize,
     #[serde(rename = "material_kinds_code")]
     pub material_kinds: bool,
     /// The glTF extensions the lighting compiles in (lighting.frag's GLTF_FEATURES: 1
@@ -624,6 +631,30 @@ impl Plan {
                 .count()
         };
         let (woven_draws, gltf_draws) = (deferred(true), deferred(false));
+        // The depth pre-pass' draws: opaque triangles the G-buffer draws (as the pass picks them:
+        // GpuDraw's alpha_mask and forward).
+        let prepassed = |woven_only: bool| {
+            scene
+                .draws
+                .iter()
+                .filter(|d| {
+                    topology(d) == Topology::Triangles
+                        && material_of(d).is_some_and(|m| {
+                            !m.needs_forward()
+                                && m.alpha_cutoff.is_none()
+                                && !m.blend
+                                && (!woven_only || m.fabric.is_some())
+                        })
+                })
+                .count()
+        };
+        let depth_prepass = if options.force.no_depth_prepass
+            || (prepassed(true) == 0 && !options.force.depth_prepass)
+        {
+            0
+        } else {
+            prepassed(false)
+        };
         // The lobes are pooled where the deferred pass shades woven pixels: a scene whose fabric
         // is all forward-lit (sheets) has none to pool, no lobe sums draw and no target for it.
         if woven_draws == 0 {
@@ -757,6 +788,7 @@ impl Plan {
             textures: scene.textures.len(),
             texture_slots,
             woven_draws,
+            depth_prepass,
             gltf_draws,
             material_kinds: !all_kinds,
             gltf_features,
@@ -872,6 +904,13 @@ impl fmt::Display for Plan {
                     .join(", "),
             }
         )?;
+        if self.depth_prepass > 0 {
+            writeln!(
+                f,
+                "depth       a depth pre-pass of {} opaque draw(s) before the G-buffer's shading, which then runs once per pixel (depth test GREATER_OR_EQUAL)",
+                self.depth_prepass
+            )?;
+        }
         writeln!(
             f,
             "alpha mask  {} draw(s) with alphaMode MASK; {} cut-out caster(s) (MASK, BLEND at alpha 0.5) (cut-out code {}{})",

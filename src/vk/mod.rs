@@ -19,8 +19,8 @@ pub use ash::vk::{BufferUsageFlags, ImageUsageFlags};
 pub use cmd::{Attachment, Cmd, Cull, InFlight, Load, Recording, Usage};
 pub use context::{Context, ContextOptions, DeviceChoice, DeviceInfo};
 pub use pipeline::{
-    Binding, BindingKind, ComputeDesc, DescriptorPool, DescriptorSet, GraphicsDesc, Pipeline,
-    Resource, SetLayout, Stages, StencilMode, Topology, VertexLayout,
+    Binding, BindingKind, ComputeDesc, DepthTest, DescriptorPool, DescriptorSet, GraphicsDesc,
+    Pipeline, Resource, SetLayout, Stages, StencilMode, Topology, VertexLayout,
 };
 pub use resources::{
     has_stencil, Address, Buffer, BufferLocation, Filter, Image, ImageDesc, QueryPool, Sampler,

@@ -129,6 +129,19 @@ pub struct GraphicsDesc<'a> {
     pub topology: Topology,
     /// What the pipeline does with the stencil of a depth-stencil attachment.
     pub stencil: StencilMode,
+    /// Which fragments pass the depth test (with a depth format).
+    pub depth_test: DepthTest,
+}
+
+/// A graphics pipeline's depth test (reversed-Z: near is 1, far is 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DepthTest {
+    /// Nearer than what the attachment holds (GREATER): the first of equally near fragments wins.
+    #[default]
+    Nearer,
+    /// As near or nearer (GREATER_OR_EQUAL): after a depth pre-pass of the same positions, the
+    /// visible fragment passes and every hidden one fails.
+    NearerOrEqual,
 }
 
 /// A graphics pipeline's use of the stencil (of a `depth_format` with a stencil aspect; the
@@ -478,7 +491,10 @@ impl Context {
         let mut depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(tests_depth)
             .depth_write_enable(tests_depth && !desc.blend)
-            .depth_compare_op(vk::CompareOp::GREATER); // reversed-Z: near is 1, far is 0
+            .depth_compare_op(match desc.depth_test {
+                DepthTest::Nearer => vk::CompareOp::GREATER,
+                DepthTest::NearerOrEqual => vk::CompareOp::GREATER_OR_EQUAL,
+            });
         let with_stencil = desc.depth_format.is_some_and(super::resources::has_stencil);
         match desc.stencil {
             StencilMode::None => {}

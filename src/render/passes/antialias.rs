@@ -7,8 +7,8 @@ use std::sync::OnceLock;
 use super::Recorded;
 use crate::render::targets::{Targets, LDR_FORMAT};
 use crate::vk::{
-    shaders, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout, Stages,
-    StencilMode, Topology, Usage,
+    shaders, Context, DepthTest, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler,
+    SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's set layout (reflected from fxaa.frag) and its pipeline, made by the first frame
@@ -55,6 +55,7 @@ impl AntialiasPass {
                     blend: false,
                     topology: Topology::Triangles,
                     stencil: StencilMode::None,
+                    depth_test: DepthTest::Nearer,
                 })?);
         }
         Ok(())

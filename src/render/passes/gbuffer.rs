@@ -2,6 +2,7 @@
 //! (gbuffer.vert, gbuffer.frag).
 
 use std::collections::HashMap;
+use std::sync::OnceLock;
 
 use super::lighting::stencil_of;
 use super::{Recorded, VariantKey};
@@ -11,20 +12,26 @@ use crate::render::targets::{
     depth_format, Targets, ALBEDO_FORMAT, EMISSIVE_FORMAT, FABRIC_FORMAT, FRAME_FORMAT,
     SPECULAR_FORMAT, SURFACE_FORMAT,
 };
-use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
+use crate::render::upload::{gbuffer_vertex_layout, GpuScene, VERTEX_FLOATS};
 use crate::render::{RenderOptions, Shading};
 use crate::vk::{
-    shaders, Attachment, Buffer, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc, Load,
-    Pipeline, Resource, SetLayout, Stages, StencilMode, Topology, Usage,
+    shaders, Attachment, Buffer, Context, Cull, DepthTest, DescriptorPool, DescriptorSet, Format,
+    GraphicsDesc, Load, Pipeline, Resource, SetLayout, Stages, StencilMode, Topology, Usage,
+    VertexLayout,
 };
 
-/// The pass's pipelines (one per variant, topology and kind of material) and its two set
-/// layouts: set 0 (frame, materials, fabrics, lights, vertex colours, thread colours) and set 1 (a
-/// material's textures).
+/// The pass's pipelines (one per variant, topology and kind of material, and the depth
+/// pre-pass's) and its two set layouts: set 0 (frame, materials, fabrics, lights, vertex colours,
+/// thread colours) and set 1 (a material's textures).
 pub struct GBufferPass {
     frame_layout: SetLayout,
     pub(crate) material_layout: SetLayout,
-    variants: HashMap<(VariantKey, Topology, Kind), Pipeline>,
+    /// By variant, topology, kind and whether a depth pre-pass runs before (its depth test).
+    variants: HashMap<(VariantKey, Topology, Kind, bool), Pipeline>,
+    /// The depth pre-pass (depth.vert, shadow.frag), made once when a plan first has one, and
+    /// its set 0 (the frame uniform alone).
+    depth: OnceLock<Pipeline>,
+    depth_layout: SetLayout,
 }
 
 /// What a G-buffer pipeline draws (gbuffer.frag's MATERIAL_KIND): every kind of material, or one
@@ -93,17 +100,53 @@ pub struct GBufferInputs<'s> {
     pub material_kinds: bool,
     /// Fabric is shaded with the glTF BRDF (its pixels' stencil is glTF's).
     pub fabric_as_pbr: bool,
+    /// The plan's depth pre-pass ([`Plan::depth_prepass`]): its opaque draws' depth first, with
+    /// the variant's pipelines then testing GREATER_OR_EQUAL.
+    pub depth_prepass: bool,
 }
 
 impl GBufferPass {
     pub fn new(ctx: &Context) -> crate::Result<GBufferPass> {
         let shaders = [&shaders::GBUFFER_VERT, &shaders::GBUFFER_FRAG];
         let [frame_layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
+        let [depth_layout] =
+            ctx.reflected_set_layouts(&[&shaders::DEPTH_VERT, &shaders::SHADOW_FRAG])?;
         Ok(GBufferPass {
             frame_layout,
             material_layout,
             variants: HashMap::new(),
+            depth: OnceLock::new(),
+            depth_layout,
         })
+    }
+
+    /// Makes the depth pre-pass' pipeline once: depth.vert's position of each opaque draw, the
+    /// frame uniform and gbuffer.vert's push block, depth test GREATER and written, the stencil
+    /// cleared with it (the shading draws write it).
+    pub fn make_depth(&self, ctx: &Context) -> crate::Result<()> {
+        if self.depth.get().is_none() {
+            let pipeline = ctx.create_graphics_pipeline(&GraphicsDesc {
+                name: "gbuffer depth pre-pass",
+                vertex: &shaders::DEPTH_VERT,
+                fragment: &shaders::SHADOW_FRAG,
+                vertex_layout: Some(VertexLayout {
+                    stride: (VERTEX_FLOATS * 4) as u32,
+                    attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
+                }),
+                color_formats: &[],
+                depth_format: Some(depth_format(ctx)),
+                set_layouts: &[&self.depth_layout],
+                push_constant_size: std::mem::size_of::<DrawPush>() as u32,
+                push_stages: Stages::VERTEX,
+                constants: &[],
+                blend: false,
+                topology: Topology::Triangles,
+                stencil: StencilMode::None,
+                depth_test: DepthTest::Nearer,
+            })?;
+            let _ = self.depth.set(pipeline);
+        }
+        Ok(())
     }
 
     /// The variant `options` and `plan` ask for (gbuffer.frag's constants by id). `weave_source`:
@@ -148,30 +191,37 @@ impl GBufferPass {
         .into_iter()
         .filter(|&(needed, _)| needed)
         .flat_map(|(_, t)| kinds.iter().map(move |&k| (t, k)))
-        .filter(|&(t, k)| !self.variants.contains_key(&(key.clone(), t, k)))
+        .filter(|&(t, k)| {
+            !self
+                .variants
+                .contains_key(&(key.clone(), t, k, plan.depth_prepass > 0))
+        })
         .collect()
     }
 
     /// Makes the pipeline of variant `key` for `topology` and `kind` (not kept: see
-    /// [`GBufferPass::insert`]).
+    /// [`GBufferPass::insert`]); after a depth pre-pass (`prepassed`) its depth test is
+    /// GREATER_OR_EQUAL (named "depth >=").
     pub fn make(
         &self,
         ctx: &Context,
         key: &VariantKey,
         topology: Topology,
         kind: Kind,
+        prepassed: bool,
     ) -> crate::Result<Pipeline> {
         let mut constants = key.constants();
         constants.push((8, kind as u32));
         ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!(
-                "gbuffer[{}{}{}]",
+                "gbuffer[{}{}{}{}]",
                 match topology {
                     Topology::Triangles => "",
                     Topology::Lines => "lines, ",
                     Topology::Points => "points, ",
                 },
                 key.describe(),
+                if prepassed { ", depth >=" } else { "" },
                 kind.name()
             ),
             vertex: &shaders::GBUFFER_VERT,
@@ -198,15 +248,28 @@ impl GBufferPass {
             } else {
                 StencilMode::None
             },
+            depth_test: if prepassed {
+                DepthTest::NearerOrEqual
+            } else {
+                DepthTest::Nearer
+            },
         })
     }
 
-    pub fn insert(&mut self, key: VariantKey, topology: Topology, kind: Kind, pipeline: Pipeline) {
-        self.variants.insert((key, topology, kind), pipeline);
+    pub fn insert(
+        &mut self,
+        key: VariantKey,
+        topology: Topology,
+        kind: Kind,
+        prepassed: bool,
+        pipeline: Pipeline,
+    ) {
+        self.variants
+            .insert((key, topology, kind, prepassed), pipeline);
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
-        self.variants.values()
+        self.variants.values().chain(self.depth.get())
     }
 
     /// Records the pass with variant `key` (made by [`GBufferPass::make`] for every topology
@@ -244,9 +307,26 @@ impl GBufferPass {
                         .iter()
                         .any(|d| !d.forward && d.topology == t && kind_of(d.woven) == k)
                 })
-                .filter_map(|(t, k)| self.variants.get(&(key.clone(), t, k)).map(|p| (t, k, p)))
+                .filter_map(|(t, k)| {
+                    self.variants
+                        .get(&(key.clone(), t, k, inputs.depth_prepass))
+                        .map(|p| (t, k, p))
+                })
                 .collect();
-        let names = pipelines.iter().map(|(_, _, p)| p.name.clone()).collect();
+        let depth_pipeline = if inputs.depth_prepass {
+            let pipeline = self.depth.get().ok_or_else(|| {
+                crate::Error::device("the G-buffer's depth pre-pass pipeline was not made")
+            })?;
+            let set = pool.set(&self.depth_layout, &[(0, Resource::Uniform(inputs.frame))])?;
+            Some((pipeline, set))
+        } else {
+            None
+        };
+        let names = depth_pipeline
+            .iter()
+            .map(|(p, _)| p.name.clone())
+            .chain(pipelines.iter().map(|(_, _, p)| p.name.clone()))
+            .collect();
         let targets = inputs.targets;
         let material_sets = inputs.material_sets;
         Ok(Recorded::new("gbuffer", names, move |cmd| {
@@ -280,11 +360,51 @@ impl GBufferPass {
                     },
                 })
                 .collect();
+            // The depth pre-pass: the opaque draws' depth (and the stencil cleared), so that the
+            // shading below passes (GREATER_OR_EQUAL) only the visible fragment of each pixel.
+            if let Some((depth, depth_set)) = depth_pipeline {
+                cmd.begin_rendering(
+                    &[],
+                    Some(Attachment {
+                        image: &targets.depth,
+                        load: Load::Clear([0.0; 4]),
+                    }),
+                );
+                cmd.bind_vertex_buffer(&scene.vertices);
+                cmd.bind_index_buffer(&scene.indices);
+                cmd.bind_pipeline(depth);
+                cmd.bind_sets(depth, 0, &[depth_set]);
+                for draw in scene
+                    .draws
+                    .iter()
+                    .filter(|d| !d.forward && !d.alpha_mask && d.topology == Topology::Triangles)
+                {
+                    cmd.set_cull(if draw.double_sided {
+                        Cull::None
+                    } else {
+                        Cull::Back
+                    });
+                    cmd.set_front_face(draw.mirrored());
+                    cmd.push_constants(depth, &DrawPush::new(draw.world, draw.material));
+                    cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);
+                }
+                cmd.end_rendering();
+                cmd.transition(
+                    &targets.depth,
+                    Usage::DepthAttachment,
+                    Usage::DepthAttachment,
+                    None,
+                );
+            }
             cmd.begin_rendering(
                 &colors,
                 Some(Attachment {
                     image: &targets.depth,
-                    load: Load::Clear([0.0; 4]),
+                    load: if depth_pipeline.is_some() {
+                        Load::Keep
+                    } else {
+                        Load::Clear([0.0; 4])
+                    },
                 }),
             );
             cmd.bind_vertex_buffer(&scene.vertices);

@@ -12,8 +12,8 @@ use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
-    shaders, Attachment, Context, DescriptorPool, GraphicsDesc, Image, Load, Pipeline, Resource,
-    Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
+    shaders, Attachment, Context, DepthTest, DescriptorPool, GraphicsDesc, Image, Load, Pipeline,
+    Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and whether they test the stencil (each with the lobe sums
@@ -204,6 +204,7 @@ impl LightingPass {
             blend: false,
             topology: Topology::Triangles,
             stencil: stencil_mode(stencil),
+            depth_test: DepthTest::Nearer,
         })?))
     }
 
@@ -224,6 +225,7 @@ impl LightingPass {
             blend: false,
             topology: Topology::Triangles,
             stencil: stencil_mode(stencil),
+            depth_test: DepthTest::Nearer,
         })
     }
 

@@ -14,8 +14,8 @@ use super::Recorded;
 use crate::render::plan::OcclusionPlan;
 use crate::render::targets::{Targets, OCCLUSION_FORMAT};
 use crate::vk::{
-    shaders, Buffer, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout,
-    Stages, StencilMode, Topology, Usage,
+    shaders, Buffer, Context, DepthTest, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler,
+    SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// occlusion.frag's push constants (80 bytes).
@@ -97,6 +97,7 @@ impl OcclusionPass {
                     blend: false,
                     topology: Topology::Triangles,
                     stencil: StencilMode::None,
+                    depth_test: DepthTest::Nearer,
                 })
             };
             let estimate = make(

@@ -9,9 +9,9 @@ use crate::render::gpu::{ShadowMaskPush, ShadowPush};
 use crate::render::targets::SHADOW_FORMAT;
 use crate::render::upload::{GpuScene, VERTEX_FLOATS};
 use crate::vk::{
-    shaders, Attachment, Buffer, Cmd, Context, DescriptorPool, DescriptorSet, Format, GraphicsDesc,
-    Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
-    VertexLayout,
+    shaders, Attachment, Buffer, Cmd, Context, DepthTest, DescriptorPool, DescriptorSet, Format,
+    GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode,
+    Topology, Usage, VertexLayout,
 };
 
 /// The pass's pipelines: depth only for opaque casters (shadow.vert/.frag), and for alphaMode
@@ -63,6 +63,7 @@ impl ShadowPass {
                 blend: false,
                 topology: Topology::Triangles,
                 stencil: StencilMode::None,
+                depth_test: DepthTest::Nearer,
             })?,
             mask_variants: HashMap::new(),
             mask_layout,
@@ -95,6 +96,7 @@ impl ShadowPass {
                 blend: false,
                 topology: Topology::Triangles,
                 stencil: StencilMode::None,
+                depth_test: DepthTest::Nearer,
             })?;
             self.mask_variants.insert(key, pipeline);
         }

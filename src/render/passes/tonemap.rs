@@ -8,8 +8,8 @@ use crate::render::gpu::TonemapPush;
 use crate::render::targets::{Targets, LDR_FORMAT};
 use crate::render::{DebugView, RenderOptions};
 use crate::vk::{
-    shaders, Context, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler, SetLayout, Stages,
-    StencilMode, Topology,
+    shaders, Context, DepthTest, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler,
+    SetLayout, Stages, StencilMode, Topology,
 };
 
 /// tonemap.frag's CURVE for a debug view: no exposure, no curve.
@@ -76,6 +76,7 @@ impl TonemapPass {
                 blend: false,
                 topology: Topology::Triangles,
                 stencil: StencilMode::None,
+                depth_test: DepthTest::Nearer,
             })?;
             let _ = slot.set(pipeline);
         }

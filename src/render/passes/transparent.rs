@@ -23,8 +23,9 @@ use crate::render::plan::Plan;
 use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
 use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
 use crate::vk::{
-    shaders, Attachment, Buffer, Cmd, Context, Cull, DescriptorPool, DescriptorSet, GraphicsDesc,
-    Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
+    shaders, Attachment, Buffer, Cmd, Context, Cull, DepthTest, DescriptorPool, DescriptorSet,
+    GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode,
+    Topology, Usage,
 };
 
 /// The pass's pipelines by variant and blend mode (true: BLEND, blended without depth writes;
@@ -137,6 +138,7 @@ impl TransparentPass {
             blend,
             topology: Topology::Triangles,
             stencil: StencilMode::None,
+            depth_test: DepthTest::Nearer,
         })
     }
 
