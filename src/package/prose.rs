@@ -74,8 +74,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          the G-buffer's shading runs once per pixel. Reads position (location 0) of gbuffer.vert's \
          vertex buffer, the frame uniform (set 0 binding 0) and gbuffer.vert's push block (128 \
          bytes); its clip position is gbuffer.vert's by the same `precise` expression, equal bit \
-         for bit. Pair it with `shadow.frag`; weft runs it when the G-buffer draws an opaque woven \
-         draw (`weft plan`'s depth line).",
+         for bit. Pair it with `shadow.frag`; weft runs it where the frame has at least 4 pixels \
+         per opaque triangle (`weft plan`'s depth line).",
     ),
     (
         "env_probe.comp",

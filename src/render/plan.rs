@@ -137,6 +137,14 @@ pub struct ShadowPlan {
 /// desktop GPUs 16384).
 pub const MAX_ATLAS: u32 = 8192;
 
+/// Pixels per opaque triangle from which the G-buffer's depth pre-pass pays: drawing every
+/// triangle twice costs vertex and setup work, shading each pixel once saves fragment work.
+/// Measured on lavapipe (G-buffer ms without → with, docs/performance.md "A depth pre-pass"):
+/// the default scene (26 k triangles) at 2.2 pixels a triangle 15.9 → 16.1, at 8.7 35.0 → 28.1;
+/// MetalRoughSpheresNoTextures (1.04 M) at 2.0 414 → 448, at 8.0 777 → 695; DamagedHelmet (15
+/// k) at 3.7 12.8 → 10.8, at 15 23.4 → 21.9.
+pub const PREPASS_PIXELS_PER_TRIANGLE: usize = 4;
+
 /// `weft plan --json` is this struct serialised (`serde_json::to_value(&plan)`), with the
 /// scene's animations and the LIGHT_TYPES mask added by the command.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -245,11 +253,12 @@ pub struct Plan {
     pub woven_draws: usize,
     pub gltf_draws: usize,
     /// The G-buffer pass's depth pre-pass: how many draws it draws depth-only first (its opaque
-    /// triangle draws, MASK ones aside: their depth depends on the cut-out), so that the costly
+    /// triangle draws, MASK ones aside: their depth depends on the cut-out), so that the
     /// G-buffer shading runs once per pixel (then drawn with depth test GREATER_OR_EQUAL). 0:
-    /// none. Planned where an opaque woven draw is among them (the woven model's G-buffer shading
-    /// is the one worth saving); `Force::depth_prepass` runs it anyway, where it must change no
-    /// pixel, `Force::no_depth_prepass` skips it.
+    /// none. Planned where the frame has at least [`PREPASS_PIXELS_PER_TRIANGLE`] pixels per
+    /// triangle of those draws (where fragments, not vertices, are the G-buffer's cost);
+    /// `Force::depth_prepass` runs it anyway, where it must change no pixel,
+    /// `Force::no_depth_prepass` skips it.
     pub depth_prepass: usize,
     #[serde(rename = "material_kinds_code")]
     pub material_kinds: bool,
@@ -633,28 +642,28 @@ impl Plan {
         let (woven_draws, gltf_draws) = (deferred(true), deferred(false));
         // The depth pre-pass' draws: opaque triangles the G-buffer draws (as the pass picks them:
         // GpuDraw's alpha_mask and forward).
-        let prepassed = |woven_only: bool| {
-            scene
-                .draws
-                .iter()
-                .filter(|d| {
-                    topology(d) == Topology::Triangles
-                        && material_of(d).is_some_and(|m| {
-                            !m.needs_forward()
-                                && m.alpha_cutoff.is_none()
-                                && !m.blend
-                                && (!woven_only || m.fabric.is_some())
-                        })
-                })
-                .count()
-        };
-        let depth_prepass = if options.force.no_depth_prepass
-            || (prepassed(true) == 0 && !options.force.depth_prepass)
-        {
-            0
-        } else {
-            prepassed(false)
-        };
+        let prepassed: Vec<&crate::scene::Draw> = scene
+            .draws
+            .iter()
+            .filter(|d| {
+                topology(d) == Topology::Triangles
+                    && material_of(d)
+                        .is_some_and(|m| !m.needs_forward() && m.alpha_cutoff.is_none() && !m.blend)
+            })
+            .collect();
+        let prepassed_triangles: usize = prepassed
+            .iter()
+            .map(|d| scene.meshes[d.mesh].indices.len() / 3)
+            .sum();
+        let pixels = options.width as usize * options.height as usize;
+        let pays =
+            !prepassed.is_empty() && pixels >= PREPASS_PIXELS_PER_TRIANGLE * prepassed_triangles;
+        let depth_prepass =
+            if options.force.no_depth_prepass || !(pays || options.force.depth_prepass) {
+                0
+            } else {
+                prepassed.len()
+            };
         // The lobes are pooled where the deferred pass shades woven pixels: a scene whose fabric
         // is all forward-lit (sheets) has none to pool, no lobe sums draw and no target for it.
         if woven_draws == 0 {
@@ -907,8 +916,8 @@ impl fmt::Display for Plan {
         if self.depth_prepass > 0 {
             writeln!(
                 f,
-                "depth       a depth pre-pass of {} opaque draw(s) before the G-buffer's shading, which then runs once per pixel (depth test GREATER_OR_EQUAL)",
-                self.depth_prepass
+                "depth       a depth pre-pass of {} opaque draw(s) before the G-buffer's shading, which then runs once per pixel (depth test GREATER_OR_EQUAL; planned from {} pixels per triangle)",
+                self.depth_prepass, PREPASS_PIXELS_PER_TRIANGLE
             )?;
         }
         writeln!(
