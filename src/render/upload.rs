@@ -34,6 +34,15 @@ pub(crate) fn gbuffer_vertex_layout() -> VertexLayout {
     }
 }
 
+/// The same vertex buffer read at position alone (location 0): the depth-only passes' input
+/// (shadow.vert, depth.vert).
+pub(crate) fn position_vertex_layout() -> VertexLayout {
+    VertexLayout {
+        stride: (VERTEX_FLOATS * 4) as u32,
+        attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
+    }
+}
+
 /// One draw: a mesh range in the shared buffers.
 pub(crate) struct DrawRange {
     /// Triangles, or (drawn by the G-buffer pass only, casting no shadow) lines or points.

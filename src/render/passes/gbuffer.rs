@@ -12,12 +12,11 @@ use crate::render::targets::{
     depth_format, Targets, ALBEDO_FORMAT, EMISSIVE_FORMAT, FABRIC_FORMAT, FRAME_FORMAT,
     SPECULAR_FORMAT, SURFACE_FORMAT,
 };
-use crate::render::upload::{gbuffer_vertex_layout, GpuScene, VERTEX_FLOATS};
+use crate::render::upload::{gbuffer_vertex_layout, position_vertex_layout, GpuScene};
 use crate::render::{RenderOptions, Shading};
 use crate::vk::{
-    shaders, Attachment, Buffer, Context, Cull, DepthTest, DescriptorPool, DescriptorSet, Format,
+    shaders, Attachment, Buffer, Context, Cull, DepthTest, DescriptorPool, DescriptorSet,
     GraphicsDesc, Load, Pipeline, Resource, SetLayout, Stages, StencilMode, Topology, Usage,
-    VertexLayout,
 };
 
 /// The pass's pipelines (one per variant, topology and kind of material, and the depth
@@ -129,10 +128,7 @@ impl GBufferPass {
                 name: "gbuffer depth pre-pass",
                 vertex: &shaders::DEPTH_VERT,
                 fragment: &shaders::SHADOW_FRAG,
-                vertex_layout: Some(VertexLayout {
-                    stride: (VERTEX_FLOATS * 4) as u32,
-                    attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
-                }),
+                vertex_layout: Some(position_vertex_layout()),
                 color_formats: &[],
                 depth_format: Some(depth_format(ctx)),
                 set_layouts: &[&self.depth_layout],

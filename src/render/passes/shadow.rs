@@ -7,7 +7,7 @@ use glam::Mat4;
 use super::Recorded;
 use crate::render::gpu::{ShadowMaskPush, ShadowPush};
 use crate::render::targets::SHADOW_FORMAT;
-use crate::render::upload::{GpuScene, VERTEX_FLOATS};
+use crate::render::upload::{position_vertex_layout, GpuScene, VERTEX_FLOATS};
 use crate::vk::{
     shaders, Attachment, Buffer, Cmd, Context, DepthTest, DescriptorPool, DescriptorSet, Format,
     GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode,
@@ -50,10 +50,7 @@ impl ShadowPass {
                 name: "shadow",
                 vertex: &shaders::SHADOW_VERT,
                 fragment: &shaders::SHADOW_FRAG,
-                vertex_layout: Some(VertexLayout {
-                    stride: (VERTEX_FLOATS * 4) as u32,
-                    attributes: vec![(0, Format::R32G32B32_SFLOAT, 0)],
-                }),
+                vertex_layout: Some(position_vertex_layout()),
                 color_formats: &[],
                 depth_format: Some(SHADOW_FORMAT),
                 set_layouts: &[],
