@@ -1,10 +1,11 @@
 #version 460
-// The occlusion pass, step 1 of 2 (`--occlusion gtao`, planned when an environment lights the
+// The occlusion pass, step 2 of 3 (`--occlusion gtao`, planned when an environment lights the
 // scene): how much of each pixel's cosine-weighted hemisphere is open to the environment, by
 // ground-truth ambient occlusion (GTAO, include/occlusion.glsl) over the depth buffer, at half
-// resolution (one estimate per 2 x 2 pixels, at its top-left pixel). Per estimate,
+// resolution (one estimate per 2 x 2 pixels, at its top-left pixel, whose depth step 1,
+// occlusion_depth.frag, keeps in a half-resolution R32F image that the depth samples read). Per estimate,
 // SLICES planes through the view vector at angles that a 4 x 4 pattern of estimates turns (so the
-// 4 x 4 blur of step 2, occlusion_blur.frag, averages 16 x SLICES evenly spaced directions); in
+// 4 x 4 blur of step 3, occlusion_blur.frag, averages 16 x SLICES evenly spaced directions); in
 // each, the highest horizon on either side among STEPS depth samples out to the world radius,
 // falling off to none over its outer 60 %; the visible arc between the horizons, weighted by the
 // normal's projection into the plane, over the same with nothing in the way. Written with the
@@ -18,7 +19,7 @@ layout(constant_id = 1) const uint STEPS = 6u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
 layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl
-layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
+layout(set = 0, binding = 26) uniform sampler2D half_depth;  // the G-buffer depth of each 2 x 2 block's top-left pixel (R32F, half resolution; occlusion_depth.frag), gathered
 
 layout(push_constant) uniform OcclusionPush {
     mat4 view_from_clip;  // the inverse of frame.proj (view space from clip space)
@@ -39,7 +40,7 @@ void main() {
     // This estimate's pixel of the full-resolution G-buffer, and its place in the pattern.
     ivec2 half_px = ivec2(gl_FragCoord.xy);
     ivec2 px = min(2 * half_px, ivec2(frame.viewport.xy) - 1);
-    float depth = texelFetch(gb_depth, px, 0).r;
+    float depth = texelFetch(half_depth, half_px, 0).r;
     if (depth <= 0.0) {
         out_occlusion = vec2(1.0, 0.0);
         return;
@@ -58,6 +59,11 @@ void main() {
     float turn = float(TURN[k]) / 16.0;
     float jitter = (float((k * 7u) & 15u) + 0.5) / 16.0;
     vec2 size = frame.viewport.xy;
+    // The half-resolution depth's texels lie at the full-resolution pixels 2i + 0.5: samples stay
+    // between the first and the last.
+    ivec2 half_size = textureSize(half_depth, 0);
+    vec2 half_texel = 1.0 / vec2(half_size);
+    vec2 q_max = 2.0 * vec2(half_size - 1) + 0.5;
 
     // The visible arcs, and what they would be with nothing in the way: their ratio is 1 on an
     // open surface whatever the slices' turn (each estimate unbiased on its own, so the blur's
@@ -89,27 +95,32 @@ void main() {
             float t = s * s * radius_px + 1.0;
             for (int side = 0; side < 2; ++side) {
                 vec2 q = centre + (side == 0 ? t : -t) * dir_px;
-                if (any(lessThan(q, vec2(0.5))) || any(greaterThan(q, size - 0.5))) {
+                if (any(lessThan(q, vec2(0.5))) || any(greaterThan(q, q_max))) {
                     continue;
                 }
-                // The depth at q itself, bilinear between the four texels around it where they
-                // lie on one surface (depth is affine in screen space over a plane, so the point
-                // is on the surface and in the slice's plane: a plane seen obliquely does not
-                // occlude itself); the nearest texel's, at its centre, across an edge.
-                vec2 tq = q - 0.5;
+                // The depth at q itself, bilinear between the four half-resolution texels around
+                // it where they lie on one plane (depth is affine in screen space over a plane, so
+                // the point is on the surface and in the slice's plane: a plane seen obliquely
+                // does not occlude itself); the nearest texel's, at its pixel, across an edge. On
+                // one plane: the two diagonals' sums agree (exactly for an affine depth: a floor
+                // seen at a grazing angle, whose depth halves over a few rows near the horizon,
+                // passes) within 2 % of the depth, which an edge through one corner fails, and no
+                // texel is 1.5 times another's depth, which an edge between two rows fails.
+                vec2 tq = (q - 0.5) * 0.5;
                 vec2 base = floor(tq);
                 vec2 f = tq - base;
-                vec4 g = textureGather(gb_depth, (base + 1.0) * frame.viewport.zw, 0);
+                vec4 g = textureGather(half_depth, (base + 1.0) * half_texel, 0);
                 float lo = min(min(g.x, g.y), min(g.z, g.w));
                 float hi = max(max(g.x, g.y), max(g.z, g.w));
                 float d;
-                if (lo > 0.0 && hi <= lo * 1.02) {
+                if (lo > 0.0 && abs(g.x + g.z - g.y - g.w) <= 0.02 * lo && hi <= lo * 1.5) {
                     d = mix(mix(g.w, g.z, f.x), mix(g.x, g.y, f.x), f.y);
                 } else {
-                    // The texel q lies in, which the gather holds (its (0, 1), (1, 1), (1, 0),
-                    // (0, 0) texels from base): floor(q) = base + 1 where f >= 0.5. No second
-                    // fetch (on lavapipe both sides of this branch run for every pixel).
-                    q = floor(q) + 0.5;
+                    // The texel nearest q, which the gather holds (its (0, 1), (1, 1), (1, 0),
+                    // (0, 0) texels from base), at its full-resolution pixel. No second fetch
+                    // (on lavapipe both sides of this branch run for every pixel).
+                    vec2 near = vec2(greaterThanEqual(f, vec2(0.5)));
+                    q = 2.0 * (base + near) + 0.5;
                     d = f.y >= 0.5 ? (f.x >= 0.5 ? g.y : g.x) : (f.x >= 0.5 ? g.z : g.w);
                 }
                 if (d <= 0.0) {

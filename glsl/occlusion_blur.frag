@@ -1,5 +1,5 @@
 #version 460
-// The occlusion pass, step 2 of 2, at half resolution: the mean of the 4 x 4 estimates of
+// The occlusion pass, step 3 of 3, at half resolution: the mean of the 4 x 4 estimates of
 // occlusion.frag around each (one of each of its pattern's 16 turns, so 16 x SLICES directions),
 // each weighted by how close its view distance lies to the plane that the estimates' distances
 // make around this one (their smaller one-sided difference to each neighbour, so an edge does not

@@ -207,21 +207,29 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          linear, clamp) through the `Shadow` records of `include/frame.glsl`.",
     ),
     (
+        "occlusion_depth.frag",
+        "Screen-space occlusion of the environment, step 1 of 3: the G-buffer depth (set 0 \
+         binding 25, fetched per texel) of each 2 x 2 block's top-left pixel, into an \
+         `R32_SFLOAT` target of half the size (rounded up) that `occlusion.frag` gathers from. \
+         Drawn with `fullscreen.vert` after the G-buffer pass; no push constants, no \
+         specialization constants.",
+    ),
+    (
         "occlusion.frag",
-        "Screen-space occlusion of the environment, step 1 of 2 (ground-truth ambient occlusion, \
-         GTAO, `include/occlusion.glsl`), drawn with `fullscreen.vert` after the G-buffer pass: \
-         at half resolution (one estimate per 2 x 2 pixels, at its top-left pixel; draw it into \
-         a target of half the size, rounded up), SLICES planes through the view vector turned by \
-         a 4 x 4 pattern of estimates, the \
+        "Screen-space occlusion of the environment, step 2 of 3 (ground-truth ambient occlusion, \
+         GTAO, `include/occlusion.glsl`), drawn with `fullscreen.vert` after \
+         `occlusion_depth.frag`: at half resolution (one estimate per 2 x 2 pixels, at its \
+         top-left pixel; draw it into a target of half the size, rounded up), SLICES planes \
+         through the view vector turned by a 4 x 4 pattern of estimates, the \
          highest horizon on each side among STEPS depth samples out to a world radius, and the \
          cosine-weighted visible arc between them. Reads the frame uniform (set 0 binding 0), the \
-         G-buffer normal (21) and depth (25); push `mat4 view_from_clip` (the inverse projection) \
+         G-buffer normal (21) and the half-resolution depth of step 1 (26); push `mat4 view_from_clip` (the inverse projection) \
          and `vec4 params` (radius, falloff scale and offset; 80 bytes, fragment stage); writes \
          visibility and view distance to an `R16G16_SFLOAT` target for `occlusion_blur.frag`.",
     ),
     (
         "occlusion_blur.frag",
-        "Screen-space occlusion of the environment, step 2 of 2, at half resolution: the mean \
+        "Screen-space occlusion of the environment, step 3 of 3, at half resolution: the mean \
          of the 4 x 4 estimates of `occlusion.frag` (set 0 binding 28) around each, weighted by \
          how close their view distances lie to its surface so that edges stay sharp, into an \
          `R16G16_SFLOAT` target (visibility, view distance) that `lighting.frag` reads at binding \

@@ -1102,7 +1102,7 @@ impl Renderer {
         // The passes, in the plan's order, each from its named inputs.
         let ctx = self.ctx.clone();
         let submissions = ctx.submissions();
-        let pool = ctx.create_descriptor_pool(11 + 3 * gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(12 + 3 * gpu.material_count)?;
         let targets = self.targets.as_ref().expect("made by prepare_targets");
         let d = &self.defaults;
         let colors = buffers.forced_colors.as_ref().unwrap_or(&gpu.colors);

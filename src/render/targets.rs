@@ -36,6 +36,8 @@ pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
 pub const LOBES_FORMAT: Format = Format::R32G32B32A32_UINT;
 /// The occlusion pass's estimates and their blur (visibility, view distance; half resolution).
 pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
+/// The occlusion pass's half-resolution depth (each 2 x 2 block's top-left pixel's, exactly).
+pub const OCCLUSION_DEPTH_FORMAT: Format = Format::R32_SFLOAT;
 
 /// The G-buffer and output targets of one resolution.
 pub(crate) struct Targets {
@@ -61,8 +63,11 @@ pub(crate) struct Targets {
     pub(crate) lobes: Option<Image>,
 }
 
-/// The occlusion pass's two targets.
+/// The occlusion pass's three targets.
 pub(crate) struct OcclusionTargets {
+    /// The G-buffer's depth per 2 x 2 pixels (`OCCLUSION_DEPTH_FORMAT`, half the resolution
+    /// rounded up), which the estimates' depth samples read.
+    pub(crate) depth: Image,
     /// Visibility and view distance per 2 x 2 pixels (`OCCLUSION_FORMAT`, half the resolution
     /// rounded up).
     pub(crate) raw: Image,
@@ -75,6 +80,9 @@ impl OcclusionTargets {
         let usage = ImageUsageFlags::COLOR_ATTACHMENT | ImageUsageFlags::SAMPLED;
         let (w, h) = (width.div_ceil(2), height.div_ceil(2));
         Ok(OcclusionTargets {
+            depth: ctx.create_image(
+                &ImageDesc::new_2d("occlusion depth", OCCLUSION_DEPTH_FORMAT, w, h).usage(usage),
+            )?,
             raw: ctx.create_image(
                 &ImageDesc::new_2d("occlusion estimates", OCCLUSION_FORMAT, w, h).usage(usage),
             )?,

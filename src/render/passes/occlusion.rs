@@ -1,7 +1,8 @@
 //! The occlusion pass (`--occlusion gtao`, planned when an environment lights the scene): how
-//! open each pixel's hemisphere is, for the environment's light. Two fullscreen draws: the
-//! ground-truth ambient occlusion estimate from the depth buffer and the G-buffer normal at half
-//! resolution (fullscreen.vert, occlusion.frag, turned per estimate by a 4 x 4 pattern), then
+//! open each pixel's hemisphere is, for the environment's light. Three fullscreen draws at half
+//! resolution: the depth of each 2 x 2 block's top-left pixel (occlusion_depth.frag), the
+//! ground-truth ambient occlusion estimate there from that depth and the G-buffer normal
+//! (fullscreen.vert, occlusion.frag, turned per estimate by a 4 x 4 pattern), then
 //! the mean of the 4 x 4 estimates around each on its own surface (occlusion_blur.frag), which
 //! the lighting pass reads, bringing it to full resolution (lighting.frag's OCCLUSION and
 //! screen_visibility).
@@ -12,7 +13,7 @@ use glam::{DMat4, Mat4};
 
 use super::Recorded;
 use crate::render::plan::OcclusionPlan;
-use crate::render::targets::{Targets, OCCLUSION_FORMAT};
+use crate::render::targets::{Targets, OCCLUSION_DEPTH_FORMAT, OCCLUSION_FORMAT};
 use crate::vk::{
     shaders, Buffer, Context, DepthTest, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler,
     SetLayout, Stages, StencilMode, Topology, Usage,
@@ -47,12 +48,13 @@ impl OcclusionPush {
     }
 }
 
-/// The pass's two set layouts (reflected from occlusion.frag and occlusion_blur.frag) and its
-/// two pipelines, made by the first frame that plans the pass.
+/// The pass's three set layouts (reflected from occlusion_depth.frag, occlusion.frag and
+/// occlusion_blur.frag) and its three pipelines, made by the first frame that plans the pass.
 pub struct OcclusionPass {
+    depth_layout: SetLayout,
     layout: SetLayout,
     blur_layout: SetLayout,
-    pipelines: OnceLock<(Pipeline, Pipeline)>,
+    pipelines: OnceLock<[Pipeline; 3]>,
 }
 
 /// What the pass reads; it writes `targets.occlusion` (left readable by fragment shaders).
@@ -67,39 +69,51 @@ pub struct OcclusionInputs<'s> {
 
 impl OcclusionPass {
     pub fn new(ctx: &Context) -> crate::Result<OcclusionPass> {
+        let [depth_layout] = ctx
+            .reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::OCCLUSION_DEPTH_FRAG])?;
         let [layout] =
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::OCCLUSION_FRAG])?;
         let [blur_layout] =
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::OCCLUSION_BLUR_FRAG])?;
         Ok(OcclusionPass {
+            depth_layout,
             layout,
             blur_layout,
             pipelines: OnceLock::new(),
         })
     }
 
-    /// Makes the two pipelines once.
+    /// Makes the three pipelines once.
     pub fn make(&self, ctx: &Context) -> crate::Result<()> {
         if self.pipelines.get().is_none() {
-            // Both draw one fullscreen triangle into an OCCLUSION_FORMAT target.
-            let make = |name: &str, fragment, layout, push: u32, constants: &[(u32, u32)]| {
-                ctx.create_graphics_pipeline(&GraphicsDesc {
-                    name,
-                    vertex: &shaders::FULLSCREEN_VERT,
-                    fragment,
-                    vertex_layout: None,
-                    color_formats: &[OCCLUSION_FORMAT],
-                    depth_format: None,
-                    set_layouts: &[layout],
-                    push_constant_size: push,
-                    push_stages: Stages::FRAGMENT,
-                    constants,
-                    blend: false,
-                    topology: Topology::Triangles,
-                    stencil: StencilMode::None,
-                    depth_test: DepthTest::Nearer,
-                })
-            };
+            // Each draws one fullscreen triangle into a half-resolution target.
+            let make =
+                |name: &str, fragment, format, layout, push: u32, constants: &[(u32, u32)]| {
+                    ctx.create_graphics_pipeline(&GraphicsDesc {
+                        name,
+                        vertex: &shaders::FULLSCREEN_VERT,
+                        fragment,
+                        vertex_layout: None,
+                        color_formats: &[format],
+                        depth_format: None,
+                        set_layouts: &[layout],
+                        push_constant_size: push,
+                        push_stages: Stages::FRAGMENT,
+                        constants,
+                        blend: false,
+                        topology: Topology::Triangles,
+                        stencil: StencilMode::None,
+                        depth_test: DepthTest::Nearer,
+                    })
+                };
+            let depth = make(
+                "occlusion depth",
+                &shaders::OCCLUSION_DEPTH_FRAG,
+                OCCLUSION_DEPTH_FORMAT,
+                &self.depth_layout,
+                0,
+                &[],
+            )?;
             let estimate = make(
                 &format!(
                     "occlusion[slices={}, steps={}]",
@@ -107,6 +121,7 @@ impl OcclusionPass {
                     OcclusionPlan::STEPS
                 ),
                 &shaders::OCCLUSION_FRAG,
+                OCCLUSION_FORMAT,
                 &self.layout,
                 std::mem::size_of::<OcclusionPush>() as u32,
                 &[(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)],
@@ -114,17 +129,18 @@ impl OcclusionPass {
             let blur = make(
                 "occlusion blur",
                 &shaders::OCCLUSION_BLUR_FRAG,
+                OCCLUSION_FORMAT,
                 &self.blur_layout,
                 0,
                 &[],
             )?;
-            let _ = self.pipelines.set((estimate, blur));
+            let _ = self.pipelines.set([depth, estimate, blur]);
         }
         Ok(())
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
-        self.pipelines.get().into_iter().flat_map(|(a, b)| [a, b])
+        self.pipelines.get().into_iter().flatten()
     }
 
     pub fn record<'s>(
@@ -132,7 +148,7 @@ impl OcclusionPass {
         pool: &'s DescriptorPool,
         inputs: OcclusionInputs<'s>,
     ) -> crate::Result<Recorded<'s>> {
-        let (estimate, blur) = self
+        let [depth, estimate, blur] = self
             .pipelines
             .get()
             .expect("the frame makes the pipelines when it plans the pass");
@@ -141,12 +157,16 @@ impl OcclusionPass {
             .occlusion
             .as_ref()
             .expect("the frame makes the occlusion targets when it plans the pass");
+        let depth_set = pool.set(
+            &self.depth_layout,
+            &[(25, Resource::Sampled(&t.depth, inputs.nearest))],
+        )?;
         let set = pool.set(
             &self.layout,
             &[
                 (0, Resource::Uniform(inputs.frame)),
                 (21, Resource::Sampled(&t.frame, inputs.nearest)),
-                (25, Resource::Sampled(&t.depth, inputs.nearest)),
+                (26, Resource::Sampled(&o.depth, inputs.nearest)),
             ],
         )?;
         let blur_set = pool.set(
@@ -156,8 +176,10 @@ impl OcclusionPass {
         let push = inputs.push;
         Ok(Recorded::new(
             "occlusion",
-            vec![estimate.name.clone(), blur.name.clone()],
+            vec![depth.name.clone(), estimate.name.clone(), blur.name.clone()],
             move |cmd| {
+                super::fullscreen::<u32>(cmd, depth, depth_set, None, &o.depth);
+                cmd.transition(&o.depth, Usage::ColorAttachment, Usage::FragmentRead, None);
                 super::fullscreen(cmd, estimate, set, Some(&push), &o.raw);
                 cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
                 super::fullscreen::<u32>(cmd, blur, blur_set, None, &o.visibility);
