@@ -1092,7 +1092,7 @@ impl fmt::Display for Plan {
             )?,
             Some(o) => writeln!(
                 f,
-                "occlusion   {} of the environment's light, radius {} ({}), {} slices x {} steps per side per pixel, 4x4 blur",
+                "occlusion   {} of the environment's light, radius {} ({}), at half resolution over a half-resolution depth copy: {} slices x {} steps per side per estimate, 4x4 blur",
                 o.method, o.radius, o.radius_from, o.slices, o.steps
             )?,
         }
