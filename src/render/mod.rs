@@ -127,8 +127,8 @@ pub struct Force {
     /// Compile the pooling of the fabric lobes' samples in (the lobe sums draw, lighting POOL =
     /// 1) where no woven pixel is shaded at fis: it must change nothing there.
     pub pool: bool,
-    /// Run the G-buffer's depth pre-pass where the plan does not (no opaque woven draw): it must
-    /// change no pixel.
+    /// Run the G-buffer's depth pre-pass where the plan does not (fewer than
+    /// `PREPASS_PIXELS_PER_TRIANGLE` pixels per opaque triangle): it must change no pixel.
     pub depth_prepass: bool,
     /// Skip the G-buffer's depth pre-pass where the plan runs it: every hidden fragment of an
     /// opaque draw is shaded (a bench comparison).
