@@ -584,19 +584,31 @@ fn rewriting_removes_modules_an_older_package_listed_and_nothing_else() {
 /// different resources.
 #[test]
 fn one_number_per_resource_in_the_frames_shaders() {
+    // The lighting pass's declarations are in its modules' shared body.
+    let lighting_main = package::INCLUDES
+        .iter()
+        .find(|(n, _)| *n == "lighting_main.glsl")
+        .expect("include/lighting_main.glsl")
+        .1;
     let frame_shaders = [
-        &shaders::GBUFFER_VERT,
-        &shaders::GBUFFER_FRAG,
-        &shaders::FORWARD_FRAG,
-        &shaders::LIGHTING_FRAG,
-        &shaders::SHADOW_MASK_VERT,
-        &shaders::SHADOW_MASK_FRAG,
+        (shaders::GBUFFER_VERT.name, shaders::GBUFFER_VERT.source),
+        (shaders::GBUFFER_FRAG.name, shaders::GBUFFER_FRAG.source),
+        (shaders::FORWARD_FRAG.name, shaders::FORWARD_FRAG.source),
+        ("include/lighting_main.glsl", lighting_main),
+        (
+            shaders::SHADOW_MASK_VERT.name,
+            shaders::SHADOW_MASK_VERT.source,
+        ),
+        (
+            shaders::SHADOW_MASK_FRAG.name,
+            shaders::SHADOW_MASK_FRAG.source,
+        ),
     ];
     let mut by_name: BTreeMap<String, (u32, &str)> = BTreeMap::new();
     let mut by_number: BTreeMap<u32, (String, &str)> = BTreeMap::new();
     let mut declarations = 0;
-    for shader in frame_shaders {
-        for line in shader.source.lines() {
+    for (shader_name, source) in frame_shaders {
+        for line in source.lines() {
             let code = line.split("//").next().unwrap_or("").trim();
             let Some(rest) = code.strip_prefix("layout(set = 0, binding = ") else {
                 continue;
@@ -605,7 +617,7 @@ fn one_number_per_resource_in_the_frames_shaders() {
                 .split(|c: char| !c.is_ascii_digit())
                 .next()
                 .and_then(|n| n.parse().ok())
-                .unwrap_or_else(|| panic!("{}: unreadable binding in `{code}`", shader.name));
+                .unwrap_or_else(|| panic!("{}: unreadable binding in `{code}`", shader_name));
             // The block's name (`buffer Lights {`), else the variable's (`sampler2D gb_depth;`).
             let after = &rest[rest.find(')').expect("layout(...)") + 1..];
             let words: Vec<&str> = after
@@ -622,18 +634,18 @@ fn one_number_per_resource_in_the_frames_shaders() {
                 assert_eq!(
                     *n, number,
                     "{name} is binding {n} in {other} and {number} in {}",
-                    shader.name
+                    shader_name
                 );
             }
             if let Some((other_name, other)) = by_number.get(&number) {
                 assert_eq!(
                     *other_name, name,
                     "set 0 binding {number} is {other_name} in {other} and {name} in {}",
-                    shader.name
+                    shader_name
                 );
             }
-            by_name.insert(name.clone(), (number, shader.name));
-            by_number.insert(number, (name, shader.name));
+            by_name.insert(name.clone(), (number, shader_name));
+            by_number.insert(number, (name, shader_name));
         }
     }
     assert!(

@@ -6,6 +6,7 @@ use sha2::{Digest, Sha256};
 use super::{
     binding_comment, spirv, Access, DescriptorKind, InterfaceVariable, PushConstantRange,
     SpecConstant, SpecValue, WorkgroupSize, FORMAT_VERSION, INCLUDES, SPEC_MEANINGS,
+    SPEC_MEANINGS_OF,
 };
 use crate::vk::{shaders, Shader, Stage};
 use crate::Error;
@@ -148,7 +149,10 @@ pub fn reflect_module(shader: &Shader) -> crate::Result<ModuleEntry> {
         .map(|c| SpecEntry {
             meaning: SPEC_MEANINGS
                 .iter()
-                .find(|(m, id, _)| *m == name && *id == c.id)
+                .find(|(m, id, _)| {
+                    let of = SPEC_MEANINGS_OF.iter().find(|o| o.0 == name).map(|o| o.1);
+                    (*m == name || Some(*m) == of) && *id == c.id
+                })
                 .map(|e| e.2),
             constant: c,
         })

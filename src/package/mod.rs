@@ -26,7 +26,7 @@ pub use manifest::{
     manifest, reflect_module, sha256_hex, stage_name, stage_vk_bit, BindingEntry, FileEntry,
     Manifest, ModuleEntry, SpecEntry,
 };
-pub use prose::{module_notes, MODULE_NOTES, SPEC_MEANINGS};
+pub use prose::{module_notes, MODULE_NOTES, SPEC_MEANINGS, SPEC_MEANINGS_OF};
 pub use spirv::{
     Access, DescriptorKind, InterfaceVariable, PushConstantRange, SpecConstant, SpecValue,
     WorkgroupSize,
@@ -58,6 +58,10 @@ pub const INCLUDES: &[(&str, &str)] = &[
     ),
     ("frame.glsl", include_str!("../../glsl/include/frame.glsl")),
     ("ibl.glsl", include_str!("../../glsl/include/ibl.glsl")),
+    (
+        "lighting_main.glsl",
+        include_str!("../../glsl/include/lighting_main.glsl"),
+    ),
     (
         "lights.glsl",
         include_str!("../../glsl/include/lights.glsl"),

@@ -151,6 +151,27 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          to one RGBA16F target. No push constants.",
     ),
     (
+        "lighting_background.frag",
+        "`lighting.frag` for the empty pixels alone (`include/lighting_main.glsl` with \
+         PIXEL_KINDS fixed at 1 when compiled, so the other kinds' code is not in the module): \
+         the environment seen along the view ray, a colour, or transparent. weft draws it over \
+         the pixels whose G-buffer stencil is 0; its set holds the bindings it keeps, at \
+         lighting.frag's numbers. No push constants.",
+    ),
+    (
+        "lighting_woven.frag",
+        "`lighting.frag` for the woven model's pixels alone (`include/lighting_main.glsl` with \
+         PIXEL_KINDS fixed at 2): drawn over the pixels whose G-buffer stencil is 1, after \
+         `fabric_lobes.frag` where the lobe samples are pooled; its set holds the bindings it \
+         keeps, at lighting.frag's numbers. No push constants.",
+    ),
+    (
+        "lighting_gltf.frag",
+        "`lighting.frag` for the glTF materials' pixels alone (`include/lighting_main.glsl` \
+         with PIXEL_KINDS fixed at 4): drawn over the pixels whose G-buffer stencil is 2; its \
+         set holds the bindings it keeps, at lighting.frag's numbers. No push constants.",
+    ),
+    (
         "fabric_lobes.frag",
         "The woven model's environment lobe samples for `lighting.frag` to pool, one fullscreen \
          triangle (`fullscreen.vert`) drawn before lighting.frag with the same set and \
@@ -275,6 +296,15 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
 ];
 
 /// What each specialization constant means: (module, constant id, meaning).
+/// Modules whose specialization constants are another module's (by id): the lighting pass's
+/// one-kind modules are lighting.frag compiled with PIXEL_KINDS fixed, keeping the constants
+/// their code still reads.
+pub const SPEC_MEANINGS_OF: &[(&str, &str)] = &[
+    ("lighting_background.frag", "lighting.frag"),
+    ("lighting_woven.frag", "lighting.frag"),
+    ("lighting_gltf.frag", "lighting.frag"),
+];
+
 pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     (
         "gbuffer.frag",

@@ -439,6 +439,13 @@ impl Renderer {
             ..Default::default()
         };
         self.prepare(&options, &Plan::new(&blended, &options), None, false)?;
+        // A debug view: one lighting pipeline shades every kind of pixel (lighting.frag, where
+        // the stencil-split frame shades each kind with its own module).
+        let debug = RenderOptions {
+            debug_view: super::DebugView::Albedo,
+            ..RenderOptions::default()
+        };
+        self.prepare(&debug, &Plan::new(&Scene::default(), &debug), None, false)?;
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
@@ -1102,7 +1109,7 @@ impl Renderer {
         // The passes, in the plan's order, each from its named inputs.
         let ctx = self.ctx.clone();
         let submissions = ctx.submissions();
-        let pool = ctx.create_descriptor_pool(12 + 3 * gpu.material_count)?;
+        let pool = ctx.create_descriptor_pool(14 + 3 * gpu.material_count)?;
         let targets = self.targets.as_ref().expect("made by prepare_targets");
         let d = &self.defaults;
         let colors = buffers.forced_colors.as_ref().unwrap_or(&gpu.colors);

@@ -1,5 +1,8 @@
 //! The deferred lighting pass: one fullscreen triangle from the G-buffer into HDR
-//! (fullscreen.vert, lighting.frag): lamps with their shadows, the environment, emission. Where
+//! (fullscreen.vert, lighting.frag): lamps with their shadows, the environment, emission; where
+//! the G-buffer's stencil says what each pixel is, one triangle per kind of pixel instead, each
+//! with the module compiled for that kind alone (lighting_background.frag, lighting_woven.frag,
+//! lighting_gltf.frag: include/lighting_main.glsl with PIXEL_KINDS fixed). Where
 //! the woven model pools its environment lobe samples (the plan's `pool`), a first fullscreen
 //! triangle over the woven pixels writes each one's lobe sums (fabric_lobes.frag) into the
 //! target the lighting then reads around each pixel.
@@ -13,14 +16,18 @@ use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
     shaders, Attachment, Context, DepthTest, DescriptorPool, GraphicsDesc, Image, Load, Pipeline,
-    Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
+    Resource, Sampler, SetLayout, Shader, Stages, StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and whether they test the stencil (each with the lobe sums
 /// draw's pipeline when the variant pools the fabric lobes' samples), and the set layouts of
-/// the two (reflected from lighting.frag and from fabric_lobes.frag).
+/// their modules (reflected from lighting.frag, from each kind's module and from
+/// fabric_lobes.frag).
 pub struct LightingPass {
     layout: SetLayout,
+    /// The modules that shade one kind of pixel alone, by PIXEL_* bit, with their set layouts
+    /// and the specialization constants their SPIR-V keeps (the other kinds' are compiled out).
+    kind_modules: Vec<(u32, &'static Shader, SetLayout, Vec<u32>)>,
     lobes_layout: SetLayout,
     variants: HashMap<(VariantKey, bool), (Pipeline, Option<Pipeline>)>,
 }
@@ -88,8 +95,23 @@ impl LightingPass {
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::LIGHTING_FRAG])?;
         let [lobes_layout] =
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::FABRIC_LOBES_FRAG])?;
+        let mut kind_modules = Vec::new();
+        for (kind, module) in [
+            (PIXEL_BACKGROUND, &shaders::LIGHTING_BACKGROUND_FRAG),
+            (PIXEL_WOVEN, &shaders::LIGHTING_WOVEN_FRAG),
+            (PIXEL_GLTF, &shaders::LIGHTING_GLTF_FRAG),
+        ] {
+            let [layout] = ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, module])?;
+            let constants = crate::reflect::reflect(module.spirv)?
+                .spec_constants
+                .iter()
+                .map(|c| c.id)
+                .collect();
+            kind_modules.push((kind, module, layout, constants));
+        }
         Ok(LightingPass {
             layout,
+            kind_modules,
             lobes_layout,
             variants: HashMap::new(),
         })
@@ -208,20 +230,39 @@ impl LightingPass {
         })?))
     }
 
+    /// The module and set layout `variant` shades with: over a stencil (one kind of pixel), the
+    /// module compiled for that kind alone (its PIXEL_KINDS is no constant to specialise); else
+    /// lighting.frag, every kind its PIXEL_KINDS names.
+    fn module(&self, variant: &LightingVariant) -> (&'static Shader, &SetLayout, Option<&[u32]>) {
+        let (key, stencil) = variant;
+        let kinds = key.0.iter().find(|c| c.0 == 12).map_or(0, |c| c.2);
+        match self.kind_modules.iter().find(|m| m.0 == kinds) {
+            Some((_, module, layout, constants)) if stencil.is_some() => {
+                (module, layout, Some(constants))
+            }
+            _ => (&shaders::LIGHTING_FRAG, &self.layout, None),
+        }
+    }
+
     /// The shading draw's pipeline of `variant`.
     pub fn make_shade(&self, ctx: &Context, variant: &LightingVariant) -> crate::Result<Pipeline> {
         let (key, stencil) = variant;
+        let (module, layout, kept) = self.module(variant);
+        let mut constants = key.constants();
+        if let Some(kept) = kept {
+            constants.retain(|c| kept.contains(&c.0));
+        }
         ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!("lighting[{}]", key.describe()),
             vertex: &shaders::FULLSCREEN_VERT,
-            fragment: &shaders::LIGHTING_FRAG,
+            fragment: module,
             vertex_layout: None,
             color_formats: &[HDR_FORMAT],
             depth_format: stencil.map(|_| depth_format(ctx)),
-            set_layouts: &[&self.layout],
+            set_layouts: &[layout],
             push_constant_size: 0,
             push_stages: Stages::FRAGMENT,
-            constants: &key.constants(),
+            constants: &constants,
             blend: false,
             topology: Topology::Triangles,
             stencil: stencil_mode(stencil),
@@ -247,17 +288,23 @@ impl LightingPass {
         variants: &[LightingVariant],
         inputs: LightingInputs<'s>,
     ) -> crate::Result<Recorded<'s>> {
-        let pipelines: Vec<(&'s Pipeline, Option<&'s Pipeline>, Option<u32>)> = variants
+        let pipelines: Vec<(
+            &'s Pipeline,
+            Option<&'s Pipeline>,
+            Option<u32>,
+            &'s SetLayout,
+        )> = variants
             .iter()
-            .map(|(key, stencil)| {
+            .map(|variant| {
+                let (key, stencil) = variant;
                 let (p, lobes) = self
                     .variants
                     .get(&(key.clone(), stencil.is_some()))
                     .expect("the frame makes the lighting variants before recording");
-                (p, lobes.as_ref(), *stencil)
+                (p, lobes.as_ref(), *stencil, self.module(variant).1)
             })
             .collect();
-        let lobes = match pipelines.iter().find_map(|(_, l, s)| l.map(|l| (l, *s))) {
+        let lobes = match pipelines.iter().find_map(|(_, l, s, _)| l.map(|l| (l, *s))) {
             Some((pipeline, stencil)) => Some((
                 pipeline,
                 stencil,
@@ -287,26 +334,28 @@ impl LightingPass {
             (28, g(lobes.map_or(&t.frame, |(_, _, image)| image))),
         ];
         bindings.extend(inputs.lighting.bindings());
-        let set = pool.set(&self.layout, &bindings)?;
-        // The lobe sums draw reads some of the same resources at the same numbers.
+        // Each module's set holds the resources its layout names (the lobe sums draw and the
+        // one-kind modules read some of the same resources at the same numbers).
+        let set_of = |layout: &SetLayout| {
+            let wanted: Vec<(u32, Resource)> = bindings
+                .iter()
+                .filter(|(b, _)| layout.bindings.iter().any(|l| l.binding == *b))
+                .cloned()
+                .collect();
+            pool.set(layout, &wanted)
+        };
+        let shades = pipelines
+            .iter()
+            .map(|(p, _, stencil, layout)| Ok((*p, *stencil, set_of(layout)?)))
+            .collect::<crate::Result<Vec<_>>>()?;
         let lobes = match lobes {
             Some((pipeline, stencil, image)) => {
-                let wanted: Vec<(u32, Resource)> = bindings
-                    .iter()
-                    .filter(|(b, _)| self.lobes_layout.bindings.iter().any(|l| l.binding == *b))
-                    .cloned()
-                    .collect();
-                Some((
-                    pipeline,
-                    stencil,
-                    image,
-                    pool.set(&self.lobes_layout, &wanted)?,
-                ))
+                Some((pipeline, stencil, image, set_of(&self.lobes_layout)?))
             }
             None => None,
         };
         let mut names: Vec<String> = lobes.iter().map(|(p, _, _, _)| p.name.clone()).collect();
-        names.extend(pipelines.iter().map(|(p, _, _)| p.name.clone()));
+        names.extend(pipelines.iter().map(|(p, _, _, _)| p.name.clone()));
         Ok(Recorded::new("lighting", names, move |cmd| {
             if let Some((pipeline, stencil, image, lobes_set)) = lobes {
                 // The fabric lobes' samples first, over the woven pixels (every pixel where
@@ -331,16 +380,18 @@ impl LightingPass {
                 cmd.end_rendering();
                 cmd.transition(image, Usage::ColorAttachment, Usage::FragmentRead, None);
             }
-            match pipelines.as_slice() {
-                [(pipeline, _, None)] => super::fullscreen::<u32>(cmd, pipeline, set, None, &t.hdr),
+            match shades.as_slice() {
+                [(pipeline, None, set)] => {
+                    super::fullscreen::<u32>(cmd, pipeline, *set, None, &t.hdr)
+                }
                 _ => {
                     // A fullscreen triangle per kind of pixel, each where the stencil is
                     // its kind: together they cover every pixel once.
                     cmd.transition(&t.hdr, Usage::Undefined, Usage::ColorAttachment, None);
                     cmd.begin_rendering_stencil_test(&[&t.hdr], &t.depth);
-                    for (pipeline, _, stencil) in &pipelines {
+                    for (pipeline, stencil, set) in &shades {
                         cmd.bind_pipeline(pipeline);
-                        cmd.bind_sets(pipeline, 0, &[set]);
+                        cmd.bind_sets(pipeline, 0, &[*set]);
                         cmd.set_stencil_reference(stencil.unwrap_or(0));
                         cmd.draw(3);
                     }
