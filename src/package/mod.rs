@@ -57,6 +57,10 @@ pub const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/fabric.glsl"),
     ),
     ("frame.glsl", include_str!("../../glsl/include/frame.glsl")),
+    (
+        "gbuffer_main.glsl",
+        include_str!("../../glsl/include/gbuffer_main.glsl"),
+    ),
     ("ibl.glsl", include_str!("../../glsl/include/ibl.glsl")),
     (
         "lighting_main.glsl",

@@ -55,6 +55,13 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          `include/fabric.glsl`.",
     ),
     (
+        "gbuffer_gltf.frag",
+        "`gbuffer.frag` for glTF materials alone (`include/gbuffer_main.glsl` with MATERIAL_KIND \
+         fixed at 2 when compiled, so the weave's code is not in the module): the same targets \
+         and records; its bindings are a subset of gbuffer.frag's at the same numbers, and weft \
+         binds it with gbuffer.frag's set layouts, so one material set serves both.",
+    ),
+    (
         "gbuffer.vert",
         "G-buffer pass, vertex stage: one interleaved vertex buffer with position (location 0, \
          vec3), normal (1, vec3), tangent (2, vec4, w = handedness), uv (3, vec2) and weave uv (4, \
@@ -295,16 +302,18 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
     ),
 ];
 
-/// What each specialization constant means: (module, constant id, meaning).
-/// Modules whose specialization constants are another module's (by id): the lighting pass's
-/// one-kind modules are lighting.frag compiled with PIXEL_KINDS fixed, keeping the constants
-/// their code still reads.
+/// Modules whose specialization constants are another module's (by id): the one-kind modules
+/// are gbuffer.frag compiled with MATERIAL_KIND fixed and lighting.frag with PIXEL_KINDS fixed,
+/// keeping the constants their code still reads. weft's glTF G-buffer pipelines give
+/// gbuffer_gltf.frag gbuffer.frag's set layouts (its bindings are a subset of them).
 pub const SPEC_MEANINGS_OF: &[(&str, &str)] = &[
+    ("gbuffer_gltf.frag", "gbuffer.frag"),
     ("lighting_background.frag", "lighting.frag"),
     ("lighting_woven.frag", "lighting.frag"),
     ("lighting_gltf.frag", "lighting.frag"),
 ];
 
+/// What each specialization constant means: (module, constant id, meaning).
 pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     (
         "gbuffer.frag",

@@ -1,5 +1,6 @@
 //! The G-buffer pass: every draw the G-buffer can hold into the six colour targets and depth
-//! (gbuffer.vert, gbuffer.frag).
+//! (gbuffer.vert, gbuffer.frag; where the kinds of material are split, glTF materials with
+//! gbuffer_gltf.frag: include/gbuffer_main.glsl without the weave's code).
 
 use std::collections::HashMap;
 use std::sync::OnceLock;
@@ -25,6 +26,9 @@ use crate::vk::{
 pub struct GBufferPass {
     frame_layout: SetLayout,
     pub(crate) material_layout: SetLayout,
+    /// The specialization constants gbuffer.vert and gbuffer_gltf.frag declare (the glTF kind's
+    /// pipeline gives only these: its MATERIAL_KIND and the weave's constants are compiled out).
+    gltf_constants: Vec<u32>,
     /// By variant, topology, kind and whether a depth pre-pass runs before (its depth test).
     variants: HashMap<(VariantKey, Topology, Kind, bool), Pipeline>,
     /// The depth pre-pass (depth.vert, shadow.frag), made once when a plan first has one, and
@@ -110,9 +114,19 @@ impl GBufferPass {
         let [frame_layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
         let [depth_layout] =
             ctx.reflected_set_layouts(&[&shaders::DEPTH_VERT, &shaders::SHADOW_FRAG])?;
+        let mut gltf_constants = Vec::new();
+        for module in [&shaders::GBUFFER_VERT, &shaders::GBUFFER_GLTF_FRAG] {
+            gltf_constants.extend(
+                crate::reflect::reflect(module.spirv)?
+                    .spec_constants
+                    .iter()
+                    .map(|c| c.id),
+            );
+        }
         Ok(GBufferPass {
             frame_layout,
             material_layout,
+            gltf_constants,
             variants: HashMap::new(),
             depth: OnceLock::new(),
             depth_layout,
@@ -208,6 +222,15 @@ impl GBufferPass {
     ) -> crate::Result<Pipeline> {
         let mut constants = key.constants();
         constants.push((8, kind as u32));
+        // glTF materials alone: the module without the weave's code (MATERIAL_KIND fixed), with
+        // gbuffer.frag's set layouts (its bindings are a subset of theirs, at the same numbers),
+        // so every material's set serves both kinds' pipelines.
+        let fragment = if kind == Kind::Gltf {
+            constants.retain(|c| self.gltf_constants.contains(&c.0));
+            &shaders::GBUFFER_GLTF_FRAG
+        } else {
+            &shaders::GBUFFER_FRAG
+        };
         ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!(
                 "gbuffer[{}{}{}{}]",
@@ -221,7 +244,7 @@ impl GBufferPass {
                 kind.name()
             ),
             vertex: &shaders::GBUFFER_VERT,
-            fragment: &shaders::GBUFFER_FRAG,
+            fragment,
             vertex_layout: Some(gbuffer_vertex_layout()),
             color_formats: &[
                 ALBEDO_FORMAT,
