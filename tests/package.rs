@@ -629,7 +629,7 @@ fn one_number_per_resource_in_the_frames_shaders() {
     let frame_shaders = [
         (shaders::GBUFFER_VERT.name, shaders::GBUFFER_VERT.source),
         ("include/gbuffer_main.glsl", include("gbuffer_main.glsl")),
-        (shaders::FORWARD_FRAG.name, shaders::FORWARD_FRAG.source),
+        ("include/forward_main.glsl", include("forward_main.glsl")),
         ("include/lighting_main.glsl", lighting_main),
         (
             shaders::SHADOW_MASK_VERT.name,

@@ -58,6 +58,10 @@ pub const INCLUDES: &[(&str, &str)] = &[
     ),
     ("frame.glsl", include_str!("../../glsl/include/frame.glsl")),
     (
+        "forward_main.glsl",
+        include_str!("../../glsl/include/forward_main.glsl"),
+    ),
+    (
         "gbuffer_main.glsl",
         include_str!("../../glsl/include/gbuffer_main.glsl"),
     ),

@@ -55,6 +55,13 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          `include/fabric.glsl`.",
     ),
     (
+        "forward_gltf.frag",
+        "`forward.frag` where no fabric is drawn forward (`include/forward_main.glsl` with the \
+         woven model compiled out: MATERIAL_KIND glTF, no fabric sheets): the same blending, \
+         backdrop and records; its bindings are a subset of forward.frag's at the same numbers, \
+         and weft binds it with forward.frag's set layouts.",
+    ),
+    (
         "gbuffer_gltf.frag",
         "`gbuffer.frag` for glTF materials alone (`include/gbuffer_main.glsl` with MATERIAL_KIND \
          fixed at 2 when compiled, so the weave's code is not in the module): the same targets \
@@ -307,6 +314,7 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
 /// keeping the constants their code still reads. weft's glTF G-buffer pipelines give
 /// gbuffer_gltf.frag gbuffer.frag's set layouts (its bindings are a subset of them).
 pub const SPEC_MEANINGS_OF: &[(&str, &str)] = &[
+    ("forward_gltf.frag", "forward.frag"),
     ("gbuffer_gltf.frag", "gbuffer.frag"),
     ("lighting_background.frag", "lighting.frag"),
     ("lighting_woven.frag", "lighting.frag"),

@@ -439,6 +439,10 @@ impl Renderer {
             ..Default::default()
         };
         self.prepare(&options, &Plan::new(&blended, &options), None, false)?;
+        // And blended fabric: forward.frag with the woven model (forward_gltf.frag above).
+        let mut woven = blended.clone();
+        woven.materials[0].fabric = Some(Default::default());
+        self.prepare(&options, &Plan::new(&woven, &options), None, false)?;
         // A debug view: one lighting pipeline shades every kind of pixel (lighting.frag, where
         // the stencil-split frame shades each kind with its own module).
         let debug = RenderOptions {

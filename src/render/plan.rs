@@ -214,6 +214,9 @@ pub struct Plan {
     /// Draws the transparent pass draws opaque, writing depth: transmissive, coated, diffusely
     /// transmissive or iridescent, not BLEND.
     pub forward_opaque_draws: usize,
+    /// Draws of fabric the transparent pass draws (blended or sheets): without any, its pipelines
+    /// use forward_gltf.frag, the module without the woven model.
+    pub forward_woven_draws: usize,
     /// EXT_mesh_gpu_instancing: nodes with instances, and the instances (each drawn as a draw of
     /// its own, counted in `draws`; no pipeline or pass of its own).
     pub instanced_nodes: usize,
@@ -502,6 +505,7 @@ impl Plan {
         let sheet_draws = count(&|m| m.is_sheet());
         let transmission_draws = count(&|m| m.transmission.is_some());
         let forward_opaque_draws = count(&|m| m.needs_forward() && !m.blended());
+        let forward_woven_draws = count(&|m| m.needs_forward() && m.fabric.is_some());
         let coat_draws = count(&|m| m.clearcoat.is_some());
         let diffuse_transmission_draws = count(&|m| m.diffuse_transmission.is_some());
         let iridescence_draws = count(&|m| m.iridescence.is_some());
@@ -720,6 +724,7 @@ impl Plan {
             blend_draws,
             transmission_draws,
             forward_opaque_draws,
+            forward_woven_draws,
             coat_draws,
             diffuse_transmission_draws,
             sheet_draws,

@@ -24,7 +24,7 @@ use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
 use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
 use crate::vk::{
     shaders, Attachment, Buffer, Cmd, Context, Cull, DepthTest, DescriptorPool, DescriptorSet,
-    GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages, StencilMode,
+    GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Shader, Stages, StencilMode,
     Topology, Usage,
 };
 
@@ -35,6 +35,10 @@ use crate::vk::{
 pub struct TransparentPass {
     layout: SetLayout,
     pub(crate) material_layout: SetLayout,
+    /// The specialization constants gbuffer.vert and forward.frag declare, and gbuffer.vert and
+    /// forward_gltf.frag (the woven model's compiled out).
+    constants: Vec<u32>,
+    gltf_constants: Vec<u32>,
     variants: HashMap<(VariantKey, bool), Pipeline>,
 }
 
@@ -61,9 +65,23 @@ impl TransparentPass {
     pub fn new(ctx: &Context) -> crate::Result<TransparentPass> {
         let shaders = [&shaders::GBUFFER_VERT, &shaders::FORWARD_FRAG];
         let [layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
+        let declared = |fragment: &Shader| -> crate::Result<Vec<u32>> {
+            let mut ids = Vec::new();
+            for module in [&shaders::GBUFFER_VERT, fragment] {
+                ids.extend(
+                    crate::reflect::reflect(module.spirv)?
+                        .spec_constants
+                        .iter()
+                        .map(|c| c.id),
+                );
+            }
+            Ok(ids)
+        };
         Ok(TransparentPass {
             layout,
             material_layout,
+            constants: declared(&shaders::FORWARD_FRAG)?,
+            gltf_constants: declared(&shaders::FORWARD_GLTF_FRAG)?,
             variants: HashMap::new(),
         })
     }
@@ -101,6 +119,8 @@ impl TransparentPass {
             (24, "dispersion", (plan.dispersion_draws > 0) as u32),
             (25, "thread_colours", plan.features.thread_colours as u32),
             (26, "fabric_sheets", plan.fabric_sheets as u32),
+            // Not a constant of either module: which module (forward_gltf.frag without fabric).
+            (27, "woven", (plan.forward_woven_draws > 0) as u32),
         ]);
         VariantKey(key)
     }
@@ -120,6 +140,17 @@ impl TransparentPass {
     /// Makes the pipeline of variant `key` and blend mode `blend` (not kept: see
     /// [`TransparentPass::insert`]).
     pub fn make(&self, ctx: &Context, key: &VariantKey, blend: bool) -> crate::Result<Pipeline> {
+        // No fabric drawn forward: the module without the woven model, with forward.frag's set
+        // layouts (its bindings are a subset, at the same numbers). Each module gets the
+        // constants it declares.
+        let woven = key.0.iter().any(|c| c.0 == 27 && c.2 != 0);
+        let (fragment, declared) = if woven {
+            (&shaders::FORWARD_FRAG, &self.constants)
+        } else {
+            (&shaders::FORWARD_GLTF_FRAG, &self.gltf_constants)
+        };
+        let mut constants = key.constants();
+        constants.retain(|c| declared.contains(&c.0));
         ctx.create_graphics_pipeline(&GraphicsDesc {
             name: &format!(
                 "forward[{}{}]",
@@ -127,14 +158,14 @@ impl TransparentPass {
                 key.describe()
             ),
             vertex: &shaders::GBUFFER_VERT,
-            fragment: &shaders::FORWARD_FRAG,
+            fragment,
             vertex_layout: Some(gbuffer_vertex_layout()),
             color_formats: &[HDR_FORMAT],
             depth_format: Some(depth_format(ctx)),
             set_layouts: &[&self.layout, &self.material_layout],
             push_constant_size: std::mem::size_of::<DrawPush>() as u32,
             push_stages: Stages::GRAPHICS,
-            constants: &key.constants(),
+            constants: &constants,
             blend,
             topology: Topology::Triangles,
             stencil: StencilMode::None,
