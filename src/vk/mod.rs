@@ -18,6 +18,7 @@ pub use ash::vk::Format;
 pub use ash::vk::{BufferUsageFlags, ImageUsageFlags};
 pub use cmd::{Attachment, Cmd, Cull, InFlight, Load, Recording, Usage};
 pub use context::{Context, ContextOptions, DeviceChoice, DeviceInfo};
+pub use pipeline::spec_constant_ids;
 pub use pipeline::{
     Binding, BindingKind, ComputeDesc, DepthTest, DescriptorPool, DescriptorSet, GraphicsDesc,
     Pipeline, Resource, SetLayout, Stages, StencilMode, Topology, VertexLayout,

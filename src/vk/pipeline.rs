@@ -292,6 +292,22 @@ fn specialization(constants: &[(u32, u32)]) -> Specialization {
     Specialization { entries, data }
 }
 
+/// The specialization constant ids `shaders` declare, reflected from their SPIR-V: what a
+/// pipeline of them may specialise (a module compiled with a constant fixed no longer declares
+/// it, nor those only its compiled-out code read).
+pub fn spec_constant_ids(shaders: &[&Shader]) -> crate::Result<Vec<u32>> {
+    let mut ids = Vec::new();
+    for shader in shaders {
+        ids.extend(
+            crate::reflect::reflect(shader.spirv)?
+                .spec_constants
+                .iter()
+                .map(|c| c.id),
+        );
+    }
+    Ok(ids)
+}
+
 /// The bindings of each descriptor set `shaders` declare (index: the set number), reflected from
 /// their SPIR-V, each shader read once: each binding once, visible to every stage that declares
 /// it. A binding two stages declare with different kinds, or a kind weft does not bind, is an

@@ -114,19 +114,13 @@ impl GBufferPass {
         let [frame_layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
         let [depth_layout] =
             ctx.reflected_set_layouts(&[&shaders::DEPTH_VERT, &shaders::SHADOW_FRAG])?;
-        let mut gltf_constants = Vec::new();
-        for module in [&shaders::GBUFFER_VERT, &shaders::GBUFFER_GLTF_FRAG] {
-            gltf_constants.extend(
-                crate::reflect::reflect(module.spirv)?
-                    .spec_constants
-                    .iter()
-                    .map(|c| c.id),
-            );
-        }
         Ok(GBufferPass {
             frame_layout,
             material_layout,
-            gltf_constants,
+            gltf_constants: crate::vk::spec_constant_ids(&[
+                &shaders::GBUFFER_VERT,
+                &shaders::GBUFFER_GLTF_FRAG,
+            ])?,
             variants: HashMap::new(),
             depth: OnceLock::new(),
             depth_layout,

@@ -15,8 +15,9 @@ use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
-    shaders, Attachment, Context, DepthTest, DescriptorPool, GraphicsDesc, Image, Load, Pipeline,
-    Resource, Sampler, SetLayout, Shader, Stages, StencilMode, Topology, Usage,
+    shaders, spec_constant_ids, Attachment, Context, DepthTest, DescriptorPool, GraphicsDesc,
+    Image, Load, Pipeline, Resource, Sampler, SetLayout, Shader, Stages, StencilMode, Topology,
+    Usage,
 };
 
 /// The pass's pipelines by variant and whether they test the stencil (each with the lobe sums
@@ -102,12 +103,7 @@ impl LightingPass {
             (PIXEL_GLTF, &shaders::LIGHTING_GLTF_FRAG),
         ] {
             let [layout] = ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, module])?;
-            let constants = crate::reflect::reflect(module.spirv)?
-                .spec_constants
-                .iter()
-                .map(|c| c.id)
-                .collect();
-            kind_modules.push((kind, module, layout, constants));
+            kind_modules.push((kind, module, layout, spec_constant_ids(&[module])?));
         }
         Ok(LightingPass {
             layout,
@@ -184,8 +180,7 @@ impl LightingPass {
     /// Whether `key` pools the fabric lobes' samples (POOL ≥ 1) where it shades woven pixels:
     /// its pass first runs the lobe sums draw.
     pub fn pools(key: &VariantKey) -> bool {
-        let constant = |id| key.0.iter().find(|c| c.0 == id).map_or(0, |c| c.2);
-        constant(14) > 0 && constant(12) & PIXEL_WOVEN != 0
+        key.value(14) > 0 && key.value(12) & PIXEL_WOVEN != 0
     }
 
     /// The pipelines of `variant` (not kept: see [`LightingPass::insert`]) are made in two
@@ -235,8 +230,7 @@ impl LightingPass {
     /// lighting.frag, every kind its PIXEL_KINDS names.
     fn module(&self, variant: &LightingVariant) -> (&'static Shader, &SetLayout, Option<&[u32]>) {
         let (key, stencil) = variant;
-        let kinds = key.0.iter().find(|c| c.0 == 12).map_or(0, |c| c.2);
-        match self.kind_modules.iter().find(|m| m.0 == kinds) {
+        match self.kind_modules.iter().find(|m| m.0 == key.value(12)) {
             Some((_, module, layout, constants)) if stencil.is_some() => {
                 (module, layout, Some(constants))
             }

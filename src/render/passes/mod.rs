@@ -70,6 +70,11 @@ impl VariantKey {
         self.0.iter().map(|&(id, _, v)| (id, v)).collect()
     }
 
+    /// The value of constant `id` (0 when the key has none).
+    pub fn value(&self, id: u32) -> u32 {
+        self.0.iter().find(|c| c.0 == id).map_or(0, |c| c.2)
+    }
+
     /// `name=value, ...` (pipeline names, `--stats`).
     pub fn describe(&self) -> String {
         self.0

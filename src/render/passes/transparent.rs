@@ -23,9 +23,9 @@ use crate::render::plan::Plan;
 use crate::render::targets::{depth_format, Targets, HDR_FORMAT};
 use crate::render::upload::{gbuffer_vertex_layout, GpuScene};
 use crate::vk::{
-    shaders, Attachment, Buffer, Cmd, Context, Cull, DepthTest, DescriptorPool, DescriptorSet,
-    GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Shader, Stages, StencilMode,
-    Topology, Usage,
+    shaders, spec_constant_ids, Attachment, Buffer, Cmd, Context, Cull, DepthTest, DescriptorPool,
+    DescriptorSet, GraphicsDesc, Image, Load, Pipeline, Resource, Sampler, SetLayout, Stages,
+    StencilMode, Topology, Usage,
 };
 
 /// The pass's pipelines by variant and blend mode (true: BLEND, blended without depth writes;
@@ -65,23 +65,14 @@ impl TransparentPass {
     pub fn new(ctx: &Context) -> crate::Result<TransparentPass> {
         let shaders = [&shaders::GBUFFER_VERT, &shaders::FORWARD_FRAG];
         let [layout, material_layout] = ctx.reflected_set_layouts(&shaders)?;
-        let declared = |fragment: &Shader| -> crate::Result<Vec<u32>> {
-            let mut ids = Vec::new();
-            for module in [&shaders::GBUFFER_VERT, fragment] {
-                ids.extend(
-                    crate::reflect::reflect(module.spirv)?
-                        .spec_constants
-                        .iter()
-                        .map(|c| c.id),
-                );
-            }
-            Ok(ids)
-        };
         Ok(TransparentPass {
             layout,
             material_layout,
-            constants: declared(&shaders::FORWARD_FRAG)?,
-            gltf_constants: declared(&shaders::FORWARD_GLTF_FRAG)?,
+            constants: spec_constant_ids(&shaders)?,
+            gltf_constants: spec_constant_ids(&[
+                &shaders::GBUFFER_VERT,
+                &shaders::FORWARD_GLTF_FRAG,
+            ])?,
             variants: HashMap::new(),
         })
     }
@@ -143,8 +134,7 @@ impl TransparentPass {
         // No fabric drawn forward: the module without the woven model, with forward.frag's set
         // layouts (its bindings are a subset, at the same numbers). Each module gets the
         // constants it declares.
-        let woven = key.0.iter().any(|c| c.0 == 27 && c.2 != 0);
-        let (fragment, declared) = if woven {
+        let (fragment, declared) = if key.value(27) != 0 {
             (&shaders::FORWARD_FRAG, &self.constants)
         } else {
             (&shaders::FORWARD_GLTF_FRAG, &self.gltf_constants)
