@@ -95,7 +95,8 @@ impl CameraMotion {
 /// Poses the scene at time `t` (seconds) for the frame about to be rendered, and returns the
 /// frame's options. With `animation`, the glTF animation is sampled at `t` ([`Scene::pose`]) and
 /// only what it changed goes to the GPU ([`Renderer::update_pose`]: world matrices, lights,
-/// joint matrices and morph weights; meshes, materials and textures stay as uploaded). Then the
+/// joint matrices and morph weights, and material records that KHR_animation_pointer drives;
+/// meshes and textures stay as uploaded). Then the
 /// camera: the scene's own (an animated camera node is already at `t`) or `--eye/--target`,
 /// moved by `motion`.
 pub fn pose_frame(

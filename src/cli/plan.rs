@@ -31,7 +31,12 @@ pub(super) fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
         json["animations"] = scene
             .animations()
             .iter()
-            .map(|a| serde_json::json!({"name": a.name, "duration": a.duration}))
+            .enumerate()
+            .map(|(i, a)| {
+                let [nodes, materials, lights, cameras] = scene.animation_drives(i);
+                serde_json::json!({"name": a.name, "duration": a.duration,
+                    "drives": {"nodes": nodes, "materials": materials, "lights": lights, "cameras": cameras}})
+            })
             .collect();
         json["light_types_mask"] = plan.light_types_mask().into();
         println!("{}", serde_json::to_string_pretty(&json)?);
@@ -39,15 +44,27 @@ pub(super) fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
         println!("scene       {}", scene.source);
         println!("{plan}");
         for (i, a) in scene.animations().iter().enumerate() {
+            let drives: Vec<String> = scene
+                .animation_drives(i)
+                .iter()
+                .zip(["node", "material", "light", "camera"])
+                .filter(|(n, _)| **n > 0)
+                .map(|(n, what)| format!("{n} {what}{}", if *n == 1 { "" } else { "s" }))
+                .collect();
             println!(
-                "{}{i}: '{}', {:.3} s",
+                "{}{i}: '{}', {:.3} s{}",
                 if i == 0 {
                     "animations  "
                 } else {
                     "            "
                 },
                 a.name,
-                a.duration
+                a.duration,
+                if drives.is_empty() {
+                    String::new()
+                } else {
+                    format!(", drives {}", drives.join(", "))
+                }
             );
         }
     }

@@ -240,8 +240,9 @@ impl SkinPass {
 
 impl Renderer {
     /// Re-uploads what [`Scene::pose`] changed: the draws' world matrices (push constants), the
-    /// lights, and, for skinned and morphed draws, the joint matrices and morph weights, then
-    /// rewrites their posed vertices on the GPU. Meshes, materials and textures are not touched.
+    /// lights, the material records where KHR_animation_pointer drives materials, and, for
+    /// skinned and morphed draws, the joint matrices and morph weights, then rewrites their posed
+    /// vertices on the GPU. Meshes and textures are not touched.
     /// `scene` must be the scene `gpu` was uploaded from.
     pub fn update_pose(&self, gpu: &mut GpuScene, scene: &Scene) -> crate::Result<()> {
         let mismatch = || {
@@ -261,6 +262,16 @@ impl Renderer {
                 *r = GpuLight::new(l);
             }
             gpu.lights.write(0, &gpu.light_records)?;
+        }
+        // KHR_animation_pointer drives material factors: their records again (the textures,
+        // weaves and plan stay: a pose changes values, never which extensions a material has).
+        if scene
+            .rig
+            .pointed
+            .as_ref()
+            .is_some_and(|p| !p.materials.is_empty())
+        {
+            self.update_material_records(scene, gpu)?;
         }
         let Some(deform) = gpu.deform.as_mut() else {
             return Ok(());

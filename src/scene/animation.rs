@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 
 use glam::{Mat3, Mat4, Quat, Vec3};
 
-use super::{Camera, Scene, Vertex};
+use super::{Camera, Light, LightKind, Material, Scene, Vertex};
 use crate::{Error, Result};
 
 /// The most joints a skin may have: JOINTS_n is unsigned byte or unsigned short in glTF, so no
@@ -49,6 +49,459 @@ pub enum Path {
     Scale,
     /// Morph target weights (as many per keyframe as the node's mesh has targets).
     Weights,
+    /// A material's property (KHR_animation_pointer); the channel's target is the material.
+    Material(MaterialProperty),
+    /// A KHR_lights_punctual light's property (KHR_animation_pointer); the target is the light
+    /// (its index in the file's list of lights: every node that places it follows).
+    Light(LightProperty),
+    /// A camera's property (KHR_animation_pointer); the target is the file's camera.
+    Camera(CameraProperty),
+}
+
+/// A material property that KHR_animation_pointer can drive, by its JSON pointer below
+/// `/materials/{index}/`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum MaterialProperty {
+    BaseColor,
+    Metallic,
+    Roughness,
+    Emissive,
+    EmissiveStrength,
+    AlphaCutoff,
+    NormalScale,
+    OcclusionStrength,
+    Ior,
+    Transmission,
+    Thickness,
+    AttenuationDistance,
+    AttenuationColor,
+    Specular,
+    SpecularColor,
+    SheenColor,
+    SheenRoughness,
+    Clearcoat,
+    ClearcoatRoughness,
+    ClearcoatNormalScale,
+    Iridescence,
+    IridescenceIor,
+    IridescenceThicknessMin,
+    IridescenceThicknessMax,
+    AnisotropyStrength,
+    AnisotropyRotation,
+    Dispersion,
+    DiffuseTransmission,
+    DiffuseTransmissionColor,
+}
+
+impl MaterialProperty {
+    /// Every property with its JSON pointer below `/materials/{index}/` and its width.
+    pub const ALL: [(MaterialProperty, &'static str, usize); 29] = {
+        use MaterialProperty as P;
+        [
+            (P::BaseColor, "pbrMetallicRoughness/baseColorFactor", 4),
+            (P::Metallic, "pbrMetallicRoughness/metallicFactor", 1),
+            (P::Roughness, "pbrMetallicRoughness/roughnessFactor", 1),
+            (P::Emissive, "emissiveFactor", 3),
+            (
+                P::EmissiveStrength,
+                "extensions/KHR_materials_emissive_strength/emissiveStrength",
+                1,
+            ),
+            (P::AlphaCutoff, "alphaCutoff", 1),
+            (P::NormalScale, "normalTexture/scale", 1),
+            (P::OcclusionStrength, "occlusionTexture/strength", 1),
+            (P::Ior, "extensions/KHR_materials_ior/ior", 1),
+            (
+                P::Transmission,
+                "extensions/KHR_materials_transmission/transmissionFactor",
+                1,
+            ),
+            (
+                P::Thickness,
+                "extensions/KHR_materials_volume/thicknessFactor",
+                1,
+            ),
+            (
+                P::AttenuationDistance,
+                "extensions/KHR_materials_volume/attenuationDistance",
+                1,
+            ),
+            (
+                P::AttenuationColor,
+                "extensions/KHR_materials_volume/attenuationColor",
+                3,
+            ),
+            (
+                P::Specular,
+                "extensions/KHR_materials_specular/specularFactor",
+                1,
+            ),
+            (
+                P::SpecularColor,
+                "extensions/KHR_materials_specular/specularColorFactor",
+                3,
+            ),
+            (
+                P::SheenColor,
+                "extensions/KHR_materials_sheen/sheenColorFactor",
+                3,
+            ),
+            (
+                P::SheenRoughness,
+                "extensions/KHR_materials_sheen/sheenRoughnessFactor",
+                1,
+            ),
+            (
+                P::Clearcoat,
+                "extensions/KHR_materials_clearcoat/clearcoatFactor",
+                1,
+            ),
+            (
+                P::ClearcoatRoughness,
+                "extensions/KHR_materials_clearcoat/clearcoatRoughnessFactor",
+                1,
+            ),
+            (
+                P::ClearcoatNormalScale,
+                "extensions/KHR_materials_clearcoat/clearcoatNormalTexture/scale",
+                1,
+            ),
+            (
+                P::Iridescence,
+                "extensions/KHR_materials_iridescence/iridescenceFactor",
+                1,
+            ),
+            (
+                P::IridescenceIor,
+                "extensions/KHR_materials_iridescence/iridescenceIor",
+                1,
+            ),
+            (
+                P::IridescenceThicknessMin,
+                "extensions/KHR_materials_iridescence/iridescenceThicknessMinimum",
+                1,
+            ),
+            (
+                P::IridescenceThicknessMax,
+                "extensions/KHR_materials_iridescence/iridescenceThicknessMaximum",
+                1,
+            ),
+            (
+                P::AnisotropyStrength,
+                "extensions/KHR_materials_anisotropy/anisotropyStrength",
+                1,
+            ),
+            (
+                P::AnisotropyRotation,
+                "extensions/KHR_materials_anisotropy/anisotropyRotation",
+                1,
+            ),
+            (
+                P::Dispersion,
+                "extensions/KHR_materials_dispersion/dispersion",
+                1,
+            ),
+            (
+                P::DiffuseTransmission,
+                "extensions/KHR_materials_diffuse_transmission/diffuseTransmissionFactor",
+                1,
+            ),
+            (
+                P::DiffuseTransmissionColor,
+                "extensions/KHR_materials_diffuse_transmission/diffuseTransmissionColorFactor",
+                3,
+            ),
+        ]
+    };
+
+    /// The property at `path` (the JSON pointer below `/materials/{index}/`), and its width.
+    pub fn from_path(path: &str) -> Option<(MaterialProperty, usize)> {
+        MaterialProperty::ALL
+            .iter()
+            .find(|(_, p, _)| *p == path)
+            .map(|&(m, _, w)| (m, w))
+    }
+
+    /// Why `m` has nothing this property drives (the extension it belongs to is not on the
+    /// material, or weft keeps it elsewhere), or None when it applies.
+    pub fn missing_on(self, m: &Material) -> Option<&'static str> {
+        use MaterialProperty as P;
+        let has = match self {
+            P::BaseColor
+            | P::Metallic
+            | P::Roughness
+            | P::Emissive
+            | P::EmissiveStrength
+            | P::NormalScale
+            | P::OcclusionStrength
+            | P::Ior
+            | P::Specular
+            | P::SpecularColor => true,
+            P::AlphaCutoff => m.alpha_cutoff.is_some(),
+            P::Transmission
+            | P::Thickness
+            | P::AttenuationDistance
+            | P::AttenuationColor
+            | P::Dispersion => m.transmission.is_some(),
+            P::SheenColor | P::SheenRoughness => m.sheen.is_some(),
+            P::Clearcoat | P::ClearcoatRoughness | P::ClearcoatNormalScale => m.clearcoat.is_some(),
+            P::Iridescence
+            | P::IridescenceIor
+            | P::IridescenceThicknessMin
+            | P::IridescenceThicknessMax => m.iridescence.is_some(),
+            P::AnisotropyStrength | P::AnisotropyRotation => m.anisotropy.is_some(),
+            P::DiffuseTransmission | P::DiffuseTransmissionColor => {
+                m.diffuse_transmission.is_some()
+            }
+        };
+        if has {
+            return None;
+        }
+        Some(match self {
+            P::AlphaCutoff => "its alphaMode is not MASK",
+            P::Transmission
+            | P::Thickness
+            | P::AttenuationDistance
+            | P::AttenuationColor
+            | P::Dispersion => "it has no KHR_materials_transmission",
+            P::SheenColor | P::SheenRoughness => "it has no KHR_materials_sheen",
+            P::Clearcoat | P::ClearcoatRoughness | P::ClearcoatNormalScale => {
+                "it has no KHR_materials_clearcoat"
+            }
+            P::AnisotropyStrength | P::AnisotropyRotation => "it has no KHR_materials_anisotropy",
+            P::DiffuseTransmission | P::DiffuseTransmissionColor => {
+                "it has no KHR_materials_diffuse_transmission"
+            }
+            _ => "it has no KHR_materials_iridescence",
+        })
+    }
+
+    /// Sets the property on `m` to `v` (its width of floats, finite), within the range the
+    /// loader keeps the file's value in. The emissive factor and strength go to `emission`
+    /// (their product is the material's emission, made once every channel has been applied).
+    pub fn apply(self, m: &mut Material, v: &[f32], emission: &mut ([f32; 3], f32)) {
+        use MaterialProperty as P;
+        let unit = |x: f32| x.clamp(0.0, 1.0);
+        let colour = |v: &[f32]| [v[0].max(0.0), v[1].max(0.0), v[2].max(0.0)];
+        match self {
+            P::BaseColor => m.base_color = [v[0], v[1], v[2], v[3]],
+            P::Metallic => m.metallic = unit(v[0]),
+            P::Roughness => m.roughness = unit(v[0]),
+            P::Emissive => emission.0 = colour(v),
+            P::EmissiveStrength => emission.1 = v[0].max(0.0),
+            P::AlphaCutoff => m.alpha_cutoff = m.alpha_cutoff.map(|_| v[0]),
+            P::NormalScale => m.normal_scale = v[0],
+            P::OcclusionStrength => m.occlusion_strength = unit(v[0]),
+            P::Ior => {
+                m.specular.ior = if v[0] == 0.0 {
+                    0.0
+                } else {
+                    v[0].clamp(1.0, 10.0)
+                }
+            }
+            P::Specular => m.specular.factor = unit(v[0]),
+            P::SpecularColor => m.specular.color = colour(v),
+            P::Transmission => {
+                if let Some(t) = &mut m.transmission {
+                    t.factor = unit(v[0]);
+                }
+            }
+            P::Thickness => {
+                if let Some(t) = &mut m.transmission {
+                    t.thickness = v[0].max(0.0);
+                }
+            }
+            P::AttenuationDistance => {
+                if let Some(t) = &mut m.transmission {
+                    t.attenuation_distance = (v[0] > 0.0).then_some(v[0]);
+                }
+            }
+            P::AttenuationColor => {
+                if let Some(t) = &mut m.transmission {
+                    t.attenuation_color = colour(v);
+                }
+            }
+            P::Dispersion => {
+                if let Some(t) = &mut m.transmission {
+                    t.dispersion = v[0].max(0.0);
+                }
+            }
+            P::SheenColor => {
+                if let Some(s) = &mut m.sheen {
+                    s.color = colour(v);
+                }
+            }
+            P::SheenRoughness => {
+                if let Some(s) = &mut m.sheen {
+                    s.roughness = unit(v[0]);
+                }
+            }
+            P::Clearcoat => {
+                if let Some(c) = &mut m.clearcoat {
+                    c.factor = unit(v[0]);
+                }
+            }
+            P::ClearcoatRoughness => {
+                if let Some(c) = &mut m.clearcoat {
+                    c.roughness = unit(v[0]);
+                }
+            }
+            P::ClearcoatNormalScale => {
+                if let Some(c) = &mut m.clearcoat {
+                    c.normal_scale = v[0];
+                }
+            }
+            P::Iridescence => {
+                if let Some(i) = &mut m.iridescence {
+                    i.factor = unit(v[0]);
+                }
+            }
+            P::IridescenceIor => {
+                if let Some(i) = &mut m.iridescence {
+                    i.ior = v[0].max(1.0);
+                }
+            }
+            P::IridescenceThicknessMin => {
+                if let Some(i) = &mut m.iridescence {
+                    i.thickness_min = v[0].max(0.0);
+                }
+            }
+            P::IridescenceThicknessMax => {
+                if let Some(i) = &mut m.iridescence {
+                    i.thickness_max = v[0].max(0.0);
+                }
+            }
+            P::AnisotropyStrength => {
+                if let Some(a) = &mut m.anisotropy {
+                    a.strength = unit(v[0]);
+                }
+            }
+            P::AnisotropyRotation => {
+                if let Some(a) = &mut m.anisotropy {
+                    a.rotation = v[0];
+                }
+            }
+            P::DiffuseTransmission => {
+                if let Some(d) = &mut m.diffuse_transmission {
+                    d.factor = unit(v[0]);
+                }
+            }
+            P::DiffuseTransmissionColor => {
+                if let Some(d) = &mut m.diffuse_transmission {
+                    d.color = colour(v);
+                }
+            }
+        }
+    }
+}
+
+/// A KHR_lights_punctual property that KHR_animation_pointer can drive, below
+/// `/extensions/KHR_lights_punctual/lights/{index}/`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightProperty {
+    Color,
+    Intensity,
+    Range,
+    InnerCone,
+    OuterCone,
+}
+
+impl LightProperty {
+    /// The property at `path` (below the light), and its width.
+    pub fn from_path(path: &str) -> Option<(LightProperty, usize)> {
+        Some(match path {
+            "color" => (LightProperty::Color, 3),
+            "intensity" => (LightProperty::Intensity, 1),
+            "range" => (LightProperty::Range, 1),
+            "spot/innerConeAngle" => (LightProperty::InnerCone, 1),
+            "spot/outerConeAngle" => (LightProperty::OuterCone, 1),
+            _ => return None,
+        })
+    }
+
+    /// Sets the property on `light` (cone angles only on a spot light; a range of 0 or less
+    /// is infinite, the cones kept within 0 ≤ inner < outer ≤ π/2 as the loader keeps them).
+    pub fn apply(self, light: &mut Light, v: &[f32]) {
+        match self {
+            LightProperty::Color => light.color = [v[0].max(0.0), v[1].max(0.0), v[2].max(0.0)],
+            LightProperty::Intensity => light.intensity = v[0].max(0.0),
+            LightProperty::Range => light.range = (v[0] > 0.0).then_some(v[0]),
+            LightProperty::InnerCone | LightProperty::OuterCone => {
+                if let LightKind::Spot {
+                    inner_cone,
+                    outer_cone,
+                } = &mut light.kind
+                {
+                    let half = std::f32::consts::FRAC_PI_2;
+                    if self == LightProperty::OuterCone {
+                        *outer_cone = v[0].clamp(1e-4, half);
+                    } else {
+                        *inner_cone = v[0].max(0.0);
+                    }
+                    *inner_cone = inner_cone.min(*outer_cone * 0.9999);
+                }
+            }
+        }
+    }
+}
+
+/// A camera property that KHR_animation_pointer can drive, below `/cameras/{index}/`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CameraProperty {
+    Yfov,
+    AspectRatio,
+    Znear,
+    Zfar,
+    Xmag,
+    Ymag,
+}
+
+impl CameraProperty {
+    /// The property at `path` (below the camera), and whether it is a perspective one.
+    pub fn from_path(path: &str) -> Option<(CameraProperty, bool)> {
+        Some(match path {
+            "perspective/yfov" => (CameraProperty::Yfov, true),
+            "perspective/aspectRatio" => (CameraProperty::AspectRatio, true),
+            "perspective/znear" => (CameraProperty::Znear, true),
+            "perspective/zfar" => (CameraProperty::Zfar, true),
+            "orthographic/xmag" => (CameraProperty::Xmag, false),
+            "orthographic/ymag" => (CameraProperty::Ymag, false),
+            "orthographic/znear" => (CameraProperty::Znear, false),
+            "orthographic/zfar" => (CameraProperty::Zfar, false),
+            _ => return None,
+        })
+    }
+
+    /// Sets the property on `camera`, kept valid: a field of view within (0, π), a near plane
+    /// above 0 and a far plane beyond it, non-zero magnifications.
+    pub fn apply(self, camera: &mut Camera, v: f32) {
+        match self {
+            CameraProperty::Yfov => camera.yfov = v.clamp(1e-4, std::f32::consts::PI - 1e-4),
+            CameraProperty::AspectRatio => camera.aspect_ratio = (v > 0.0).then_some(v),
+            CameraProperty::Znear => {
+                camera.znear = v.max(1e-6);
+                if let Some(f) = &mut camera.zfar {
+                    *f = f.max(camera.znear * 1.0001);
+                }
+            }
+            CameraProperty::Zfar => {
+                camera.zfar = match camera.zfar {
+                    Some(_) => Some(v.max(camera.znear * 1.0001)),
+                    None => None,
+                }
+            }
+            CameraProperty::Xmag | CameraProperty::Ymag => {
+                if let Some(m) = &mut camera.orthographic {
+                    let k = if self == CameraProperty::Xmag { 0 } else { 1 };
+                    m[k] = if v.abs() > 1e-6 {
+                        v
+                    } else {
+                        1e-6f32.copysign(v)
+                    };
+                }
+            }
+        }
+    }
 }
 
 /// One sampler: keyframe times and values. `values` holds `width` floats per keyframe, three
@@ -230,10 +683,12 @@ pub fn slerp(a: Quat, b: Quat, s: f32) -> Quat {
     (a * wa + b * wb).normalize()
 }
 
-/// A channel: a sampler driving one property of one node.
+/// A channel: a sampler driving one property of one node (or, through KHR_animation_pointer,
+/// of a material, light or camera).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channel {
-    /// Index into [`Rig::nodes`].
+    /// Index into [`Rig::nodes`]; for [`Path::Material`] into `Scene::materials`, for
+    /// [`Path::Light`] and [`Path::Camera`] the file's light or camera.
     pub node: usize,
     pub path: Path,
     pub sampler: Sampler,
@@ -392,7 +847,32 @@ pub struct Rig {
     /// (index into `Scene::lights`, node) and (index into `Scene::cameras`, node).
     pub lights: Vec<(usize, usize)>,
     pub cameras: Vec<(usize, usize)>,
+    /// Per entry of `lights`: the file's light it places (its index in KHR_lights_punctual's
+    /// list); per entry of `cameras`: the file's camera.
+    pub light_defs: Vec<usize>,
+    pub camera_defs: Vec<usize>,
+    /// What KHR_animation_pointer channels drive besides nodes, at rest (None: no such channel).
+    pub pointed: Option<Pointed>,
 }
+
+/// The materials, lights and cameras that some KHR_animation_pointer channel drives, as the
+/// file has them: a pose starts from these, so a property one animation drives is back at
+/// rest in another.
+#[derive(Clone, Debug, Default)]
+pub struct Pointed {
+    /// By index into `Scene::materials`: the material at rest, its emissiveFactor and
+    /// KHR_materials_emissive_strength (the material's emission is their product).
+    pub materials: BTreeMap<usize, (Material, [f32; 3], f32)>,
+    /// (material, its unlit copy for points and lines): the copy follows the material.
+    pub copies: Vec<(usize, usize)>,
+    /// By index into `Scene::lights` and `Scene::cameras`: at rest.
+    pub lights: BTreeMap<usize, Light>,
+    pub cameras: BTreeMap<usize, Camera>,
+}
+
+/// The brightest emission a pose gives a material (an animated factor times an animated
+/// strength can overflow; the HDR target holds half floats).
+const MAX_EMISSION: f32 = 65504.0;
 
 impl Rig {
     /// World matrices of every node with each node's (translation, rotation, scale) given.
@@ -451,6 +931,31 @@ impl Scene {
         &self.rig.infos
     }
 
+    /// How many distinct nodes, materials, lights and cameras animation `index` drives (its
+    /// usable channels; materials, lights and cameras through KHR_animation_pointer).
+    pub fn animation_drives(&self, index: usize) -> [usize; 4] {
+        let mut seen = std::collections::BTreeSet::new();
+        for c in self
+            .rig
+            .animations
+            .get(index)
+            .map_or(&[][..], |a| &a.channels)
+        {
+            let kind = match c.path {
+                Path::Material(_) => 1,
+                Path::Light(_) => 2,
+                Path::Camera(_) => 3,
+                _ => 0,
+            };
+            seen.insert((kind, c.node));
+        }
+        let mut counts = [0; 4];
+        for (kind, _) in seen {
+            counts[kind] += 1;
+        }
+        counts
+    }
+
     /// The index of an animation given by name or by index (`--animation NAME|INDEX`).
     pub fn find_animation(&self, name_or_index: &str) -> Result<usize> {
         let list = || {
@@ -487,19 +992,21 @@ impl Scene {
     /// morph weights. Every node not animated by `index` is at its rest transform, whatever the
     /// previous pose was.
     pub fn pose(&mut self, index: usize, time: f32) -> Result<()> {
-        let Some(animation) = self.rig.animations.get(index) else {
+        if index >= self.rig.animations.len() {
             return Err(Error::input(format!(
                 "animation {index} does not exist in {}: it has {} animation(s) (`weft plan` lists them)",
                 self.source,
                 self.rig.animations.len()
             )));
-        };
+        }
         if !time.is_finite() {
             return Err(Error::input(format!(
                 "animation time {time} is not a finite number of seconds; pass e.g. --time 0.5"
             )));
         }
+        let mut emission = self.reset_pointed();
         let rig = &self.rig;
+        let animation = &rig.animations[index];
         let mut trs: Vec<(Vec3, Quat, Vec3)> = rig
             .nodes
             .iter()
@@ -510,23 +1017,105 @@ impl Scene {
         for c in &animation.channels {
             buf.resize(c.sampler.width, 0.0);
             c.sampler.sample(time, c.path == Path::Rotation, &mut buf);
-            let (t, r, s) = &mut trs[c.node];
             match c.path {
-                Path::Translation => *t = Vec3::from_slice(&buf),
-                Path::Rotation => *r = quat(&buf),
-                Path::Scale => *s = Vec3::from_slice(&buf),
+                Path::Translation => trs[c.node].0 = Vec3::from_slice(&buf),
+                Path::Rotation => trs[c.node].1 = quat(&buf),
+                Path::Scale => trs[c.node].2 = Vec3::from_slice(&buf),
                 Path::Weights => {
                     let w = &mut weights[c.node];
                     let n = w.len().min(buf.len());
                     w[..n].copy_from_slice(&buf[..n]);
                 }
+                Path::Material(p) => {
+                    if let (Some(m), Some(e)) =
+                        (self.materials.get_mut(c.node), emission.get_mut(&c.node))
+                    {
+                        p.apply(m, &buf, e);
+                    }
+                }
+                Path::Light(p) => {
+                    for (k, &(l, _)) in rig.lights.iter().enumerate() {
+                        if rig.light_defs.get(k) == Some(&c.node) {
+                            if let Some(light) = self.lights.get_mut(l) {
+                                p.apply(light, &buf);
+                            }
+                        }
+                    }
+                }
+                Path::Camera(p) => {
+                    for (k, &(i, _)) in rig.cameras.iter().enumerate() {
+                        if rig.camera_defs.get(k) == Some(&c.node) {
+                            if let Some(camera) = self.cameras.get_mut(i) {
+                                p.apply(camera, buf[0]);
+                            }
+                        }
+                    }
+                }
             }
         }
+        self.finish_pointed(&emission);
         self.apply_pose(&trs, &weights)
+    }
+
+    /// Puts what KHR_animation_pointer channels drive back at rest, and returns the driven
+    /// materials' emissive factor and strength at rest (by material) for the channels to change.
+    fn reset_pointed(&mut self) -> BTreeMap<usize, ([f32; 3], f32)> {
+        let Some(p) = &self.rig.pointed else {
+            return BTreeMap::new();
+        };
+        for (&i, (m, _, _)) in &p.materials {
+            if let Some(slot) = self.materials.get_mut(i) {
+                *slot = m.clone();
+            }
+        }
+        for (&i, l) in &p.lights {
+            if let Some(slot) = self.lights.get_mut(i) {
+                *slot = l.clone();
+            }
+        }
+        for (&i, c) in &p.cameras {
+            if let Some(slot) = self.cameras.get_mut(i) {
+                *slot = c.clone();
+            }
+        }
+        p.materials
+            .iter()
+            .map(|(&i, (_, f, s))| (i, (*f, *s)))
+            .collect()
+    }
+
+    /// The driven materials' emission from their (posed) factor and strength, and their unlit
+    /// copies made again from them.
+    fn finish_pointed(&mut self, emission: &BTreeMap<usize, ([f32; 3], f32)>) {
+        for (&i, &(factor, strength)) in emission {
+            if let Some(m) = self.materials.get_mut(i) {
+                m.emissive = factor.map(|f| (f * strength).min(MAX_EMISSION));
+            }
+        }
+        let Some(p) = &self.rig.pointed else {
+            return;
+        };
+        for &(original, copy) in &p.copies {
+            if !p.materials.contains_key(&original) || copy >= self.materials.len() {
+                continue;
+            }
+            let Some(source) = self.materials.get(original).cloned() else {
+                continue;
+            };
+            let name = std::mem::take(&mut self.materials[copy].name);
+            self.materials[copy] = Material {
+                name,
+                unlit: true,
+                fabric: None,
+                ..source
+            };
+        }
     }
 
     /// Puts every node back at rest (the pose of the file without animation).
     pub fn rest_pose(&mut self) -> Result<()> {
+        let emission = self.reset_pointed();
+        self.finish_pointed(&emission);
         let trs: Vec<_> = self
             .rig
             .nodes

@@ -37,6 +37,7 @@ mod lights;
 mod materials;
 mod meshes;
 mod nodes;
+mod pointer;
 mod skins;
 
 /// Limits that keep an absurd or hostile file from exhausting memory or time: a few hundred bytes
@@ -60,6 +61,9 @@ const DEFAULT_SCENE_SOURCE: &str = "built-in default scene";
 
 /// The fabric material extension; its parameters are parsed by [`FabricParams`].
 const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
+
+/// KHR_animation_pointer: animation channels that drive materials, lights and cameras.
+const ANIMATION_POINTER: &str = "KHR_animation_pointer";
 
 /// KHR_materials_unlit: base colour only, no lighting.
 const UNLIT: &str = "KHR_materials_unlit";
@@ -92,6 +96,7 @@ const METADATA_EXTENSIONS: &[&str] = &["KHR_xmp", "KHR_xmp_json_ld"];
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    ANIMATION_POINTER,
     DRACO,
     UNLIT,
     INSTANCING,
@@ -196,7 +201,7 @@ fn load_checked(
     options: &LoadOptions,
 ) -> Result<Scene> {
     let label = format!("'{source}'");
-    let (mut root, glb_bin) = parse(bytes, source)?;
+    let (mut root, glb_bin, pointers) = parse(bytes, source)?;
     let mut warnings = Vec::new();
     check_extensions(&mut root, &label, &mut warnings)?;
     compressed::choose_texture_sources(&mut root, &label)?;
@@ -249,6 +254,7 @@ fn load_checked(
         indices_read: 0,
         texture_bytes_left: resources::MAX_TEXTURE_BYTES,
         triangles_drawn: 0,
+        pointers,
     };
     loader.load_materials()?;
     loader.lights = loader.light_definitions()?;
@@ -270,7 +276,10 @@ fn load_checked(
 
 /// Splits a .glb into JSON and binary chunk, or takes the bytes as .gltf JSON, and deserialises
 /// the document.
-fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
+fn parse(
+    bytes: &[u8],
+    source: &str,
+) -> Result<(json::Root, Option<Vec<u8>>, pointer::PointerChannels)> {
     let not_gltf = |why: &str| {
         Error::input(format!(
             "'{source}' is not a glTF 2.0 file (.gltf JSON or .glb): {why}; pass a scene exported as glTF 2.0"
@@ -304,6 +313,12 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
     let text = text
         .strip_prefix(b"\xEF\xBB\xBF".as_slice())
         .unwrap_or(&text);
+    // KHR_animation_pointer's channels are not of the schema the gltf crate knows: read apart.
+    let (rewritten, pointers) = match pointer::take_channels(text) {
+        Some((json, pointers)) => (Some(json), pointers),
+        None => (None, pointer::PointerChannels::default()),
+    };
+    let text: &[u8] = rewritten.as_deref().unwrap_or(text);
 
     // Parsed once as glTF; only a file that does not parse is parsed again, as plain JSON, to
     // say why (large embedded buffers make a second parse cost time and peak memory).
@@ -344,7 +359,7 @@ fn parse(bytes: &[u8], source: &str) -> Result<(json::Root, Option<Vec<u8>>)> {
             "'{source}' is not a valid glTF 2.0 file: {e}; fix the JSON or re-export the scene (the Khronos glTF Validator explains such problems)"
         ))
     })?;
-    Ok((root, bin))
+    Ok((root, bin, pointers))
 }
 
 /// The deepest nesting of arrays and objects in JSON text (brackets inside strings not counted).
@@ -420,6 +435,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::SPEC_GLOSS,
         material_ext::DISPERSION,
         DRACO,
+        ANIMATION_POINTER,
     ];
     root.extensions_required
         .retain(|e| !OWN.contains(&e.as_str()) && !compressed::EXTENSIONS.contains(&e.as_str()));
@@ -627,6 +643,9 @@ struct Loader<'a> {
     indices_read: usize,
     texture_bytes_left: u64,
     triangles_drawn: u64,
+    /// The file's KHR_animation_pointer channels, taken out of the JSON before the gltf crate
+    /// read it.
+    pointers: pointer::PointerChannels,
 }
 
 impl<'a> Loader<'a> {

@@ -138,6 +138,7 @@ impl<'a> Loader<'a> {
                 self.place_camera(camera.index(), world, &who);
                 if self.scene.cameras.len() > before {
                     self.scene.rig.cameras.push((before, node.index()));
+                    self.scene.rig.camera_defs.push(camera.index());
                 }
             }
             let light = doc
@@ -152,6 +153,7 @@ impl<'a> Loader<'a> {
                 self.place_light(light, world, &who)?;
                 if self.scene.lights.len() > before {
                     self.scene.rig.lights.push((before, node.index()));
+                    self.scene.rig.light_defs.push(light);
                 }
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {

@@ -158,7 +158,10 @@ impl<'a> Loader<'a> {
                 .unwrap_or_else(|| format!("animation {}", anim.index()));
             let mut channels = Vec::new();
             for (c, channel) in anim.channels().enumerate() {
-                let who = format!("animation '{name}' channel {c}");
+                let who = format!(
+                    "animation '{name}' channel {}",
+                    self.pointers.file_index(anim.index(), c)
+                );
                 // The gltf crate's validator does not check a channel's target node, and its
                 // Target::node() unwraps it: check before anything asks for it.
                 let node = doc.as_json().animations[anim.index()].channels[c]
@@ -178,6 +181,25 @@ impl<'a> Loader<'a> {
                     Err(why) => self.warn(format_args!("{who} {why}; the channel is ignored")),
                 }
             }
+            // KHR_animation_pointer's channels, in the file's order among themselves (a later
+            // channel on the same property wins, as with node channels).
+            let pointed: Vec<_> = self
+                .pointers
+                .channels
+                .iter()
+                .filter(|p| p.animation == anim.index())
+                .cloned()
+                .collect();
+            for pc in &pointed {
+                let who = format!("animation '{name}' channel {}", pc.channel);
+                match self.pointer_channel(&anim, pc, &who) {
+                    Ok(Some(ch)) => channels.push(ch),
+                    Ok(None) => {}
+                    Err(why) => self.warn(format_args!(
+                        "{who} (KHR_animation_pointer) {why}; the channel is ignored"
+                    )),
+                }
+            }
             let duration = channels
                 .iter()
                 .map(|c: &animation::Channel| c.sampler.end())
@@ -191,6 +213,7 @@ impl<'a> Loader<'a> {
                 .animations
                 .push(animation::Animation { name, channels });
         }
+        self.keep_pointed_at_rest();
         Ok(())
     }
 
