@@ -41,6 +41,13 @@ fn glb(
         &[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0],
         json!({"count": 3, "type": "VEC3"}),
     );
+    // Texture coordinates inside the left texel of a 2 x 1 red | blue image (texture 0,
+    // nearest filtering): a texture transform's offset of 0.5 in u shows the blue one.
+    let uv = push(
+        &mut bin,
+        &[0.2, 0.4, 0.3, 0.4, 0.25, 0.6],
+        json!({"count": 3, "type": "VEC2"}),
+    );
     let mut anim_samplers = Vec::new();
     for (times, values, ty) in samplers {
         let input = push(
@@ -50,6 +57,7 @@ fn glb(
         );
         let width = match *ty {
             "SCALAR" => 1,
+            "VEC2" => 2,
             "VEC3" => 3,
             _ => 4,
         };
@@ -60,14 +68,30 @@ fn glb(
         );
         anim_samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
     }
+    let mut png = Vec::new();
+    image::RgbImage::from_fn(2, 1, |x, _| {
+        image::Rgb(if x == 0 { [255, 0, 0] } else { [0, 0, 255] })
+    })
+    .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+    .unwrap();
+    let png_at = bin.len();
+    bin.extend_from_slice(&png);
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    views.push(json!({"buffer": 0, "byteOffset": png_at, "byteLength": png.len()}));
+    let png_view = views.len() - 1;
     let mut doc = json!({
         "asset": {"version": "2.0"},
-        "extensionsUsed": ["KHR_animation_pointer", "KHR_lights_punctual", "KHR_materials_emissive_strength"],
+        "extensionsUsed": ["KHR_animation_pointer", "KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"],
         "buffers": [{"byteLength": bin.len()}],
         "bufferViews": views,
         "accessors": accessors,
+        "images": [{"bufferView": png_view, "mimeType": "image/png"}],
+        "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+        "textures": [{"source": 0, "sampler": 0}],
         "materials": [material],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "material": 0}]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv}, "material": 0}]}],
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 10.0, "color": [1.0, 1.0, 1.0]}]}},
         "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1, "zfar": 100.0}}],
         "nodes": [
@@ -206,14 +230,20 @@ fn a_pointer_weft_cannot_follow_is_a_warning_naming_it_and_the_rest_plays() {
     let bytes = glb(
         json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0]}}),
         vec![
-            pointer(0, "/materials/0/pbrMetallicRoughness/baseColorTexture/extensions/KHR_texture_transform/offset"),
-            pointer(1, "/materials/0/extensions/KHR_materials_transmission/transmissionFactor"),
+            pointer(
+                0,
+                "/materials/0/pbrMetallicRoughness/baseColorTexture/texCoord",
+            ),
+            pointer(
+                1,
+                "/materials/0/extensions/KHR_materials_transmission/transmissionFactor",
+            ),
             pointer(1, "/materials/7/pbrMetallicRoughness/metallicFactor"),
             pointer(1, "/materials/0/pbrMetallicRoughness/metallicFactor"),
             json!({"sampler": 1, "target": {"path": "pointer"}}),
         ],
         &[
-            (&[0.0, 1.0], &[0.0, 0.0, 1.0, 1.0], "VEC3"),
+            (&[0.0, 1.0], &[0.0, 1.0], "SCALAR"),
             (&[0.0, 1.0], &[1.0, 0.0], "SCALAR"),
         ],
         true,
@@ -225,10 +255,7 @@ fn a_pointer_weft_cannot_follow_is_a_warning_naming_it_and_the_rest_plays() {
             .any(|w| w.contains(a) && w.contains(b) && w.contains("ignored"))
     };
     assert!(
-        has(
-            "channel 0",
-            "KHR_texture_transform/offset', which weft does not animate"
-        ),
+        has("channel 0", "texCoord', which weft does not animate"),
         "{w:?}"
     );
     assert!(
@@ -327,5 +354,87 @@ fn a_sequence_shows_the_driven_colour_in_every_frame() {
     assert!(
         second[2] > 60 && second[0] < 10,
         "frame 1 is blue: {second:?}"
+    );
+}
+
+/// A texture transform's offset, driven: the slot's map moves (relative to the coordinates the
+/// vertices carry, which hold the file's transform), and the rendered colour with it.
+#[test]
+fn a_texture_transform_follows_its_pointer() {
+    let tex = |offset: [f32; 2]| {
+        json!({"pbrMetallicRoughness": {"metallicFactor": 0.0, "baseColorTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": {"offset": offset}}}}, "doubleSided": true})
+    };
+    let path = "/materials/0/pbrMetallicRoughness/baseColorTexture/extensions/KHR_texture_transform/offset";
+    let bytes = glb(
+        tex([0.0, 0.0]),
+        vec![pointer(0, path)],
+        &[(&[0.0, 1.0], &[0.0, 0.0, 0.5, 0.0], "VEC2")],
+        false,
+    );
+    let mut s = load(&bytes);
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    s.pose(0, 1.0).unwrap();
+    let m = s.materials[0].uv[0].m;
+    assert!(close(&[m[0][2], m[1][2]], &[0.5, 0.0]), "{m:?}");
+    // The file's own transform is baked into the vertices: a pose moves relative to it.
+    let baked = glb(
+        tex([0.25, 0.0]),
+        vec![pointer(0, path)],
+        &[(&[0.0, 1.0], &[0.25, 0.0, 0.75, 0.0], "VEC2")],
+        false,
+    );
+    let mut s = load(&baked);
+    s.pose(0, 0.0).unwrap();
+    assert!(
+        close(&[s.materials[0].uv[0].m[0][2]], &[0.0]),
+        "{:?}",
+        s.materials[0].uv[0].m
+    );
+    s.pose(0, 1.0).unwrap();
+    assert!(
+        close(&[s.materials[0].uv[0].m[0][2]], &[0.5]),
+        "{:?}",
+        s.materials[0].uv[0].m
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("uv.glb");
+    std::fs::write(&file, &bytes).unwrap();
+    let out = dir.path().join("f%04d.png");
+    let o = common::weft()
+        .args([
+            "render",
+            "--validate",
+            "--size",
+            "64x48",
+            "--env",
+            "none",
+            "--frames-range",
+            "0..1",
+            "--fps",
+            "1",
+            "-o",
+        ])
+        .arg(&out)
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let centre = |f: u32| {
+        image::open(dir.path().join(format!("f{f:04}.png")))
+            .unwrap()
+            .to_rgb8()
+            .get_pixel(32, 30)
+            .0
+    };
+    let (first, second) = (centre(0), centre(1));
+    assert!(
+        first[0] > 60 && first[2] < 10,
+        "frame 0 shows the red texel: {first:?}"
+    );
+    assert!(
+        second[2] > 60 && second[0] < 10,
+        "frame 1 shows the blue texel: {second:?}"
     );
 }

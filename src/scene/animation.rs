@@ -14,7 +14,8 @@ use std::collections::BTreeMap;
 
 use glam::{Mat3, Mat4, Quat, Vec3};
 
-use super::{Camera, Light, LightKind, Material, Scene, Vertex};
+use super::tangents::UvTransform;
+use super::{Camera, Light, LightKind, Material, Scene, TextureSlot, Vertex};
 use crate::{Error, Result};
 
 /// The most joints a skin may have: JOINTS_n is unsigned byte or unsigned short in glTF, so no
@@ -60,7 +61,7 @@ pub enum Path {
 
 /// A material property that KHR_animation_pointer can drive, by its JSON pointer below
 /// `/materials/{index}/`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MaterialProperty {
     BaseColor,
     Metallic,
@@ -91,6 +92,95 @@ pub enum MaterialProperty {
     Dispersion,
     DiffuseTransmission,
     DiffuseTransmissionColor,
+    /// A texture slot's KHR_texture_transform: offset, rotation, scale.
+    TextureOffset(TextureSlot),
+    TextureRotation(TextureSlot),
+    TextureScale(TextureSlot),
+}
+
+/// Where each texture slot's textureInfo is, below `/materials/{index}/`.
+const SLOT_PATHS: [(TextureSlot, &str); TextureSlot::COUNT] = [
+    (
+        TextureSlot::BaseColor,
+        "pbrMetallicRoughness/baseColorTexture",
+    ),
+    (
+        TextureSlot::MetallicRoughness,
+        "pbrMetallicRoughness/metallicRoughnessTexture",
+    ),
+    (TextureSlot::Normal, "normalTexture"),
+    (TextureSlot::Emissive, "emissiveTexture"),
+    (TextureSlot::Occlusion, "occlusionTexture"),
+    (
+        TextureSlot::SheenColor,
+        "extensions/KHR_materials_sheen/sheenColorTexture",
+    ),
+    (
+        TextureSlot::SheenRoughness,
+        "extensions/KHR_materials_sheen/sheenRoughnessTexture",
+    ),
+    (
+        TextureSlot::Specular,
+        "extensions/KHR_materials_specular/specularTexture",
+    ),
+    (
+        TextureSlot::SpecularColor,
+        "extensions/KHR_materials_specular/specularColorTexture",
+    ),
+    (
+        TextureSlot::Anisotropy,
+        "extensions/KHR_materials_anisotropy/anisotropyTexture",
+    ),
+    (
+        TextureSlot::Transmission,
+        "extensions/KHR_materials_transmission/transmissionTexture",
+    ),
+    (
+        TextureSlot::Thickness,
+        "extensions/KHR_materials_volume/thicknessTexture",
+    ),
+    (
+        TextureSlot::Clearcoat,
+        "extensions/KHR_materials_clearcoat/clearcoatTexture",
+    ),
+    (
+        TextureSlot::ClearcoatRoughness,
+        "extensions/KHR_materials_clearcoat/clearcoatRoughnessTexture",
+    ),
+    (
+        TextureSlot::ClearcoatNormal,
+        "extensions/KHR_materials_clearcoat/clearcoatNormalTexture",
+    ),
+    (
+        TextureSlot::DiffuseTransmission,
+        "extensions/KHR_materials_diffuse_transmission/diffuseTransmissionTexture",
+    ),
+    (
+        TextureSlot::DiffuseTransmissionColor,
+        "extensions/KHR_materials_diffuse_transmission/diffuseTransmissionColorTexture",
+    ),
+    (
+        TextureSlot::Iridescence,
+        "extensions/KHR_materials_iridescence/iridescenceTexture",
+    ),
+    (
+        TextureSlot::IridescenceThickness,
+        "extensions/KHR_materials_iridescence/iridescenceThicknessTexture",
+    ),
+];
+
+/// What a pose changes on a material beyond its own fields: the emission's factor and strength
+/// (the material keeps their product) and each texture slot's KHR_texture_transform (the
+/// material keeps, per slot, the map from the coordinates the vertices carry, which already
+/// hold the first TEXCOORD_0 slot's transform at rest, `frame_inverse` undoing it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MaterialState {
+    pub emissive: [f32; 3],
+    pub strength: f32,
+    pub(super) transforms: [UvTransform; TextureSlot::COUNT],
+    pub frame_inverse: [[f32; 3]; 2],
+    /// The slots whose transform a channel moved (bit per slot).
+    pub moved: u32,
 }
 
 impl MaterialProperty {
@@ -216,10 +306,17 @@ impl MaterialProperty {
 
     /// The property at `path` (the JSON pointer below `/materials/{index}/`), and its width.
     pub fn from_path(path: &str) -> Option<(MaterialProperty, usize)> {
-        MaterialProperty::ALL
-            .iter()
-            .find(|(_, p, _)| *p == path)
-            .map(|&(m, _, w)| (m, w))
+        if let Some(&(m, _, w)) = MaterialProperty::ALL.iter().find(|(_, p, _)| *p == path) {
+            return Some((m, w));
+        }
+        let (info, part) = path.split_once("/extensions/KHR_texture_transform/")?;
+        let slot = SLOT_PATHS.iter().find(|(_, p)| *p == info)?.0;
+        Some(match part {
+            "offset" => (MaterialProperty::TextureOffset(slot), 2),
+            "rotation" => (MaterialProperty::TextureRotation(slot), 1),
+            "scale" => (MaterialProperty::TextureScale(slot), 2),
+            _ => return None,
+        })
     }
 
     /// Why `m` has nothing this property drives (the extension it belongs to is not on the
@@ -253,6 +350,12 @@ impl MaterialProperty {
             P::DiffuseTransmission | P::DiffuseTransmissionColor => {
                 m.diffuse_transmission.is_some()
             }
+            P::TextureOffset(slot) | P::TextureRotation(slot) | P::TextureScale(slot) => {
+                if m.textures()[slot as usize].is_none() {
+                    return Some("the texture it transforms is not on the material");
+                }
+                true
+            }
         };
         if has {
             return None;
@@ -277,9 +380,10 @@ impl MaterialProperty {
     }
 
     /// Sets the property on `m` to `v` (its width of floats, finite), within the range the
-    /// loader keeps the file's value in. The emissive factor and strength go to `emission`
-    /// (their product is the material's emission, made once every channel has been applied).
-    pub fn apply(self, m: &mut Material, v: &[f32], emission: &mut ([f32; 3], f32)) {
+    /// loader keeps the file's value in. The emissive factor and strength and the texture
+    /// transforms go to `state` ([`Scene::pose`] makes the material's emission and slot maps
+    /// from it once every channel has been applied).
+    pub fn apply(self, m: &mut Material, v: &[f32], state: &mut MaterialState) {
         use MaterialProperty as P;
         let unit = |x: f32| x.clamp(0.0, 1.0);
         let colour = |v: &[f32]| [v[0].max(0.0), v[1].max(0.0), v[2].max(0.0)];
@@ -287,8 +391,17 @@ impl MaterialProperty {
             P::BaseColor => m.base_color = [v[0], v[1], v[2], v[3]],
             P::Metallic => m.metallic = unit(v[0]),
             P::Roughness => m.roughness = unit(v[0]),
-            P::Emissive => emission.0 = colour(v),
-            P::EmissiveStrength => emission.1 = v[0].max(0.0),
+            P::Emissive => state.emissive = colour(v),
+            P::EmissiveStrength => state.strength = v[0].max(0.0),
+            P::TextureOffset(slot) | P::TextureRotation(slot) | P::TextureScale(slot) => {
+                let t = &mut state.transforms[slot as usize];
+                match self {
+                    P::TextureOffset(_) => t.offset = [v[0], v[1]],
+                    P::TextureRotation(_) => t.rotation = v[0],
+                    _ => t.scale = [v[0], v[1]],
+                }
+                state.moved |= 1 << slot as u32;
+            }
             P::AlphaCutoff => m.alpha_cutoff = m.alpha_cutoff.map(|_| v[0]),
             P::NormalScale => m.normal_scale = v[0],
             P::OcclusionStrength => m.occlusion_strength = unit(v[0]),
@@ -860,9 +973,9 @@ pub struct Rig {
 /// rest in another.
 #[derive(Clone, Debug, Default)]
 pub struct Pointed {
-    /// By index into `Scene::materials`: the material at rest, its emissiveFactor and
-    /// KHR_materials_emissive_strength (the material's emission is their product).
-    pub materials: BTreeMap<usize, (Material, [f32; 3], f32)>,
+    /// By index into `Scene::materials`: the material at rest, with its emissiveFactor,
+    /// KHR_materials_emissive_strength and texture transforms at rest.
+    pub materials: BTreeMap<usize, (Material, MaterialState)>,
     /// (material, its unlit copy for points and lines): the copy follows the material.
     pub copies: Vec<(usize, usize)>,
     /// By index into `Scene::lights` and `Scene::cameras`: at rest.
@@ -1004,7 +1117,7 @@ impl Scene {
                 "animation time {time} is not a finite number of seconds; pass e.g. --time 0.5"
             )));
         }
-        let mut emission = self.reset_pointed();
+        let mut states = self.reset_pointed();
         let rig = &self.rig;
         let animation = &rig.animations[index];
         let mut trs: Vec<(Vec3, Quat, Vec3)> = rig
@@ -1028,7 +1141,7 @@ impl Scene {
                 }
                 Path::Material(p) => {
                     if let (Some(m), Some(e)) =
-                        (self.materials.get_mut(c.node), emission.get_mut(&c.node))
+                        (self.materials.get_mut(c.node), states.get_mut(&c.node))
                     {
                         p.apply(m, &buf, e);
                     }
@@ -1053,17 +1166,17 @@ impl Scene {
                 }
             }
         }
-        self.finish_pointed(&emission);
+        self.finish_pointed(&states);
         self.apply_pose(&trs, &weights)
     }
 
     /// Puts what KHR_animation_pointer channels drive back at rest, and returns the driven
-    /// materials' emissive factor and strength at rest (by material) for the channels to change.
-    fn reset_pointed(&mut self) -> BTreeMap<usize, ([f32; 3], f32)> {
+    /// materials' states at rest (by material) for the channels to change.
+    fn reset_pointed(&mut self) -> BTreeMap<usize, MaterialState> {
         let Some(p) = &self.rig.pointed else {
             return BTreeMap::new();
         };
-        for (&i, (m, _, _)) in &p.materials {
+        for (&i, (m, _)) in &p.materials {
             if let Some(slot) = self.materials.get_mut(i) {
                 *slot = m.clone();
             }
@@ -1078,18 +1191,28 @@ impl Scene {
                 *slot = c.clone();
             }
         }
-        p.materials
-            .iter()
-            .map(|(&i, (_, f, s))| (i, (*f, *s)))
-            .collect()
+        p.materials.iter().map(|(&i, (_, st))| (i, *st)).collect()
     }
 
-    /// The driven materials' emission from their (posed) factor and strength, and their unlit
-    /// copies made again from them.
-    fn finish_pointed(&mut self, emission: &BTreeMap<usize, ([f32; 3], f32)>) {
-        for (&i, &(factor, strength)) in emission {
-            if let Some(m) = self.materials.get_mut(i) {
-                m.emissive = factor.map(|f| (f * strength).min(MAX_EMISSION));
+    /// The driven materials' emission from their (posed) factor and strength, their moved
+    /// slots' maps, and their unlit copies made again from them.
+    fn finish_pointed(&mut self, states: &BTreeMap<usize, MaterialState>) {
+        for (&i, st) in states {
+            let Some(m) = self.materials.get_mut(i) else {
+                continue;
+            };
+            m.emissive = st.emissive.map(|f| (f * st.strength).min(MAX_EMISSION));
+            for slot in 0..TextureSlot::COUNT {
+                if st.moved & (1 << slot) == 0 {
+                    continue;
+                }
+                let t = st.transforms[slot].affine();
+                let uv = &mut m.uv[slot];
+                uv.m = if uv.set == 0 {
+                    UvTransform::compose(t, st.frame_inverse)
+                } else {
+                    t
+                };
             }
         }
         let Some(p) = &self.rig.pointed else {
@@ -1114,8 +1237,8 @@ impl Scene {
 
     /// Puts every node back at rest (the pose of the file without animation).
     pub fn rest_pose(&mut self) -> Result<()> {
-        let emission = self.reset_pointed();
-        self.finish_pointed(&emission);
+        let states = self.reset_pointed();
+        self.finish_pointed(&states);
         let trs: Vec<_> = self
             .rig
             .nodes

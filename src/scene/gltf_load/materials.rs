@@ -8,9 +8,10 @@ impl<'a> Loader<'a> {
     pub(super) fn load_materials(&mut self) -> Result<()> {
         let doc = self.doc;
         for (index, m) in doc.materials().enumerate() {
-            let (material, uv) = self.material(&m, index)?;
+            let (material, uv, transforms) = self.material(&m, index)?;
             self.scene.materials.push(material);
             self.material_uv.push(uv);
+            self.slot_transforms.push(transforms);
         }
         self.scene.file_materials = self.scene.materials.len();
         Ok(())
@@ -20,7 +21,7 @@ impl<'a> Loader<'a> {
         &mut self,
         m: &gltf::Material<'a>,
         index: usize,
-    ) -> Result<(Material, UvTransform)> {
+    ) -> Result<(Material, UvTransform, [UvTransform; TextureSlot::COUNT])> {
         let name = m
             .name()
             .map(str::to_owned)
@@ -697,7 +698,11 @@ impl<'a> Loader<'a> {
             alpha_cutoff,
             blend,
         };
-        Ok((material, uv))
+        let mut transforms = [UvTransform::IDENTITY; TextureSlot::COUNT];
+        for (kind, t, _, _) in &uv_transforms {
+            transforms[*kind as usize] = *t;
+        }
+        Ok((material, uv, transforms))
     }
 
     /// KHR_texture_transform from raw JSON (normal textures).

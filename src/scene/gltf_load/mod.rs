@@ -245,6 +245,7 @@ fn load_checked(
         variant: variant.map(|i| (i, variants.len())),
         textures: HashMap::new(),
         material_uv: Vec::new(),
+        slot_transforms: Vec::new(),
         default_material: None,
         unlit_copies: HashMap::new(),
         mesh_ids: vec![None; doc.meshes().len()],
@@ -627,6 +628,9 @@ struct Loader<'a> {
     textures: HashMap<(usize, bool), usize>,
     /// Per glTF material: the texture transform baked into the texture coordinates of its meshes.
     material_uv: Vec<UvTransform>,
+    /// Per glTF material: each texture slot's KHR_texture_transform (identity without one), for
+    /// KHR_animation_pointer channels that move it.
+    slot_transforms: Vec<[UvTransform; TextureSlot::COUNT]>,
     /// The KHR_materials_variants variant chosen, and how many the file has.
     variant: Option<(usize, usize)>,
     /// Index of `Material::default()` in `scene.materials`, once a primitive needed it.

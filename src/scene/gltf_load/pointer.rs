@@ -111,7 +111,7 @@ fn tokens(pointer: &str) -> Option<Vec<String>> {
 fn resolve(pointer: &str) -> std::result::Result<(animation::Path, usize, usize), String> {
     let unsupported = || {
         format!(
-            "points at '{pointer}', which weft does not animate (it animates nodes' translation, rotation, scale and weights, materials' factors, lights' colour, intensity, range and cones, and cameras' projections)"
+            "points at '{pointer}', which weft does not animate (it animates nodes' translation, rotation, scale and weights, materials' factors and texture transforms, lights' colour, intensity, range and cones, and cameras' projections)"
         )
     };
     let t = tokens(pointer).ok_or_else(|| {
@@ -299,15 +299,23 @@ impl<'a> Loader<'a> {
             match channel.path {
                 animation::Path::Material(_) => {
                     let i = channel.node;
-                    if let (Some(m), Some(gm)) =
-                        (self.scene.materials.get(i), doc.materials().nth(i))
-                    {
+                    if let (Some(m), Some(gm), Some(frame), Some(transforms)) = (
+                        self.scene.materials.get(i),
+                        doc.materials().nth(i),
+                        self.material_uv.get(i),
+                        self.slot_transforms.get(i),
+                    ) {
                         pointed.materials.entry(i).or_insert_with(|| {
-                            (
-                                m.clone(),
-                                gm.emissive_factor(),
-                                gm.emissive_strength().unwrap_or(1.0),
-                            )
+                            let state = animation::MaterialState {
+                                emissive: gm.emissive_factor(),
+                                strength: gm.emissive_strength().unwrap_or(1.0),
+                                transforms: *transforms,
+                                frame_inverse: frame
+                                    .inverse()
+                                    .unwrap_or(UvTransform::IDENTITY.affine()),
+                                moved: 0,
+                            };
+                            (m.clone(), state)
                         });
                     }
                 }
@@ -374,12 +382,17 @@ mod tests {
             resolve("/cameras/0/perspective/yfov").unwrap(),
             (Path::Camera(CameraProperty::Yfov), 0, 1)
         );
-        // A texture transform is glTF's, but weft bakes it into the vertices: named, refused.
-        let why = resolve(
-            "/materials/0/pbrMetallicRoughness/baseColorTexture/extensions/KHR_texture_transform/offset",
-        )
-        .unwrap_err();
+        assert_eq!(
+            resolve("/materials/1/extensions/KHR_materials_sheen/sheenColorTexture/extensions/KHR_texture_transform/offset")
+                .unwrap(),
+            (Path::Material(MaterialProperty::TextureOffset(crate::scene::TextureSlot::SheenColor)), 1, 2)
+        );
+        let why =
+            resolve("/materials/0/pbrMetallicRoughness/baseColorTexture/texCoord").unwrap_err();
         assert!(why.contains("does not animate"), "{why}");
+        assert!(resolve("/meshes/0/weights")
+            .unwrap_err()
+            .contains("does not animate"));
         assert!(resolve("materials/0/alphaCutoff")
             .unwrap_err()
             .contains("must start with '/'"));
