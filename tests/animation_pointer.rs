@@ -438,3 +438,106 @@ fn a_texture_transform_follows_its_pointer() {
         "frame 1 shows the blue texel: {second:?}"
     );
 }
+
+/// `bytes` (a .glb from [`glb`]) with its JSON changed by `f`.
+fn patch(bytes: &[u8], f: impl FnOnce(&mut Value)) -> Vec<u8> {
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut doc: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    f(&mut doc);
+    let mut text = serde_json::to_vec(&doc).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let bin = &bytes[20 + json_len..];
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + text.len() + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(bin);
+    out
+}
+
+/// KHR_node_visibility (ratified): `visible` false hides a node's subtree (its meshes and its
+/// lights, not its cameras), and a pointer channel shows it again.
+#[test]
+fn node_visibility_hides_the_subtree_and_a_pointer_shows_it() {
+    let red = json!({"pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}, "doubleSided": true});
+    let path = "/nodes/3/extensions/KHR_node_visibility/visible";
+    let bytes = patch(
+        &glb(
+            red,
+            vec![pointer(0, path)],
+            &[(&[0.0, 1.0], &[0.0, 1.0], "SCALAR")],
+            false,
+        ),
+        |doc| {
+            // Node 3 (hidden) holds the mesh node 0 and the light node 1 as children; its
+            // child's own `visible` true does not show it.
+            doc["nodes"][0]["extensions"] = json!({"KHR_node_visibility": {"visible": true}});
+            doc["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!({"children": [0, 1], "extensions": {"KHR_node_visibility": {"visible": false}}}));
+            doc["scenes"][0]["nodes"] = json!([3, 2]);
+            doc["extensionsUsed"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!("KHR_node_visibility"));
+            doc["extensionsRequired"] = json!(["KHR_node_visibility"]);
+        },
+    );
+    let mut s = load(&bytes);
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert!(!s.draws[0].visible, "hidden at rest");
+    assert_eq!(s.lights[0].intensity, 0.0, "its light is dark");
+    assert!(s.bounds().is_none(), "a hidden draw is in no bounds");
+    assert_eq!(s.cameras.len(), 1, "cameras are not hidden");
+    s.pose(0, 1.0).unwrap();
+    assert!(s.draws[0].visible);
+    assert_eq!(s.lights[0].intensity, 10.0);
+    s.pose(0, 0.0).unwrap();
+    assert!(!s.draws[0].visible);
+
+    // On the GPU (lavapipe, validation on): frame 0 shows the background where the red
+    // triangle is, frame 1 the triangle.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("visibility.glb");
+    std::fs::write(&file, &bytes).unwrap();
+    let out = dir.path().join("f%04d.png");
+    let o = common::weft()
+        .args([
+            "render",
+            "--validate",
+            "--size",
+            "64x48",
+            "--env",
+            "none",
+            "--background",
+            "color:0,0,0",
+        ])
+        .args(["--frames-range", "0..1", "--fps", "1", "-o"])
+        .arg(&out)
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let centre = |f: u32| {
+        image::open(dir.path().join(format!("f{f:04}.png")))
+            .unwrap()
+            .to_rgb8()
+            .get_pixel(32, 30)
+            .0
+    };
+    let (hidden, shown) = (centre(0), centre(1));
+    assert!(
+        hidden[0] < 10,
+        "frame 0: the hidden triangle is not drawn: {hidden:?}"
+    );
+    assert!(
+        shown[0] > 60 && shown[2] < 10,
+        "frame 1: the red triangle: {shown:?}"
+    );
+}

@@ -812,6 +812,7 @@ pub fn stage(
         world: glam::Mat4::IDENTITY,
         cast_shadows: false,
         receive_shadows: true,
+        visible: true,
     });
     true
 }

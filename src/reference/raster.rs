@@ -155,7 +155,7 @@ pub fn render(scene: &Scene, options: &RasterOptions) -> crate::Result<RasterIma
         subdivisions: options.subdivisions,
         pieces: options.pieces,
     };
-    for draw in &scene.draws {
+    for draw in scene.draws.iter().filter(|d| d.visible) {
         let mesh = &scene.meshes[draw.mesh];
         let dm = materials.get(mesh.material).unwrap_or(&fallback);
         let world3 = Mat3::from_mat4(draw.world);

@@ -252,7 +252,9 @@ impl Renderer {
             ))
         };
         for d in &mut gpu.draws {
-            d.world = scene.draws.get(d.scene_draw).ok_or_else(mismatch)?.world;
+            let posed = scene.draws.get(d.scene_draw).ok_or_else(mismatch)?;
+            d.world = posed.world;
+            d.visible = posed.visible;
         }
         if scene.lights.len() != gpu.light_count as usize {
             return Err(mismatch());

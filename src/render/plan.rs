@@ -157,6 +157,8 @@ pub struct Plan {
     /// offsets, each running `passes`; 1 otherwise).
     pub supersample: u32,
     pub draws: usize,
+    /// Draws hidden in this pose (KHR_node_visibility): planned for, drawn by no pass.
+    pub hidden_draws: usize,
     pub triangles: usize,
     /// Draws of line and point primitives (glTF LINES, LINE_LOOP, LINE_STRIP, POINTS): drawn 1
     /// pixel wide by the G-buffer pass with pipelines of their own topology, casting no shadow.
@@ -764,6 +766,7 @@ impl Plan {
             height: options.height,
             passes,
             draws: scene.draws.len(),
+            hidden_draws: scene.draws.iter().filter(|d| !d.visible).count(),
             triangles,
             line_draws,
             point_draws,
@@ -864,8 +867,17 @@ impl fmt::Display for Plan {
         )?;
         writeln!(
             f,
-            "draws       {} ({} triangles)",
-            self.draws, self.triangles
+            "draws       {} ({} triangles){}",
+            self.draws,
+            self.triangles,
+            if self.hidden_draws > 0 {
+                format!(
+                    "; {} hidden (KHR_node_visibility: planned, drawn by no pass)",
+                    self.hidden_draws
+                )
+            } else {
+                String::new()
+            }
         )?;
         if self.line_draws + self.point_draws > 0 {
             writeln!(

@@ -67,6 +67,9 @@ pub(crate) struct DrawRange {
     pub(crate) centre: glam::Vec3,
     /// Index into `Scene::draws` (what `update_pose` takes the world matrix from).
     pub(crate) scene_draw: usize,
+    /// Shown (KHR_node_visibility; `update_pose` takes it from the scene): a hidden draw is in
+    /// no pass.
+    pub(crate) visible: bool,
 }
 
 impl DrawRange {
@@ -199,6 +202,7 @@ impl Renderer {
                     mesh.vertices.iter().map(|v| v.position),
                 ),
                 scene_draw,
+                visible: d.visible,
             });
         }
         // Skinned and morphed draws get posed copies of their vertices, which the skinning pass

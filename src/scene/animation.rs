@@ -57,6 +57,8 @@ pub enum Path {
     Light(LightProperty),
     /// A camera's property (KHR_animation_pointer); the target is the file's camera.
     Camera(CameraProperty),
+    /// A node's KHR_node_visibility `visible` (KHR_animation_pointer; above 0.5 is shown).
+    Visible,
 }
 
 /// A material property that KHR_animation_pointer can drive, by its JSON pointer below
@@ -961,11 +963,16 @@ pub struct Rig {
     pub lights: Vec<(usize, usize)>,
     pub cameras: Vec<(usize, usize)>,
     /// Per entry of `lights`: the file's light it places (its index in KHR_lights_punctual's
-    /// list); per entry of `cameras`: the file's camera.
+    /// list) and its intensity at rest (a hidden node's light is dark); per entry of
+    /// `cameras`: the file's camera.
     pub light_defs: Vec<usize>,
+    pub light_intensity: Vec<f32>,
     pub camera_defs: Vec<usize>,
     /// What KHR_animation_pointer channels drive besides nodes, at rest (None: no such channel).
     pub pointed: Option<Pointed>,
+    /// Each node's own KHR_node_visibility `visible` at rest (true without the extension; empty
+    /// when no node has it): a node is shown when it and every ancestor are.
+    pub visible: Vec<bool>,
 }
 
 /// The materials, lights and cameras that some KHR_animation_pointer channel drives, as the
@@ -1126,6 +1133,7 @@ impl Scene {
             .map(|n| (n.translation, n.rotation, n.scale))
             .collect();
         let mut weights: Vec<Vec<f32>> = rig.nodes.iter().map(|n| n.weights.clone()).collect();
+        let mut visible = rig.visible.clone();
         let mut buf = Vec::new();
         for c in &animation.channels {
             buf.resize(c.sampler.width, 0.0);
@@ -1138,6 +1146,14 @@ impl Scene {
                     let w = &mut weights[c.node];
                     let n = w.len().min(buf.len());
                     w[..n].copy_from_slice(&buf[..n]);
+                }
+                Path::Visible => {
+                    if visible.is_empty() {
+                        visible = vec![true; rig.nodes.len()];
+                    }
+                    if let Some(v) = visible.get_mut(c.node) {
+                        *v = buf[0] > 0.5;
+                    }
                 }
                 Path::Material(p) => {
                     if let (Some(m), Some(e)) =
@@ -1167,7 +1183,7 @@ impl Scene {
             }
         }
         self.finish_pointed(&states);
-        self.apply_pose(&trs, &weights)
+        self.apply_pose(&trs, &weights, &visible)
     }
 
     /// Puts what KHR_animation_pointer channels drive back at rest, and returns the driven
@@ -1246,11 +1262,27 @@ impl Scene {
             .map(|n| (n.translation, n.rotation, n.scale))
             .collect();
         let weights: Vec<_> = self.rig.nodes.iter().map(|n| n.weights.clone()).collect();
-        self.apply_pose(&trs, &weights)
+        let visible = self.rig.visible.clone();
+        self.apply_pose(&trs, &weights, &visible)
     }
 
-    fn apply_pose(&mut self, trs: &[(Vec3, Quat, Vec3)], weights: &[Vec<f32>]) -> Result<()> {
+    fn apply_pose(
+        &mut self,
+        trs: &[(Vec3, Quat, Vec3)],
+        weights: &[Vec<f32>],
+        visible: &[bool],
+    ) -> Result<()> {
         let world = self.rig.world_matrices(trs);
+        // KHR_node_visibility: shown where the node and every ancestor are (parents come first
+        // in `order`).
+        let mut shown = vec![true; self.rig.nodes.len()];
+        if !visible.is_empty() {
+            for &i in &self.rig.order {
+                let own = visible.get(i).copied().unwrap_or(true);
+                let parent = self.rig.nodes[i].parent.and_then(|p| shown.get(p).copied());
+                shown[i] = own && parent.unwrap_or(true);
+            }
+        }
         if let Some(i) = world.iter().position(|m| !m.is_finite()) {
             return Err(Error::input(format!(
                 "{}: node {i} has a world transform that is not finite in this pose (its or its parents' translation, rotation or scale, as the file or the animation sets them, overflow 32-bit floating point); check the node and the animation's output values",
@@ -1274,6 +1306,7 @@ impl Scene {
         let mut bindings = std::mem::take(&mut self.rig.draws);
         for b in &mut bindings {
             if let Some(d) = self.draws.get_mut(b.draw) {
+                d.visible = shown.get(b.node).copied().unwrap_or(true);
                 d.world = if b.skin.is_some() {
                     Mat4::IDENTITY
                 } else {
@@ -1287,8 +1320,26 @@ impl Scene {
         }
         self.rig.draws = bindings;
         self.check_deformed()?;
-        for &(l, n) in &self.rig.lights {
-            if let (Some(light), Some((p, d))) = (self.lights.get_mut(l), light_frame(world[n])) {
+        for (k, &(l, n)) in self.rig.lights.iter().enumerate() {
+            let pointed = self
+                .rig
+                .pointed
+                .as_ref()
+                .is_some_and(|p| p.lights.contains_key(&l));
+            let Some(light) = self.lights.get_mut(l) else {
+                continue;
+            };
+            // A pointed light's intensity is this pose's already; the others' is the file's
+            // (a pose that hid it left 0).
+            if !pointed {
+                if let Some(&i) = self.rig.light_intensity.get(k) {
+                    light.intensity = i;
+                }
+            }
+            if !shown.get(n).copied().unwrap_or(true) {
+                light.intensity = 0.0;
+            }
+            if let Some((p, d)) = light_frame(world[n]) {
                 light.position = p;
                 light.direction = d;
             }

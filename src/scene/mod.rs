@@ -87,6 +87,9 @@ pub struct Draw {
     pub cast_shadows: bool,
     /// Whether shadows darken this instance (node `extras.receive_shadows`, default true).
     pub receive_shadows: bool,
+    /// Whether the draw is shown: KHR_node_visibility hides a node's subtree (its meshes and
+    /// lights), and a pose may show it again. A hidden draw is in no pass and no bounds.
+    pub visible: bool,
 }
 
 impl Draw {
@@ -97,6 +100,7 @@ impl Draw {
             world,
             cast_shadows: true,
             receive_shadows: true,
+            visible: true,
         }
     }
 }
@@ -752,12 +756,12 @@ impl Scene {
 
     /// World-space bounds of every drawn vertex; None for a scene with nothing to draw.
     pub fn bounds(&self) -> Option<Bounds> {
-        self.bounds_of(|_| true)
+        self.bounds_of(|d| d.visible)
     }
 
     /// World-space bounds of the draws that cast shadows (what a shadow map must cover).
     pub fn caster_bounds(&self) -> Option<Bounds> {
-        self.bounds_of(|d| d.cast_shadows)
+        self.bounds_of(|d| d.cast_shadows && d.visible)
     }
 
     fn bounds_of(&self, keep: impl Fn(&Draw) -> bool) -> Option<Bounds> {
@@ -922,7 +926,7 @@ impl Scene {
         let mut points = Vec::with_capacity(total.min(FRAMING_POINTS));
         let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let mut k = 0usize;
-        for (i, d) in self.draws.iter().enumerate() {
+        for (i, d) in self.draws.iter().enumerate().filter(|(_, d)| d.visible) {
             let Some(mesh) = self.meshes.get(d.mesh) else {
                 continue;
             };
@@ -966,7 +970,7 @@ impl Scene {
             .sum();
         let stride = (triangles >> 20).max(1);
         let mut front = [0f64; 4];
-        for d in &self.draws {
+        for d in self.draws.iter().filter(|d| d.visible) {
             let Some(mesh) = self.meshes.get(d.mesh) else {
                 continue;
             };

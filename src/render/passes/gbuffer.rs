@@ -387,11 +387,9 @@ impl GBufferPass {
                 cmd.bind_index_buffer(&scene.indices);
                 cmd.bind_pipeline(depth);
                 cmd.bind_sets(depth, 0, &[depth_set]);
-                for draw in scene
-                    .draws
-                    .iter()
-                    .filter(|d| !d.forward && !d.alpha_mask && d.topology == Topology::Triangles)
-                {
+                for draw in scene.draws.iter().filter(|d| {
+                    d.visible && !d.forward && !d.alpha_mask && d.topology == Topology::Triangles
+                }) {
                     cmd.set_cull(if draw.double_sided {
                         Cull::None
                     } else {
@@ -429,7 +427,12 @@ impl GBufferPass {
                 let mut draws = scene
                     .draws
                     .iter()
-                    .filter(|d| !d.forward && d.topology == topology && kind_of(d.woven) == kind)
+                    .filter(|d| {
+                        d.visible
+                            && !d.forward
+                            && d.topology == topology
+                            && kind_of(d.woven) == kind
+                    })
                     .peekable();
                 if draws.peek().is_none() {
                     continue;

@@ -152,7 +152,12 @@ impl ShadowPass {
         };
         let mut names = vec![self.pipeline.name.clone()];
         names.extend(mask.as_ref().map(|m| m.pipeline.name.clone()));
-        let draws = inputs.tiles.len() * scene.draws.iter().filter(|d| d.cast_shadows).count();
+        let draws = inputs.tiles.len()
+            * scene
+                .draws
+                .iter()
+                .filter(|d| d.cast_shadows && d.visible)
+                .count();
         let (atlas, tiles, pipeline) = (inputs.atlas, inputs.tiles, &self.pipeline);
         Ok((
             Recorded::new("shadow", names, move |cmd| {
@@ -197,7 +202,11 @@ fn shadow_pass<'s>(
     for &(x, y, resolution, clip_from_world) in tiles {
         cmd.set_viewport(x, y, resolution, resolution);
         cmd.bind_pipeline(pipeline);
-        for draw in scene.draws.iter().filter(|d| d.cast_shadows && !cut(d)) {
+        for draw in scene
+            .draws
+            .iter()
+            .filter(|d| d.cast_shadows && d.visible && !cut(d))
+        {
             let push = ShadowPush {
                 clip_from_object: (clip_from_world * draw.world).to_cols_array_2d(),
             };
@@ -209,7 +218,11 @@ fn shadow_pass<'s>(
         };
         cmd.bind_pipeline(mask.pipeline);
         cmd.bind_sets(mask.pipeline, 0, &[mask.set]);
-        for draw in scene.draws.iter().filter(|d| d.cast_shadows && cut(d)) {
+        for draw in scene
+            .draws
+            .iter()
+            .filter(|d| d.cast_shadows && d.visible && cut(d))
+        {
             let material = draw.material.min(scene.material_count - 1);
             let Some(Some(texture)) = mask.textures.get(material as usize) else {
                 continue;

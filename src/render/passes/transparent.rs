@@ -232,7 +232,7 @@ pub fn back_to_front(scene: &GpuScene, view: Mat4) -> Vec<usize> {
         .draws
         .iter()
         .enumerate()
-        .filter(|(_, d)| d.forward)
+        .filter(|(_, d)| d.forward && d.visible)
         .map(|(i, d)| {
             let centre = view.transform_point3(d.world.transform_point3(d.centre));
             // -z is the distance in front of the camera; NaN (a degenerate matrix) sorts last.

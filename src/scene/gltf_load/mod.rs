@@ -65,6 +65,9 @@ const FABRIC_EXTENSION: &str = "WEFT_materials_fabric";
 /// KHR_animation_pointer: animation channels that drive materials, lights and cameras.
 const ANIMATION_POINTER: &str = "KHR_animation_pointer";
 
+/// KHR_node_visibility: a node's `visible` false hides it and its subtree.
+const NODE_VISIBILITY: &str = "KHR_node_visibility";
+
 /// KHR_materials_unlit: base colour only, no lighting.
 const UNLIT: &str = "KHR_materials_unlit";
 
@@ -97,6 +100,7 @@ const METADATA_EXTENSIONS: &[&str] = &["KHR_xmp", "KHR_xmp_json_ld"];
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     ANIMATION_POINTER,
+    NODE_VISIBILITY,
     DRACO,
     UNLIT,
     INSTANCING,
@@ -437,6 +441,7 @@ fn check_extensions(root: &mut json::Root, label: &str, warnings: &mut Vec<Warni
         material_ext::DISPERSION,
         DRACO,
         ANIMATION_POINTER,
+        NODE_VISIBILITY,
     ];
     root.extensions_required
         .retain(|e| !OWN.contains(&e.as_str()) && !compressed::EXTENSIONS.contains(&e.as_str()));

@@ -154,6 +154,8 @@ impl<'a> Loader<'a> {
                 if self.scene.lights.len() > before {
                     self.scene.rig.lights.push((before, node.index()));
                     self.scene.rig.light_defs.push(light);
+                    let intensity = self.scene.lights[before].intensity;
+                    self.scene.rig.light_intensity.push(intensity);
                 }
             }
             for child in node.children().collect::<Vec<_>>().into_iter().rev() {

@@ -111,7 +111,7 @@ fn tokens(pointer: &str) -> Option<Vec<String>> {
 fn resolve(pointer: &str) -> std::result::Result<(animation::Path, usize, usize), String> {
     let unsupported = || {
         format!(
-            "points at '{pointer}', which weft does not animate (it animates nodes' translation, rotation, scale and weights, materials' factors and texture transforms, lights' colour, intensity, range and cones, and cameras' projections)"
+            "points at '{pointer}', which weft does not animate (it animates nodes' translation, rotation, scale, weights and KHR_node_visibility, materials' factors and texture transforms, lights' colour, intensity, range and cones, and cameras' projections)"
         )
     };
     let t = tokens(pointer).ok_or_else(|| {
@@ -125,6 +125,9 @@ fn resolve(pointer: &str) -> std::result::Result<(animation::Path, usize, usize)
         })
     };
     match t.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+        ["nodes", i, "extensions", "KHR_node_visibility", "visible"] => {
+            Ok((animation::Path::Visible, index(i)?, 1))
+        }
         ["nodes", i, p] => {
             let path = match *p {
                 "translation" => (animation::Path::Translation, 3),
@@ -167,6 +170,15 @@ impl<'a> Loader<'a> {
         let (path, target, width) = resolve(pointer)?;
         let doc = self.doc;
         let width = match path {
+            animation::Path::Visible => {
+                if target >= self.scene.rig.nodes.len() {
+                    return Err(format!(
+                        "points at node {target}, but the file has only {} node(s)",
+                        doc.nodes().len()
+                    ));
+                }
+                width
+            }
             animation::Path::Translation
             | animation::Path::Rotation
             | animation::Path::Scale

@@ -53,6 +53,26 @@ impl<'a> Loader<'a> {
                     (None, Vec3::from(translation), q, Vec3::from(scale))
                 }
             };
+            // KHR_node_visibility: `visible` false hides the node and its subtree.
+            if let Some(ext) = node.extension_value(NODE_VISIBILITY) {
+                let visible = match ext.get("visible") {
+                    None => true,
+                    Some(serde_json::Value::Bool(b)) => *b,
+                    Some(other) => {
+                        self.warn(format_args!(
+                            "node {} has {NODE_VISIBILITY} \"visible\": {other}, which is not true or false; the node is shown",
+                            node.index()
+                        ));
+                        true
+                    }
+                };
+                if !visible {
+                    let n = doc.nodes().len();
+                    let list = &mut self.scene.rig.visible;
+                    list.resize(n, true);
+                    list[node.index()] = false;
+                }
+            }
             self.scene.rig.nodes.push(animation::Node {
                 parent: parent.get(node.index()).copied().flatten(),
                 matrix,
