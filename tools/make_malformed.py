@@ -230,7 +230,7 @@ def add_animation(d, node, path, interpolation, times, values, kind):
     inp = d.push("accessors", {"bufferView": d.view(struct.pack("<%df" % len(times), *times)), "componentType": 5126,
                                "count": len(times), "type": "SCALAR", "min": [min(times)], "max": [max(times)]})
     flat = [x for row in values for x in row]
-    count = len(flat) // {"SCALAR": 1, "VEC3": 3, "VEC4": 4}[kind]
+    count = len(flat) // {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[kind]
     out = d.push("accessors", {"bufferView": d.view(struct.pack("<%df" % len(flat), *flat)), "componentType": 5126, "count": count, "type": kind})
     d.json["animations"] = [{"name": "broken", "channels": [{"sampler": 0, "target": {"node": node, "path": path}}],
                              "samplers": [{"input": inp, "output": out, "interpolation": interpolation}]}]
@@ -500,6 +500,28 @@ def build():
     add_animation(d, 0, "weights", "LINEAR", [0.0, 1.0], [[0.0], [0.5], [1.0]], "SCALAR")
     entry("animation-weights-count-mismatch.gltf", gltf(d),
           "a weights channel of a mesh with 2 morph targets: 2 keyframes, 3 output scalars (4 needed)", "renders, warning: `2 keyframe times but 3 output values`")
+
+    # KHR_animation_pointer and KHR_node_visibility (ratified): files using them were refused
+    # whole ("missing field `node`"); a pointer weft cannot follow is a warning, the rest plays.
+    def pointer_doc(pointer, kind, values):
+        d = quad_doc()
+        add_animation(d, 0, "translation", "LINEAR", [0.0, 1.0], values, kind)
+        d.json["animations"][0]["channels"][0]["target"] = {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": pointer}}}
+        d.json["extensionsUsed"] = d.json.get("extensionsUsed", []) + ["KHR_animation_pointer"]
+        d.json["extensionsRequired"] = ["KHR_animation_pointer"]
+        return d
+    entry("animation-pointer-valid.gltf", gltf(pointer_doc("/materials/0/pbrMetallicRoughness/baseColorFactor", "VEC4", [[1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0]])),
+          "nothing: a KHR_animation_pointer channel on a material's base colour (such a file was refused as invalid)", "renders")
+    entry("animation-pointer-unknown-property.gltf", gltf(pointer_doc("/materials/0/pbrMetallicRoughness/baseColorTexture/texCoord", "SCALAR", [[0.0], [1.0]])),
+          "a KHR_animation_pointer channel on a property weft does not animate (a texture's texCoord)", "renders, warning: `which weft does not animate`")
+    entry("animation-pointer-missing-material.gltf", gltf(pointer_doc("/materials/9/emissiveFactor", "VEC3", [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])),
+          "a KHR_animation_pointer channel on material 9 of a file with one", "renders, warning: `points at material 9`")
+    entry("animation-pointer-not-a-pointer.gltf", gltf(pointer_doc("materials/0/alphaCutoff", "SCALAR", [[0.0], [1.0]])),
+          "a KHR_animation_pointer \"pointer\" that does not start with '/'", "renders, warning: `not a JSON pointer`")
+    d = quad_doc()
+    d.json["nodes"][0]["extensions"] = {"KHR_node_visibility": {"visible": "no"}}
+    d.json["extensionsUsed"] = d.json.get("extensionsUsed", []) + ["KHR_node_visibility"]
+    entry("node-visibility-not-boolean.gltf", gltf(d), "KHR_node_visibility with \"visible\": \"no\" (a string, not a boolean)", "renders, warning: `not true or false`")
 
     # Finite numbers whose products overflow: refused or repaired where the product is made.
     d = quad_doc()
