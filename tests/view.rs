@@ -520,3 +520,49 @@ fn a_click_picks_the_material_under_it() {
     assert_eq!(controls::material_at(&g, w, w, 0, &scene), None);
     assert_eq!(controls::material_at(&g, w, 0, h, &scene), None);
 }
+
+/// The viewer plays a file's animation (KHR_animation_pointer drives the quad's base colour from
+/// red at 0 s to blue at 1 s): `--time` starts it paused there, and a playing one runs with
+/// validation on.
+#[test]
+fn the_viewer_plays_and_poses_animations() {
+    let Some(xvfb) = xvfb_run() else {
+        println!("SKIPPED the_viewer_plays_and_poses_animations: xvfb-run is not installed (tools/setup installs xvfb and xauth)");
+        return;
+    };
+    let file =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed/animation-pointer-valid.gltf");
+    let dir = tempfile::tempdir().unwrap();
+    let centre = |time: Option<&str>, name: &str| {
+        let shot = dir.path().join(name);
+        let mut args = vec![
+            "view",
+            "--validate",
+            "--no-panel",
+            "--size",
+            "96x64",
+            "--screenshot",
+            shot.to_str().unwrap(),
+            "--after",
+            "4",
+            file.to_str().unwrap(),
+        ];
+        if let Some(t) = time {
+            args.extend(["--time", t]);
+        }
+        weft_in_xvfb(xvfb, &args);
+        rgb(&shot).get_pixel(48, 32).0
+    };
+    let (red, blue) = (centre(Some("0"), "t0.png"), centre(Some("1"), "t1.png"));
+    assert!(
+        red[0] > 200 && red[2] < 100,
+        "paused at 0 s: red, got {red:?}"
+    );
+    assert!(
+        blue[2] > 200 && blue[0] < 100,
+        "paused at 1 s: blue, got {blue:?}"
+    );
+    // Playing: posed every frame (each after the frame before has finished), no validation
+    // message; its colour depends on the frames' wall time, so only that it ran.
+    let _ = centre(None, "playing.png");
+}

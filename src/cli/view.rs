@@ -31,6 +31,14 @@ pub(super) struct ViewArgs {
     /// Time this many frames of the frame loop (after 3 warm-up frames), print a table, exit.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub(super) bench_frames: Option<u32>,
+    /// The glTF animation to play (name or index; `weft plan` lists them): the file's first
+    /// plays, looping, unless this says which. Space pauses and plays.
+    #[arg(long)]
+    pub(super) animation: Option<String>,
+    /// Start paused at this time of the animation, in seconds (Space plays).
+    #[arg(long, allow_hyphen_values = true,
+          value_parser = |s: &str| render::parse_finite("--time", s))]
+    pub(super) time: Option<f32>,
 }
 
 pub(super) fn run_view(args: ViewArgs) -> anyhow::Result<()> {
@@ -40,6 +48,8 @@ pub(super) fn run_view(args: ViewArgs) -> anyhow::Result<()> {
         .map(DeviceChoice::parse)
         .unwrap_or_else(DeviceChoice::from_env);
     let (scene, mut options) = load_scene_with(&args.scene, (1280, 720), &[], false)?;
+    let playback =
+        weft::view::playback::Playback::for_scene(&scene, args.animation.as_deref(), args.time)?;
     options.exposure = args.exposure;
     options.antialias = args.aa;
     options.validate()?;
@@ -75,6 +85,7 @@ pub(super) fn run_view(args: ViewArgs) -> anyhow::Result<()> {
         screenshot: args.screenshot.map(|p| (p, args.after)),
         panel: !args.no_panel,
         bench_frames: args.bench_frames,
+        playback,
     })?;
     if let Some(r) = report {
         print!("{}", r.table());

@@ -13,6 +13,7 @@
 pub mod controls;
 pub mod orbit;
 mod panel;
+pub mod playback;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -59,6 +60,8 @@ pub struct ViewOptions {
     pub panel: bool,
     /// Time this many frames after a warm-up, print the table, exit.
     pub bench_frames: Option<u32>,
+    /// The scene's animation clock (None: the scene has no animations).
+    pub playback: Option<playback::Playback>,
 }
 
 /// The frame loop's figures of `--bench-frames` (medians over the timed frames, ms).
@@ -226,6 +229,8 @@ struct App {
     /// What the panel wove or changed, as `weft fabric` requests on the source file: the scene
     /// is the source with these applied, and "save woven file" writes it.
     requests: Vec<crate::assets::Request>,
+    /// The animation playing (or paused), if the scene has any.
+    playback: Option<playback::Playback>,
 }
 
 /// Warm-up frames of `--bench-frames` (the first pays the shader JIT and pipeline creation).
@@ -270,6 +275,7 @@ impl App {
             ctrl: false,
             scene_x0: 0,
             scene_width: 0,
+            playback: o.playback,
         }
     }
 
@@ -377,6 +383,18 @@ impl App {
         }
         self.scene = scene;
         self.source = source;
+        // The same file keeps its clock (another variant); another file plays its first
+        // animation from the start.
+        let keep = !new_file
+            && self
+                .playback
+                .as_ref()
+                .is_some_and(|p| p.index < self.scene.animations().len());
+        if !keep {
+            self.playback = playback::Playback::for_scene(&self.scene, None, None)?;
+        } else if let Some(p) = self.playback.as_mut() {
+            p.repose();
+        }
         if new_file {
             self.camera = CameraMode::Scene(None);
             let cam = self
@@ -386,6 +404,32 @@ impl App {
             self.orbit = Orbit::from_camera(&cam, &self.scene);
         }
         self.ui.scene_changed(&self.scene);
+        Ok(())
+    }
+
+    /// Moves the animation clock on by `dt` seconds and, where the pose changed, poses the
+    /// scene and brings the GPU's copy up to date (after the frame in flight, which reads what
+    /// `update_pose` writes, has finished).
+    fn animate(&mut self, dt: f32) -> crate::Result<()> {
+        let Some(p) = self.playback.as_mut() else {
+            return Ok(());
+        };
+        let duration = self
+            .scene
+            .animations()
+            .get(p.index)
+            .map_or(0.0, |a| a.duration);
+        p.advance(dt, duration);
+        if !p.needs_pose() {
+            return Ok(());
+        }
+        let Some(r) = self.running.as_mut() else {
+            return Ok(());
+        };
+        r.renderer.finish()?;
+        self.scene.pose(p.index, p.time)?;
+        r.renderer.update_pose(&mut r.gpu, &self.scene)?;
+        p.posed();
         Ok(())
     }
 
@@ -568,13 +612,23 @@ impl App {
             let ui = &mut self.ui;
             let options = &mut self.options;
             let scene = &self.scene;
+            let playback = &mut self.playback;
             let camera = match self.camera {
                 CameraMode::Scene(i) => Some(i),
                 CameraMode::Orbit => None,
             };
             let mut left = 0.0;
             let full = r.egui_ctx.run(raw, |ctx| {
-                left = panel::show(ctx, ui, options, scene, camera, &stats, &mut actions)
+                left = panel::show(
+                    ctx,
+                    ui,
+                    options,
+                    scene,
+                    camera,
+                    playback,
+                    &stats,
+                    &mut actions,
+                )
             });
             r.egui_state
                 .handle_platform_output(&r.window, full.platform_output.clone());
@@ -582,6 +636,7 @@ impl App {
         };
         actions.append(&mut self.ui.take_key_actions());
         self.apply(actions);
+        self.animate((frame_ms / 1e3) as f32)?;
         let r = self.running.as_mut().expect("started");
         let primitives = r.egui_ctx.tessellate(full.shapes, full.pixels_per_point);
         let ui_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -665,6 +720,11 @@ impl App {
             Key::Named(NamedKey::Tab) => self.ui.show = !self.ui.show,
             Key::Named(NamedKey::F12) => self.apply(vec![panel::Action::Screenshot]),
             Key::Named(NamedKey::Escape) => event_loop.exit(),
+            Key::Named(NamedKey::Space) => {
+                if let Some(p) = self.playback.as_mut() {
+                    p.playing = !p.playing;
+                }
+            }
             Key::Character(c) => match c.as_str() {
                 "f" | "F" => self.apply(vec![panel::Action::Frame]),
                 "c" | "C" => {
@@ -873,6 +933,7 @@ impl ApplicationHandler for App {
         // Continuous frames only while something needs them: a bench, a pending screenshot, the
         // first frames, or an input / panel change (egui asks for a repaint after animations).
         let busy = self.bench_frames.is_some()
+            || self.playback.as_ref().is_some_and(|p| p.playing)
             || self.screenshot.is_some()
             || self.pending_shot.is_some()
             || self.presented < FRAMES_IN_FLIGHT as u32 + 1;

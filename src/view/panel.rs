@@ -135,6 +135,7 @@ pub fn show(
     options: &mut RenderOptions,
     scene: &Scene,
     camera: Option<Option<usize>>,
+    playback: &mut Option<super::playback::Playback>,
     stats: &Stats,
     actions: &mut Vec<Action>,
 ) -> f32 {
@@ -155,6 +156,9 @@ pub fn show(
                 environment(ui, state, options, actions);
                 ui.separator();
                 camera_controls(ui, scene, camera, actions);
+                if let Some(p) = playback.as_mut() {
+                    animation(ui, scene, p);
+                }
                 if !scene.variants.is_empty() {
                     let mut v = scene.variant.clone();
                     let before = v.clone();
@@ -324,6 +328,38 @@ fn environment(
             };
         }
     }
+}
+
+/// The animation playing: which, play / pause (Space), and the time (dragging it seeks).
+fn animation(ui: &mut egui::Ui, scene: &Scene, p: &mut super::playback::Playback) {
+    let list = scene.animations();
+    let name = |i: usize| {
+        list.get(i)
+            .map(|a| format!("{i}: {}", a.name))
+            .unwrap_or_default()
+    };
+    ui.horizontal(|ui| {
+        let before = p.index;
+        egui::ComboBox::from_label("animation")
+            .selected_text(name(p.index))
+            .show_ui(ui, |ui| {
+                for i in 0..list.len() {
+                    ui.selectable_value(&mut p.index, i, name(i));
+                }
+            });
+        if p.index != before {
+            p.time = 0.0;
+        }
+    });
+    let duration = list.get(p.index).map_or(0.0, |a| a.duration);
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut p.playing, "play (Space)");
+        ui.add(
+            egui::Slider::new(&mut p.time, 0.0..=duration.max(0.0))
+                .suffix(" s")
+                .max_decimals(2),
+        );
+    });
 }
 
 fn camera_controls(
