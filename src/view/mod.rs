@@ -619,16 +619,11 @@ impl App {
             };
             let mut left = 0.0;
             let full = r.egui_ctx.run(raw, |ctx| {
-                left = panel::show(
-                    ctx,
-                    ui,
-                    options,
-                    scene,
+                let showing = panel::Showing {
                     camera,
-                    playback,
-                    &stats,
-                    &mut actions,
-                )
+                    playback: &mut *playback,
+                };
+                left = panel::show(ctx, ui, options, scene, showing, &stats, &mut actions)
             });
             r.egui_state
                 .handle_platform_output(&r.window, full.platform_output.clone());

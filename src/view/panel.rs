@@ -127,18 +127,25 @@ fn combo<T: PartialEq + Copy>(
     *value != before
 }
 
+/// What the window shows of the scene besides its options: the camera (Some(the scene camera
+/// shown), or None when orbiting) and the animation clock.
+pub struct Showing<'a> {
+    pub camera: Option<Option<usize>>,
+    pub playback: &'a mut Option<super::playback::Playback>,
+}
+
 /// Lays out the panel and returns the left edge, in points, of the area it leaves for the scene
-/// (0 when hidden). `camera`: Some(the scene camera shown) or None when orbiting.
+/// (0 when hidden).
 pub fn show(
     ctx: &egui::Context,
     state: &mut UiState,
     options: &mut RenderOptions,
     scene: &Scene,
-    camera: Option<Option<usize>>,
-    playback: &mut Option<super::playback::Playback>,
+    showing: Showing,
     stats: &Stats,
     actions: &mut Vec<Action>,
 ) -> f32 {
+    let Showing { camera, playback } = showing;
     if !state.show {
         return 0.0;
     }

@@ -55,7 +55,7 @@ impl Playback {
     /// Moves the clock on by `dt` seconds when playing, looping over `duration` (an animation
     /// of one instant stays at 0).
     pub fn advance(&mut self, dt: f32, duration: f32) {
-        if !self.playing || !(dt > 0.0) {
+        if !self.playing || dt.is_nan() || dt <= 0.0 {
             return;
         }
         self.time = if duration > 0.0 {
