@@ -123,6 +123,33 @@ fn glb(
     out
 }
 
+/// Renders frames 0 and 1 of `bytes` (a .glb) as a one-frame-per-second sequence in one
+/// process (lavapipe, validation on, no environment; `extra` arguments added), and returns each
+/// frame's pixel at (32, 30) of 64x48: a sequence poses each frame and re-uploads what changed.
+fn sequence_centres(bytes: &[u8], extra: &[&str]) -> ([u8; 3], [u8; 3]) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("scene.glb");
+    std::fs::write(&file, bytes).unwrap();
+    let out = dir.path().join("f%04d.png");
+    let o = common::weft()
+        .args(["render", "--validate", "--size", "64x48", "--env", "none"])
+        .args(extra)
+        .args(["--frames-range", "0..1", "--fps", "1", "-o"])
+        .arg(&out)
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let centre = |f: u32| {
+        image::open(dir.path().join(format!("f{f:04}.png")))
+            .unwrap()
+            .to_rgb8()
+            .get_pixel(32, 30)
+            .0
+    };
+    (centre(0), centre(1))
+}
+
 fn pointer(sampler: usize, pointer: &str) -> Value {
     json!({"sampler": sampler, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": pointer}}}})
 }
@@ -320,36 +347,7 @@ fn a_sequence_shows_the_driven_colour_in_every_frame() {
         )],
         false,
     );
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("pointer.glb");
-    std::fs::write(&file, bytes).unwrap();
-    let out = dir.path().join("f%04d.png");
-    let o = common::weft()
-        .args([
-            "render",
-            "--validate",
-            "--size",
-            "64x48",
-            "--env",
-            "none",
-            "--frames-range",
-            "0..1",
-            "--fps",
-            "1",
-            "-o",
-        ])
-        .arg(&out)
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let centre = |f: u32| {
-        let img = image::open(dir.path().join(format!("f{f:04}.png")))
-            .unwrap()
-            .to_rgb8();
-        img.get_pixel(32, 30).0
-    };
-    let (first, second) = (centre(0), centre(1));
+    let (first, second) = sequence_centres(&bytes, &[]);
     assert!(first[0] > 60 && first[2] < 10, "frame 0 is red: {first:?}");
     assert!(
         second[2] > 60 && second[0] < 10,
@@ -398,37 +396,7 @@ fn a_texture_transform_follows_its_pointer() {
         s.materials[0].uv[0].m
     );
 
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("uv.glb");
-    std::fs::write(&file, &bytes).unwrap();
-    let out = dir.path().join("f%04d.png");
-    let o = common::weft()
-        .args([
-            "render",
-            "--validate",
-            "--size",
-            "64x48",
-            "--env",
-            "none",
-            "--frames-range",
-            "0..1",
-            "--fps",
-            "1",
-            "-o",
-        ])
-        .arg(&out)
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let centre = |f: u32| {
-        image::open(dir.path().join(format!("f{f:04}.png")))
-            .unwrap()
-            .to_rgb8()
-            .get_pixel(32, 30)
-            .0
-    };
-    let (first, second) = (centre(0), centre(1));
+    let (first, second) = sequence_centres(&bytes, &[]);
     assert!(
         first[0] > 60 && first[2] < 10,
         "frame 0 shows the red texel: {first:?}"
@@ -503,35 +471,7 @@ fn node_visibility_hides_the_subtree_and_a_pointer_shows_it() {
 
     // On the GPU (lavapipe, validation on): frame 0 shows the background where the red
     // triangle is, frame 1 the triangle.
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("visibility.glb");
-    std::fs::write(&file, &bytes).unwrap();
-    let out = dir.path().join("f%04d.png");
-    let o = common::weft()
-        .args([
-            "render",
-            "--validate",
-            "--size",
-            "64x48",
-            "--env",
-            "none",
-            "--background",
-            "color:0,0,0",
-        ])
-        .args(["--frames-range", "0..1", "--fps", "1", "-o"])
-        .arg(&out)
-        .arg(&file)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let centre = |f: u32| {
-        image::open(dir.path().join(format!("f{f:04}.png")))
-            .unwrap()
-            .to_rgb8()
-            .get_pixel(32, 30)
-            .0
-    };
-    let (hidden, shown) = (centre(0), centre(1));
+    let (hidden, shown) = sequence_centres(&bytes, &["--background", "color:0,0,0"]);
     assert!(
         hidden[0] < 10,
         "frame 0: the hidden triangle is not drawn: {hidden:?}"

@@ -278,26 +278,7 @@ impl<'a> Loader<'a> {
             (_, 3) => Dimensions::Vec3,
             _ => Dimensions::Vec4,
         };
-        let read = |acc: gltf::Accessor, dims: Dimensions, what: &str| {
-            accessor::read_f32(
-                &acc,
-                dims,
-                self.buffers,
-                &Use {
-                    source: &self.label,
-                    what: &format!("{who}, {what}"),
-                },
-            )
-            .map_err(|e| format!("cannot be read: {e}"))
-        };
-        let times = read(sampler.input(), Dimensions::Scalar, "sampler input")?;
-        let values = read(sampler.output(), dims, "sampler output")?;
-        use gltf::animation::Interpolation as I;
-        let interpolation = match sampler.interpolation() {
-            I::Step => animation::Interpolation::Step,
-            I::Linear => animation::Interpolation::Linear,
-            I::CubicSpline => animation::Interpolation::CubicSpline,
-        };
+        let (times, values, interpolation) = self.keyframes(&sampler, dims, who)?;
         animation::Channel::new(target, path, interpolation, times, values, width).map(Some)
     }
 

@@ -237,12 +237,43 @@ impl<'a> Loader<'a> {
         Ok(())
     }
 
+    /// A sampler's keyframe times and values (`dims` per value) and its interpolation; the error
+    /// (for `who`'s warning) says why they cannot be read.
+    pub(super) fn keyframes(
+        &self,
+        sampler: &gltf::animation::Sampler<'a>,
+        dims: Dimensions,
+        who: &str,
+    ) -> std::result::Result<(Vec<f32>, Vec<f32>, animation::Interpolation), String> {
+        use gltf::animation::Interpolation as I;
+        let read = |acc: gltf::Accessor, dims: Dimensions, what: &str| {
+            accessor::read_f32(
+                &acc,
+                dims,
+                self.buffers,
+                &Use {
+                    source: &self.label,
+                    what: &format!("{who}, {what}"),
+                },
+            )
+            .map_err(|e| format!("cannot be read: {e}"))
+        };
+        let times = read(sampler.input(), Dimensions::Scalar, "sampler input")?;
+        let values = read(sampler.output(), dims, "sampler output")?;
+        let interpolation = match sampler.interpolation() {
+            I::Step => animation::Interpolation::Step,
+            I::Linear => animation::Interpolation::Linear,
+            I::CubicSpline => animation::Interpolation::CubicSpline,
+        };
+        Ok((times, values, interpolation))
+    }
+
     pub(super) fn channel(
         &mut self,
         channel: &gltf::animation::Channel<'a>,
         who: &str,
     ) -> std::result::Result<Option<animation::Channel>, String> {
-        use gltf::animation::{Interpolation as I, Property};
+        use gltf::animation::Property;
         let target = channel.target();
         let node = target.node();
         let (path, width, dims) = match target.property() {
@@ -278,26 +309,7 @@ impl<'a> Loader<'a> {
                 node.index()
             ));
         }
-        let sampler = channel.sampler();
-        let read = |acc: gltf::Accessor, dims: Dimensions, what: &str| {
-            accessor::read_f32(
-                &acc,
-                dims,
-                self.buffers,
-                &Use {
-                    source: &self.label,
-                    what: &format!("{who}, {what}"),
-                },
-            )
-            .map_err(|e| format!("cannot be read: {e}"))
-        };
-        let times = read(sampler.input(), Dimensions::Scalar, "sampler input")?;
-        let values = read(sampler.output(), dims, "sampler output")?;
-        let interpolation = match sampler.interpolation() {
-            I::Step => animation::Interpolation::Step,
-            I::Linear => animation::Interpolation::Linear,
-            I::CubicSpline => animation::Interpolation::CubicSpline,
-        };
+        let (times, values, interpolation) = self.keyframes(&channel.sampler(), dims, who)?;
         animation::Channel::new(node.index(), path, interpolation, times, values, width).map(Some)
     }
 }
