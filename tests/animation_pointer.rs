@@ -106,21 +106,7 @@ fn glb(
     if required {
         doc["extensionsRequired"] = json!(["KHR_animation_pointer"]);
     }
-    let mut text = serde_json::to_vec(&doc).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&text);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
+    common::glb(&serde_json::to_vec(&doc).unwrap(), &bin)
 }
 
 /// Renders frames 0 and 1 of `bytes` (a .glb) as a one-frame-per-second sequence in one
@@ -412,20 +398,12 @@ fn patch(bytes: &[u8], f: impl FnOnce(&mut Value)) -> Vec<u8> {
     let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
     let mut doc: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
     f(&mut doc);
-    let mut text = serde_json::to_vec(&doc).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let bin = &bytes[20 + json_len..];
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&((12 + 8 + text.len() + bin.len()) as u32).to_le_bytes());
-    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&text);
-    out.extend_from_slice(bin);
-    out
+    let bin_len =
+        u32::from_le_bytes(bytes[20 + json_len..24 + json_len].try_into().unwrap()) as usize;
+    common::glb(
+        &serde_json::to_vec(&doc).unwrap(),
+        &bytes[28 + json_len..28 + json_len + bin_len],
+    )
 }
 
 /// KHR_node_visibility (ratified): `visible` false hides a node's subtree (its meshes and its

@@ -220,3 +220,27 @@ pub fn fabric_patch(
         ..Default::default()
     }
 }
+
+/// A binary glTF container: `json` (padded with spaces) and `bin` (padded with zeros) as its two
+/// chunks.
+pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let mut text = json.to_vec();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let mut out = Vec::with_capacity(12 + 8 + text.len() + 8 + bin.len());
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
