@@ -459,3 +459,55 @@ fn node_visibility_hides_the_subtree_and_a_pointer_shows_it() {
         "frame 1: the red triangle: {shown:?}"
     );
 }
+
+/// `/meshes/M/weights` animates the default morph weights: the nodes that draw mesh M without
+/// weights of their own follow it, a node with its own keeps them.
+#[test]
+fn a_meshs_default_weights_drive_the_nodes_without_their_own() {
+    let bytes = patch(
+        &glb(
+            json!({}),
+            vec![pointer(0, "/meshes/0/weights")],
+            &[(&[0.0, 1.0], &[0.0, 1.0], "SCALAR")],
+            false,
+        ),
+        |doc| {
+            // One morph target moving every vertex by the normal (accessor 1), default weight 0;
+            // node 3 draws the mesh with its own weight 0.25.
+            doc["meshes"][0]["primitives"][0]["targets"] = json!([{"POSITION": 1}]);
+            doc["meshes"][0]["weights"] = json!([0.0]);
+            doc["accessors"][1]["min"] = json!([0.0, 0.0, 1.0]);
+            doc["accessors"][1]["max"] = json!([0.0, 0.0, 1.0]);
+            doc["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!({"mesh": 0, "weights": [0.25], "translation": [3.0, 0.0, 0.0]}));
+            doc["scenes"][0]["nodes"]
+                .as_array_mut()
+                .unwrap()
+                .push(json!(3));
+        },
+    );
+    let mut s = load(&bytes);
+    assert!(
+        s.warnings.iter().all(|w| !w.0.contains("channel")),
+        "{:?}",
+        s.warnings
+    );
+    let weight = |s: &Scene, node: usize| {
+        s.rig
+            .draws
+            .iter()
+            .find(|b| b.node == node)
+            .map(|b| b.weights.clone())
+            .unwrap()
+    };
+    s.pose(0, 0.5).unwrap();
+    assert_eq!(
+        weight(&s, 0),
+        vec![0.5],
+        "node 0 follows the mesh's weights"
+    );
+    assert_eq!(weight(&s, 3), vec![0.25], "node 3 keeps its own");
+    assert_eq!(s.animation_drives(0), [1, 0, 0, 0]);
+}

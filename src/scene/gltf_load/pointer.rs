@@ -111,7 +111,7 @@ fn tokens(pointer: &str) -> Option<Vec<String>> {
 fn resolve(pointer: &str) -> std::result::Result<(animation::Path, usize, usize), String> {
     let unsupported = || {
         format!(
-            "points at '{pointer}', which weft does not animate (it animates nodes' translation, rotation, scale, weights and KHR_node_visibility, materials' factors and texture transforms, lights' colour, intensity, range and cones, and cameras' projections)"
+            "points at '{pointer}', which weft does not animate (it animates nodes' translation, rotation, scale, weights and KHR_node_visibility, meshes' default weights, materials' factors and texture transforms, lights' colour, intensity, range and cones, and cameras' projections)"
         )
     };
     let t = tokens(pointer).ok_or_else(|| {
@@ -156,6 +156,40 @@ fn resolve(pointer: &str) -> std::result::Result<(animation::Path, usize, usize)
 }
 
 impl<'a> Loader<'a> {
+    /// A channel on a mesh's default morph weights (`/meshes/M/weights`) as the channels on the
+    /// weights of each node that draws mesh M without weights of its own (what the mesh's
+    /// weights are the default of); any other channel as it is. The error says why such a
+    /// channel drives nothing.
+    pub(super) fn expand_mesh_weights(
+        &self,
+        pc: &PointerChannel,
+    ) -> std::result::Result<Vec<PointerChannel>, String> {
+        let Some(mesh) = pc
+            .pointer
+            .as_deref()
+            .and_then(|p| p.strip_prefix("/meshes/"))
+            .and_then(|p| p.strip_suffix("/weights"))
+            .and_then(|m| m.parse::<usize>().ok())
+        else {
+            return Ok(vec![pc.clone()]);
+        };
+        let nodes: Vec<PointerChannel> = self
+            .doc
+            .nodes()
+            .filter(|n| n.mesh().is_some_and(|m| m.index() == mesh) && n.weights().is_none())
+            .map(|n| PointerChannel {
+                pointer: Some(format!("/nodes/{}/weights", n.index())),
+                ..pc.clone()
+            })
+            .collect();
+        if nodes.is_empty() {
+            return Err(format!(
+                "animates the default weights of mesh {mesh}, but no node draws that mesh without weights of its own"
+            ));
+        }
+        Ok(nodes)
+    }
+
     /// Reads a pointer channel of animation `anim` (named `who` in messages); Ok(None) when it
     /// drives nothing the scene has. The error says why the channel is dropped.
     pub(super) fn pointer_channel(
@@ -383,9 +417,6 @@ mod tests {
         let why =
             resolve("/materials/0/pbrMetallicRoughness/baseColorTexture/texCoord").unwrap_err();
         assert!(why.contains("does not animate"), "{why}");
-        assert!(resolve("/meshes/0/weights")
-            .unwrap_err()
-            .contains("does not animate"));
         assert!(resolve("materials/0/alphaCutoff")
             .unwrap_err()
             .contains("must start with '/'"));

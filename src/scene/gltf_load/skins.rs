@@ -212,12 +212,21 @@ impl<'a> Loader<'a> {
                 .collect();
             for pc in &pointed {
                 let who = format!("animation '{name}' channel {}", pc.channel);
-                match self.pointer_channel(&anim, pc, &who) {
-                    Ok(Some(ch)) => channels.push(ch),
-                    Ok(None) => {}
-                    Err(why) => self.warn(format_args!(
+                // A mesh's default weights drive the nodes that draw it without their own.
+                let expanded = self.expand_mesh_weights(pc);
+                for pc in expanded.as_deref().unwrap_or(&[]) {
+                    match self.pointer_channel(&anim, pc, &who) {
+                        Ok(Some(ch)) => channels.push(ch),
+                        Ok(None) => {}
+                        Err(why) => self.warn(format_args!(
+                            "{who} (KHR_animation_pointer) {why}; the channel is ignored"
+                        )),
+                    }
+                }
+                if let Err(why) = expanded {
+                    self.warn(format_args!(
                         "{who} (KHR_animation_pointer) {why}; the channel is ignored"
-                    )),
+                    ));
                 }
             }
             let duration = channels
