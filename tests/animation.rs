@@ -357,25 +357,7 @@ fn skinned_gltf(joints: usize, bound: u16, times: &[f32], rotations: usize) -> V
         "accessors": accessors,
     });
     // A .glb: header, JSON chunk (space-padded), BIN chunk (zero-padded).
-    let mut json = serde_json::to_vec(&doc).unwrap();
-    while json.len() % 4 != 0 {
-        json.push(b' ');
-    }
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&(total as u32).to_le_bytes());
-    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&json);
-    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&bin);
-    glb
+    common::glb(&serde_json::to_vec(&doc).unwrap(), &bin)
 }
 
 fn load_bytes(bytes: &[u8]) -> weft::Result<Scene> {

@@ -537,21 +537,7 @@ fn big_glb(n: u32, copies: u32) -> Vec<u8> {
         ],
         "buffers": [{"byteLength": bin.len()}],
     });
-    let mut text = serde_json::to_vec(&json).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut glb = Vec::with_capacity(28 + text.len() + bin.len());
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&text);
-    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&bin);
-    glb
+    common::glb(&serde_json::to_vec(&json).unwrap(), &bin)
 }
 
 #[test]

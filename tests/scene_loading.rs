@@ -1432,24 +1432,7 @@ fn glb_written_by_hand_loads() {
     d.quad(true, true);
     let mut j = d.json.clone();
     j["buffers"] = json!([{"byteLength": d.bin.len()}]);
-    let mut text = serde_json::to_vec(&j).unwrap();
-    while text.len() % 4 != 0 {
-        text.push(b' ');
-    }
-    let mut bin = d.bin.clone();
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&text);
-    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&bin);
+    let glb = common::glb(&serde_json::to_vec(&j).unwrap(), &d.bin);
     let s = scene::load_slice(&glb, "hand.glb", None).unwrap();
     assert_eq!(s.meshes.len(), 1);
     assert_eq!(s.source, "hand.glb");
