@@ -315,11 +315,17 @@ impl Renderer {
             ));
         }
         let ctx = &self.ctx;
-        gpu.fabrics =
-            ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
-        // New exponents need new albedo tables (the next frame that reads them makes them).
-        gpu.fabric_records = bytemuck::pod_collect_to_vec(&fabric_bytes);
-        gpu.lobe_albedo = std::sync::OnceLock::new();
+        // Fabric records that changed (a `weft view` edit) need their buffer and, for new
+        // exponents, new albedo tables (the next frame that reads them makes them). A pose that
+        // drives only glTF materials (KHR_animation_pointer, every frame of a sequence) leaves
+        // them, and the tables are not made again.
+        let uploaded: &[u8] = bytemuck::cast_slice(&gpu.fabric_records);
+        if uploaded != fabric_bytes.as_slice() {
+            gpu.fabrics =
+                ctx.create_buffer_with("fabrics", BufferUsageFlags::STORAGE_BUFFER, &fabric_bytes)?;
+            gpu.fabric_records = bytemuck::pod_collect_to_vec(&fabric_bytes);
+            gpu.lobe_albedo = std::sync::OnceLock::new();
+        }
         gpu.thread_colours = ctx.create_buffer_with(
             "thread colours",
             BufferUsageFlags::STORAGE_BUFFER,
