@@ -561,3 +561,103 @@ fn deformations_that_overflow_are_errors_naming_the_mesh() {
         "{e}"
     );
 }
+
+// --- more than four joint influences -------------------------------------------------------------
+
+/// One triangle skinned to 6 joints through JOINTS_0/WEIGHTS_0 and JOINTS_1/WEIGHTS_1, the
+/// given (joint, weight) lists per set for every vertex.
+fn eight_influence_gltf(set0: [(u16, f32); 4], set1: [(u16, f32); 4]) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut push = |bytes: Vec<u8>, acc: serde_json::Value| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        views.push(
+            serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}),
+        );
+        bin.extend_from_slice(&bytes);
+        let mut acc = acc;
+        acc["bufferView"] = serde_json::json!(views.len() - 1);
+        accessors.push(acc);
+        accessors.len() - 1
+    };
+    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let pos = push(
+        f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}),
+    );
+    let mut attributes = serde_json::json!({"POSITION": pos});
+    for (k, set) in [set0, set1].iter().enumerate() {
+        let joints: Vec<u8> = (0..3)
+            .flat_map(|_| set.iter().flat_map(|(j, _)| j.to_le_bytes()))
+            .collect();
+        let weights: Vec<f32> = (0..3).flat_map(|_| set.map(|(_, w)| w)).collect();
+        attributes[format!("JOINTS_{k}")] = serde_json::json!(push(
+            joints,
+            serde_json::json!({"componentType": 5123, "count": 3, "type": "VEC4"})
+        ));
+        attributes[format!("WEIGHTS_{k}")] = serde_json::json!(push(
+            f32s(&weights),
+            serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC4"})
+        ));
+    }
+    let mut nodes = vec![serde_json::json!({"mesh": 0, "skin": 0})];
+    nodes.extend((0..6).map(|_| serde_json::json!({})));
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": (0..=6).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": attributes}]}],
+        "skins": [{"joints": (1..=6).collect::<Vec<_>>()}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    common::glb(&serde_json::to_vec(&doc).unwrap(), &bin)
+}
+
+#[test]
+fn a_second_set_of_joints_keeps_each_vertex_four_strongest_influences() {
+    // Joint 2 appears in both sets (0.1 + 0.2 = 0.3, the strongest); the two weakest (joints 3
+    // and 5, 0.05 and 0.02) are left out, and the four kept are scaled to sum to 1.
+    let s = load_bytes(&eight_influence_gltf(
+        [(0, 0.2), (2, 0.1), (3, 0.05), (4, 0.15)],
+        [(1, 0.25), (2, 0.2), (5, 0.02), (0, 0.0)],
+    ))
+    .expect("valid file");
+    let deform = &s.rig.meshes[&0];
+    let kept = 0.3 + 0.25 + 0.2 + 0.15;
+    for v in &deform.skin {
+        assert_eq!(v.joints, [2, 1, 0, 4]);
+        for (w, want) in v.weights.iter().zip([0.3, 0.25, 0.2, 0.15]) {
+            assert!((w - want / kept).abs() < 1e-6, "{:?}", v.weights);
+        }
+    }
+    // 0.05 of a total 0.97 left out: the warning names the share and a vertex.
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.0.contains("2 sets of JOINTS/WEIGHTS") && w.0.contains("5 % of vertex 0")),
+        "{:?}",
+        s.warnings
+    );
+
+    // Four influences in all, spread over the two sets: nothing is left out, no warning.
+    let s = load_bytes(&eight_influence_gltf(
+        [(0, 0.5), (1, 0.0), (0, 0.0), (0, 0.0)],
+        [(3, 0.25), (5, 0.125), (4, 0.125), (0, 0.0)],
+    ))
+    .expect("valid file");
+    for v in &s.rig.meshes[&0].skin {
+        assert_eq!(v.joints, [0, 3, 4, 5]);
+        assert_eq!(v.weights, [0.5, 0.25, 0.125, 0.125]);
+    }
+    assert!(
+        s.warnings.iter().all(|w| !w.0.contains("JOINTS")),
+        "{:?}",
+        s.warnings
+    );
+}

@@ -366,7 +366,7 @@ def build():
     entry("degenerate-triangles.gltf", gltf(quad_doc(positions=[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0]], indices=[0, 1, 2, 0, 0, 0, 1, 1, 3, 0, 1, 3])), "zero-area triangles (collinear, repeated vertices) beside one good one", "renders, warning: `tangent(s)`")
     entry("coincident-corners.gltf", gltf(quad_doc(positions=[[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [-1.0, -1.0, 0.0], [-1.0, 1.0, 0.0]])), "every triangle has two corners at one position (made mikktspace read out of bounds; found by tests/fuzz_mutate.rs)", "renders")
     entry("collapsed-mesh.gltf", gltf(quad_doc(positions=[[0.5, 0.5, 0.5]] * 4)), "every vertex at one point (made mikktspace panic)", "renders")
-    entry("all-triangles-degenerate.gltf", gltf(quad_doc(positions=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [0.0, 0.0, 0.0]], normals=None, indices=[0, 1, 2, 0, 3, 0])), "every triangle has zero area, and there are no normals to fall back on", "renders, warning: `no normals`")
+    entry("all-triangles-degenerate.gltf", gltf(quad_doc(positions=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0], [0.0, 0.0, 0.0]], normals=None, indices=[0, 1, 2, 0, 3, 0])), "every triangle has zero area, and there are no normals to fall back on", "renders, warning: `covers no pixel`")
     d = quad_doc()
     d.json["nodes"][0]["rotation"] = [0.0, 0.0, 0.0, 0.0]
     entry("zero-quaternion.gltf", gltf(d), "a node rotation of (0, 0, 0, 0)", "error: `not a unit quaternion`")

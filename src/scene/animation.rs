@@ -913,6 +913,30 @@ pub struct MeshDeform {
 }
 
 impl MeshDeform {
+    /// Replaces the vertices by copies of vertices `origin`, in that order (a mesh unwelded into
+    /// one vertex per triangle corner): each copy moves as its original.
+    pub fn select(&mut self, origin: &[usize]) {
+        let pick = |list: &mut Vec<[f32; 3]>| {
+            if !list.is_empty() {
+                *list = origin
+                    .iter()
+                    .map(|&o| list.get(o).copied().unwrap_or([0.0; 3]))
+                    .collect();
+            }
+        };
+        if !self.skin.is_empty() {
+            self.skin = origin
+                .iter()
+                .map(|&o| self.skin.get(o).copied().unwrap_or_default())
+                .collect();
+        }
+        for t in &mut self.targets {
+            pick(&mut t.positions);
+            pick(&mut t.normals);
+            pick(&mut t.tangents);
+        }
+    }
+
     /// Appends copies of vertices `origin` (the vertices split off by tangent generation, in
     /// order): they move as their originals.
     pub fn extend_to(&mut self, origin: &[usize]) {

@@ -6,6 +6,7 @@ use std::collections::HashMap;
 
 use glam::{Vec3, Vec4};
 
+use super::animation::MorphTarget;
 use super::Vertex;
 
 /// Area-weighted sum of the face normals around each vertex (not normalised; zero for a vertex
@@ -39,13 +40,111 @@ pub(super) fn direction(v: Vec3) -> Option<Vec3> {
     (v / largest).try_normalize()
 }
 
-/// Gives every vertex the normalised sum of its faces' normals: smooth where triangles share
-/// vertices, flat where they do not.
-pub(super) fn generate_normals(vertices: &mut [Vertex], indices: &[u32]) {
-    let sums = face_normal_sums(vertices, indices);
-    for (v, n) in vertices.iter_mut().zip(sums) {
-        v.normal = direction(n).unwrap_or(Vec3::ZERO).to_array();
+/// What [`flat_normals`] did besides the vertices.
+pub(super) struct Flat {
+    /// For each new vertex, the vertex it copies (for the per-vertex data that travels with it:
+    /// colours, joints, morph deltas).
+    pub origin: Vec<usize>,
+    /// Triangles with no area (their corners get +Y; such a triangle covers no pixel).
+    pub degenerate: usize,
+    /// For each morph target that moves positions but gives no normal deltas (its index), the
+    /// deltas per new vertex that turn each face's rest normal into its morphed one.
+    pub target_normals: Vec<(usize, Vec<[f32; 3]>)>,
+}
+
+/// Flat normals for a primitive the file gives none (glTF 2.0 §3.7.2.1): each triangle's corners
+/// get its face normal. A vertex is shared only by triangles whose normals agree at rest and in
+/// every morph target that moves it (within 1e-6 of the cosine, 0.08°); elsewhere it is copied,
+/// so a flat grid keeps one vertex per grid point and a cube's corner becomes three. Rewrites
+/// `indices` to the new vertices, which it returns; a vertex no triangle uses is left out.
+pub(super) fn flat_normals(
+    vertices: &[Vertex],
+    indices: &mut [u32],
+    targets: &[MorphTarget],
+) -> (Vec<Vertex>, Flat) {
+    const NONE: u32 = u32::MAX;
+    let face = |p: [Vec3; 3]| direction((p[1] - p[0]).cross(p[2] - p[0]));
+    // A face degenerate in a target is ZERO there, and agrees only with another such face.
+    let same = |a: &Vec3, b: &Vec3| {
+        if *a == Vec3::ZERO || *b == Vec3::ZERO {
+            a == b
+        } else {
+            a.dot(*b) > 1.0 - 1e-6
+        }
+    };
+    let moved: Vec<usize> = (0..targets.len())
+        .filter(|&t| targets[t].normals.is_empty() && targets[t].positions.len() == vertices.len())
+        .collect();
+    let stride = 1 + moved.len();
+    // Per original vertex its newest copy, per copy the one before it: the copies of a vertex
+    // as a list; per copy its normals at rest and in each moved target (`stride` of them).
+    let mut first = vec![NONE; vertices.len()];
+    let mut next: Vec<u32> = Vec::new();
+    let mut normals: Vec<Vec3> = Vec::new();
+    let mut out: Vec<Vertex> = Vec::with_capacity(vertices.len());
+    let mut origin = Vec::with_capacity(vertices.len());
+    let mut sig = Vec::with_capacity(stride);
+    let mut degenerate = 0;
+    for tri in indices.chunks_exact_mut(3) {
+        let p = [0, 1, 2].map(|c| Vec3::from(vertices[tri[c] as usize].position));
+        let n = face(p);
+        degenerate += usize::from(n.is_none());
+        let n = n.unwrap_or(Vec3::Y);
+        sig.clear();
+        sig.push(n);
+        for &t in &moved {
+            let d = &targets[t].positions;
+            let q = [0, 1, 2].map(|c| p[c] + Vec3::from(d[tri[c] as usize]));
+            sig.push(face(q).unwrap_or(Vec3::ZERO));
+        }
+        for corner in tri.iter_mut() {
+            let v = *corner as usize;
+            let mut j = first[v];
+            while j != NONE {
+                let theirs = &normals[j as usize * stride..][..stride];
+                if theirs.iter().zip(&sig).all(|(a, b)| same(a, b)) {
+                    break;
+                }
+                j = next[j as usize];
+            }
+            if j == NONE {
+                j = out.len() as u32;
+                let mut copy = vertices[v];
+                copy.normal = n.to_array();
+                out.push(copy);
+                origin.push(v);
+                next.push(first[v]);
+                first[v] = j;
+                normals.extend_from_slice(&sig);
+            }
+            *corner = j;
+        }
     }
+    let target_normals = moved
+        .iter()
+        .enumerate()
+        .map(|(m, &t)| {
+            let deltas = (0..out.len())
+                .map(|j| {
+                    let morphed = normals[j * stride + 1 + m];
+                    if morphed == Vec3::ZERO {
+                        [0.0; 3]
+                    } else {
+                        (morphed - normals[j * stride]).to_array()
+                    }
+                })
+                .collect();
+            (t, deltas)
+        })
+        .collect();
+    (
+        out,
+        Flat {
+            origin,
+            degenerate,
+            target_normals,
+        },
+    )
 }
 
 /// Replaces zero-length or non-finite normals (by the faces' normal, or +Y where the faces are
@@ -321,6 +420,71 @@ mod tests {
             tangent: [0.0; 4],
             uv,
             uv1: [0.0; 2],
+        }
+    }
+
+    #[test]
+    fn flat_normals_split_only_where_faces_disagree_and_follow_morph_targets() {
+        // A flat quad (two triangles sharing an edge, normal +Z), a third triangle folded up
+        // along the quad's edge x = 1 (normal +X) and a degenerate one.
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 1.0],
+            [2.0, 2.0, 2.0],
+        ];
+        let v: Vec<Vertex> = p.iter().map(|&p| vertex(p, [0.0; 2])).collect();
+        let mut indices = vec![0, 1, 2, 0, 2, 3, 1, 2, 4, 0, 5, 5];
+        let (out, flat) = flat_normals(&v, &mut indices, &[]);
+        assert_eq!(flat.degenerate, 1);
+        // The quad's four corners shared; the fold's 1 and 2 copied, 4 its own; 0 and 5 for
+        // the degenerate triangle (+Y, unlike the quad's 0).
+        assert_eq!(out.len(), 4 + 3 + 2);
+        assert_eq!(&indices[..6], &[0, 1, 2, 0, 2, 3]);
+        for (k, tri) in indices.chunks_exact(3).enumerate() {
+            let want = [
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ][k];
+            for &i in tri {
+                assert_eq!(out[i as usize].normal, want, "triangle {k}");
+                assert_eq!(out[i as usize].position, p[flat.origin[i as usize]]);
+            }
+        }
+
+        // A target lifting corner 3 to z = 1 tilts the quad's second triangle to (1, -1, 1)/sqrt 3
+        // and leaves the first flat: the shared corners 0 and 2 split between them.
+        let mut lifted = vec![[0.0; 3]; 6];
+        lifted[3] = [0.0, 0.0, 1.0];
+        let targets = [
+            MorphTarget {
+                positions: lifted,
+                ..MorphTarget::default()
+            },
+            // A target with its own normal deltas keeps them (none are made).
+            MorphTarget {
+                positions: vec![[0.0; 3]; 6],
+                normals: vec![[0.5; 3]; 6],
+                ..MorphTarget::default()
+            },
+        ];
+        let mut indices = vec![0, 1, 2, 0, 2, 3];
+        let (out, flat) = flat_normals(&v, &mut indices, &targets);
+        assert_eq!(out.len(), 6);
+        assert_eq!(flat.target_normals.len(), 1);
+        let (t, deltas) = &flat.target_normals[0];
+        assert_eq!(*t, 0);
+        let tilted = Vec3::new(1.0, -1.0, 1.0).normalize();
+        for (k, tri) in indices.chunks_exact(3).enumerate() {
+            for &i in tri {
+                let morphed = Vec3::from(out[i as usize].normal) + Vec3::from(deltas[i as usize]);
+                let want = if k == 0 { Vec3::Z } else { tilted };
+                assert!(morphed.abs_diff_eq(want, 1e-6), "{morphed} on triangle {k}");
+            }
         }
     }
 

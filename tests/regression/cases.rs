@@ -512,12 +512,10 @@ pub fn cases() -> Vec<Case> {
         },
         Case {
             env: STUDIO,
-            warnings: &["has no normals"],
             ..case("khronos-texture-encoding", "tests/data/khronos/TextureEncodingTest/glTF-Binary/TextureEncodingTest.glb", "the texture encoding test's panels, the cut-out (alphaMode MASK) ones with their background showing through the cut")
         },
         Case {
             env: STUDIO,
-            warnings: &["has no normals", "normal(s) were zero-length"],
             ..case("khronos-mesh-primitive-modes", "tests/data/khronos/MeshPrimitiveModes/glTF/MeshPrimitiveModes.gltf", "all seven primitive modes as the sample viewer shows them: on top a ring of single-pixel white POINTS; in the middle row, 1-pixel white lines: the LINES star, the LINE_LOOP closed back to its start, the LINE_STRIP open; below, three grey filled shapes alike, the TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN meshes")
         },
         Case {
@@ -543,7 +541,6 @@ pub fn cases() -> Vec<Case> {
         Case {
             camera: Some(1),
             env: STUDIO,
-            warnings: &["has no normals"],
             ..case("khronos-cameras-ortho", "tests/data/khronos/Cameras/glTF/Cameras.gltf", "the Cameras sample's grey square, tilted back 45 degrees, through its orthographic camera (ymag 1): 0.71 as tall as wide, centred on the camera axis, no perspective")
         },
     ]);
@@ -605,16 +602,10 @@ pub fn cases() -> Vec<Case> {
             "the green tapered tube on its two-joint skin, its upper half starting to lean right: one smooth bend at the middle joint, its shadow on the ground bent with it"),
         posed("khronos-rigged-simple-t1.0", "tests/data/khronos/RiggedSimple/glTF-Binary/RiggedSimple.glb", (0, 1.0),
             "the same tube fully bent (about 40 degrees) at the middle joint, no crease or tear at the bend"),
-        Case {
-            warnings: &["has no normals"],
-            ..posed("khronos-simple-skin-t1.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 1.0),
-                "the SimpleSkin strip in glTF's default material (a rough white metal: near white since the GGX energy compensation, mid-grey before) (ten triangles on two joints, flat-shaded from generated normals) with its upper half bent over to the right at the middle, a notch where the two halves meet, its shadow on the ground")
-        },
-        Case {
-            warnings: &["has no normals"],
-            ..posed("khronos-simple-skin-t3.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 3.0),
-                "the same strip at t = 3, where the animation swings back through the rest shape: nearly straight and upright, slightly narrower at the bottom")
-        },
+        posed("khronos-simple-skin-t1.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 1.0),
+                "the SimpleSkin strip in glTF's default material (a rough white metal: near white since the GGX energy compensation, mid-grey before) (ten triangles on two joints, flat-shaded from generated normals) with its upper half bent over to the right at the middle, a notch where the two halves meet, its shadow on the ground"),
+        posed("khronos-simple-skin-t3.0", "tests/data/khronos/SimpleSkin/glTF/SimpleSkin.gltf", (0, 3.0),
+                "the same strip at t = 3, where the animation swings back through the rest shape: nearly straight and upright, slightly narrower at the bottom"),
         Case {
             warnings: &["tangent(s) were zero-length"],
             ..posed("khronos-morph-cube-t1.0", "tests/data/khronos/AnimatedMorphCube/glTF-Binary/AnimatedMorphCube.glb", (0, 1.0),

@@ -554,17 +554,41 @@ impl<'a> Loader<'a> {
             )));
         }
         if normals.is_none() {
-            tangents::generate_normals(&mut vertices, &indices);
-            self.warn(format_args!(
-                "{who} has no normals; generated them from the triangles (export normals for the intended shading)"
-            ));
+            // glTF 2.0 (3.7.2.1): "When normals are not specified, client implementations MUST
+            // calculate flat normals and the provided tangents (if present) MUST be ignored."
+            // A vertex is copied where the triangles sharing it disagree (tangents.rs).
+            let no_targets = Vec::new();
+            let targets = deform.as_ref().map_or(&no_targets, |d| &d.targets);
+            let (flat, made) = tangents::flat_normals(&vertices, &mut indices, targets);
+            vertices = flat;
+            if !colors.is_empty() {
+                colors = made
+                    .origin
+                    .iter()
+                    .map(|&o| colors.get(o).copied().unwrap_or([1.0; 4]))
+                    .collect();
+            }
+            if let Some(d) = deform.as_mut() {
+                d.select(&made.origin);
+                for (t, normals) in made.target_normals {
+                    d.targets[t].normals = normals;
+                }
+            }
+            if made.degenerate == indices.len() / 3 {
+                self.warn(format_args!(
+                    "{who} has no normals and none of its {} triangle(s) has an area, so it covers no pixel; check the mesh in your modelling tool",
+                    made.degenerate
+                ));
+            }
         }
         let bad_normals = tangents::repair_normals(&mut vertices, &indices);
 
-        let bad_tangents = if tangents.is_some() && !uv_transform.turns_or_mirrors() {
+        let file_tangents = tangents.is_some() && normals.is_some();
+        let bad_tangents = if file_tangents && !uv_transform.turns_or_mirrors() {
             tangents::repair_tangents(&mut vertices)
         } else if uvs.is_some() {
             let before = (deform.is_some() || !colors.is_empty()).then(|| indices.clone());
+            let welded = vertices.len();
             if !tangents::mikktspace_tangents(&mut vertices, &mut indices) {
                 tangents::arbitrary_tangents(&mut vertices);
             }
@@ -580,10 +604,10 @@ impl<'a> Loader<'a> {
                     }
                 }
                 if let Some(d) = deform.as_mut() {
-                    d.extend_to(&origin[count..]);
+                    d.extend_to(&origin[welded..]);
                 }
                 if !colors.is_empty() {
-                    for &o in &origin[count..] {
+                    for &o in &origin[welded..] {
                         colors.push(colors.get(o).copied().unwrap_or([1.0; 4]));
                     }
                 }
@@ -760,12 +784,81 @@ impl<'a> Loader<'a> {
                 }
                 let joints = read(j, format!("{who}, attribute JOINTS_0"), Dimensions::Vec4)?;
                 let weights = read(w, format!("{who}, attribute WEIGHTS_0"), Dimensions::Vec4)?;
+                // More than four influences come in further sets (JOINTS_1 / WEIGHTS_1, ...):
+                // weft's vertex holds four, so each vertex keeps its four strongest.
+                let mut more = Vec::new();
+                for set in 1u32.. {
+                    let (Some(j), Some(w)) = (
+                        prim.get(&Semantic::Joints(set)),
+                        prim.get(&Semantic::Weights(set)),
+                    ) else {
+                        break;
+                    };
+                    if !matches!(
+                        j.data_type(),
+                        gltf::accessor::DataType::U8 | gltf::accessor::DataType::U16
+                    ) || j.normalized()
+                    {
+                        return Err(self.error(format_args!(
+                            "{who}: JOINTS_{set} (accessor {}) has component type {:?}{}; glTF requires unsigned byte or unsigned short joint indices: re-export the mesh",
+                            j.index(),
+                            j.data_type(),
+                            if j.normalized() { ", normalized" } else { "" }
+                        )));
+                    }
+                    more.push((
+                        read(
+                            j,
+                            format!("{who}, attribute JOINTS_{set}"),
+                            Dimensions::Vec4,
+                        )?,
+                        read(
+                            w,
+                            format!("{who}, attribute WEIGHTS_{set}"),
+                            Dimensions::Vec4,
+                        )?,
+                    ));
+                }
                 let mut unweighted = 0;
+                // The largest weight left out (as a share of the vertex's total) and its vertex.
+                let mut dropped = (0f32, 0usize);
                 deform.skin = (0..count)
                     .map(|v| {
+                        let mut j = [0u32; 4];
                         let mut w = [0f32; 4];
-                        w.copy_from_slice(&weights[4 * v..4 * v + 4]);
-                        let w = w.map(|x| x.max(0.0));
+                        for k in 0..4 {
+                            j[k] = joints[4 * v + k] as u32;
+                            w[k] = weights[4 * v + k].max(0.0);
+                        }
+                        if !more.is_empty() {
+                            let mut all: Vec<(u32, f32)> = j.into_iter().zip(w).collect();
+                            for (js, ws) in &more {
+                                all.extend(
+                                    (0..4).map(|k| (js[4 * v + k] as u32, ws[4 * v + k].max(0.0))),
+                                );
+                            }
+                            // A joint named twice is one influence; strongest first, the lower
+                            // joint first between equals.
+                            all.sort_by_key(|&(joint, _)| joint);
+                            all.dedup_by(|b, a| {
+                                let same = a.0 == b.0;
+                                if same {
+                                    a.1 += b.1;
+                                }
+                                same
+                            });
+                            all.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+                            let total: f32 = all.iter().map(|x| x.1).sum();
+                            if let Some(&(_, cut)) = all.get(4) {
+                                if total > 1e-6 && cut / total > dropped.0 {
+                                    dropped = (cut / total, v);
+                                }
+                            }
+                            all.resize(4.max(all.len()), (0, 0.0));
+                            for k in 0..4 {
+                                (j[k], w[k]) = all[k];
+                            }
+                        }
                         let sum: f32 = w.iter().sum();
                         let weights = if sum > 1e-6 {
                             // glTF asks for weights that sum to 1; exporters round (u8 weights
@@ -775,10 +868,7 @@ impl<'a> Loader<'a> {
                             unweighted += 1;
                             [1.0, 0.0, 0.0, 0.0]
                         };
-                        VertexSkin {
-                            joints: [0, 1, 2, 3].map(|k| joints[4 * v + k] as u32),
-                            weights,
-                        }
+                        VertexSkin { joints: j, weights }
                     })
                     .collect();
                 if unweighted > 0 {
@@ -786,9 +876,14 @@ impl<'a> Loader<'a> {
                         "{who} has {unweighted} vertex/vertices whose WEIGHTS_0 are all zero; they follow their first joint"
                     ));
                 }
-                if prim.get(&Semantic::Joints(1)).is_some() {
+                // Below 1 % of a vertex's weight a fifth influence moves it by under 1 % of its
+                // joints' relative motion: not worth a message.
+                if dropped.0 > 0.01 {
                     self.warn(format_args!(
-                        "{who} has more than four joint influences per vertex (JOINTS_1); weft uses JOINTS_0 / WEIGHTS_0 only, so the skin deforms slightly differently"
+                        "{who} has more than four joint influences per vertex ({} sets of JOINTS/WEIGHTS); weft keeps each vertex's four strongest, and the largest left out is {:.0} % of vertex {}'s weight, so the skin deforms slightly differently",
+                        more.len() + 1,
+                        dropped.0 * 100.0,
+                        dropped.1
                     ));
                 }
             }
