@@ -67,6 +67,8 @@ pub struct SceneSpec {
     pub scene: Option<PathBuf>,
     /// KHR_materials_variants: the variant whose materials to load.
     pub variant: Option<String>,
+    /// Which of the file's glTF scenes to draw, by index or name (None: the file's default).
+    pub gltf_scene: Option<String>,
     /// `weft render --fabric` requests (`MATERIAL=PRESET...`, [`crate::assets`]).
     pub fabric: Vec<String>,
     /// Output size; the caller's default size when None.
@@ -100,6 +102,7 @@ impl Default for SceneSpec {
         SceneSpec {
             scene: None,
             variant: None,
+            gltf_scene: None,
             fabric: Vec::new(),
             size: None,
             camera: None,
@@ -136,13 +139,14 @@ impl SceneSpec {
     pub fn load_unstaged(&self) -> Result<(Scene, Vec<Applied>)> {
         let load_options = LoadOptions {
             variant: self.variant.clone(),
+            scene: self.gltf_scene.clone(),
         };
         Ok(match (&self.scene, self.fabric.is_empty()) {
             (Some(path), true) => (crate::scene::load_with(path, &load_options)?, Vec::new()),
             (path, false) => {
                 crate::assets::load_with_fabric(path.as_deref(), &self.fabric, &load_options)?
             }
-            (None, true) if self.variant.is_some() => (
+            (None, true) if self.variant.is_some() || self.gltf_scene.is_some() => (
                 crate::scene::load_slice_with(
                     crate::scene::DEFAULT_SCENE_GLB,
                     "built-in default scene",

@@ -96,6 +96,7 @@ fn load_scene(
         .or_insert_with(|| {
             let options = weft::scene::LoadOptions {
                 variant: variant.map(str::to_owned),
+                ..Default::default()
             };
             let scene = weft::scene::load_with(&root().join(path), &options)
                 .unwrap_or_else(|e| panic!("{path}: {e}"));

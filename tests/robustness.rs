@@ -186,7 +186,13 @@ fn prepare(path: &Path, args: &[String]) -> weft::Result<(Scene, RenderOptions)>
         .iter()
         .position(|a| a == "--variant")
         .and_then(|i| args.get(i + 1).cloned());
-    let scene = scene::load_with(path, &scene::LoadOptions { variant })?;
+    let scene = scene::load_with(
+        path,
+        &scene::LoadOptions {
+            variant,
+            ..Default::default()
+        },
+    )?;
     let mut options = RenderOptions {
         width: 64,
         height: 36,

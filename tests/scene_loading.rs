@@ -2215,6 +2215,73 @@ fn each_texture_slot_keeps_its_own_transform_and_uv_set() {
     );
 }
 
+/// A file with several scenes draws its `scene` (with a warning that says how to pick another);
+/// `--gltf-scene` picks one by index or by name, with no warning; an unknown one is an error
+/// listing the file's scenes.
+#[test]
+fn gltf_scene_picks_one_of_the_file_s_scenes_by_index_or_name() {
+    let mut d = Doc::new();
+    let (_, first) = d.quad(true, false);
+    let (_, second) = d.mesh(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        None,
+        None,
+        None,
+    );
+    d.json["scenes"] = serde_json::json!([
+        {"name": "quad", "nodes": [first]},
+        {"name": "triangle", "nodes": [second]},
+    ]);
+    d.json["scene"] = serde_json::json!(1);
+    let dir = TempDir::new("scene-loading-gltf-scene");
+    let path = dir.join("scenes.gltf");
+    std::fs::write(&path, d.text()).unwrap();
+    let load = |pick: Option<&str>| {
+        scene::load_with(
+            &path,
+            &scene::LoadOptions {
+                scene: pick.map(str::to_owned),
+                ..Default::default()
+            },
+        )
+    };
+    let triangles = |s: &Scene| {
+        s.draws
+            .iter()
+            .map(|d| s.meshes[d.mesh].indices.len() / 3)
+            .sum::<usize>()
+    };
+
+    let default = load(None).unwrap();
+    assert_eq!(default.gltf_scene, Some(1));
+    assert_eq!(default.gltf_scenes, vec!["0 'quad'", "1 'triangle'"]);
+    assert_eq!(triangles(&default), 1);
+    assert!(
+        default
+            .warnings
+            .iter()
+            .any(|w| w.0.contains("has 2 scenes") && w.0.contains("--gltf-scene")),
+        "{:?}",
+        default.warnings
+    );
+    for pick in ["0", "quad"] {
+        let s = load(Some(pick)).unwrap();
+        assert_eq!(s.gltf_scene, Some(0), "{pick}");
+        assert_eq!(triangles(&s), 2, "{pick}");
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+    assert_eq!(load(Some("triangle")).unwrap().gltf_scene, Some(1));
+    for bad in ["2", "square"] {
+        let msg = error_text(load(Some(bad)));
+        assert!(
+            msg.contains(&format!("no scene '{bad}'"))
+                && msg.contains("0 'quad', 1 'triangle'")
+                && msg.contains("scenes.gltf"),
+            "{msg}"
+        );
+    }
+}
+
 #[test]
 fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
     let mut d = Doc::new();
@@ -2243,6 +2310,7 @@ fn variants_switch_materials_and_an_unknown_variant_is_an_error_listing_them() {
             &path,
             &scene::LoadOptions {
                 variant: Some(v.into()),
+                ..Default::default()
             },
         )
     };

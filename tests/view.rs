@@ -336,7 +336,7 @@ fn dropped_files_load_or_say_why() {
     let load = |p: &str| {
         controls::load(
             &SceneSource::File(p.into()),
-            None,
+            Default::default(),
             LightsMode::Auto,
             0.0,
             false,
@@ -384,7 +384,7 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
     let file = dir.join("SheenChair.gltf");
     let source = weft::view::SceneSource::File(file.clone());
     let lights = weft::env::LightsMode::Auto;
-    let scene = controls::load(&source, None, lights, 0.0, false).unwrap();
+    let scene = controls::load(&source, Default::default(), lights, 0.0, false).unwrap();
     assert!(controls::fabric_materials(&scene).is_empty());
     let materials = controls::file_materials(&scene);
     // The file's own materials only (not the staged ground), all of them.
@@ -409,7 +409,7 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
     let (r, _) = controls::weave_request(seat, "denim-twill", None).unwrap();
     controls::replace_request(&mut requests, r);
     let (scene, applied) =
-        controls::load_woven(&source, None, &requests, lights, 0.0, false).unwrap();
+        controls::load_woven(&source, Default::default(), &requests, lights, 0.0, false).unwrap();
     let woven = scene.materials[seat].fabric.clone().expect("woven");
     assert_eq!(applied.len(), 1);
     assert_eq!(woven.pattern, weft::fabric::WeavePattern::twill());
@@ -422,7 +422,8 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
     let (r, _) = controls::weave_request(seat, "cotton-plain", Some(&draft)).unwrap();
     controls::replace_request(&mut requests, r);
     assert_eq!(requests.len(), 1);
-    let (scene, _) = controls::load_woven(&source, None, &requests, lights, 0.0, false).unwrap();
+    let (scene, _) =
+        controls::load_woven(&source, Default::default(), &requests, lights, 0.0, false).unwrap();
     let woven = scene.materials[seat].fabric.clone().unwrap();
     assert!(woven.has_thread_colours(), "the tartan's sett");
 
@@ -465,7 +466,7 @@ fn a_material_is_woven_tuned_and_saved_from_the_viewer() {
     assert_eq!(requests[0].source.name(), "cotton-plain");
     let before: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
     let source2 = weft::view::SceneSource::File(path.clone());
-    let scene2 = controls::load(&source2, None, lights, 0.0, false).unwrap();
+    let scene2 = controls::load(&source2, Default::default(), lights, 0.0, false).unwrap();
     let mut retuned = scene2.materials[seat].fabric.clone().unwrap();
     retuned.rs = 0.1;
     let exact = controls::exact_request(&scene2, &[], seat, &retuned).unwrap();

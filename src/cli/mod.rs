@@ -169,6 +169,10 @@ struct SceneArgs {
     /// KHR_materials_variants: load the materials of this variant (`weft plan` lists them).
     #[arg(long)]
     variant: Option<String>,
+    /// Which of the file's scenes to draw, by index or name (default: the file's `scene`, else
+    /// its first; `weft plan` lists them).
+    #[arg(long, value_name = "N|NAME")]
+    gltf_scene: Option<String>,
 }
 
 impl SceneArgs {
@@ -178,6 +182,7 @@ impl SceneArgs {
         Ok(SceneSpec {
             scene: self.scene.clone(),
             variant: self.variant.clone(),
+            gltf_scene: self.gltf_scene.clone(),
             fabric: fabric.to_vec(),
             size: self.size,
             camera: self.camera,

@@ -229,6 +229,9 @@ pub struct Plan {
     /// KHR_materials_variants: the file's variants and the one loaded (None: the defaults).
     pub variants: Vec<String>,
     pub variant: Option<String>,
+    /// The file's glTF scenes and the one drawn (listed when it has more than one).
+    pub gltf_scenes: Vec<String>,
+    pub gltf_scene: Option<usize>,
     /// One per distinct weave (materials differing only in colour or exponents share one).
     pub weaves: Vec<WeavePlan>,
     pub features: FabricFeatures,
@@ -788,6 +791,8 @@ impl Plan {
                 .count(),
             variants: scene.variants.clone(),
             variant: scene.variant.clone(),
+            gltf_scenes: scene.gltf_scenes.clone(),
+            gltf_scene: scene.gltf_scene,
             fabric_materials: scene
                 .materials
                 .iter()
@@ -1008,6 +1013,15 @@ impl fmt::Display for Plan {
                 "none"
             }
         )?;
+        if self.gltf_scenes.len() > 1 {
+            writeln!(
+                f,
+                "scenes      {} (drawn: {}; --gltf-scene picks)",
+                self.gltf_scenes.join(", "),
+                self.gltf_scene
+                    .map_or("none".to_string(), |i| i.to_string())
+            )?;
+        }
         if !self.variants.is_empty() {
             writeln!(
                 f,

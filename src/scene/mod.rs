@@ -724,6 +724,10 @@ pub struct Scene {
     /// KHR_materials_variants: the file's variant names, and the one the scene was loaded with.
     pub variants: Vec<String>,
     pub variant: Option<String>,
+    /// The file's scenes ("index" or "index 'name'"), and the one drawn (None for a file
+    /// without scenes, whose root nodes are drawn).
+    pub gltf_scenes: Vec<String>,
+    pub gltf_scene: Option<usize>,
     /// EXT_mesh_gpu_instancing: the nodes that place their mesh several times, and their
     /// instances summed (each instance is a draw of its own: a node with 125 instances of a
     /// one-primitive mesh makes 125 draws).

@@ -18,7 +18,7 @@ use super::SceneSource;
 /// An error names the file and leaves the caller's current scene as it is.
 pub fn load(
     source: &SceneSource,
-    variant: Option<String>,
+    options: LoadOptions,
     lights: LightsMode,
     env_rotation: f32,
     own_env: bool,
@@ -40,7 +40,8 @@ pub fn load(
             SceneSource::File(path) => Some(path.clone()),
             SceneSource::Builtin => None,
         },
-        variant,
+        variant: options.variant,
+        gltf_scene: options.scene,
         ..Default::default()
     };
     let (mut scene, _) = spec.load_unstaged()?;
@@ -225,11 +226,11 @@ pub fn replace_request(requests: &mut Vec<Request>, request: Request) {
     requests.push(request);
 }
 
-/// Loads `source` (with `variant`) with `requests` applied by `weft fabric`'s own transform,
+/// Loads `source` (with `options`' variant and scene) with `requests` applied by `weft fabric`'s own transform,
 /// staged as [`load`] stages it; and what was applied.
 pub fn load_woven(
     source: &SceneSource,
-    variant: Option<String>,
+    options: LoadOptions,
     requests: &[Request],
     lights: LightsMode,
     env_rotation: f32,
@@ -237,8 +238,7 @@ pub fn load_woven(
 ) -> crate::Result<(Scene, Vec<Applied>)> {
     let (bytes, name, dir) = source_bytes(source)?;
     let (out, applied) = assets::transform(&bytes, &name, dir.as_deref(), requests)?;
-    let mut scene =
-        crate::scene::load_slice_with(&out, &name, dir.as_deref(), &LoadOptions { variant })?;
+    let mut scene = crate::scene::load_slice_with(&out, &name, dir.as_deref(), &options)?;
     crate::env::stage(&mut scene, lights, env_rotation, own_env);
     Ok((scene, applied))
 }

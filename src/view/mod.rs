@@ -359,13 +359,22 @@ impl App {
             .map(|e| e.rotation)
             .unwrap_or(0.0);
         let new_file = source != self.source;
+        // The same file keeps the glTF scene it shows; another opens at its own default.
+        let options = crate::scene::LoadOptions {
+            variant,
+            scene: if new_file {
+                None
+            } else {
+                self.scene.gltf_scene.map(|i| i.to_string())
+            },
+        };
         let scene = if new_file || self.requests.is_empty() {
-            controls::load(&source, variant, self.lights, rotation, self.own_env)?
+            controls::load(&source, options, self.lights, rotation, self.own_env)?
         } else {
             // The same file (another variant, a weave): with what the panel wove.
             controls::load_woven(
                 &source,
-                variant,
+                options,
                 &self.requests,
                 self.lights,
                 rotation,

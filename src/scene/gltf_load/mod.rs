@@ -133,6 +133,9 @@ pub struct LoadOptions {
     /// KHR_materials_variants: the variant to load (by name); None loads the file's default
     /// materials.
     pub variant: Option<String>,
+    /// Which of the file's scenes to draw, by index or name (`--gltf-scene`); None draws the
+    /// file's `scene`, else its first.
+    pub scene: Option<String>,
 }
 
 /// The scene embedded in the binary: a draped cloth over a ball on a floor, a metal ball, three
@@ -234,6 +237,38 @@ fn load_checked(
         },
     };
 
+    let scenes: Vec<String> = doc
+        .scenes()
+        .map(|s| match s.name() {
+            Some(n) => format!("{} '{n}'", s.index()),
+            None => s.index().to_string(),
+        })
+        .collect();
+    let chosen_scene = match &options.scene {
+        None => None,
+        Some(want) => {
+            let by_index = want
+                .parse::<usize>()
+                .ok()
+                .filter(|&i| i < doc.scenes().len());
+            let by_name = || doc.scenes().find(|s| s.name() == Some(want.as_str()));
+            match by_index.or_else(|| by_name().map(|s| s.index())) {
+                Some(i) => Some(i),
+                None if scenes.is_empty() => {
+                    return Err(Error::input(format!(
+                        "{label} has no scenes, so --gltf-scene '{want}' cannot be applied; leave --gltf-scene out"
+                    )))
+                }
+                None => {
+                    return Err(Error::input(format!(
+                        "{label} has no scene '{want}'; its scenes are: {} (by index or name; `weft plan` lists them)",
+                        scenes.join(", ")
+                    )))
+                }
+            }
+        }
+    };
+
     let mut loader = Loader {
         label,
         base_dir,
@@ -244,9 +279,11 @@ fn load_checked(
             warnings,
             variant: options.variant.clone(),
             variants: variants.clone(),
+            gltf_scenes: scenes,
             ..Scene::default()
         },
         variant: variant.map(|i| (i, variants.len())),
+        chosen_scene,
         textures: HashMap::new(),
         material_uv: Vec::new(),
         slot_transforms: Vec::new(),
@@ -638,6 +675,8 @@ struct Loader<'a> {
     slot_transforms: Vec<[UvTransform; TextureSlot::COUNT]>,
     /// The KHR_materials_variants variant chosen, and how many the file has.
     variant: Option<(usize, usize)>,
+    /// The scene `--gltf-scene` chose (None: the file's default).
+    chosen_scene: Option<usize>,
     /// Index of `Material::default()` in `scene.materials`, once a primitive needed it.
     default_material: Option<usize>,
     /// Unlit copies of materials (by index) for points and lines without normals.

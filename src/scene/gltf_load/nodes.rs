@@ -7,17 +7,24 @@ impl<'a> Loader<'a> {
 
     pub(super) fn walk_nodes(&mut self) -> Result<()> {
         let doc = self.doc;
-        let roots: Vec<gltf::Node<'a>> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        let chosen = self.chosen_scene.and_then(|i| doc.scenes().nth(i));
+        let picked = chosen.is_some();
+        let roots: Vec<gltf::Node<'a>> = match chosen
+            .or_else(|| doc.default_scene())
+            .or_else(|| doc.scenes().next())
+        {
             Some(scene) => {
-                if doc.scenes().len() > 1 {
+                self.scene.gltf_scene = Some(scene.index());
+                if doc.scenes().len() > 1 && !picked {
                     let name = scene
                         .name()
                         .map(|n| format!(" ('{n}')"))
                         .unwrap_or_default();
                     self.warn(format_args!(
-                        "has {} scenes; weft renders scene {}{name}",
+                        "has {} scenes; weft renders scene {}{name}, the file's {} (--gltf-scene N or NAME picks another; `weft plan` lists them)",
                         doc.scenes().len(),
-                        scene.index()
+                        scene.index(),
+                        if doc.default_scene().is_some() { "default" } else { "first" }
                     ));
                 }
                 scene.nodes().collect()
