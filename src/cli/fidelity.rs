@@ -37,6 +37,10 @@ pub struct FidelityArgs {
     /// Monte Carlo truth).
     #[arg(long, default_value = "fis:8", value_parser = |s: &str| weft::env::IblLevel::parse(s).map(|_| s.to_string()))]
     pub ibl: String,
+    /// Punctual lights in weft's renders, as `weft render --lights` takes them (auto: the file's;
+    /// none): to see what the file's own lights change in the comparison.
+    #[arg(long, default_value = "auto", value_parser = |s: &str| weft::env::LightsMode::parse(s).map(|_| s.to_string()))]
+    pub lights: String,
 }
 
 fn shared_dir(arg: &Option<PathBuf>) -> anyhow::Result<PathBuf> {
@@ -103,6 +107,7 @@ fn render(
     height: u32,
     occlusion: &str,
     ibl: &str,
+    lights: &str,
     out: &Path,
 ) -> anyhow::Result<()> {
     let exe = std::env::current_exe()?;
@@ -122,6 +127,7 @@ fn render(
         .args(["--tonemap", "aces"])
         .args(["--occlusion", occlusion])
         .args(["--ibl", ibl])
+        .args(["--lights", lights])
         .arg("-o")
         .arg(out)
         .output()?;
@@ -189,6 +195,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
             2 * s.size[1],
             &args.occlusion,
             &args.ibl,
+            &args.lights,
             Path::new(out),
         );
     }
@@ -228,6 +235,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
             2 * s.size[1],
             &args.occlusion,
             &args.ibl,
+            &args.lights,
             &full,
         ) {
             eprintln!("{e}");
