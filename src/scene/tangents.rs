@@ -63,6 +63,7 @@ pub(super) fn flat_normals(
     targets: &[MorphTarget],
 ) -> (Vec<Vertex>, Flat) {
     const NONE: u32 = u32::MAX;
+    const MAX_SEARCHED: usize = 64;
     let face = |p: [Vec3; 3]| direction((p[1] - p[0]).cross(p[2] - p[0]));
     // A face degenerate in a target is ZERO there, and agrees only with another such face.
     let same = |a: &Vec3, b: &Vec3| {
@@ -100,12 +101,20 @@ pub(super) fn flat_normals(
         for corner in tri.iter_mut() {
             let v = *corner as usize;
             let mut j = first[v];
-            while j != NONE {
+            // Only the newest copies are searched: a cone's apex shared by a million faces would
+            // otherwise cost a million comparisons a corner. Past them a corner gets a copy of its
+            // own, with the same normal as one it missed at worst: a vertex more, nothing seen.
+            let mut searched = 0;
+            while j != NONE && searched < MAX_SEARCHED {
                 let theirs = &normals[j as usize * stride..][..stride];
                 if theirs.iter().zip(&sig).all(|(a, b)| same(a, b)) {
                     break;
                 }
                 j = next[j as usize];
+                searched += 1;
+            }
+            if searched == MAX_SEARCHED {
+                j = NONE;
             }
             if j == NONE {
                 j = out.len() as u32;
@@ -484,6 +493,32 @@ mod tests {
                 let morphed = Vec3::from(out[i as usize].normal) + Vec3::from(deltas[i as usize]);
                 let want = if k == 0 { Vec3::Z } else { tilted };
                 assert!(morphed.abs_diff_eq(want, 1e-6), "{morphed} on triangle {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn flat_normals_of_a_cone_with_a_huge_apex_stay_linear_and_exact() {
+        // 200,000 faces around one apex, each with its own normal: every corner gets its face's
+        // normal, and the apex is not compared against every earlier copy (that would be 2e10
+        // comparisons: this test would not finish).
+        let n = 200_000;
+        let mut v = vec![vertex([0.0, 1.0, 0.0], [0.0; 2])];
+        v.extend((0..n).map(|k| {
+            let a = k as f32 / n as f32 * std::f32::consts::TAU;
+            vertex([a.cos(), 0.0, -a.sin()], [0.0; 2])
+        }));
+        let mut indices: Vec<u32> = (0..n as u32)
+            .flat_map(|k| [0, 1 + k, 1 + (k + 1) % n as u32])
+            .collect();
+        let (out, flat) = flat_normals(&v, &mut indices, &[]);
+        assert_eq!(flat.degenerate, 0);
+        for tri in indices.chunks_exact(3) {
+            let p = [0, 1, 2].map(|c| Vec3::from(out[tri[c] as usize].position));
+            let face = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+            for &i in tri {
+                let got = Vec3::from(out[i as usize].normal);
+                assert!(got.dot(face) > 1.0 - 1e-5, "{got} on a face facing {face}");
             }
         }
     }
