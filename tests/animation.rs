@@ -288,56 +288,69 @@ fn rendered_thread_directions_follow_the_skin() {
 
 // --- bad animation data ---------------------------------------------------------------------------
 
+/// A glTF binary buffer built accessor by accessor: each `push` appends a 4-byte aligned buffer
+/// view holding `bytes` and an accessor on it (`acc` without its bufferView), and returns the
+/// accessor's index.
+#[derive(Default)]
+struct Buffer {
+    bin: Vec<u8>,
+    views: Vec<serde_json::Value>,
+    accessors: Vec<serde_json::Value>,
+}
+
+impl Buffer {
+    fn push(&mut self, bytes: &[u8], mut acc: serde_json::Value) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        self.views.push(
+            serde_json::json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}),
+        );
+        self.bin.extend_from_slice(bytes);
+        acc["bufferView"] = serde_json::json!(self.views.len() - 1);
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+
+    /// The triangle (0,0,0), (1,0,0), (0,1,0)'s POSITION accessor.
+    fn triangle(&mut self) -> usize {
+        self.push(
+            &f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+            serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}),
+        )
+    }
+}
+
+fn f32s(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
 /// A minimal .gltf: one triangle skinned to `joints` joints (all at the origin), with vertex 0
 /// bound to joint `bound`, and one animation channel on joint 0's rotation with `times` and
 /// `values` (raw f32s; `rotations` quaternions).
 fn skinned_gltf(joints: usize, bound: u16, times: &[f32], rotations: usize) -> Vec<u8> {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut push = |bin: &mut Vec<u8>, bytes: &[u8], acc: serde_json::Value| {
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
-        views.push(
-            serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}),
-        );
-        bin.extend_from_slice(bytes);
-        let mut acc = acc;
-        acc["bufferView"] = serde_json::json!(views.len() - 1);
-        accessors.push(acc);
-        accessors.len() - 1
-    };
-    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-    let pos = push(
-        &mut bin,
-        &f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
-        serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}),
-    );
+    let mut b = Buffer::default();
+    let pos = b.triangle();
     let j: Vec<u8> = [bound, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]
         .iter()
         .flat_map(|x| x.to_le_bytes())
         .collect();
-    let joints_acc = push(
-        &mut bin,
+    let joints_acc = b.push(
         &j,
         serde_json::json!({"componentType": 5123, "count": 3, "type": "VEC4"}),
     );
-    let weights = push(
-        &mut bin,
+    let weights = b.push(
         &f32s(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]),
         serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC4"}),
     );
-    let input = push(
-        &mut bin,
+    let input = b.push(
         &f32s(times),
         serde_json::json!({"componentType": 5126, "count": times.len(), "type": "SCALAR",
             "min": [times.iter().copied().fold(f32::INFINITY, f32::min)],
             "max": [times.iter().copied().fold(f32::NEG_INFINITY, f32::max)]}),
     );
     let q: Vec<f32> = (0..rotations).flat_map(|_| [0.0, 0.0, 0.0, 1.0]).collect();
-    let output = push(
-        &mut bin,
+    let output = b.push(
         &f32s(&q),
         serde_json::json!({"componentType": 5126, "count": rotations, "type": "VEC4"}),
     );
@@ -352,12 +365,12 @@ fn skinned_gltf(joints: usize, bound: u16, times: &[f32], rotations: usize) -> V
         "skins": [{"joints": (1..=joints).collect::<Vec<_>>()}],
         "animations": [{"channels": [{"sampler": 0, "target": {"node": 1, "path": "rotation"}}],
                         "samplers": [{"input": input, "output": output}]}],
-        "buffers": [{"byteLength": bin.len()}],
-        "bufferViews": views,
-        "accessors": accessors,
+        "buffers": [{"byteLength": b.bin.len()}],
+        "bufferViews": b.views,
+        "accessors": b.accessors,
     });
     // A .glb: header, JSON chunk (space-padded), BIN chunk (zero-padded).
-    common::glb(&serde_json::to_vec(&doc).unwrap(), &bin)
+    common::glb(&serde_json::to_vec(&doc).unwrap(), &b.bin)
 }
 
 fn load_bytes(bytes: &[u8]) -> weft::Result<Scene> {
@@ -567,39 +580,20 @@ fn deformations_that_overflow_are_errors_naming_the_mesh() {
 /// One triangle skinned to 6 joints through JOINTS_0/WEIGHTS_0 and JOINTS_1/WEIGHTS_1, the
 /// given (joint, weight) lists per set for every vertex.
 fn eight_influence_gltf(set0: [(u16, f32); 4], set1: [(u16, f32); 4]) -> Vec<u8> {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut push = |bytes: Vec<u8>, acc: serde_json::Value| {
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
-        views.push(
-            serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}),
-        );
-        bin.extend_from_slice(&bytes);
-        let mut acc = acc;
-        acc["bufferView"] = serde_json::json!(views.len() - 1);
-        accessors.push(acc);
-        accessors.len() - 1
-    };
-    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-    let pos = push(
-        f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
-        serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}),
-    );
+    let mut b = Buffer::default();
+    let pos = b.triangle();
     let mut attributes = serde_json::json!({"POSITION": pos});
     for (k, set) in [set0, set1].iter().enumerate() {
         let joints: Vec<u8> = (0..3)
             .flat_map(|_| set.iter().flat_map(|(j, _)| j.to_le_bytes()))
             .collect();
         let weights: Vec<f32> = (0..3).flat_map(|_| set.map(|(_, w)| w)).collect();
-        attributes[format!("JOINTS_{k}")] = serde_json::json!(push(
-            joints,
+        attributes[format!("JOINTS_{k}")] = serde_json::json!(b.push(
+            &joints,
             serde_json::json!({"componentType": 5123, "count": 3, "type": "VEC4"})
         ));
-        attributes[format!("WEIGHTS_{k}")] = serde_json::json!(push(
-            f32s(&weights),
+        attributes[format!("WEIGHTS_{k}")] = serde_json::json!(b.push(
+            &f32s(&weights),
             serde_json::json!({"componentType": 5126, "count": 3, "type": "VEC4"})
         ));
     }
@@ -612,11 +606,11 @@ fn eight_influence_gltf(set0: [(u16, f32); 4], set1: [(u16, f32); 4]) -> Vec<u8>
         "nodes": nodes,
         "meshes": [{"primitives": [{"attributes": attributes}]}],
         "skins": [{"joints": (1..=6).collect::<Vec<_>>()}],
-        "buffers": [{"byteLength": bin.len()}],
-        "bufferViews": views,
-        "accessors": accessors,
+        "buffers": [{"byteLength": b.bin.len()}],
+        "bufferViews": b.views,
+        "accessors": b.accessors,
     });
-    common::glb(&serde_json::to_vec(&doc).unwrap(), &bin)
+    common::glb(&serde_json::to_vec(&doc).unwrap(), &b.bin)
 }
 
 #[test]

@@ -770,18 +770,22 @@ impl<'a> Loader<'a> {
             prim.get(&Semantic::Weights(0)),
         ) {
             (Some(j), Some(w)) => {
-                if !matches!(
-                    j.data_type(),
-                    gltf::accessor::DataType::U8 | gltf::accessor::DataType::U16
-                ) || j.normalized()
-                {
-                    return Err(self.error(format_args!(
-                        "{who}: JOINTS_0 (accessor {}) has component type {:?}{}; glTF requires unsigned byte or unsigned short joint indices: re-export the mesh",
-                        j.index(),
+                let check_joints = |this: &Self, j: &gltf::Accessor, set: u32| -> Result<()> {
+                    if !matches!(
                         j.data_type(),
-                        if j.normalized() { ", normalized" } else { "" }
-                    )));
-                }
+                        gltf::accessor::DataType::U8 | gltf::accessor::DataType::U16
+                    ) || j.normalized()
+                    {
+                        return Err(this.error(format_args!(
+                            "{who}: JOINTS_{set} (accessor {}) has component type {:?}{}; glTF requires unsigned byte or unsigned short joint indices: re-export the mesh",
+                            j.index(),
+                            j.data_type(),
+                            if j.normalized() { ", normalized" } else { "" }
+                        )));
+                    }
+                    Ok(())
+                };
+                check_joints(self, &j, 0)?;
                 let joints = read(j, format!("{who}, attribute JOINTS_0"), Dimensions::Vec4)?;
                 let weights = read(w, format!("{who}, attribute WEIGHTS_0"), Dimensions::Vec4)?;
                 // More than four influences come in further sets (JOINTS_1 / WEIGHTS_1, ...):
@@ -794,18 +798,7 @@ impl<'a> Loader<'a> {
                     ) else {
                         break;
                     };
-                    if !matches!(
-                        j.data_type(),
-                        gltf::accessor::DataType::U8 | gltf::accessor::DataType::U16
-                    ) || j.normalized()
-                    {
-                        return Err(self.error(format_args!(
-                            "{who}: JOINTS_{set} (accessor {}) has component type {:?}{}; glTF requires unsigned byte or unsigned short joint indices: re-export the mesh",
-                            j.index(),
-                            j.data_type(),
-                            if j.normalized() { ", normalized" } else { "" }
-                        )));
-                    }
+                    check_joints(self, &j, set)?;
                     more.push((
                         read(
                             j,
