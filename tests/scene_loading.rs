@@ -2164,6 +2164,53 @@ fn a_file_that_requires_sheen_loads() {
     assert!(s.materials[0].sheen.is_some());
 }
 
+/// glTF: "When tangents are not specified, client implementations SHOULD calculate tangents using
+/// default MikkTSpace algorithms with the specified vertex positions, normals, and texture
+/// coordinates associated with the normal texture." The quad's TEXCOORD_0 runs u along +x; a
+/// normal texture turned a quarter by its own transform, or read from a TEXCOORD_1 that runs u
+/// along +y, must get tangents along its own u, or its bumps lean the wrong way.
+#[test]
+fn generated_tangents_follow_the_normal_texture_s_coordinates() {
+    let tangent_of = |material: Value, uv1: Option<[[f32; 2]; 4]>| {
+        let mut d = material_doc(material, &["KHR_texture_transform"]);
+        if let Some(uv1) = uv1 {
+            let a = d.floats(&uv1);
+            d.json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(a);
+        }
+        let s = d.load("normal-map-frame").unwrap();
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let v = &s.meshes[0].vertices;
+        let t = Vec3::new(v[0].tangent[0], v[0].tangent[1], v[0].tangent[2]);
+        assert!(
+            v.iter().all(
+                |w| Vec3::from([w.tangent[0], w.tangent[1], w.tangent[2]]).abs_diff_eq(t, 1e-5)
+            ),
+            "a flat quad has one tangent"
+        );
+        t
+    };
+    // The base colour alone: the tangent is TEXCOORD_0's u, +x.
+    let base = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}});
+    assert!(tangent_of(base, None).abs_diff_eq(Vec3::X, 1e-5));
+    // The normal texture turned a quarter: u' = v, and v = 1 - y on this quad, so -y.
+    let turned = json!({
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+        "normalTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"rotation": 1.5707964}}},
+    });
+    let t = tangent_of(turned, None);
+    assert!(t.abs_diff_eq(-Vec3::Y, 1e-5), "{t}");
+    // The normal texture on a TEXCOORD_1 whose u runs along +y.
+    let second = json!({
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+        "normalTexture": {"index": 0, "texCoord": 1},
+    });
+    let t = tangent_of(
+        second,
+        Some([[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]]),
+    );
+    assert!(t.abs_diff_eq(Vec3::Y, 1e-5), "{t}");
+}
+
 #[test]
 fn each_texture_slot_keeps_its_own_transform_and_uv_set() {
     // SheenChair's case: base colour scaled 7 with an offset, the normal map scaled 2, occlusion on

@@ -236,14 +236,21 @@ pub(super) fn arbitrary_tangents(vertices: &mut [Vertex]) {
 /// split. Degenerate triangles (coincident corners, zero UV area), collapsed meshes and
 /// positions whose extent overflows f32 are MikkTSpace's to handle: it gives a corner no tangent
 /// where it has none, and such corners keep whatever their vertex gets. Returns false if no
-/// triangle got a tangent (the caller then falls back to arbitrary tangents).
-pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32]) -> bool {
+/// triangle got a tangent (the caller then falls back to arbitrary tangents). `uv_of` gives the
+/// texture coordinates the tangents follow: glTF's are those of the normal texture (its set,
+/// through its transform).
+pub(super) fn mikktspace_tangents(
+    vertices: &mut Vec<Vertex>,
+    indices: &mut [u32],
+    uv_of: &dyn Fn(&Vertex) -> [f32; 2],
+) -> bool {
     /// The triangles MikkTSpace sees: `faces` lists the mesh's triangles whose indices are in
     /// range (the loader has checked them; this keeps the function total on its own).
     struct Corners<'a> {
         vertices: &'a [Vertex],
         indices: &'a [u32],
         faces: &'a [usize],
+        uv_of: &'a dyn Fn(&Vertex) -> [f32; 2],
         /// Per corner of the mesh (not of `faces`).
         tangents: Vec<Option<[f32; 4]>>,
     }
@@ -271,7 +278,7 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
             // UV is given as (u, 1 - v), as Blender's glTF exporter does, so that the generated
             // tangents' sign agrees with the ones such files carry (NormalTangentTest without its
             // tangents renders as NormalTangentMirrorTest with them).
-            let [u, v] = self.vertex(face, vert).uv;
+            let [u, v] = (self.uv_of)(self.vertex(face, vert));
             [u, 1.0 - v]
         }
         fn set_tangent(
@@ -295,6 +302,7 @@ pub(super) fn mikktspace_tangents(vertices: &mut Vec<Vertex>, indices: &mut [u32
         vertices: vertices.as_slice(),
         indices: &*indices,
         faces: &faces,
+        uv_of,
         tangents: vec![None; indices.len()],
     };
     // The error type has no variants yet (`non_exhaustive`): a future one means "no tangents".
@@ -526,7 +534,7 @@ mod tests {
     /// Runs MikkTSpace and then the loader's repair, as gltf_load does, and checks that every
     /// vertex ends with a unit tangent orthogonal to its normal and indices still in range.
     fn tangents_of(mut vertices: Vec<Vertex>, mut indices: Vec<u32>) -> (Vec<Vertex>, bool) {
-        let ran = mikktspace_tangents(&mut vertices, &mut indices);
+        let ran = mikktspace_tangents(&mut vertices, &mut indices, &|v| v.uv);
         if !ran {
             arbitrary_tangents(&mut vertices);
         }

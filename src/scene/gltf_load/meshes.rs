@@ -589,7 +589,34 @@ impl<'a> Loader<'a> {
         } else if uvs.is_some() {
             let before = (deform.is_some() || !colors.is_empty()).then(|| indices.clone());
             let welded = vertices.len();
-            if !tangents::mikktspace_tangents(&mut vertices, &mut indices) {
+            // glTF: generated tangents follow the normal texture's coordinates: its set, through
+            // its own transform (its map from the coordinates the vertices carry, which hold the
+            // first TEXCOORD_0 slot's transform: materials.rs). A woven material's tangent is
+            // its weave's thread direction, which follows the vertices' coordinates.
+            // Without a normal texture, a clear coat's normal texture is the one to follow.
+            let normal_map = self.scene.materials.get(material).and_then(|m| {
+                let coat_normal = m.clearcoat.as_ref().is_some_and(|c| c.normal_texture.is_some());
+                let slot = if m.normal_texture.is_some() {
+                    TextureSlot::Normal
+                } else if coat_normal {
+                    TextureSlot::ClearcoatNormal
+                } else {
+                    return None;
+                };
+                let map = m.uv[slot as usize];
+                (m.fabric.is_none() && map != SlotUv::IDENTITY).then_some(map)
+            });
+            let uv_of = move |v: &Vertex| match normal_map {
+                Some(SlotUv { set, m }) => {
+                    let [u, w] = if set == 1 { v.uv1 } else { v.uv };
+                    [
+                        m[0][0] * u + m[0][1] * w + m[0][2],
+                        m[1][0] * u + m[1][1] * w + m[1][2],
+                    ]
+                }
+                None => v.uv,
+            };
+            if !tangents::mikktspace_tangents(&mut vertices, &mut indices, &uv_of) {
                 tangents::arbitrary_tangents(&mut vertices);
             }
             // MikkTSpace splits vertices whose corners need different tangents: the copies get
