@@ -611,7 +611,7 @@ mod tests {
             vertex([0.0, 0.0, 0.0], [0.0, 0.0]),
             vertex([1.0, 0.0, 0.0], [1.0, 0.0]),
         ];
-        assert!(!mikktspace_tangents(&mut two, &mut [0, 1, 7]));
+        assert!(!mikktspace_tangents(&mut two, &mut [0, 1, 7], &|v| v.uv));
         // Nothing at all.
         let (_, ran) = tangents_of(Vec::new(), Vec::new());
         assert!(!ran);
