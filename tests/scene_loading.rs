@@ -2242,20 +2242,14 @@ fn each_texture_slot_keeps_its_own_transform_and_uv_set() {
     assert_eq!(mesh.vertices[1].uv1, [0.0, 1.0]);
     // ... and every slot maps the stored coordinates to its own: the normal map's at the raw
     // (1, 1) is (2, 2), the occlusion's reads TEXCOORD_1 rotated a quarter turn.
-    let apply = |s: &weft::scene::SlotUv, uv: [f32; 2]| {
-        [
-            s.m[0][0] * uv[0] + s.m[0][1] * uv[1] + s.m[0][2],
-            s.m[1][0] * uv[0] + s.m[1][1] * uv[1] + s.m[1][2],
-        ]
-    };
-    let normal = apply(&m.uv[TextureSlot::Normal as usize], mesh.vertices[2].uv);
+    let normal = m.uv[TextureSlot::Normal as usize].apply(mesh.vertices[2].uv);
     assert!(
         (normal[0] - 2.0).abs() < 1e-5 && (normal[1] - 0.0).abs() < 1e-5,
         "{normal:?}"
     );
     let occ = &m.uv[TextureSlot::Occlusion as usize];
     assert_eq!(occ.set, 1);
-    let o = apply(occ, [1.0, 0.0]);
+    let o = occ.apply([1.0, 0.0]);
     assert!(
         (o[0] - 0.0).abs() < 1e-6 && (o[1] + 1.0).abs() < 1e-6,
         "{o:?}"

@@ -913,8 +913,8 @@ pub struct MeshDeform {
 }
 
 impl MeshDeform {
-    /// Replaces the vertices by copies of vertices `origin`, in that order (a mesh unwelded into
-    /// one vertex per triangle corner): each copy moves as its original.
+    /// Replaces the vertices by copies of vertices `origin`, in that order (a mesh unwelded for
+    /// flat normals, or split by tangent generation): each copy moves as its original.
     pub fn select(&mut self, origin: &[usize]) {
         let pick = |list: &mut Vec<[f32; 3]>| {
             if !list.is_empty() {
@@ -934,25 +934,6 @@ impl MeshDeform {
             pick(&mut t.positions);
             pick(&mut t.normals);
             pick(&mut t.tangents);
-        }
-    }
-
-    /// Appends copies of vertices `origin` (the vertices split off by tangent generation, in
-    /// order): they move as their originals.
-    pub fn extend_to(&mut self, origin: &[usize]) {
-        for &o in origin {
-            if !self.skin.is_empty() {
-                let s = self.skin.get(o).copied().unwrap_or_default();
-                self.skin.push(s);
-            }
-            for t in &mut self.targets {
-                for list in [&mut t.positions, &mut t.normals, &mut t.tangents] {
-                    if !list.is_empty() {
-                        let d = list.get(o).copied().unwrap_or([0.0; 3]);
-                        list.push(d);
-                    }
-                }
-            }
         }
     }
 }

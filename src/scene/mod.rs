@@ -392,6 +392,17 @@ impl SlotUv {
         m: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
     };
 
+    /// `uv` through the map.
+    pub fn apply(&self, uv: [f32; 2]) -> [f32; 2] {
+        let [[a, b, c], [d, e, f]] = self.m;
+        [a * uv[0] + b * uv[1] + c, d * uv[0] + e * uv[1] + f]
+    }
+
+    /// The slot's texture coordinates at `v`: its set's, through the map.
+    pub fn coordinates(&self, v: &Vertex) -> [f32; 2] {
+        self.apply(if self.set == 1 { v.uv1 } else { v.uv })
+    }
+
     /// Whether the map takes some texture coordinate of `vertices` (of its set) out of 32-bit
     /// floating point: finite factors whose product overflows, which the shader would turn into
     /// a black surface. An affine map is largest at the corners of the coordinates' bounds, so
@@ -408,15 +419,14 @@ impl SlotUv {
                 hi[k] = hi[k].max(uv[k]);
             }
         }
-        let [[a, b, c], [d, e, f]] = self.m;
         [
-            (lo[0], lo[1]),
-            (lo[0], hi[1]),
-            (hi[0], lo[1]),
-            (hi[0], hi[1]),
+            [lo[0], lo[1]],
+            [lo[0], hi[1]],
+            [hi[0], lo[1]],
+            [hi[0], hi[1]],
         ]
         .iter()
-        .any(|&(u, v)| !((a * u + b * v + c).is_finite() && (d * u + e * v + f).is_finite()))
+        .any(|&uv| !self.apply(uv).iter().all(|x| x.is_finite()))
     }
 }
 

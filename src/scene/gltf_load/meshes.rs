@@ -561,15 +561,8 @@ impl<'a> Loader<'a> {
             let targets = deform.as_ref().map_or(&no_targets, |d| &d.targets);
             let (flat, made) = tangents::flat_normals(&vertices, &mut indices, targets);
             vertices = flat;
-            if !colors.is_empty() {
-                colors = made
-                    .origin
-                    .iter()
-                    .map(|&o| colors.get(o).copied().unwrap_or([1.0; 4]))
-                    .collect();
-            }
+            carry_along(&made.origin, &mut colors, deform.as_mut());
             if let Some(d) = deform.as_mut() {
-                d.select(&made.origin);
                 for (t, normals) in made.target_normals {
                     d.targets[t].normals = normals;
                 }
@@ -588,7 +581,6 @@ impl<'a> Loader<'a> {
             tangents::repair_tangents(&mut vertices)
         } else if uvs.is_some() {
             let before = (deform.is_some() || !colors.is_empty()).then(|| indices.clone());
-            let welded = vertices.len();
             // glTF: generated tangents follow the normal texture's coordinates: its set, through
             // its own transform (its map from the coordinates the vertices carry, which hold the
             // first TEXCOORD_0 slot's transform: materials.rs). A woven material's tangent is
@@ -609,16 +601,7 @@ impl<'a> Loader<'a> {
                 let map = m.uv[slot as usize];
                 (m.fabric.is_none() && map != SlotUv::IDENTITY).then_some(map)
             });
-            let uv_of = move |v: &Vertex| match normal_map {
-                Some(SlotUv { set, m }) => {
-                    let [u, w] = if set == 1 { v.uv1 } else { v.uv };
-                    [
-                        m[0][0] * u + m[0][1] * w + m[0][2],
-                        m[1][0] * u + m[1][1] * w + m[1][2],
-                    ]
-                }
-                None => v.uv,
-            };
+            let uv_of = move |v: &Vertex| normal_map.map_or(v.uv, |slot| slot.coordinates(v));
             if !tangents::mikktspace_tangents(&mut vertices, &mut indices, &uv_of) {
                 tangents::arbitrary_tangents(&mut vertices);
             }
@@ -633,14 +616,7 @@ impl<'a> Loader<'a> {
                         }
                     }
                 }
-                if let Some(d) = deform.as_mut() {
-                    d.extend_to(&origin[welded..]);
-                }
-                if !colors.is_empty() {
-                    for &o in &origin[welded..] {
-                        colors.push(colors.get(o).copied().unwrap_or([1.0; 4]));
-                    }
-                }
+                carry_along(&origin, &mut colors, deform.as_mut());
             }
             tangents::repair_tangents(&mut vertices)
         } else {
@@ -954,5 +930,19 @@ impl<'a> Loader<'a> {
             deform.targets.push(target);
         }
         Ok((!deform.skin.is_empty() || !deform.targets.is_empty()).then_some(deform))
+    }
+}
+
+/// After a primitive's vertices were unwelded or split, vertex i is a copy of vertex
+/// `origin[i]`: it gets that vertex's colour, joints and morph deltas.
+fn carry_along(origin: &[usize], colors: &mut Vec<[f32; 4]>, deform: Option<&mut MeshDeform>) {
+    if !colors.is_empty() {
+        *colors = origin
+            .iter()
+            .map(|&o| colors.get(o).copied().unwrap_or([1.0; 4]))
+            .collect();
+    }
+    if let Some(d) = deform {
+        d.select(origin);
     }
 }
