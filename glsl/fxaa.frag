@@ -9,30 +9,16 @@
 // Luma is taken from its encoded bytes (the same image viewed as UNORM, as FXAA 3.11 takes luma in
 // the display encoding): on lavapipe the sRGB decode of every look-up was half the pass (1080p:
 // 99 ms with every look-up decoded, 53 ms with none), and the edge search reads nothing else.
-layout(set = 0, binding = 0) uniform sampler2D image;  // the tone-mapped image (an `R8G8B8A8_SRGB` target, linear filtering, clamp to edge)
-layout(set = 0, binding = 1) uniform sampler2D encoded;  // the same image viewed as `R8G8B8A8_UNORM`: its sRGB-encoded values, undecoded (linear filtering, clamp to edge)
+#include "fxaa.glsl"
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec4 out_color;
 
-// Edges below this contrast (of the local maximum, or absolutely) are left alone.
-const float EDGE_RELATIVE = 0.125;
-const float EDGE_ABSOLUTE = 0.0312;
 // How much sub-pixel aliasing is removed (0: none, 1: all; softer).
 const float SUBPIXEL = 0.75;
 // The search along an edge: steps (in pixels) of growing length, 12 of them (up to 32 pixels).
 const int SEARCH_STEPS = 12;
 const float STEP[SEARCH_STEPS] = float[SEARCH_STEPS](1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 2.0, 2.0, 2.0, 2.0, 4.0, 8.0);
-
-// Luma of sRGB-encoded colour (Rec. 601 weights on the encoded values).
-float luma(vec3 encoded_rgb) {
-    return dot(encoded_rgb, vec3(0.299, 0.587, 0.114));
-}
-
-float luma_at(ivec2 p) {
-    ivec2 size = textureSize(encoded, 0);
-    return luma(texelFetch(encoded, clamp(p, ivec2(0), size - 1), 0).rgb);
-}
 
 void main() {
     ivec2 size = textureSize(image, 0);
@@ -40,18 +26,17 @@ void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec2 uv = (vec2(p) + 0.5) * texel;
     vec4 centre = texelFetch(image, p, 0);
-    float m = luma_at(p);
-    float n = luma_at(p + ivec2(0, -1));
-    float s = luma_at(p + ivec2(0, 1));
-    float e = luma_at(p + ivec2(1, 0));
-    float w = luma_at(p + ivec2(-1, 0));
-    float lo = min(m, min(min(n, s), min(e, w)));
-    float hi = max(m, max(max(n, s), max(e, w)));
-    float range = hi - lo;
-    if (range < max(EDGE_ABSOLUTE, hi * EDGE_RELATIVE)) {
+    FxaaCross c = fxaa_cross(p);
+    if (!fxaa_on_edge(c)) {
         out_color = centre;
         return;
     }
+    float m = c.m;
+    float n = c.n;
+    float s = c.s;
+    float e = c.e;
+    float w = c.w;
+    float range = c.range;
     float nw = luma_at(p + ivec2(-1, -1));
     float ne = luma_at(p + ivec2(1, -1));
     float sw = luma_at(p + ivec2(-1, 1));

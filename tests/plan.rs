@@ -853,3 +853,101 @@ fn the_depth_prepass_runs_where_pixels_outnumber_triangles_and_changes_nothing()
     }
     assert_eq!(Plan::new(&cut, &large).depth_prepass, 3);
 }
+
+#[test]
+fn fxaa_on_the_edge_blocks_alone_changes_nothing() {
+    // Where the G-buffer's depth has a stencil, FXAA draws twice: the pixels off an edge copied
+    // and marked, then the edge search where no mark is (llvmpipe skips the 4 x 4 blocks without
+    // an edge). Against one draw of the search over every pixel (Force::fxaa_everywhere), the
+    // same image byte for byte; and FXAA changed it (the comparison is not of two unsmoothed
+    // images). The scenes: the default (the cloth's fine weave, a metal ball) under the studio,
+    // and SheenChair (textures, thin legs).
+    let studio = Some(weft::env::EnvLighting::new(std::sync::Arc::new(
+        weft::env::Environment::studio(),
+    )));
+    let base = RenderOptions {
+        width: 160,
+        height: 96,
+        environment: studio,
+        antialias: weft::render::Antialias::Fxaa,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let stencil = renderer.context().info().depth_stencil;
+    for (name, scene) in [
+        ("default", scene::default_scene()),
+        ("SheenChair", khronos(CHAIR)),
+    ] {
+        let plan = Plan::new(&scene, &base);
+        assert!(
+            plan.runs(Pass::Antialias) && plan.antialias_edge_blocks,
+            "{name}"
+        );
+        assert!(plan
+            .to_string()
+            .contains("only on the 4x4 blocks with an edge"));
+        let planned = renderer.render(&scene, &base).unwrap();
+        let forced = renderer
+            .render(
+                &scene,
+                &RenderOptions {
+                    force: weft::render::Force {
+                        fxaa_everywhere: true,
+                        ..Default::default()
+                    },
+                    ..base.clone()
+                },
+            )
+            .unwrap();
+        let none = renderer
+            .render(
+                &scene,
+                &RenderOptions {
+                    antialias: weft::render::Antialias::None,
+                    ..base.clone()
+                },
+            )
+            .unwrap();
+        let aa: Vec<&String> = planned
+            .stats
+            .pipelines
+            .iter()
+            .filter(|p| p.starts_with("antialias["))
+            .collect();
+        if stencil {
+            assert_eq!(
+                aa,
+                ["antialias[fxaa, off edges]", "antialias[fxaa, edge blocks]"],
+                "{name}"
+            );
+        } else {
+            assert_eq!(aa, ["antialias[fxaa]"], "{name}");
+        }
+        assert!(
+            forced
+                .stats
+                .pipelines
+                .iter()
+                .any(|p| p == "antialias[fxaa]"),
+            "{name}: {:?}",
+            forced.stats.pipelines
+        );
+        let smoothed = planned
+            .ldr
+            .chunks(4)
+            .zip(none.ldr.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(smoothed > 50, "{name}: FXAA changed only {smoothed} pixels");
+        let differ = planned
+            .ldr
+            .chunks(4)
+            .zip(forced.ldr.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(
+            differ, 0,
+            "{name}: {differ} pixels differ from FXAA everywhere"
+        );
+    }
+}

@@ -149,6 +149,32 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         planned_ms: kinds[0].0,
         forced_ms: kinds[1].0,
     }];
+    // FXAA as `weft render` runs it: its edge search only on the blocks with an edge.
+    let fxaa = RenderOptions {
+        antialias: crate::render::Antialias::Fxaa,
+        ..base.clone()
+    };
+    let edges = interleaved(
+        renderer,
+        &default,
+        &[
+            fxaa.clone(),
+            RenderOptions {
+                force: Force {
+                    fxaa_everywhere: true,
+                    ..Force::NONE
+                },
+                ..fxaa
+            },
+        ],
+        frames,
+    )?;
+    skips.push(SkipRow {
+        scene: "default, --aa fxaa".into(),
+        skipped: "FXAA's edge search off the edges".into(),
+        planned_ms: edges[0].0,
+        forced_ms: edges[1].0,
+    });
     let cases: [(&str, &str, &Scene, Force); 6] = [
         (
             "default",

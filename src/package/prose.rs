@@ -283,6 +283,16 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          target; no push constants, no specialization constants.",
     ),
     (
+        "fxaa_flat.frag",
+        "The first of edge anti-aliasing's two draws over a stencil (`fxaa.frag`'s bindings 0 and \
+         1): every pixel off a luma edge (the test `fxaa.frag` makes first) is copied from the \
+         tone-mapped image, a pixel on an edge is discarded. Draw it with a pipeline that writes \
+         a stencil bit where a fragment is kept, then `fxaa.frag` where that bit is clear: \
+         together they write every pixel as `fxaa.frag` alone would, and a GPU that skips \
+         blocks by their stencil runs the edge search only where there are edges. Drawn with \
+         `fullscreen.vert`; no push constants, no specialization constants.",
+    ),
+    (
         "tonemap.frag",
         "Exposure and tone mapping (Khronos PBR Neutral by default: constant 0) of the HDR target, drawn with \
          `fullscreen.vert`; write to an `R8G8B8A8_SRGB` target, which does the sRGB encoding. \

@@ -255,6 +255,13 @@ fn split_lighting(ctx: &Context, options: &RenderOptions, plan: &Plan) -> bool {
     ctx.info().depth_stencil && plan.material_kinds && options.debug_view == super::DebugView::None
 }
 
+/// Whether the anti-aliasing pass runs its edge search only on the blocks with an edge, over the
+/// G-buffer's stencil (`passes::antialias`): as the plan says, where the device has the
+/// depth-stencil format.
+fn antialias_edge_blocks(ctx: &Context, plan: &Plan) -> bool {
+    ctx.info().depth_stencil && plan.antialias_edge_blocks
+}
+
 /// The pipeline variants a frame records with, and its environment's index in the cache.
 struct FrameKeys {
     gbuffer: VariantKey,
@@ -453,7 +460,10 @@ impl Renderer {
         if self.skin_pass.get().is_none() {
             let _ = self.skin_pass.set(super::deform::SkinPass::new(&self.ctx)?);
         }
-        self.antialias.make(&self.ctx)?;
+        self.antialias.make(&self.ctx, false)?;
+        if self.ctx.info().depth_stencil {
+            self.antialias.make(&self.ctx, true)?;
+        }
         self.occlusion.make(&self.ctx)?;
         self.shadow.make_mask(&self.ctx, false)?;
         let mut all = vec![self.weave.pipeline()];
@@ -464,7 +474,7 @@ impl Renderer {
         all.extend(self.lighting.pipelines());
         all.extend(self.transparent.pipelines());
         all.extend(self.skin_pass.get().map(|s| s.pipeline()));
-        all.extend(self.antialias.pipeline());
+        all.extend(self.antialias.pipelines());
         all.extend(self.occlusion.pipelines());
         Ok(all)
     }
@@ -566,7 +576,7 @@ impl Renderer {
                     }
                     tonemap.make(ctx, curve)?;
                     if plan.runs(Pass::Antialias) {
-                        antialias.make(ctx)?;
+                        antialias.make(ctx, antialias_edge_blocks(ctx, plan))?;
                     }
                     if plan.runs(Pass::Occlusion) {
                         occlusion.make(ctx)?;
@@ -1280,6 +1290,7 @@ impl Renderer {
                     AntialiasInputs {
                         targets,
                         sampler: &d.linear_clamp,
+                        edge_blocks: antialias_edge_blocks(&self.ctx, &plan),
                     },
                 )?),
             }

@@ -133,6 +133,9 @@ pub struct Force {
     /// Skip the G-buffer's depth pre-pass where the plan runs it: every hidden fragment of an
     /// opaque draw is shaded (a bench comparison).
     pub no_depth_prepass: bool,
+    /// Run FXAA's edge search over every pixel in one draw, instead of only on the 4 x 4 blocks
+    /// that a first draw found an edge in (over the stencil): it must change no pixel.
+    pub fxaa_everywhere: bool,
 }
 
 impl Force {
@@ -150,6 +153,7 @@ impl Force {
         pool: false,
         depth_prepass: false,
         no_depth_prepass: false,
+        fxaa_everywhere: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -167,6 +171,7 @@ impl Force {
         // The costly reading: every hidden fragment shaded where the plan pre-passes depth.
         depth_prepass: false,
         no_depth_prepass: true,
+        fxaa_everywhere: true,
     };
 }
 

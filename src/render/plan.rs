@@ -270,6 +270,11 @@ pub struct Plan {
     pub depth_prepass: usize,
     #[serde(rename = "material_kinds_code")]
     pub material_kinds: bool,
+    /// With the anti-aliasing pass: its edge search only on the 4 x 4 blocks that hold an edge
+    /// (a first draw copies the pixels off an edge and marks them in the G-buffer's stencil;
+    /// fxaa.frag then runs where no mark is), on a device with a depth-stencil format;
+    /// `Force::fxaa_everywhere` runs it over every pixel instead, which must change no pixel.
+    pub antialias_edge_blocks: bool,
     /// The glTF extensions the lighting compiles in (lighting.frag's GLTF_FEATURES: 1
     /// KHR_materials_sheen, 2 KHR_materials_anisotropy): those some deferred glTF material has
     /// (every one when fabric is shaded as glTF, or forced).
@@ -633,6 +638,8 @@ impl Plan {
         .filter(|(_, runs)| *runs)
         .map(|(pass, _)| pass)
         .collect();
+        let antialias_edge_blocks =
+            passes.contains(&Pass::Antialias) && !options.force.fxaa_everywhere;
         let unlit_materials = scene.materials.iter().filter(|m| m.unlit).count();
         // The G-buffer's draws by kind of material (lines and points are its whatever their
         // material).
@@ -813,6 +820,7 @@ impl Plan {
             depth_prepass,
             gltf_draws,
             material_kinds: !all_kinds,
+            antialias_edge_blocks,
             gltf_features,
             bc7_textures: scene.textures.iter().filter(|t| t.bc7.is_some()).count(),
             debug_view: options.debug_view,
@@ -1149,6 +1157,17 @@ impl fmt::Display for Plan {
             "tone curve  {} (the only curve compiled into the tonemap pass's pipeline)",
             self.tone_curve
         )?;
+        if self.runs(Pass::Antialias) {
+            writeln!(
+                f,
+                "antialias   fxaa, {}",
+                if self.antialias_edge_blocks {
+                    "its edge search only on the 4x4 blocks with an edge: a first draw copies the pixels off an edge and marks them in the stencil (on a device with a depth-stencil format)"
+                } else {
+                    "its edge search over every pixel (forced)"
+                }
+            )?;
+        }
         write!(f, "debug view  {}", self.debug_view.name())
     }
 }

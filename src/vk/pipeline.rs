@@ -156,6 +156,12 @@ pub enum StencilMode {
     /// Only fragments whose stencil equals the reference are drawn; no depth test, nothing
     /// written to the attachment (it may be attached read-only).
     Equal,
+    /// Every fragment the shader keeps writes the reference's bits under this mask (the other
+    /// bits stay); no depth test.
+    MarkBits(u32),
+    /// Only fragments whose stencil has none of these bits set are drawn; no depth test,
+    /// nothing written.
+    BitsClear(u32),
 }
 
 /// The primitive topology of a graphics pipeline.
@@ -494,16 +500,17 @@ impl Context {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let stencil_op = |compare: vk::CompareOp, pass: vk::StencilOp, write: u32| {
+        let stencil_op = |compare: vk::CompareOp, pass: vk::StencilOp, tested: u32, write: u32| {
             vk::StencilOpState::default()
                 .fail_op(vk::StencilOp::KEEP)
                 .pass_op(pass)
                 .depth_fail_op(vk::StencilOp::KEEP)
                 .compare_op(compare)
-                .compare_mask(0xff)
+                .compare_mask(tested)
                 .write_mask(write)
         };
-        let tests_depth = desc.depth_format.is_some() && desc.stencil != StencilMode::Equal;
+        let tests_depth = desc.depth_format.is_some()
+            && matches!(desc.stencil, StencilMode::None | StencilMode::Write);
         let mut depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(tests_depth)
             .depth_write_enable(tests_depth && !desc.blend)
@@ -515,11 +522,20 @@ impl Context {
         match desc.stencil {
             StencilMode::None => {}
             StencilMode::Write => {
-                let op = stencil_op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0xff);
+                let op = stencil_op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0xff, 0xff);
                 depth = depth.stencil_test_enable(true).front(op).back(op);
             }
             StencilMode::Equal => {
-                let op = stencil_op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, 0);
+                let op = stencil_op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, 0xff, 0);
+                depth = depth.stencil_test_enable(true).front(op).back(op);
+            }
+            StencilMode::MarkBits(bits) => {
+                let op = stencil_op(vk::CompareOp::ALWAYS, vk::StencilOp::REPLACE, 0, bits);
+                depth = depth.stencil_test_enable(true).front(op).back(op);
+            }
+            StencilMode::BitsClear(bits) => {
+                // (stencil & bits) == (reference & bits), the reference 0.
+                let op = stencil_op(vk::CompareOp::EQUAL, vk::StencilOp::KEEP, bits, 0);
                 depth = depth.stencil_test_enable(true).front(op).back(op);
             }
         }
