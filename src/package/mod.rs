@@ -57,6 +57,7 @@ pub const INCLUDES: &[(&str, &str)] = &[
         include_str!("../../glsl/include/fabric.glsl"),
     ),
     ("frame.glsl", include_str!("../../glsl/include/frame.glsl")),
+    ("fxaa.glsl", include_str!("../../glsl/include/fxaa.glsl")),
     (
         "forward_main.glsl",
         include_str!("../../glsl/include/forward_main.glsl"),
