@@ -951,3 +951,83 @@ fn fxaa_on_the_edge_blocks_alone_changes_nothing() {
         );
     }
 }
+
+#[test]
+fn occlusion_where_a_surface_is_alone_changes_nothing() {
+    // The occlusion pass draws its estimates and blur against a half-resolution copy of depth,
+    // where a surface is (llvmpipe skips the empty 4 x 4 blocks); the empty texels keep the
+    // targets' clear. Against both drawn over every pixel (Force::occlusion_everywhere), the
+    // same image: the lit HDR and the occlusion debug view, byte for byte; and the occlusion
+    // darkened something (the comparison is not of two unoccluded images). The scenes: the
+    // default (a quarter of it sky) and SheenChair (mostly empty around the chair).
+    let studio = Some(weft::env::EnvLighting::new(std::sync::Arc::new(
+        weft::env::Environment::studio(),
+    )));
+    let base = RenderOptions {
+        width: 160,
+        height: 96,
+        environment: studio,
+        occlusion: weft::render::Occlusion::Gtao { radius: None },
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    for (name, scene) in [
+        ("default", scene::default_scene()),
+        ("SheenChair", khronos(CHAIR)),
+    ] {
+        let plan = Plan::new(&scene, &base);
+        assert!(plan.runs(Pass::Occlusion), "{name}");
+        assert!(plan.occlusion.as_ref().unwrap().covered_only, "{name}");
+        assert!(plan.to_string().contains("drawn only where a surface is"));
+        let forced_options = RenderOptions {
+            force: weft::render::Force {
+                occlusion_everywhere: true,
+                ..Default::default()
+            },
+            ..base.clone()
+        };
+        for view in [
+            weft::render::DebugView::None,
+            weft::render::DebugView::Occlusion,
+        ] {
+            let planned = renderer
+                .render(
+                    &scene,
+                    &RenderOptions {
+                        debug_view: view,
+                        ..base.clone()
+                    },
+                )
+                .unwrap();
+            let forced = renderer
+                .render(
+                    &scene,
+                    &RenderOptions {
+                        debug_view: view,
+                        ..forced_options.clone()
+                    },
+                )
+                .unwrap();
+            assert!(
+                forced
+                    .stats
+                    .pipelines
+                    .iter()
+                    .any(|p| p.ends_with("everywhere")),
+                "{name}: {:?}",
+                forced.stats.pipelines
+            );
+            assert!(!planned
+                .stats
+                .pipelines
+                .iter()
+                .any(|p| p.ends_with("everywhere")));
+            assert_eq!(max_hdr_diff(&planned, &forced), 0.0, "{name} {view:?}");
+            assert_eq!(planned.ldr, forced.ldr, "{name} {view:?}");
+            if view == weft::render::DebugView::Occlusion {
+                let occluded = planned.ldr.chunks(4).filter(|p| p[0] < 250).count();
+                assert!(occluded > 100, "{name}: only {occluded} pixels occluded");
+            }
+        }
+    }
+}

@@ -138,7 +138,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
                     material_kinds: true,
                     ..Force::NONE
                 },
-                ..studio
+                ..studio.clone()
             },
         ],
         frames,
@@ -174,6 +174,33 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         skipped: "FXAA's edge search off the edges".into(),
         planned_ms: edges[0].0,
         forced_ms: edges[1].0,
+    });
+    // The occlusion pass as `weft render` runs it under the studio: its estimates and blur
+    // only where a surface is.
+    let gtao = RenderOptions {
+        occlusion: crate::render::Occlusion::Gtao { radius: None },
+        ..studio.clone()
+    };
+    let covered = interleaved(
+        renderer,
+        &default,
+        &[
+            gtao.clone(),
+            RenderOptions {
+                force: Force {
+                    occlusion_everywhere: true,
+                    ..Force::NONE
+                },
+                ..gtao
+            },
+        ],
+        frames,
+    )?;
+    skips.push(SkipRow {
+        scene: "default, studio, --occlusion gtao".into(),
+        skipped: "occlusion estimates where nothing is".into(),
+        planned_ms: covered[0].0,
+        forced_ms: covered[1].0,
     });
     let cases: [(&str, &str, &Scene, Force); 6] = [
         (

@@ -464,7 +464,7 @@ impl Renderer {
         if self.ctx.info().depth_stencil {
             self.antialias.make(&self.ctx, true)?;
         }
-        self.occlusion.make(&self.ctx)?;
+        self.occlusion.make(&self.ctx, true)?;
         self.shadow.make_mask(&self.ctx, false)?;
         let mut all = vec![self.weave.pipeline()];
         all.extend(self.tonemap.pipelines());
@@ -579,7 +579,10 @@ impl Renderer {
                         antialias.make(ctx, antialias_edge_blocks(ctx, plan))?;
                     }
                     if plan.runs(Pass::Occlusion) {
-                        occlusion.make(ctx)?;
+                        occlusion.make(
+                            ctx,
+                            plan.occlusion.as_ref().is_some_and(|o| !o.covered_only),
+                        )?;
                     }
                     Made::Fixed
                 }
@@ -1226,6 +1229,7 @@ impl Renderer {
                         ),
                         targets,
                         nearest: &d.nearest,
+                        covered_only: plan.occlusion.as_ref().is_none_or(|o| o.covered_only),
                     },
                 )?),
                 Pass::Lighting => recorded.push(self.lighting.record(

@@ -136,6 +136,10 @@ pub struct Force {
     /// Run FXAA's edge search over every pixel in one draw, instead of only on the 4 x 4 blocks
     /// that a first draw found an edge in (over the stencil): it must change no pixel.
     pub fxaa_everywhere: bool,
+    /// Run the occlusion pass's estimates and blur over every pixel, empty ones included (where
+    /// each writes "open, no surface"), instead of drawing them against the depth where a surface
+    /// is: it must change no pixel.
+    pub occlusion_everywhere: bool,
 }
 
 impl Force {
@@ -154,6 +158,7 @@ impl Force {
         depth_prepass: false,
         no_depth_prepass: false,
         fxaa_everywhere: false,
+        occlusion_everywhere: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -172,6 +177,7 @@ impl Force {
         depth_prepass: false,
         no_depth_prepass: true,
         fxaa_everywhere: true,
+        occlusion_everywhere: true,
     };
 }
 

@@ -330,6 +330,10 @@ pub struct OcclusionPlan {
     /// Slices per pixel and depth samples per side of each (occlusion.frag's SLICES and STEPS).
     pub slices: u32,
     pub steps: u32,
+    /// The estimates and their blur drawn only where a surface is (against a half-resolution
+    /// depth attachment, depth test LESS at the far plane); `Force::occlusion_everywhere` draws
+    /// them over every pixel.
+    pub covered_only: bool,
 }
 
 impl OcclusionPlan {
@@ -608,6 +612,7 @@ impl Plan {
                     },
                     slices: OcclusionPlan::SLICES,
                     steps: OcclusionPlan::STEPS,
+                    covered_only: !options.force.occlusion_everywhere,
                 })
             }
             _ => None,
@@ -1131,8 +1136,17 @@ impl fmt::Display for Plan {
             )?,
             Some(o) => writeln!(
                 f,
-                "occlusion   {} of the environment's light, radius {} ({}), at half resolution over a half-resolution depth copy: {} slices x {} steps per side per estimate, 4x4 blur",
-                o.method, o.radius, o.radius_from, o.slices, o.steps
+                "occlusion   {} of the environment's light, radius {} ({}), at half resolution over a half-resolution depth copy: {} slices x {} steps per side per estimate, 4x4 blur, {}",
+                o.method,
+                o.radius,
+                o.radius_from,
+                o.slices,
+                o.steps,
+                if o.covered_only {
+                    "both drawn only where a surface is (against the depth copy)"
+                } else {
+                    "both over every pixel (forced)"
+                }
             )?,
         }
         if self.bc7_textures > 0 {

@@ -38,6 +38,9 @@ pub const LOBES_FORMAT: Format = Format::R32G32B32A32_UINT;
 pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
 /// The occlusion pass's half-resolution depth (each 2 x 2 block's top-left pixel's, exactly).
 pub const OCCLUSION_DEPTH_FORMAT: Format = Format::R32_SFLOAT;
+/// The same depth as a depth attachment, which the estimates and their blur are drawn against
+/// (at the far plane, depth test LESS) so that they run only where a surface is.
+pub const OCCLUSION_COVERAGE_FORMAT: Format = Format::D32_SFLOAT;
 
 /// The G-buffer and output targets of one resolution.
 pub(crate) struct Targets {
@@ -68,6 +71,9 @@ pub(crate) struct OcclusionTargets {
     /// The G-buffer's depth per 2 x 2 pixels (`OCCLUSION_DEPTH_FORMAT`, half the resolution
     /// rounded up), which the estimates' depth samples read.
     pub(crate) depth: Image,
+    /// The same depth as a depth attachment (`OCCLUSION_COVERAGE_FORMAT`): a fullscreen draw at
+    /// the far plane with depth test LESS passes where a surface is and nowhere else.
+    pub(crate) coverage: Image,
     /// Visibility and view distance per 2 x 2 pixels (`OCCLUSION_FORMAT`, half the resolution
     /// rounded up).
     pub(crate) raw: Image,
@@ -82,6 +88,10 @@ impl OcclusionTargets {
         Ok(OcclusionTargets {
             depth: ctx.create_image(
                 &ImageDesc::new_2d("occlusion depth", OCCLUSION_DEPTH_FORMAT, w, h).usage(usage),
+            )?,
+            coverage: ctx.create_image(
+                &ImageDesc::new_2d("occlusion coverage", OCCLUSION_COVERAGE_FORMAT, w, h)
+                    .usage(ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT),
             )?,
             raw: ctx.create_image(
                 &ImageDesc::new_2d("occlusion estimates", OCCLUSION_FORMAT, w, h).usage(usage),

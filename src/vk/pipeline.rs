@@ -142,6 +142,11 @@ pub enum DepthTest {
     /// As near or nearer (GREATER_OR_EQUAL): after a depth pre-pass of the same positions, the
     /// visible fragment passes and every hidden one fails.
     NearerOrEqual,
+    /// Every fragment passes and writes its depth (ALWAYS): a copy of depth.
+    Always,
+    /// Farther than what the attachment holds (LESS), writing nothing: a fullscreen triangle at
+    /// the far plane (depth 0) is drawn where the attachment holds a surface.
+    Farther,
 }
 
 /// A graphics pipeline's use of the stencil (of a `depth_format` with a stencil aspect; the
@@ -513,10 +518,12 @@ impl Context {
             && matches!(desc.stencil, StencilMode::None | StencilMode::Write);
         let mut depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(tests_depth)
-            .depth_write_enable(tests_depth && !desc.blend)
+            .depth_write_enable(tests_depth && !desc.blend && desc.depth_test != DepthTest::Farther)
             .depth_compare_op(match desc.depth_test {
                 DepthTest::Nearer => vk::CompareOp::GREATER,
                 DepthTest::NearerOrEqual => vk::CompareOp::GREATER_OR_EQUAL,
+                DepthTest::Always => vk::CompareOp::ALWAYS,
+                DepthTest::Farther => vk::CompareOp::LESS,
             });
         let with_stencil = desc.depth_format.is_some_and(super::resources::has_stencil);
         match desc.stencil {

@@ -5,7 +5,11 @@
 //! (fullscreen.vert, occlusion.frag, turned per estimate by a 4 x 4 pattern), then
 //! the mean of the 4 x 4 estimates around each on its own surface (occlusion_blur.frag), which
 //! the lighting pass reads, bringing it to full resolution (lighting.frag's OCCLUSION and
-//! screen_visibility).
+//! screen_visibility). The depth copy also writes a half-resolution depth attachment, and the
+//! estimates and the blur are drawn against it at the far plane (depth test LESS): only where a
+//! surface is. On lavapipe, where a shader's early return skips nothing, that skips the empty
+//! 4 x 4 blocks; the empty texels keep the targets' clear, which is what the shaders would write
+//! there (`Force::occlusion_everywhere` draws them everywhere: the same image).
 
 use std::sync::OnceLock;
 
@@ -13,10 +17,12 @@ use glam::{DMat4, Mat4};
 
 use super::Recorded;
 use crate::render::plan::OcclusionPlan;
-use crate::render::targets::{Targets, OCCLUSION_DEPTH_FORMAT, OCCLUSION_FORMAT};
+use crate::render::targets::{
+    Targets, OCCLUSION_COVERAGE_FORMAT, OCCLUSION_DEPTH_FORMAT, OCCLUSION_FORMAT,
+};
 use crate::vk::{
-    shaders, Buffer, Context, DepthTest, DescriptorPool, GraphicsDesc, Pipeline, Resource, Sampler,
-    SetLayout, Stages, StencilMode, Topology, Usage,
+    shaders, Attachment, Buffer, Context, DepthTest, DescriptorPool, GraphicsDesc, Load, Pipeline,
+    Resource, Sampler, SetLayout, Stages, StencilMode, Topology, Usage,
 };
 
 /// occlusion.frag's push constants (80 bytes).
@@ -49,12 +55,15 @@ impl OcclusionPush {
 }
 
 /// The pass's three set layouts (reflected from occlusion_depth.frag, occlusion.frag and
-/// occlusion_blur.frag) and its three pipelines, made by the first frame that plans the pass.
+/// occlusion_blur.frag) and its pipelines, made by the first frame that plans the pass: the
+/// depth copy, then the estimates and the blur drawn where a surface is (against the copy's
+/// depth attachment) or, forced, over every pixel.
 pub struct OcclusionPass {
     depth_layout: SetLayout,
     layout: SetLayout,
     blur_layout: SetLayout,
     pipelines: OnceLock<[Pipeline; 3]>,
+    everywhere: OnceLock<[Pipeline; 2]>,
 }
 
 /// What the pass reads; it writes `targets.occlusion` (left readable by fragment shaders).
@@ -65,6 +74,8 @@ pub struct OcclusionInputs<'s> {
     /// The G-buffer's depth and normals, fetched per pixel with `nearest`.
     pub targets: &'s Targets,
     pub nearest: &'s Sampler,
+    /// The estimates and blur only where a surface is ([`OcclusionPlan::covered_only`]).
+    pub covered_only: bool,
 }
 
 impl OcclusionPass {
@@ -80,32 +91,47 @@ impl OcclusionPass {
             layout,
             blur_layout,
             pipelines: OnceLock::new(),
+            everywhere: OnceLock::new(),
         })
     }
 
-    /// Makes the three pipelines once.
-    pub fn make(&self, ctx: &Context) -> crate::Result<()> {
+    /// Makes the pipelines once: the depth copy and the estimates and blur where a surface is,
+    /// and with `everywhere` the estimates and blur over every pixel.
+    pub fn make(&self, ctx: &Context, everywhere: bool) -> crate::Result<()> {
+        // Each draws one fullscreen triangle into a half-resolution target; `depth` says how it
+        // uses the half-resolution depth attachment (none: not attached).
+        let make = |name: &str,
+                    fragment,
+                    format,
+                    layout,
+                    push: u32,
+                    constants: &[(u32, u32)],
+                    depth: Option<DepthTest>| {
+            ctx.create_graphics_pipeline(&GraphicsDesc {
+                name,
+                vertex: &shaders::FULLSCREEN_VERT,
+                fragment,
+                vertex_layout: None,
+                color_formats: &[format],
+                depth_format: depth.map(|_| OCCLUSION_COVERAGE_FORMAT),
+                set_layouts: &[layout],
+                push_constant_size: push,
+                push_stages: Stages::FRAGMENT,
+                constants,
+                blend: false,
+                topology: Topology::Triangles,
+                stencil: StencilMode::None,
+                depth_test: depth.unwrap_or_default(),
+            })
+        };
+        let estimate_name = format!(
+            "occlusion[slices={}, steps={}]",
+            OcclusionPlan::SLICES,
+            OcclusionPlan::STEPS
+        );
+        let constants = [(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)];
+        let push = std::mem::size_of::<OcclusionPush>() as u32;
         if self.pipelines.get().is_none() {
-            // Each draws one fullscreen triangle into a half-resolution target.
-            let make =
-                |name: &str, fragment, format, layout, push: u32, constants: &[(u32, u32)]| {
-                    ctx.create_graphics_pipeline(&GraphicsDesc {
-                        name,
-                        vertex: &shaders::FULLSCREEN_VERT,
-                        fragment,
-                        vertex_layout: None,
-                        color_formats: &[format],
-                        depth_format: None,
-                        set_layouts: &[layout],
-                        push_constant_size: push,
-                        push_stages: Stages::FRAGMENT,
-                        constants,
-                        blend: false,
-                        topology: Topology::Triangles,
-                        stencil: StencilMode::None,
-                        depth_test: DepthTest::Nearer,
-                    })
-                };
             let depth = make(
                 "occlusion depth",
                 &shaders::OCCLUSION_DEPTH_FRAG,
@@ -113,18 +139,16 @@ impl OcclusionPass {
                 &self.depth_layout,
                 0,
                 &[],
+                Some(DepthTest::Always),
             )?;
             let estimate = make(
-                &format!(
-                    "occlusion[slices={}, steps={}]",
-                    OcclusionPlan::SLICES,
-                    OcclusionPlan::STEPS
-                ),
+                &estimate_name,
                 &shaders::OCCLUSION_FRAG,
                 OCCLUSION_FORMAT,
                 &self.layout,
-                std::mem::size_of::<OcclusionPush>() as u32,
-                &[(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)],
+                push,
+                &constants,
+                Some(DepthTest::Farther),
             )?;
             let blur = make(
                 "occlusion blur",
@@ -133,14 +157,40 @@ impl OcclusionPass {
                 &self.blur_layout,
                 0,
                 &[],
+                Some(DepthTest::Farther),
             )?;
             let _ = self.pipelines.set([depth, estimate, blur]);
+        }
+        if everywhere && self.everywhere.get().is_none() {
+            let estimate = make(
+                &format!("{estimate_name} everywhere"),
+                &shaders::OCCLUSION_FRAG,
+                OCCLUSION_FORMAT,
+                &self.layout,
+                push,
+                &constants,
+                None,
+            )?;
+            let blur = make(
+                "occlusion blur everywhere",
+                &shaders::OCCLUSION_BLUR_FRAG,
+                OCCLUSION_FORMAT,
+                &self.blur_layout,
+                0,
+                &[],
+                None,
+            )?;
+            let _ = self.everywhere.set([estimate, blur]);
         }
         Ok(())
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
-        self.pipelines.get().into_iter().flatten()
+        self.pipelines
+            .get()
+            .into_iter()
+            .flatten()
+            .chain(self.everywhere.get().into_iter().flatten())
     }
 
     pub fn record<'s>(
@@ -148,10 +198,15 @@ impl OcclusionPass {
         pool: &'s DescriptorPool,
         inputs: OcclusionInputs<'s>,
     ) -> crate::Result<Recorded<'s>> {
-        let [depth, estimate, blur] = self
-            .pipelines
-            .get()
-            .expect("the frame makes the pipelines when it plans the pass");
+        let made = "the frame makes the pipelines when it plans the pass";
+        let [depth, covered_estimate, covered_blur] = self.pipelines.get().expect(made);
+        let (estimate, blur) = if inputs.covered_only {
+            (covered_estimate, covered_blur)
+        } else {
+            let [estimate, blur] = self.everywhere.get().expect(made);
+            (estimate, blur)
+        };
+        let covered_only = inputs.covered_only;
         let t = inputs.targets;
         let o = t
             .occlusion
@@ -178,11 +233,71 @@ impl OcclusionPass {
             "occlusion",
             vec![depth.name.clone(), estimate.name.clone(), blur.name.clone()],
             move |cmd| {
-                super::fullscreen::<u32>(cmd, depth, depth_set, None, &o.depth);
+                // The depth copy writes every texel of both targets.
+                cmd.transition(&o.depth, Usage::Undefined, Usage::ColorAttachment, None);
+                cmd.transition(&o.coverage, Usage::Undefined, Usage::DepthAttachment, None);
+                cmd.begin_rendering(
+                    &[Attachment {
+                        image: &o.depth,
+                        load: Load::Undefined,
+                    }],
+                    Some(Attachment {
+                        image: &o.coverage,
+                        load: Load::Undefined,
+                    }),
+                );
+                cmd.bind_pipeline(depth);
+                cmd.bind_sets(depth, 0, &[depth_set]);
+                cmd.draw(3);
+                cmd.end_rendering();
                 cmd.transition(&o.depth, Usage::ColorAttachment, Usage::FragmentRead, None);
-                super::fullscreen(cmd, estimate, set, Some(&push), &o.raw);
-                cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
-                super::fullscreen::<u32>(cmd, blur, blur_set, None, &o.visibility);
+                // The copy's depth writes before the draws' depth tests read them.
+                cmd.transition(
+                    &o.coverage,
+                    Usage::DepthAttachment,
+                    Usage::DepthAttachment,
+                    None,
+                );
+                if !covered_only {
+                    super::fullscreen(cmd, estimate, set, Some(&push), &o.raw);
+                    cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
+                    super::fullscreen::<u32>(cmd, blur, blur_set, None, &o.visibility);
+                } else {
+                    // Drawn where a surface is; an empty texel keeps the clear, what the shaders
+                    // write there: open (1), no surface (distance 0).
+                    let open = [1.0, 0.0, 0.0, 0.0];
+                    for (pipeline, set, target, push) in [
+                        (estimate, set, &o.raw, Some(&push)),
+                        (blur, blur_set, &o.visibility, None),
+                    ] {
+                        cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
+                        cmd.begin_rendering(
+                            &[Attachment {
+                                image: target,
+                                load: Load::Clear(open),
+                            }],
+                            Some(Attachment {
+                                image: &o.coverage,
+                                load: Load::Keep,
+                            }),
+                        );
+                        cmd.bind_pipeline(pipeline);
+                        cmd.bind_sets(pipeline, 0, &[set]);
+                        if let Some(push) = push {
+                            cmd.push_constants(pipeline, push);
+                        }
+                        cmd.draw(3);
+                        cmd.end_rendering();
+                        if std::ptr::eq(target, &o.raw) {
+                            cmd.transition(
+                                &o.raw,
+                                Usage::ColorAttachment,
+                                Usage::FragmentRead,
+                                None,
+                            );
+                        }
+                    }
+                }
                 cmd.transition(
                     &o.visibility,
                     Usage::ColorAttachment,
