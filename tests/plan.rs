@@ -501,6 +501,13 @@ fn khronos(path: &str) -> Scene {
 const CHAIR: &str = "SheenChair/glTF/SheenChair.gltf";
 const ANISOTROPY: &str = "AnisotropyRotationTest/glTF-Binary/AnisotropyRotationTest.glb";
 
+/// The built-in studio environment, as `weft render` lights a scene by default.
+fn studio() -> Option<weft::env::EnvLighting> {
+    Some(weft::env::EnvLighting::new(std::sync::Arc::new(
+        weft::env::Environment::studio(),
+    )))
+}
+
 #[test]
 fn a_pipeline_per_kind_of_material_with_only_the_scenes_code_changes_nothing() {
     // The G-buffer draws fabric and glTF materials with a pipeline each (the other kind's code
@@ -511,13 +518,10 @@ fn a_pipeline_per_kind_of_material_with_only_the_scenes_code_changes_nothing() {
     // the same image bit for bit. The scenes: the default (fabric and untextured glTF), SheenChair
     // (textures, sheen), AnisotropyRotationTest (anisotropy), and the default with its fabric
     // shaded as glTF.
-    let studio = Some(weft::env::EnvLighting::new(std::sync::Arc::new(
-        weft::env::Environment::studio(),
-    )));
     let base = RenderOptions {
         width: 96,
         height: 64,
-        environment: studio,
+        environment: studio(),
         ..Default::default()
     };
     let cases: [(&str, Scene, RenderOptions, &[&str]); 4] = [
@@ -862,13 +866,10 @@ fn fxaa_on_the_edge_blocks_alone_changes_nothing() {
     // same image byte for byte; and FXAA changed it (the comparison is not of two unsmoothed
     // images). The scenes: the default (the cloth's fine weave, a metal ball) under the studio,
     // and SheenChair (textures, thin legs).
-    let studio = Some(weft::env::EnvLighting::new(std::sync::Arc::new(
-        weft::env::Environment::studio(),
-    )));
     let base = RenderOptions {
         width: 160,
         height: 96,
-        environment: studio,
+        environment: studio(),
         antialias: weft::render::Antialias::Fxaa,
         ..Default::default()
     };
@@ -960,13 +961,10 @@ fn occlusion_where_a_surface_is_alone_changes_nothing() {
     // same image: the lit HDR and the occlusion debug view, byte for byte; and the occlusion
     // darkened something (the comparison is not of two unoccluded images). The scenes: the
     // default (a quarter of it sky) and SheenChair (mostly empty around the chair).
-    let studio = Some(weft::env::EnvLighting::new(std::sync::Arc::new(
-        weft::env::Environment::studio(),
-    )));
     let base = RenderOptions {
         width: 160,
         height: 96,
-        environment: studio,
+        environment: studio(),
         occlusion: weft::render::Occlusion::Gtao { radius: None },
         ..Default::default()
     };

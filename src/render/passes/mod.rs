@@ -41,14 +41,36 @@ pub(crate) fn fullscreen<'s, P: bytemuck::Pod>(
     push: Option<&P>,
     target: &'s crate::vk::Image,
 ) {
-    use crate::vk::{Attachment, Load, Usage};
+    fullscreen_into(
+        cmd,
+        pipeline,
+        set,
+        push,
+        target,
+        crate::vk::Load::Keep,
+        None,
+    );
+}
+
+/// [`fullscreen`] with the target started from `load`, and a depth attachment (the pipeline's
+/// depth test, e.g. a triangle at the far plane drawn where a surface is).
+pub(crate) fn fullscreen_into<'s, P: bytemuck::Pod>(
+    cmd: &mut crate::vk::Cmd<'s>,
+    pipeline: &'s crate::vk::Pipeline,
+    set: crate::vk::DescriptorSet<'s>,
+    push: Option<&P>,
+    target: &'s crate::vk::Image,
+    load: crate::vk::Load,
+    depth: Option<crate::vk::Attachment<'s>>,
+) {
+    use crate::vk::{Attachment, Usage};
     cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
     cmd.begin_rendering(
         &[Attachment {
             image: target,
-            load: Load::Keep,
+            load,
         }],
-        None,
+        depth,
     );
     cmd.bind_pipeline(pipeline);
     cmd.bind_sets(pipeline, 0, &[set]);

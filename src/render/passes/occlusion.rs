@@ -234,22 +234,19 @@ impl OcclusionPass {
             vec![depth.name.clone(), estimate.name.clone(), blur.name.clone()],
             move |cmd| {
                 // The depth copy writes every texel of both targets.
-                cmd.transition(&o.depth, Usage::Undefined, Usage::ColorAttachment, None);
                 cmd.transition(&o.coverage, Usage::Undefined, Usage::DepthAttachment, None);
-                cmd.begin_rendering(
-                    &[Attachment {
-                        image: &o.depth,
-                        load: Load::Undefined,
-                    }],
+                super::fullscreen_into::<u32>(
+                    cmd,
+                    depth,
+                    depth_set,
+                    None,
+                    &o.depth,
+                    Load::Undefined,
                     Some(Attachment {
                         image: &o.coverage,
                         load: Load::Undefined,
                     }),
                 );
-                cmd.bind_pipeline(depth);
-                cmd.bind_sets(depth, 0, &[depth_set]);
-                cmd.draw(3);
-                cmd.end_rendering();
                 cmd.transition(&o.depth, Usage::ColorAttachment, Usage::FragmentRead, None);
                 // The copy's depth writes before the draws' depth tests read them.
                 cmd.transition(
@@ -265,38 +262,32 @@ impl OcclusionPass {
                 } else {
                     // Drawn where a surface is; an empty texel keeps the clear, what the shaders
                     // write there: open (1), no surface (distance 0).
-                    let open = [1.0, 0.0, 0.0, 0.0];
-                    for (pipeline, set, target, push) in [
-                        (estimate, set, &o.raw, Some(&push)),
-                        (blur, blur_set, &o.visibility, None),
-                    ] {
-                        cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
-                        cmd.begin_rendering(
-                            &[Attachment {
-                                image: target,
-                                load: Load::Clear(open),
-                            }],
-                            Some(Attachment {
-                                image: &o.coverage,
-                                load: Load::Keep,
-                            }),
-                        );
-                        cmd.bind_pipeline(pipeline);
-                        cmd.bind_sets(pipeline, 0, &[set]);
-                        if let Some(push) = push {
-                            cmd.push_constants(pipeline, push);
-                        }
-                        cmd.draw(3);
-                        cmd.end_rendering();
-                        if std::ptr::eq(target, &o.raw) {
-                            cmd.transition(
-                                &o.raw,
-                                Usage::ColorAttachment,
-                                Usage::FragmentRead,
-                                None,
-                            );
-                        }
-                    }
+                    let open = Load::Clear([1.0, 0.0, 0.0, 0.0]);
+                    let coverage = || {
+                        Some(Attachment {
+                            image: &o.coverage,
+                            load: Load::Keep,
+                        })
+                    };
+                    super::fullscreen_into(
+                        cmd,
+                        estimate,
+                        set,
+                        Some(&push),
+                        &o.raw,
+                        open,
+                        coverage(),
+                    );
+                    cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
+                    super::fullscreen_into::<u32>(
+                        cmd,
+                        blur,
+                        blur_set,
+                        None,
+                        &o.visibility,
+                        open,
+                        coverage(),
+                    );
                 }
                 cmd.transition(
                     &o.visibility,
