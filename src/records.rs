@@ -277,7 +277,9 @@ pub struct GpuMaterial {
     /// KHR_materials_volume's attenuation colour (rgb, linear), a: the index of refraction.
     pub volume: [f32; 4],
     /// KHR_materials_clearcoat: x the factor, y the roughness, z the coat normal texture's scale
-    /// (0 without one), w unused.
+    /// (0 without one), w 1 where the coat normal texture's coordinates are not those the
+    /// vertices' tangents follow (its set or its transform's linear part differs from the normal
+    /// texture's): surface.glsl then takes its frame from their screen derivatives.
     pub coat: [f32; 4],
     /// KHR_materials_diffuse_transmission: x the factor, yzw the colour (linear).
     pub diffuse_transmission: [f32; 4],
@@ -309,6 +311,24 @@ pub const MATERIAL_IRIDESCENCE: u32 = 256;
 /// KHR_materials_pbrSpecularGlossiness: `metallic_roughness[1]` is the glossiness and the
 /// metallic-roughness slot's alpha multiplies it (roughness = 1 − that).
 pub const MATERIAL_SPEC_GLOSS: u32 = 512;
+
+/// Whether a material's clear-coat normal texture reads other coordinates than those its
+/// vertices' tangents follow: the normal texture's (glTF: generated tangents follow the normal
+/// texture's; the loader makes them so), which differ from the coat's by their UV set or by the
+/// linear part of their transform (an offset moves the texture, not its frame). Without a normal
+/// texture the tangents follow the coat's own.
+fn coat_normal_has_own_frame(m: &Material) -> bool {
+    use crate::scene::TextureSlot;
+    if m.normal_texture.is_none() {
+        return false;
+    }
+    let (coat, base) = (
+        &m.uv[TextureSlot::ClearcoatNormal as usize],
+        &m.uv[TextureSlot::Normal as usize],
+    );
+    let linear = |s: &crate::scene::SlotUv| [s.m[0][0], s.m[0][1], s.m[1][0], s.m[1][1]];
+    coat.set != base.set || linear(coat) != linear(base)
+}
 
 impl GpuMaterial {
     pub fn new(m: &Material, fabric_index: Option<usize>) -> GpuMaterial {
@@ -431,7 +451,11 @@ impl GpuMaterial {
                     } else {
                         0.0
                     },
-                    0.0,
+                    if c.normal_texture.is_some() && coat_normal_has_own_frame(m) {
+                        1.0
+                    } else {
+                        0.0
+                    },
                 ],
                 None => [0.0; 4],
             },

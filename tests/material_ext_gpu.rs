@@ -520,3 +520,168 @@ fn the_terminator_is_not_biased_by_the_gbuffer() {
     );
     renderer.context().check_validation().unwrap();
 }
+
+/// A glTF quad (x, y in [-1, 1], z = 0, facing +z; u along +x, v along -y) with one material,
+/// `textures` PNGs embedded, loaded as a user's file is (the loader generates its tangents).
+fn textured_quad(material: serde_json::Value, textures: &[Vec<u8>]) -> Scene {
+    let floats = |v: &[f32]| v.iter().flat_map(|f| f.to_le_bytes()).collect::<Vec<u8>>();
+    let mut bin = floats(&[
+        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+    ]);
+    bin.extend(floats(&[0.0, 0.0, 1.0].repeat(4)));
+    bin.extend(floats(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]));
+    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_materials_clearcoat", "KHR_texture_transform"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{
+            "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2},
+            "indices": 3, "material": 0}]}],
+        "materials": [material],
+        "images": textures.iter().map(|png| serde_json::json!({
+            "uri": format!("data:image/png;base64,{}", common::base64(png))})).collect::<Vec<_>>(),
+        "textures": (0..textures.len()).map(|i| serde_json::json!({"source": i})).collect::<Vec<_>>(),
+        "buffers": [{"byteLength": bin.len(),
+            "uri": format!("data:application/octet-stream;base64,{}", common::base64(&bin))}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 96, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 128, "byteLength": 12},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [-1.0, -1.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+    });
+    let text = serde_json::to_vec(&json).unwrap();
+    let scene = weft::scene::load_slice(&text, "coat-frame.gltf", None).expect("a valid file");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    scene
+}
+
+/// A normal map of ridges across s (the normal tilts along the tangent, 6 ridges a repeat), or
+/// flat, as PNG bytes.
+fn normal_map_png(ridges: bool) -> Vec<u8> {
+    let size = 64u32;
+    let img = image::RgbaImage::from_fn(size, size, |x, _| {
+        let tilt = if ridges {
+            0.7 * (std::f32::consts::TAU * 6.0 * (x as f32 + 0.5) / size as f32).sin()
+        } else {
+            0.0
+        };
+        // Tilted along the bitangent too, so that its sign shows.
+        let n = Vec3::new(tilt, if ridges { 0.35 } else { 0.0 }, 1.0).normalize();
+        let enc = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+        image::Rgba([enc(n.x), enc(n.y), enc(n.z), 255])
+    });
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png
+}
+
+#[test]
+fn a_coat_normal_map_with_its_own_transform_takes_its_own_frame() {
+    // KHR_materials_clearcoat's normal texture turned a quarter (KHR_texture_transform) on a
+    // material whose normal texture is not turned: the vertices' tangents follow the normal
+    // texture's coordinates (glTF), so the coat's bumps need a frame of their own. Rendered
+    // like the same coat without a normal texture (whose tangents then follow the coat's own
+    // coordinates), and unlike the coat's map unturned: the frame from the coat coordinates'
+    // screen derivatives, its bitangent's sign included (the map tilts along both axes), on the
+    // front face and, double-sided, on the back.
+    let ridges = normal_map_png(true);
+    let flat = normal_map_png(false);
+    let coat = |rotation: f32| {
+        serde_json::json!({"KHR_materials_clearcoat": {
+            "clearcoatFactor": 1.0, "clearcoatRoughnessFactor": 0.2,
+            "clearcoatNormalTexture": {"index": 0, "extensions": {
+                "KHR_texture_transform": {"rotation": rotation}}}}})
+    };
+    let base = serde_json::json!({"baseColorFactor": [0.02, 0.02, 0.02, 1.0],
+                                  "metallicFactor": 0.0, "roughnessFactor": 1.0});
+    let quarter = std::f32::consts::FRAC_PI_2;
+    // The coat turned over a flat normal texture (its own frame), turned alone (the vertices'
+    // tangents follow it), and unturned over the flat normal texture.
+    let own = textured_quad(
+        serde_json::json!({"pbrMetallicRoughness": base, "normalTexture": {"index": 1},
+                           "doubleSided": true, "extensions": coat(quarter)}),
+        &[ridges.clone(), flat.clone()],
+    );
+    let alone = textured_quad(
+        serde_json::json!({"pbrMetallicRoughness": base, "doubleSided": true,
+                           "extensions": coat(quarter)}),
+        &[ridges.clone()],
+    );
+    let unturned = textured_quad(
+        serde_json::json!({"pbrMetallicRoughness": base, "normalTexture": {"index": 1},
+                           "doubleSided": true, "extensions": coat(0.0)}),
+        &[ridges, flat],
+    );
+    let material = |s: &Scene| weft::render::gpu::GpuMaterial::new(&s.materials[0], None).coat[3];
+    assert_eq!(
+        material(&own),
+        1.0,
+        "the turned coat map needs its own frame"
+    );
+    assert_eq!(material(&alone), 0.0);
+    assert_eq!(material(&unturned), 0.0);
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    for eye_z in [2.6f32, -2.6] {
+        let mut render = |scene: &Scene| {
+            let mut scene = scene.clone();
+            // A light from over the camera's shoulder, to the right.
+            scene.lights = vec![light(
+                LightKind::Directional,
+                [0.0; 3],
+                [-0.6 * eye_z.signum(), -0.5, -0.62 * eye_z.signum()],
+                3.0,
+            )];
+            let camera = scene
+                .look_at_camera(Vec3::new(0.0, 0.0, eye_z), Vec3::ZERO, 0.9)
+                .unwrap();
+            let frame = renderer
+                .render(
+                    &scene,
+                    &RenderOptions {
+                        width: 96,
+                        height: 96,
+                        camera_override: Some(camera),
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+            assert!(frame.plan.runs(weft::render::Pass::Transparent));
+            frame.hdr
+        };
+        let (own, alone, unturned) = (render(&own), render(&alone), render(&unturned));
+        let diff = |a: &[f32], b: &[f32]| {
+            a.chunks(4)
+                .zip(b.chunks(4))
+                .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0f32, f32::max))
+                .fold(0f32, f32::max)
+        };
+        let peak = alone
+            .chunks(4)
+            .flat_map(|p| p[..3].to_vec())
+            .fold(0f32, f32::max);
+        let (same, other) = (diff(&own, &alone), diff(&own, &unturned));
+        println!(
+            "eye z {eye_z}: peak {peak}; own frame against the coat's tangents {same}, against the unturned map {other}"
+        );
+        assert!(
+            other > 0.2 * peak,
+            "eye z {eye_z}: the turn changed little ({other} of {peak}): the test sees nothing"
+        );
+        assert!(
+            same < 0.002 * peak,
+            "eye z {eye_z}: own frame {same} off the coat's tangents' (peak {peak})"
+        );
+    }
+}

@@ -10,30 +10,9 @@ use glam::{Mat4, Vec3};
 use serde_json::{json, Value};
 use weft::scene::{self, ColorSpace, LightKind, Scene, Shadow, TextureSlot};
 
-use common::TempDir;
+use common::{base64, TempDir};
 
 // --- helpers --------------------------------------------------------------------------------------
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
 
 /// Builds glTF documents with one buffer: accessors are appended as the test needs them.
 struct Doc {

@@ -108,6 +108,35 @@ vec4 sample_slot(sampler2D tex, Material m, uint slot) {
     return textureGrad(tex, st, lin * uv_d[3u * set + 1u], lin * uv_d[3u * set + 2u]);
 }
 
+// The tangent and bitangent of the clear coat's normal texture where its coordinates are not
+// those the vertices' tangents follow: the surface's directions of increasing s and t of its own
+// coordinates (its set through its transform's linear part), from the screen derivatives of
+// those and of the position (dpdx, dpdy), in the plane of n; the bitangent along decreasing t on
+// a front face (up the image: a glTF normal map's green points up, and the vertices' tangents'
+// sign makes their bitangent so), turned with n on a back face (`facing` -1) as the vertices'
+// frame is. Unchanged (t, b) where the coordinates do not vary on screen.
+void coat_frame(Material m, vec3 dpdx, vec3 dpdy, vec3 n, float facing, inout vec3 t, inout vec3 b) {
+    vec4 r0 = m.uv[2u * SLOT_CLEARCOAT_NORMAL];
+    vec4 r1 = m.uv[2u * SLOT_CLEARCOAT_NORMAL + 1u];
+    uint set = r0.w > 0.5 ? 1u : 0u;
+    mat2 lin = mat2(r0.x, r1.x, r0.y, r1.y);
+    vec2 dx = lin * uv_d[3u * set + 1u];
+    vec2 dy = lin * uv_d[3u * set + 2u];
+    float det = dx.x * dy.y - dx.y * dy.x;
+    if (!(abs(det) > 1e-30)) {
+        return;
+    }
+    // dpdx = Ps dx.x + Pt dx.y, dpdy = Ps dy.x + Pt dy.y.
+    vec3 ps = (dpdx * dy.y - dpdy * dx.y) / det;
+    vec3 pt = (dpdy * dx.x - dpdx * dy.x) / det;
+    vec3 ts = ps - n * dot(n, ps);
+    if (!(dot(ts, ts) > 1e-30)) {
+        return;
+    }
+    t = normalize(ts);
+    b = facing * (dot(cross(n, t), pt) > 0.0 ? -1.0 : 1.0) * cross(n, t);
+}
+
 // The weave's summed-area table (WEAVE_SOURCE 2 filtered, 3 fetched; Rust twin
 // weft::fabric::WeaveSat, which builds it): it spans R x R repeats (2, more for a weave of fewer
 // than four cells a side: a box narrower than R - 1 repeats, its corner in the first repeat, lies
@@ -277,7 +306,9 @@ GSurface material_surface() {    GSurface s;
 
     // Shading frame. Interpolated normals can cancel out (or be NaN from a broken file that got
     // past the loader); fall back to the triangle's own normal.
-    vec3 geometric = cross(dFdx(in_world_pos), dFdy(in_world_pos));
+    vec3 dpdx = dFdx(in_world_pos);
+    vec3 dpdy = dFdy(in_world_pos);
+    vec3 geometric = cross(dpdx, dpdy);
     vec3 n = in_normal;
     if (!(dot(n, n) > 1e-20)) {
         n = geometric;
@@ -291,12 +322,19 @@ GSurface material_surface() {    GSurface s;
     float sign = in_tangent.w < 0.0 ? -1.0 : 1.0;
     vec3 b = sign * cross(n, t);
 
-    // The coat's normal: the geometry's, or its own normal map in the same frame.
+    // The coat's normal: the geometry's, or its own normal map, in the vertices' frame or (where
+    // its coordinates are not those the tangents follow: coat.w) in the frame of its own
+    // coordinates' screen derivatives.
     vec3 coat_normal = n;
     if (m.coat.z != 0.0) {
         vec3 ctn = sample_slot(clearcoat_normal_tex, m, SLOT_CLEARCOAT_NORMAL).xyz * 2.0 - 1.0;
         ctn.xy *= m.coat.z;
-        vec3 cm = t * ctn.x + b * ctn.y + n * ctn.z;
+        vec3 ct = t;
+        vec3 cb = b;
+        if (m.coat.w > 0.5) {
+            coat_frame(m, dpdx, dpdy, n, gl_FrontFacing ? 1.0 : -1.0, ct, cb);
+        }
+        vec3 cm = ct * ctn.x + cb * ctn.y + n * ctn.z;
         coat_normal = dot(cm, cm) > 1e-20 ? normalize(cm) : n;
     }
 
