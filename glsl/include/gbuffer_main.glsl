@@ -42,6 +42,9 @@ layout(constant_id = 8) const uint MATERIAL_KIND = 0u;
 // The texture slots some material of the scene has a texture in (bit SLOT_*): the others are
 // not sampled (sample_slot, surface.glsl).
 layout(constant_id = 9) const uint TEXTURE_SLOTS = 0x7FFFFu;
+// The G-buffer draws no clear coat (coated draws go to the transparent pass): surface.glsl's coat
+// code is compiled out.
+const uint COAT = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`, include/frame.glsl)

@@ -4,7 +4,7 @@
 // at once with the same functions the lighting pass uses (shade.glsl), so a blended surface is lit
 // exactly as an opaque one. The including shader declares `materials`, `fabrics` and the
 // specialization constants ACCURACY, WEAVE_SOURCE, SHADING, FOOTPRINT_PIECES, VERTEX_COLORS,
-// MATERIAL_KIND and TEXTURE_SLOTS.
+// MATERIAL_KIND, TEXTURE_SLOTS and COAT (0 where no clear coat is drawn: its code is compiled out).
 
 // Per material; missing textures are bound to 1x1 defaults (white, or a flat normal).
 layout(set = 1, binding = 0) uniform sampler2D base_color_tex;  // base colour texture (sRGB)
@@ -326,7 +326,7 @@ GSurface material_surface() {    GSurface s;
     // its coordinates are not those the tangents follow: coat.w) in the frame of its own
     // coordinates' screen derivatives.
     vec3 coat_normal = n;
-    if (m.coat.z != 0.0) {
+    if (COAT != 0u && m.coat.z != 0.0) {
         vec3 ctn = sample_slot(clearcoat_normal_tex, m, SLOT_CLEARCOAT_NORMAL).xyz * 2.0 - 1.0;
         ctn.xy *= m.coat.z;
         vec3 ct = t;
@@ -578,7 +578,7 @@ GSurface material_surface() {    GSurface s;
                               sample_slot(iridescence_thickness_tex, m, SLOT_IRIDESCENCE_THICKNESS).g);
         s.iridescence = vec4(clamp(factor, 0.0, 1.0), m.iridescence.y, max(thickness, 0.0), 0.0);
     }
-    if (fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_CLEARCOAT) != 0u) {
+    if (COAT != 0u && fabric == 0u && (uint(m.extra.w + 0.5) & MATERIAL_CLEARCOAT) != 0u) {
         float factor = m.coat.x * sample_slot(clearcoat_tex, m, SLOT_CLEARCOAT).r;
         float rough = m.coat.y * sample_slot(clearcoat_roughness_tex, m, SLOT_CLEARCOAT_ROUGHNESS).g;
         s.coat = vec4(clamp(factor, 0.0, 1.0), clamp(rough, 0.0, 1.0), 0.0, 0.0);
