@@ -679,6 +679,9 @@ fn a_coat_normal_map_with_its_own_transform_takes_its_own_frame() {
             other > 0.2 * peak,
             "eye z {eye_z}: the turn changed little ({other} of {peak}): the test sees nothing"
         );
+        // Measured: 0.0039 of a peak of 6.54 (0.06 %), front and back, on an Intel Xeon's
+        // lavapipe (the two frames differ by rounding, sharpened by the coat's narrow lobe); the
+        // bound leaves 3x for another CPU's, where a bitangent the wrong way is the whole peak.
         assert!(
             same < 0.002 * peak,
             "eye z {eye_z}: own frame {same} off the coat's tangents' (peak {peak})"
