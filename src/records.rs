@@ -313,21 +313,23 @@ pub const MATERIAL_IRIDESCENCE: u32 = 256;
 pub const MATERIAL_SPEC_GLOSS: u32 = 512;
 
 /// Whether a material's clear-coat normal texture reads other coordinates than those its
-/// vertices' tangents follow: the normal texture's (glTF: generated tangents follow the normal
-/// texture's; the loader makes them so), which differ from the coat's by their UV set or by the
-/// linear part of their transform (an offset moves the texture, not its frame). Without a normal
-/// texture the tangents follow the coat's own.
+/// vertices' tangents follow ([`Material::tangent_slot`]): another UV set, or another linear
+/// part of its transform (an offset moves a texture, not its frame).
 fn coat_normal_has_own_frame(m: &Material) -> bool {
     use crate::scene::TextureSlot;
-    if m.normal_texture.is_none() {
-        return false;
+    let coat = TextureSlot::ClearcoatNormal;
+    let has_coat_normal = m
+        .clearcoat
+        .as_ref()
+        .is_some_and(|c| c.normal_texture.is_some());
+    match m.tangent_slot() {
+        Some(slot) if has_coat_normal && slot != coat => {
+            let (own, theirs) = (&m.uv[coat as usize], &m.uv[slot as usize]);
+            let linear = |s: &crate::scene::SlotUv| [s.m[0][0], s.m[0][1], s.m[1][0], s.m[1][1]];
+            own.set != theirs.set || linear(own) != linear(theirs)
+        }
+        _ => false,
     }
-    let (coat, base) = (
-        &m.uv[TextureSlot::ClearcoatNormal as usize],
-        &m.uv[TextureSlot::Normal as usize],
-    );
-    let linear = |s: &crate::scene::SlotUv| [s.m[0][0], s.m[0][1], s.m[1][0], s.m[1][1]];
-    coat.set != base.set || linear(coat) != linear(base)
 }
 
 impl GpuMaterial {
@@ -451,7 +453,7 @@ impl GpuMaterial {
                     } else {
                         0.0
                     },
-                    if c.normal_texture.is_some() && coat_normal_has_own_frame(m) {
+                    if coat_normal_has_own_frame(m) {
                         1.0
                     } else {
                         0.0

@@ -18,13 +18,14 @@ float luma_at(ivec2 p) {
     return luma(texelFetch(encoded, clamp(p, ivec2(0), size - 1), 0).rgb);
 }
 
-// The luma of a pixel (m) and of its four neighbours, and their range.
+// The luma of a pixel (m) and of its four neighbours, their maximum and their range.
 struct FxaaCross {
     float m;
     float n;
     float s;
     float e;
     float w;
+    float hi;
     float range;
 };
 
@@ -36,14 +37,13 @@ FxaaCross fxaa_cross(ivec2 p) {
     c.e = luma_at(p + ivec2(1, 0));
     c.w = luma_at(p + ivec2(-1, 0));
     float lo = min(c.m, min(min(c.n, c.s), min(c.e, c.w)));
-    float hi = max(c.m, max(max(c.n, c.s), max(c.e, c.w)));
-    c.range = hi - lo;
+    c.hi = max(c.m, max(max(c.n, c.s), max(c.e, c.w)));
+    c.range = c.hi - lo;
     return c;
 }
 
 // Whether the pixel sits on an edge FXAA smooths: its neighbourhood's contrast reaches the
 // thresholds.
 bool fxaa_on_edge(FxaaCross c) {
-    float hi = max(c.m, max(max(c.n, c.s), max(c.e, c.w)));
-    return c.range >= max(EDGE_ABSOLUTE, hi * EDGE_RELATIVE);
+    return c.range >= max(EDGE_ABSOLUTE, c.hi * EDGE_RELATIVE);
 }

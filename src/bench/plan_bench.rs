@@ -98,10 +98,6 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         height: size.1,
         ..crate::bench::timed_options()
     };
-    let forced = |force: Force| RenderOptions {
-        force,
-        ..base.clone()
-    };
     // In the binary: `weft bench` works wherever weft is installed, not only in its source tree.
     let shadows = crate::scene::load_slice(
         include_bytes!("../../assets/scenes/shadows.glb"),
@@ -128,85 +124,52 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         ))),
         ..base.clone()
     };
-    let kinds = interleaved(
-        renderer,
-        &default,
-        &[
-            studio.clone(),
-            RenderOptions {
-                force: Force {
-                    material_kinds: true,
-                    ..Force::NONE
-                },
-                ..studio.clone()
-            },
-        ],
-        frames,
-    )?;
-    let mut skips = vec![SkipRow {
-        scene: "default, studio environment".into(),
-        skipped: "other kinds' code, unused texture slots".into(),
-        planned_ms: kinds[0].0,
-        forced_ms: kinds[1].0,
-    }];
-    // FXAA as `weft render` runs it: its edge search only on the blocks with an edge.
+    // FXAA as `weft render` runs it (its edge search only on the blocks with an edge), and the
+    // occlusion pass as it runs under the studio (its estimates and blur where a surface is).
     let fxaa = RenderOptions {
         antialias: crate::render::Antialias::Fxaa,
         ..base.clone()
     };
-    let edges = interleaved(
-        renderer,
-        &default,
-        &[
-            fxaa.clone(),
-            RenderOptions {
-                force: Force {
-                    fxaa_everywhere: true,
-                    ..Force::NONE
-                },
-                ..fxaa
-            },
-        ],
-        frames,
-    )?;
-    skips.push(SkipRow {
-        scene: "default, --aa fxaa".into(),
-        skipped: "FXAA's edge search off the edges".into(),
-        planned_ms: edges[0].0,
-        forced_ms: edges[1].0,
-    });
-    // The occlusion pass as `weft render` runs it under the studio: its estimates and blur
-    // only where a surface is.
     let gtao = RenderOptions {
         occlusion: crate::render::Occlusion::Gtao { radius: None },
         ..studio.clone()
     };
-    let covered = interleaved(
-        renderer,
-        &default,
-        &[
-            gtao.clone(),
-            RenderOptions {
-                force: Force {
-                    occlusion_everywhere: true,
-                    ..Force::NONE
-                },
-                ..gtao
+    let cases: [(&str, &str, &Scene, &RenderOptions, Force); 9] = [
+        (
+            "default, studio environment",
+            "other kinds' code, unused texture slots",
+            &default,
+            &studio,
+            Force {
+                material_kinds: true,
+                ..Force::NONE
             },
-        ],
-        frames,
-    )?;
-    skips.push(SkipRow {
-        scene: "default, studio, --occlusion gtao".into(),
-        skipped: "occlusion estimates where nothing is".into(),
-        planned_ms: covered[0].0,
-        forced_ms: covered[1].0,
-    });
-    let cases: [(&str, &str, &Scene, Force); 6] = [
+        ),
+        (
+            "default, --aa fxaa",
+            "FXAA's edge search off the edges",
+            &default,
+            &fxaa,
+            Force {
+                fxaa_everywhere: true,
+                ..Force::NONE
+            },
+        ),
+        (
+            "default, studio, --occlusion gtao",
+            "occlusion estimates where nothing is",
+            &default,
+            &gtao,
+            Force {
+                occlusion_everywhere: true,
+                ..Force::NONE
+            },
+        ),
         (
             "default",
             "hidden G-buffer fragments (depth pre-pass)",
             &default,
+            &base,
             Force {
                 no_depth_prepass: true,
                 ..Force::NONE
@@ -216,6 +179,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
             "default, steel ball as 2-sided glass",
             "glass back faces behind its front faces",
             &glass,
+            &base,
             Force {
                 back_faces_first: true,
                 ..Force::NONE
@@ -225,6 +189,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
             "shadows.glb, nothing receives",
             "shadow pass (2 maps) and shadow sampling",
             &no_receivers,
+            &base,
             Force {
                 shadows: true,
                 ..Force::NONE
@@ -234,6 +199,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
             "default, directional lights only",
             "point and spot light code",
             &directional_only,
+            &base,
             Force {
                 light_types: true,
                 ..Force::NONE
@@ -243,6 +209,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
             "default + 256 point lights, range 0.6",
             "lights out of range, per pixel",
             &local,
+            &base,
             Force {
                 no_range_culling: true,
                 ..Force::NONE
@@ -252,11 +219,17 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
             "default (no light asks for shadows)",
             "all of the above",
             &default,
+            &base,
             Force::ALL,
         ),
     ];
-    for (name, skipped, scene, force) in cases {
-        let m = interleaved(renderer, scene, &[base.clone(), forced(force)], frames)?;
+    let mut skips = Vec::new();
+    for (name, skipped, scene, options, force) in cases {
+        let forced = RenderOptions {
+            force,
+            ..options.clone()
+        };
+        let m = interleaved(renderer, scene, &[options.clone(), forced], frames)?;
         skips.push(SkipRow {
             scene: name.into(),
             skipped: skipped.into(),

@@ -183,6 +183,22 @@ pub struct Material {
 }
 
 impl Material {
+    /// The texture slot whose coordinates the vertices' generated tangents follow: glTF's normal
+    /// texture, or without one the clear coat's normal texture; None when it has neither.
+    pub fn tangent_slot(&self) -> Option<TextureSlot> {
+        if self.normal_texture.is_some() {
+            Some(TextureSlot::Normal)
+        } else if self
+            .clearcoat
+            .as_ref()
+            .is_some_and(|c| c.normal_texture.is_some())
+        {
+            Some(TextureSlot::ClearcoatNormal)
+        } else {
+            None
+        }
+    }
+
     /// Whether the G-buffer cannot hold this material, so the transparent pass draws it:
     /// alphaMode BLEND, a fabric sheet, transmission, a clear coat, diffuse transmission, a
     /// thin film.

@@ -587,18 +587,7 @@ impl<'a> Loader<'a> {
             // its weave's thread direction, which follows the vertices' coordinates.
             // Without a normal texture, a clear coat's normal texture is the one to follow.
             let normal_map = self.scene.materials.get(material).and_then(|m| {
-                let coat_normal = m
-                    .clearcoat
-                    .as_ref()
-                    .is_some_and(|c| c.normal_texture.is_some());
-                let slot = if m.normal_texture.is_some() {
-                    TextureSlot::Normal
-                } else if coat_normal {
-                    TextureSlot::ClearcoatNormal
-                } else {
-                    return None;
-                };
-                let map = m.uv[slot as usize];
+                let map = m.uv[m.tangent_slot()? as usize];
                 (m.fabric.is_none() && map != SlotUv::IDENTITY).then_some(map)
             });
             let uv_of = move |v: &Vertex| normal_map.map_or(v.uv, |slot| slot.coordinates(v));
