@@ -63,7 +63,7 @@ fn scores_and_ranks_weft_among_the_engines() {
     assert!(full.pixels().any(|p| p.0[3] == 0) && full.pixels().any(|p| p.0[3] == 255));
 
     // Thumbnails: the reference is weft's own (so weft scores -inf), "filament" 20 levels darker.
-    let reference = weft::fidelity::resize_premultiplied(&full, 48, 32);
+    let reference = weft::fidelity::thumbnail(&full, 48, 32).unwrap();
     save_webp(&reference, &thumbs.join("blender-cycles.webp"));
     let mut dark = reference.clone();
     for p in dark.pixels_mut() {

@@ -241,7 +241,7 @@ pub fn run(args: FidelityArgs) -> anyhow::Result<()> {
             eprintln!("{e}");
             continue;
         }
-        let ours = fidelity::resize_premultiplied(&load_rgba(&full)?, tw, th);
+        let ours = fidelity::thumbnail(&load_rgba(&full)?, tw, th)?;
         ours.save(renders.join(format!("{}.thumb.png", s.short_name())))?;
         let Some(weft_score) = fidelity::score(&reference, &ours) else {
             eprintln!("{}: weft's render has no opaque pixel", s.name);
