@@ -245,7 +245,8 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
     // (velvet 4.7 % against 4.0 %) and little better at 64 (3.8 %).
     float k = max3(s.sheen);
     return diffuse * sheen_layer_diffuse(k, e_v, s.sheen_roughness)
-         + specular * max(1.0 - k * e_v, 0.0) + s.sheen * e_v * irradiance * ao;
+         + specular * max(1.0 - k * e_v, 0.0)
+         + s.sheen * e_v * irradiance * cone_occlusion(nv, ao, s.sheen_roughness);
 }
 
 // The weft lobe's share of the mixture the samples draw from: its thread coverage's share,

@@ -126,6 +126,45 @@ float specular_occlusion(float nv, float ao, float roughness) {
     return clamp(pow(max(nv + ao, 0.0), exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
 }
 
+// acos on [0, 1] by Abramowitz & Stegun 4.4.45 (|error| ≤ 6.7e-5 rad): only a square root and
+// products, so the GPU and the Rust twin agree to their rounding, where Vulkan lets acos err by
+// 4096 ulp (inherited from atan2: the twins of cone_occlusion were 0.1 % apart with it).
+float acos01(float x) {
+    return sqrt(1.0 - x) * (1.5707288 + x * (-0.2121144 + x * (0.0742610 - 0.0187293 * x)));
+}
+
+// How much of the smaller of two spherical caps (half-angles a1, a2, axes d apart) lies in the
+// larger: 1 while inside (d ≤ |a1 - a2|), 0 once they part (d ≥ a1 + a2), a smoothstep between
+// (Oat & Sander 2007, "Ambient aperture lighting", the approximation Jimenez et al. 2016 take for
+// specular occlusion). The overlap's solid angle is this times 2π(1 - cos min(a1, a2)).
+float cap_overlap(float a1, float a2, float d) {
+    float lo = max(a1, a2) - min(a1, a2);
+    float x = clamp((a1 + a2 - d) / max(a1 + a2 - lo, 1e-6), 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+}
+
+// The share of a lobe's environment light that an occlusion ao leaves, from cones (Jimenez et al.
+// 2016, §5): the visible directions as a cone about n whose cosine-weighted visibility is ao
+// (sin² of its half-angle), the lobe as a cone about the mirror direction (n·v from n) whose
+// cosine is 10^(-α), α = roughness² (a GGX lobe's spread, as Filament's cone occlusion takes
+// it); their overlap over the lobe's overlap with the open hemisphere, so an open surface keeps
+// all (the split sum's albedo already has the horizon).
+// Used for the sheen's light: a rough Charlie lobe lives near the horizon, which occlusion takes
+// first, so ao alone lit the inside of folds (measured against the path tracers:
+// docs/fidelity.md). Rust twin: weft::reference::ibl_twin::cone_occlusion.
+float cone_occlusion(float nv, float ao, float roughness) {
+    float cos_visible = sqrt(clamp(1.0 - ao, 0.0, 1.0));
+    float alpha = roughness * roughness;
+    float cos_lobe = clamp(exp2(-3.321928 * alpha), 0.0, 1.0);
+    float d = acos01(clamp(nv, 0.0, 1.0));
+    float visible = acos01(cos_visible);
+    float lobe = acos01(cos_lobe);
+    // The smaller cap's 1 - cos over the lobe's (the lobe is never wider than the hemisphere).
+    float caps = min((1.0 - cos_visible) / max(1.0 - cos_lobe, 1e-7), 1.0);
+    float share = caps * cap_overlap(visible, lobe, d) / max(cap_overlap(0.5 * IBL_PI, lobe, d), 1e-6);
+    return ao >= 1.0 ? 1.0 : clamp(share, 0.0, 1.0);
+}
+
 // The split sum's look-up direction for roughness r about normal n: the mirror direction bent
 // towards the normal as the lobe widens (Lagarde & de Rousiers 2014, "dominant direction"): a
 // rough lobe's mass is nearer n.

@@ -379,7 +379,10 @@ pub fn pbr_env(
             scale(diffuse, sheen_layer_diffuse(env, k, e_v, s.sheen_roughness)),
             scale(specular, (1.0 - k * e_v).max(0.0)),
         ),
-        scale(mul(s.sheen, irradiance), e_v * ao),
+        scale(
+            mul(s.sheen, irradiance),
+            e_v * ibl_twin::cone_occlusion(nv, ao, s.sheen_roughness),
+        ),
     )
 }
 
