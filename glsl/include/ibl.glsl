@@ -161,7 +161,11 @@ float cone_occlusion(float nv, float ao, float roughness) {
     float lobe = acos01(cos_lobe);
     // The smaller cap's 1 - cos over the lobe's (the lobe is never wider than the hemisphere).
     float caps = min((1.0 - cos_visible) / max(1.0 - cos_lobe, 1e-7), 1.0);
-    float share = caps * cap_overlap(visible, lobe, d) / max(cap_overlap(0.5 * IBL_PI, lobe, d), 1e-6);
+    // The open hemisphere is the visibility cone of ao = 1, its angle by the same acos01, so the
+    // share tends to 1 as ao does; at ao = 1 it is 1 exactly (also for a mirror lobe at the
+    // horizon, where both overlaps vanish).
+    float open = acos01(0.0);
+    float share = caps * cap_overlap(visible, lobe, d) / max(cap_overlap(open, lobe, d), 1e-6);
     return ao >= 1.0 ? 1.0 : clamp(share, 0.0, 1.0);
 }
 

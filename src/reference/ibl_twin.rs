@@ -374,8 +374,9 @@ pub mod formula {
         let visible = acos01(cos_visible);
         let lobe = acos01(cos_lobe);
         let caps = ((one - cos_visible) / (one - cos_lobe).max(T::lit(1e-7))).min(one);
-        let share = caps * cap_overlap(visible, lobe, d)
-            / cap_overlap(T::lit(0.5) * pi::<T>(), lobe, d).max(T::lit(1e-6));
+        let open = acos01(zero);
+        let share =
+            caps * cap_overlap(visible, lobe, d) / cap_overlap(open, lobe, d).max(T::lit(1e-6));
         if ao.exact() >= 1.0 {
             one
         } else {
