@@ -15,7 +15,7 @@
 
 layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
-// Rust twin: weft::reference::env_light::EnvProbeInput (464 bytes).
+// Rust twin: weft::reference::env_light::EnvProbeInput (480 bytes).
 struct EnvProbeInput {
     vec4 n;              // pbr_env: normal (unit, xyz); w: ao
     vec4 v;              // pbr_env: view direction (unit, xyz); w: the sheen's E(n·v)
@@ -37,6 +37,7 @@ struct EnvProbeInput {
     vec4 light_pos;      // shadow_pcf: the light's position (xyz); w > 0.5: fabric sheets (fabric_env_combine)
     vec4 p;              // shadow_pcf: the point (xyz)
     vec4 pn;             // shadow_pcf: its normal (xyz)
+    vec4 indirect;       // pbr_env and fabric_env_combine: the occluders' bounced light (rgb)
 };
 
 // Rust twin: weft::reference::env_light::EnvProbeOutput (112 bytes).
@@ -108,7 +109,7 @@ void main() {
     uint samples = p.mode.y;
     vec2 rot = p.rot.xy;
     EnvProbeOutput o;
-    o.pbr = vec4(pbr_env(p.n.xyz, p.v.xyz, s, p.n.w, p.bounce.rgb, p.v.w, mode, samples, rot),
+    o.pbr = vec4(pbr_env(p.n.xyz, p.v.xyz, s, p.n.w, p.bounce.rgb, p.indirect.rgb, p.v.w, mode, samples, rot),
                  sheen_layer_diffuse(p.rot.z, p.rot.w, p.sheen.a));
     o.aniso = vec4(aniso_env_specular(p.n.xyz, p.v.xyz, s, p.surface.z, samples),
                    shadow_pcf(p.shadow, p.light_pos.xyz, p.p.xyz, p.pn.xyz));
@@ -141,7 +142,7 @@ void main() {
     o.diffuse = vec4(diffuse, last.x);
     o.back = vec4(back, last.y);
     o.combined = vec4(fabric_env_combine(p.coverage, p.fabric, diffuse, weft, warp, back, p.frame_n.w,
-                                         p.bounce.rgb, p.bounce.w, p.light_pos.w > 0.5),
+                                         p.bounce.rgb, p.indirect.rgb, p.bounce.w, p.light_pos.w > 0.5),
                       ggx_albedo(dot(p.n.xyz, p.v.xyz), p.surface.x));
     outputs[id] = o;
 }

@@ -38,7 +38,7 @@ struct IblProbeOutput {
     vec4 cube;       // cube_texel_dir (xyz), 0
     vec4 uv;         // hammersley (xy), equirect_uv (zw)
     vec4 scalars;    // fis_lod, specular_occlusion, fabric_diffuse_albedo, cone_occlusion
-    vec4 occlusion;  // gtao_arc, gtao_multibounce, 0, 0
+    vec4 occlusion;  // gtao_arc, gtao_multibounce, gtao_half_arc(h0, n), 0
     vec4 dominant;   // dominant_dir(normal, dir, misc.x) (xyz), 0
 };
 
@@ -80,7 +80,8 @@ void main() {
         specular_occlusion(inp.lod.z, inp.lod.w, inp.misc.x),
         fabric_diffuse_albedo(inp.fabric, inp.misc.y),
         cone_occlusion(inp.lod.z, inp.lod.w, inp.misc.x));
-    o.occlusion = vec4(gtao_arc(inp.arc.x, inp.arc.y, inp.arc.z), gtao_multibounce(inp.misc.z, inp.misc.w), 0.0, 0.0);
+    o.occlusion = vec4(gtao_arc(inp.arc.x, inp.arc.y, inp.arc.z), gtao_multibounce(inp.misc.z, inp.misc.w),
+                       gtao_half_arc(inp.arc.x, inp.arc.z), 0.0);
     o.dominant = vec4(dominant_dir(inp.normal.xyz, inp.dir.xyz, inp.misc.x), 0.0);
     outputs[id] = o;
 }

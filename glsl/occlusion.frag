@@ -10,16 +10,34 @@
 // falling off to none over its outer 60 %; the visible arc between the horizons, weighted by the
 // normal's projection into the plane, over the same with nothing in the way. Written with the
 // pixel's view distance for the blur.
+// With BOUNCE (`--occlusion gtao`, the default), also the light the occluders send back: the
+// part of each side's arc that its horizon hides (gtao_half_arc from the tangent plane to the
+// horizon) sees the surface of the depth sample that set the horizon instead of the environment:
+// its diffuse light under the environment (the albedo target's base colour times 1 - metallic,
+// times the environment's irradiance/π at its normal, the roughness-1 look-up env_irradiance of
+// include/env_light.glsl makes), where its front faces this pixel. One bounce, from what the
+// screen shows, one occluder per side and slice (the highest: per depth sample, the G-buffer
+// reads and the cube look-up made the pass five times slower on lavapipe); a woven occluder
+// sends nothing back (its diffuse colour is the fabric record's, which this pass does not read). Weighted and normalised as the visibility, so an irradiance/π;
+// the lighting pass adds what of it exceeds the multi-bounce fit (lighting.frag's OCCLUSION 2).
 #include "frame.glsl"
 #include "occlusion.glsl"
+#define WEFT_ENV_SPECULAR_ONLY
 
 // Slices per pixel and depth samples per side of a slice.
 layout(constant_id = 0) const uint SLICES = 2u;
 layout(constant_id = 1) const uint STEPS = 6u;
+// 1: the occluders' bounced light too (out_bounce); 0: out_bounce is 0.
+layout(constant_id = 2) const uint BOUNCE = 0u;
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
 layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl
 layout(set = 0, binding = 26) uniform sampler2D half_depth;  // the G-buffer depth of each 2 x 2 block's top-left pixel (R32F, half resolution; occlusion_depth.frag), gathered
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`): which occluders are woven (BOUNCE)
+layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube, whose roughness-1 level is the irradiance/π (BOUNCE)
+layout(set = 0, binding = 20) uniform sampler2D gb_albedo;  // G-buffer albedo (RGBA8 sRGB): base colour, a: metallic (BOUNCE)
+layout(set = 0, binding = 22) uniform sampler2D gb_surface;  // G-buffer surface (RGBA16F): y the material index (BOUNCE)
+#include "env_cubes.glsl"
 
 layout(push_constant) uniform OcclusionPush {
     mat4 view_from_clip;  // the inverse of frame.proj (view space from clip space)
@@ -29,6 +47,7 @@ layout(push_constant) uniform OcclusionPush {
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 0) out vec2 out_occlusion;  // x: visibility (1: open), y: view distance (0: empty); half resolution
+layout(location = 1) out vec4 out_bounce;     // rgb: the occluders' bounced light, as an irradiance/π (0 without BOUNCE); a: 0
 
 vec3 view_position(vec2 pixel, float depth) {
     vec2 ndc = pixel * frame.viewport.zw * 2.0 - 1.0;
@@ -43,6 +62,7 @@ void main() {
     float depth = texelFetch(half_depth, half_px, 0).r;
     if (depth <= 0.0) {
         out_occlusion = vec2(1.0, 0.0);
+        out_bounce = vec4(0.0);
         return;
     }
     vec2 centre = vec2(px) + 0.5;
@@ -70,6 +90,7 @@ void main() {
     // unequal weights do not bias the mean).
     float visibility = 0.0;
     float open = 0.0;
+    vec3 bounce = vec3(0.0);
     for (uint slice = 0u; slice < SLICES; ++slice) {
         float phi = (float(slice) + turn) / float(SLICES) * PI;
         vec3 dir = vec3(cos(phi), sin(phi), 0.0);
@@ -90,6 +111,9 @@ void main() {
         float low_neg = cos(angle_n - 0.5 * PI);
         float horizon_pos = low_pos;
         float horizon_neg = low_neg;
+        // Where the sample that set each side's horizon lies (BOUNCE): its pixel and its offset.
+        vec2 top_q[2] = vec2[2](vec2(-1.0), vec2(-1.0));
+        vec3 top_delta[2] = vec3[2](vec3(0.0), vec3(0.0));
         for (uint step = 0u; step < STEPS; ++step) {
             float s = (float(step) + jitter) / float(STEPS);
             float t = s * s * radius_px + 1.0;
@@ -133,10 +157,15 @@ void main() {
                 }
                 float weight = clamp(dist * pc.params.y + pc.params.z, 0.0, 1.0);
                 float h = dot(delta / dist, v);
+                float raised = mix(side == 0 ? low_pos : low_neg, h, weight);
+                if (BOUNCE != 0u && raised > (side == 0 ? horizon_pos : horizon_neg)) {
+                    top_q[side] = q;
+                    top_delta[side] = delta;
+                }
                 if (side == 0) {
-                    horizon_pos = max(horizon_pos, mix(low_pos, h, weight));
+                    horizon_pos = max(horizon_pos, raised);
                 } else {
-                    horizon_neg = max(horizon_neg, mix(low_neg, h, weight));
+                    horizon_neg = max(horizon_neg, raised);
                 }
             }
         }
@@ -146,8 +175,29 @@ void main() {
         h1 = angle_n + min(h1 - angle_n, 0.5 * PI);
         visibility += pn_len * gtao_arc(h0, h1, angle_n);
         open += pn_len * gtao_arc(angle_n - 0.5 * PI, angle_n + 0.5 * PI, angle_n);
+        if (BOUNCE != 0u) {
+            // Each side's hidden arc, from the tangent plane to its horizon, and what hides it.
+            float hidden[2] = float[2](gtao_half_arc(angle_n + 0.5 * PI, angle_n) - gtao_half_arc(h1, angle_n),
+                                       gtao_half_arc(angle_n - 0.5 * PI, angle_n) - gtao_half_arc(h0, angle_n));
+            for (int side = 0; side < 2; ++side) {
+                if (!(top_q[side].x >= 0.0 && hidden[side] > 0.0)) {
+                    continue;
+                }
+                ivec2 qp = clamp(ivec2(top_q[side]), ivec2(0), ivec2(size) - 1);
+                vec3 ns = oct_decode(frame_decode(texelFetch(gb_frame, qp, 0)).xy);
+                vec4 alb = texelFetch(gb_albedo, qp, 0);
+                uint material = min(uint(texelFetch(gb_surface, qp, 0).y + 0.5), frame.material_count - 1u);
+                bool woven = materials[material].metallic_roughness.z > 0.5;
+                // Its front faces this pixel: the sample's normal (world) against the way back.
+                bool facing = dot(mat3(frame.view) * ns, top_delta[side]) < 0.0;
+                if (facing && !woven) {
+                    bounce += pn_len * hidden[side] * alb.rgb * (1.0 - alb.a) * env_prefiltered(ns, 1.0);
+                }
+            }
+        }
     }
     visibility = open > 0.0 ? visibility / open : 1.0;
     float distance = orthographic ? -p.z : length(p);
     out_occlusion = vec2(clamp(visibility, 0.0, 1.0), max(distance, 1e-30));
+    out_bounce = vec4(open > 0.0 ? max(bounce / open, vec3(0.0)) : vec3(0.0), 0.0);
 }

@@ -119,7 +119,7 @@ impl Default for SceneSpec {
             background: Background::Env { blur: 0.0 },
             ibl: crate::env::DEFAULT_IBL,
             ibl_pool: crate::env::DEFAULT_POOL,
-            occlusion: Occlusion::Gtao { radius: None },
+            occlusion: Occlusion::DEFAULT,
             lights: LightsMode::Auto,
         }
     }

@@ -218,6 +218,13 @@ fn inputs(seed: u64, count: usize) -> Vec<EnvProbeInput> {
             light_pos: [0.0, 0.0, 0.0, if i % 5 == 2 { 1.0 } else { 0.0 }],
             p: v4(p, 0.0),
             pn: v4(unit(r.unit()), 0.0),
+            // The occluders' bounced light: none, then two colours.
+            indirect: [
+                0.3 * (i % 3) as f32,
+                0.2 * (i % 3) as f32,
+                0.05 * (i % 3) as f32,
+                0.0,
+            ],
         });
     }
     out

@@ -965,7 +965,7 @@ fn occlusion_where_a_surface_is_alone_changes_nothing() {
         width: 160,
         height: 96,
         environment: studio(),
-        occlusion: weft::render::Occlusion::Gtao { radius: None },
+        occlusion: weft::render::Occlusion::DEFAULT,
         ..Default::default()
     };
     let mut renderer = Renderer::new(common::context()).unwrap();

@@ -153,12 +153,15 @@ float sheen_layer_diffuse(float k, float e_v, float roughness) {
 // The glTF BRDF (with its extensions) under the environment: the prefiltered irradiance for the
 // diffuse, the split sum for the specular and the sheen (approx and fis), or Monte Carlo (mc,
 // `rot` its per-pixel rotation). ao: the occlusion texture (times the occlusion pass's
-// visibility); bounce: the pass's coloured multi-bounce for diffuse light. Anisotropy bends the
+// visibility); bounce: the pass's coloured multi-bounce for diffuse light; indirect: more light
+// from the occluders (irradiance/π: what the occlusion pass measured on screen beyond the
+// multi-bounce fit, times the occlusion texture; 0 without it), which the diffuse and the sheen
+// take besides the environment's. Anisotropy bends the
 // look-up normal (McAuley's bent reflection vector, as Filament and the glTF Sample Viewer do) at
 // approx and is sampled at fis; the sheen takes the irradiance times its albedo, and scales the
 // layers below it (sheen_layer_diffuse for the diffuse, 1 - max(sheen)·E(n·v) for the specular).
 // e_v: the sheen's albedo E(n·v) (0 without sheen), which the lamps' loop shares.
-vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, uint mode, uint samples, vec2 rot) {
+vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, vec3 indirect, float e_v, uint mode, uint samples, vec2 rot) {
     vec3 base = s.base;
     float metallic = s.metallic;
     float roughness = s.roughness;
@@ -227,13 +230,12 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
     vec3 r = dominant_dir(n, reflect(-v, bent), lookup_roughness);
     vec3 prefiltered = env_prefiltered(r, lookup_roughness);
     vec3 irradiance = env_irradiance(n);
-    vec3 diffuse = irradiance * base * (1.0 - metallic) * (1.0 - s.specular * max3(dielectric))
-                 * (1.0 - s.transmission);
+    vec3 diffuse = (irradiance * ao * bounce + indirect) * base * (1.0 - metallic)
+                 * (1.0 - s.specular * max3(dielectric)) * (1.0 - s.transmission);
     // fis: an anisotropic lobe is sampled (the bent normal above stays approx's).
     vec3 specular = mode == 2u && s.anisotropy > 0.0 ? aniso_env_specular(n, v, s, ess, samples)
                                                      : prefiltered * spec_albedo;
     specular *= specular_occlusion(nv, ao, roughness);
-    diffuse *= ao * bounce;
     if (!has_sheen) {
         return diffuse + specular;
     }
@@ -246,7 +248,7 @@ vec3 pbr_env(vec3 n, vec3 v, GltfSurface s, float ao, vec3 bounce, float e_v, ui
     float k = max3(s.sheen);
     return diffuse * sheen_layer_diffuse(k, e_v, s.sheen_roughness)
          + specular * max(1.0 - k * e_v, 0.0)
-         + s.sheen * e_v * irradiance * cone_occlusion(nv, ao, s.sheen_roughness);
+         + s.sheen * e_v * (irradiance * cone_occlusion(nv, ao, s.sheen_roughness) + indirect);
 }
 
 // The weft lobe's share of the mixture the samples draw from: its thread coverage's share,
@@ -507,12 +509,14 @@ vec3 fabric_env_back(mat3 tbn, uint mode, uint samples, vec2 rot) {
 // The fabric's environment light for one coverage: the diffuse with the threads' albedo and the
 // thread shadowing (as for lamps), each lobe weighted by its thread's coverage, and for a sheet
 // (`sheets`: the shader draws fabric sheets) the light its threads pass from its far side (back:
-// fabric_env_back; 0 for any other cloth).
-vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, vec3 back, float ao, vec3 bounce, float nv, bool sheets) {
+// fabric_env_back; 0 for any other cloth). indirect: as pbr_env's, for the diffuse (times its
+// diffuse factor at nv).
+vec3 fabric_env_combine(vec4 coverage, GpuFabric f, vec3 diffuse, vec3 weft, vec3 warp, vec3 back, float ao, vec3 bounce, vec3 indirect, float nv, bool sheets) {
     vec3 rd = fabric_albedo(coverage, sheets ? fabric_reflecting(f) : f);
     // (Every accuracy level uses the two lobes here: the environment integral of one lobe with
     // averaged exponents would need a sampler of its own.)
-    vec3 radiance = rd * diffuse * ao * bounce + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
+    vec3 radiance = rd * (diffuse * ao * bounce + indirect * fabric_diffuse_albedo(f, nv))
+                  + (coverage.y * weft + coverage.x * warp) * specular_occlusion(nv, ao, 0.5);
     if (sheets) {
         radiance += back * fabric_passed(coverage, f);
     }

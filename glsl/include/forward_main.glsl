@@ -156,7 +156,7 @@ void main() {
     vec4 emissive = cover >= 0.0 ? vec4(s.emissive.rgb * cover, s.emissive.a) : s.emissive;
     vec3 radiance = shade_surface(in_world_pos, v, s.albedo, frame_decode(s.frame), s.surface, s.fabric,
                                   emissive, s.specular, s.transmission, s.attenuation, s.coat,
-                                  s.coat_normal, s.diffuse_transmission, s.iridescence, vec3(1.0));
+                                  s.coat_normal, s.diffuse_transmission, s.iridescence, vec3(1.0), vec3(0.0));
     radiance = all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0);
     // alphaMode BLEND blends by the base colour's alpha; a transmissive surface that is not BLEND
     // covers what is behind (its transmitted light is in its radiance).

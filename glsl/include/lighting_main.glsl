@@ -40,9 +40,11 @@ layout(constant_id = 8) const uint IBL_SAMPLES = 16u;
 // 1: some material is unlit (KHR_materials_unlit, MATERIAL_UNLIT): its pixels show the base colour
 // from the albedo target as their radiance, unlit; 0: the check is compiled out.
 layout(constant_id = 9) const uint UNLIT = 0u;
-// 1: the occlusion pass ran (an environment lights the scene, --occlusion gtao): its visibility,
-// raised for light bounced between occluders, multiplies the material's occlusion texture in the
-// environment's light; 0: it is not read.
+// 1: the occlusion pass ran (an environment lights the scene, --occlusion gtao-nobounce): its
+// visibility, raised for light bounced between occluders (a fit), multiplies the material's
+// occlusion texture in the environment's light; 2 (--occlusion gtao): the same, and where the
+// occluders' light the pass measured on screen exceeds what the fit gives back, the excess is
+// added to the diffuse and sheen light; 0: it is not read.
 layout(constant_id = 10) const uint OCCLUSION = 0u;
 // 1: a debug view (frame.debug_view) may show a G-buffer target instead of the lit image; 0: that
 // code is compiled out.
@@ -102,6 +104,7 @@ layout(set = 0, binding = 24) uniform sampler2D gb_emissive;  // G-buffer emissi
 layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
 layout(set = 0, binding = 26) uniform sampler2D gb_specular;  // G-buffer specular (KHR_materials_specular: rgb F0, a weight)
 layout(set = 0, binding = 27) uniform sampler2D screen_occlusion;  // the occlusion pass's visibility of the environment and view distance per 2 x 2 pixels (RG16F, half resolution, occlusion_blur.frag); any image when OCCLUSION = 0
+layout(set = 0, binding = 29) uniform sampler2D screen_bounce;  // the occlusion pass's bounced light from the occluders per 2 x 2 pixels (RGBA16F: rgb irradiance/π, half resolution, occlusion_blur.frag); any image when OCCLUSION < 2
 layout(set = 0, binding = 28) uniform usampler2D fabric_lobe_sums;  // fabric_lobes.frag's lobe sums per pixel (RGBA32_UINT, fabric_lobe_pack of include/env_light.glsl) when POOL ≥ 1; any unsigned-integer image otherwise
 
 layout(location = 0) in vec2 in_uv;
@@ -145,12 +148,14 @@ void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels) {
 // The occlusion pass's visibility at pixel px, whose view distance is `dist`: the half-resolution
 // estimates around it (each made at the top-left pixel of its 2 x 2 block), bilinearly, each
 // weighted by how close its distance is to the pixel's (an edge does not take the visibility of
-// what is behind it); 1 where no estimate lies on the pixel's surface.
-float screen_visibility(ivec2 px, float dist) {
+// what is behind it); 1 where no estimate lies on the pixel's surface. `bounced`: the occluders'
+// light (OCCLUSION 2) with the same weights; 0 where no estimate lies on the surface.
+float screen_visibility(ivec2 px, float dist, out vec3 bounced) {
     ivec2 size = textureSize(screen_occlusion, 0);
     ivec2 c = px / 2;
     vec2 f = vec2(px & 1) * 0.5;
     float sum = 0.0;
+    vec3 bounce_sum = vec3(0.0);
     float weights = 0.0;
     for (int y = 0; y < 2; ++y) {
         for (int x = 0; x < 2; ++x) {
@@ -161,9 +166,13 @@ float screen_visibility(ivec2 px, float dist) {
             vec2 s = texelFetch(screen_occlusion, min(c + ivec2(x, y), size - 1), 0).rg;
             float w = s.y > 0.0 ? bilinear * clamp(1.0 - abs(s.y - dist) / (0.05 * dist), 0.0, 1.0) : 0.0;
             sum += w * s.x;
+            if (OCCLUSION >= 2u) {
+                bounce_sum += w * texelFetch(screen_bounce, min(c + ivec2(x, y), size - 1), 0).rgb;
+            }
             weights += w;
         }
     }
+    bounced = weights > 1e-6 ? bounce_sum / weights : vec3(0.0);
     return weights > 1e-6 ? sum / weights : 1.0;
 }
 
@@ -200,7 +209,8 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
         // occlusion texture, before the multi-bounce correction.
         vec2 ndc = (vec2(px) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
         vec4 hp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
-        float screen = OCCLUSION != 0u ? screen_visibility(px, view_distance(hp.xyz / hp.w)) : 1.0;
+        vec3 bounced;
+        float screen = OCCLUSION != 0u ? screen_visibility(px, view_distance(hp.xyz / hp.w), bounced) : 1.0;
         return vec3(screen * texelFetch(gb_emissive, px, 0).a);
     }
     if (view == DEBUG_DEPTH) {
@@ -252,21 +262,32 @@ void main() {
     vec4 surface = texelFetch(gb_surface, px, 0);
     vec4 emissive_ao = texelFetch(gb_emissive, px, 0);
     vec3 bounce = vec3(1.0);
+    vec3 indirect = vec3(0.0);
     if (OCCLUSION != 0u) {
         // Light bounced between occluders takes their colour (the fit takes the surroundings'
         // albedo to be the surface's): the diffuse light gets each channel's own multi-bounce,
         // the specular occlusion the grey one of the albedo's luminance.
-        float visibility = screen_visibility(px, view_distance(p));
+        vec3 bounced;
+        float visibility = screen_visibility(px, view_distance(p), bounced);
         float grey = gtao_multibounce(visibility, dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722)));
         vec3 coloured = vec3(gtao_multibounce(visibility, albedo.r), gtao_multibounce(visibility, albedo.g),
                              gtao_multibounce(visibility, albedo.b));
+        if (OCCLUSION >= 2u) {
+            // The occluders' own light that the screen shows (occlusion.frag: one bounce of the
+            // environment's off them), where it exceeds what the fit gives back: per channel, the
+            // diffuse light is the larger of the fit's and the visible environment's plus the
+            // measured bounce (the fit knows the bounces the screen cannot show; the screen, the
+            // occluders' real colour and light). Both under the material's occlusion texture.
+            vec3 e = env_irradiance(oct_decode(fr.xy));
+            indirect = max(bounced - e * (coloured - visibility), vec3(0.0)) * emissive_ao.a;
+        }
         emissive_ao.a *= grey;
         bounce = grey > 1e-4 ? coloured / grey : vec3(1.0);
     }
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),
                                   emissive_ao, texelFetch(gb_specular, px, 0),
                                   vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0),
-                                  vec4(0.0), bounce);
+                                  vec4(0.0), bounce, indirect);
     // Never NaN or Inf into the image.
     out_color = vec4(all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0), 1.0);
 }

@@ -1,21 +1,24 @@
 // Screen-space occlusion of the environment (the occlusion pass, glsl/occlusion.frag): the
 // formulas of ground-truth ambient occlusion (GTAO; Jimenez, Wu, Pesce, Jarabo 2016, "Practical
 // Real-Time Strategies for Accurate Indirect Occlusion"), written for weft. Rust twins:
-// weft::reference::ibl_twin (gtao_arc, gtao_multibounce; compared on the GPU by ibl_probe.comp).
+// weft::reference::ibl_twin (gtao_half_arc, gtao_arc, gtao_multibounce; compared on the GPU by ibl_probe.comp).
 #ifndef WEFT_OCCLUSION_GLSL
 #define WEFT_OCCLUSION_GLSL
 
-// The cosine-weighted visible arc of one slice of the hemisphere:
-// ∫ from h0 to h1 of cos(θ − n)·|sin θ| dθ, θ the angle from the view vector within the slice's
-// plane (positive towards the slice's direction), n the angle of the normal projected into the
-// plane, h0 ≤ 0 ≤ h1 the two horizons (within n ± π/2). An unoccluded slice (h0 = n − π/2,
+// One side of a slice's cosine-weighted arc: ∫ from 0 to h of cos(θ − n)·|sin θ| dθ (for h < 0,
+// from h to 0), θ the angle from the view vector within the slice's plane (positive towards the
+// slice's direction), n the angle of the normal projected into the plane. It grows with |h|; the
+// part of a side between two horizons a and b is gtao_half_arc(a, n) − gtao_half_arc(b, n).
+float gtao_half_arc(float h, float n) {
+    return 0.25 * (cos(n) + 2.0 * h * sin(n) - cos(2.0 * h - n));
+}
+
+// The cosine-weighted visible arc of one slice of the hemisphere between the horizons
+// h0 ≤ 0 ≤ h1 (within n ± π/2): both sides' gtao_half_arc. An unoccluded slice (h0 = n − π/2,
 // h1 = n + π/2) gives cos n + n·sin n; weighted by the projected normal's length and averaged
 // over the slices' directions, the unoccluded hemisphere gives 1.
 float gtao_arc(float h0, float h1, float n) {
-    float cn = cos(n);
-    float sn = sin(n);
-    return 0.25 * (cn + 2.0 * h0 * sn - cos(2.0 * h0 - n))
-         + 0.25 * (cn + 2.0 * h1 * sn - cos(2.0 * h1 - n));
+    return gtao_half_arc(h0, n) + gtao_half_arc(h1, n);
 }
 
 // The light that bounces between occluders and comes back (Jimenez et al. 2016, §5: a cubic fit

@@ -174,10 +174,12 @@ void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels);
 // transmission, attenuation, coat_params, coat_n, dtrans, iridescence: surface.glsl's GSurface
 // fields (no transmission, coat, diffuse transmission or film from the G-buffer, which holds none).
 // bounce: per channel, what the occlusion pass's coloured multi-bounce makes of emissive_ao.a
-// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass).
+// for diffuse light (its ratio to the grey bounce in ao; 1 without the pass); indirect: the light
+// the occluders send back (irradiance/π; pbr_env; 0 without the pass's bounce).
 vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabric_texel,
                    vec4 emissive_ao, vec4 specular, vec4 transmission, vec4 attenuation,
-                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce) {
+                   vec4 coat_params, vec3 coat_n, vec4 dtrans, vec4 iridescence, vec3 bounce,
+                   vec3 indirect) {
     vec3 n = oct_decode(fr.xy);
     vec3 base = albedo.rgb;
     float metallic = albedo.a;
@@ -245,7 +247,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
             radiance += classic_radiance(p, ambient, tbn, k2, f, receives);
             if (IBL != 0u) {
                 // The comparison models take only the environment's diffuse light.
-                radiance += fabric_mean_rd(f) * fabric_env_diffuse(tbn, k2, f, IBL, IBL_SAMPLES, ibl_rotation()) * ao * bounce;
+                radiance += fabric_mean_rd(f) * (fabric_env_diffuse(tbn, k2, f, IBL, IBL_SAMPLES, ibl_rotation()) * ao * bounce + indirect);
             }
         } else if (ACCURACY == 3u) {
             Weave w = weave_from_fabric(f);
@@ -258,7 +260,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
                     vec4 c = weave_point(w, s.x, s.y);
                     sum += fabric_radiance(p, ambient, ambient_back, tbn, k2, c, f, receives);
                     if (IBL != 0u) {
-                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, env_back, ao, bounce, nv, FABRIC_SHEETS != 0u);
+                        sum += fabric_env_combine(c, f, env_diffuse, env_weft, env_warp, env_back, ao, bounce, indirect, nv, FABRIC_SHEETS != 0u);
                     }
                 }
             }
@@ -266,7 +268,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         } else {
             radiance += fabric_radiance(p, ambient, ambient_back, tbn, k2, g, f, receives);
             if (IBL != 0u) {
-                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, env_back, ao, bounce, nv, FABRIC_SHEETS != 0u);
+                radiance += fabric_env_combine(g, f, env_diffuse, env_weft, env_warp, env_back, ao, bounce, indirect, nv, FABRIC_SHEETS != 0u);
             }
         }
     } else {
@@ -301,7 +303,7 @@ vec3 shade_surface(vec3 p, vec3 v, vec4 albedo, vec4 fr, vec4 surface, vec4 fabr
         vec3 under = emissive_ao.rgb;
         radiance -= emissive_ao.rgb;
         if (IBL != 0u) {
-            under += pbr_env(n, v, s, ao, bounce, e_v, IBL, IBL_SAMPLES, ibl_rotation());
+            under += pbr_env(n, v, s, ao, bounce, indirect, e_v, IBL, IBL_SAMPLES, ibl_rotation());
         } else {
             // Hemispherical ambient, so surfaces facing away from every light are not pure black.
             under += ambient * base * (1.0 - metallic) * (1.0 - s.transmission) + ambient * mix(vec3(0.04), base, metallic) * (1.0 - roughness) * 0.5;

@@ -131,7 +131,7 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         ..base.clone()
     };
     let gtao = RenderOptions {
-        occlusion: crate::render::Occlusion::Gtao { radius: None },
+        occlusion: crate::render::Occlusion::DEFAULT,
         ..studio.clone()
     };
     let cases: [(&str, &str, &Scene, &RenderOptions, Force); 9] = [

@@ -258,9 +258,13 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          through the view vector turned by a 4 x 4 pattern of estimates, the \
          highest horizon on each side among STEPS depth samples out to a world radius, and the \
          cosine-weighted visible arc between them. Reads the frame uniform (set 0 binding 0), the \
-         G-buffer normal (21) and the half-resolution depth of step 1 (26); push `mat4 view_from_clip` (the inverse projection) \
+         G-buffer normal (21) and the half-resolution depth of step 1 (26), and with BOUNCE the \
+         material records (1), the prefiltered environment cube (14), the G-buffer albedo (20) \
+         and surface (22); push `mat4 view_from_clip` (the inverse projection) \
          and `vec4 params` (radius, falloff scale and offset; 80 bytes, fragment stage); writes \
-         visibility and view distance to an `R16G16_SFLOAT` target for `occlusion_blur.frag`.",
+         visibility and view distance to an `R16G16_SFLOAT` target (location 0) and the \
+         occluders' bounced light (rgb, 0 without BOUNCE) to an `R16G16B16A16_SFLOAT` target \
+         (location 1) for `occlusion_blur.frag`.",
     ),
     (
         "occlusion_blur.frag",
@@ -268,7 +272,9 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          of the 4 x 4 estimates of `occlusion.frag` (set 0 binding 28) around each, weighted by \
          how close their view distances lie to its surface so that edges stay sharp, into an \
          `R16G16_SFLOAT` target (visibility, view distance) that `lighting.frag` reads at binding \
-         27 when OCCLUSION = 1, bringing it to full resolution. Drawn with `fullscreen.vert`; no \
+         27 when OCCLUSION ≥ 1, bringing it to full resolution, and with BOUNCE the same mean of \
+         the bounced light (binding 29) into an `R16G16B16A16_SFLOAT` target (location 1) that \
+         `lighting.frag` reads at binding 29 when OCCLUSION = 2. Drawn with `fullscreen.vert`; no \
          push constants.",
     ),
     (
@@ -370,9 +376,11 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),
     ("forward.frag", 20, "TRANSMISSION: 1 reads the backdrop for KHR_materials_transmission surfaces (`Material.extra.w` flag 32); 0 (default) compiles that out"),
     ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 4) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
-    ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 0 (default) uses the texture alone and reads nothing at binding 27"),
+    ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 2 also adds the occluders' bounced light (binding 29) where it exceeds that; 0 (default) uses the texture alone and reads nothing at bindings 27 and 29"),
     ("occlusion.frag", 0, "SLICES: slices per pixel (default 2; the blur averages 16 x SLICES directions)"),
     ("occlusion.frag", 1, "STEPS: depth samples per side of a slice (default 6)"),
+    ("occlusion.frag", 2, "BOUNCE: 1 also measures the occluders' bounced light (location 1); 0 (default) writes 0 there and reads nothing at bindings 1, 14, 20 and 22"),
+    ("occlusion_blur.frag", 2, "BOUNCE: 1 also blurs the bounced light (binding 29, location 1); 0 (default) writes 0 there"),
     ("lighting.frag", 11, "DEBUG_VIEWS: 1 (default) shows the G-buffer target `FrameData.debug_view` names instead of the lit image when it is not 0; 0 compiles the debug views out"),
     ("lighting.frag", 12, "PIXEL_KINDS: bit mask of the kinds of pixel shaded: 1 empty pixels (the background), 2 fabric by the woven model, 4 glTF materials (and fabric with FABRIC_AS_PBR); the other kinds' code is compiled out, for pipelines each drawn over its own pixels (by a stencil test, say). A pipeline without 4 shades every surface pixel as fabric, one without 2 as glTF (default 7, all)"),
     ("lighting.frag", 13, "GLTF_FEATURES: bit mask of the glTF extensions whose lighting is compiled in: 1 KHR_materials_sheen (the G-buffer's fabric target holds its colour and roughness), 2 KHR_materials_anisotropy (the surface target's z its strength); a clear bit reads that extension as absent (default 3, both)"),

@@ -261,6 +261,7 @@ pub fn pbr_env(
     s: &GltfSurface,
     ao: f32,
     bounce: Vec3,
+    indirect: Vec3,
     e_v: f32,
     mode: u32,
     samples: u32,
@@ -362,14 +363,13 @@ pub fn pbr_env(
         scale(base, 1.0 - metallic),
         (1.0 - s.specular * max3(dielectric)) * (1.0 - s.transmission),
     );
-    diffuse = mul(irradiance, diffuse);
+    diffuse = mul(add(mul(scale(irradiance, ao), bounce), indirect), diffuse);
     let mut specular = if mode == 2 && s.anisotropy > 0.0 {
         aniso_env_specular(env, n, v, s, ess, samples)
     } else {
         mul(prefiltered, spec_albedo)
     };
     specular = scale(specular, ibl_twin::specular_occlusion(nv, ao, roughness));
-    diffuse = mul(scale(diffuse, ao), bounce);
     if !has_sheen {
         return add(diffuse, specular);
     }
@@ -380,8 +380,17 @@ pub fn pbr_env(
             scale(specular, (1.0 - k * e_v).max(0.0)),
         ),
         scale(
-            mul(s.sheen, irradiance),
-            e_v * ibl_twin::cone_occlusion(nv, ao, s.sheen_roughness),
+            mul(
+                s.sheen,
+                add(
+                    scale(
+                        irradiance,
+                        ibl_twin::cone_occlusion(nv, ao, s.sheen_roughness),
+                    ),
+                    indirect,
+                ),
+            ),
+            e_v,
         ),
     )
 }
@@ -817,6 +826,7 @@ pub fn fabric_env_combine(
     back: Vec3,
     ao: f32,
     bounce: Vec3,
+    indirect: Vec3,
     nv: f32,
     sheets: bool,
 ) -> Vec3 {
@@ -827,7 +837,13 @@ pub fn fabric_env_combine(
     );
     let lobes = add(scale(weft, coverage[1]), scale(warp, coverage[0]));
     let mut radiance = add(
-        mul(scale(mul(rd, diffuse), ao), bounce),
+        mul(
+            rd,
+            add(
+                mul(scale(diffuse, ao), bounce),
+                scale(indirect, ibl_twin::fabric_diffuse_albedo(f, nv)),
+            ),
+        ),
         scale(lobes, ibl_twin::specular_occlusion(nv, ao, 0.5)),
     );
     if sheets {
@@ -897,7 +913,7 @@ pub fn stand_in_compare(uvz: [f32; 3]) -> f32 {
     (8.0 * (uvz[0] - 0.5 * uvz[1]) - uvz[2] * 2.0 + 0.5).clamp(0.0, 1.0)
 }
 
-/// One input of `glsl/env_probe.comp` (std430, 464 bytes; `EnvProbeInput` there, whose comments
+/// One input of `glsl/env_probe.comp` (std430, 480 bytes; `EnvProbeInput` there, whose comments
 /// say what each field feeds).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -922,8 +938,9 @@ pub struct EnvProbeInput {
     pub light_pos: [f32; 4],
     pub p: [f32; 4],
     pub pn: [f32; 4],
+    pub indirect: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<EnvProbeInput>() == 464);
+const _: () = assert!(std::mem::size_of::<EnvProbeInput>() == 480);
 
 /// One output of `glsl/env_probe.comp` (std430, 112 bytes; `EnvProbeOutput` there).
 ///
@@ -1040,6 +1057,7 @@ pub fn env_probe_eval(
         &s,
         inp.n[3],
         xyz(inp.bounce),
+        xyz(inp.indirect),
         inp.v[3],
         mode,
         samples,
@@ -1100,6 +1118,7 @@ pub fn env_probe_eval(
         back,
         inp.frame_n[3],
         xyz(inp.bounce),
+        xyz(inp.indirect),
         inp.bounce[3],
         inp.light_pos[3] > 0.5,
     );

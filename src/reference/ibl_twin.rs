@@ -8,7 +8,7 @@
 //! three ways:
 //! - at `f32` it is the twin ([`ggx_sample_h`], [`as_sample_h`], [`cosine_sample`], [`fis_lod`],
 //!   [`specular_occlusion`], [`cone_occlusion`], [`fabric_diffuse_albedo`], [`equirect_uv`], [`env_dir`],
-//!   [`gtao_arc`], [`gtao_multibounce`]);
+//!   [`gtao_half_arc`], [`gtao_arc`], [`gtao_multibounce`]);
 //! - at `f64` (with the ideal constants: π, not its f32 rounding) it is the exact formula;
 //! - at [`Iv`] (interval arithmetic) it is the error analysis: an enclosure of every value a
 //!   conforming implementation may return for that input (see below).
@@ -69,8 +69,8 @@
 //!   rounds what the twin rounds); the error grows where a cap is small, in the ratio of two
 //!   `1 - cos` and of two smoothsteps; the enclosure carries it.
 //! - `fabric_diffuse_albedo`: a handful of roundings of numbers ≤ 1.
-//! - `gtao_arc`: `sin`/`cos`'s 2^-11 absolute, times the angles (≤ π) that multiply them, in a
-//!   sum of terms ≤ 1: absolute, a few 2^-11.
+//! - `gtao_arc` and `gtao_half_arc` (one of its two terms): `sin`/`cos`'s 2^-11 absolute, times
+//!   the angles (≤ π) that multiply them, in a sum of terms ≤ 1: absolute, a few 2^-11.
 //! - `gtao_multibounce`: a cubic's few roundings of numbers ≤ 3, then `max` and `clamp`.
 //! - `cube_texel_dir`: the division in `(t + ½)/size`, then `normalize` (2 + 2.5 + 2.5 ulp).
 //! - `equirect_uv`: `atan`'s and `acos`'s (inherited from `atan`) 4096 ulp; u is compared modulo
@@ -133,7 +133,7 @@ pub struct IblProbeInput {
 /// | 80  | `cube` | `cube_texel_dir` x | y | z | 0 |
 /// | 96  | `uv` | `hammersley` x | y | `equirect_uv` u | v |
 /// | 112 | `scalars` | `fis_lod` | `specular_occlusion` | `fabric_diffuse_albedo` | `cone_occlusion` |
-/// | 128 | `occlusion` | `gtao_arc` | `gtao_multibounce` | 0 | 0 |
+/// | 128 | `occlusion` | `gtao_arc` | `gtao_multibounce` | `gtao_half_arc`(h0, n) | 0 |
 /// | 144 | `dominant` | `dominant_dir` x | y | z | 0 |
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -174,7 +174,7 @@ pub const IBL_PROBE_OUTPUT_NAMES: [&str; IBL_PROBE_OUTPUTS] = [
     "cube_texel_dir.x", "cube_texel_dir.y", "cube_texel_dir.z", "cube_texel_dir.w",
     "hammersley.x", "hammersley.y", "equirect_uv.u", "equirect_uv.v",
     "fis_lod", "specular_occlusion", "fabric_diffuse_albedo", "cone_occlusion",
-    "gtao_arc", "gtao_multibounce", "occlusion.z", "occlusion.w",
+    "gtao_arc", "gtao_multibounce", "gtao_half_arc", "occlusion.w",
     "dominant_dir.x", "dominant_dir.y", "dominant_dir.z", "dominant_dir.w",
 ];
 
@@ -395,13 +395,15 @@ pub mod formula {
         (one - rs) * (one - b2 * b2 * b)
     }
 
+    /// `gtao_half_arc` (occlusion.glsl).
+    pub fn gtao_half_arc<T: Real>(h: T, n: T) -> T {
+        let two = T::lit(2.0);
+        T::lit(0.25) * (n.cos() + two * h * n.sin() - (two * h - n).cos())
+    }
+
     /// `gtao_arc` (occlusion.glsl).
     pub fn gtao_arc<T: Real>(h0: T, h1: T, n: T) -> T {
-        let quarter = T::lit(0.25);
-        let two = T::lit(2.0);
-        let (cn, sn) = (n.cos(), n.sin());
-        quarter * (cn + two * h0 * sn - (two * h0 - n).cos())
-            + quarter * (cn + two * h1 * sn - (two * h1 - n).cos())
+        gtao_half_arc(h0, n) + gtao_half_arc(h1, n)
     }
 
     /// `gtao_multibounce` (occlusion.glsl).
@@ -506,6 +508,12 @@ pub fn fabric_diffuse_albedo(f: &GpuFabric, nk2: f32) -> f32 {
     formula::fabric_diffuse_albedo(f.rs, f.flags, nk2)
 }
 
+/// `gtao_half_arc` of occlusion.glsl: one side of a slice's cosine-weighted arc, from the view
+/// vector to the horizon `h` (radians, signed by side), the normal's projection at angle `n`.
+pub fn gtao_half_arc(h: f32, n: f32) -> f32 {
+    formula::gtao_half_arc(h, n)
+}
+
 /// `gtao_arc` of occlusion.glsl: the cosine-weighted visible arc of a slice between horizons
 /// `h0 ≤ 0 ≤ h1`, the normal's projection at angle `n` (radians from the view vector).
 pub fn gtao_arc(h0: f32, h1: f32, n: f32) -> f32 {
@@ -558,7 +566,7 @@ pub fn ibl_probe_cpu(inp: &IblProbeInput) -> IblProbeOutput {
         occlusion: [
             gtao_arc(inp.arc[0], inp.arc[1], inp.arc[2]),
             gtao_multibounce(inp.misc[2], inp.misc[3]),
-            0.0,
+            gtao_half_arc(inp.arc[0], inp.arc[2]),
             0.0,
         ],
         dominant: v4(
@@ -626,7 +634,7 @@ pub fn ibl_probe_eval<T: Real>(inp: &IblProbeInput) -> [T; IBL_PROBE_OUTPUTS] {
         formula::cone_occlusion(l(inp.lod[2]), l(inp.lod[3]), l(inp.misc[0])),
         formula::gtao_arc(l(inp.arc[0]), l(inp.arc[1]), l(inp.arc[2])),
         formula::gtao_multibounce(l(inp.misc[2]), l(inp.misc[3])),
-        zero,
+        formula::gtao_half_arc(l(inp.arc[0]), l(inp.arc[2])),
         zero,
         dom[0],
         dom[1],
@@ -756,6 +764,34 @@ mod tests {
         const MAX: f64 = 0.13;
         assert!(worst < MAX, "worst {worst}");
         eprintln!("cone_occlusion against the exact caps: worst {worst:.4}");
+    }
+
+    #[test]
+    fn gtao_half_arc_is_its_integral() {
+        // ∫ from 0 to h of cos(θ − n)·|sin θ| dθ by the midpoint rule (f64, 20,000 steps), for
+        // horizons on both sides and normals across the half-circle; and the two halves make
+        // the unoccluded slice's cos n + n·sin n.
+        let pi = std::f64::consts::PI;
+        for &n in &[-1.2f64, -0.4, 0.0, 0.3, 1.0, 1.5] {
+            for &h in &[-2.5f64, -1.0, -0.2, 0.0, 0.4, 1.3, 2.9] {
+                let steps = 20_000;
+                let dt = h / steps as f64;
+                let exact: f64 = (0..steps)
+                    .map(|i| {
+                        let t = (i as f64 + 0.5) * dt;
+                        (t - n).cos() * t.sin().abs() * dt.abs()
+                    })
+                    .sum();
+                let got = formula::gtao_half_arc(h, n);
+                assert!((got - exact).abs() < 1e-6, "n {n} h {h}: {got} vs {exact}");
+                assert!((gtao_half_arc(h as f32, n as f32) as f64 - exact).abs() < 1e-5);
+            }
+            let open = formula::gtao_arc(n - 0.5 * pi, n + 0.5 * pi, n);
+            assert!(
+                (open - (n.cos() + n * n.sin())).abs() < 1e-12,
+                "n {n}: {open}"
+            );
+        }
     }
 
     #[test]

@@ -464,7 +464,9 @@ impl Renderer {
         if self.ctx.info().depth_stencil {
             self.antialias.make(&self.ctx, true)?;
         }
-        self.occlusion.make(&self.ctx, true)?;
+        for bounce in [false, true] {
+            self.occlusion.make(&self.ctx, true, bounce)?;
+        }
         self.shadow.make_mask(&self.ctx, false)?;
         let mut all = vec![self.weave.pipeline()];
         all.extend(self.tonemap.pipelines());
@@ -582,6 +584,7 @@ impl Renderer {
                         occlusion.make(
                             ctx,
                             plan.occlusion.as_ref().is_some_and(|o| !o.covered_only),
+                            plan.occlusion.as_ref().is_some_and(|o| o.bounce),
                         )?;
                     }
                     Made::Fixed
@@ -1230,6 +1233,10 @@ impl Renderer {
                         targets,
                         nearest: &d.nearest,
                         covered_only: plan.occlusion.as_ref().is_none_or(|o| o.covered_only),
+                        bounce: plan.occlusion.as_ref().is_some_and(|o| o.bounce),
+                        materials: &gpu.materials,
+                        env_specular,
+                        env_sampler: &self.env.sampler,
                     },
                 )?),
                 Pass::Lighting => recorded.push(self.lighting.record(
@@ -1242,6 +1249,10 @@ impl Renderer {
                         nearest: &d.nearest,
                         occlusion: match &targets.occlusion {
                             Some(o) if plan.runs(Pass::Occlusion) => &o.visibility,
+                            _ => &d.white,
+                        },
+                        bounce: match &targets.occlusion {
+                            Some(o) if plan.runs(Pass::Occlusion) => &o.bounce,
                             _ => &d.white,
                         },
                         lobes: targets.lobes.as_ref(),

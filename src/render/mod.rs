@@ -452,41 +452,69 @@ pub enum Occlusion {
     None,
     /// Ground-truth ambient occlusion from the depth buffer (glsl/occlusion.frag) out to
     /// `radius` world units; None: 0.3 of the diagonal of what casts shadows (of the whole
-    /// scene when nothing casts).
-    Gtao { radius: Option<f32> },
+    /// scene when nothing casts). The light bounced between occluders is given back by a fit
+    /// from the surface's own albedo (Jimenez et al. 2016); with `bounce` (`gtao`), also the
+    /// occluders' own light where the screen shows more of it than the fit gives (one bounce of
+    /// the environment's diffuse light off what hides it); `gtao-nobounce`: the fit alone.
+    Gtao { radius: Option<f32>, bounce: bool },
 }
 
 impl Occlusion {
     /// The radius of `Gtao { radius: None }`, as a fraction of the scene's diagonal.
     pub const RADIUS_OF_DIAGONAL: f32 = 0.3;
 
-    /// `none`, `gtao` or `gtao:R` (R > 0, world units).
+    /// The default of `weft render` and `weft view`: GTAO with the occluders' bounce, at the
+    /// scene's radius.
+    pub const DEFAULT: Occlusion = Occlusion::Gtao {
+        radius: None,
+        bounce: true,
+    };
+
+    /// `none`, `gtao`, `gtao:R` (R > 0, world units), `gtao-nobounce` or `gtao-nobounce:R`.
     pub fn parse(text: &str) -> crate::Result<Occlusion> {
         let bad = || {
             Error::input(format!(
-                "unknown occlusion '{text}': choose none, gtao (radius 0.3 of the scene's size) or gtao:R (R world units, R > 0, e.g. gtao:0.5)"
+                "unknown occlusion '{text}': choose none, gtao (radius 0.3 of the scene's size, with the occluders' bounced light), gtao:R (R world units, R > 0, e.g. gtao:0.5), or gtao-nobounce / gtao-nobounce:R (without the bounce)"
             ))
         };
-        match text {
-            "none" => Ok(Occlusion::None),
-            "gtao" => Ok(Occlusion::Gtao { radius: None }),
-            _ => {
-                let r = text.strip_prefix("gtao:").ok_or_else(bad)?;
-                let r: f32 = r.parse().map_err(|_| bad())?;
-                if r.is_finite() && r > 0.0 {
-                    Ok(Occlusion::Gtao { radius: Some(r) })
-                } else {
-                    Err(bad())
-                }
-            }
+        if text == "none" {
+            return Ok(Occlusion::None);
+        }
+        let (rest, bounce) = match text.strip_prefix("gtao-nobounce") {
+            Some(rest) => (rest, false),
+            None => (text.strip_prefix("gtao").ok_or_else(bad)?, true),
+        };
+        if rest.is_empty() {
+            return Ok(Occlusion::Gtao {
+                radius: None,
+                bounce,
+            });
+        }
+        let r: f32 = rest
+            .strip_prefix(':')
+            .ok_or_else(bad)?
+            .parse()
+            .map_err(|_| bad())?;
+        if r.is_finite() && r > 0.0 {
+            Ok(Occlusion::Gtao {
+                radius: Some(r),
+                bounce,
+            })
+        } else {
+            Err(bad())
         }
     }
 
     pub fn name(self) -> String {
         match self {
             Occlusion::None => "none".into(),
-            Occlusion::Gtao { radius: None } => "gtao".into(),
-            Occlusion::Gtao { radius: Some(r) } => format!("gtao:{r}"),
+            Occlusion::Gtao { radius, bounce } => {
+                let method = if bounce { "gtao" } else { "gtao-nobounce" };
+                match radius {
+                    None => method.into(),
+                    Some(r) => format!("{method}:{r}"),
+                }
+            }
         }
     }
 }
@@ -608,7 +636,10 @@ impl RenderOptions {
         if let Some(e) = &self.environment {
             e.validate()?;
         }
-        if let Occlusion::Gtao { radius: Some(r) } = self.occlusion {
+        if let Occlusion::Gtao {
+            radius: Some(r), ..
+        } = self.occlusion
+        {
             if !(r.is_finite() && r > 0.0) {
                 return Err(Error::input(format!(
                     "occlusion radius {r} is out of range: it must be a finite number of world units above 0 (e.g. --occlusion gtao:0.5)"

@@ -321,8 +321,10 @@ fn debug_view_name<S: serde::Serializer>(view: &DebugView, s: S) -> Result<S::Ok
 /// Screen-space occlusion of the environment in a frame (the occlusion pass).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OcclusionPlan {
-    /// "gtao".
+    /// "gtao" (with the occluders' bounced light) or "gtao-nobounce".
     pub method: &'static str,
+    /// The occluders' bounced light (occlusion.frag's BOUNCE; lighting.frag's OCCLUSION 2).
+    pub bounce: bool,
     /// How far occluders count, in world units (the last 60 % falling off), and whether it is
     /// the scene's (0.3 of its diagonal) or `--occlusion gtao:R`'s.
     pub radius: f32,
@@ -579,13 +581,13 @@ impl Plan {
                 }
             });
         // Occlusion of the environment's light, when there is one (or the debug view shows it).
-        let occlusion_radius = match options.occlusion {
-            super::Occlusion::Gtao { radius }
+        let (occlusion_radius, bounce) = match options.occlusion {
+            super::Occlusion::Gtao { radius, bounce }
                 if environment.is_some() || options.debug_view == DebugView::Occlusion =>
             {
-                Some(radius)
+                (Some(radius), bounce)
             }
-            _ => None,
+            _ => (None, false),
         };
         // What casts (the whole scene when nothing does), once per frame, only when shadow maps
         // must cover it or the occlusion radius is a share of it.
@@ -603,7 +605,8 @@ impl Plan {
                         .unwrap_or(1.0)
                 };
                 Some(OcclusionPlan {
-                    method: "gtao",
+                    method: if bounce { "gtao" } else { "gtao-nobounce" },
+                    bounce,
                     radius: radius.unwrap_or_else(scene_radius),
                     radius_from: if radius.is_some() {
                         "--occlusion"
@@ -1136,7 +1139,7 @@ impl fmt::Display for Plan {
             )?,
             Some(o) => writeln!(
                 f,
-                "occlusion   {} of the environment's light, radius {} ({}), at half resolution over a half-resolution depth copy: {} slices x {} steps per side per estimate, 4x4 blur, {}",
+                "occlusion   {} of the environment's light, radius {} ({}), at half resolution over a half-resolution depth copy: {} slices x {} steps per side per estimate, 4x4 blur, {}; {}",
                 o.method,
                 o.radius,
                 o.radius_from,
@@ -1146,6 +1149,11 @@ impl fmt::Display for Plan {
                     "both drawn only where a surface is (against the depth copy)"
                 } else {
                     "both over every pixel (forced)"
+                },
+                if o.bounce {
+                    "the light the occluders on screen bounce, where it exceeds the multi-bounce fit"
+                } else {
+                    "the multi-bounce fit alone"
                 }
             )?,
         }

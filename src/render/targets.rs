@@ -36,6 +36,8 @@ pub const SHADOW_FORMAT: Format = Format::D32_SFLOAT;
 pub const LOBES_FORMAT: Format = Format::R32G32B32A32_UINT;
 /// The occlusion pass's estimates and their blur (visibility, view distance; half resolution).
 pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
+/// The occlusion pass's bounced light (rgb: irradiance/π from the occluders), half resolution.
+pub const OCCLUSION_BOUNCE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 /// The occlusion pass's half-resolution depth (each 2 x 2 block's top-left pixel's, exactly).
 pub const OCCLUSION_DEPTH_FORMAT: Format = Format::R32_SFLOAT;
 /// The same depth as a depth attachment, which the estimates and their blur are drawn against
@@ -79,6 +81,10 @@ pub(crate) struct OcclusionTargets {
     pub(crate) raw: Image,
     /// The same blurred, which the lighting pass reads.
     pub(crate) visibility: Image,
+    /// The occluders' bounced light per 2 x 2 pixels (`OCCLUSION_BOUNCE_FORMAT`; 0 without the
+    /// bounce), and the same blurred, which the lighting pass reads.
+    pub(crate) raw_bounce: Image,
+    pub(crate) bounce: Image,
 }
 
 impl OcclusionTargets {
@@ -98,6 +104,13 @@ impl OcclusionTargets {
             )?,
             visibility: ctx.create_image(
                 &ImageDesc::new_2d("occlusion", OCCLUSION_FORMAT, w, h).usage(usage),
+            )?,
+            raw_bounce: ctx.create_image(
+                &ImageDesc::new_2d("occlusion bounce estimates", OCCLUSION_BOUNCE_FORMAT, w, h)
+                    .usage(usage),
+            )?,
+            bounce: ctx.create_image(
+                &ImageDesc::new_2d("occlusion bounce", OCCLUSION_BOUNCE_FORMAT, w, h).usage(usage),
             )?,
         })
     }

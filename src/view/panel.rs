@@ -329,7 +329,7 @@ fn environment(
         let mut on = o.occlusion != Occlusion::None;
         if ui.checkbox(&mut on, "occlusion (GTAO)").changed() {
             o.occlusion = if on {
-                Occlusion::Gtao { radius: None }
+                Occlusion::DEFAULT
             } else {
                 Occlusion::None
             };

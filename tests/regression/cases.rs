@@ -381,13 +381,13 @@ pub fn cases() -> Vec<Case> {
         },
         Case {
             env: STUDIO,
-            occlusion: weft::render::Occlusion::Gtao { radius: None },
+            occlusion: weft::render::Occlusion::DEFAULT,
             look: Some(([0.5, 0.12, 1.0], [0.0, 0.22, 0.0], 40.0)),
             ..case("khronos-sheen-chair-underside", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the chair seen from just above the ground, as weft render shows it with the occlusion pass (its default): the key light's shadow of the chair on the ground, and the ground a little darker under the seat and at the feet of the legs; the velvet, wood and studio walls as in khronos-sheen-chair")
         },
         Case {
             env: STUDIO,
-            occlusion: weft::render::Occlusion::Gtao { radius: None },
+            occlusion: weft::render::Occlusion::DEFAULT,
             look: Some(([0.5, 0.12, 1.0], [0.0, 0.22, 0.0], 40.0)),
             debug_view: DebugView::Occlusion,
             ..case("khronos-sheen-chair-underside-occlusion", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the occlusion debug view of khronos-sheen-chair-underside: white where the environment is open, a soft grey patch on the ground under the seat, darkest beside the right front leg, light grey along the seat's piping and the rail under it, the background black")

@@ -63,6 +63,9 @@ pub struct LightingInputs<'s> {
     /// The occlusion pass's visibility when the plan has the pass (any image otherwise: the
     /// variant without OCCLUSION does not read it).
     pub occlusion: &'s Image,
+    /// The occlusion pass's blurred bounced light when the plan has the pass (any image
+    /// otherwise: lighting.frag reads it only at OCCLUSION 2).
+    pub bounce: &'s Image,
     /// The fabric lobes' sums (`LOBES_FORMAT`) when a variant pools them (made by the frame).
     pub lobes: Option<&'s Image>,
 }
@@ -135,7 +138,12 @@ impl LightingPass {
                     .unwrap_or(1),
             ),
             (9, "unlit", plan.unlit as u32),
-            (10, "occlusion", plan.occlusion.is_some() as u32),
+            // 0: none, 1: the visibility, 2: and the occluders' bounced light.
+            (
+                10,
+                "occlusion",
+                plan.occlusion.as_ref().map_or(0, |o| 1 + o.bounce as u32),
+            ),
             (
                 11,
                 "debug_views",
@@ -323,6 +331,7 @@ impl LightingPass {
             (25, g(&t.depth)),
             (26, g(&t.specular)),
             (27, g(inputs.occlusion)),
+            (29, g(inputs.bounce)),
             // The lobe sums where a variant pools them (the first draw writes them); else any
             // unsigned-integer image in the layout sampled images are in (unread).
             (28, g(lobes.map_or(&t.frame, |(_, _, image)| image))),

@@ -63,15 +63,28 @@ pub(crate) fn fullscreen_into<'s, P: bytemuck::Pod>(
     load: crate::vk::Load,
     depth: Option<crate::vk::Attachment<'s>>,
 ) {
-    use crate::vk::{Attachment, Usage};
-    cmd.transition(target, Usage::Undefined, Usage::ColorAttachment, None);
-    cmd.begin_rendering(
-        &[Attachment {
-            image: target,
-            load,
-        }],
-        depth,
-    );
+    let color = crate::vk::Attachment {
+        image: target,
+        load,
+    };
+    fullscreen_targets(cmd, pipeline, set, push, &[color], depth);
+}
+
+/// [`fullscreen_into`] with several colour targets (the pipeline's colour attachments, in order),
+/// each started from its own load.
+pub(crate) fn fullscreen_targets<'s, P: bytemuck::Pod>(
+    cmd: &mut crate::vk::Cmd<'s>,
+    pipeline: &'s crate::vk::Pipeline,
+    set: crate::vk::DescriptorSet<'s>,
+    push: Option<&P>,
+    colors: &[crate::vk::Attachment<'s>],
+    depth: Option<crate::vk::Attachment<'s>>,
+) {
+    use crate::vk::Usage;
+    for color in colors {
+        cmd.transition(color.image, Usage::Undefined, Usage::ColorAttachment, None);
+    }
+    cmd.begin_rendering(colors, depth);
     cmd.bind_pipeline(pipeline);
     cmd.bind_sets(pipeline, 0, &[set]);
     if let Some(push) = push {

@@ -9,7 +9,10 @@
 //! estimates and the blur are drawn against it at the far plane (depth test LESS): only where a
 //! surface is. On lavapipe, where a shader's early return skips nothing, that skips the empty
 //! 4 x 4 blocks; the empty texels keep the targets' clear, which is what the shaders would write
-//! there (`Force::occlusion_everywhere` draws them everywhere: the same image).
+//! there (`Force::occlusion_everywhere` draws them everywhere: the same image). The estimates and
+//! the blur also write the occluders' bounced light (a second target; BOUNCE, `--occlusion gtao`),
+//! which reads the G-buffer's albedo and surface, the material records and the environment's
+//! prefiltered cube.
 
 use std::sync::OnceLock;
 
@@ -18,7 +21,8 @@ use glam::{DMat4, Mat4};
 use super::Recorded;
 use crate::render::plan::OcclusionPlan;
 use crate::render::targets::{
-    Targets, OCCLUSION_COVERAGE_FORMAT, OCCLUSION_DEPTH_FORMAT, OCCLUSION_FORMAT,
+    Targets, OCCLUSION_BOUNCE_FORMAT, OCCLUSION_COVERAGE_FORMAT, OCCLUSION_DEPTH_FORMAT,
+    OCCLUSION_FORMAT,
 };
 use crate::vk::{
     shaders, Attachment, Buffer, Context, DepthTest, DescriptorPool, GraphicsDesc, Load, Pipeline,
@@ -57,13 +61,13 @@ impl OcclusionPush {
 /// The pass's three set layouts (reflected from occlusion_depth.frag, occlusion.frag and
 /// occlusion_blur.frag) and its pipelines, made by the first frame that plans the pass: the
 /// depth copy, then the estimates and the blur drawn where a surface is (against the copy's
-/// depth attachment) or, forced, over every pixel.
+/// depth attachment) or, forced, over every pixel; each without and with the bounce.
 pub struct OcclusionPass {
     depth_layout: SetLayout,
     layout: SetLayout,
     blur_layout: SetLayout,
-    pipelines: OnceLock<[Pipeline; 3]>,
-    everywhere: OnceLock<[Pipeline; 2]>,
+    pipelines: [OnceLock<[Pipeline; 3]>; 2],
+    everywhere: [OnceLock<[Pipeline; 2]>; 2],
 }
 
 /// What the pass reads; it writes `targets.occlusion` (left readable by fragment shaders).
@@ -76,6 +80,12 @@ pub struct OcclusionInputs<'s> {
     pub nearest: &'s Sampler,
     /// The estimates and blur only where a surface is ([`OcclusionPlan::covered_only`]).
     pub covered_only: bool,
+    /// The occluders' bounced light ([`OcclusionPlan::bounce`]), and what it reads: the
+    /// material records and the environment's prefiltered cube with its sampler.
+    pub bounce: bool,
+    pub materials: &'s Buffer,
+    pub env_specular: &'s crate::vk::Image,
+    pub env_sampler: &'s Sampler,
 }
 
 impl OcclusionPass {
@@ -90,19 +100,19 @@ impl OcclusionPass {
             depth_layout,
             layout,
             blur_layout,
-            pipelines: OnceLock::new(),
-            everywhere: OnceLock::new(),
+            pipelines: [OnceLock::new(), OnceLock::new()],
+            everywhere: [OnceLock::new(), OnceLock::new()],
         })
     }
 
     /// Makes the pipelines once: the depth copy and the estimates and blur where a surface is,
-    /// and with `everywhere` the estimates and blur over every pixel.
-    pub fn make(&self, ctx: &Context, everywhere: bool) -> crate::Result<()> {
+    /// and with `everywhere` the estimates and blur over every pixel, with or without `bounce`.
+    pub fn make(&self, ctx: &Context, everywhere: bool, bounce: bool) -> crate::Result<()> {
         // Each draws one fullscreen triangle into a half-resolution target; `depth` says how it
         // uses the half-resolution depth attachment (none: not attached).
         let make = |name: &str,
                     fragment,
-                    format,
+                    formats: &[crate::vk::Format],
                     layout,
                     push: u32,
                     constants: &[(u32, u32)],
@@ -112,7 +122,7 @@ impl OcclusionPass {
                 vertex: &shaders::FULLSCREEN_VERT,
                 fragment,
                 vertex_layout: None,
-                color_formats: &[format],
+                color_formats: formats,
                 depth_format: depth.map(|_| OCCLUSION_COVERAGE_FORMAT),
                 set_layouts: &[layout],
                 push_constant_size: push,
@@ -124,18 +134,27 @@ impl OcclusionPass {
                 depth_test: depth.unwrap_or_default(),
             })
         };
+        let b = bounce as u32;
         let estimate_name = format!(
-            "occlusion[slices={}, steps={}]",
+            "occlusion[slices={}, steps={}, bounce={b}]",
             OcclusionPlan::SLICES,
             OcclusionPlan::STEPS
         );
-        let constants = [(0, OcclusionPlan::SLICES), (1, OcclusionPlan::STEPS)];
+        let blur_name = format!("occlusion blur[bounce={b}]");
+        let constants = [
+            (0, OcclusionPlan::SLICES),
+            (1, OcclusionPlan::STEPS),
+            (2, b),
+        ];
+        let blur_constants = [(2, b)];
+        let two = [OCCLUSION_FORMAT, OCCLUSION_BOUNCE_FORMAT];
         let push = std::mem::size_of::<OcclusionPush>() as u32;
-        if self.pipelines.get().is_none() {
+        let i = bounce as usize;
+        if self.pipelines[i].get().is_none() {
             let depth = make(
                 "occlusion depth",
                 &shaders::OCCLUSION_DEPTH_FRAG,
-                OCCLUSION_DEPTH_FORMAT,
+                &[OCCLUSION_DEPTH_FORMAT],
                 &self.depth_layout,
                 0,
                 &[],
@@ -144,53 +163,56 @@ impl OcclusionPass {
             let estimate = make(
                 &estimate_name,
                 &shaders::OCCLUSION_FRAG,
-                OCCLUSION_FORMAT,
+                &two,
                 &self.layout,
                 push,
                 &constants,
                 Some(DepthTest::Farther),
             )?;
             let blur = make(
-                "occlusion blur",
+                &blur_name,
                 &shaders::OCCLUSION_BLUR_FRAG,
-                OCCLUSION_FORMAT,
+                &two,
                 &self.blur_layout,
                 0,
-                &[],
+                &blur_constants,
                 Some(DepthTest::Farther),
             )?;
-            let _ = self.pipelines.set([depth, estimate, blur]);
+            let _ = self.pipelines[i].set([depth, estimate, blur]);
         }
-        if everywhere && self.everywhere.get().is_none() {
+        if everywhere && self.everywhere[i].get().is_none() {
             let estimate = make(
                 &format!("{estimate_name} everywhere"),
                 &shaders::OCCLUSION_FRAG,
-                OCCLUSION_FORMAT,
+                &two,
                 &self.layout,
                 push,
                 &constants,
                 None,
             )?;
             let blur = make(
-                "occlusion blur everywhere",
+                &format!("{blur_name} everywhere"),
                 &shaders::OCCLUSION_BLUR_FRAG,
-                OCCLUSION_FORMAT,
+                &two,
                 &self.blur_layout,
                 0,
-                &[],
+                &blur_constants,
                 None,
             )?;
-            let _ = self.everywhere.set([estimate, blur]);
+            let _ = self.everywhere[i].set([estimate, blur]);
         }
         Ok(())
     }
 
     pub fn pipelines(&self) -> impl Iterator<Item = &Pipeline> {
         self.pipelines
-            .get()
-            .into_iter()
-            .flatten()
-            .chain(self.everywhere.get().into_iter().flatten())
+            .iter()
+            .flat_map(|p| p.get().into_iter().flatten())
+            .chain(
+                self.everywhere
+                    .iter()
+                    .flat_map(|p| p.get().into_iter().flatten()),
+            )
     }
 
     pub fn record<'s>(
@@ -199,11 +221,12 @@ impl OcclusionPass {
         inputs: OcclusionInputs<'s>,
     ) -> crate::Result<Recorded<'s>> {
         let made = "the frame makes the pipelines when it plans the pass";
-        let [depth, covered_estimate, covered_blur] = self.pipelines.get().expect(made);
+        let i = inputs.bounce as usize;
+        let [depth, covered_estimate, covered_blur] = self.pipelines[i].get().expect(made);
         let (estimate, blur) = if inputs.covered_only {
             (covered_estimate, covered_blur)
         } else {
-            let [estimate, blur] = self.everywhere.get().expect(made);
+            let [estimate, blur] = self.everywhere[i].get().expect(made);
             (estimate, blur)
         };
         let covered_only = inputs.covered_only;
@@ -220,13 +243,23 @@ impl OcclusionPass {
             &self.layout,
             &[
                 (0, Resource::Uniform(inputs.frame)),
+                (1, Resource::Storage(inputs.materials)),
+                (
+                    14,
+                    Resource::Sampled(inputs.env_specular, inputs.env_sampler),
+                ),
+                (20, Resource::Sampled(&t.albedo, inputs.nearest)),
                 (21, Resource::Sampled(&t.frame, inputs.nearest)),
+                (22, Resource::Sampled(&t.surface, inputs.nearest)),
                 (26, Resource::Sampled(&o.depth, inputs.nearest)),
             ],
         )?;
         let blur_set = pool.set(
             &self.blur_layout,
-            &[(28, Resource::Sampled(&o.raw, inputs.nearest))],
+            &[
+                (28, Resource::Sampled(&o.raw, inputs.nearest)),
+                (29, Resource::Sampled(&o.raw_bounce, inputs.nearest)),
+            ],
         )?;
         let push = inputs.push;
         Ok(Recorded::new(
@@ -255,46 +288,47 @@ impl OcclusionPass {
                     Usage::DepthAttachment,
                     None,
                 );
-                if !covered_only {
-                    super::fullscreen(cmd, estimate, set, Some(&push), &o.raw);
-                    cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
-                    super::fullscreen::<u32>(cmd, blur, blur_set, None, &o.visibility);
+                // Drawn where a surface is, an empty texel keeps the clear, what the shaders write
+                // there: open (1), no surface (distance 0), no bounce; drawn everywhere, the
+                // shaders write every texel.
+                let (open, none) = if covered_only {
+                    (Load::Clear([1.0, 0.0, 0.0, 0.0]), Load::Clear([0.0; 4]))
                 } else {
-                    // Drawn where a surface is; an empty texel keeps the clear, what the shaders
-                    // write there: open (1), no surface (distance 0).
-                    let open = Load::Clear([1.0, 0.0, 0.0, 0.0]);
-                    let coverage = || {
-                        Some(Attachment {
-                            image: &o.coverage,
-                            load: Load::Keep,
-                        })
-                    };
-                    super::fullscreen_into(
-                        cmd,
-                        estimate,
-                        set,
-                        Some(&push),
-                        &o.raw,
-                        open,
-                        coverage(),
-                    );
-                    cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
-                    super::fullscreen_into::<u32>(
-                        cmd,
-                        blur,
-                        blur_set,
-                        None,
-                        &o.visibility,
-                        open,
-                        coverage(),
-                    );
-                }
+                    (Load::Keep, Load::Keep)
+                };
+                let coverage = || {
+                    covered_only.then_some(Attachment {
+                        image: &o.coverage,
+                        load: Load::Keep,
+                    })
+                };
+                let into = |image, load| Attachment { image, load };
+                super::fullscreen_targets(
+                    cmd,
+                    estimate,
+                    set,
+                    Some(&push),
+                    &[into(&o.raw, open), into(&o.raw_bounce, none)],
+                    coverage(),
+                );
+                cmd.transition(&o.raw, Usage::ColorAttachment, Usage::FragmentRead, None);
                 cmd.transition(
-                    &o.visibility,
+                    &o.raw_bounce,
                     Usage::ColorAttachment,
                     Usage::FragmentRead,
                     None,
                 );
+                super::fullscreen_targets::<u32>(
+                    cmd,
+                    blur,
+                    blur_set,
+                    None,
+                    &[into(&o.visibility, open), into(&o.bounce, none)],
+                    coverage(),
+                );
+                for image in [&o.visibility, &o.bounce] {
+                    cmd.transition(image, Usage::ColorAttachment, Usage::FragmentRead, None);
+                }
             },
         ))
     }
