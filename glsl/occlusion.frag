@@ -17,11 +17,13 @@
 // times the environment's irradiance/π at its normal, the roughness-1 look-up env_irradiance of
 // include/env_light.glsl makes), where its front faces this pixel. One bounce, from what the
 // screen shows, one occluder per side and slice (the highest: per depth sample, the G-buffer
-// reads and the cube look-up made the pass five times slower on lavapipe); a woven occluder
-// sends nothing back (its diffuse colour is the fabric record's, which this pass does not read). Weighted and normalised as the visibility, so an irradiance/π;
+// reads and the cube look-up made the pass five times slower on lavapipe); a woven occluder's
+// diffuse colour is its threads' (fabric_albedo of its coverage, the record's colours under the
+// albedo target's thread texture, times the diffuse factor towards this pixel). Weighted and normalised as the visibility, so an irradiance/π;
 // the lighting pass adds what of it exceeds the multi-bounce fit (lighting.frag's OCCLUSION 2).
 #include "frame.glsl"
 #include "occlusion.glsl"
+#include "fabric.glsl"
 #define WEFT_ENV_SPECULAR_ONLY
 
 // Slices per pixel and depth samples per side of a slice.
@@ -34,9 +36,11 @@ layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  /
 layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl
 layout(set = 0, binding = 26) uniform sampler2D half_depth;  // the G-buffer depth of each 2 x 2 block's top-left pixel (R32F, half resolution; occlusion_depth.frag), gathered
 layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`): which occluders are woven (BOUNCE)
+layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };  // fabric records (`GpuFabric[]`): a woven occluder's thread colours (BOUNCE)
 layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube, whose roughness-1 level is the irradiance/π (BOUNCE)
 layout(set = 0, binding = 20) uniform sampler2D gb_albedo;  // G-buffer albedo (RGBA8 sRGB): base colour, a: metallic (BOUNCE)
 layout(set = 0, binding = 22) uniform sampler2D gb_surface;  // G-buffer surface (RGBA16F): y the material index (BOUNCE)
+layout(set = 0, binding = 23) uniform sampler2D gb_fabric;  // G-buffer fabric coverage (RGBA16F): a woven occluder's c_warp, c_weft, s_warp, s_weft (BOUNCE)
 #include "env_cubes.glsl"
 
 layout(push_constant) uniform OcclusionPush {
@@ -187,11 +191,18 @@ void main() {
                 vec3 ns = oct_decode(frame_decode(texelFetch(gb_frame, qp, 0)).xy);
                 vec4 alb = texelFetch(gb_albedo, qp, 0);
                 uint material = min(uint(texelFetch(gb_surface, qp, 0).y + 0.5), frame.material_count - 1u);
-                bool woven = materials[material].metallic_roughness.z > 0.5;
+                uint fabric = uint(materials[material].metallic_roughness.z + 0.5);
                 // Its front faces this pixel: the sample's normal (world) against the way back.
-                bool facing = dot(mat3(frame.view) * ns, top_delta[side]) < 0.0;
-                if (facing && !woven) {
-                    bounce += pn_len * hidden[side] * alb.rgb * (1.0 - alb.a) * env_prefiltered(ns, 1.0);
+                float toward = -dot(mat3(frame.view) * ns, top_delta[side]) / max(length(top_delta[side]), 1e-30);
+                vec3 diffuse = alb.rgb * (1.0 - alb.a);
+                if (fabric > 0u) {
+                    // The threads' diffuse colour over the coverage (fabric_env_combine's), its
+                    // diffuse factor towards this pixel.
+                    GpuFabric f = fabric_reflecting(fabric_tinted(fabrics[fabric - 1u], alb.rgb));
+                    diffuse = fabric_albedo(texelFetch(gb_fabric, qp, 0), f) * fabric_diffuse_albedo(f, toward);
+                }
+                if (toward > 0.0) {
+                    bounce += pn_len * hidden[side] * diffuse * env_prefiltered(ns, 1.0);
                 }
             }
         }

@@ -259,8 +259,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          highest horizon on each side among STEPS depth samples out to a world radius, and the \
          cosine-weighted visible arc between them. Reads the frame uniform (set 0 binding 0), the \
          G-buffer normal (21) and the half-resolution depth of step 1 (26), and with BOUNCE the \
-         material records (1), the prefiltered environment cube (14), the G-buffer albedo (20) \
-         and surface (22); push `mat4 view_from_clip` (the inverse projection) \
+         material and fabric records (1, 2), the prefiltered environment cube (14), the G-buffer \
+         albedo (20), surface (22) and fabric coverage (23); push `mat4 view_from_clip` (the inverse projection) \
          and `vec4 params` (radius, falloff scale and offset; 80 bytes, fragment stage); writes \
          visibility and view distance to an `R16G16_SFLOAT` target (location 0) and the \
          occluders' bounced light (rgb, 0 without BOUNCE) to an `R16G16B16A16_SFLOAT` target \
@@ -379,7 +379,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 2 also adds the occluders' bounced light (binding 29) where it exceeds that; 0 (default) uses the texture alone and reads nothing at bindings 27 and 29"),
     ("occlusion.frag", 0, "SLICES: slices per pixel (default 2; the blur averages 16 x SLICES directions)"),
     ("occlusion.frag", 1, "STEPS: depth samples per side of a slice (default 6)"),
-    ("occlusion.frag", 2, "BOUNCE: 1 also measures the occluders' bounced light (location 1); 0 (default) writes 0 there and reads nothing at bindings 1, 14, 20 and 22"),
+    ("occlusion.frag", 2, "BOUNCE: 1 also measures the occluders' bounced light (location 1); 0 (default) writes 0 there and reads nothing at bindings 1, 2, 14, 20, 22 and 23"),
     ("occlusion_blur.frag", 2, "BOUNCE: 1 also blurs the bounced light (binding 29, location 1); 0 (default) writes 0 there"),
     ("lighting.frag", 11, "DEBUG_VIEWS: 1 (default) shows the G-buffer target `FrameData.debug_view` names instead of the lit image when it is not 0; 0 compiles the debug views out"),
     ("lighting.frag", 12, "PIXEL_KINDS: bit mask of the kinds of pixel shaded: 1 empty pixels (the background), 2 fabric by the woven model, 4 glTF materials (and fabric with FABRIC_AS_PBR); the other kinds' code is compiled out, for pipelines each drawn over its own pixels (by a stencil test, say). A pipeline without 4 shades every surface pixel as fabric, one without 2 as glTF (default 7, all)"),

@@ -1235,6 +1235,7 @@ impl Renderer {
                         covered_only: plan.occlusion.as_ref().is_none_or(|o| o.covered_only),
                         bounce: plan.occlusion.as_ref().is_some_and(|o| o.bounce),
                         materials: &gpu.materials,
+                        fabrics: &gpu.fabrics,
                         env_specular,
                         env_sampler: &self.env.sampler,
                     },

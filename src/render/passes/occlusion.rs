@@ -11,8 +11,8 @@
 //! 4 x 4 blocks; the empty texels keep the targets' clear, which is what the shaders would write
 //! there (`Force::occlusion_everywhere` draws them everywhere: the same image). The estimates and
 //! the blur also write the occluders' bounced light (a second target; BOUNCE, `--occlusion gtao`),
-//! which reads the G-buffer's albedo and surface, the material records and the environment's
-//! prefiltered cube.
+//! which reads the G-buffer's albedo, surface and fabric coverage, the material and fabric
+//! records and the environment's prefiltered cube.
 
 use std::sync::OnceLock;
 
@@ -81,9 +81,10 @@ pub struct OcclusionInputs<'s> {
     /// The estimates and blur only where a surface is ([`OcclusionPlan::covered_only`]).
     pub covered_only: bool,
     /// The occluders' bounced light ([`OcclusionPlan::bounce`]), and what it reads: the
-    /// material records and the environment's prefiltered cube with its sampler.
+    /// material and fabric records and the environment's prefiltered cube with its sampler.
     pub bounce: bool,
     pub materials: &'s Buffer,
+    pub fabrics: &'s Buffer,
     pub env_specular: &'s crate::vk::Image,
     pub env_sampler: &'s Sampler,
 }
@@ -244,6 +245,7 @@ impl OcclusionPass {
             &[
                 (0, Resource::Uniform(inputs.frame)),
                 (1, Resource::Storage(inputs.materials)),
+                (2, Resource::Storage(inputs.fabrics)),
                 (
                     14,
                     Resource::Sampled(inputs.env_specular, inputs.env_sampler),
@@ -251,6 +253,7 @@ impl OcclusionPass {
                 (20, Resource::Sampled(&t.albedo, inputs.nearest)),
                 (21, Resource::Sampled(&t.frame, inputs.nearest)),
                 (22, Resource::Sampled(&t.surface, inputs.nearest)),
+                (23, Resource::Sampled(&t.fabric, inputs.nearest)),
                 (26, Resource::Sampled(&o.depth, inputs.nearest)),
             ],
         )?;
