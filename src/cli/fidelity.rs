@@ -29,7 +29,7 @@ pub struct FidelityArgs {
     #[arg(long, conflicts_with_all = ["only"])]
     pub scenario: Option<String>,
     /// Occlusion of the environment's light in weft's renders, as `weft render --occlusion`
-    /// takes it (gtao, gtao:R, none): to see what it changes in the comparison.
+    /// takes it (gtao, gtao:R, gtao-nobounce, none): to see what it changes in the comparison.
     #[arg(long, default_value = "gtao", value_parser = |s: &str| weft::render::Occlusion::parse(s).map(|_| s.to_string()))]
     pub occlusion: String,
     /// How weft's renders integrate environment light, as `weft render --ibl` takes it (approx,
