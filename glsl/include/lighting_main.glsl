@@ -166,7 +166,7 @@ float screen_visibility(ivec2 px, float dist, out vec3 bounced) {
             vec2 s = texelFetch(screen_occlusion, min(c + ivec2(x, y), size - 1), 0).rg;
             float w = s.y > 0.0 ? bilinear * clamp(1.0 - abs(s.y - dist) / (0.05 * dist), 0.0, 1.0) : 0.0;
             sum += w * s.x;
-            if (OCCLUSION >= 2u) {
+            if (OCCLUSION == 2u) {
                 bounce_sum += w * texelFetch(screen_bounce, min(c + ivec2(x, y), size - 1), 0).rgb;
             }
             weights += w;
@@ -272,7 +272,7 @@ void main() {
         float grey = gtao_multibounce(visibility, dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722)));
         vec3 coloured = vec3(gtao_multibounce(visibility, albedo.r), gtao_multibounce(visibility, albedo.g),
                              gtao_multibounce(visibility, albedo.b));
-        if (OCCLUSION >= 2u) {
+        if (OCCLUSION == 2u) {
             // The occluders' own light that the screen shows (occlusion.frag: one bounce of the
             // environment's off them), where it exceeds what the fit gives back: per channel, the
             // diffuse light is the larger of the fit's and the visible environment's plus the
