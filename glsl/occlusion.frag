@@ -14,17 +14,18 @@
 // part of each side's arc that its horizon hides (gtao_half_arc from the tangent plane to the
 // horizon) sees the surface of the depth sample that set the horizon instead of the environment:
 // its diffuse light under the environment (the albedo target's base colour times 1 - metallic,
-// times the environment's irradiance/π at its normal, the roughness-1 look-up env_irradiance of
-// include/env_light.glsl makes), where its front faces this pixel. One bounce, from what the
-// screen shows, one occluder per side and slice (the highest: per depth sample, the G-buffer
-// reads and the cube look-up made the pass five times slower on lavapipe); a woven occluder's
-// diffuse colour is its threads' (fabric_albedo of its coverage, the record's colours under the
-// albedo target's thread texture, times the diffuse factor towards this pixel). Weighted and normalised as the visibility, so an irradiance/π;
+// times the environment's irradiance/π at its normal; a woven occluder's threads' diffuse colour,
+// fabric_albedo of its coverage, times the diffuse factor towards this pixel), where its front
+// faces this pixel. One bounce, from what the screen shows, one occluder per side and slice (the
+// highest: per depth sample, the G-buffer reads and the cube look-up made the pass five times
+// slower on lavapipe), its light made once per half-resolution texel by step 1
+// (occlusion_depth.frag) and read here at the texel nearest the sample. Weighted and normalised
+// as the visibility, so an irradiance/π;
 // the lighting pass adds what of it exceeds the multi-bounce fit (lighting.frag's OCCLUSION 2).
 #include "frame.glsl"
 #include "occlusion.glsl"
 #include "fabric.glsl"
-#define WEFT_ENV_SPECULAR_ONLY
+#include "ibl.glsl"
 
 // Slices per pixel and depth samples per side of a slice.
 layout(constant_id = 0) const uint SLICES = 2u;
@@ -35,13 +36,7 @@ layout(constant_id = 2) const uint BOUNCE = 0u;
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameData frame; };  // the frame uniform (`FrameData`, std140, include/frame.glsl)
 layout(set = 0, binding = 21) uniform usampler2D gb_frame;  // G-buffer normal + tangent (RGBA16_UINT): octahedral normal (xy), tangent (zw), frame_encode of include/frame.glsl
 layout(set = 0, binding = 26) uniform sampler2D half_depth;  // the G-buffer depth of each 2 x 2 block's top-left pixel (R32F, half resolution; occlusion_depth.frag), gathered
-layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };  // material records (`Material[]`): which occluders are woven (BOUNCE)
-layout(set = 0, binding = 2, std430) readonly buffer Fabrics { GpuFabric fabrics[]; };  // fabric records (`GpuFabric[]`): a woven occluder's thread colours (BOUNCE)
-layout(set = 0, binding = 14) uniform samplerCube env_specular;  // the GGX-prefiltered specular cube, whose roughness-1 level is the irradiance/π (BOUNCE)
-layout(set = 0, binding = 20) uniform sampler2D gb_albedo;  // G-buffer albedo (RGBA8 sRGB): base colour, a: metallic (BOUNCE)
-layout(set = 0, binding = 22) uniform sampler2D gb_surface;  // G-buffer surface (RGBA16F): y the material index (BOUNCE)
-layout(set = 0, binding = 23) uniform sampler2D gb_fabric;  // G-buffer fabric coverage (RGBA16F): a woven occluder's c_warp, c_weft, s_warp, s_weft (BOUNCE)
-#include "env_cubes.glsl"
+layout(set = 0, binding = 30) uniform usampler2D occluder_light;  // each 2 x 2 block's top-left pixel as an occluder (RGBA32_UINT, half resolution; occlusion_depth.frag's occluder_light_pack): its diffuse light and normal (BOUNCE)
 
 layout(push_constant) uniform OcclusionPush {
     mat4 view_from_clip;  // the inverse of frame.proj (view space from clip space)
@@ -187,22 +182,19 @@ void main() {
                 if (!(top_q[side].x >= 0.0 && hidden[side] > 0.0)) {
                     continue;
                 }
-                ivec2 qp = clamp(ivec2(top_q[side]), ivec2(0), ivec2(size) - 1);
-                vec3 ns = oct_decode(frame_decode(texelFetch(gb_frame, qp, 0)).xy);
-                vec4 alb = texelFetch(gb_albedo, qp, 0);
-                uint material = min(uint(texelFetch(gb_surface, qp, 0).y + 0.5), frame.material_count - 1u);
-                uint fabric = uint(materials[material].metallic_roughness.z + 0.5);
+                // The half-resolution texel nearest the sample (its light made at the texel's
+                // pixel by occlusion_depth.frag).
+                ivec2 qt = clamp(ivec2(floor((top_q[side] - 0.5) * 0.5 + 0.5)), ivec2(0), half_size - 1);
+                uvec4 occluder = texelFetch(occluder_light, qt, 0);
+                vec3 ns = oct_decode((vec2(occluder.w & 0xffffu, occluder.w >> 16u) - 32768.0) / 32767.0);
                 // Its front faces this pixel: the sample's normal (world) against the way back.
                 float toward = -dot(mat3(frame.view) * ns, top_delta[side]) / max(length(top_delta[side]), 1e-30);
-                vec3 diffuse = alb.rgb * (1.0 - alb.a);
-                if (fabric > 0u) {
-                    // The threads' diffuse colour over the coverage (fabric_env_combine's), its
-                    // diffuse factor towards this pixel.
-                    GpuFabric f = fabric_reflecting(fabric_tinted(fabrics[fabric - 1u], alb.rgb));
-                    diffuse = fabric_albedo(texelFetch(gb_fabric, qp, 0), f) * fabric_diffuse_albedo(f, toward);
-                }
+                // Its diffuse light, for a woven occluder with the coupled diffuse times that
+                // diffuse's factor towards this pixel (its 1 - rs already in).
+                vec3 diffuse = uintBitsToFloat(occluder.xyz & uvec3(0x7fffffffu, 0xffffffffu, 0xffffffffu))
+                             * fabric_diffuse_factor(0.0, (occluder.x >> 31u) != 0u ? FABRIC_FLAG_COUPLED_DIFFUSE : 0u, toward);
                 if (toward > 0.0) {
-                    bounce += pn_len * hidden[side] * diffuse * env_prefiltered(ns, 1.0);
+                    bounce += pn_len * hidden[side] * diffuse;
                 }
             }
         }

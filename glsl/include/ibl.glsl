@@ -180,13 +180,18 @@ vec3 dominant_dir(vec3 n, vec3 r, float roughness) {
 // The diffuse factor of the fabric's diffuse term under a uniform-in-cosine environment: 1 for
 // Lambert, (1 - rs)(1 - (1 - n·k2/2)^5) for the A–S coupled diffuse (its hemispherical
 // integral, which its 28/(23π) normalises to exactly that).
-float fabric_diffuse_albedo(GpuFabric f, float nk2) {
-    if ((f.flags & FABRIC_FLAG_COUPLED_DIFFUSE) == 0u) {
+// The same from the record's rs and flags alone (the twin's `formula::fabric_diffuse_albedo`).
+float fabric_diffuse_factor(float rs, uint flags, float nk2) {
+    if ((flags & FABRIC_FLAG_COUPLED_DIFFUSE) == 0u) {
         return 1.0;
     }
     float b = 1.0 - 0.5 * clamp(nk2, 0.0, 1.0);
     float b2 = b * b;
-    return (1.0 - f.rs) * (1.0 - b2 * b2 * b);
+    return (1.0 - rs) * (1.0 - b2 * b2 * b);
+}
+
+float fabric_diffuse_albedo(GpuFabric f, float nk2) {
+    return fabric_diffuse_factor(f.rs, f.flags, nk2);
 }
 
 #endif

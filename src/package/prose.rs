@@ -245,9 +245,14 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "occlusion_depth.frag",
         "Screen-space occlusion of the environment, step 1 of 3: the G-buffer depth (set 0 \
          binding 25, fetched per texel) of each 2 x 2 block's top-left pixel, into an \
-         `R32_SFLOAT` target of half the size (rounded up) that `occlusion.frag` gathers from. \
-         Drawn with `fullscreen.vert` after the G-buffer pass; no push constants, no \
-         specialization constants.",
+         `R32_SFLOAT` target of half the size (rounded up) that `occlusion.frag` gathers from; \
+         with BOUNCE also the same pixel as an occluder into an `R32G32B32A32_UINT` target \
+         (location 1: its diffuse light under the environment as three f32 bit patterns, x's \
+         sign bit set for a woven pixel with the coupled diffuse, and w its octahedral normal \
+         as the G-buffer stores it), from the frame uniform (set 0 binding 0), the material and \
+         fabric records (1, 2), the prefiltered environment cube (14) and the G-buffer albedo \
+         (20), normal (21), surface (22) and fabric coverage (23). Drawn with `fullscreen.vert` \
+         after the G-buffer pass; no push constants.",
     ),
     (
         "occlusion.frag",
@@ -258,9 +263,8 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          through the view vector turned by a 4 x 4 pattern of estimates, the \
          highest horizon on each side among STEPS depth samples out to a world radius, and the \
          cosine-weighted visible arc between them. Reads the frame uniform (set 0 binding 0), the \
-         G-buffer normal (21) and the half-resolution depth of step 1 (26), and with BOUNCE the \
-         material and fabric records (1, 2), the prefiltered environment cube (14), the G-buffer \
-         albedo (20), surface (22) and fabric coverage (23); push `mat4 view_from_clip` (the inverse projection) \
+         G-buffer normal (21) and the half-resolution depth of step 1 (26), and with BOUNCE \
+         step 1's occluder light (30), at the texel nearest the sample that set each horizon; push `mat4 view_from_clip` (the inverse projection) \
          and `vec4 params` (radius, falloff scale and offset; 80 bytes, fragment stage); writes \
          visibility and view distance to an `R16G16_SFLOAT` target (location 0) and the \
          occluders' bounced light (rgb, 0 without BOUNCE) to an `R16G16B16A16_SFLOAT` target \
@@ -379,7 +383,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 2 also adds the occluders' bounced light (binding 29) where it exceeds that; 0 (default) uses the texture alone and reads nothing at bindings 27 and 29"),
     ("occlusion.frag", 0, "SLICES: slices per pixel (default 2; the blur averages 16 x SLICES directions)"),
     ("occlusion.frag", 1, "STEPS: depth samples per side of a slice (default 6)"),
-    ("occlusion.frag", 2, "BOUNCE: 1 also measures the occluders' bounced light (location 1); 0 (default) writes 0 there and reads nothing at bindings 1, 2, 14, 20, 22 and 23"),
+    ("occlusion_depth.frag", 2, "BOUNCE: 1 also writes each texel's pixel as an occluder (location 1); 0 (default) writes depth alone and reads nothing at bindings 0, 1, 2, 14, 20, 21, 22 and 23"),
+    ("occlusion.frag", 2, "BOUNCE: 1 also measures the occluders' bounced light (location 1) from occlusion_depth.frag's occluder light (binding 30); 0 (default) writes 0 there and reads nothing at binding 30"),
     ("occlusion_blur.frag", 2, "BOUNCE: 1 also blurs the bounced light (binding 29, location 1); 0 (default) writes 0 there"),
     ("lighting.frag", 11, "DEBUG_VIEWS: 1 (default) shows the G-buffer target `FrameData.debug_view` names instead of the lit image when it is not 0; 0 compiles the debug views out"),
     ("lighting.frag", 12, "PIXEL_KINDS: bit mask of the kinds of pixel shaded: 1 empty pixels (the background), 2 fabric by the woven model, 4 glTF materials (and fabric with FABRIC_AS_PBR); the other kinds' code is compiled out, for pipelines each drawn over its own pixels (by a stencil test, say). A pipeline without 4 shades every surface pixel as fabric, one without 2 as glTF (default 7, all)"),

@@ -40,6 +40,10 @@ pub const OCCLUSION_FORMAT: Format = Format::R16G16_SFLOAT;
 pub const OCCLUSION_BOUNCE_FORMAT: Format = Format::R16G16B16A16_SFLOAT;
 /// The occlusion pass's half-resolution depth (each 2 x 2 block's top-left pixel's, exactly).
 pub const OCCLUSION_DEPTH_FORMAT: Format = Format::R32_SFLOAT;
+/// Each 2 x 2 block's top-left pixel as an occluder (occlusion_depth.frag's occluder_light_pack:
+/// its diffuse light as three f32, its octahedral normal as the G-buffer stores it), half
+/// resolution, which the occlusion estimates read for the bounce.
+pub const OCCLUSION_LIGHT_FORMAT: Format = Format::R32G32B32A32_UINT;
 /// The same depth as a depth attachment, which the estimates and their blur are drawn against
 /// (at the far plane, depth test LESS) so that they run only where a surface is.
 pub const OCCLUSION_COVERAGE_FORMAT: Format = Format::D32_SFLOAT;
@@ -73,6 +77,8 @@ pub(crate) struct OcclusionTargets {
     /// The G-buffer's depth per 2 x 2 pixels (`OCCLUSION_DEPTH_FORMAT`, half the resolution
     /// rounded up), which the estimates' depth samples read.
     pub(crate) depth: Image,
+    /// The same pixels as occluders (`OCCLUSION_LIGHT_FORMAT`; written with the bounce only).
+    pub(crate) light: Image,
     /// The same depth as a depth attachment (`OCCLUSION_COVERAGE_FORMAT`): a fullscreen draw at
     /// the far plane with depth test LESS passes where a surface is and nowhere else.
     pub(crate) coverage: Image,
@@ -94,6 +100,9 @@ impl OcclusionTargets {
         Ok(OcclusionTargets {
             depth: ctx.create_image(
                 &ImageDesc::new_2d("occlusion depth", OCCLUSION_DEPTH_FORMAT, w, h).usage(usage),
+            )?,
+            light: ctx.create_image(
+                &ImageDesc::new_2d("occluder light", OCCLUSION_LIGHT_FORMAT, w, h).usage(usage),
             )?,
             coverage: ctx.create_image(
                 &ImageDesc::new_2d("occlusion coverage", OCCLUSION_COVERAGE_FORMAT, w, h)

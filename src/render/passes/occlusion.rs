@@ -11,8 +11,9 @@
 //! 4 x 4 blocks; the empty texels keep the targets' clear, which is what the shaders would write
 //! there (`Force::occlusion_everywhere` draws them everywhere: the same image). The estimates and
 //! the blur also write the occluders' bounced light (a second target; BOUNCE, `--occlusion gtao`),
-//! which reads the G-buffer's albedo, surface and fabric coverage, the material and fabric
-//! records and the environment's prefiltered cube.
+//! from each half-resolution texel's light as an occluder, which the depth copy makes (a second
+//! target of its own) from the G-buffer's albedo, normal, surface and fabric coverage, the
+//! material and fabric records and the environment's prefiltered cube.
 
 use std::sync::OnceLock;
 
@@ -22,7 +23,7 @@ use super::Recorded;
 use crate::render::plan::OcclusionPlan;
 use crate::render::targets::{
     Targets, OCCLUSION_BOUNCE_FORMAT, OCCLUSION_COVERAGE_FORMAT, OCCLUSION_DEPTH_FORMAT,
-    OCCLUSION_FORMAT,
+    OCCLUSION_FORMAT, OCCLUSION_LIGHT_FORMAT,
 };
 use crate::vk::{
     shaders, Attachment, Buffer, Context, DepthTest, DescriptorPool, GraphicsDesc, Load, Pipeline,
@@ -152,13 +153,14 @@ impl OcclusionPass {
         let push = std::mem::size_of::<OcclusionPush>() as u32;
         let i = bounce as usize;
         if self.pipelines[i].get().is_none() {
+            let depth_formats = [OCCLUSION_DEPTH_FORMAT, OCCLUSION_LIGHT_FORMAT];
             let depth = make(
-                "occlusion depth",
+                &format!("occlusion depth[bounce={b}]"),
                 &shaders::OCCLUSION_DEPTH_FRAG,
-                &[OCCLUSION_DEPTH_FORMAT],
+                &depth_formats[..1 + bounce as usize],
                 &self.depth_layout,
                 0,
-                &[],
+                &blur_constants,
                 Some(DepthTest::Always),
             )?;
             let estimate = make(
@@ -231,6 +233,7 @@ impl OcclusionPass {
             (estimate, blur)
         };
         let covered_only = inputs.covered_only;
+        let bounce = inputs.bounce;
         let t = inputs.targets;
         let o = t
             .occlusion
@@ -238,10 +241,6 @@ impl OcclusionPass {
             .expect("the frame makes the occlusion targets when it plans the pass");
         let depth_set = pool.set(
             &self.depth_layout,
-            &[(25, Resource::Sampled(&t.depth, inputs.nearest))],
-        )?;
-        let set = pool.set(
-            &self.layout,
             &[
                 (0, Resource::Uniform(inputs.frame)),
                 (1, Resource::Storage(inputs.materials)),
@@ -254,7 +253,16 @@ impl OcclusionPass {
                 (21, Resource::Sampled(&t.frame, inputs.nearest)),
                 (22, Resource::Sampled(&t.surface, inputs.nearest)),
                 (23, Resource::Sampled(&t.fabric, inputs.nearest)),
+                (25, Resource::Sampled(&t.depth, inputs.nearest)),
+            ],
+        )?;
+        let set = pool.set(
+            &self.layout,
+            &[
+                (0, Resource::Uniform(inputs.frame)),
+                (21, Resource::Sampled(&t.frame, inputs.nearest)),
                 (26, Resource::Sampled(&o.depth, inputs.nearest)),
+                (30, Resource::Sampled(&o.light, inputs.nearest)),
             ],
         )?;
         let blur_set = pool.set(
@@ -271,19 +279,40 @@ impl OcclusionPass {
             move |cmd| {
                 // The depth copy writes every texel of both targets.
                 cmd.transition(&o.coverage, Usage::Undefined, Usage::DepthAttachment, None);
-                super::fullscreen_into::<u32>(
+                let depth_targets = [
+                    Attachment {
+                        image: &o.depth,
+                        load: Load::Undefined,
+                    },
+                    Attachment {
+                        image: &o.light,
+                        load: Load::Undefined,
+                    },
+                ];
+                let depth_targets = &depth_targets[..1 + bounce as usize];
+                super::fullscreen_targets::<u32>(
                     cmd,
                     depth,
                     depth_set,
                     None,
-                    &o.depth,
-                    Load::Undefined,
+                    depth_targets,
                     Some(Attachment {
                         image: &o.coverage,
                         load: Load::Undefined,
                     }),
                 );
-                cmd.transition(&o.depth, Usage::ColorAttachment, Usage::FragmentRead, None);
+                for target in depth_targets {
+                    cmd.transition(
+                        target.image,
+                        Usage::ColorAttachment,
+                        Usage::FragmentRead,
+                        None,
+                    );
+                }
+                if !bounce {
+                    // Bound but not read without the bounce: readable, its contents undefined.
+                    cmd.transition(&o.light, Usage::Undefined, Usage::FragmentRead, None);
+                }
                 // The copy's depth writes before the draws' depth tests read them.
                 cmd.transition(
                     &o.coverage,
