@@ -442,12 +442,14 @@ fn real_hdr_matches_the_cpu_ground_truth() {
             );
             flips.push(flip);
             // Bounds, each about 1.3x the worst of the two scenes as measured on lavapipe (the
-            // table is in docs/fabric-model.md §6). What they bound: the SH diffuse (2 % on this
-            // map, tested in env::quadrature), the split sum of the glTF spheres (3.47 % at every
+            // table is in docs/fabric-model.md §6). What they bound: the irradiance (the specular
+            // cube's roughness-1 level, an exact sum since 2026-12-06), the split sum of the glTF
+            // spheres (3.42 % at every
             // level: the level changes only the fabric), and for the cloth the estimator of each
             // level: approx takes one look-up per lobe (16.1 %); FIS, its samples pooled over
-            // 3 x 3 pixels and more of them at grazing views, 3.47 %, 3.65 %, 2.19 %, 0.68 % at
-            // 4, 8, 16, 64 (2026-12-05; it was 16.4 %, 7.6 %, 5.7 %, 2.3 % before the exact lobe
+            // 3 x 3 pixels and more of them at grazing views, 3.42 %, 3.56 %, 2.09 %, 0.56 % at
+            // 4, 8, 16, 64 (2026-12-06; 3.47, 3.65, 2.19, 0.68 % with the sampled irradiance
+            // level; it was 16.4 %, 7.6 %, 5.7 %, 2.3 % before the exact lobe
             // albedo and the pooling, when these bounds were 0.215, 0.10, 0.075 and 0.05), so
             // every FIS level is bounded by the spheres' split sum; Monte Carlo with 512 samples
             // is unbiased, its noise averages to ~1 %. The convergence is asserted below.
@@ -479,15 +481,18 @@ fn real_hdr_matches_the_cpu_ground_truth() {
     }
     assert!(failures.is_empty(), "{failures:?}");
     // On the cloth, FIS converges to the Monte Carlo answer: approx is the farthest, each 4x the
-    // samples closer (fis:4, 16, 64), Monte Carlo the closest. fis:8 lies between approx and
-    // fis:16; against fis:4 it is not ordered on this 140-pixel image (3.65 % against 3.47 %,
+    // samples closer (fis:4, 16, 64). fis:8 lies between approx and
+    // fis:16; against fis:4 it is not ordered on this 140-pixel image (3.56 % against 3.42 %,
     // FLIP 0.0336 against 0.0342: the two sets of pooled samples differ by less than the image's
     // noise), while `weft bench --ibl` at 480x270 has fis:8 closer on every view (close up 3.7 %
     // against 5.1 %).
     let cloth = &errors[errors.len() - 6..];
     let [approx, fis4, fis8, fis16, fis64, mc] = [0, 1, 2, 3, 4, 5].map(|i| cloth[i]);
+    // Monte Carlo is closer than fis:16; against fis:64 it is not ordered since the irradiance
+    // is an exact sum (2026-12-06): fis:64's remaining bias, 0.56 %, is below mc:512's noise,
+    // 0.62 %.
     assert!(
-        approx > fis4.max(fis8) && fis16 < fis4.min(fis8) && fis64 < fis16 && mc < fis64,
+        approx > fis4.max(fis8) && fis16 < fis4.min(fis8) && fis64 < fis16 && mc < fis16,
         "cloth errors do not shrink (approx, fis:4, 8, 16, 64, mc:512): {cloth:?}"
     );
 }

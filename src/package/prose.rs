@@ -17,9 +17,11 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "env_prefilter.comp",
         "Environment preprocessing, step 2: one level of the GGX-prefiltered specular cube of \
          the split sum, by filtered importance sampling of the radiance cube (Krivanek & Colbert \
-         2008). Bind the level as a storage `image2DArray` and the radiance cube (with mips) as a \
+         2008); at roughness 1 (the irradiance level) an exact cosine-weighted sum over the \
+         radiance cube's 32² level instead (`samples` ignored; its level 0 where the cube is smaller). \
+         Bind the level as a storage `image2DArray` and the radiance cube (with mips) as a \
          `samplerCube`; push `CubePush` with this level's `size`, its `roughness` \
-         (level/(levels-1)), the radiance cube's level-0 `source_size` and `samples` (64); \
+         (level/(levels-1)), the radiance cube's level-0 `source_size` and `samples` (32·2^(level-1)); \
          dispatch `ceil(size/8)` x `ceil(size/8)` x 6 per level.",
     ),
     (

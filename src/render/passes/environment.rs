@@ -39,8 +39,10 @@ pub const SPECULAR_LEVELS: u32 = 5;
 /// samples (16 of them above the horizon at roughness 1) left the texel's value +50 % off.
 pub const PREFILTER_SAMPLES: u32 = 32;
 
-/// Samples per texel of specular level `level` ([`PREFILTER_SAMPLES`] doubling per level: 32, 64,
-/// 128, 256, 512 for levels 0 to 4; level 0 is a copy and takes none).
+/// Samples per texel of specular level `level` ([`PREFILTER_SAMPLES`] doubling per level: 32, 64
+/// and 128 for levels 1 to 3; level 0 is a copy and takes none, and the last level (roughness 1,
+/// the irradiance) is an exact sum over the radiance cube's 16² level, env_prefilter.comp, which
+/// ignores its count).
 pub fn prefilter_samples(level: u32) -> u32 {
     PREFILTER_SAMPLES << level.saturating_sub(1)
 }
