@@ -33,7 +33,7 @@ pub enum Pass {
     /// Fullscreen pass after tone mapping (`--aa fxaa`): edge anti-aliasing of the 8-bit image.
     Antialias,
     /// Compute passes, once per environment (cached by content hash): the radiance cube and its
-    /// mips, the GGX-prefiltered specular cube; the SH irradiance on the CPU.
+    /// mips, the GGX-prefiltered specular cube (its last level the irradiance); the SH on the CPU.
     Environment,
 }
 
@@ -1097,7 +1097,7 @@ impl fmt::Display for Plan {
             None => writeln!(f, "environment none (fixed hemispherical ambient)")?,
             Some(e) => writeln!(
                 f,
-                "environment {} {}x{}: radiance cube {}² ({} levels), specular cube {}² ({} levels), SH irradiance; IBL {}, rotation {}°, intensity {}, background {}",
+                "environment {} {}x{}: radiance cube {}² ({} levels), specular cube {}² ({} levels, the last the irradiance: an exact sum over the radiance cube's 32² level); IBL {}, rotation {}°, intensity {}, background {}",
                 e.name,
                 e.width,
                 e.height,

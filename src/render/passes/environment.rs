@@ -6,9 +6,10 @@
 //!    cube by `env_cube.comp`; the cube's other levels are box-filtered by blits;
 //! 2. `env_prefilter.comp` fills each level of the specular cube with the radiance convolved with
 //!    GGX of that level's roughness (the split sum's first factor), by filtered importance
-//!    sampling;
+//!    sampling; its last level (roughness 1) is the irradiance every diffuse term reads, an exact
+//!    cosine-weighted sum over the radiance cube's 32² level;
 //! 3. the order-2 SH irradiance is projected on the CPU in f64 ([`crate::env::Environment::sh9`]:
-//!    a few milliseconds, and exact where a GPU reduction would need a second pass).
+//!    a few milliseconds) for the package's consumers and the probes.
 //!
 //! The DFG table of the split sum does not depend on the environment: it is computed once per
 //! renderer on the CPU ([`crate::env::dfg_table`]) and uploaded.
