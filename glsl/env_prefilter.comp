@@ -3,7 +3,7 @@
 // sum (Karis 2013): for each texel direction R (with n = v = R), the radiance cube convolved with
 // the GGX distribution of `roughness`, weighted by n·l, by filtered importance sampling
 // (Křivánek & Colbert 2008: each sample reads the radiance cube at the mip level of its pdf);
-// roughness 1, the cosine-weighted mean, by an exact sum over the radiance cube's 16² level.
+// roughness 1, the cosine-weighted mean, by an exact sum over the radiance cube's 32² level.
 //
 // Dispatch ceil(size/8) x ceil(size/8) x 6.
 #extension GL_GOOGLE_include_directive : require
@@ -36,7 +36,7 @@ void main() {
     if (pc.roughness >= 1.0) {
         // Roughness 1, the irradiance level (env_irradiance): GGX at α = 1 with n = v reflects
         // uniformly over the sphere, so this level is the cosine-weighted mean of the radiance
-        // about n. Summed exactly over every texel of the radiance cube's 16² level (box-filtered
+        // about n. Summed exactly over every texel of the radiance cube's 32² level (box-filtered
         // from level 0, so every texel's light is in it) with its solid angle, not sampled: 256
         // samples of a map whose lights are small and bright (lightroom_14b: 0.5 % of its pixels
         // hold 30 % of its light) left it 8.6 % low straight up, where Monte Carlo over level 0

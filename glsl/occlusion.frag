@@ -186,7 +186,7 @@ void main() {
                 // pixel by occlusion_depth.frag).
                 ivec2 qt = clamp(ivec2(floor((top_q[side] - 0.5) * 0.5 + 0.5)), ivec2(0), half_size - 1);
                 uvec4 occluder = texelFetch(occluder_light, qt, 0);
-                vec3 ns = oct_decode((vec2(occluder.w & 0xffffu, occluder.w >> 16u) - 32768.0) / 32767.0);
+                vec3 ns = oct_decode(frame_decode(uvec4(occluder.w & 0xffffu, occluder.w >> 16u, 0u, 0u)).xy);
                 // Its front faces this pixel: the sample's normal (world) against the way back.
                 float toward = -dot(mat3(frame.view) * ns, top_delta[side]) / max(length(top_delta[side]), 1e-30);
                 // Its diffuse light, for a woven occluder with the coupled diffuse times that

@@ -42,7 +42,7 @@ pub const PREFILTER_SAMPLES: u32 = 32;
 
 /// Samples per texel of specular level `level` ([`PREFILTER_SAMPLES`] doubling per level: 32, 64
 /// and 128 for levels 1 to 3; level 0 is a copy and takes none, and the last level (roughness 1,
-/// the irradiance) is an exact sum over the radiance cube's 16² level, env_prefilter.comp, which
+/// the irradiance) is an exact sum over the radiance cube's 32² level, env_prefilter.comp, which
 /// ignores its count).
 pub fn prefilter_samples(level: u32) -> u32 {
     PREFILTER_SAMPLES << level.saturating_sub(1)

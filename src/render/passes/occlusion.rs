@@ -148,7 +148,7 @@ impl OcclusionPass {
             (1, OcclusionPlan::STEPS),
             (2, b),
         ];
-        let blur_constants = [(2, b)];
+        let bounce_constant = [(2, b)];
         let two = [OCCLUSION_FORMAT, OCCLUSION_BOUNCE_FORMAT];
         let push = std::mem::size_of::<OcclusionPush>() as u32;
         let i = bounce as usize;
@@ -160,7 +160,7 @@ impl OcclusionPass {
                 &depth_formats[..1 + bounce as usize],
                 &self.depth_layout,
                 0,
-                &blur_constants,
+                &bounce_constant,
                 Some(DepthTest::Always),
             )?;
             let estimate = make(
@@ -178,7 +178,7 @@ impl OcclusionPass {
                 &two,
                 &self.blur_layout,
                 0,
-                &blur_constants,
+                &bounce_constant,
                 Some(DepthTest::Farther),
             )?;
             let _ = self.pipelines[i].set([depth, estimate, blur]);
@@ -199,7 +199,7 @@ impl OcclusionPass {
                 &two,
                 &self.blur_layout,
                 0,
-                &blur_constants,
+                &bounce_constant,
                 None,
             )?;
             let _ = self.everywhere[i].set([estimate, blur]);
