@@ -11,6 +11,9 @@ layout(constant_id = 3) const uint LIGHT_TYPES = 7u;
 // 1: the scene has vertex colours (COLOR_0): each vertex's is read from the colour buffer and
 // passed on (0: none is read, gbuffer.frag multiplies nothing).
 layout(constant_id = 5) const uint VERTEX_COLORS = 0u;
+// 1: the scene has the world light (render::world_light, --occlusion gtao): each vertex's is
+// read from the world-light buffer where the draw has it (flags bit 1) and passed on.
+layout(constant_id = 10) const uint WORLD_LIGHT = 0u;
 // Lights out of range are skipped (as lighting.frag's RANGE_CULLING).
 const uint RANGE_CULLING = 1u;
 
@@ -24,14 +27,17 @@ layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 // COLOR_0, linear RGBA, one per vertex of the vertex buffer (indexed like it, by gl_VertexIndex,
 // which includes the draw's vertex offset); white where a mesh has none.
 layout(set = 0, binding = 4, std430) readonly buffer Colors { vec4 colors[]; };  // vertex colours (`vec4[]`, linear RGBA, glTF COLOR_0): one per vertex of the vertex buffer, indexed by `gl_VertexIndex` (vertex offset included), white for vertices without; read only when VERTEX_COLORS = 1
+// The world light baked per vertex of each draw that takes it (rgb: the scene's surfaces' light
+// over its hemisphere, irradiance/π; a: the environment's visibility), from draw.world_base.
+layout(set = 0, binding = 6, std430) readonly buffer WorldLight { vec4 world_light[]; };  // the world light (`vec4[]`: rgb bounce irradiance/π, a visibility; render::world_light), one per vertex of each draw that takes it, at `draw.world_base + gl_VertexIndex`; read only when WORLD_LIGHT = 1
 
 layout(push_constant, std430) uniform Draw {
     mat4 world;
     vec4 normal_matrix[3];  // columns of the inverse-transpose of world's 3x3 part
     uint material;
     float tangent_sign;     // -1 where world mirrors (negative determinant), else 1
-    uint flags;             // bit 0: the draw receives shadows
-    uint pad1;
+    uint flags;             // bit 0: the draw receives shadows; bit 1: it has the world light
+    uint world_base;        // where its world light begins, less its vertex offset (wrapping)
 } draw;
 
 layout(location = 0) in vec3 in_position;
@@ -51,6 +57,7 @@ layout(location = 4) out vec2 out_weave_uv;
 layout(location = 5) out vec3 out_gouraud;
 layout(location = 6) out vec2 out_uv1;
 layout(location = 7) out vec4 out_color;
+layout(location = 8) out vec4 out_world_light;
 // The depth pre-pass (depth.vert) computes the same clip position by the same expression, both
 // `precise`: equal bit for bit.
 precise gl_Position;
@@ -89,6 +96,9 @@ void main() {
     out_weave_uv = in_weave_uv;
     out_uv1 = in_uv1;
     out_color = VERTEX_COLORS != 0u ? colors[gl_VertexIndex] : vec4(1.0);
+    // Without the world light: no bounce, the environment open (what the lighting leaves as is).
+    out_world_light = WORLD_LIGHT != 0u && (draw.flags & 2u) != 0u
+                    ? world_light[draw.world_base + uint(gl_VertexIndex)] : vec4(0.0, 0.0, 0.0, 1.0);
     out_gouraud = vec3(0.0);
     if (SHADING == SHADING_GOURAUD) {
         uint fabric = uint(materials[draw.material].metallic_roughness.z + 0.5);

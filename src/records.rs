@@ -491,14 +491,19 @@ pub struct DrawPush {
     pub normal_matrix: [[f32; 4]; 3],
     pub material: u32,
     pub tangent_sign: f32,
-    /// Bit 0 ([`DRAW_RECEIVES_SHADOWS`]): shadows darken this draw.
+    /// Bit 0 ([`DRAW_RECEIVES_SHADOWS`]): shadows darken this draw; bit 1
+    /// ([`DRAW_WORLD_LIGHT`]): its vertices have the world light.
     pub flags: u32,
-    pub pad: u32,
+    /// With [`DRAW_WORLD_LIGHT`]: where the draw's vertices' world light begins in its buffer,
+    /// less the draw's vertex offset (gbuffer.vert adds `gl_VertexIndex`; wrapping).
+    pub world_base: u32,
 }
 const _: () = assert!(std::mem::size_of::<DrawPush>() == 128);
 
 /// `DrawPush::flags`: the draw receives shadows.
 pub const DRAW_RECEIVES_SHADOWS: u32 = 1;
+/// `DrawPush::flags`: the draw's vertices have the world light (render::world_light).
+pub const DRAW_WORLD_LIGHT: u32 = 2;
 
 impl DrawPush {
     pub fn new(world: Mat4, material: u32) -> DrawPush {
@@ -516,7 +521,7 @@ impl DrawPush {
             material,
             tangent_sign: if det < 0.0 { -1.0 } else { 1.0 },
             flags: DRAW_RECEIVES_SHADOWS,
-            pad: 0,
+            world_base: 0,
         }
     }
 }

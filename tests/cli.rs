@@ -366,7 +366,7 @@ fn help_lists_the_values_of_every_choice() {
         "[possible values: nearest, filtered-params, mixture, supersampled:N]",
         "[possible values: rgba8, rgba16f, analytic, sat]",
         "[possible values: none, albedo, normals, tangents, roughness-metallic, coverage, thread-dir, depth, occlusion]",
-        "[possible values: gtao, gtao:R, gtao-nobounce, gtao-nobounce:R, none]",
+        "[possible values: gtao, gtao:R, gtao-screen, gtao-screen:R, gtao-nobounce, gtao-nobounce:R, none]",
         "[possible values: gouraud, phong, ashikhmin-shirley, fabric]",
     ] {
         assert!(help.contains(values), "{values} missing from:\n{help}");
@@ -379,6 +379,7 @@ fn help_lists_the_values_of_every_choice() {
         ("--debug-view", "thread-dir"),
         ("--debug-view", "occlusion"),
         ("--occlusion", "gtao:0.25"),
+        ("--occlusion", "gtao-screen"),
         ("--occlusion", "none"),
         ("--shading", "ashikhmin-shirley"),
     ] {

@@ -164,6 +164,7 @@ fn a_wall_occludes_the_floor_as_the_truth_says() {
         Occlusion::Gtao {
             radius: Some(4.0),
             bounce: true,
+            world: false,
         },
     );
     let plan = Plan::new(&scene, &o);
@@ -232,6 +233,7 @@ fn the_multi_bounce_takes_the_albedo_s_colour() {
     let occlusion = Occlusion::Gtao {
         radius: Some(4.0),
         bounce: false,
+        world: false,
     };
     let visibility = renderer
         .render(&scene, &lit(occlusion, DebugView::Occlusion))
@@ -343,7 +345,8 @@ fn the_plan_runs_the_pass_only_where_it_is_read() {
         Occlusion::parse("gtao:0.5").unwrap(),
         Occlusion::Gtao {
             radius: Some(0.5),
-            bounce: true
+            bounce: true,
+            world: true,
         }
     );
     assert_eq!(Occlusion::parse("gtao").unwrap(), Occlusion::DEFAULT);
@@ -353,7 +356,20 @@ fn the_plan_runs_the_pass_only_where_it_is_read() {
             o,
             Occlusion::Gtao {
                 radius,
-                bounce: false
+                bounce: false,
+                world: false,
+            }
+        );
+        assert_eq!(o.name(), text);
+    }
+    for (text, radius) in [("gtao-screen", None), ("gtao-screen:2", Some(2.0))] {
+        let o = Occlusion::parse(text).unwrap();
+        assert_eq!(
+            o,
+            Occlusion::Gtao {
+                radius,
+                bounce: true,
+                world: false,
             }
         );
         assert_eq!(o.name(), text);
@@ -410,6 +426,7 @@ fn the_occluders_bounce_takes_their_colour_where_it_exceeds_the_fit() {
                 Occlusion::Gtao {
                     radius: Some(4.0),
                     bounce,
+                    world: false,
                 },
             );
             o.debug_view = debug_view;
@@ -469,4 +486,187 @@ fn the_occluders_bounce_takes_their_colour_where_it_exceeds_the_fit() {
         );
     }
     renderer.context().check_validation().unwrap();
+}
+
+/// A floor of `cols` x `rows` vertices over x in [-2, 2] and z in `zs` (facing +y), so the
+/// world light, baked per vertex, has vertices at those distances from the wall.
+fn floor_grid(zs: &[f32], cols: usize) -> Mesh {
+    let mut vertices = Vec::new();
+    for &z in zs {
+        for i in 0..cols {
+            let x = -2.0 + 4.0 * i as f32 / (cols - 1) as f32;
+            vertices.push(Vertex {
+                position: [x, 0.0, z],
+                normal: [0.0, 1.0, 0.0],
+                tangent: [1.0, 0.0, 0.0, 1.0],
+                uv: [0.0; 2],
+                uv1: [0.0; 2],
+            });
+        }
+    }
+    let mut indices = Vec::new();
+    for r in 0..zs.len() as u32 - 1 {
+        for i in 0..cols as u32 - 1 {
+            let (a, b) = (r * cols as u32 + i, (r + 1) * cols as u32 + i);
+            indices.extend_from_slice(&[a, b, b + 1, a, b + 1, a + 1]);
+        }
+    }
+    Mesh {
+        name: "floor grid".into(),
+        vertices,
+        indices,
+        material: 0,
+        colors: Vec::new(),
+        topology: Topology::Triangles,
+    }
+}
+
+/// The world light's visibility (render::world_light: rays per vertex against a BVH, on the
+/// CPU) against the same independent truth as the screen's: the floor before the wall, each
+/// distance's row of vertices averaged (41 vertices of 64 rays each: a standard error about
+/// 0.01), and its bounce against the wall's light: under a uniform sky of radiance 1 the grey
+/// wall (0.5) sends back 0.5 times its own visibility, so the floor's bounce is at most
+/// 0.5 · (1 − visibility) and at least a quarter of it (the wall's visibility, seen from the
+/// floor, is between 0.5 at its foot and 1 at its top).
+#[test]
+fn the_world_light_sees_the_wall_as_the_truth_says() {
+    use weft::render::world_light::{bake, SkyLight};
+    let mut scene = wall_scene(true);
+    let zs = [0.25f32, 0.5, 1.0, 2.0];
+    scene.meshes[0] = floor_grid(&zs, 41);
+    let sky = SkyLight {
+        sh: weft::env::Environment::uniform([1.0; 3]).sh9(),
+        rotation: 0.0,
+        intensity: 1.0,
+    };
+    let b = bake(&scene, &sky);
+    let base = b.base[0].expect("the floor receives") as usize;
+    for (r, &z) in zs.iter().enumerate() {
+        let row = &b.texels[base + r * 41..base + (r + 1) * 41];
+        let v = row.iter().map(|t| t[3]).sum::<f32>() / 41.0;
+        let bounce = row.iter().map(|t| t[0]).sum::<f32>() / 41.0;
+        let truth = wall_visibility_truth(z as f64, 400) as f32;
+        println!("d = {z}: world visibility {v:.4}, truth {truth:.4}; bounce {bounce:.4}");
+        assert!((v - truth).abs() < 0.03, "d = {z}: {v} against {truth}");
+        let hidden = 1.0 - truth;
+        assert!(
+            bounce <= 0.5 * hidden + 0.02 && bounce >= 0.25 * hidden - 0.02,
+            "d = {z}: bounce {bounce} for {hidden} of the hemisphere hidden"
+        );
+    }
+}
+
+/// What the world light is for: an occluder the screen cannot see. A red plate (y = 0.5, in
+/// front of a light grey wall) seen exactly edge-on from a camera level with it is not on the
+/// screen at all, yet the wall just above it sees the plate's top over half its hemisphere, lit
+/// red by the white sky. With `--occlusion gtao` the wall there turns red (its red over its green
+/// rises from 1 to about 1.8: half its sky is the plate, whose red albedo is 0.9, and the fit
+/// gives back no grey bounce for what only the world sees); with
+/// `gtao-screen` it keeps its grey, as the screen shows nothing there. And where the plan leaves
+/// the world light out (a material with KHR_materials_specular's data takes the target), `gtao`
+/// renders exactly as `gtao-screen`.
+#[test]
+fn the_world_light_brings_back_what_the_screen_hides() {
+    let ctx = common::context();
+    let mut renderer = Renderer::new(ctx).expect("renderer");
+    let w = 3.0f32;
+    // Vertices every 0.1 across and 0.05 to 0.25 up: the world light counts an occluder fully
+    // from as far as the longest edge of a vertex's triangles (world_light::reach).
+    let rows = [
+        0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.9, 1.0, 1.25, 1.5, 1.75,
+        1.9, 2.0,
+    ];
+    let mut wall = floor_grid(&rows, 61);
+    // The grid stood up: (x, 0, z) -> (x, z, 0), facing +z.
+    for v in &mut wall.vertices {
+        v.position = [v.position[0] * w / 2.0, v.position[2], 0.0];
+        v.normal = [0.0, 0.0, 1.0];
+    }
+    wall.indices.chunks_exact_mut(3).for_each(|t| t.swap(1, 2));
+    let plate = quad(
+        "plate",
+        [[-w, 0.5, 3.0], [w, 0.5, 3.0], [w, 0.5, 0.0], [-w, 0.5, 0.0]],
+        [0.0, 1.0, 0.0],
+    );
+    let mut scene = wall_scene(false);
+    scene.meshes = vec![wall, plate];
+    scene.meshes[1].material = 1;
+    scene.materials[0].base_color = [0.8, 0.8, 0.8, 1.0];
+    scene.materials[0].specular.factor = 1.0;
+    let mut red = scene.materials[0].clone();
+    red.name = "red".into();
+    red.base_color = [0.9, 0.05, 0.05, 1.0];
+    scene.materials.push(red);
+    scene.draws = vec![Draw::new(0, Mat4::IDENTITY), Draw::new(1, Mat4::IDENTITY)];
+    let env = weft::env::EnvLighting::new(std::sync::Arc::new(weft::env::Environment::uniform(
+        [1.0; 3],
+    )));
+    let camera = scene
+        .look_at_camera(
+            Vec3::new(0.0, 0.5, 6.0),
+            Vec3::new(0.0, 0.5, 0.0),
+            40f32.to_radians(),
+        )
+        .expect("a valid camera");
+    let lit = |scene: &Scene, world: bool| {
+        let o = RenderOptions {
+            width: 160,
+            height: 120,
+            camera_override: Some(camera.clone()),
+            occlusion: Occlusion::Gtao {
+                radius: Some(2.0),
+                bounce: true,
+                world,
+            },
+            environment: Some(env.clone()),
+            ..Default::default()
+        };
+        let plan = Plan::new(scene, &o);
+        (o, plan)
+    };
+    let (o, plan) = lit(&scene, true);
+    assert!(
+        plan.occlusion.as_ref().is_some_and(|p| p.world.is_some()),
+        "{plan}"
+    );
+    let with = renderer.render(&scene, &o).expect("render");
+    let (o, plan) = lit(&scene, false);
+    assert!(plan.occlusion.as_ref().is_some_and(|p| p.world.is_none()));
+    let without = renderer.render(&scene, &o).expect("render");
+    // The plate is edge-on: no pixel shows it (every covered pixel is the wall's grey, the
+    // screen-only render's red equal to its green).
+    let at = |img: &weft::render::Frame, y: f32| {
+        let (x, py) = pixel_of(&o, Vec3::new(0.0, y, 0.0));
+        let i = (py * o.width as usize + x) * 4;
+        [img.hdr[i], img.hdr[i + 1], img.hdr[i + 2]]
+    };
+    let mut ratios = Vec::new();
+    for y in [0.6f32, 0.75, 1.9] {
+        let (a, b) = (at(&with, y), at(&without, y));
+        println!("wall at y = {y}: with the world light {a:?}, screen alone {b:?}");
+        assert!(
+            (b[0] / b[1] - 1.0).abs() < 0.02,
+            "screen alone at {y}: {b:?}"
+        );
+        ratios.push(a[0] / a[1]);
+    }
+    // Just above the plate half the wall's sky is the plate: its green falls to about the sky's
+    // half (0.5 + 0.05 · 0.5 of the wall's 0.8), its red stays near 0.5 + 0.9 · 0.5 (measured
+    // on lavapipe: red over green 1.7 at y = 0.6); higher up the plate is less of the sky.
+    assert!(ratios[0] > 1.4 && ratios[1] > 1.4, "{ratios:?}");
+    assert!(ratios[2] < ratios[1] && ratios[2] > 1.0, "{ratios:?}");
+    // Where the plan cannot take the target, gtao renders as gtao-screen, bit for bit.
+    scene.materials[0].specular.factor = 0.9;
+    let (o, plan) = lit(&scene, true);
+    let why = plan
+        .occlusion
+        .as_ref()
+        .and_then(|p| p.world_off.clone())
+        .expect("the world light is left out");
+    assert!(why.contains("KHR_materials_specular"), "{why}");
+    let asked = renderer.render(&scene, &o).expect("render");
+    let (o, _) = lit(&scene, false);
+    let screen = renderer.render(&scene, &o).expect("render");
+    assert_eq!(asked.ldr, screen.ldr);
+    assert_eq!(asked.hdr, screen.hdr);
 }

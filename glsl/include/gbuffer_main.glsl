@@ -42,6 +42,10 @@ layout(constant_id = 8) const uint MATERIAL_KIND = 0u;
 // The texture slots some material of the scene has a texture in (bit SLOT_*): the others are
 // not sampled (sample_slot, surface.glsl).
 layout(constant_id = 9) const uint TEXTURE_SLOTS = 0x7FFFFu;
+// 1: the scene has the world light (render::world_light): the specular target carries each
+// pixel's, interpolated from its vertices (gbuffer.vert), in place of KHR_materials_specular's
+// data, which the plan then knows no material has (the lighting takes F0 from the material).
+layout(constant_id = 10) const uint WORLD_LIGHT = 0u;
 // The G-buffer draws no clear coat (coated draws go to the transparent pass): surface.glsl's coat
 // code is compiled out.
 const uint COAT = 0u;
@@ -60,7 +64,7 @@ layout(location = 1) out uvec4 gb_frame;    // RGBA16_UINT: octahedral normal (x
 layout(location = 2) out vec4 gb_surface;   // RGBA16F: roughness, material index, tangent sign, 1 if it receives shadows
 layout(location = 3) out vec4 gb_fabric;    // RGBA16F: c_warp, c_weft and each shadow-weighted (s_warp, s_weft)
 layout(location = 4) out vec4 gb_emissive;  // RGBA16F: emitted radiance, a: ambient occlusion
-layout(location = 5) out vec4 gb_specular;  // RGBA16F: the dielectric's F0 (rgb), specular weight
+layout(location = 5) out vec4 gb_specular;  // RGBA16F: the dielectric's F0 (rgb), specular weight; with WORLD_LIGHT the world light (rgb bounce irradiance/π, a visibility)
 
 void main() {
     GSurface s = material_surface();
@@ -69,7 +73,10 @@ void main() {
     gb_surface = s.surface;
     gb_fabric = s.fabric;
     gb_emissive = s.emissive;
-    gb_specular = s.specular;
+    // The world light is its vertices' front hemisphere's: a double-sided surface's back face
+    // keeps the screen's occlusion alone.
+    gb_specular = WORLD_LIGHT != 0u ? (gl_FrontFacing ? in_world_light : vec4(0.0, 0.0, 0.0, 1.0))
+                                    : s.specular;
     if (ALPHA_MASK != 0u && alpha_cut(materials[draw.material], s.alpha)) {
         discard;
     }

@@ -44,7 +44,12 @@ layout(constant_id = 9) const uint UNLIT = 0u;
 // visibility, raised for light bounced between occluders (a fit), multiplies the material's
 // occlusion texture in the environment's light; 2 (--occlusion gtao): the same, and where the
 // occluders' light the pass measured on screen exceeds what the fit gives back, the excess is
-// added to the diffuse and sheen light; 0: it is not read.
+// added to the diffuse and sheen light (--occlusion gtao-screen); 3 (--occlusion gtao, where the
+// plan bakes the world light): the same with the world light (render::world_light) from the
+// G-buffer's specular target: the lesser of the screen's visibility and the world's, the greater
+// of the two bounces (KHR_materials_specular's data then the material's F0, weight 1); 0: it is
+// not read. (Bit 1, 2 and 3, is the occluders' bounce: tested with `&`, which spirq evaluates
+// where it does not evaluate `||` of two comparisons.)
 layout(constant_id = 10) const uint OCCLUSION = 0u;
 // 1: a debug view (frame.debug_view) may show a G-buffer target instead of the lit image; 0: that
 // code is compiled out.
@@ -149,7 +154,7 @@ void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels) {
 // estimates around it (each made at the top-left pixel of its 2 x 2 block), bilinearly, each
 // weighted by how close its distance is to the pixel's (an edge does not take the visibility of
 // what is behind it); 1 where no estimate lies on the pixel's surface. `bounced`: the occluders'
-// light (OCCLUSION 2) with the same weights; 0 where no estimate lies on the surface.
+// light (OCCLUSION 2 and 3) with the same weights; 0 where no estimate lies on the surface.
 float screen_visibility(ivec2 px, float dist, out vec3 bounced) {
     ivec2 size = textureSize(screen_occlusion, 0);
     ivec2 c = px / 2;
@@ -166,7 +171,7 @@ float screen_visibility(ivec2 px, float dist, out vec3 bounced) {
             vec2 s = texelFetch(screen_occlusion, min(c + ivec2(x, y), size - 1), 0).rg;
             float w = s.y > 0.0 ? bilinear * clamp(1.0 - abs(s.y - dist) / (0.05 * dist), 0.0, 1.0) : 0.0;
             sum += w * s.x;
-            if (OCCLUSION == 2u) {
+            if ((OCCLUSION & 2u) != 0u) {
                 bounce_sum += w * texelFetch(screen_bounce, min(c + ivec2(x, y), size - 1), 0).rgb;
             }
             weights += w;
@@ -174,6 +179,16 @@ float screen_visibility(ivec2 px, float dist, out vec3 bounced) {
     }
     bounced = weights > 1e-6 ? bounce_sum / weights : vec3(0.0);
     return weights > 1e-6 ? sum / weights : 1.0;
+}
+
+// The world light (render::world_light; `world`: the G-buffer's specular target, rgb the scene's
+// surfaces' light over the vertex's hemisphere as irradiance/π, a the environment's visibility)
+// with the screen's: the world sees the occluders the screen hides, the screen the detail
+// between vertices, so the visibility is the lesser (returned: what the world sees hidden beyond
+// the screen's `screen`) and the occluders' light `bounced` the greater of the two, per channel.
+float world_hidden(float screen, inout vec3 bounced, vec4 world) {
+    bounced = max(bounced, world.rgb);
+    return max(screen - world.a, 0.0);
 }
 
 // The view distance occlusion.frag measures: from the eye, or along the view axis when
@@ -211,6 +226,9 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
         vec4 hp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
         vec3 bounced;
         float screen = OCCLUSION != 0u ? screen_visibility(px, view_distance(hp.xyz / hp.w), bounced) : 1.0;
+        if (OCCLUSION == 3u) {
+            screen -= world_hidden(screen, bounced, texelFetch(gb_specular, px, 0));
+        }
         return vec3(screen * texelFetch(gb_emissive, px, 0).a);
     }
     if (view == DEBUG_DEPTH) {
@@ -269,23 +287,36 @@ void main() {
         // the specular occlusion the grey one of the albedo's luminance.
         vec3 bounced;
         float visibility = screen_visibility(px, view_distance(p), bounced);
-        float grey = gtao_multibounce(visibility, dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722)));
+        // The sky the world light sees hidden and the screen does not (OCCLUSION 3): taken
+        // away from the fit's result as it is (no bounce of it credited but the measured one),
+        // so the fit gives back multiple bounces only for the occluders the screen shows, whose
+        // colour it takes to be the surface's; the world light knows the hidden ones' colour.
+        float hidden = OCCLUSION == 3u ? world_hidden(visibility, bounced, texelFetch(gb_specular, px, 0)) : 0.0;
+        float grey = gtao_multibounce(visibility, dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722))) - hidden;
         vec3 coloured = vec3(gtao_multibounce(visibility, albedo.r), gtao_multibounce(visibility, albedo.g),
-                             gtao_multibounce(visibility, albedo.b));
-        if (OCCLUSION == 2u) {
+                             gtao_multibounce(visibility, albedo.b)) - hidden;
+        visibility -= hidden;
+        if ((OCCLUSION & 2u) != 0u) {
             // The occluders' own light that the screen shows (occlusion.frag: one bounce of the
-            // environment's off them), where it exceeds what the fit gives back: per channel, the
-            // diffuse light is the larger of the fit's and the visible environment's plus the
-            // measured bounce (the fit knows the bounces the screen cannot show; the screen, the
-            // occluders' real colour and light). Both under the material's occlusion texture.
+            // environment's off them), and the world light's, where it exceeds what the fit
+            // gives back: per channel, the diffuse light is the larger of the fit's and the
+            // visible environment's plus the measured bounce (the fit knows the bounces the
+            // screen cannot show; the screen and the world, the occluders' real colour and
+            // light). Both under the material's occlusion texture.
             vec3 e = env_irradiance(oct_decode(fr.xy));
             indirect = max(bounced - e * (coloured - visibility), vec3(0.0)) * emissive_ao.a;
         }
         emissive_ao.a *= grey;
         bounce = grey > 1e-4 ? coloured / grey : vec3(1.0);
     }
+    // With the world light in the specular target, the material's own dielectric layer: F0 from
+    // its index of refraction, weight 1 (the plan leaves the world light out where a material has
+    // KHR_materials_specular's data; surface.glsl writes the same for the others).
+    vec4 specular = OCCLUSION == 3u
+        ? vec4(vec3(min(materials[min(uint(surface.y + 0.5), frame.material_count - 1u)].extra.x, 1.0)), 1.0)
+        : texelFetch(gb_specular, px, 0);
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),
-                                  emissive_ao, texelFetch(gb_specular, px, 0),
+                                  emissive_ao, specular,
                                   vec4(0.0), vec4(1.0), vec4(0.0), vec3(0.0, 0.0, 1.0), vec4(0.0),
                                   vec4(0.0), bounce, indirect);
     // Never NaN or Inf into the image.

@@ -43,7 +43,7 @@ layout(push_constant, std430) uniform Draw {
     uint material;
     float tangent_sign;
     uint flags;             // bit 0: the draw receives shadows
-    uint pad1;
+    uint world_base;        // gbuffer.vert's (the world light's offset)
 } draw;
 
 layout(location = 0) in vec3 in_world_pos;
@@ -54,6 +54,7 @@ layout(location = 4) in vec2 in_weave_uv;
 layout(location = 5) in vec3 in_gouraud;
 layout(location = 6) in vec2 in_uv1;
 layout(location = 7) in vec4 in_color;
+layout(location = 8) in vec4 in_world_light;
 
 
 // The G-buffer's six values of one surface point (gbuffer.frag's outputs, before storage), and

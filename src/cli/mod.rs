@@ -156,12 +156,15 @@ struct SceneArgs {
     ibl_pool: u32,
     /// Occlusion of the environment's light: gtao (screen-space ground-truth ambient occlusion
     /// from the depth buffer, out to 0.3 of the scene's size; the light bounced between
-    /// occluders from a fit, and the occluders' own light the screen shows where it is more),
-    /// gtao:R (out to R world units), gtao-nobounce[:R] (the fit alone), or none (occlusion
-    /// textures only). Runs only when an environment lights the scene.
+    /// occluders from a fit, and the occluders' own light the screen shows where it is more;
+    /// and, for a static scene, the world light: what each vertex sees of the whole scene,
+    /// baked by rays on the CPU, for the occluders the screen does not show), gtao:R (out to R
+    /// world units), gtao-screen[:R] (the screen's alone, no world light), gtao-nobounce[:R] (the
+    /// fit alone), or none (occlusion textures only). Runs only when an environment lights the
+    /// scene.
     #[arg(long, default_value = "gtao", value_parser = Choice::new(
         render::Occlusion::parse,
-        &["gtao", "gtao:R", "gtao-nobounce", "gtao-nobounce:R", "none"],
+        &["gtao", "gtao:R", "gtao-screen", "gtao-screen:R", "gtao-nobounce", "gtao-nobounce:R", "none"],
     ))]
     occlusion: render::Occlusion,
     /// Punctual lights: auto (the file's; a default key light with a shadow and a ground when it

@@ -273,7 +273,9 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
                 .wall_ms
                 .map(|w| format!("{w:.2}"))
                 .unwrap_or_else(|| "-".into());
-            let note = if t.name == "environment" && frame.stats.environment_from_disk {
+            let note = if (t.name == "environment" && frame.stats.environment_from_disk)
+                || (t.name == "world light" && frame.stats.world_light_from_disk)
+            {
                 "   (from weft's cache on disk)"
             } else {
                 ""

@@ -77,9 +77,11 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
          vec2: the uv with whole weave repeats removed per mesh) and uv1 (5, vec2: TEXCOORD_1), and, \
          for SHADING = 1 (Gouraud), per-vertex lighting of fabric at output location 5 for \
          gbuffer.frag; the vertex colour (COLOR_0, from a storage buffer, white unless \
-         VERTEX_COLORS = 1) at output location 7. Push constants per draw: `mat4 \
-         world`, `vec4 normal_matrix[3]`, `uint material`, `float tangent_sign`, two pad words \
-         (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
+         VERTEX_COLORS = 1) at output location 7; the world light (from a storage buffer, \
+         (0, 0, 0, 1) unless WORLD_LIGHT = 1 and the draw's flags bit 1 is set) at output \
+         location 8. Push constants per draw: `mat4 world`, `vec4 normal_matrix[3]`, `uint \
+         material`, `float tangent_sign`, `uint flags` (bit 0 receives shadows, bit 1 has the \
+         world light), `uint world_base` (128 bytes, visible to the vertex and fragment stages). glTF winding: counter-clockwise \
          front faces; the projection flips y. Its clip position is `precise`, computed as \
          depth.vert computes it.",
     ),
@@ -360,6 +362,8 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("gbuffer.frag", 6, "ALPHA_MASK: 1 discards pixels of alphaMode MASK materials (`Material.extra.w` flag 8) whose base colour alpha (factor x texture x vertex colour) is below the cutoff `Material.alpha.x`, after every target is written; 0 (default) compiles the discard out"),
     ("gbuffer.frag", 8, "MATERIAL_KIND: what the pipeline draws: 0 (default) any material; 1 only fabric (materials whose `metallic_roughness.z` names a fabric record), the glTF extensions compiled out; 2 only glTF materials, the weave's code compiled out"),
     ("gbuffer.frag", 9, "TEXTURE_SLOTS: bit mask of the material texture slots (set 1 bindings 0-19 as `SLOT_*` of frame.glsl: bit 0 base colour, 2 normal, ...) that are sampled; a slot whose bit is clear reads the stand-in value (flat normal (128/255, 128/255, 1, 1) for the normal and clearcoat-normal slots, white otherwise) without sampling (default 0x7FFFF, all)"),
+    ("gbuffer.vert", 10, "WORLD_LIGHT: 1 reads each vertex's world light (set 0, binding 6, `vec4[]`: rgb the scene's surfaces' light over its hemisphere as irradiance/pi, a the environment's cosine-weighted visibility) at `world_base + gl_VertexIndex` for draws whose flags bit 1 is set, and writes it to output location 8 ((0, 0, 0, 1) otherwise); 0 (default) reads none"),
+    ("gbuffer.frag", 10, "WORLD_LIGHT: 1 writes the interpolated world light (input location 8; (0, 0, 0, 1) on back faces) to the specular target instead of KHR_materials_specular's F0 and weight; 0 (default) writes those"),
     ("gbuffer.frag", 7, "THREAD_COLOURS: 1 reads fabrics' thread-by-thread colours (`GpuFabric.flags` bit 3) from the `ThreadColours` buffer (set 0 binding 5) into the albedo target; 0 (default) compiles that out (the buffer may then hold one zero vec4)"),
     ("forward.frag", 0, "ACCURACY: as gbuffer.frag's and lighting.frag's"),
     ("forward.frag", 1, "WEAVE_SOURCE: as gbuffer.frag's"),
@@ -382,7 +386,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("forward.frag", 21, "COAT: 1 shades KHR_materials_clearcoat surfaces (`Material.extra.w` flag 64) with their coat; 0 (default) compiles that out"),
     ("forward.frag", 20, "TRANSMISSION: 1 reads the backdrop for KHR_materials_transmission surfaces (`Material.extra.w` flag 32); 0 (default) compiles that out"),
     ("shadow_mask.vert", 0, "VERTEX_COLORS: 1 reads each vertex's colour alpha (set 0, binding 4) for shadow_mask.frag; 0 (default) reads none (alpha 1)"),
-    ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 2 also adds the occluders' bounced light (binding 29) where it exceeds that; 0 (default) uses the texture alone and reads nothing at bindings 27 and 29"),
+    ("lighting.frag", 10, "OCCLUSION: 1 multiplies the environment's light by the occlusion pass's visibility (binding 27, raised for light bounced between occluders by the surface's albedo) times the material's occlusion texture; 2 also adds the occluders' bounced light (binding 29) where it exceeds that; 3 as 2 with the world light from the G-buffer's specular target (binding 26, written by gbuffer.frag with WORLD_LIGHT = 1): the lesser of the two visibilities, the fit credited only for the screen's, and the greater of the two bounces, the dielectric's F0 then from `Material.extra.x` with weight 1; 0 (default) uses the texture alone and reads nothing at bindings 27 and 29"),
     ("occlusion.frag", 0, "SLICES: slices per pixel (default 2; the blur averages 16 x SLICES directions)"),
     ("occlusion.frag", 1, "STEPS: depth samples per side of a slice (default 6)"),
     ("occlusion_depth.frag", 2, "BOUNCE: 1 also writes each texel's pixel as an occluder (location 1); 0 (default) writes depth alone and reads nothing at bindings 0, 1, 2, 14, 20, 21, 22 and 23"),

@@ -74,6 +74,8 @@ pub struct FrameStats {
     /// This frame prepared its environment from weft's cache on disk (crate::cache) instead of
     /// preprocessing it.
     pub environment_from_disk: bool,
+    /// Whether this frame's world light was read from weft's cache on disk (render::world_light).
+    pub world_light_from_disk: bool,
 }
 
 /// A rendered frame, read back.
@@ -287,6 +289,11 @@ struct FrameBuffers {
     /// The lamps with each caster's map index (None: the scene's own records serve).
     lights: Option<Buffer>,
     forced_colors: Option<Buffer>,
+    /// The world light when the plan has it (the scene's, kept while this frame is in flight),
+    /// and how long its bake took when this frame baked it (and whether it came from weft's
+    /// cache on disk).
+    world_light: Option<std::sync::Arc<super::upload::WorldLightGpu>>,
+    world_light_ms: Option<(f64, bool)>,
 }
 
 /// An overlapped frame on the device: its submission, and what its commands read that is its
@@ -888,6 +895,55 @@ impl Renderer {
         make_targets(&self.ctx, targets, options, plan)
     }
 
+    /// The scene's world light under `env` (render::world_light): the one baked before when its
+    /// environment is this frame's, else baked now (on the CPU) and uploaded (with the bake's
+    /// milliseconds).
+    fn world_light(
+        &self,
+        scene: &Scene,
+        gpu: &GpuScene,
+        env: &crate::env::EnvLighting,
+    ) -> crate::Result<(
+        std::sync::Arc<super::upload::WorldLightGpu>,
+        Option<(f64, bool)>,
+    )> {
+        let key = (
+            env.env.hash(),
+            env.rotation.to_bits(),
+            env.intensity.to_bits(),
+        );
+        let mut cached = gpu
+            .world_light
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(w) = cached.as_ref().filter(|w| w.key == key) {
+            return Ok((w.clone(), None));
+        }
+        let start = Instant::now();
+        let sky = super::world_light::SkyLight {
+            sh: env.env.sh9(),
+            rotation: env.rotation,
+            intensity: env.intensity,
+        };
+        let (bake, from_disk) = super::world_light::bake_cached(scene, &sky);
+        let mut texels = bake.texels;
+        if texels.is_empty() {
+            texels.push([0.0, 0.0, 0.0, 1.0]); // a storage buffer cannot be empty
+        }
+        let buffer = self.ctx.create_buffer_with(
+            "world light",
+            BufferUsageFlags::STORAGE_BUFFER,
+            &texels,
+        )?;
+        let w = std::sync::Arc::new(super::upload::WorldLightGpu {
+            key,
+            buffer,
+            base: bake.base,
+        });
+        *cached = Some(w.clone());
+        Ok((w, Some((start.elapsed().as_secs_f64() * 1e3, from_disk))))
+    }
+
     /// The frame's own buffers (see [`FrameBuffers`]); makes the shadow atlas of the plan's size.
     fn frame_buffers(
         &mut self,
@@ -1001,7 +1057,19 @@ impl Renderer {
         } else {
             None
         };
+        let (world_light, world_light_ms) = match (
+            plan.occlusion.as_ref().and_then(|o| o.world.as_ref()),
+            &options.environment,
+        ) {
+            (Some(_), Some(env)) => {
+                let (w, ms) = self.world_light(scene, gpu, env)?;
+                (Some(w), ms)
+            }
+            _ => (None, None),
+        };
         Ok(FrameBuffers {
+            world_light,
+            world_light_ms,
             frame,
             proj: Mat4::from_cols_array_2d(&frame_data.proj),
             tile_lights,
@@ -1123,6 +1191,13 @@ impl Renderer {
             )?,
         };
         let buffers = self.frame_buffers(scene, gpu, &plan, options, &camera, keys.env)?;
+        if let Some((ms, _)) = buffers.world_light_ms {
+            timings.push(PassTiming {
+                name: "world light",
+                gpu_ms: None,
+                wall_ms: Some(ms),
+            });
+        }
         // The frame in flight (overlapped frames): waited for after this one is recorded.
         let previous = self.in_flight.take();
 
@@ -1158,6 +1233,7 @@ impl Renderer {
             draws: gpu.draws.len(),
             triangles: gpu.triangles,
             environment_from_disk: keys.env_from_disk,
+            world_light_from_disk: buffers.world_light_ms.is_some_and(|(_, disk)| disk),
             light_slices: buffers.light_slices,
             ..Default::default()
         };
@@ -1201,6 +1277,7 @@ impl Renderer {
                         material_kinds: plan.material_kinds,
                         fabric_as_pbr: options.fabric_as_pbr,
                         depth_prepass: plan.depth_prepass > 0,
+                        world_light: buffers.world_light.as_deref(),
                     },
                 )?),
                 Pass::Shadow if buffers.shadow_tiles.is_empty() => {}

@@ -6,6 +6,7 @@ mod passes;
 mod readback;
 mod targets;
 mod upload;
+pub mod world_light;
 /// The GPU records (`crate::records`), under their old name.
 pub use crate::records as gpu;
 pub use crate::records::{Shading, MAX_SIZE};
@@ -455,39 +456,51 @@ pub enum Occlusion {
     /// scene when nothing casts). The light bounced between occluders is given back by a fit
     /// from the surface's own albedo (Jimenez et al. 2016); with `bounce` (`gtao`), also the
     /// occluders' own light where the screen shows more of it than the fit gives (one bounce of
-    /// the environment's diffuse light off what hides it); `gtao-nobounce`: the fit alone.
-    Gtao { radius: Option<f32>, bounce: bool },
+    /// the environment's diffuse light off what hides it); `gtao-nobounce`: the fit alone. With
+    /// `world` (`gtao`, with the bounce), also what each vertex sees of the whole scene, baked
+    /// by rays where the scene is static ([`world_light`]): the occluders and their light that
+    /// the screen does not show; `gtao-screen`: the screen's alone.
+    Gtao {
+        radius: Option<f32>,
+        bounce: bool,
+        world: bool,
+    },
 }
 
 impl Occlusion {
     /// The radius of `Gtao { radius: None }`, as a fraction of the scene's diagonal.
     pub const RADIUS_OF_DIAGONAL: f32 = 0.3;
 
-    /// The default of `weft render` and `weft view`: GTAO with the occluders' bounce, at the
-    /// scene's radius.
+    /// The default of `weft render` and `weft view`: GTAO with the occluders' bounce and the
+    /// world light, at the scene's radius.
     pub const DEFAULT: Occlusion = Occlusion::Gtao {
         radius: None,
         bounce: true,
+        world: true,
     };
 
-    /// `none`, `gtao`, `gtao:R` (R > 0, world units), `gtao-nobounce` or `gtao-nobounce:R`.
+    /// `none`, `gtao`, `gtao:R` (R > 0, world units), `gtao-screen[:R]` or `gtao-nobounce[:R]`.
     pub fn parse(text: &str) -> crate::Result<Occlusion> {
         let bad = || {
             Error::input(format!(
-                "unknown occlusion '{text}': choose none, gtao (radius 0.3 of the scene's size, with the occluders' bounced light), gtao:R (R world units, R > 0, e.g. gtao:0.5), or gtao-nobounce / gtao-nobounce:R (without the bounce)"
+                "unknown occlusion '{text}': choose none, gtao (radius 0.3 of the scene's size, with the occluders' bounced light and the world light baked per vertex), gtao:R (R world units, R > 0, e.g. gtao:0.5), gtao-screen / gtao-screen:R (what the screen shows alone, no world light), or gtao-nobounce / gtao-nobounce:R (without the bounce)"
             ))
         };
         if text == "none" {
             return Ok(Occlusion::None);
         }
-        let (rest, bounce) = match text.strip_prefix("gtao-nobounce") {
-            Some(rest) => (rest, false),
-            None => (text.strip_prefix("gtao").ok_or_else(bad)?, true),
+        let (rest, bounce, world) = if let Some(rest) = text.strip_prefix("gtao-nobounce") {
+            (rest, false, false)
+        } else if let Some(rest) = text.strip_prefix("gtao-screen") {
+            (rest, true, false)
+        } else {
+            (text.strip_prefix("gtao").ok_or_else(bad)?, true, true)
         };
         if rest.is_empty() {
             return Ok(Occlusion::Gtao {
                 radius: None,
                 bounce,
+                world,
             });
         }
         let r: f32 = rest
@@ -499,6 +512,7 @@ impl Occlusion {
             Ok(Occlusion::Gtao {
                 radius: Some(r),
                 bounce,
+                world,
             })
         } else {
             Err(bad())
@@ -508,8 +522,16 @@ impl Occlusion {
     pub fn name(self) -> String {
         match self {
             Occlusion::None => "none".into(),
-            Occlusion::Gtao { radius, bounce } => {
-                let method = if bounce { "gtao" } else { "gtao-nobounce" };
+            Occlusion::Gtao {
+                radius,
+                bounce,
+                world,
+            } => {
+                let method = match (bounce, world) {
+                    (false, _) => "gtao-nobounce",
+                    (true, false) => "gtao-screen",
+                    (true, true) => "gtao",
+                };
                 match radius {
                     None => method.into(),
                     Some(r) => format!("{method}:{r}"),

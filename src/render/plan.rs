@@ -336,6 +336,63 @@ pub struct OcclusionPlan {
     /// depth attachment, depth test LESS at the far plane); `Force::occlusion_everywhere` draws
     /// them over every pixel.
     pub covered_only: bool,
+    /// The world light baked per vertex (`--occlusion gtao`, render::world_light), when the
+    /// scene allows it.
+    pub world: Option<WorldLightPlan>,
+    /// Why the world light was asked for and is not planned.
+    pub world_off: Option<String>,
+}
+
+/// The world light of a frame (render::world_light): rays from each receiving vertex against
+/// the occluding triangles, interpolated by the G-buffer into its specular target.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct WorldLightPlan {
+    pub vertices: usize,
+    pub triangles: usize,
+    pub rays_per_vertex: u32,
+}
+
+impl WorldLightPlan {
+    /// The world light for `scene`, or why not: it needs a static scene (its bake holds for one
+    /// pose), the G-buffer's specular target free (no material with KHR_materials_specular's
+    /// factor, colour or textures), something to receive and to occlude, and at most
+    /// `world_light::MAX_RAYS` rays.
+    pub fn new(scene: &Scene) -> Result<WorldLightPlan, String> {
+        use super::world_light::{extent, receives, MAX_RAYS, RAYS};
+        if !scene.rig.animations.is_empty() || !scene.rig.meshes.is_empty() {
+            return Err("the scene animates or deforms (a bake holds for one pose)".into());
+        }
+        let specular = scene.draws.iter().filter(|d| receives(scene, d)).any(|d| {
+            scene.drawn_material(d).is_some_and(|m| {
+                let s = &m.specular;
+                m.fabric.is_none()
+                    && (s.factor != 1.0
+                        || s.color != [1.0; 3]
+                        || s.texture.is_some()
+                        || s.color_texture.is_some())
+            })
+        });
+        if specular {
+            return Err(
+                "a material has KHR_materials_specular's data, which the G-buffer's specular target holds".into(),
+            );
+        }
+        let (vertices, triangles) = extent(scene);
+        if vertices == 0 || triangles == 0 {
+            return Err("nothing both receives and occludes".into());
+        }
+        let rays = vertices as u64 * RAYS as u64 * 2;
+        if rays > MAX_RAYS {
+            return Err(format!(
+                "{vertices} vertices would take {rays} rays, over the {MAX_RAYS} a bake may cast"
+            ));
+        }
+        Ok(WorldLightPlan {
+            vertices,
+            triangles,
+            rays_per_vertex: RAYS,
+        })
+    }
 }
 
 impl OcclusionPlan {
@@ -581,14 +638,19 @@ impl Plan {
                 }
             });
         // Occlusion of the environment's light, when there is one (or the debug view shows it).
-        let (occlusion_radius, bounce) = match options.occlusion {
-            super::Occlusion::Gtao { radius, bounce }
-                if environment.is_some() || options.debug_view == DebugView::Occlusion =>
-            {
-                (Some(radius), bounce)
-            }
-            _ => (None, false),
+        let (occlusion_radius, bounce, world) = match options.occlusion {
+            super::Occlusion::Gtao {
+                radius,
+                bounce,
+                world,
+            } if environment.is_some() || options.debug_view == DebugView::Occlusion => (
+                Some(radius),
+                bounce,
+                world && bounce && environment.is_some(),
+            ),
+            _ => (None, false, false),
         };
+        let world_light = world.then(|| WorldLightPlan::new(scene));
         // What casts (the whole scene when nothing does), once per frame, only when shadow maps
         // must cover it or the occlusion radius is a share of it.
         let caster_bounds = if !shadows.is_empty() || occlusion_radius == Some(None) {
@@ -616,6 +678,8 @@ impl Plan {
                     slices: OcclusionPlan::SLICES,
                     steps: OcclusionPlan::STEPS,
                     covered_only: !options.force.occlusion_everywhere,
+                    world: world_light.clone().and_then(Result::ok),
+                    world_off: world_light.clone().and_then(Result::err),
                 })
             }
             _ => None,
@@ -1156,6 +1220,17 @@ impl fmt::Display for Plan {
                     "the multi-bounce fit alone"
                 }
             )?,
+        }
+        if let Some(o) = &self.occlusion {
+            if let Some(w) = &o.world {
+                writeln!(
+                    f,
+                    "world light baked per vertex on the CPU: {} vertices x {} rays (twice: visibility, then the hit surfaces' light) against {} triangles; the G-buffer's specular target carries it, the lighting takes the lesser visibility and the greater bounce of screen and world",
+                    w.vertices, w.rays_per_vertex, w.triangles
+                )?;
+            } else if let Some(why) = &o.world_off {
+                writeln!(f, "world light none: {why}")?;
+            }
         }
         if self.bc7_textures > 0 {
             writeln!(

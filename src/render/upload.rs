@@ -81,6 +81,16 @@ impl DrawRange {
 }
 
 /// A scene's data on the GPU.
+/// A scene's baked world light on the device (render::world_light).
+pub(crate) struct WorldLightGpu {
+    /// The environment it was baked under: its content hash, rotation and intensity.
+    pub(crate) key: ([u8; 32], u32, u32),
+    /// `vec4` per receiving vertex (rgb bounce irradiance/π, a visibility).
+    pub(crate) buffer: Buffer,
+    /// Per scene draw, where its vertices' entries begin.
+    pub(crate) base: Vec<Option<u32>>,
+}
+
 pub struct GpuScene {
     pub(crate) vertices: Buffer,
     /// COLOR_0 of every vertex of `vertices` (linear RGBA, white where a mesh has none), or one
@@ -99,6 +109,9 @@ pub struct GpuScene {
     /// and transparent passes).
     pub(crate) fabric_records: Vec<GpuFabric>,
     pub(crate) lobe_albedo: std::sync::OnceLock<Buffer>,
+    /// The world light baked for the environment of its key, made by the first frame that
+    /// plans it (render::world_light; replaced when a frame's environment differs).
+    pub(crate) world_light: std::sync::Mutex<Option<std::sync::Arc<WorldLightGpu>>>,
     /// Thread-by-thread colours (set 0 binding 5 of the G-buffer and transparent passes).
     pub(crate) thread_colours: Buffer,
     /// One weave texture per distinct weave (RGBA16F mip chains, built by the weave pass for
@@ -278,6 +291,7 @@ impl Renderer {
             fabric_records: bytemuck::pod_collect_to_vec(&fabric_bytes),
             fabrics,
             lobe_albedo: std::sync::OnceLock::new(),
+            world_light: std::sync::Mutex::new(None),
             thread_colours,
             weaves: std::sync::OnceLock::new(),
             weaves8: std::sync::OnceLock::new(),

@@ -383,7 +383,7 @@ pub fn cases() -> Vec<Case> {
             env: STUDIO,
             occlusion: weft::render::Occlusion::DEFAULT,
             look: Some(([0.5, 0.12, 1.0], [0.0, 0.22, 0.0], 40.0)),
-            ..case("khronos-sheen-chair-underside", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the chair seen from just above the ground, as weft render shows it with the occlusion pass (its default): the key light's shadow of the chair on the ground, and the ground a little darker under the seat and at the feet of the legs; the velvet, wood and studio walls as in khronos-sheen-chair")
+            ..case("khronos-sheen-chair-underside", "tests/data/khronos/SheenChair/glTF/SheenChair.gltf", "the chair seen from just above the ground, as weft render shows it with the occlusion pass and the world light (its default): the key light's shadow of the chair on the ground, and the ground a little darker under the seat and at the feet of the legs; the legs and the back a little darker than the screen's occlusion alone leaves them (the seat hides their sky), the seat's front roll a little redder; the velvet, wood and studio walls as in khronos-sheen-chair")
         },
         Case {
             env: STUDIO,

@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 
 use super::lighting::stencil_of;
 use super::{Recorded, VariantKey};
-use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS};
+use crate::render::gpu::{DrawPush, DRAW_RECEIVES_SHADOWS, DRAW_WORLD_LIGHT};
 use crate::render::plan::Plan;
 use crate::render::targets::{
     depth_format, Targets, ALBEDO_FORMAT, EMISSIVE_FORMAT, FABRIC_FORMAT, FRAME_FORMAT,
@@ -106,6 +106,9 @@ pub struct GBufferInputs<'s> {
     /// The plan's depth pre-pass ([`Plan::depth_prepass`]): its opaque draws' depth first, with
     /// the variant's pipelines then testing GREATER_OR_EQUAL.
     pub depth_prepass: bool,
+    /// The world light when the plan has it (render::world_light): per draw where its
+    /// vertices' entries begin in its buffer.
+    pub world_light: Option<&'s crate::render::upload::WorldLightGpu>,
 }
 
 impl GBufferPass {
@@ -181,6 +184,11 @@ impl GBufferPass {
             (6, "alpha_mask", plan.alpha_mask as u32),
             (7, "thread_colours", plan.features.thread_colours as u32),
             (9, "texture_slots", plan.texture_slots),
+            (
+                10,
+                "world_light",
+                plan.occlusion.as_ref().is_some_and(|o| o.world.is_some()) as u32,
+            ),
         ])
     }
 
@@ -303,6 +311,11 @@ impl GBufferPass {
                 (3, Resource::Storage(inputs.lights)),
                 (4, Resource::Storage(inputs.colors)),
                 (5, Resource::Storage(&scene.thread_colours)),
+                // Read only where the plan compiles the world light in (any buffer otherwise).
+                (
+                    6,
+                    Resource::Storage(inputs.world_light.map_or(inputs.colors, |w| &w.buffer)),
+                ),
             ],
         )?;
         let split = inputs.material_kinds;
@@ -342,6 +355,7 @@ impl GBufferPass {
             .collect();
         let targets = inputs.targets;
         let material_sets = inputs.material_sets;
+        let world_light = inputs.world_light;
         Ok(Recorded::new("gbuffer", names, move |cmd| {
             for img in targets.gbuffer_colors() {
                 cmd.transition(img, Usage::Undefined, Usage::ColorAttachment, None);
@@ -454,6 +468,12 @@ impl GBufferPass {
                     let mut push = DrawPush::new(draw.world, material);
                     if !draw.receive_shadows {
                         push.flags &= !DRAW_RECEIVES_SHADOWS;
+                    }
+                    if let Some(base) =
+                        world_light.and_then(|w| w.base.get(draw.scene_draw).copied().flatten())
+                    {
+                        push.world_base = base.wrapping_sub(draw.vertex_offset as u32);
+                        push.flags |= DRAW_WORLD_LIGHT;
                     }
                     cmd.push_constants(pipeline, &push);
                     cmd.draw_indexed(draw.index_count, draw.first_index, draw.vertex_offset);

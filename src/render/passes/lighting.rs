@@ -138,11 +138,18 @@ impl LightingPass {
                     .unwrap_or(1),
             ),
             (9, "unlit", plan.unlit as u32),
-            // 0: none, 1: the visibility, 2: and the occluders' bounced light.
+            // 0: none, 1: the visibility, 2: and the occluders' bounced light, 3: and the world
+            // light (the G-buffer's specular target holds it).
             (
                 10,
                 "occlusion",
-                plan.occlusion.as_ref().map_or(0, |o| 1 + o.bounce as u32),
+                plan.occlusion.as_ref().map_or(0, |o| {
+                    if o.world.is_some() {
+                        3
+                    } else {
+                        1 + o.bounce as u32
+                    }
+                }),
             ),
             (
                 11,

@@ -190,6 +190,9 @@ impl TransparentPass {
             (2, Resource::Storage(&scene.fabrics)),
             (4, Resource::Storage(inputs.colors)),
             (5, Resource::Storage(&scene.thread_colours)),
+            // gbuffer.vert's world light, which the forward pipelines never read (WORLD_LIGHT 0):
+            // any buffer.
+            (6, Resource::Storage(inputs.colors)),
             (16, Resource::Sampled(backdrop_image, backdrop_sampler)),
         ];
         bindings.extend(inputs.lighting.bindings());
