@@ -381,7 +381,7 @@ impl WorldLightPlan {
         if vertices == 0 || triangles == 0 {
             return Err("nothing both receives and occludes".into());
         }
-        let rays = vertices as u64 * RAYS as u64 * 2;
+        let rays = vertices as u64 * RAYS as u64;
         if rays > MAX_RAYS {
             return Err(format!(
                 "{vertices} vertices would take {rays} rays, over the {MAX_RAYS} a bake may cast"
@@ -1225,7 +1225,7 @@ impl fmt::Display for Plan {
             if let Some(w) = &o.world {
                 writeln!(
                     f,
-                    "world light baked per vertex on the CPU: {} vertices x {} rays (twice: visibility, then the hit surfaces' light) against {} triangles; the G-buffer's specular target carries it, the lighting takes the lesser visibility and the greater bounce of screen and world",
+                    "world light baked per vertex on the CPU (once per scene and environment, then weft's cache on disk): {} vertices x {} rays against {} triangles (the visibility, then the hit surfaces' light); the G-buffer's specular target carries it, the lighting takes the lesser visibility and the greater bounce of screen and world",
                     w.vertices, w.rays_per_vertex, w.triangles
                 )?;
             } else if let Some(why) = &o.world_off {

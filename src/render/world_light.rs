@@ -38,9 +38,10 @@ use obvhs::{
 /// Rays per vertex.
 pub const RAYS: u32 = 64;
 
-/// The most rays a scene's bake casts (receiving vertices × [`RAYS`] × 2 passes): beyond it the
-/// plan leaves the world light off and says why.
-pub const MAX_RAYS: u64 = 24_000_000;
+/// The most rays a scene's bake casts (receiving vertices × [`RAYS`]; each ray's hit, 8 bytes,
+/// is kept for the second pass): beyond it the plan leaves the world light off and says why. On
+/// two cores a bake traces about 4 million rays a second (docs/performance.md).
+pub const MAX_RAYS: u64 = 4_000_000;
 
 /// The environment's diffuse light as the bake takes it: irradiance/π at a world normal.
 #[derive(Clone, Debug)]
@@ -229,15 +230,25 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
     };
     // First pass: each vertex's visibility (the hit surfaces' own, in the second, comes from
     // it: the light a surface sends on is what reaches it).
-    let visibility: Vec<f32> = parallel_map(&receivers, |i, r| {
-        let mut hidden = 0.0f32;
-        for k in 0..RAYS {
-            if let Some(hit) = tracer.trace(r, i, k) {
-                hidden += reach(r, hit.t);
-            }
-        }
-        1.0 - hidden / RAYS as f32
+    // Each ray once: its nearest hit (the triangle and distance; u32::MAX where it escapes),
+    // kept for the second pass, and the vertex's visibility from them.
+    let hits: Vec<Vec<(u32, f32)>> = parallel_map(&receivers, |i, r| {
+        (0..RAYS)
+            .map(|k| tracer.nearest(r, i, k).unwrap_or((u32::MAX, 0.0)))
+            .collect()
     });
+    let visibility: Vec<f32> = receivers
+        .iter()
+        .zip(&hits)
+        .map(|(r, h)| {
+            let hidden: f32 = h
+                .iter()
+                .filter(|(p, _)| *p != u32::MAX)
+                .map(|(_, t)| reach(r, *t))
+                .sum();
+            1.0 - hidden / RAYS as f32
+        })
+        .collect();
     // Where each occluder's vertices' visibility is (None where the draw does not receive:
     // taken as 1).
     let occluder_base: Vec<Option<u32>> = occluders
@@ -252,17 +263,17 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
         .collect();
     let texels = parallel_map(&receivers, |i, r| {
         let mut light = Vec3::ZERO;
-        for k in 0..RAYS {
-            let Some(hit) = tracer.trace(r, i, k) else {
+        for (k, &(p, t)) in hits[i].iter().enumerate() {
+            if p == u32::MAX {
                 continue;
-            };
+            }
             let Hit {
                 occluder: o,
                 indices: idx,
                 bary,
                 dir,
                 t,
-            } = hit;
+            } = tracer.hit(r, i, k as u32, p as usize, t);
             let occ = &occluders[o as usize];
             let mesh = &scene.meshes[occ.draw.mesh];
             // The hit surface's own visibility, interpolated as the G-buffer would.
@@ -520,13 +531,18 @@ fn reach(r: &Receiver, t: f32) -> f32 {
 }
 
 impl Tracer<'_> {
-    /// Ray `k` of receiver `i` (vertex `r`): the nearest surface it hits, if any.
-    fn trace(&self, r: &Receiver, i: usize, k: u32) -> Option<Hit> {
+    /// Ray `k` of receiver `i` (vertex `r`): where it starts and where it goes.
+    fn ray(&self, r: &Receiver, i: usize, k: u32) -> (Vec3, Vec3) {
+        (r.p + r.n * self.eps, cosine_direction(r.n, i as u32, k))
+    }
+
+    /// Ray `k` of receiver `i` (vertex `r`): the nearest triangle it hits (its index in `tris`)
+    /// and how far, if any.
+    fn nearest(&self, r: &Receiver, i: usize, k: u32) -> Option<(u32, f32)> {
         if r.n == Vec3::ZERO {
             return None;
         }
-        let dir = cosine_direction(r.n, i as u32, k);
-        let origin = r.p + r.n * self.eps;
+        let (origin, dir) = self.ray(r, i, k);
         let ray = Ray::new(origin.into(), dir.into(), self.eps, f32::INFINITY);
         let mut hit = RayHit::none();
         let found = self.bvh.ray_traverse(ray, &mut hit, |ray, id| {
@@ -537,19 +553,20 @@ impl Tracer<'_> {
             }
             t
         });
-        if !found {
-            return None;
-        }
-        let p = self.bvh.primitive_indices[hit.primitive_id as usize] as usize;
-        let (o, t) = self.owner[p];
-        let at = origin + dir * hit.t;
-        Some(Hit {
+        found.then(|| (self.bvh.primitive_indices[hit.primitive_id as usize], hit.t))
+    }
+
+    /// The hit of ray `k` of receiver `i` on triangle `p` at distance `t` ([`Tracer::nearest`]'s).
+    fn hit(&self, r: &Receiver, i: usize, k: u32, p: usize, t: f32) -> Hit {
+        let (origin, dir) = self.ray(r, i, k);
+        let (o, tri) = self.owner[p];
+        Hit {
             occluder: o,
-            indices: self.indices(o, t),
-            bary: barycentric(&self.tris[p], at),
+            indices: self.indices(o, tri),
+            bary: barycentric(&self.tris[p], origin + dir * t),
             dir,
-            t: hit.t,
-        })
+            t,
+        }
     }
 
     fn indices(&self, o: u32, t: u32) -> [u32; 3] {
@@ -690,7 +707,7 @@ fn texel(t: &Texture, uv: [f32; 2]) -> [f32; 4] {
     let i = 4 * (y.min(h - 1) * w + x.min(w - 1));
     let b = &t.rgba8[i..i + 4];
     let decode = |v: u8| match t.color_space {
-        ColorSpace::Srgb => crate::color::srgb_decode(v as f32 / 255.0),
+        ColorSpace::Srgb => srgb_table()[v as usize],
         ColorSpace::Linear => v as f32 / 255.0,
     };
     [
@@ -699,6 +716,12 @@ fn texel(t: &Texture, uv: [f32; 2]) -> [f32; 4] {
         decode(b[2]),
         b[3] as f32 / 255.0,
     ]
+}
+
+/// sRGB bytes decoded, once (`color::srgb_decode`).
+fn srgb_table() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|i| crate::color::srgb_decode(i as f32 / 255.0)))
 }
 
 /// Barycentric weights of point `p` (on the triangle's plane) for v0, v1, v2.
