@@ -296,6 +296,13 @@ struct FrameBuffers {
     world_light_ms: Option<(f64, bool)>,
 }
 
+/// The world light a frame reads, and its bake's milliseconds and whether it came from weft's
+/// cache on disk when this frame baked it.
+type WorldLightFrame = (
+    std::sync::Arc<super::upload::WorldLightGpu>,
+    Option<(f64, bool)>,
+);
+
 /// An overlapped frame on the device: its submission, and what its commands read that is its
 /// own (the descriptor pool, the per-frame buffers, the timestamp queries), moved here once the
 /// recorded passes that borrowed them were consumed. What it reads that the renderer keeps (the
@@ -895,18 +902,16 @@ impl Renderer {
         make_targets(&self.ctx, targets, options, plan)
     }
 
-    /// The scene's world light under `env` (render::world_light): the one baked before when its
-    /// environment is this frame's, else baked now (on the CPU) and uploaded (with the bake's
-    /// milliseconds).
+    /// The scene's world light under `env` (render::world_light), whose SH the frame's
+    /// preprocessed environment `sh` holds: the one baked before when its environment is this
+    /// frame's, else baked now (on the CPU) and uploaded (with the bake's milliseconds).
     fn world_light(
         &self,
         scene: &Scene,
         gpu: &GpuScene,
         env: &crate::env::EnvLighting,
-    ) -> crate::Result<(
-        std::sync::Arc<super::upload::WorldLightGpu>,
-        Option<(f64, bool)>,
-    )> {
+        sh: [[f32; 3]; 9],
+    ) -> crate::Result<WorldLightFrame> {
         let key = (
             env.env.hash(),
             env.rotation.to_bits(),
@@ -921,7 +926,7 @@ impl Renderer {
         }
         let start = Instant::now();
         let sky = super::world_light::SkyLight {
-            sh: env.env.sh9(),
+            sh,
             rotation: env.rotation,
             intensity: env.intensity,
         };
@@ -1060,9 +1065,11 @@ impl Renderer {
         let (world_light, world_light_ms) = match (
             plan.occlusion.as_ref().and_then(|o| o.world.as_ref()),
             &options.environment,
+            env_index,
         ) {
-            (Some(_), Some(env)) => {
-                let (w, ms) = self.world_light(scene, gpu, env)?;
+            (Some(_), Some(env), Some(i)) => {
+                let sh = self.env_cache[i].sh;
+                let (w, ms) = self.world_light(scene, gpu, env, sh)?;
                 (Some(w), ms)
             }
             _ => (None, None),

@@ -120,6 +120,8 @@ pub struct Bake {
 
 /// One occluding draw, in world space.
 struct Occluder<'a> {
+    /// Its index in `Scene::draws`, and the draw.
+    index: usize,
     draw: &'a Draw,
     material: Option<&'a Material>,
     normal_matrix: Mat3,
@@ -138,8 +140,10 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
     let occluders: Vec<Occluder> = scene
         .draws
         .iter()
-        .filter(|d| occludes(scene, d))
-        .map(|d| Occluder {
+        .enumerate()
+        .filter(|(_, d)| occludes(scene, d))
+        .map(|(index, d)| Occluder {
+            index,
             draw: d,
             material: scene.mesh_material(&scene.meshes[d.mesh]),
             normal_matrix: normal_matrix(d),
@@ -249,18 +253,6 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
             1.0 - hidden / RAYS as f32
         })
         .collect();
-    // Where each occluder's vertices' visibility is (None where the draw does not receive:
-    // taken as 1).
-    let occluder_base: Vec<Option<u32>> = occluders
-        .iter()
-        .map(|o| {
-            scene
-                .draws
-                .iter()
-                .position(|x| std::ptr::eq(x, o.draw))
-                .and_then(|i| base[i])
-        })
-        .collect();
     let texels = parallel_map(&receivers, |i, r| {
         let mut light = Vec3::ZERO;
         for (k, &(p, t)) in hits[i].iter().enumerate() {
@@ -277,7 +269,8 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
             let occ = &occluders[o as usize];
             let mesh = &scene.meshes[occ.draw.mesh];
             // The hit surface's own visibility, interpolated as the G-buffer would.
-            let vis = occluder_base[o as usize].map_or(1.0, |b| {
+            // (Where the occluding draw does not receive, its visibility is taken as 1.)
+            let vis = base[occ.index].map_or(1.0, |b| {
                 (0..3)
                     .map(|j| {
                         visibility
@@ -745,12 +738,10 @@ fn cosine_direction(n: Vec3, i: u32, k: u32) -> Vec3 {
     let h = hash(i);
     let shift = ((h & 0xffff) as f32 / 65536.0, (h >> 16) as f32 / 65536.0);
     let (a, b) = crate::env::hammersley(k, RAYS);
-    let u = (a as f32 + shift.0).fract();
-    let v = (b as f32 + shift.1).fract();
-    let r = u.sqrt();
-    let phi = 2.0 * std::f32::consts::PI * v;
+    let xi = [(a as f32 + shift.0).fract(), (b as f32 + shift.1).fract()];
+    let [x, y, z] = crate::reference::ibl_twin::cosine_sample(xi);
     let (t, bt) = n.any_orthonormal_pair();
-    (t * (r * phi.cos()) + bt * (r * phi.sin()) + n * (1.0 - u).max(0.0).sqrt()).normalize()
+    (t * x + bt * y + n * z).normalize()
 }
 
 /// A 32-bit integer hash (lowbias32).
