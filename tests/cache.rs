@@ -93,9 +93,40 @@ fn a_second_run_reuses_the_cache_and_damage_is_never_used() {
         assert_eq!(first.ldr, f.ldr);
     }
 
+    // The world light (`--occlusion gtao`): traced beside the pipelines the first time, read
+    // from disk the second (its key is known before the environment's SH is), the same image;
+    // damaged on disk, traced again, the same image.
+    let world = RenderOptions {
+        occlusion: weft::render::Occlusion::DEFAULT,
+        ..options.clone()
+    };
+    assert!(weft::render::Plan::new(&scene, &world)
+        .occlusion
+        .is_some_and(|o| o.world.is_some()));
+    let traced = render(&scene, &world);
+    assert!(!traced.stats.world_light_from_disk);
+    let world_files = entries(&cache, "world-light");
+    assert_eq!(world_files.len(), 1, "{world_files:?}");
+    let read = render(&scene, &world);
+    assert!(read.stats.world_light_from_disk);
+    assert_eq!(traced.ldr, read.ldr);
+    assert_eq!(traced.hdr, read.hdr);
+    assert_ne!(traced.ldr, first.ldr, "the occlusion is drawn");
+    let mut bytes = std::fs::read(&world_files[0]).unwrap();
+    let n = bytes.len();
+    bytes[n / 2] ^= 0x10;
+    std::fs::write(&world_files[0], &bytes).unwrap();
+    let again = render(&scene, &world);
+    assert!(!again.stats.world_light_from_disk);
+    assert_eq!(traced.ldr, again.ldr);
+    assert!(render(&scene, &world).stats.world_light_from_disk);
+
     // Turned off: nothing read or written.
     std::env::set_var("WEFT_CACHE_DIR", "off");
     let off = render(&scene, &options);
     assert!(!off.stats.environment_from_disk);
     assert_eq!(first.ldr, off.ldr);
+    let off = render(&scene, &world);
+    assert!(!off.stats.world_light_from_disk);
+    assert_eq!(traced.ldr, off.ldr);
 }

@@ -277,6 +277,8 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
                 || (t.name == "world light" && frame.stats.world_light_from_disk)
             {
                 "   (from weft's cache on disk)"
+            } else if t.name == "world rays" {
+                "   (on a thread beside the pipelines)"
             } else {
                 ""
             };

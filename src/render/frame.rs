@@ -293,14 +293,32 @@ struct FrameBuffers {
     /// and how long its bake took when this frame baked it (and whether it came from weft's
     /// cache on disk).
     world_light: Option<std::sync::Arc<super::upload::WorldLightGpu>>,
-    world_light_ms: Option<(f64, bool)>,
+    world_light_ms: Option<WorldLightTiming>,
 }
 
-/// The world light a frame reads, and its bake's milliseconds and whether it came from weft's
-/// cache on disk when this frame baked it.
+/// Where a frame's world light comes from (Renderer::world_light_start).
+enum WorldStart {
+    /// Baked for this scene and environment before, in memory.
+    Ready(std::sync::Arc<super::upload::WorldLightGpu>),
+    /// Read from weft's cache on disk (the bake, the milliseconds its key and read took).
+    Disk(super::world_light::Bake, f64),
+    /// To be traced and shaded (the key to keep it under on disk, when there is a cache).
+    Trace(Option<Vec<u8>>),
+}
+
+/// What a frame's world light cost when this frame made it.
+#[derive(Clone, Copy, Debug)]
+enum WorldLightTiming {
+    /// Read from weft's cache on disk and uploaded, in milliseconds.
+    Disk(f64),
+    /// Its rays traced (beside the pipelines), then shaded and uploaded after them.
+    Traced { rays_ms: f64, shade_ms: f64 },
+}
+
+/// The world light a frame reads, and what it cost when this frame made it.
 type WorldLightFrame = (
     std::sync::Arc<super::upload::WorldLightGpu>,
-    Option<(f64, bool)>,
+    Option<WorldLightTiming>,
 );
 
 /// An overlapped frame on the device: its submission, and what its commands read that is its
@@ -902,35 +920,87 @@ impl Renderer {
         make_targets(&self.ctx, targets, options, plan)
     }
 
-    /// The scene's world light under `env` (render::world_light), whose SH the frame's
-    /// preprocessed environment `sh` holds: the one baked before when its environment is this
-    /// frame's, else baked now (on the CPU) and uploaded (with the bake's milliseconds).
-    fn world_light(
+    /// Where this frame's world light comes from (render::world_light), decided before its
+    /// pipelines are made: the one in memory when its environment is this frame's, else the one
+    /// on disk under the same key, else it is to be traced (beside the pipelines) and shaded.
+    /// None where the plan has no world light.
+    fn world_light_start(
         &self,
         scene: &Scene,
         gpu: &GpuScene,
-        env: &crate::env::EnvLighting,
-        sh: [[f32; 3]; 9],
-    ) -> crate::Result<WorldLightFrame> {
+        plan: &Plan,
+        options: &RenderOptions,
+    ) -> Option<WorldStart> {
+        plan.occlusion.as_ref()?.world.as_ref()?;
+        plan.environment.as_ref()?;
+        let env = options.environment.as_ref()?;
         let key = (
             env.env.hash(),
             env.rotation.to_bits(),
             env.intensity.to_bits(),
         );
-        let mut cached = gpu
+        let cached = gpu
             .world_light
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
         if let Some(w) = cached.as_ref().filter(|w| w.key == key) {
-            return Ok((w.clone(), None));
+            return Some(WorldStart::Ready(w.clone()));
         }
         let start = Instant::now();
-        let sky = super::world_light::SkyLight {
-            sh,
-            rotation: env.rotation,
-            intensity: env.intensity,
+        let disk_key = crate::cache::dir().map(|_| {
+            super::world_light::cache_key(
+                scene,
+                &super::passes::environment::EnvPasses::cache_key(&self.ctx, &env.env),
+                env.rotation,
+                env.intensity,
+            )
+        });
+        if let Some(bake) = disk_key
+            .as_deref()
+            .and_then(|k| super::world_light::read_cached(scene, k))
+        {
+            return Some(WorldStart::Disk(bake, start.elapsed().as_secs_f64() * 1e3));
+        }
+        Some(WorldStart::Trace(disk_key))
+    }
+
+    /// The frame's world light from where [`Renderer::world_light_start`] found it: the rays
+    /// `traced` shaded under the frame's environment (whose SH `sh` the preprocessing left) and
+    /// kept on disk, or the bake read from there; uploaded and kept in memory for the next frame.
+    fn world_light(
+        &self,
+        gpu: &GpuScene,
+        start: WorldStart,
+        traced: Option<(super::world_light::Traced, f64)>,
+        env: &crate::env::EnvLighting,
+        sh: [[f32; 3]; 9],
+    ) -> crate::Result<WorldLightFrame> {
+        let began = Instant::now();
+        let (bake, timing) = match (start, traced) {
+            (WorldStart::Ready(w), _) => return Ok((w, None)),
+            (WorldStart::Disk(bake, ms), _) => (bake, WorldLightTiming::Disk(ms)),
+            (WorldStart::Trace(disk_key), Some((traced, rays_ms))) => {
+                let sky = super::world_light::SkyLight {
+                    sh,
+                    rotation: env.rotation,
+                    intensity: env.intensity,
+                };
+                let bake = super::world_light::shade(&traced, &sky);
+                if let Some(k) = &disk_key {
+                    super::world_light::write_cached(k, &bake);
+                }
+                (
+                    bake,
+                    WorldLightTiming::Traced {
+                        rays_ms,
+                        shade_ms: 0.0,
+                    },
+                )
+            }
+            (WorldStart::Trace(_), None) => {
+                unreachable!("a frame that traces joins its tracing thread before it shades")
+            }
         };
-        let (bake, from_disk) = super::world_light::bake_cached(scene, &sky);
         let mut texels = bake.texels;
         if texels.is_empty() {
             texels.push([0.0, 0.0, 0.0, 1.0]); // a storage buffer cannot be empty
@@ -941,12 +1011,26 @@ impl Renderer {
             &texels,
         )?;
         let w = std::sync::Arc::new(super::upload::WorldLightGpu {
-            key,
+            key: (
+                env.env.hash(),
+                env.rotation.to_bits(),
+                env.intensity.to_bits(),
+            ),
             buffer,
             base: bake.base,
         });
-        *cached = Some(w.clone());
-        Ok((w, Some((start.elapsed().as_secs_f64() * 1e3, from_disk))))
+        *gpu.world_light
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner()) = Some(w.clone());
+        let ms = began.elapsed().as_secs_f64() * 1e3;
+        let timing = match timing {
+            WorldLightTiming::Disk(read) => WorldLightTiming::Disk(read + ms),
+            WorldLightTiming::Traced { rays_ms, .. } => WorldLightTiming::Traced {
+                rays_ms,
+                shade_ms: ms,
+            },
+        };
+        Ok((w, Some(timing)))
     }
 
     /// The frame's own buffers (see [`FrameBuffers`]); makes the shadow atlas of the plan's size.
@@ -958,6 +1042,8 @@ impl Renderer {
         options: &RenderOptions,
         camera: &crate::scene::Camera,
         env_index: Option<usize>,
+        world: Option<WorldStart>,
+        traced: Option<(super::world_light::Traced, f64)>,
     ) -> crate::Result<FrameBuffers> {
         let ctx = &self.ctx.clone();
         let mut frame_data =
@@ -1062,14 +1148,10 @@ impl Renderer {
         } else {
             None
         };
-        let (world_light, world_light_ms) = match (
-            plan.occlusion.as_ref().and_then(|o| o.world.as_ref()),
-            &options.environment,
-            env_index,
-        ) {
-            (Some(_), Some(env), Some(i)) => {
+        let (world_light, world_light_ms) = match (world, &options.environment, env_index) {
+            (Some(start), Some(env), Some(i)) => {
                 let sh = self.env_cache[i].sh;
-                let (w, ms) = self.world_light(scene, gpu, env, sh)?;
+                let (w, ms) = self.world_light(gpu, start, traced, env, sh)?;
                 (Some(w), ms)
             }
             _ => (None, None),
@@ -1187,8 +1269,25 @@ impl Renderer {
                 options.read_hdr,
             )?;
         }
-        let keys = self.prepare(options, &plan, env, fresh_targets)?;
-        self.prepare_targets(gpu, options, &plan)?;
+        // The world light's rays, when this frame must trace them, on a thread of their own
+        // while the pipelines are made (they need no environment; its SH shades them after).
+        let world = self.world_light_start(scene, gpu, &plan, options);
+        let (keys, traced) = std::thread::scope(|s| {
+            let tracing = matches!(world, Some(WorldStart::Trace(_))).then(|| {
+                s.spawn(|| {
+                    let start = Instant::now();
+                    let traced = super::world_light::trace(scene);
+                    (traced, start.elapsed().as_secs_f64() * 1e3)
+                })
+            });
+            let keys = self
+                .prepare(options, &plan, env, fresh_targets)
+                .and_then(|keys| self.prepare_targets(gpu, options, &plan).map(|()| keys));
+            let traced =
+                tracing.map(|h| h.join().expect("the world light's thread does not panic"));
+            (keys, traced)
+        });
+        let keys = keys?;
         let camera = match &options.camera_override {
             Some(c) => c.clone(),
             // An automatic framing fills this image's aspect ratio.
@@ -1197,13 +1296,27 @@ impl Renderer {
                 options.width as f32 / options.height.max(1) as f32,
             )?,
         };
-        let buffers = self.frame_buffers(scene, gpu, &plan, options, &camera, keys.env)?;
-        if let Some((ms, _)) = buffers.world_light_ms {
-            timings.push(PassTiming {
+        let buffers =
+            self.frame_buffers(scene, gpu, &plan, options, &camera, keys.env, world, traced)?;
+        match buffers.world_light_ms {
+            Some(WorldLightTiming::Disk(ms)) => timings.push(PassTiming {
                 name: "world light",
                 gpu_ms: None,
                 wall_ms: Some(ms),
-            });
+            }),
+            Some(WorldLightTiming::Traced { rays_ms, shade_ms }) => {
+                timings.push(PassTiming {
+                    name: "world rays",
+                    gpu_ms: None,
+                    wall_ms: Some(rays_ms),
+                });
+                timings.push(PassTiming {
+                    name: "world light",
+                    gpu_ms: None,
+                    wall_ms: Some(shade_ms),
+                });
+            }
+            None => {}
         }
         // The frame in flight (overlapped frames): waited for after this one is recorded.
         let previous = self.in_flight.take();
@@ -1240,7 +1353,10 @@ impl Renderer {
             draws: gpu.draws.len(),
             triangles: gpu.triangles,
             environment_from_disk: keys.env_from_disk,
-            world_light_from_disk: buffers.world_light_ms.is_some_and(|(_, disk)| disk),
+            world_light_from_disk: matches!(
+                buffers.world_light_ms,
+                Some(WorldLightTiming::Disk(_))
+            ),
             light_slices: buffers.light_slices,
             ..Default::default()
         };

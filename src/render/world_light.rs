@@ -134,8 +134,45 @@ struct Receiver {
     edge: f32,
 }
 
-/// Bakes the scene's world light under `sky` (see the module's documentation).
+/// Bakes the scene's world light under `sky` (see the module's documentation): its rays
+/// traced ([`trace`]), then their hits shaded under the sky ([`shade`]).
 pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
+    shade(&trace(scene), sky)
+}
+
+/// The half of a bake that does not depend on the sky: the scene's triangles in a BVH, each
+/// receiving vertex's rays traced to their nearest hits and its visibility. A renderer traces it
+/// while its pipelines compile, before the environment's SH is known.
+pub struct Traced<'a> {
+    scene: &'a Scene,
+    occluders: Vec<Occluder<'a>>,
+    tris: Vec<Triangle>,
+    owner: Vec<(u32, u32)>,
+    /// None where nothing occludes or nothing receives.
+    bvh: Option<obvhs::cwbvh::CwBvh>,
+    eps: f32,
+    receivers: Vec<Receiver>,
+    base: Vec<Option<u32>>,
+    /// Per receiver, per ray: the nearest triangle (u32::MAX: escapes) and its distance.
+    hits: Vec<Vec<(u32, f32)>>,
+    visibility: Vec<f32>,
+}
+
+impl Traced<'_> {
+    fn tracer(&self) -> Option<Tracer<'_>> {
+        Some(Tracer {
+            scene: self.scene,
+            occluders: &self.occluders,
+            tris: &self.tris,
+            owner: &self.owner,
+            bvh: self.bvh.as_ref()?,
+            eps: self.eps,
+        })
+    }
+}
+
+/// Traces the scene's rays (the sky-independent half of [`bake`]).
+pub fn trace(scene: &Scene) -> Traced<'_> {
     // The occluders' triangles, in world space, and which draw and triangle each is.
     let occluders: Vec<Occluder> = scene
         .draws
@@ -203,9 +240,18 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
         }
     }
     if tris.is_empty() || receivers.is_empty() {
-        return Bake {
-            texels: vec![[0.0, 0.0, 0.0, 1.0]; receivers.len()],
+        let visibility = vec![1.0; receivers.len()];
+        return Traced {
+            scene,
+            occluders,
+            tris,
+            owner,
+            bvh: None,
+            eps: 0.0,
+            receivers,
             base,
+            hits: Vec::new(),
+            visibility,
         };
     }
     let bvh = build_cwbvh_from_tris(
@@ -253,7 +299,37 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
             1.0 - hidden / RAYS as f32
         })
         .collect();
-    let texels = parallel_map(&receivers, |i, r| {
+    Traced {
+        scene,
+        occluders,
+        tris,
+        owner,
+        bvh: Some(bvh),
+        eps,
+        receivers,
+        base,
+        hits,
+        visibility,
+    }
+}
+
+/// The hits of `traced` shaded under `sky` (the second half of [`bake`]).
+pub fn shade(traced: &Traced, sky: &SkyLight) -> Bake {
+    let Some(tracer) = traced.tracer() else {
+        return Bake {
+            texels: vec![[0.0, 0.0, 0.0, 1.0]; traced.receivers.len()],
+            base: traced.base.clone(),
+        };
+    };
+    let (scene, occluders, receivers, hits, visibility, base) = (
+        traced.scene,
+        &traced.occluders,
+        &traced.receivers,
+        &traced.hits,
+        &traced.visibility,
+        &traced.base,
+    );
+    let texels = parallel_map(receivers, |i, r| {
         let mut light = Vec3::ZERO;
         for (k, &(p, t)) in hits[i].iter().enumerate() {
             if p == u32::MAX {
@@ -288,38 +364,42 @@ pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
         let finite = |x: f32| if x.is_finite() { x.max(0.0) } else { 0.0 };
         [finite(l.x), finite(l.y), finite(l.z), finite(v).min(1.0)]
     });
-    Bake { texels, base }
+    Bake {
+        texels,
+        base: base.clone(),
+    }
 }
 
-/// [`bake`] through weft's cache on disk (src/cache.rs): a scene baked before under the same sky
-/// is read back (true: from the cache) instead of traced again; a new bake is written.
-pub fn bake_cached(scene: &Scene, sky: &SkyLight) -> (Bake, bool) {
-    let key = cache_key(scene, sky);
-    if let Some(bake) = crate::cache::read(CACHE_KIND, &key).and_then(|p| decode(&p)) {
-        // Each draw's vertices within the texels (the shader indexes them unchecked).
-        let fits = bake.base.len() == scene.draws.len()
-            && scene.draws.iter().zip(&bake.base).all(|(d, b)| {
-                b.is_none_or(|b| {
-                    let n = scene.meshes.get(d.mesh).map_or(0, |m| m.vertices.len());
-                    b as usize + n <= bake.texels.len()
-                })
-            });
-        if fits {
-            return (bake, true);
-        }
-    }
-    let bake = bake(scene, sky);
-    crate::cache::write(CACHE_KIND, &key, &encode(&bake));
-    (bake, false)
+/// The bake of `key` ([`cache_key`]) from weft's cache on disk (src/cache.rs), when it holds one
+/// that fits `scene`'s draws.
+pub fn read_cached(scene: &Scene, key: &[u8]) -> Option<Bake> {
+    let bake = crate::cache::read(CACHE_KIND, key).and_then(|p| decode(&p))?;
+    // Each draw's vertices within the texels (the shader indexes them unchecked).
+    let fits = bake.base.len() == scene.draws.len()
+        && scene.draws.iter().zip(&bake.base).all(|(d, b)| {
+            b.is_none_or(|b| {
+                let n = scene.meshes.get(d.mesh).map_or(0, |m| m.vertices.len());
+                b as usize + n <= bake.texels.len()
+            })
+        });
+    fits.then_some(bake)
+}
+
+/// Keeps `bake` in weft's cache on disk under `key` (best effort).
+pub fn write_cached(key: &[u8], bake: &Bake) {
+    crate::cache::write(CACHE_KIND, key, &encode(bake));
 }
 
 const CACHE_KIND: &str = "world-light";
 
-/// The key of a scene's bake under `sky`: a SHA-256 of everything [`bake`] reads (the receiving
+/// The key of a scene's bake under a sky: a SHA-256 of everything [`bake`] reads (the receiving
 /// and occluding draws' transforms, their meshes' vertices, indices and colours, their
 /// materials' base colour, metal, emission, cut-out and sides, the textures those read), the
-/// sky, the rays per vertex and weft's version.
-pub fn cache_key(scene: &Scene, sky: &SkyLight) -> Vec<u8> {
+/// sky, the rays per vertex and weft's version. The sky is `env_key`, the environment's own key in
+/// the cache (its map's content, the preprocessing shaders, the device and driver: what fixes the
+/// SH the frame takes), with the rotation and intensity: known before the SH is computed, so a
+/// renderer can look the bake up before it starts tracing.
+pub fn cache_key(scene: &Scene, env_key: &[u8], rotation: f32, intensity: f32) -> Vec<u8> {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
     let f = |h: &mut Sha256, v: &[f32]| {
@@ -327,13 +407,12 @@ pub fn cache_key(scene: &Scene, sky: &SkyLight) -> Vec<u8> {
             h.update(x.to_le_bytes());
         }
     };
-    h.update(b"weft world light 1 ");
+    h.update(b"weft world light 2 ");
     h.update(env!("CARGO_PKG_VERSION"));
     h.update(RAYS.to_le_bytes());
-    for row in &sky.sh {
-        f(&mut h, row);
-    }
-    f(&mut h, &[sky.rotation, sky.intensity]);
+    h.update((env_key.len() as u64).to_le_bytes());
+    h.update(env_key);
+    f(&mut h, &[rotation, intensity]);
     let mut meshes = std::collections::BTreeSet::new();
     let mut textures = std::collections::BTreeSet::new();
     for (i, d) in scene.draws.iter().enumerate() {

@@ -187,7 +187,7 @@ impl EnvPasses {
     }
 
     /// The key of `env`'s entry in the cache on disk.
-    fn cache_key(ctx: &Context, env: &Environment) -> Vec<u8> {
+    pub(crate) fn cache_key(ctx: &Context, env: &Environment) -> Vec<u8> {
         let mut key = b"environment v2 ".to_vec();
         key.extend_from_slice(&env.hash());
         let mut shaders = Sha256::new();
