@@ -129,4 +129,20 @@ fn a_second_run_reuses_the_cache_and_damage_is_never_used() {
     let off = render(&scene, &world);
     assert!(!off.stats.world_light_from_disk);
     assert_eq!(traced.ldr, off.ldr);
+
+    // Another sky for the same uploaded scene (a viewer turning the environment): its rays are
+    // shaded again, not traced (no "world rays" in the frame's timings), and the image is the
+    // one a fresh renderer traces for that sky.
+    let mut renderer = Renderer::new(common::context()).expect("renderer");
+    let gpu = renderer.upload(&scene).expect("upload");
+    let named = |f: &Frame, name: &str| f.timings.iter().any(|t| t.name == name);
+    let first_sky = renderer.render_frame(&scene, &gpu, &world).expect("render");
+    assert!(named(&first_sky, "world rays"));
+    let mut turned = world.clone();
+    turned.environment.as_mut().expect("lit").rotation = 90.0;
+    let again = renderer.render_frame(&scene, &gpu, &turned).expect("render");
+    assert!(!named(&again, "world rays") && named(&again, "world light"));
+    assert_eq!(again.ldr, render(&scene, &turned).ldr);
+    assert_ne!(again.ldr, first_sky.ldr, "the sky turned");
+    renderer.context().check_validation().unwrap();
 }

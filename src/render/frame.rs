@@ -304,6 +304,8 @@ enum WorldStart {
     Disk(super::world_light::Bake, f64),
     /// To be traced and shaded (the key to keep it under on disk, when there is a cache).
     Trace(Option<Vec<u8>>),
+    /// Traced for this scene before (under another sky): to be shaded only.
+    Shade(std::sync::Arc<super::world_light::Traced>, Option<Vec<u8>>),
 }
 
 /// What a frame's world light cost when this frame made it.
@@ -313,6 +315,8 @@ enum WorldLightTiming {
     Disk(f64),
     /// Its rays traced (beside the pipelines), then shaded and uploaded after them.
     Traced { rays_ms: f64, shade_ms: f64 },
+    /// The rays traced for an earlier sky shaded again, and uploaded.
+    Shaded(f64),
 }
 
 /// The world light a frame reads, and what it cost when this frame made it.
@@ -961,7 +965,15 @@ impl Renderer {
         {
             return Some(WorldStart::Disk(bake, start.elapsed().as_secs_f64() * 1e3));
         }
-        Some(WorldStart::Trace(disk_key))
+        let traced = gpu
+            .world_traced
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .clone();
+        Some(match traced {
+            Some(t) => WorldStart::Shade(t, disk_key),
+            None => WorldStart::Trace(disk_key),
+        })
     }
 
     /// The frame's world light from where [`Renderer::world_light_start`] found it: the rays
@@ -969,6 +981,7 @@ impl Renderer {
     /// kept on disk, or the bake read from there; uploaded and kept in memory for the next frame.
     fn world_light(
         &self,
+        scene: &Scene,
         gpu: &GpuScene,
         start: WorldStart,
         traced: Option<(super::world_light::Traced, f64)>,
@@ -976,19 +989,31 @@ impl Renderer {
         sh: [[f32; 3]; 9],
     ) -> crate::Result<WorldLightFrame> {
         let began = Instant::now();
+        let sky = super::world_light::SkyLight {
+            sh,
+            rotation: env.rotation,
+            intensity: env.intensity,
+        };
+        let shade = |traced: &super::world_light::Traced, disk_key: &Option<Vec<u8>>| {
+            let bake = super::world_light::shade(traced, scene, &sky);
+            if let Some(k) = disk_key {
+                super::world_light::write_cached(k, &bake);
+            }
+            bake
+        };
         let (bake, timing) = match (start, traced) {
             (WorldStart::Ready(w), _) => return Ok((w, None)),
             (WorldStart::Disk(bake, ms), _) => (bake, WorldLightTiming::Disk(ms)),
+            (WorldStart::Shade(traced, disk_key), _) => {
+                (shade(&traced, &disk_key), WorldLightTiming::Shaded(0.0))
+            }
             (WorldStart::Trace(disk_key), Some((traced, rays_ms))) => {
-                let sky = super::world_light::SkyLight {
-                    sh,
-                    rotation: env.rotation,
-                    intensity: env.intensity,
-                };
-                let bake = super::world_light::shade(&traced, &sky);
-                if let Some(k) = &disk_key {
-                    super::world_light::write_cached(k, &bake);
-                }
+                let bake = shade(&traced, &disk_key);
+                // Kept for the scene's next sky (`GpuScene::world_traced`).
+                *gpu.world_traced
+                    .lock()
+                    .unwrap_or_else(|poisoned| poisoned.into_inner()) =
+                    Some(std::sync::Arc::new(traced));
                 (
                     bake,
                     WorldLightTiming::Traced {
@@ -1029,6 +1054,7 @@ impl Renderer {
                 rays_ms,
                 shade_ms: ms,
             },
+            WorldLightTiming::Shaded(_) => WorldLightTiming::Shaded(ms),
         };
         Ok((w, Some(timing)))
     }
@@ -1151,7 +1177,7 @@ impl Renderer {
         let (world_light, world_light_ms) = match (world, &options.environment, env_index) {
             (Some(start), Some(env), Some(i)) => {
                 let sh = self.env_cache[i].sh;
-                let (w, ms) = self.world_light(gpu, start, traced, env, sh)?;
+                let (w, ms) = self.world_light(scene, gpu, start, traced, env, sh)?;
                 (Some(w), ms)
             }
             _ => (None, None),
@@ -1299,11 +1325,13 @@ impl Renderer {
         let buffers =
             self.frame_buffers(scene, gpu, &plan, options, &camera, keys.env, world, traced)?;
         match buffers.world_light_ms {
-            Some(WorldLightTiming::Disk(ms)) => timings.push(PassTiming {
-                name: "world light",
-                gpu_ms: None,
-                wall_ms: Some(ms),
-            }),
+            Some(WorldLightTiming::Disk(ms) | WorldLightTiming::Shaded(ms)) => {
+                timings.push(PassTiming {
+                    name: "world light",
+                    gpu_ms: None,
+                    wall_ms: Some(ms),
+                })
+            }
             Some(WorldLightTiming::Traced { rays_ms, shade_ms }) => {
                 timings.push(PassTiming {
                     name: "world rays",

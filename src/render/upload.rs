@@ -112,6 +112,10 @@ pub struct GpuScene {
     /// The world light baked for the environment of its key, made by the first frame that
     /// plans it (render::world_light; replaced when a frame's environment differs).
     pub(crate) world_light: std::sync::Mutex<Option<std::sync::Arc<WorldLightGpu>>>,
+    /// The world light's rays as traced for this scene (render::world_light::Traced), kept so
+    /// that another sky (a viewer turning the environment) shades them again without tracing:
+    /// at most `world_light::MAX_RAYS` hits of 8 bytes, with the BVH.
+    pub(crate) world_traced: std::sync::Mutex<Option<std::sync::Arc<super::world_light::Traced>>>,
     /// Thread-by-thread colours (set 0 binding 5 of the G-buffer and transparent passes).
     pub(crate) thread_colours: Buffer,
     /// One weave texture per distinct weave (RGBA16F mip chains, built by the weave pass for
@@ -292,6 +296,7 @@ impl Renderer {
             fabrics,
             lobe_albedo: std::sync::OnceLock::new(),
             world_light: std::sync::Mutex::new(None),
+            world_traced: std::sync::Mutex::new(None),
             thread_colours,
             weaves: std::sync::OnceLock::new(),
             weaves8: std::sync::OnceLock::new(),

@@ -119,12 +119,20 @@ pub struct Bake {
 }
 
 /// One occluding draw, in world space.
-struct Occluder<'a> {
-    /// Its index in `Scene::draws`, and the draw.
+struct Occluder {
+    /// Its index in `Scene::draws`.
     index: usize,
-    draw: &'a Draw,
-    material: Option<&'a Material>,
     normal_matrix: Mat3,
+}
+
+impl Occluder {
+    fn draw<'s>(&self, scene: &'s Scene) -> &'s Draw {
+        &scene.draws[self.index]
+    }
+
+    fn material<'s>(&self, scene: &'s Scene) -> Option<&'s Material> {
+        scene.mesh_material(&scene.meshes[self.draw(scene).mesh])
+    }
 }
 
 /// A vertex that receives: where it is, its normal, and the longest edge of its triangles.
@@ -137,15 +145,16 @@ struct Receiver {
 /// Bakes the scene's world light under `sky` (see the module's documentation): its rays
 /// traced ([`trace`]), then their hits shaded under the sky ([`shade`]).
 pub fn bake(scene: &Scene, sky: &SkyLight) -> Bake {
-    shade(&trace(scene), sky)
+    shade(&trace(scene), scene, sky)
 }
 
 /// The half of a bake that does not depend on the sky: the scene's triangles in a BVH, each
 /// receiving vertex's rays traced to their nearest hits and its visibility. A renderer traces it
-/// while its pipelines compile, before the environment's SH is known.
-pub struct Traced<'a> {
-    scene: &'a Scene,
-    occluders: Vec<Occluder<'a>>,
+/// while its pipelines compile, before the environment's SH is known, and keeps it for the
+/// scene's next sky (a viewer turning the environment shades again without tracing). It holds
+/// for the scene it was traced from: the same draws, meshes and materials' cut-outs.
+pub struct Traced {
+    occluders: Vec<Occluder>,
     tris: Vec<Triangle>,
     owner: Vec<(u32, u32)>,
     /// None where nothing occludes or nothing receives.
@@ -158,10 +167,10 @@ pub struct Traced<'a> {
     visibility: Vec<f32>,
 }
 
-impl Traced<'_> {
-    fn tracer(&self) -> Option<Tracer<'_>> {
+impl Traced {
+    fn tracer<'a>(&'a self, scene: &'a Scene) -> Option<Tracer<'a>> {
         Some(Tracer {
-            scene: self.scene,
+            scene,
             occluders: &self.occluders,
             tris: &self.tris,
             owner: &self.owner,
@@ -172,7 +181,7 @@ impl Traced<'_> {
 }
 
 /// Traces the scene's rays (the sky-independent half of [`bake`]).
-pub fn trace(scene: &Scene) -> Traced<'_> {
+pub fn trace(scene: &Scene) -> Traced {
     // The occluders' triangles, in world space, and which draw and triangle each is.
     let occluders: Vec<Occluder> = scene
         .draws
@@ -181,21 +190,20 @@ pub fn trace(scene: &Scene) -> Traced<'_> {
         .filter(|(_, d)| occludes(scene, d))
         .map(|(index, d)| Occluder {
             index,
-            draw: d,
-            material: scene.mesh_material(&scene.meshes[d.mesh]),
             normal_matrix: normal_matrix(d),
         })
         .collect();
     let mut tris = Vec::new();
     let mut owner: Vec<(u32, u32)> = Vec::new();
     for (o, occ) in occluders.iter().enumerate() {
-        let mesh = &scene.meshes[occ.draw.mesh];
+        let draw = occ.draw(scene);
+        let mesh = &scene.meshes[draw.mesh];
         let pos = |i: u32| -> Vec3A {
             let v = mesh
                 .vertices
                 .get(i as usize)
                 .map_or([0.0; 3], |v| v.position);
-            occ.draw.world.transform_point3(Vec3::from(v)).into()
+            draw.world.transform_point3(Vec3::from(v)).into()
         };
         for (t, idx) in mesh.indices.chunks_exact(3).enumerate() {
             let tri = Triangle {
@@ -242,7 +250,6 @@ pub fn trace(scene: &Scene) -> Traced<'_> {
     if tris.is_empty() || receivers.is_empty() {
         let visibility = vec![1.0; receivers.len()];
         return Traced {
-            scene,
             occluders,
             tris,
             owner,
@@ -300,7 +307,6 @@ pub fn trace(scene: &Scene) -> Traced<'_> {
         })
         .collect();
     Traced {
-        scene,
         occluders,
         tris,
         owner,
@@ -313,16 +319,15 @@ pub fn trace(scene: &Scene) -> Traced<'_> {
     }
 }
 
-/// The hits of `traced` shaded under `sky` (the second half of [`bake`]).
-pub fn shade(traced: &Traced, sky: &SkyLight) -> Bake {
-    let Some(tracer) = traced.tracer() else {
+/// The hits of `traced` (traced from `scene`) shaded under `sky` (the second half of [`bake`]).
+pub fn shade(traced: &Traced, scene: &Scene, sky: &SkyLight) -> Bake {
+    let Some(tracer) = traced.tracer(scene) else {
         return Bake {
             texels: vec![[0.0, 0.0, 0.0, 1.0]; traced.receivers.len()],
             base: traced.base.clone(),
         };
     };
-    let (scene, occluders, receivers, hits, visibility, base) = (
-        traced.scene,
+    let (occluders, receivers, hits, visibility, base) = (
         &traced.occluders,
         &traced.receivers,
         &traced.hits,
@@ -343,7 +348,7 @@ pub fn shade(traced: &Traced, sky: &SkyLight) -> Bake {
                 t,
             } = tracer.hit(r, i, k as u32, p as usize, t);
             let occ = &occluders[o as usize];
-            let mesh = &scene.meshes[occ.draw.mesh];
+            let mesh = &scene.meshes[occ.draw(scene).mesh];
             // The hit surface's own visibility, interpolated as the G-buffer would.
             // (Where the occluding draw does not receive, its visibility is taken as 1.)
             let vis = base[occ.index].map_or(1.0, |b| {
@@ -570,7 +575,7 @@ fn parallel_map<T: Sync, R: Send + Default + Clone>(
 
 struct Tracer<'a> {
     scene: &'a Scene,
-    occluders: &'a [Occluder<'a>],
+    occluders: &'a [Occluder],
     tris: &'a [Triangle],
     owner: &'a [(u32, u32)],
     bvh: &'a obvhs::cwbvh::CwBvh,
@@ -642,7 +647,7 @@ impl Tracer<'_> {
     }
 
     fn indices(&self, o: u32, t: u32) -> [u32; 3] {
-        let mesh = &self.scene.meshes[self.occluders[o as usize].draw.mesh];
+        let mesh = &self.scene.meshes[self.occluders[o as usize].draw(self.scene).mesh];
         let i = 3 * t as usize;
         [mesh.indices[i], mesh.indices[i + 1], mesh.indices[i + 2]]
     }
@@ -652,14 +657,15 @@ impl Tracer<'_> {
     fn opaque_at(&self, p: usize, ray: &Ray, t: f32) -> bool {
         let (o, tri) = self.owner[p];
         let occ = &self.occluders[o as usize];
-        let Some(cutoff) = occ.material.and_then(|m| m.alpha_cutoff) else {
+        let material = occ.material(self.scene);
+        let Some(cutoff) = material.and_then(|m| m.alpha_cutoff) else {
             return true;
         };
         let at = Vec3::from(ray.origin + ray.direction * t);
         let bary = barycentric(&self.tris[p], at);
-        let mesh = &self.scene.meshes[occ.draw.mesh];
+        let mesh = &self.scene.meshes[occ.draw(self.scene).mesh];
         let idx = self.indices(o, tri);
-        base_colour(self.scene, occ.material, mesh, idx, bary)[3] >= cutoff
+        base_colour(self.scene, material, mesh, idx, bary)[3] >= cutoff
     }
 
     /// The light a hit surface sends back along `dir`: its diffuse albedo times the sky's
@@ -685,15 +691,16 @@ impl Tracer<'_> {
             n += Vec3::from(v) * bary[j];
         }
         let mut n = (occ.normal_matrix * n).normalize_or_zero();
-        let double_sided = occ.material.is_some_and(|m| m.double_sided);
+        let material = occ.material(self.scene);
+        let double_sided = material.is_some_and(|m| m.double_sided);
         if n.dot(dir) > 0.0 {
             if !double_sided {
                 return Vec3::ZERO;
             }
             n = -n;
         }
-        let c = base_colour(self.scene, occ.material, mesh, idx, bary);
-        let Some(m) = occ.material else {
+        let c = base_colour(self.scene, material, mesh, idx, bary);
+        let Some(m) = material else {
             return Vec3::new(c[0], c[1], c[2]) * sky.at(n) * vis;
         };
         let albedo = Vec3::new(c[0], c[1], c[2]);
