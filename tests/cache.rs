@@ -140,7 +140,9 @@ fn a_second_run_reuses_the_cache_and_damage_is_never_used() {
     assert!(named(&first_sky, "world rays"));
     let mut turned = world.clone();
     turned.environment.as_mut().expect("lit").rotation = 90.0;
-    let again = renderer.render_frame(&scene, &gpu, &turned).expect("render");
+    let again = renderer
+        .render_frame(&scene, &gpu, &turned)
+        .expect("render");
     assert!(!named(&again, "world rays") && named(&again, "world light"));
     assert_eq!(again.ldr, render(&scene, &turned).ldr);
     assert_ne!(again.ldr, first_sky.ldr, "the sky turned");
