@@ -146,5 +146,25 @@ fn a_second_run_reuses_the_cache_and_damage_is_never_used() {
     assert!(!named(&again, "world rays") && named(&again, "world light"));
     assert_eq!(again.ldr, render(&scene, &turned).ldr);
     assert_ne!(again.ldr, first_sky.ldr, "the sky turned");
+
+    // A material's colour rewritten on the uploaded scene (`weft view`'s live edits): the world
+    // light is shaded again with it (the kept rays, whose cut-outs did not change, not traced
+    // again), and the image is a fresh renderer's of the edited scene.
+    let mut edited = scene.clone();
+    let glossy = edited
+        .materials
+        .iter_mut()
+        .find(|m| m.fabric.is_none() && m.metallic < 0.5)
+        .expect("the default scene's floor");
+    glossy.base_color = [0.1, 0.6, 0.2, 1.0];
+    let mut gpu = gpu;
+    renderer
+        .update_material_records(&edited, &mut gpu)
+        .expect("records");
+    let recoloured = renderer
+        .render_frame(&edited, &gpu, &turned)
+        .expect("render");
+    assert!(!named(&recoloured, "world rays") && named(&recoloured, "world light"));
+    assert_eq!(recoloured.ldr, render(&edited, &turned).ldr);
     renderer.context().check_validation().unwrap();
 }

@@ -296,6 +296,16 @@ struct FrameBuffers {
     world_light_ms: Option<WorldLightTiming>,
 }
 
+/// What a world light in memory was made under (`WorldLightGpu::key`): the environment's map,
+/// its rotation and intensity.
+fn world_light_key(env: &crate::env::EnvLighting) -> ([u8; 32], u32, u32) {
+    (
+        env.env.hash(),
+        env.rotation.to_bits(),
+        env.intensity.to_bits(),
+    )
+}
+
 /// Where a frame's world light comes from (Renderer::world_light_start).
 enum WorldStart {
     /// Baked for this scene and environment before, in memory.
@@ -938,11 +948,7 @@ impl Renderer {
         plan.occlusion.as_ref()?.world.as_ref()?;
         plan.environment.as_ref()?;
         let env = options.environment.as_ref()?;
-        let key = (
-            env.env.hash(),
-            env.rotation.to_bits(),
-            env.intensity.to_bits(),
-        );
+        let key = world_light_key(env);
         let cached = gpu
             .world_light
             .lock()
@@ -953,7 +959,8 @@ impl Renderer {
         let start = Instant::now();
         let disk_key = crate::cache::dir().map(|_| {
             super::world_light::cache_key(
-                scene,
+                gpu.world_scene_hash
+                    .get_or_init(|| super::world_light::scene_hash(scene)),
                 &super::passes::environment::EnvPasses::cache_key(&self.ctx, &env.env),
                 env.rotation,
                 env.intensity,
@@ -969,7 +976,8 @@ impl Renderer {
             .world_traced
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner())
-            .clone();
+            .clone()
+            .filter(|t| t.holds_for(scene));
         Some(match traced {
             Some(t) => WorldStart::Shade(t, disk_key),
             None => WorldStart::Trace(disk_key),
@@ -1036,11 +1044,7 @@ impl Renderer {
             &texels,
         )?;
         let w = std::sync::Arc::new(super::upload::WorldLightGpu {
-            key: (
-                env.env.hash(),
-                env.rotation.to_bits(),
-                env.intensity.to_bits(),
-            ),
+            key: world_light_key(env),
             buffer,
             base: bake.base,
         });

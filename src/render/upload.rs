@@ -116,6 +116,9 @@ pub struct GpuScene {
     /// that another sky (a viewer turning the environment) shades them again without tracing:
     /// at most `world_light::MAX_RAYS` hits of 8 bytes, with the BVH.
     pub(crate) world_traced: std::sync::Mutex<Option<std::sync::Arc<super::world_light::Traced>>>,
+    /// The scene's part of the world light's key on disk (`world_light::scene_hash`), hashed
+    /// once: every sky's key starts with it.
+    pub(crate) world_scene_hash: std::sync::OnceLock<[u8; 32]>,
     /// Thread-by-thread colours (set 0 binding 5 of the G-buffer and transparent passes).
     pub(crate) thread_colours: Buffer,
     /// One weave texture per distinct weave (RGBA16F mip chains, built by the weave pass for
@@ -297,6 +300,7 @@ impl Renderer {
             lobe_albedo: std::sync::OnceLock::new(),
             world_light: std::sync::Mutex::new(None),
             world_traced: std::sync::Mutex::new(None),
+            world_scene_hash: std::sync::OnceLock::new(),
             thread_colours,
             weaves: std::sync::OnceLock::new(),
             weaves8: std::sync::OnceLock::new(),
@@ -352,6 +356,10 @@ impl Renderer {
         )?;
         gpu.materials =
             ctx.create_buffer_with("materials", BufferUsageFlags::STORAGE_BUFFER, &materials)?;
+        // The world light's bake reads the materials' colours (its rays, kept, are checked
+        // against the cut-outs when next used): shaded again by the next frame that plans it.
+        gpu.world_light = std::sync::Mutex::new(None);
+        gpu.world_scene_hash = std::sync::OnceLock::new();
         Ok(())
     }
 }

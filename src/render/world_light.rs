@@ -125,6 +125,19 @@ struct Occluder {
     normal_matrix: Mat3,
 }
 
+/// Each occluder's cut-out, as bits: alphaMode MASK's cutoff and its base colour factor's alpha
+/// (what [`Tracer::opaque_at`] reads besides the textures, which an upload fixes).
+fn cutouts(scene: &Scene, occluders: &[Occluder]) -> Vec<(u32, u32)> {
+    occluders
+        .iter()
+        .map(|o| {
+            o.material(scene)
+                .and_then(|m| Some((m.alpha_cutoff?.to_bits(), m.base_color[3].to_bits())))
+                .unwrap_or((u32::MAX, 0))
+        })
+        .collect()
+}
+
 impl Occluder {
     fn draw<'s>(&self, scene: &'s Scene) -> &'s Draw {
         &scene.draws[self.index]
@@ -165,9 +178,21 @@ pub struct Traced {
     /// Per receiver, per ray: the nearest triangle (u32::MAX: escapes) and its distance.
     hits: Vec<Vec<(u32, f32)>>,
     visibility: Vec<f32>,
+    /// The occluders' cut-outs as traced ([`cutouts`]).
+    cutouts: Vec<(u32, u32)>,
 }
 
 impl Traced {
+    /// Whether these rays hold for `scene` (the scene they were traced from, its materials
+    /// perhaps rewritten since, `Renderer::update_material_records`): the same occluders with
+    /// the same cut-outs. Colours may change: [`shade`] reads them.
+    pub fn holds_for(&self, scene: &Scene) -> bool {
+        self.occluders
+            .iter()
+            .all(|o| scene.draws.get(o.index).is_some_and(|d| occludes(scene, d)))
+            && cutouts(scene, &self.occluders) == self.cutouts
+    }
+
     fn tracer<'a>(&'a self, scene: &'a Scene) -> Option<Tracer<'a>> {
         Some(Tracer {
             scene,
@@ -250,6 +275,7 @@ pub fn trace(scene: &Scene) -> Traced {
     if tris.is_empty() || receivers.is_empty() {
         let visibility = vec![1.0; receivers.len()];
         return Traced {
+            cutouts: cutouts(scene, &occluders),
             occluders,
             tris,
             owner,
@@ -307,6 +333,7 @@ pub fn trace(scene: &Scene) -> Traced {
         })
         .collect();
     Traced {
+        cutouts: cutouts(scene, &occluders),
         occluders,
         tris,
         owner,
@@ -397,14 +424,26 @@ pub fn write_cached(key: &[u8], bake: &Bake) {
 
 const CACHE_KIND: &str = "world-light";
 
-/// The key of a scene's bake under a sky: a SHA-256 of everything [`bake`] reads (the receiving
-/// and occluding draws' transforms, their meshes' vertices, indices and colours, their
-/// materials' base colour, metal, emission, cut-out and sides, the textures those read), the
-/// sky, the rays per vertex and weft's version. The sky is `env_key`, the environment's own key in
-/// the cache (its map's content, the preprocessing shaders, the device and driver: what fixes the
-/// SH the frame takes), with the rotation and intensity: known before the SH is computed, so a
-/// renderer can look the bake up before it starts tracing.
-pub fn cache_key(scene: &Scene, env_key: &[u8], rotation: f32, intensity: f32) -> Vec<u8> {
+/// The key of a scene's bake under a sky: the scene's part ([`scene_hash`]), then the sky:
+/// `env_key`, the environment's own key in the cache (its map's content, the preprocessing
+/// shaders, the device and driver: what fixes the SH the frame takes), with the rotation and
+/// intensity. Known before the SH is computed, so a renderer can look the bake up before it
+/// starts tracing.
+pub fn cache_key(scene_hash: &[u8; 32], env_key: &[u8], rotation: f32, intensity: f32) -> Vec<u8> {
+    let mut key = b"world light ".to_vec();
+    key.extend_from_slice(scene_hash);
+    key.extend_from_slice(&rotation.to_le_bytes());
+    key.extend_from_slice(&intensity.to_le_bytes());
+    key.extend_from_slice(env_key);
+    key
+}
+
+/// The scene's part of a bake's key: a SHA-256 of everything [`bake`] reads (the receiving and
+/// occluding draws' transforms, their meshes' vertices, indices and colours, their materials'
+/// base colour, metal, emission, cut-out and sides, the textures those read), the rays per
+/// vertex and weft's version. The same under every sky: a renderer hashes it once per uploaded
+/// scene.
+pub fn scene_hash(scene: &Scene) -> [u8; 32] {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
     let f = |h: &mut Sha256, v: &[f32]| {
@@ -412,12 +451,9 @@ pub fn cache_key(scene: &Scene, env_key: &[u8], rotation: f32, intensity: f32) -
             h.update(x.to_le_bytes());
         }
     };
-    h.update(b"weft world light 2 ");
+    h.update(b"weft world light 3 ");
     h.update(env!("CARGO_PKG_VERSION"));
     h.update(RAYS.to_le_bytes());
-    h.update((env_key.len() as u64).to_le_bytes());
-    h.update(env_key);
-    f(&mut h, &[rotation, intensity]);
     let mut meshes = std::collections::BTreeSet::new();
     let mut textures = std::collections::BTreeSet::new();
     for (i, d) in scene.draws.iter().enumerate() {
@@ -483,9 +519,7 @@ pub fn cache_key(scene: &Scene, env_key: &[u8], rotation: f32, intensity: f32) -
             h.update(&tex.rgba8);
         }
     }
-    let mut key = b"world light ".to_vec();
-    key.extend_from_slice(&h.finalize());
-    key
+    h.finalize().into()
 }
 
 /// A bake as the cache's payload: the texel count, the texels (4 f32 each), the draw count, each
