@@ -21,7 +21,7 @@
 // slower on lavapipe), its light made once per half-resolution texel by step 1
 // (occlusion_depth.frag) and read here at the texel nearest the sample. Weighted and normalised
 // as the visibility, so an irradiance/π;
-// the lighting pass adds what of it exceeds the multi-bounce fit (lighting.frag's OCCLUSION 2).
+// the lighting pass adds what of it exceeds the multi-bounce fit (lighting.frag's OCCLUSION bit 1).
 #include "frame.glsl"
 #include "occlusion.glsl"
 #include "fabric.glsl"

@@ -40,16 +40,18 @@ layout(constant_id = 8) const uint IBL_SAMPLES = 16u;
 // 1: some material is unlit (KHR_materials_unlit, MATERIAL_UNLIT): its pixels show the base colour
 // from the albedo target as their radiance, unlit; 0: the check is compiled out.
 layout(constant_id = 9) const uint UNLIT = 0u;
-// 1: the occlusion pass ran (an environment lights the scene, --occlusion gtao-nobounce): its
-// visibility, raised for light bounced between occluders (a fit), multiplies the material's
-// occlusion texture in the environment's light; 2 (--occlusion gtao): the same, and where the
+// Bits. Any set: the occlusion pass ran (an environment lights the scene): its visibility,
+// raised for light bounced between occluders (a fit), multiplies the material's occlusion
+// texture in the environment's light (1 alone: --occlusion gtao-nobounce). Bit 1 (2): where the
 // occluders' light the pass measured on screen exceeds what the fit gives back, the excess is
-// added to the diffuse and sheen light (--occlusion gtao-screen); 3 (--occlusion gtao, where the
-// plan bakes the world light): the same with the world light (render::world_light) from the
-// G-buffer's specular target: the lesser of the screen's visibility and the world's, the greater
-// of the two bounces (KHR_materials_specular's data then the material's F0, weight 1); 0: it is
-// not read. (Bit 1, 2 and 3, is the occluders' bounce: tested with `&`, which spirq evaluates
-// where it does not evaluate `||` of two comparisons.)
+// added to the diffuse and sheen light (--occlusion gtao-screen). Bit 2 (4: --occlusion gtao,
+// where the plan bakes the world light): the world light (render::world_light) from the G-buffer's
+// specular target: the lesser of the screen's visibility and the world's, the greater of the two
+// bounces (KHR_materials_specular's data then the material's F0, weight 1); 4 without bit 1 where
+// the world light carries the occluders' light alone (every receiving triangle small beside the
+// occlusion radius: the screen's bounce adds nothing the vertices do not hold). 0: none of it is
+// read. (Tested with `&`, which spirq evaluates where it does not evaluate `||` of two
+// comparisons.)
 layout(constant_id = 10) const uint OCCLUSION = 0u;
 // 1: a debug view (frame.debug_view) may show a G-buffer target instead of the lit image; 0: that
 // code is compiled out.
@@ -109,7 +111,7 @@ layout(set = 0, binding = 24) uniform sampler2D gb_emissive;  // G-buffer emissi
 layout(set = 0, binding = 25) uniform sampler2D gb_depth;  // G-buffer depth (D32)
 layout(set = 0, binding = 26) uniform sampler2D gb_specular;  // G-buffer specular (KHR_materials_specular: rgb F0, a weight)
 layout(set = 0, binding = 27) uniform sampler2D screen_occlusion;  // the occlusion pass's visibility of the environment and view distance per 2 x 2 pixels (RG16F, half resolution, occlusion_blur.frag); any image when OCCLUSION = 0
-layout(set = 0, binding = 29) uniform sampler2D screen_bounce;  // the occlusion pass's bounced light from the occluders per 2 x 2 pixels (RGBA16F: rgb irradiance/π, half resolution, occlusion_blur.frag); any image when OCCLUSION < 2
+layout(set = 0, binding = 29) uniform sampler2D screen_bounce;  // the occlusion pass's bounced light from the occluders per 2 x 2 pixels (RGBA16F: rgb irradiance/π, half resolution, occlusion_blur.frag); any image without OCCLUSION's bit 1
 layout(set = 0, binding = 28) uniform usampler2D fabric_lobe_sums;  // fabric_lobes.frag's lobe sums per pixel (RGBA32_UINT, fabric_lobe_pack of include/env_light.glsl) when POOL ≥ 1; any unsigned-integer image otherwise
 
 layout(location = 0) in vec2 in_uv;
@@ -154,7 +156,7 @@ void fabric_pooled_lobe_sums(out vec4 weft, out vec4 warp, out uint pixels) {
 // estimates around it (each made at the top-left pixel of its 2 x 2 block), bilinearly, each
 // weighted by how close its distance is to the pixel's (an edge does not take the visibility of
 // what is behind it); 1 where no estimate lies on the pixel's surface. `bounced`: the occluders'
-// light (OCCLUSION 2 and 3) with the same weights; 0 where no estimate lies on the surface.
+// light (OCCLUSION's bit 1) with the same weights; 0 where no estimate lies on the surface.
 float screen_visibility(ivec2 px, float dist, out vec3 bounced) {
     ivec2 size = textureSize(screen_occlusion, 0);
     ivec2 c = px / 2;
@@ -226,7 +228,7 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
         vec4 hp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
         vec3 bounced;
         float screen = OCCLUSION != 0u ? screen_visibility(px, view_distance(hp.xyz / hp.w), bounced) : 1.0;
-        if (OCCLUSION == 3u) {
+        if ((OCCLUSION & 4u) != 0u) {
             screen -= world_hidden(screen, bounced, texelFetch(gb_specular, px, 0));
         }
         return vec3(screen * texelFetch(gb_emissive, px, 0).a);
@@ -287,16 +289,16 @@ void main() {
         // the specular occlusion the grey one of the albedo's luminance.
         vec3 bounced;
         float visibility = screen_visibility(px, view_distance(p), bounced);
-        // The sky the world light sees hidden and the screen does not (OCCLUSION 3): taken
+        // The sky the world light sees hidden and the screen does not (OCCLUSION's bit 2): taken
         // away from the fit's result as it is (no bounce of it credited but the measured one),
         // so the fit gives back multiple bounces only for the occluders the screen shows, whose
         // colour it takes to be the surface's; the world light knows the hidden ones' colour.
-        float hidden = OCCLUSION == 3u ? world_hidden(visibility, bounced, texelFetch(gb_specular, px, 0)) : 0.0;
+        float hidden = (OCCLUSION & 4u) != 0u ? world_hidden(visibility, bounced, texelFetch(gb_specular, px, 0)) : 0.0;
         float grey = gtao_multibounce(visibility, dot(albedo.rgb, vec3(0.2126, 0.7152, 0.0722))) - hidden;
         vec3 coloured = vec3(gtao_multibounce(visibility, albedo.r), gtao_multibounce(visibility, albedo.g),
                              gtao_multibounce(visibility, albedo.b)) - hidden;
         visibility -= hidden;
-        if ((OCCLUSION & 2u) != 0u) {
+        if ((OCCLUSION & 6u) != 0u) {
             // The occluders' own light that the screen shows (occlusion.frag: one bounce of the
             // environment's off them), and the world light's, where it exceeds what the fit
             // gives back: per channel, the diffuse light is the larger of the fit's and the
@@ -312,7 +314,7 @@ void main() {
     // With the world light in the specular target, the material's own dielectric layer: F0 from
     // its index of refraction, weight 1 (the plan leaves the world light out where a material has
     // KHR_materials_specular's data; surface.glsl writes the same for the others).
-    vec4 specular = OCCLUSION == 3u
+    vec4 specular = (OCCLUSION & 4u) != 0u
         ? vec4(vec3(min(materials[min(uint(surface.y + 0.5), frame.material_count - 1u)].extra.x, 1.0)), 1.0)
         : texelFetch(gb_specular, px, 0);
     vec3 radiance = shade_surface(p, v, albedo, fr, surface, texelFetch(gb_fabric, px, 0),

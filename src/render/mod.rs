@@ -141,6 +141,10 @@ pub struct Force {
     /// each writes "open, no surface"), instead of drawing them against the depth where a surface
     /// is: it must change no pixel.
     pub occlusion_everywhere: bool,
+    /// Keep the occlusion pass's bounce beside the world light where the plan leaves the
+    /// occluders' light to the world light alone (`OcclusionPlan::world_bounce`): to measure
+    /// what leaving it out changes.
+    pub screen_bounce: bool,
 }
 
 impl Force {
@@ -160,6 +164,7 @@ impl Force {
         no_depth_prepass: false,
         fxaa_everywhere: false,
         occlusion_everywhere: false,
+        screen_bounce: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -179,6 +184,9 @@ impl Force {
         no_depth_prepass: true,
         fxaa_everywhere: true,
         occlusion_everywhere: true,
+        // Not code compiled in for nothing: a second estimate of the occluders' light, which
+        // the world light's own takes the greater of (not the same image bit for bit).
+        screen_bounce: false,
     };
 }
 

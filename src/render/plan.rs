@@ -323,8 +323,15 @@ fn debug_view_name<S: serde::Serializer>(view: &DebugView, s: S) -> Result<S::Ok
 pub struct OcclusionPlan {
     /// "gtao" (with the occluders' bounced light) or "gtao-nobounce".
     pub method: &'static str,
-    /// The occluders' bounced light (occlusion.frag's BOUNCE; lighting.frag's OCCLUSION 2).
+    /// The occluders' bounced light as the screen shows it (occlusion.frag's BOUNCE;
+    /// lighting.frag's OCCLUSION bit 1): asked for (`gtao`, `gtao-screen`) and not carried by
+    /// the world light alone (`world_bounce`).
     pub bounce: bool,
+    /// The world light carries the occluders' light alone: it is planned and every receiving
+    /// triangle's longest edge is within [`OcclusionPlan::WORLD_BOUNCE_EDGE`] of the radius, so
+    /// the screen's bounce (which it would take the greater of) adds nothing its vertices do not
+    /// hold, and the occlusion pass leaves it out.
+    pub world_bounce: bool,
     /// How far occluders count, in world units (the last 60 % falling off), and whether it is
     /// the scene's (0.3 of its diagonal) or `--occlusion gtao:R`'s.
     pub radius: f32,
@@ -350,6 +357,8 @@ pub struct WorldLightPlan {
     pub vertices: usize,
     pub triangles: usize,
     pub rays_per_vertex: u32,
+    /// The longest edge of a receiving triangle, world units (`world_light::longest_receiving_edge`).
+    pub longest_edge: f32,
 }
 
 impl WorldLightPlan {
@@ -391,6 +400,7 @@ impl WorldLightPlan {
             vertices,
             triangles,
             rays_per_vertex: RAYS,
+            longest_edge: super::world_light::longest_receiving_edge(scene),
         })
     }
 }
@@ -398,6 +408,26 @@ impl WorldLightPlan {
 impl OcclusionPlan {
     pub const SLICES: u32 = 2;
     pub const STEPS: u32 = 6;
+    /// The world light carries the occluders' light alone where every receiving triangle's
+    /// longest edge is at most this share of the occlusion radius: occluders nearer than a
+    /// vertex's edges count in proportion to their distance there (world_light's `reach`), so
+    /// what the screen's bounce would add is what lies within a quarter of its radius of a coarse
+    /// vertex. Measured (`weft fidelity`, all 37 scenarios against Cycles, and SheenChair,
+    /// SheenCloth and Duck against STELLAR): the world light with and without the screen's bounce
+    /// within 0.2 dB on every scenario, the medians the same (docs/fidelity.md, "Does the
+    /// screen's bounce still add anything beside the world light?").
+    pub const WORLD_BOUNCE_EDGE: f32 = 0.25;
+
+    /// lighting.frag's OCCLUSION: any bit the visibility, bit 1 the screen's bounce, bit 2 the
+    /// world light.
+    pub fn lighting_code(&self) -> u32 {
+        match (self.world.is_some(), self.bounce) {
+            (false, false) => 1,
+            (false, true) => 2,
+            (true, false) => 4,
+            (true, true) => 6,
+        }
+    }
 }
 
 /// Environment lighting of a frame.
@@ -666,11 +696,21 @@ impl Plan {
                         .filter(|r| r.is_finite() && *r > 0.0)
                         .unwrap_or(1.0)
                 };
+                let given = radius.is_some();
+                let radius = radius.unwrap_or_else(scene_radius);
+                let world_bounce = bounce
+                    && !options.force.screen_bounce
+                    && world_light.as_ref().is_some_and(|w| {
+                        w.as_ref().is_ok_and(|w| {
+                            w.longest_edge <= OcclusionPlan::WORLD_BOUNCE_EDGE * radius
+                        })
+                    });
                 Some(OcclusionPlan {
                     method: if bounce { "gtao" } else { "gtao-nobounce" },
-                    bounce,
-                    radius: radius.unwrap_or_else(scene_radius),
-                    radius_from: if radius.is_some() {
+                    bounce: bounce && !world_bounce,
+                    world_bounce,
+                    radius,
+                    radius_from: if given {
                         "--occlusion"
                     } else {
                         "0.3 of the scene's diagonal"
@@ -1216,6 +1256,8 @@ impl fmt::Display for Plan {
                 },
                 if o.bounce {
                     "the light the occluders on screen bounce, where it exceeds the multi-bounce fit"
+                } else if o.world_bounce {
+                    "the occluders' light from the world light alone (every receiving triangle's edges within a quarter of the radius: the screen's bounce adds nothing its vertices do not hold; left out of the pass)"
                 } else {
                     "the multi-bounce fit alone"
                 }
@@ -1225,8 +1267,16 @@ impl fmt::Display for Plan {
             if let Some(w) = &o.world {
                 writeln!(
                     f,
-                    "world light baked per vertex on the CPU (once per scene and environment, then weft's cache on disk): {} vertices x {} rays against {} triangles (the visibility, then the hit surfaces' light); the G-buffer's specular target carries it, the lighting takes the lesser visibility and the greater bounce of screen and world",
-                    w.vertices, w.rays_per_vertex, w.triangles
+                    "world light baked per vertex on the CPU (once per scene and environment, then weft's cache on disk): {} vertices x {} rays against {} triangles (the visibility, then the hit surfaces' light); the G-buffer's specular target carries it, the lighting takes the lesser visibility of screen and world and {}; longest receiving edge {:.3}",
+                    w.vertices,
+                    w.rays_per_vertex,
+                    w.triangles,
+                    if o.world_bounce {
+                        "the world's bounce"
+                    } else {
+                        "the greater bounce of the two"
+                    },
+                    w.longest_edge
                 )?;
             } else if let Some(why) = &o.world_off {
                 writeln!(f, "world light none: {why}")?;

@@ -22,7 +22,7 @@
 //! The G-buffer pass interpolates them over each triangle into its specular target (which the
 //! plan gives the world light only where no material needs KHR_materials_specular's data), and
 //! the lighting pass takes, per pixel, the smaller of the screen's visibility and the world's and
-//! the larger of the two bounces (lighting_main.glsl, OCCLUSION 3). Planned only for a static
+//! the larger of the two bounces (lighting_main.glsl, OCCLUSION's bit 2). Planned only for a static
 //! scene lit by an environment, with the occlusion pass's bounce, and within [`MAX_RAYS`]
 //! (`Plan::occlusion`'s `world`).
 
@@ -107,6 +107,29 @@ pub fn extent(scene: &Scene) -> (usize, usize) {
         .map(|d| scene.meshes[d.mesh].indices.len() / 3)
         .sum();
     (vertices, triangles)
+}
+
+/// The longest edge of any triangle of a receiving draw, in world units: the vertices' spacing,
+/// below which the world light cannot hold what changes across a triangle ([`reach`]).
+pub fn longest_receiving_edge(scene: &Scene) -> f32 {
+    let mut longest = 0f32;
+    for d in scene.draws.iter().filter(|d| receives(scene, d)) {
+        let mesh = &scene.meshes[d.mesh];
+        let at = |i: u32| {
+            mesh.vertices
+                .get(i as usize)
+                .map(|v| d.world.transform_point3(Vec3::from(v.position)))
+        };
+        for t in mesh.indices.chunks_exact(3) {
+            if let (Some(a), Some(b), Some(c)) = (at(t[0]), at(t[1]), at(t[2])) {
+                let e = a.distance(b).max(b.distance(c)).max(c.distance(a));
+                if e.is_finite() {
+                    longest = longest.max(e);
+                }
+            }
+        }
+    }
+    longest
 }
 
 /// A scene's baked world light.

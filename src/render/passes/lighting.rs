@@ -10,7 +10,7 @@
 use std::collections::HashMap;
 
 use super::{Recorded, SceneLighting, VariantKey};
-use crate::render::plan::Plan;
+use crate::render::plan::{OcclusionPlan, Plan};
 use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
@@ -138,18 +138,14 @@ impl LightingPass {
                     .unwrap_or(1),
             ),
             (9, "unlit", plan.unlit as u32),
-            // 0: none, 1: the visibility, 2: and the occluders' bounced light, 3: and the world
-            // light (the G-buffer's specular target holds it).
+            // 0: none; any bit the visibility, bit 1 the occluders' bounced light the screen
+            // shows, bit 2 the world light (the G-buffer's specular target holds it).
             (
                 10,
                 "occlusion",
-                plan.occlusion.as_ref().map_or(0, |o| {
-                    if o.world.is_some() {
-                        3
-                    } else {
-                        1 + o.bounce as u32
-                    }
-                }),
+                plan.occlusion
+                    .as_ref()
+                    .map_or(0, OcclusionPlan::lighting_code),
             ),
             (
                 11,
