@@ -158,7 +158,9 @@ struct SceneArgs {
     /// from the depth buffer, out to 0.3 of the scene's size; the light bounced between
     /// occluders from a fit, and the occluders' own light the screen shows where it is more;
     /// and, for a static scene, the world light: what each vertex sees of the whole scene,
-    /// baked by rays on the CPU, for the occluders the screen does not show), gtao:R (out to R
+    /// baked by rays on the CPU, for the occluders the screen does not show; where every
+    /// receiving triangle is small beside the radius, the world's alone: `weft plan` says which),
+    /// gtao:R (out to R
     /// world units), gtao-screen[:R] (the screen's alone, no world light), gtao-nobounce[:R] (the
     /// fit alone), or none (occlusion textures only). Runs only when an environment lights the
     /// scene.
