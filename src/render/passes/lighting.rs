@@ -64,7 +64,7 @@ pub struct LightingInputs<'s> {
     /// variant without OCCLUSION does not read it).
     pub occlusion: &'s Image,
     /// The occlusion pass's blurred bounced light when the plan has the pass (any image
-    /// otherwise: lighting.frag reads it only at OCCLUSION 2).
+    /// otherwise: lighting.frag reads it only with OCCLUSION's bit 1).
     pub bounce: &'s Image,
     /// The fabric lobes' sums (`LOBES_FORMAT`) when a variant pools them (made by the frame).
     pub lobes: Option<&'s Image>,
