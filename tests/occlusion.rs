@@ -634,7 +634,7 @@ fn the_world_light_brings_back_what_the_screen_hides() {
     assert!(
         plan.occlusion
             .as_ref()
-            .is_some_and(|p| p.bounce && !p.world_bounce),
+            .is_some_and(|p| p.bounce && !p.world_bounce()),
         "{plan}"
     );
     let with = renderer.render(&scene, &o).expect("render");
@@ -682,7 +682,7 @@ fn the_world_light_brings_back_what_the_screen_hides() {
 /// Where every receiving triangle is within a quarter of the occlusion radius (the default
 /// scene, whose floor is 16 x 16 cells of 0.375 m against a radius of 2.56 m), the world light's
 /// vertices hold the occluders' light the screen would add, and the plan leaves the screen's
-/// bounce out of the occlusion pass (`OcclusionPlan::world_bounce`: the lighting takes the
+/// bounce out of the occlusion pass (`OcclusionPlan::world_bounce()`: the lighting takes the
 /// world's bounce alone). `Force::screen_bounce` puts it back. Measured on lavapipe (AMD EPYC,
 /// 256-bit) at 480x270: the world's bounce alone against both, mean 8-bit difference
 /// 0.0005/255, 2 pixels beyond 8/255, at most 15 (where the screen's half-resolution bounce
@@ -716,7 +716,7 @@ fn the_world_light_alone_carries_the_bounce_where_its_vertices_are_fine() {
     let o = plan.occlusion.as_ref().expect("planned");
     let w = o.world.as_ref().expect("the world light is planned");
     assert!(
-        o.world_bounce && !o.bounce,
+        o.world_bounce() && !o.bounce,
         "the screen's bounce is left out: {plan}"
     );
     assert!(w.longest_edge <= 0.25 * o.radius, "{plan}");
@@ -727,7 +727,7 @@ fn the_world_light_alone_carries_the_bounce_where_its_vertices_are_fine() {
     let forced = options(true, true);
     let plan = Plan::new(&scene, &forced);
     let o = plan.occlusion.as_ref().expect("planned");
-    assert!(o.bounce && !o.world_bounce, "forced back: {plan}");
+    assert!(o.bounce && !o.world_bounce(), "forced back: {plan}");
     let alone = renderer.render(&scene, &planned).expect("render");
     let both = renderer.render(&scene, &forced).expect("render");
     let screen = renderer

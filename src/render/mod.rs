@@ -142,7 +142,7 @@ pub struct Force {
     /// is: it must change no pixel.
     pub occlusion_everywhere: bool,
     /// Keep the occlusion pass's bounce beside the world light where the plan leaves the
-    /// occluders' light to the world light alone (`OcclusionPlan::world_bounce`): to measure
+    /// occluders' light to the world light alone (`OcclusionPlan::world_bounce()`): to measure
     /// what leaving it out changes.
     pub screen_bounce: bool,
 }

@@ -325,13 +325,8 @@ pub struct OcclusionPlan {
     pub method: &'static str,
     /// The occluders' bounced light as the screen shows it (occlusion.frag's BOUNCE;
     /// lighting.frag's OCCLUSION bit 1): asked for (`gtao`, `gtao-screen`) and not carried by
-    /// the world light alone (`world_bounce`).
+    /// the world light alone ([`OcclusionPlan::world_bounce`]).
     pub bounce: bool,
-    /// The world light carries the occluders' light alone: it is planned and every receiving
-    /// triangle's longest edge is within [`OcclusionPlan::WORLD_BOUNCE_EDGE`] of the radius, so
-    /// the screen's bounce (which it would take the greater of) adds nothing its vertices do not
-    /// hold, and the occlusion pass leaves it out.
-    pub world_bounce: bool,
     /// How far occluders count, in world units (the last 60 % falling off), and whether it is
     /// the scene's (0.3 of its diagonal) or `--occlusion gtao:R`'s.
     pub radius: f32,
@@ -417,6 +412,15 @@ impl OcclusionPlan {
     /// within 0.2 dB on every scenario, the medians the same (docs/fidelity.md, "Does the
     /// screen's bounce still add anything beside the world light?").
     pub const WORLD_BOUNCE_EDGE: f32 = 0.25;
+
+    /// Whether the world light carries the occluders' light alone: it is planned (only ever
+    /// with the bounce asked for) and the screen's bounce is not, because every receiving
+    /// triangle's longest edge is within [`OcclusionPlan::WORLD_BOUNCE_EDGE`] of the radius: the
+    /// screen's bounce (which the lighting would take the greater of) adds nothing its vertices
+    /// do not hold, and the occlusion pass leaves it out.
+    pub fn world_bounce(&self) -> bool {
+        self.world.is_some() && !self.bounce
+    }
 
     /// lighting.frag's OCCLUSION: any bit the visibility, bit 1 the screen's bounce, bit 2 the
     /// world light.
@@ -708,7 +712,6 @@ impl Plan {
                 Some(OcclusionPlan {
                     method: if bounce { "gtao" } else { "gtao-nobounce" },
                     bounce: bounce && !world_bounce,
-                    world_bounce,
                     radius,
                     radius_from: if given {
                         "--occlusion"
@@ -1256,7 +1259,7 @@ impl fmt::Display for Plan {
                 },
                 if o.bounce {
                     "the light the occluders on screen bounce, where it exceeds the multi-bounce fit"
-                } else if o.world_bounce {
+                } else if o.world_bounce() {
                     "the occluders' light from the world light alone (every receiving triangle's edges within a quarter of the radius: the screen's bounce adds nothing its vertices do not hold; left out of the pass)"
                 } else {
                     "the multi-bounce fit alone"
@@ -1271,7 +1274,7 @@ impl fmt::Display for Plan {
                     w.vertices,
                     w.rays_per_vertex,
                     w.triangles,
-                    if o.world_bounce {
+                    if o.world_bounce() {
                         "the world's bounce"
                     } else {
                         "the greater bounce of the two"
