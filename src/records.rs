@@ -91,6 +91,8 @@ pub struct FrameData {
     pub inv_view_proj: [[f32; 4]; 4],
     pub eye: [f32; 4],
     pub viewport: [f32; 4],
+    /// rgb: ambient radiance from above; a: the exposure (linear, 2^EV), which the lighting
+    /// pass applies where it tone-maps (lighting_main.glsl's TONE_CURVE).
     pub ambient_sky: [f32; 4],
     pub ambient_ground: [f32; 4],
     pub background: [f32; 4],

@@ -126,12 +126,13 @@ fn plan_prints_the_default_scene() {
             "gbuffer",
             "occlusion",
             "lighting",
-            "tonemap",
             "antialias"
         ])
     );
-    // The tone curve the tonemap pass compiles in (the others are not in its pipeline).
+    // The tone curve compiled in (the others are not in the pipeline): nothing reads the HDR
+    // image without --exr, so the lighting pass applies it and no tonemap pass runs.
     assert_eq!(v["tone_curve"], "pbr-neutral");
+    assert_eq!(v["tone_in_lighting"], true);
     let v = plan_json(&["--tonemap", "agx"]);
     assert_eq!(v["tone_curve"], "agx");
     let v = plan_json(&["--debug-view", "normals"]);
@@ -139,14 +140,7 @@ fn plan_prints_the_default_scene() {
     let v = plan_json(&["--aa", "none"]);
     assert_eq!(
         v["passes"],
-        serde_json::json!([
-            "environment",
-            "weave",
-            "gbuffer",
-            "occlusion",
-            "lighting",
-            "tonemap"
-        ])
+        serde_json::json!(["environment", "weave", "gbuffer", "occlusion", "lighting"])
     );
     assert_eq!(v["supersample"], 1);
     assert!(
@@ -188,7 +182,7 @@ fn plan_prints_the_default_scene() {
     let v = plan_json(&["--env", "none"]);
     assert_eq!(
         v["passes"],
-        serde_json::json!(["weave", "gbuffer", "lighting", "tonemap", "antialias"])
+        serde_json::json!(["weave", "gbuffer", "lighting", "antialias"])
     );
     assert!(v["environment"].is_null());
 }

@@ -1029,3 +1029,104 @@ fn occlusion_where_a_surface_is_alone_changes_nothing() {
         }
     }
 }
+
+/// Where nothing reads the HDR image (no HDR readback, no transparent pass blending over it), the
+/// lighting pass applies the exposure and the tone curve itself and no tonemap pass runs; the
+/// image is the tonemap pass's to the last bit of the 8-bit target: the tonemap pass reads the
+/// radiance back from the half-float HDR target, the folded curve takes the shader's f32, so a
+/// pixel may round to the neighbouring 8-bit value (measured at 160x90: 1/255 at most, in 1.6-6.7 %
+/// of the pixels), never further.
+#[test]
+fn the_lighting_pass_tone_maps_where_nothing_reads_the_hdr_image_and_it_changes_nothing() {
+    use weft::render::{DebugView, Force, ToneCurve};
+    let scene = scene::default_scene();
+    let mut renderer = Renderer::new(common::context()).unwrap();
+    let mut checked = 0;
+    for (tonemap, exposure, debug_view, environment) in [
+        (ToneCurve::PbrNeutral, 0.0, DebugView::None, studio()),
+        (ToneCurve::Agx, 1.5, DebugView::None, None),
+        (ToneCurve::Aces, -1.0, DebugView::None, studio()),
+        (ToneCurve::None, 0.5, DebugView::None, None),
+        (ToneCurve::PbrNeutral, 2.0, DebugView::Normals, None),
+    ] {
+        let folded = RenderOptions {
+            width: 160,
+            height: 90,
+            read_hdr: false,
+            tonemap,
+            exposure,
+            debug_view,
+            environment,
+            ..options()
+        };
+        let plan = Plan::new(&scene, &folded);
+        assert!(
+            plan.tone_in_lighting && !plan.runs(Pass::Tonemap),
+            "{tonemap:?}"
+        );
+        let a = renderer.render(&scene, &folded).unwrap();
+        assert!(!a.stats.passes.contains(&"tonemap"), "{:?}", a.stats.passes);
+        // tonemap.frag's CURVE (4: a debug view's passthrough), plus one.
+        let curve = if debug_view == DebugView::None {
+            tonemap.code()
+        } else {
+            4
+        } + 1;
+        assert!(
+            lighting_pipeline(&a).contains(&format!("tone_curve={curve}")),
+            "{}",
+            lighting_pipeline(&a)
+        );
+        let separate = RenderOptions {
+            force: Force {
+                tonemap_pass: true,
+                ..Force::NONE
+            },
+            ..folded.clone()
+        };
+        assert!(!Plan::new(&scene, &separate).tone_in_lighting);
+        let b = renderer.render(&scene, &separate).unwrap();
+        assert!(b.stats.passes.contains(&"tonemap"));
+        assert!(lighting_pipeline(&b).contains("tone_curve=0"));
+        assert_eq!(a.ldr.len(), b.ldr.len());
+        let max = a
+            .ldr
+            .iter()
+            .zip(&b.ldr)
+            .map(|(x, y)| x.abs_diff(*y))
+            .max()
+            .unwrap();
+        let moved = a
+            .ldr
+            .chunks_exact(4)
+            .zip(b.ldr.chunks_exact(4))
+            .filter(|(x, y)| x != y)
+            .count();
+        eprintln!(
+            "{tonemap:?} {exposure} EV {debug_view:?}: {moved} of {} pixels moved, by at most {max}/255",
+            a.ldr.len() / 4
+        );
+        assert!(max <= 1, "{tonemap:?} {debug_view:?}: {max}/255");
+        // Rounding moves a few pixels; another curve or exposure would move most of them.
+        assert!(
+            moved * 4 < a.ldr.len() / 4,
+            "{tonemap:?}: {moved} pixels moved"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 5);
+    // The HDR image read back (`weft render --exr`), or blended draws over it: the pass runs.
+    let hdr = RenderOptions {
+        read_hdr: true,
+        ..options()
+    };
+    assert!(Plan::new(&scene, &hdr).runs(Pass::Tonemap));
+    let mut blended = scene.clone();
+    blended.materials[0].blend = true;
+    let folded = RenderOptions {
+        read_hdr: false,
+        ..options()
+    };
+    assert!(Plan::new(&blended, &folded).runs(Pass::Transparent));
+    assert!(Plan::new(&blended, &folded).runs(Pass::Tonemap));
+}

@@ -31,7 +31,8 @@ struct FrameData {
     mat4 inv_view_proj;
     vec4 eye;            // xyz: camera position in world space
     vec4 viewport;       // width, height, 1/width, 1/height
-    vec4 ambient_sky;    // rgb: ambient radiance from above (a: unused)
+    vec4 ambient_sky;    // rgb: ambient radiance from above; a: the exposure (linear, 2^EV), which the
+                         // lighting pass applies where it tone-maps (lighting_main.glsl's TONE_CURVE)
     vec4 ambient_ground; // rgb: ambient radiance from below
     vec4 background;     // rgb: radiance of empty pixels
     uint light_count;

@@ -78,6 +78,12 @@ layout(constant_id = 13) const uint GLTF_FEATURES = 3u;
 // fabric_lobes.frag wrote at binding 28 with the same R; 0 (default): each pixel estimates its
 // lobes alone.
 layout(constant_id = 14) const uint POOL = 0u;
+// 0: the pass writes linear HDR radiance (the tonemap pass follows, or the HDR image is read:
+// --exr, the transparent pass's blending); c + 1: nothing reads the HDR image, and the pass
+// writes the 8-bit target itself: each pixel through tone curve c of include/tonemap.glsl
+// (CURVE_PASSTHROUGH for a debug view) after the exposure frame.ambient_sky.a, as the tonemap
+// pass would, which then does not run.
+layout(constant_id = 15) const uint TONE_CURVE = 0u;
 // Fabric sheets are drawn by the transparent pass (forward.frag), never deferred.
 const uint FABRIC_SHEETS = 0u;
 
@@ -128,6 +134,7 @@ vec3 transmitted_light(vec3 p, vec3 n, vec3 v, GltfSurface s, vec4 transmission,
 
 #include "shade.glsl"
 #include "pool.glsl"
+#include "tonemap.glsl"
 
 // shade.glsl's fabric_pooled_lobe_sums: this pixel's lobe sums (fabric_lobes.frag's, at
 // binding 28) and those of the pixels its mask names (within POOL of it, their surface agreeing
@@ -242,7 +249,8 @@ vec3 debug_color(uint view, ivec2 px, float depth) {
     return vec3(1.0, 0.0, 1.0);
 }
 
-void main() {
+// The pixel's linear radiance and coverage into out_color.
+void shade_pixel() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gb_depth, px, 0).r;
     if ((PIXEL_KINDS & PIXEL_KIND_BACKGROUND) != 0u && depth <= 0.0) {
@@ -323,4 +331,11 @@ void main() {
                                   vec4(0.0), bounce, indirect);
     // Never NaN or Inf into the image.
     out_color = vec4(all(lessThan(abs(radiance), vec3(1e30))) ? radiance : vec3(0.0), 1.0);
+}
+
+void main() {
+    shade_pixel();
+    if (TONE_CURVE != 0u) {
+        out_color = tone_map_texel(out_color, TONE_CURVE - 1u, frame.ambient_sky.a);
+    }
 }

@@ -134,7 +134,24 @@ pub fn run(renderer: &mut Renderer, size: (u32, u32), frames: u32) -> crate::Res
         occlusion: crate::render::Occlusion::DEFAULT,
         ..studio.clone()
     };
-    let cases: [(&str, &str, &Scene, &RenderOptions, Force); 9] = [
+    // The frame `weft render` renders by default (the studio, GTAO, FXAA, no HDR read back):
+    // its lighting pass applies the tone curve, and the tonemap pass does not run.
+    let render_default = RenderOptions {
+        antialias: crate::render::Antialias::Fxaa,
+        read_hdr: false,
+        ..gtao.clone()
+    };
+    let cases: [(&str, &str, &Scene, &RenderOptions, Force); 10] = [
+        (
+            "default, as weft render renders it",
+            "tonemap pass (the curve in the lighting pass)",
+            &default,
+            &render_default,
+            Force {
+                tonemap_pass: true,
+                ..Force::NONE
+            },
+        ),
         (
             "default, studio environment",
             "other kinds' code, unused texture slots",

@@ -25,6 +25,8 @@ pub(super) fn run_plan(args: PlanArgs) -> anyhow::Result<()> {
     let (scene, mut options) = load_scene_with(&args.scene, (1280, 720), &args.fabric, false)?;
     options.antialias = args.aa;
     options.tonemap = args.tonemap;
+    // As `weft render` plans a frame without `--exr`: no HDR image read back.
+    options.read_hdr = false;
     let plan = Plan::new(&scene, &options);
     if args.json {
         let mut json = serde_json::to_value(&plan)?;

@@ -90,5 +90,9 @@ pub const INCLUDES: &[(&str, &str)] = &[
         "surface.glsl",
         include_str!("../../glsl/include/surface.glsl"),
     ),
+    (
+        "tonemap.glsl",
+        include_str!("../../glsl/include/tonemap.glsl"),
+    ),
     ("weave.glsl", include_str!("../../glsl/include/weave.glsl")),
 ];

@@ -310,7 +310,9 @@ pub const MODULE_NOTES: &[(&str, &str)] = &[
         "tonemap.frag",
         "Exposure and tone mapping (Khronos PBR Neutral by default: constant 0) of the HDR target, drawn with \
          `fullscreen.vert`; write to an `R8G8B8A8_SRGB` target, which does the sRGB encoding. \
-         Push `float exposure` (linear scale, 2^EV); the curve is specialization constant 0.",
+         Push `float exposure` (linear scale, 2^EV); the curve is specialization constant 0. \
+         Where nothing reads the HDR image, `lighting.frag` can apply the same curve itself \
+         (its constant 15) and this pass is not needed.",
     ),
     (
         "weave.comp",
@@ -396,6 +398,7 @@ pub const SPEC_MEANINGS: &[(&str, u32, &str)] = &[
     ("lighting.frag", 12, "PIXEL_KINDS: bit mask of the kinds of pixel shaded: 1 empty pixels (the background), 2 fabric by the woven model, 4 glTF materials (and fabric with FABRIC_AS_PBR); the other kinds' code is compiled out, for pipelines each drawn over its own pixels (by a stencil test, say). A pipeline without 4 shades every surface pixel as fabric, one without 2 as glTF (default 7, all)"),
     ("lighting.frag", 13, "GLTF_FEATURES: bit mask of the glTF extensions whose lighting is compiled in: 1 KHR_materials_sheen (the G-buffer's fabric target holds its colour and roughness), 2 KHR_materials_anisotropy (the surface target's z its strength); a clear bit reads that extension as absent (default 3, both)"),
     ("lighting.frag", 14, "POOL: R >= 1 pools the woven model's environment lobe samples at fis (IBL 2) over the (2R + 1) x (2R + 1) pixels around each pixel that show the same material with normals and tangents within a quarter of the lobe's narrow width, from `fabric_lobes.frag`'s sums at binding 28 (drawn first with the same constants); 0 (default) estimates each pixel's lobes alone and reads nothing at binding 28"),
+    ("lighting.frag", 15, "TONE_CURVE: 0 (default) writes linear HDR radiance (render into `R16G16B16A16_SFLOAT` and tone-map with `tonemap.frag`); c + 1 applies tonemap.frag's curve c itself (4 pass-through for debug views), after the exposure `FrameData.ambient_sky.a` (linear, 2^EV), writing the 8-bit image into an `R8G8B8A8_SRGB` target as `tonemap.frag` would (to within a step of the 8 bits: the curve takes the shader's f32, not the HDR target's half floats): for a frame in which nothing reads the HDR image"),
     ("tonemap.frag", 0, "CURVE: the tone curve, 0 Khronos PBR Neutral (default), 1 none (clamp), 2 three.js' ACES fit with the 1/2.2 display gamma, 3 AgX, 4 pass-through (no exposure, no curve: debug views); only that curve is compiled in"),
     ("fabric_lobes.frag", 0, "ACCURACY: as lighting.frag's (3, supersampled, weighs the two lobes' sampling evenly; otherwise the pixel's coverage does)"),
     ("fabric_lobes.frag", 8, "IBL_SAMPLES: N of fis:N, as lighting.frag's: the base count of each pixel's samples; a pixel alone takes N times include/env_light.glsl's fabric_lobe_passes (1 to 7, more toward grazing views, where the lobes are bright), a pixel that pools N / 2 times that"),

@@ -193,6 +193,9 @@ fn make_targets(
     plan: &Plan,
 ) -> crate::Result<()> {
     let (width, height) = (options.width, options.height);
+    if !plan.tone_in_lighting {
+        targets.make_hdr(ctx)?;
+    }
     if plan.runs(Pass::Antialias) && targets.tonemapped.is_none() {
         targets.tonemapped = Some(
             ctx.create_image(
@@ -622,7 +625,9 @@ impl Renderer {
                     if plan.depth_prepass > 0 {
                         gbuffer.make_depth(ctx)?;
                     }
-                    tonemap.make(ctx, curve)?;
+                    if plan.runs(Pass::Tonemap) {
+                        tonemap.make(ctx, curve)?;
+                    }
                     if plan.runs(Pass::Antialias) {
                         antialias.make(ctx, antialias_edge_blocks(ctx, plan))?;
                     }
@@ -1106,6 +1111,8 @@ impl Renderer {
         frame_data.light_count = gpu.light_count;
         frame_data.material_count = gpu.material_count;
         frame_data.debug_view = options.debug_view as u32;
+        // The exposure, for the lighting pass where it tone-maps (TONE_CURVE).
+        frame_data.ambient_sky[3] = 2f32.powf(options.exposure);
         let (lists, clusters) = super::tiles::tile_lights(
             &frame_data,
             &gpu.light_records[..gpu.light_count as usize],
@@ -1287,7 +1294,7 @@ impl Renderer {
         // Targets of another size are dropped here, once the device is done with them, and made
         // while the pipelines compile.
         let (width, height) = (options.width, options.height);
-        let fresh_targets = self.targets.as_ref().map(|t| t.hdr.extent()) != Some((width, height));
+        let fresh_targets = self.targets.as_ref().map(|t| t.ldr.extent()) != Some((width, height));
         if fresh_targets {
             self.settle()?;
             self.targets = None;
@@ -1489,6 +1496,13 @@ impl Renderer {
                             _ => &d.white,
                         },
                         lobes: targets.lobes.as_ref(),
+                        // The 8-bit image where the lighting tone-maps: the anti-aliasing
+                        // pass's input, or the output.
+                        output: match (plan.tone_in_lighting, &targets.tonemapped) {
+                            (false, _) => targets.hdr(),
+                            (true, Some(t)) if plan.runs(Pass::Antialias) => t,
+                            (true, _) => &targets.ldr,
+                        },
                     },
                 )?),
                 Pass::Transparent => {
@@ -1655,7 +1669,7 @@ impl<'t> Readback<'t> {
         Ok(Readback {
             ldr: (&targets.ldr, buffer(&targets.ldr, 4)?),
             hdr: if read_hdr {
-                Some((&targets.hdr, buffer(&targets.hdr, 8)?))
+                Some((targets.hdr(), buffer(targets.hdr(), 8)?))
             } else {
                 None
             },

@@ -145,6 +145,10 @@ pub struct Force {
     /// occluders' light to the world light alone (`OcclusionPlan::world_bounce()`): to measure
     /// what leaving it out changes.
     pub screen_bounce: bool,
+    /// Keep the tonemap pass where nothing reads the HDR image and the plan has the lighting
+    /// pass apply the tone curve itself (`Plan::tone_in_lighting`): to measure what the fold
+    /// changes.
+    pub tonemap_pass: bool,
 }
 
 impl Force {
@@ -165,6 +169,7 @@ impl Force {
         fxaa_everywhere: false,
         occlusion_everywhere: false,
         screen_bounce: false,
+        tonemap_pass: false,
     };
     pub const ALL: Force = Force {
         light_types: true,
@@ -187,6 +192,9 @@ impl Force {
         // Not code compiled in for nothing: a second estimate of the occluders' light, which
         // the world light's own takes the greater of (not the same image bit for bit).
         screen_bounce: false,
+        // Not code compiled in for nothing: the same curve a pass later, from the HDR target's
+        // half floats (not the same image bit for bit).
+        tonemap_pass: false,
     };
 }
 

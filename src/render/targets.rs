@@ -57,7 +57,9 @@ pub(crate) struct Targets {
     pub(crate) emissive: Image,
     pub(crate) specular: Image,
     pub(crate) depth: Image,
-    pub(crate) hdr: Image,
+    /// The lit image in linear radiance (made by the first frame whose plan reads it: none
+    /// where the lighting pass tone-maps, `Plan::tone_in_lighting`); [`Targets::hdr`].
+    pub(crate) hdr_image: Option<Image>,
     pub(crate) ldr: Image,
     /// The lit opaque image with box-filtered mips, for transmissive surfaces (made by the first
     /// frame that has one).
@@ -144,13 +146,36 @@ impl Targets {
                 depth_format(ctx),
                 ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | ImageUsageFlags::SAMPLED | read,
             )?,
-            hdr: t("hdr", HDR_FORMAT, color | read)?,
+            hdr_image: None,
             ldr: t("ldr", LDR_FORMAT, ImageUsageFlags::COLOR_ATTACHMENT | read)?,
             backdrop: None,
             tonemapped: None,
             occlusion: None,
             lobes: None,
         })
+    }
+
+    /// The HDR target (`HDR_FORMAT`), which the frame makes where its plan writes or reads it
+    /// (every plan but one whose lighting pass tone-maps).
+    pub(crate) fn hdr(&self) -> &Image {
+        self.hdr_image
+            .as_ref()
+            .expect("the frame makes the HDR target where its plan uses it")
+    }
+
+    /// Makes the HDR target if it is not made yet.
+    pub(crate) fn make_hdr(&mut self, ctx: &Context) -> crate::Result<()> {
+        if self.hdr_image.is_none() {
+            let (width, height) = self.ldr.extent();
+            self.hdr_image = Some(ctx.create_image(
+                &ImageDesc::new_2d("hdr", HDR_FORMAT, width, height).usage(
+                    ImageUsageFlags::COLOR_ATTACHMENT
+                        | ImageUsageFlags::SAMPLED
+                        | ImageUsageFlags::TRANSFER_SRC,
+                ),
+            )?);
+        }
+        Ok(())
     }
 
     pub(crate) fn gbuffer_colors(&self) -> [&Image; 6] {

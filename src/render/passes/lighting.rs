@@ -1,5 +1,7 @@
 //! The deferred lighting pass: one fullscreen triangle from the G-buffer into HDR
 //! (fullscreen.vert, lighting.frag): lamps with their shadows, the environment, emission; where
+//! nothing reads the HDR image (`Plan::tone_in_lighting`), into the 8-bit image through the
+//! exposure and the tone curve instead (TONE_CURVE), and no tonemap pass follows; where
 //! the G-buffer's stencil says what each pixel is, one triangle per kind of pixel instead, each
 //! with the module compiled for that kind alone (lighting_background.frag, lighting_woven.frag,
 //! lighting_gltf.frag: include/lighting_main.glsl with PIXEL_KINDS fixed). Where
@@ -11,7 +13,7 @@ use std::collections::HashMap;
 
 use super::{Recorded, SceneLighting, VariantKey};
 use crate::render::plan::{OcclusionPlan, Plan};
-use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LOBES_FORMAT};
+use crate::render::targets::{depth_format, Targets, HDR_FORMAT, LDR_FORMAT, LOBES_FORMAT};
 use crate::render::upload::GpuScene;
 use crate::render::RenderOptions;
 use crate::vk::{
@@ -52,7 +54,8 @@ pub fn stencil_of(woven: bool, fabric_as_pbr: bool) -> u32 {
     }
 }
 
-/// What the pass reads; it writes the HDR target (left readable by fragment shaders).
+/// What the pass reads; it writes `output` (the HDR target, left readable by fragment shaders;
+/// or the 8-bit image, left a colour attachment as the tonemap pass leaves it).
 pub struct LightingInputs<'s> {
     /// Materials and fabrics (the G-buffer's material index points into them).
     pub scene: &'s GpuScene,
@@ -68,6 +71,10 @@ pub struct LightingInputs<'s> {
     pub bounce: &'s Image,
     /// The fabric lobes' sums (`LOBES_FORMAT`) when a variant pools them (made by the frame).
     pub lobes: Option<&'s Image>,
+    /// Where the pass writes: the HDR target, or where its variants tone-map
+    /// ([`LightingPass::tone_maps`]) the 8-bit image (the anti-aliasing pass's input, or the
+    /// output).
+    pub output: &'s Image,
 }
 
 /// The constants fabric_lobes.frag declares (ACCURACY, IBL_SAMPLES, POOL), by lighting.frag's ids.
@@ -155,6 +162,16 @@ impl LightingPass {
             (12, "pixel_kinds", kinds),
             (13, "gltf_features", plan.gltf_features),
             (14, "pool", plan.pool_code(options)),
+            // 0: linear HDR out; c + 1: the tone curve c applied here, into the 8-bit target.
+            (
+                15,
+                "tone_curve",
+                if plan.tone_in_lighting {
+                    super::tonemap::TonemapPass::curve(options) + 1
+                } else {
+                    0
+                },
+            ),
         ])
     }
 
@@ -186,6 +203,11 @@ impl LightingPass {
     pub fn has(&self, variant: &LightingVariant) -> bool {
         self.variants
             .contains_key(&(variant.0.clone(), variant.1.is_some()))
+    }
+
+    /// Whether `key` applies the tone curve and writes the 8-bit target (TONE_CURVE ≥ 1).
+    pub fn tone_maps(key: &VariantKey) -> bool {
+        key.value(15) > 0
     }
 
     /// Whether `key` pools the fabric lobes' samples (POOL ≥ 1) where it shades woven pixels:
@@ -262,7 +284,11 @@ impl LightingPass {
             vertex: &shaders::FULLSCREEN_VERT,
             fragment: module,
             vertex_layout: None,
-            color_formats: &[HDR_FORMAT],
+            color_formats: &[if Self::tone_maps(key) {
+                LDR_FORMAT
+            } else {
+                HDR_FORMAT
+            }],
             depth_format: stencil.map(|_| depth_format(ctx)),
             set_layouts: &[layout],
             push_constant_size: 0,
@@ -322,6 +348,8 @@ impl LightingPass {
             None => None,
         };
         let t = inputs.targets;
+        let output = inputs.output;
+        let tone_maps = variants.iter().any(|(key, _)| Self::tone_maps(key));
         let g = |image| Resource::Sampled(image, inputs.nearest);
         let mut bindings = vec![
             (1, Resource::Storage(&inputs.scene.materials)),
@@ -388,13 +416,13 @@ impl LightingPass {
             }
             match shades.as_slice() {
                 [(pipeline, None, set)] => {
-                    super::fullscreen::<u32>(cmd, pipeline, *set, None, &t.hdr)
+                    super::fullscreen::<u32>(cmd, pipeline, *set, None, output)
                 }
                 _ => {
                     // A fullscreen triangle per kind of pixel, each where the stencil is
                     // its kind: together they cover every pixel once.
-                    cmd.transition(&t.hdr, Usage::Undefined, Usage::ColorAttachment, None);
-                    cmd.begin_rendering_stencil_test(&[&t.hdr], &t.depth);
+                    cmd.transition(output, Usage::Undefined, Usage::ColorAttachment, None);
+                    cmd.begin_rendering_stencil_test(&[output], &t.depth);
                     for (pipeline, stencil, set) in &shades {
                         cmd.bind_pipeline(pipeline);
                         cmd.bind_sets(pipeline, 0, &[*set]);
@@ -404,7 +432,12 @@ impl LightingPass {
                     cmd.end_rendering();
                 }
             }
-            cmd.transition(&t.hdr, Usage::ColorAttachment, Usage::FragmentRead, None);
+            // The HDR target for the fragment shaders that read it; the 8-bit image as the
+            // tonemap pass leaves it (a colour attachment, which the anti-aliasing pass and the
+            // readback take it from).
+            if !tone_maps {
+                cmd.transition(output, Usage::ColorAttachment, Usage::FragmentRead, None);
+            }
         }))
     }
 }

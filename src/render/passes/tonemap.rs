@@ -17,8 +17,8 @@ pub const CURVE_PASSTHROUGH: u32 = 4;
 
 /// The pass's set layout (reflected from tonemap.frag) and a pipeline per tone curve
 /// (specialization constant 0, CURVE: llvmpipe runs every side of a branch on a uniform value,
-/// so only the curve in use is compiled in): the default curve's made with the device, the
-/// others by the first frame that asks for them.
+/// so only the curve in use is compiled in), each made by the first frame that runs the pass
+/// with it.
 pub struct TonemapPass {
     layout: SetLayout,
     pipelines: [OnceLock<Pipeline>; CURVE_PASSTHROUGH as usize + 1],
@@ -40,12 +40,13 @@ impl TonemapPass {
     pub fn new(ctx: &Context) -> crate::Result<TonemapPass> {
         let [layout] =
             ctx.reflected_set_layouts(&[&shaders::FULLSCREEN_VERT, &shaders::TONEMAP_FRAG])?;
-        let pass = TonemapPass {
+        // No pipeline yet: a frame whose lighting pass tone-maps (nothing reads its HDR image:
+        // `weft render` without --exr) never runs this pass; the frame makes its curve's pipeline
+        // where the plan has the pass.
+        Ok(TonemapPass {
             layout,
             pipelines: Default::default(),
-        };
-        pass.make(ctx, Self::curve(&RenderOptions::default()))?;
-        Ok(pass)
+        })
     }
 
     /// tonemap.frag's CURVE for `options`: the tone curve's code, or [`CURVE_PASSTHROUGH`] for a
@@ -97,7 +98,7 @@ impl TonemapPass {
         let t = inputs.targets;
         let set = pool.set(
             &self.layout,
-            &[(0, Resource::Sampled(&t.hdr, inputs.nearest))],
+            &[(0, Resource::Sampled(t.hdr(), inputs.nearest))],
         )?;
         let target = match (&t.tonemapped, inputs.antialiased) {
             (Some(i), true) => i,

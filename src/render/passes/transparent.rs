@@ -298,14 +298,14 @@ fn transparent_pass<'s>(
 ) {
     if let Some(b) = backdrop {
         // The lit opaque image, and its mips for rough transmission.
-        cmd.transition(&targets.hdr, Usage::FragmentRead, Usage::TransferSrc, None);
+        cmd.transition(targets.hdr(), Usage::FragmentRead, Usage::TransferSrc, None);
         cmd.transition(b, Usage::Undefined, Usage::TransferDst, None);
-        cmd.copy_image(&targets.hdr, b);
+        cmd.copy_image(targets.hdr(), b);
         cmd.generate_mips(b, Usage::FragmentRead);
-        cmd.transition(&targets.hdr, Usage::TransferSrc, Usage::FragmentRead, None);
+        cmd.transition(targets.hdr(), Usage::TransferSrc, Usage::FragmentRead, None);
     }
     cmd.transition(
-        &targets.hdr,
+        targets.hdr(),
         Usage::FragmentRead,
         Usage::ColorAttachment,
         None,
@@ -318,7 +318,7 @@ fn transparent_pass<'s>(
     );
     cmd.begin_rendering(
         &[Attachment {
-            image: &targets.hdr,
+            image: targets.hdr(),
             load: Load::Keep,
         }],
         Some(Attachment {
@@ -352,7 +352,7 @@ fn transparent_pass<'s>(
     }
     cmd.end_rendering();
     cmd.transition(
-        &targets.hdr,
+        targets.hdr(),
         Usage::ColorAttachment,
         Usage::FragmentRead,
         None,
