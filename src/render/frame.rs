@@ -1496,12 +1496,12 @@ impl Renderer {
                             _ => &d.white,
                         },
                         lobes: targets.lobes.as_ref(),
-                        // The 8-bit image where the lighting tone-maps: the anti-aliasing
-                        // pass's input, or the output.
-                        output: match (plan.tone_in_lighting, &targets.tonemapped) {
-                            (false, _) => targets.hdr(),
-                            (true, Some(t)) if plan.runs(Pass::Antialias) => t,
-                            (true, _) => &targets.ldr,
+                        // The 8-bit image where the lighting tone-maps, as the tonemap pass
+                        // would write it.
+                        output: if plan.tone_in_lighting {
+                            targets.tone_mapped_target(plan.runs(Pass::Antialias))
+                        } else {
+                            targets.hdr()
                         },
                     },
                 )?),

@@ -284,8 +284,9 @@ pub struct Plan {
     pub bc7_textures: usize,
     #[serde(serialize_with = "debug_view_name")]
     pub debug_view: DebugView,
-    /// The tone curve the tonemap pass compiles in (`--tonemap`'s name; "passthrough" for a
-    /// debug view): the others are not in its pipeline.
+    /// The tone curve compiled in (`--tonemap`'s name; "passthrough" for a debug view), into
+    /// the tonemap pass's pipeline or, with `tone_in_lighting`, the lighting pass's: the others
+    /// are in neither.
     pub tone_curve: &'static str,
     /// The lighting pass applies the tone curve and writes the 8-bit image itself, and the
     /// tonemap pass does not run: nothing reads the HDR image (no transparent pass blends over

@@ -178,6 +178,16 @@ impl Targets {
         Ok(())
     }
 
+    /// Where the tone-mapped 8-bit image is written (by the tonemap pass, or by the lighting
+    /// pass where it tone-maps): the anti-aliasing pass's input when it follows (`antialiased`,
+    /// the target made), else the output.
+    pub(crate) fn tone_mapped_target(&self, antialiased: bool) -> &Image {
+        match (&self.tonemapped, antialiased) {
+            (Some(i), true) => i,
+            _ => &self.ldr,
+        }
+    }
+
     pub(crate) fn gbuffer_colors(&self) -> [&Image; 6] {
         [
             &self.albedo,

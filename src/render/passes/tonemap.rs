@@ -100,10 +100,7 @@ impl TonemapPass {
             &self.layout,
             &[(0, Resource::Sampled(t.hdr(), inputs.nearest))],
         )?;
-        let target = match (&t.tonemapped, inputs.antialiased) {
-            (Some(i), true) => i,
-            _ => &t.ldr,
-        };
+        let target = t.tone_mapped_target(inputs.antialiased);
         let push = inputs.push;
         let pipeline = self.pipelines[inputs.curve.min(CURVE_PASSTHROUGH) as usize]
             .get()
