@@ -293,6 +293,10 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             frame.stats.draws, frame.stats.triangles
         );
         println!("pipelines  {}", frame.stats.pipelines.join(", "));
+        let (specialized, reused) = weft::vk::specialize::counts();
+        println!(
+            "modules    {specialized} specialised before the driver by spirv-opt ({reused} of them from weft's cache; a CPU device's large modules only)"
+        );
         println!(
             "submits    {} queue submission(s) ({})",
             frame.stats.submissions,

@@ -44,20 +44,22 @@ pub fn node_view(i: usize, j: usize) -> [f64; 3] {
 /// One fabric's table: `[albedo at rs 0, albedo at rs 1]` per entry, computed on the machine's
 /// cores (about 10 ms here, two cores), and kept for the process (keyed by the exponents' bits: a scene's
 /// fabrics mostly share presets, and `weft view` asks again after every edit).
+/// A second caller for the same exponents while the first computes (the renderer starts the
+/// tables on a thread beside the pipelines, and its upload may ask before they are done) waits
+/// for that one's table.
 pub fn table(e_along: f32, e_across: f32) -> Arc<Vec<[f32; 2]>> {
-    type Tables = HashMap<(u32, u32), Arc<Vec<[f32; 2]>>>;
+    type Tables = HashMap<(u32, u32), Arc<OnceLock<Arc<Vec<[f32; 2]>>>>>;
     static CACHE: OnceLock<Mutex<Tables>> = OnceLock::new();
     let key = (e_along.to_bits(), e_across.to_bits());
-    let cache = CACHE.get_or_init(Default::default);
-    if let Some(t) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
-        return t.clone();
-    }
-    let t = Arc::new(compute(e_along as f64, e_across as f64));
-    cache
+    let cell = CACHE
+        .get_or_init(Default::default)
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .insert(key, t.clone());
-    t
+        .entry(key)
+        .or_default()
+        .clone();
+    cell.get_or_init(|| Arc::new(compute(e_along as f64, e_across as f64)))
+        .clone()
 }
 
 /// Entry for view `k2`: [`crate::reference::furnace::lobe_albedo`]'s estimate at rs 0 and rs 1

@@ -1309,6 +1309,11 @@ impl Renderer {
         // The world light's rays, when this frame must trace them, on a thread of their own
         // while the pipelines are made (they need no environment; its SH shades them after).
         let world = self.world_light_start(scene, gpu, &plan, options);
+        let lobe_tables = plan
+            .environment
+            .as_ref()
+            .is_some_and(|e| e.lobe_albedo_tables > 0)
+            && gpu.lobe_albedo.get().is_none();
         let (keys, traced) = std::thread::scope(|s| {
             let tracing = matches!(world, Some(WorldStart::Trace(_))).then(|| {
                 s.spawn(|| {
@@ -1317,6 +1322,11 @@ impl Renderer {
                     (traced, start.elapsed().as_secs_f64() * 1e3)
                 })
             });
+            // The fabric lobes' albedo tables (CPU work, kept for the process) while the
+            // pipelines are made; prepare_targets uploads them.
+            if lobe_tables {
+                s.spawn(|| crate::env::lobe_albedo::records(&gpu.fabric_records));
+            }
             let keys = self
                 .prepare(options, &plan, env, fresh_targets)
                 .and_then(|keys| self.prepare_targets(gpu, options, &plan).map(|()| keys));

@@ -12,6 +12,7 @@ mod cmd;
 mod context;
 mod pipeline;
 mod resources;
+pub mod specialize;
 mod swapchain;
 
 pub use ash::vk::Format;

@@ -272,7 +272,43 @@ fn module<'a>(
             shader.name, shader.stage, expect
         )));
     }
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(shader.spirv)).map_err(|e| {
+    module_of(shared, shader, shader.spirv)
+}
+
+/// `shader`'s SPIR-V for a pipeline with `constants` on this device: on a CPU device with the
+/// constants applied first ([`super::specialize`]); None where the module goes as it is (a GPU,
+/// or where that cannot be done).
+fn specialized_spirv(
+    shared: &Shared,
+    shader: &Shader,
+    constants: &[(u32, u32)],
+) -> Option<std::sync::Arc<Vec<u8>>> {
+    if !shared.info.is_cpu() {
+        return None;
+    }
+    super::specialize::specialize(shader.name, shader.spirv, constants)
+}
+
+/// The module of `shader`, of `specialized` (its [`specialized_spirv`]) when there is one.
+fn module_for<'a>(
+    shared: &'a Shared,
+    shader: &Shader,
+    expect: Stage,
+    specialized: Option<&[u8]>,
+) -> crate::Result<ShaderModule<'a>> {
+    match specialized {
+        Some(spirv) if shader.stage == expect => module_of(shared, shader, spirv),
+        _ => module(shared, shader, expect),
+    }
+}
+
+/// A module of `spirv`, `shader`'s code or a specialisation of it.
+fn module_of<'a>(
+    shared: &'a Shared,
+    shader: &Shader,
+    spirv: &[u8],
+) -> crate::Result<ShaderModule<'a>> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).map_err(|e| {
         Error::device(format!(
             "embedded SPIR-V of {} is malformed: {e}",
             shader.name
@@ -442,10 +478,18 @@ impl Context {
     }
 
     pub fn create_graphics_pipeline(&self, desc: &GraphicsDesc) -> crate::Result<Pipeline> {
+        // Specialised (a process of its own, on a CPU device) before the compiler is taken, so
+        // that one thread's optimizer runs while another's pipeline compiles.
+        let specialized = specialized_spirv(&self.shared, desc.fragment, desc.constants);
         let _compiling = self.shared.compile_lock()?;
         let device = &self.shared.device;
         let vs = module(&self.shared, desc.vertex, Stage::Vertex)?;
-        let fs = module(&self.shared, desc.fragment, Stage::Fragment)?;
+        let fs = module_for(
+            &self.shared,
+            desc.fragment,
+            Stage::Fragment,
+            specialized.as_deref().map(Vec::as_slice),
+        )?;
         let spec = specialization(desc.constants);
         let spec_info = vk::SpecializationInfo::default()
             .map_entries(&spec.entries)
@@ -638,9 +682,15 @@ impl Context {
     }
 
     pub fn create_compute_pipeline(&self, desc: &ComputeDesc) -> crate::Result<Pipeline> {
+        let specialized = specialized_spirv(&self.shared, desc.shader, desc.constants);
         let _compiling = self.shared.compile_lock()?;
         let device = &self.shared.device;
-        let cs = module(&self.shared, desc.shader, Stage::Compute)?;
+        let cs = module_for(
+            &self.shared,
+            desc.shader,
+            Stage::Compute,
+            specialized.as_deref().map(Vec::as_slice),
+        )?;
         let spec = specialization(desc.constants);
         let spec_info = vk::SpecializationInfo::default()
             .map_entries(&spec.entries)
