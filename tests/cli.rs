@@ -91,7 +91,9 @@ fn render_writes_png_and_exr() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("lighting")
-            && stdout.contains("weave -> gbuffer -> occlusion -> lighting -> tonemap"),
+            && stdout.contains("weave -> gbuffer -> occlusion -> lighting -> tonemap")
+            && stdout.contains("(the PNG and the EXR encoded and written)")
+            && stdout.contains("specialised before the driver"),
         "{stdout}"
     );
     let img = image::open(&png).unwrap().to_rgba8();

@@ -216,6 +216,7 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
     let (frame, render_ms) =
         weft::metrics::render_warm(&mut renderer, &scene, &options, args.frames)?;
     // Both outputs or neither (as a batch frame): encoded first, then renamed into place.
+    let write_start = std::time::Instant::now();
     render::write_frame(
         &args.output,
         args.exr.as_deref(),
@@ -225,6 +226,7 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
         &frame.hdr,
         &options,
     )?;
+    let write_ms = write_start.elapsed().as_secs_f64() * 1e3;
     eprintln!(
         "wrote {} ({}x{})",
         args.output.display(),
@@ -285,6 +287,13 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             println!("{:<12} {:>10} {:>10}{note}", t.name, gpu, wall);
         }
         println!("{:<12} {:>10} {:>10.2}", "frame", "-", render_ms);
+        println!(
+            "{:<12} {:>10} {:>10.2}   (the PNG{} encoded and written)",
+            "write",
+            "-",
+            write_ms,
+            if args.exr.is_some() { " and the EXR" } else { "" }
+        );
     }
     if args.stats {
         println!("passes     {}", frame.stats.passes.join(" -> "));
