@@ -292,7 +292,11 @@ pub(super) fn run_render(args: RenderArgs) -> anyhow::Result<()> {
             "write",
             "-",
             write_ms,
-            if args.exr.is_some() { " and the EXR" } else { "" }
+            if args.exr.is_some() {
+                " and the EXR"
+            } else {
+                ""
+            }
         );
     }
     if args.stats {

@@ -22,7 +22,7 @@
 //! translates, and keeps its own cache.
 
 use std::collections::HashMap;
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -43,15 +43,19 @@ pub const PASSES: &[&str] = &[
     "--eliminate-dead-code-aggressive",
 ];
 
+/// How long one run of the optimizer may take (gbuffer.frag, the largest module the renderer
+/// makes pipelines of, takes 30 ms alone).
+const TIMEOUT: std::time::Duration = std::time::Duration::from_secs(30);
+
 /// The cache's kind for a specialised module.
 const CACHE_KIND: &str = "spirv";
 
-/// How many modules this process specialised, and how many of those came from weft's cache on
-/// disk or from an earlier pipeline of the process ([`counts`]).
+/// How many modules this process handed to the driver specialised, and how many of those came
+/// from weft's cache on disk ([`counts`]).
 static MADE: AtomicU64 = AtomicU64::new(0);
 static REUSED: AtomicU64 = AtomicU64::new(0);
 
-/// (modules specialised, of which reused from the cache on disk or the process).
+/// (modules handed to the driver specialised, of which taken from weft's cache on disk).
 pub fn counts() -> (u64, u64) {
     (MADE.load(Ordering::Relaxed), REUSED.load(Ordering::Relaxed))
 }
@@ -136,37 +140,38 @@ pub fn specialize(name: &str, spirv: &[u8], constants: &[(u32, u32)]) -> Option<
     }
     let tool = optimizer()?;
     let key = key(tool, spirv, constants);
-    // The process's own: a pipeline made again (another frame size, a test) asks again.
-    type Memo = HashMap<Vec<u8>, Option<Arc<Vec<u8>>>>;
+    // The process's own: a pipeline made again (another frame size, a test) asks again. Each
+    // entry says whether it came from the cache on disk, for [`counts`].
+    type Memo = HashMap<Vec<u8>, Option<(Arc<Vec<u8>>, bool)>>;
     static MEMO: OnceLock<Mutex<Memo>> = OnceLock::new();
     let memo = MEMO.get_or_init(Default::default);
-    if let Some(found) = memo.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
-        if found.is_some() {
-            MADE.fetch_add(1, Ordering::Relaxed);
-            REUSED.fetch_add(1, Ordering::Relaxed);
-        }
-        return found.clone();
-    }
-    let made = match crate::cache::read(CACHE_KIND, &key).filter(|b| is_spirv(b)) {
-        Some(bytes) => {
-            REUSED.fetch_add(1, Ordering::Relaxed);
-            Some(Arc::new(bytes))
-        }
+    let known = memo
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .get(&key)
+        .cloned();
+    let entry = match known {
+        Some(entry) => entry,
         None => {
-            let made = run(tool, name, spirv, constants).map(Arc::new);
-            if let Some(bytes) = &made {
-                crate::cache::write(CACHE_KIND, &key, bytes);
-            }
-            made
+            let entry = match crate::cache::read(CACHE_KIND, &key).filter(|b| is_spirv(b)) {
+                Some(bytes) => Some((Arc::new(bytes), true)),
+                None => run(tool, name, spirv, constants).map(|bytes| {
+                    crate::cache::write(CACHE_KIND, &key, &bytes);
+                    (Arc::new(bytes), false)
+                }),
+            };
+            memo.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .insert(key, entry.clone());
+            entry
         }
     };
-    if made.is_some() {
-        MADE.fetch_add(1, Ordering::Relaxed);
+    let (bytes, from_disk) = entry?;
+    MADE.fetch_add(1, Ordering::Relaxed);
+    if from_disk {
+        REUSED.fetch_add(1, Ordering::Relaxed);
     }
-    memo.lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .insert(key, made.clone());
-    made
+    Some(bytes)
 }
 
 /// One run of the optimizer: the module on its standard input, the result on its output.
@@ -199,26 +204,56 @@ fn run(tool: &Optimizer, name: &str, spirv: &[u8], constants: &[(u32, u32)]) -> 
             return None;
         }
     };
-    // Written from a thread of its own, so a full output pipe cannot stall the optimizer
-    // while this thread still writes.
+    // Fed and read by threads of their own, so that neither pipe can stall the optimizer, while
+    // this one waits for it: a run that has not ended after TIMEOUT is killed (a module as it
+    // is is always there to fall back on).
     let mut stdin = child.stdin.take()?;
+    let mut stdout = child.stdout.take()?;
+    let mut stderr = child.stderr.take()?;
     let input = spirv.to_vec();
     let writer = std::thread::spawn(move || stdin.write_all(&input));
-    let out = child.wait_with_output();
+    let reader = std::thread::spawn(move || {
+        let mut out = Vec::new();
+        stdout.read_to_end(&mut out).map(|_| out)
+    });
+    let errors = std::thread::spawn(move || {
+        let mut err = String::new();
+        let _ = stderr.read_to_string(&mut err);
+        err
+    });
+    let start = std::time::Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break Some(status),
+            Ok(None) if start.elapsed() < TIMEOUT => {
+                std::thread::sleep(std::time::Duration::from_millis(2))
+            }
+            _ => {
+                let _ = child.kill();
+                let _ = child.wait();
+                break None;
+            }
+        }
+    };
     let wrote = writer.join().map(|r| r.is_ok()).unwrap_or(false);
-    match out {
-        Ok(out) if out.status.success() && wrote && is_spirv(&out.stdout) => Some(out.stdout),
-        Ok(out) => {
+    let out = reader.join().ok().and_then(Result::ok);
+    let err = errors.join().unwrap_or_default();
+    match (status, out) {
+        (Some(status), Some(out)) if status.success() && wrote && is_spirv(&out) => Some(out),
+        (Some(status), _) => {
             note(format_args!(
-                "{name}: {} gave no module ({}): {}",
+                "{name}: {} gave no module ({status}): {}",
                 tool.path.display(),
-                out.status,
-                String::from_utf8_lossy(&out.stderr).trim()
+                err.trim()
             ));
             None
         }
-        Err(e) => {
-            note(format_args!("{name}: {}: {e}", tool.path.display()));
+        (None, _) => {
+            note(format_args!(
+                "{name}: {} ran past {} s and was stopped",
+                tool.path.display(),
+                TIMEOUT.as_secs()
+            ));
             None
         }
     }
