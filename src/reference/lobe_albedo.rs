@@ -44,6 +44,7 @@ pub fn node_view(i: usize, j: usize) -> [f64; 3] {
 /// One fabric's table: `[albedo at rs 0, albedo at rs 1]` per entry, computed on the machine's
 /// cores (about 10 ms here, two cores), and kept for the process (keyed by the exponents' bits: a scene's
 /// fabrics mostly share presets, and `weft view` asks again after every edit).
+///
 /// A second caller for the same exponents while the first computes (the renderer starts the
 /// tables on a thread beside the pipelines, and its upload may ask before they are done) waits
 /// for that one's table.
