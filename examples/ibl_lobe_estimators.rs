@@ -14,6 +14,10 @@
 //! axis at the level of its short one; `gauss KxM` is a deterministic quadrature on a Gaussian
 //! approximation of the lobe (K x M quantile points, `s1`: weighted by the true lobe).
 //!
+//! `NV=LO,HI` draws the views from n·v in [LO, HI]; `QUICK=1` runs only the ratio estimator at
+//! 8, 16 and 32 samples; `FOLD=1` mirrors each sample that falls below the horizon above it (its
+//! pdf then the sum of its direction's and its mirror image's) instead of losing it.
+//!
 //! With `GH=1` (and `GHQ=1` to skip the slow grid), the session-23 candidates instead: the ratio
 //! estimator at 8-24 samples and with the two lobes' mixture at weights 0.5 and 0.8 (the mid and
 //! far field's), a Gauss–Hermite quadrature of the lobe in the half vector's angle plane with
@@ -282,18 +286,46 @@ fn fis_w(cube: &Cube, c: &Cfg, n: u32, pat: Pat, bias: f64, aniso: u32, w_self: 
         if !(kh > 0.0) {
             continue;
         }
-        let k1 = [
+        let mut k1 = [
             2.0 * kh * h[0] - k2[0],
             2.0 * kh * h[1] - k2[1],
             2.0 * kh * h[2] - k2[2],
         ];
+        // FOLD=1: a sample below the horizon is mirrored above it instead of lost; every
+        // sample's pdf is then the sum of its direction's and its mirror image's.
+        let fold = std::env::var("FOLD").is_ok();
+        if fold {
+            k1[2] = k1[2].abs();
+        }
         if !(k1[2] > 0.0) {
             continue;
         }
-        let p_self = fd::as_power(h[0], h[1], h[2], EU, EV);
-        let p_other = fd::as_power(h[0], h[1], h[2], EV, EU);
-        let mixed = w_self * p_self + (1.0 - w_self) * p_other;
-        let pdf = fd::as_norm(EU, EV) / (2.0 * std::f64::consts::PI) * mixed / (4.0 * kh);
+        let pdf_of = |k: V| -> (f64, f64, f64) {
+            let hs = norm(add(k, k2, 1.0));
+            let kh = dot(k2, hs);
+            if !(kh > 0.0 && hs[2] > 0.0) {
+                return (0.0, 0.0, 0.0);
+            }
+            let p_self = fd::as_power(hs[0], hs[1], hs[2], EU, EV);
+            let p_other = fd::as_power(hs[0], hs[1], hs[2], EV, EU);
+            let mixed = w_self * p_self + (1.0 - w_self) * p_other;
+            let pdf = fd::as_norm(EU, EV) / (2.0 * std::f64::consts::PI) * mixed / (4.0 * kh);
+            (pdf, p_self, kh)
+        };
+        let (pdf, p_self, kh) = if fold {
+            let (p1, p_self, kh1) = pdf_of(k1);
+            let (p2, _, _) = pdf_of([k1[0], k1[1], -k1[2]]);
+            (p1 + p2, p_self, kh1)
+        } else {
+            let p_self = fd::as_power(h[0], h[1], h[2], EU, EV);
+            let p_other = fd::as_power(h[0], h[1], h[2], EV, EU);
+            let mixed = w_self * p_self + (1.0 - w_self) * p_other;
+            let pdf = fd::as_norm(EU, EV) / (2.0 * std::f64::consts::PI) * mixed / (4.0 * kh);
+            (pdf, p_self, kh)
+        };
+        if !(pdf > 0.0) {
+            continue;
+        }
         let factor = fd::as_lobe_factor(k1[2], k2[2], kh.min(1.0), EU, EV, RS);
         let wgt = factor * k1[2] / pdf * p_self;
         let omega_s = 1.0 / (n as f64 * pdf);
@@ -688,7 +720,15 @@ fn main() {
         let a = norm([rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0]);
         let t = norm(add(a, n, -dot(a, n)));
         let b = cross(n, t);
-        let z: f64 = 0.15 + 0.85 * rnd();
+        // NV=LO,HI: views with n·v in [LO, HI] (default 0.15 to 1).
+        let (zlo, zhi) = std::env::var("NV")
+            .ok()
+            .and_then(|v| {
+                let (a, b) = v.split_once(',')?;
+                Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?))
+            })
+            .unwrap_or((0.15, 1.0));
+        let z: f64 = zlo + (zhi - zlo) * rnd();
         let ph = rnd() * 2.0 * std::f64::consts::PI;
         let r = (1.0 - z * z).sqrt();
         cfgs.push(Cfg {
@@ -700,7 +740,16 @@ fn main() {
     }
     let truths: Vec<V> = cfgs.iter().map(|c| truth(&q, c)).collect();
     let mut ests: Vec<(String, Box<dyn Fn(&Cfg) -> V>)> = Vec::new();
-    if std::env::var("GH").is_ok() {
+    if std::env::var("QUICK").is_ok() {
+        // QUICK=1: the ratio estimator (exact albedo) at 8, 16 and 32 samples alone.
+        let cube = &cube;
+        for n in [8u32, 16, 32] {
+            ests.push((
+                format!("ratio fis:{n}"),
+                Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),
+            ));
+        }
+    } else if std::env::var("GH").is_ok() {
         let cube = &cube;
         ests.push((
             "ratio fis:8".into(),
