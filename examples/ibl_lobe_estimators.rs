@@ -261,6 +261,7 @@ fn fis_w(cube: &Cube, c: &Cfg, n: u32, pat: Pat, bias: f64, aniso: u32, w_self: 
     let omega_p = 4.0 * std::f64::consts::PI / (6.0 * size * size);
     let mut s = [0.0; 3];
     let k2 = c.k2;
+    let fold = std::env::var("FOLD").is_ok();
     for i in 0..n {
         let (mut x, y) = match pat {
             Pat::Hammersley => (i as f64 / n as f64, radinv(i)),
@@ -293,7 +294,6 @@ fn fis_w(cube: &Cube, c: &Cfg, n: u32, pat: Pat, bias: f64, aniso: u32, w_self: 
         ];
         // FOLD=1: a sample below the horizon is mirrored above it instead of lost; every
         // sample's pdf is then the sum of its direction's and its mirror image's.
-        let fold = std::env::var("FOLD").is_ok();
         if fold {
             k1[2] = k1[2].abs();
         }
