@@ -269,6 +269,9 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
     }
 }
 
+/// The widest vectors weft lets lavapipe generate code for (`consistent_lavapipe_cpu`).
+pub const MAX_LAVAPIPE_VECTOR_BITS: u32 = 256;
+
 /// Makes lavapipe's CPU description agree with a vector width forced by `LP_NATIVE_VECTOR_WIDTH`.
 ///
 /// Mesa's lavapipe (seen in 22.3.6) asked for 128-bit vectors on a CPU that has AVX generates a
@@ -282,13 +285,31 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
 /// overridden, weft sets that override before the driver reads it (lavapipe reads it once, when
 /// the first instance is created): the device still reports 128 bits and runs the code a 128-bit
 /// CPU gets. `tests/driver_config.rs` renders the case that overflowed, under glibc's heap checker.
+///
+/// Asked for more than 256 bits (`LP_NATIVE_VECTOR_WIDTH=512`, which Mesa accepts), the same
+/// lavapipe crashes inside LLVM (`LLVMBuildBitCast`, a segmentation fault on its queue thread)
+/// at the first `vkCmdBlitImage` it runs: every mip chain weft makes (the environment's radiance
+/// cube, a glTF file's textures) is made by blits, so nearly every render died (session 43;
+/// docs/regression.md, "Driver configurations"). 512-bit code was no faster where it ran (an
+/// AVX-512 EPYC, which splits such vectors in two), so weft caps the width at 256 bits before the
+/// driver reads it, and says so once.
 fn consistent_lavapipe_cpu() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        let narrow = std::env::var("LP_NATIVE_VECTOR_WIDTH")
+        let asked = std::env::var("LP_NATIVE_VECTOR_WIDTH")
             .ok()
-            .and_then(|v| v.trim().parse::<u32>().ok())
-            .is_some_and(|bits| bits <= 128);
+            .and_then(|v| v.trim().parse::<u32>().ok());
+        if let Some(bits) = asked.filter(|&bits| bits > MAX_LAVAPIPE_VECTOR_BITS) {
+            eprintln!(
+                "warning: LP_NATIVE_VECTOR_WIDTH={bits}: lavapipe (seen in Mesa 22.3) crashes in \
+                 its image blits above {MAX_LAVAPIPE_VECTOR_BITS}-bit vectors; weft runs it at \
+                 {MAX_LAVAPIPE_VECTOR_BITS} bits (unset the variable, or set it to 256 or 128, \
+                 to silence this)"
+            );
+            // Before any Vulkan library is loaded (see below).
+            std::env::set_var("LP_NATIVE_VECTOR_WIDTH", MAX_LAVAPIPE_VECTOR_BITS.to_string());
+        }
+        let narrow = asked.is_some_and(|bits| bits <= 128);
         if !narrow || std::env::var_os("GALLIUM_OVERRIDE_CPU_CAPS").is_some() {
             return;
         }
