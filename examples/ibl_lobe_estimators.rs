@@ -15,8 +15,9 @@
 //! approximation of the lobe (K x M quantile points, `s1`: weighted by the true lobe).
 //!
 //! `NV=LO,HI` draws the views from n·v in [LO, HI]; `QUICK=1` runs only the ratio estimator at
-//! 8, 16 and 32 samples; `FOLD=1` mirrors each sample that falls below the horizon above it (its
-//! pdf then the sum of its direction's and its mirror image's) instead of losing it.
+//! 8, 16 and 32 samples (`QN=A,B,...`: at those counts); `FOLD=1` mirrors each sample that falls
+//! below the horizon above it (its pdf then the sum of its direction's and its mirror image's)
+//! instead of losing it.
 //!
 //! With `GH=1` (and `GHQ=1` to skip the slow grid), the session-23 candidates instead: the ratio
 //! estimator at 8-24 samples and with the two lobes' mixture at weights 0.5 and 0.8 (the mid and
@@ -743,7 +744,10 @@ fn main() {
     if std::env::var("QUICK").is_ok() {
         // QUICK=1: the ratio estimator (exact albedo) at 8, 16 and 32 samples alone.
         let cube = &cube;
-        for n in [8u32, 16, 32] {
+        let ns: Vec<u32> = std::env::var("QN")
+            .map(|v| v.split(',').map(|x| x.parse().unwrap()).collect())
+            .unwrap_or(vec![8, 16, 32]);
+        for n in ns {
             ests.push((
                 format!("ratio fis:{n}"),
                 Box::new(move |c| ratio(cube, c, n, Pat::Hammersley, 0.0, 0, 0.95)),

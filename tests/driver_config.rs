@@ -97,7 +97,10 @@ fn renders_at_512_bit_vectors_run_at_256_and_say_so() {
     // (their mips by blits) without the environment.
     let cases: [(&str, Vec<&str>); 2] = [
         ("default", vec!["--size", "32x18"]),
-        ("textures", vec!["--size", "32x18", "--env", "none", textured]),
+        (
+            "textures",
+            vec!["--size", "32x18", "--env", "none", textured],
+        ),
     ];
     for (name, args) in cases {
         let out = dir.join(format!("{name}.png"));

@@ -307,7 +307,10 @@ fn consistent_lavapipe_cpu() {
                  to silence this)"
             );
             // Before any Vulkan library is loaded (see below).
-            std::env::set_var("LP_NATIVE_VECTOR_WIDTH", MAX_LAVAPIPE_VECTOR_BITS.to_string());
+            std::env::set_var(
+                "LP_NATIVE_VECTOR_WIDTH",
+                MAX_LAVAPIPE_VECTOR_BITS.to_string(),
+            );
         }
         let narrow = asked.is_some_and(|bits| bits <= 128);
         if !narrow || std::env::var_os("GALLIUM_OVERRIDE_CPU_CAPS").is_some() {
