@@ -269,8 +269,9 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
     }
 }
 
-/// The widest vectors weft lets lavapipe generate code for (`consistent_lavapipe_cpu`).
-pub const MAX_LAVAPIPE_VECTOR_BITS: u32 = 256;
+/// The narrowest and widest vectors weft lets lavapipe generate code for
+/// (`consistent_lavapipe_cpu`).
+pub const LAVAPIPE_VECTOR_BITS: std::ops::RangeInclusive<u32> = 128..=256;
 
 /// Makes lavapipe's CPU description agree with a vector width forced by `LP_NATIVE_VECTOR_WIDTH`.
 ///
@@ -292,26 +293,28 @@ pub const MAX_LAVAPIPE_VECTOR_BITS: u32 = 256;
 /// cube, a glTF file's textures) is made by blits, so nearly every render died (session 43;
 /// docs/regression.md, "Driver configurations"). 512-bit code was no faster where it ran (an
 /// AVX-512 EPYC, which splits such vectors in two), so weft caps the width at 256 bits before the
-/// driver reads it, and says so once.
+/// driver reads it, and says so once. Below 128 bits (64, 32: Mesa accepts those too) every
+/// render crashed the same way; weft raises such a width to 128.
 fn consistent_lavapipe_cpu() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let asked = std::env::var("LP_NATIVE_VECTOR_WIDTH")
             .ok()
             .and_then(|v| v.trim().parse::<u32>().ok());
-        if let Some(bits) = asked.filter(|&bits| bits > MAX_LAVAPIPE_VECTOR_BITS) {
-            eprintln!(
-                "warning: LP_NATIVE_VECTOR_WIDTH={bits}: lavapipe (seen in Mesa 22.3) crashes in \
-                 its image blits above {MAX_LAVAPIPE_VECTOR_BITS}-bit vectors; weft runs it at \
-                 {MAX_LAVAPIPE_VECTOR_BITS} bits (unset the variable, or set it to 256 or 128, \
-                 to silence this)"
-            );
-            // Before any Vulkan library is loaded (see below).
-            std::env::set_var(
-                "LP_NATIVE_VECTOR_WIDTH",
-                MAX_LAVAPIPE_VECTOR_BITS.to_string(),
-            );
-        }
+        let (lo, hi) = (*LAVAPIPE_VECTOR_BITS.start(), *LAVAPIPE_VECTOR_BITS.end());
+        let asked = asked.map(|bits| {
+            let kept = bits.clamp(lo, hi);
+            if kept != bits {
+                eprintln!(
+                    "warning: LP_NATIVE_VECTOR_WIDTH={bits}: lavapipe (seen in Mesa 22.3) crashes \
+                     outside {lo} to {hi}-bit vectors (at 512 in its image blits); weft runs it at \
+                     {kept} bits (unset the variable, or set it to {lo} or {hi}, to silence this)"
+                );
+                // Before any Vulkan library is loaded (see below).
+                std::env::set_var("LP_NATIVE_VECTOR_WIDTH", kept.to_string());
+            }
+            kept
+        });
         let narrow = asked.is_some_and(|bits| bits <= 128);
         if !narrow || std::env::var_os("GALLIUM_OVERRIDE_CPU_CAPS").is_some() {
             return;
