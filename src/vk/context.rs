@@ -269,9 +269,9 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
     }
 }
 
-/// The narrowest and widest vectors weft lets lavapipe generate code for
-/// (`consistent_lavapipe_cpu`).
-pub const LAVAPIPE_VECTOR_BITS: std::ops::RangeInclusive<u32> = 128..=256;
+/// The vector widths weft lets lavapipe generate code for (`consistent_lavapipe_cpu`): every
+/// other width Mesa accepts crashed it.
+pub const LAVAPIPE_VECTOR_BITS: [u32; 2] = [128, 256];
 
 /// Makes lavapipe's CPU description agree with a vector width forced by `LP_NATIVE_VECTOR_WIDTH`.
 ///
@@ -293,22 +293,24 @@ pub const LAVAPIPE_VECTOR_BITS: std::ops::RangeInclusive<u32> = 128..=256;
 /// cube, a glTF file's textures) is made by blits, so nearly every render died (session 43;
 /// docs/regression.md, "Driver configurations"). 512-bit code was no faster where it ran (an
 /// AVX-512 EPYC, which splits such vectors in two), so weft caps the width at 256 bits before the
-/// driver reads it, and says so once. Below 128 bits (64, 32: Mesa accepts those too) every
-/// render crashed the same way; weft raises such a width to 128.
+/// driver reads it, and says so once. Mesa accepts any width, and every other one tried crashed
+/// every render too (32, 64, 129, 160, 192, 255: a segmentation fault or an abort at the first
+/// frame); weft runs a width under 256 at 128 bits, one over it at 256.
 fn consistent_lavapipe_cpu() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let asked = std::env::var("LP_NATIVE_VECTOR_WIDTH")
             .ok()
             .and_then(|v| v.trim().parse::<u32>().ok());
-        let (lo, hi) = (*LAVAPIPE_VECTOR_BITS.start(), *LAVAPIPE_VECTOR_BITS.end());
+        let [lo, hi] = LAVAPIPE_VECTOR_BITS;
         let asked = asked.map(|bits| {
-            let kept = bits.clamp(lo, hi);
+            let kept = if bits >= hi { hi } else { lo };
             if kept != bits {
                 eprintln!(
                     "warning: LP_NATIVE_VECTOR_WIDTH={bits}: lavapipe (seen in Mesa 22.3) crashes \
-                     outside {lo} to {hi}-bit vectors (at 512 in its image blits); weft runs it at \
-                     {kept} bits (unset the variable, or set it to {lo} or {hi}, to silence this)"
+                     at vector widths other than {lo} and {hi} bits (at 512 in its image blits); \
+                     weft runs it at {kept} bits (unset the variable, or set it to {lo} or {hi}, \
+                     to silence this)"
                 );
                 // Before any Vulkan library is loaded (see below).
                 std::env::set_var("LP_NATIVE_VECTOR_WIDTH", kept.to_string());
