@@ -124,7 +124,7 @@ fn renders_at_other_vector_widths_run_at_256_or_128_bits_and_say_so() {
             "{bits}: no word of the width weft keeps:\n{stderr}"
         );
     }
-    // Within the range nothing is said.
+    // At one of the two widths nothing is said.
     let out = dir.join("256.png");
     let (ok, stderr) = render_at_width("256", &["--size", "32x18", "--env", "none"], &out);
     assert!(ok, "{stderr}");
