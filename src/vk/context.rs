@@ -271,7 +271,7 @@ pub(crate) fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> Error {
 
 /// The vector widths weft lets lavapipe generate code for (`consistent_lavapipe_cpu`): every
 /// other width Mesa accepts crashed it.
-pub const LAVAPIPE_VECTOR_BITS: [u32; 2] = [128, 256];
+const LAVAPIPE_VECTOR_BITS: [u32; 2] = [128, 256];
 
 /// Makes lavapipe's CPU description agree with a vector width forced by `LP_NATIVE_VECTOR_WIDTH`.
 ///
@@ -317,7 +317,7 @@ fn consistent_lavapipe_cpu() {
             }
             kept
         });
-        let narrow = asked.is_some_and(|bits| bits <= 128);
+        let narrow = asked == Some(lo);
         if !narrow || std::env::var_os("GALLIUM_OVERRIDE_CPU_CAPS").is_some() {
             return;
         }
