@@ -800,3 +800,104 @@ fn without_a_depth_stencil_format_the_frame_is_the_same() {
     assert_eq!(one_pipelines, 1);
     assert!(split == one, "the two paths' PNGs differ");
 }
+
+/// Bytes held by weft's entries (`KIND-HEX.bin`) in a cache directory.
+fn cache_bytes(dir: &std::path::Path) -> (usize, u64) {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".bin"))
+        .fold((0, 0), |(n, b), e| (n + 1, b + e.metadata().unwrap().len()))
+}
+
+#[test]
+fn the_cache_on_disk_stays_within_its_limit_and_can_be_cleared() {
+    let dir = temp_dir("cli-cache");
+    let cache = dir.join("cache");
+    let render = |env: &str, limit: Option<u64>| {
+        let mut c = weft();
+        c.args(["render", "--size", "64x36", "--env", env, "-o"])
+            .arg(dir.join("x.png"))
+            .env("WEFT_CACHE_DIR", &cache);
+        if let Some(limit) = limit {
+            c.env("WEFT_CACHE_MAX_SIZE", limit.to_string());
+        }
+        let out = c.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let lebombo = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/env/lebombo_1k.hdr");
+    // No limit to speak of: the studio's run fills the cache with what it made.
+    render("studio", None);
+    let (studio_entries, studio_bytes) = cache_bytes(&cache);
+    assert!(
+        studio_entries >= 2 && studio_bytes > 1 << 20,
+        "{studio_entries} {studio_bytes}"
+    );
+    // A second environment's preprocessing does not fit beside the first in a limit a little over
+    // the first run's: the least recently used go, and what this run made stays.
+    let limit = studio_bytes + studio_bytes / 8;
+    render(lebombo, Some(limit));
+    let (_, bytes) = cache_bytes(&cache);
+    assert!(bytes <= limit, "{bytes} bytes over the limit of {limit}");
+    let names: Vec<String> = std::fs::read_dir(&cache)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names
+            .iter()
+            .filter(|n| n.starts_with("environment-"))
+            .count(),
+        1,
+        "only the latest environment fits: {names:?}"
+    );
+    // The cache read back as a run would use it: the same entry again, nothing removed.
+    render(lebombo, Some(limit));
+    assert_eq!(cache_bytes(&cache).1, bytes);
+
+    // `weft cache` says where it is, its limit and what it holds; --clear removes weft's files
+    // and nothing else.
+    std::fs::write(cache.join("notes.txt"), "the user's").unwrap();
+    let out = weft()
+        .arg("cache")
+        .env("WEFT_CACHE_DIR", &cache)
+        .env("WEFT_CACHE_MAX_SIZE", "512M")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains(&cache.display().to_string())
+            && text.contains("limit 512.0 MiB")
+            && text.contains("| environment | 1 |"),
+        "{text}"
+    );
+    let out = weft()
+        .args(["cache", "--clear"])
+        .env("WEFT_CACHE_DIR", &cache)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(cache_bytes(&cache), (0, 0));
+    assert!(cache.join("notes.txt").exists());
+    // A limit that is not a size is said, and the cache keeps its default.
+    let out = weft()
+        .arg("cache")
+        .env("WEFT_CACHE_DIR", &cache)
+        .env("WEFT_CACHE_MAX_SIZE", "lots")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("WEFT_CACHE_MAX_SIZE") && err.contains("512M"),
+        "{err}"
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("limit 1.00 GiB"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -13,6 +13,7 @@ use weft::spec::{EnvSource, Loaded, SceneSpec};
 use weft::vk::{Context, ContextOptions, DeviceChoice};
 
 mod bench;
+mod cache;
 mod compare;
 mod fabric;
 mod fidelity;
@@ -64,6 +65,9 @@ enum Command {
     Fidelity(fidelity::FidelityArgs),
     /// An interactive window on the same renderer: orbit camera, live controls (docs/viewer.md).
     View(ViewArgs),
+    /// What weft's cache on disk holds (compiled pipelines and shaders, preprocessed environments,
+    /// baked world light) and its size limit; `--clear` empties it.
+    Cache(cache::CacheArgs),
     /// Write the SPIR-V shader package: every module as .spv, manifest.json, include/, README.md.
     Shaders {
         /// Directory to write the package into (created if missing).
@@ -315,6 +319,7 @@ pub fn main() -> ExitCode {
         Command::Fabric(args) => fabric::run(args),
         Command::Fidelity(args) => fidelity::run(args),
         Command::View(args) => run_view(args),
+        Command::Cache(args) => cache::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
