@@ -31,10 +31,9 @@ fn report(args: CacheArgs) -> String {
     use std::fmt::Write;
     let mut out = String::new();
     let Some(dir) = weft::cache::dir() else {
-        return format!(
-            "weft's cache is off (WEFT_CACHE_DIR is \"off\" or empty, or there is no HOME): \
-             every run computes its pipelines and environments afresh\n"
-        );
+        return "weft's cache is off (WEFT_CACHE_DIR is \"off\" or empty, or there is no HOME): \
+                every run computes its pipelines and environments afresh\n"
+            .to_string();
     };
     if args.clear {
         let removed = weft::cache::clear_in(&dir);
