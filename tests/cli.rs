@@ -901,3 +901,24 @@ fn the_cache_on_disk_stays_within_its_limit_and_can_be_cleared() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("limit 1.00 GiB"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_reader_that_stops_early_is_not_a_crash() {
+    // `weft fabric --list-presets | head -1`: the pipe is closed before weft writes to it.
+    for args in [&["fabric", "--list-presets"][..], &["cache"][..]] {
+        let mut child = weft_without_gpu()
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !err.contains("panicked") && !err.contains("Broken pipe"),
+            "{args:?}: {err}"
+        );
+        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
+    }
+}

@@ -275,8 +275,20 @@ pub fn main() -> ExitCode {
     // A panic the library catches and turns into an error (weft::catch_panic: a dependency's,
     // on input that slipped past weft's checks) is reported as that error, naming the file;
     // its panic text and backtrace would only bury it. Any other panic is a bug: shown as is.
+    // A reader that stops early (`weft fabric --list-presets | head -1`) closes the pipe under
+    // the standard library's print!, which panics: weft ends quietly and successfully there, as
+    // command-line tools do (ripgrep's choice), instead of printing a backtrace.
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let text = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if text.starts_with("failed printing to stdout") && text.contains("Broken pipe") {
+            std::process::exit(0);
+        }
         if !weft::catching_panic() {
             default_hook(info);
         }
