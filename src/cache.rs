@@ -126,6 +126,17 @@ fn is_temporary(name: &str) -> bool {
     })
 }
 
+/// The temporaries of weft's writes in `dir` (a run's in progress, or a killed run's).
+fn temporaries_in(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| e.file_name().to_str().is_some_and(is_temporary))
+        .map(|e| e.path())
+        .collect()
+}
+
 /// weft's entries in `dir`, least recently used first (nothing when it cannot be read).
 pub fn entries_in(dir: &Path) -> Vec<Entry> {
     let mut found: Vec<Entry> = std::fs::read_dir(dir)
@@ -153,14 +164,12 @@ pub fn entries_in(dir: &Path) -> Vec<Entry> {
 /// over an hour ago. Files that are not weft's are never touched. Returns the entries removed.
 pub fn trim_in(dir: &Path, max: u64, keep: Option<&Path>) -> Vec<Entry> {
     let now = SystemTime::now();
-    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-        let stale = e
-            .metadata()
-            .ok()
-            .and_then(|m| m.modified().ok())
-            .is_some_and(|t| now.duration_since(t).is_ok_and(|age| age > STALE_TEMPORARY));
-        if stale && e.file_name().to_str().is_some_and(is_temporary) {
-            let _ = std::fs::remove_file(e.path());
+    for tmp in temporaries_in(dir) {
+        let stale = std::fs::metadata(&tmp)
+            .and_then(|m| m.modified())
+            .is_ok_and(|t| now.duration_since(t).is_ok_and(|age| age > STALE_TEMPORARY));
+        if stale {
+            let _ = std::fs::remove_file(tmp);
         }
     }
     let entries = entries_in(dir);
@@ -191,10 +200,8 @@ pub fn trim_in(dir: &Path, max: u64, keep: Option<&Path>) -> Vec<Entry> {
 /// Removes every one of weft's entries and temporaries in `dir` (nothing else); returns the
 /// entries removed.
 pub fn clear_in(dir: &Path) -> Vec<Entry> {
-    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
-        if e.file_name().to_str().is_some_and(is_temporary) {
-            let _ = std::fs::remove_file(e.path());
-        }
+    for tmp in temporaries_in(dir) {
+        let _ = std::fs::remove_file(tmp);
     }
     entries_in(dir)
         .into_iter()
