@@ -814,15 +814,27 @@ fn cache_bytes(dir: &std::path::Path) -> (usize, u64) {
 fn the_cache_on_disk_stays_within_its_limit_and_can_be_cleared() {
     let dir = temp_dir("cli-cache");
     let cache = dir.join("cache");
-    let render = |env: &str, limit: Option<u64>| {
+    let png = dir.join("x.png");
+    // weft with this test's cache directory and, when given, its size limit.
+    let cache_command = |args: &[&str], limit: Option<&str>| {
         let mut c = weft();
-        c.args(["render", "--size", "64x36", "--env", env, "-o"])
-            .arg(dir.join("x.png"))
-            .env("WEFT_CACHE_DIR", &cache);
+        c.args(args).env("WEFT_CACHE_DIR", &cache);
         if let Some(limit) = limit {
-            c.env("WEFT_CACHE_MAX_SIZE", limit.to_string());
+            c.env("WEFT_CACHE_MAX_SIZE", limit);
         }
-        let out = c.output().unwrap();
+        c.output().unwrap()
+    };
+    let render = |env: &str, limit: Option<u64>| {
+        let args = [
+            "render",
+            "--size",
+            "64x36",
+            "--env",
+            env,
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        let out = cache_command(&args, limit.map(|l| l.to_string()).as_deref());
         assert!(
             out.status.success(),
             "{}",
@@ -863,12 +875,7 @@ fn the_cache_on_disk_stays_within_its_limit_and_can_be_cleared() {
     // `weft cache` says where it is, its limit and what it holds; --clear removes weft's files
     // and nothing else.
     std::fs::write(cache.join("notes.txt"), "the user's").unwrap();
-    let out = weft()
-        .arg("cache")
-        .env("WEFT_CACHE_DIR", &cache)
-        .env("WEFT_CACHE_MAX_SIZE", "512M")
-        .output()
-        .unwrap();
+    let out = cache_command(&["cache"], Some("512M"));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     assert!(
@@ -877,21 +884,12 @@ fn the_cache_on_disk_stays_within_its_limit_and_can_be_cleared() {
             && text.contains("| environment | 1 |"),
         "{text}"
     );
-    let out = weft()
-        .args(["cache", "--clear"])
-        .env("WEFT_CACHE_DIR", &cache)
-        .output()
-        .unwrap();
+    let out = cache_command(&["cache", "--clear"], None);
     assert!(out.status.success());
     assert_eq!(cache_bytes(&cache), (0, 0));
     assert!(cache.join("notes.txt").exists());
     // A limit that is not a size is said, and the cache keeps its default.
-    let out = weft()
-        .arg("cache")
-        .env("WEFT_CACHE_DIR", &cache)
-        .env("WEFT_CACHE_MAX_SIZE", "lots")
-        .output()
-        .unwrap();
+    let out = cache_command(&["cache"], Some("lots"));
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
